@@ -1,0 +1,112 @@
+// The offscreen OSMesa OpenGL 4.5 core context (Mesa llvmpipe).
+#include <cstdio>
+#include <utility>
+
+#include "gl/gl_api.h"
+#include "tessref/error.h"
+
+namespace tessref::gl {
+
+namespace {
+
+const char* error_name(GLenum error) {
+    switch (error) {
+        case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
+        case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
+        case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
+        case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
+        case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
+        default: return "unknown GL error";
+    }
+}
+
+}  // namespace
+
+void Context::Impl::make_current() {
+    if (OSMesaGetCurrentContext() == osmesa) return;
+    if (!OSMesaMakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1))
+        throw Error("OSMesa: cannot make the GL context current");
+}
+
+void Context::Impl::check_error(const char* what) {
+    const GLenum error = gl.GetError();
+    if (error == GL_NO_ERROR) return;
+    char code[16];
+    std::snprintf(code, sizeof code, "0x%04x", error);
+    throw Error(std::string("OpenGL error ") + error_name(error) + " (" + code + ") in " + what);
+}
+
+Context::Impl::~Impl() {
+    if (!osmesa) return;
+    if (OSMesaGetCurrentContext() == osmesa || OSMesaMakeCurrent(osmesa, color_buffer.data(),
+                                                                 GL_UNSIGNED_BYTE, 1, 1)) {
+        for (auto& [key, program] : programs)
+            if (program.program) gl.DeleteProgram(program.program);
+        const GLuint buffers[] = {level_buffer, feedback_buffer};
+        if (gl.DeleteBuffers) gl.DeleteBuffers(2, buffers);
+        const GLuint queries[] = {query_generated, query_written};
+        if (gl.DeleteQueries) gl.DeleteQueries(2, queries);
+        if (gl.DeleteVertexArrays && vertex_array) gl.DeleteVertexArrays(1, &vertex_array);
+    }
+    OSMesaDestroyContext(osmesa);
+}
+
+Context Context::create() {
+    auto impl = std::make_unique<Impl>();
+    const int attributes[] = {OSMESA_FORMAT,
+                              OSMESA_RGBA,
+                              OSMESA_DEPTH_BITS,
+                              0,
+                              OSMESA_STENCIL_BITS,
+                              0,
+                              OSMESA_ACCUM_BITS,
+                              0,
+                              OSMESA_PROFILE,
+                              OSMESA_CORE_PROFILE,
+                              OSMESA_CONTEXT_MAJOR_VERSION,
+                              4,
+                              OSMESA_CONTEXT_MINOR_VERSION,
+                              5,
+                              0};
+    impl->osmesa = OSMesaCreateContextAttribs(attributes, nullptr);
+    if (!impl->osmesa)
+        throw Error(
+            "OSMesa: cannot create an OpenGL 4.5 core-profile context (is libOSMesa built with "
+            "llvmpipe, and does it support GL 4.5? try GALLIUM_DRIVER=llvmpipe)");
+    impl->color_buffer.assign(4, 0);
+    impl->make_current();
+
+    std::string missing;
+#define TESSREF_GL_LOAD(name, ret, params)                                                   \
+    impl->gl.name = reinterpret_cast<ret(GLAPIENTRY*) params>(OSMesaGetProcAddress("gl" #name)); \
+    if (!impl->gl.name) missing += (missing.empty() ? "gl" : ", gl") + std::string(#name);
+    TESSREF_GL_FUNCTIONS(TESSREF_GL_LOAD)
+#undef TESSREF_GL_LOAD
+    if (!missing.empty())
+        throw Error("OSMesa: OpenGL functions not available: " + missing);
+
+    auto gl_string = [&](GLenum name) {
+        const GLubyte* s = impl->gl.GetString(name);
+        return s ? std::string(reinterpret_cast<const char*>(s)) : std::string("(unknown)");
+    };
+    impl->renderer = gl_string(GL_RENDERER);
+    impl->version = gl_string(GL_VERSION);
+    GLint major = 0, minor = 0;
+    impl->gl.GetIntegerv(GL_MAJOR_VERSION, &major);
+    impl->gl.GetIntegerv(GL_MINOR_VERSION, &minor);
+    if (major < 4 || (major == 4 && minor < 5))
+        throw Error("OSMesa: OpenGL 4.5 is required, the context reports " + impl->version +
+                    " (" + impl->renderer + ")");
+    impl->check_error("context creation");
+    return Context(std::move(impl));
+}
+
+Context::Context(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Context::Context(Context&&) noexcept = default;
+Context& Context::operator=(Context&&) noexcept = default;
+Context::~Context() = default;
+
+const std::string& Context::renderer() const { return impl_->renderer; }
+const std::string& Context::version() const { return impl_->version; }
+
+}  // namespace tessref::gl
