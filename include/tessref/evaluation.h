@@ -1,0 +1,133 @@
+// tessref/evaluation.h — the tessellation evaluation stage: one gl_TessCoord -> one vertex.
+//
+// Pure functions mirroring the evaluation shaders in data/shaders/:
+//   thesis_evaluate    thesis_terrain.tese    bilinear mix of the 4 corners, height from
+//                                             texture(heightMap, xy / scaleXY).r * scaleZ
+//   cosc422_evaluate   cosc422_terrain.tese   bilinear mix, height = texture(...).r * 10 in y
+//   lab4_evaluate      lab4_terrain.tese      bilinear mix, height from the mip level that
+//                                             matches the tessellation level (textureLod)
+//   pn_evaluate        pn_triangles.tese      PN triangle, influence 0.75
+// Each is a template over the scalar: float (GPU-faithful, the shader's operations in its
+// order) or double (accuracy), chosen per call; both are instantiated in src/evaluation/.
+// The tess coord comes from the primitive generator: TessCoord (float) for the float path,
+// TessCoordExact (double) for the double path.
+//
+// mix() is GLSL's x * (1 - a) + y * a (glm's too), so mix(x, y, 0) == x and mix(x, y, 1) == y
+// exactly: a corner tess coord gives the corner bit for bit, and a vertex on a shared edge
+// depends only on that edge's two corners, so neighbouring patches compute the same bits
+// given the same tess coordinate along the edge.
+//
+// Quad corner layout: see control.h (c0 = (0,0), c1 = (0,1), c2 = (1,1), c3 = (1,0)).
+#pragma once
+
+#include <array>
+
+#include <glm/glm.hpp>
+
+#include "tessref/control.h"
+#include "tessref/tessellator.h"
+
+namespace tessref {
+
+// One evaluated vertex.
+template <typename T>
+struct EvaluatedVertex {
+    vec3_t<T> position{T(0)};           // world space, after displacement (the mesh vertex)
+    vec4_t<T> glPosition{T(0)};         // gl_Position = mvp * vec4(position, 1)
+    vec2_t<T> textureCoordinate{T(0)};  // the TES's texture coordinate output
+    vec3_t<T> normal{T(0)};             // only pn_evaluate writes one; zero otherwise
+};
+
+// ---------------------------------------------------------------------------------------
+// Thesis, thesis_terrain.tese (z up).
+//   adPosition = mix(tcPosition[0], tcPosition[3], u); bcPosition = mix(tcPosition[1],
+//   tcPosition[2], u); position = mix(adPosition, bcPosition, v);
+//   textureCoordinate = position.xy / scaleXY;
+//   height = texture(heightMap, textureCoordinate).r * scaleZ;
+//   positionWithHeight = vec4(position.x, position.y, height, 1); gl_Position = mvp * it.
+// The corners' own z (the vertex shader's height) is interpolated and then discarded, as in
+// the shader: the height comes only from the texture.
+// ---------------------------------------------------------------------------------------
+template <typename T>
+struct ThesisEvaluation {
+    Sampler2D<T> heightMap;
+    mat4_t<T> mvp{T(1)};
+    T scaleXY = T(1);
+    T scaleZ = T(1);
+};
+template <typename T>
+EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
+                                   const DomainPoint<T>& glTessCoord,
+                                   const ThesisEvaluation<T>& evaluation);
+
+// ---------------------------------------------------------------------------------------
+// COSC422, cosc422_terrain.tese (y up). posn = the same bilinear mix of gl_in[0..3];
+// s = (x - xMin) / (xMax - xMin), t = (z - zMin) / (zMax - zMin) with the assignment's
+// x in [-45, 45] and z from 0 (zMin) to -100 (zMax); posn.y = texture(heightMap, (s,t)).r
+// * heightScale (10).
+// ---------------------------------------------------------------------------------------
+template <typename T>
+struct Cosc422Evaluation {
+    Sampler2D<T> heightMap;
+    mat4_t<T> mvpMatrix{T(1)};
+    T xMin = T(-45), xMax = T(45);
+    T zMin = T(0), zMax = T(-100);
+    T heightScale = T(10);
+};
+template <typename T>
+EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>& glInPosition,
+                                    const DomainPoint<T>& glTessCoord,
+                                    const Cosc422Evaluation<T>& evaluation);
+
+// ---------------------------------------------------------------------------------------
+// Lab 4, lab4_terrain.tese (y up). position = the bilinear mix of the corners (y = 0);
+// texCoord = position.xz / horizontalScale + texCoordOffset;
+// height = textureLod(heightMap, texCoord, maxLogTessellationLevel - logTessellationLevel).r
+// * verticalScale, where logTessellationLevel is chosen per vertex by lab4_vertex_log_level
+// (edge vertices use their edge's level, corners their corner level, see control.h).
+// ---------------------------------------------------------------------------------------
+template <typename T>
+struct Lab4Evaluation {
+    Sampler2DLod<T> heightMap;
+    mat4_t<T> mvp{T(1)};
+    T horizontalScale = T(1);  // world units per texture-coordinate unit
+    T verticalScale = T(1);
+    vec2_t<T> texCoordOffset{T(0)};
+};
+// logTessellationLevel for a tess coord: u == 0 -> edge 0, v == 0 -> edge 1, u == 1 ->
+// edge 2, v == 1 -> edge 3; two of them at once -> that corner; otherwise logInner.
+template <typename T>
+T lab4_vertex_log_level(const DomainPoint<T>& glTessCoord, const Lab4Lod<T>& lod);
+template <typename T>
+EvaluatedVertex<T> lab4_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
+                                 const DomainPoint<T>& glTessCoord, const Lab4Lod<T>& lod,
+                                 const Lab4Evaluation<T>& evaluation);
+
+// ---------------------------------------------------------------------------------------
+// PN triangles, pn_triangles.tese. (u, v, w) = gl_TessCoord weights P030, P003, P300:
+//   v3PNPoint = P030 uuu + P003 vvv + P300 www + P021 3uu v + P012 3vv u + P102 3vv w
+//             + P201 3ww v + P210 3ww u + P120 3uu w + P111 6 w u v        (that order)
+//   v3BasePosition = P030 u + P003 v + P300 w
+//   position = mix(v3BasePosition, v3PNPoint, fInfluence)                   (0.75)
+// Normal: PnNormal::linear is the tutorial's v3NormalOut = N0 u + N1 v + N2 w (not
+// normalized, as the tutorial leaves it); PnNormal::quadratic is Vlachos et al.'s quadratic
+// normal N0 uu + N1 vv + N2 ww + n01 uv + n12 vw + n20 wu, normalized (the default).
+// Watertight edges (default on): when exactly one of u, v, w is 0 the vertex lies on an
+// edge; the tutorial's sum order then depends on which way round the patch holds that edge,
+// so its two patches can differ in the last bit. With watertightEdges the four non-zero
+// terms (and the normal's) are summed in the canonical order of the edge's end points
+// instead; off reproduces the tutorial's sum order exactly.
+// ---------------------------------------------------------------------------------------
+enum class PnNormal : std::uint8_t { linear, quadratic };
+template <typename T>
+struct PnEvaluation {
+    mat4_t<T> m4ViewProjection{T(1)};
+    T fInfluence = T(0.75);
+    PnNormal normal = PnNormal::quadratic;
+    bool watertightEdges = true;
+};
+template <typename T>
+EvaluatedVertex<T> pn_evaluate(const PnPatch<T>& patch, const DomainPoint<T>& glTessCoord,
+                               const PnEvaluation<T>& evaluation = {});
+
+}  // namespace tessref
