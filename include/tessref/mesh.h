@@ -4,10 +4,52 @@
 // geometry) produces and what `tessref mesh` writes through OpenMesh. Every vertex
 // remembers where it came from: the patch that emitted it and its gl_TessCoord, so a
 // defect found later (a crack, a wrong normal) can be traced back to a patch.
+//
+// Export (write_mesh) in three steps:
+//  1. Validate: every per-vertex array is empty or as long as `positions`, every triangle
+//     index is in range. A violation throws tessref::Error.
+//  2. Weld (weld_bitwise): vertices are merged ONLY where their positions are bitwise
+//     equal, so two patches that compute a shared edge identically share its vertices,
+//     and a crack (positions that differ by even one ulp) stays a visible hole in the
+//     file. The one exception to "bitwise": -0.0 and +0.0 are the same coordinate (they
+//     compare equal and no GPU rasterizes a gap between them), so the sign of a zero is
+//     ignored. When the merged copies disagree on their other attributes (normal, uv,
+//     tess coord, patch id), the welded vertex takes ALL of them from one copy: the copy
+//     with the lowest patch id, and among those the one emitted first. The result does not
+//     depend on the order of the input vertices beyond that tie-break.
+//  3. Write through OpenMesh's writers (OpenMesh::IO::write_mesh on a stream). What each
+//     format carries:
+//       ply  positions, vertex normals (nx ny nz), uv (u v), and the provenance of every
+//            vertex as extra properties: `property int patch_id`, `property float tess_u`,
+//            `tess_v`, `tess_w`; ascii or --binary (little endian).
+//       obj  positions, normals (vn), uv (vt); ascii only (OBJ has no binary form:
+//            asking for one is an Error).
+//       off  positions, normals, uv (the "STNOFF" variant); ascii, or OpenMesh's binary
+//            OFF ("OFF BINARY" header) with binary = true.
+//       stl  positions only (STL has no vertex attributes); facet normals are computed by
+//            OpenMesh from each triangle's (float) corners. ascii or binary.
+//     ASCII numbers are written with 9 significant digits (enough for any float to read
+//     back bitwise). Caveats of OpenMesh 9.0's writers, kept rather than hand-writing a
+//     format: every writer stores positions, normals and uvs as 32-bit float, so positions
+//     of an `exact` (double) run are rounded to the nearest float in the file (welding
+//     still happens on the double bit patterns); the ASCII STL writer prints vertex
+//     coordinates with 10 significant digits, not 9 (it hard-codes that).
+//
+// OpenMesh's half-edge structure cannot hold a non-manifold configuration (an edge with
+// three or more triangles, two fans meeting at one vertex). A triangle that OpenMesh
+// refuses is still written, on its own copies of its three vertices (the importers of
+// OpenMesh do the same); MeshWriteReport::split_triangles counts them. A triangle whose
+// corners weld into fewer than three distinct vertices has no area and no edges to
+// share; it is left out and counted in MeshWriteReport::degenerate_triangles.
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -24,5 +66,66 @@ struct SurfaceMesh {
     std::vector<glm::vec3> tess_coords;  // gl_TessCoord of the vertex in its patch
     std::vector<std::array<std::uint32_t, 3>> triangles;  // counter-clockwise seen from outside/above
 };
+
+// ---------------------------------------------------------------------------------------
+// Formats
+
+enum class MeshFormat : std::uint8_t { ply, obj, off, stl };
+
+// "ply", "obj", "off", "stl".
+std::string_view to_string(MeshFormat format);
+// The format named by a lower- or upper-case name without the dot; nullopt if unknown.
+std::optional<MeshFormat> parse_mesh_format(std::string_view name);
+// The format of an output path from its extension ("out/terrain.PLY" -> ply). Throws
+// tessref::Error naming the path when the extension is missing or not one of the four.
+MeshFormat mesh_format_from_path(const std::string& path);
+// Whether OpenMesh writes `format` in a binary form (ply, off, stl: yes; obj: no).
+bool mesh_format_has_binary(MeshFormat format);
+
+// ---------------------------------------------------------------------------------------
+// Checks and welding
+
+// Throws tessref::Error when the arrays of `mesh` disagree in length (normals, uvs,
+// patch_ids, tess_coords must each be empty or one per position) or a triangle names a
+// vertex that does not exist (the error's patch id is that triangle's first corner's).
+void validate(const SurfaceMesh& mesh);
+
+struct WeldedMesh {
+    SurfaceMesh mesh;                        // welded vertices, triangles re-indexed
+    std::vector<std::uint32_t> vertex_map;   // emitted vertex -> welded vertex
+    std::size_t degenerate_triangles = 0;    // dropped: corners welded into < 3 vertices
+};
+
+// Welds vertices whose positions are bitwise equal (up to the sign of zero), keeping the
+// attributes of the copy with the lowest patch id (then the lowest index). Welded
+// vertices are numbered in order of their first emitted copy; triangles keep their order
+// and orientation. Validates `mesh` first.
+WeldedMesh weld_bitwise(const SurfaceMesh& mesh);
+
+// ---------------------------------------------------------------------------------------
+// Writing
+
+struct MeshWriteOptions {
+    MeshFormat format = MeshFormat::ply;
+    bool binary = false;       // ply, off, stl; an Error for obj
+    int ascii_digits = 9;      // significant digits of every ASCII number
+};
+
+struct MeshWriteReport {
+    std::size_t emitted_vertices = 0;      // vertices of the SurfaceMesh
+    std::size_t welded_vertices = 0;       // distinct vertices after welding
+    std::size_t written_vertices = 0;      // welded + copies made for split triangles
+    std::size_t triangles = 0;             // triangles written
+    std::size_t degenerate_triangles = 0;  // left out (see above)
+    std::size_t split_triangles = 0;       // written on their own vertex copies (see above)
+};
+
+// Welds `mesh` and writes it to `out` (opened in binary mode for a binary format) through
+// OpenMesh. Throws tessref::Error when the mesh is inconsistent, the options ask for what
+// the format cannot do, or the stream fails. `out` may then hold part of a file: a caller
+// writing a file writes a temporary file next to it and renames it only on success, as
+// `tessref mesh` does (cli::AtomicOutput).
+MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
+                           const MeshWriteOptions& options);
 
 }  // namespace tessref

@@ -1,0 +1,344 @@
+// Export of a SurfaceMesh: validation, bitwise welding, and the OpenMesh writers.
+// See include/tessref/mesh.h for the contract (what is welded, what each format carries).
+#include "tessref/mesh.h"
+
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <ostream>
+#include <unordered_map>
+#include <utility>
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include "tessref/error.h"
+
+namespace tessref {
+
+namespace {
+
+// (Where's fields are filled one by one: designated initializers that skip fields warn
+// under -Wextra.)
+Where where_file(std::string file) {
+    Where where;
+    where.file = std::move(file);
+    return where;
+}
+
+Where where_key(std::string key) {
+    Where where;
+    where.key = std::move(key);
+    return where;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Formats
+
+std::string_view to_string(MeshFormat format) {
+    switch (format) {
+        case MeshFormat::ply: return "ply";
+        case MeshFormat::obj: return "obj";
+        case MeshFormat::off: return "off";
+        case MeshFormat::stl: return "stl";
+    }
+    return "?";
+}
+
+std::optional<MeshFormat> parse_mesh_format(std::string_view name) {
+    std::string lower(name);
+    std::transform(lower.begin(), lower.end(), lower.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    for (MeshFormat format : {MeshFormat::ply, MeshFormat::obj, MeshFormat::off, MeshFormat::stl}) {
+        if (lower == to_string(format)) return format;
+    }
+    return std::nullopt;
+}
+
+MeshFormat mesh_format_from_path(const std::string& path) {
+    std::string extension = std::filesystem::path(path).extension().string();
+    if (!extension.empty() && extension.front() == '.') extension.erase(0, 1);
+    if (const std::optional<MeshFormat> format = parse_mesh_format(extension)) return *format;
+    const std::string what =
+        extension.empty() ? "output file has no extension; expected .ply, .obj, .off or .stl"
+                          : "unknown mesh format '." + extension +
+                                "'; expected .ply, .obj, .off or .stl";
+    throw Error(what, where_file(path));
+}
+
+bool mesh_format_has_binary(MeshFormat format) { return format != MeshFormat::obj; }
+
+// ---------------------------------------------------------------------------------------
+// Checks
+
+void validate(const SurfaceMesh& mesh) {
+    const std::size_t n = mesh.positions.size();
+    const auto check_size = [n](std::size_t size, const char* name) {
+        if (size != 0 && size != n) {
+            throw Error("surface mesh has " + std::to_string(size) + " " + name + " for " +
+                            std::to_string(n) + " vertices",
+                        where_key(name));
+        }
+    };
+    check_size(mesh.normals.size(), "normals");
+    check_size(mesh.uvs.size(), "uvs");
+    check_size(mesh.patch_ids.size(), "patch_ids");
+    check_size(mesh.tess_coords.size(), "tess_coords");
+    if (n > std::numeric_limits<std::uint32_t>::max()) {
+        throw Error("surface mesh has more vertices than 32-bit indices can name");
+    }
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        for (const std::uint32_t index : mesh.triangles[t]) {
+            if (index >= n) {
+                Where where = where_key("triangles[" + std::to_string(t) + "]");
+                const std::uint32_t first = mesh.triangles[t][0];
+                if (first < mesh.patch_ids.size()) where.patch_id = mesh.patch_ids[first];
+                throw Error("triangle names vertex " + std::to_string(index) + " of " +
+                                std::to_string(n),
+                            where);
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Welding
+
+namespace {
+
+// The bit pattern of a position, the sign of a zero dropped (+0.0 + 0.0 == +0.0, and
+// -0.0 + 0.0 == +0.0, every other value is unchanged, NaN payloads included).
+struct PositionKey {
+    std::uint64_t x, y, z;
+    bool operator==(const PositionKey&) const = default;
+};
+
+std::uint64_t coordinate_bits(double c) {
+    if (c == 0.0) c = 0.0;  // -0.0 -> +0.0
+    return std::bit_cast<std::uint64_t>(c);
+}
+
+PositionKey position_key(const glm::dvec3& p) {
+    return {coordinate_bits(p.x), coordinate_bits(p.y), coordinate_bits(p.z)};
+}
+
+// splitmix64's finalizer: every input bit reaches every output bit, so grid-like
+// coordinates (which differ only in a few mantissa bits) spread over the buckets.
+std::uint64_t mix64(std::uint64_t h) {
+    h ^= h >> 30;
+    h *= 0xbf58476d1ce4e5b9ULL;
+    h ^= h >> 27;
+    h *= 0x94d049bb133111ebULL;
+    h ^= h >> 31;
+    return h;
+}
+
+struct PositionKeyHash {
+    std::size_t operator()(const PositionKey& k) const {
+        return static_cast<std::size_t>(mix64(k.x ^ mix64(k.y ^ mix64(k.z))));
+    }
+};
+
+}  // namespace
+
+WeldedMesh weld_bitwise(const SurfaceMesh& mesh) {
+    validate(mesh);
+    const std::size_t n = mesh.positions.size();
+    WeldedMesh result;
+    result.vertex_map.resize(n);
+
+    // The emitted copy each welded vertex takes its attributes from.
+    std::vector<std::uint32_t> source;
+    source.reserve(n);
+    {
+        std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_of;
+        welded_of.reserve(n);
+        const bool has_patch_ids = !mesh.patch_ids.empty();
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const auto [it, inserted] =
+                welded_of.try_emplace(position_key(mesh.positions[i]),
+                                      static_cast<std::uint32_t>(source.size()));
+            if (inserted) {
+                source.push_back(i);
+            } else if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[it->second]]) {
+                // Lowest patch id wins; on a tie the earlier copy (already there) stays.
+                source[it->second] = i;
+            }
+            result.vertex_map[i] = it->second;
+        }
+    }
+
+    SurfaceMesh& out = result.mesh;
+    const std::size_t m = source.size();
+    out.positions.resize(m);
+    for (std::size_t v = 0; v < m; ++v) out.positions[v] = mesh.positions[source[v]];
+    const auto gather = [&source, m](const auto& from, auto& to) {
+        if (from.empty()) return;
+        to.resize(m);
+        for (std::size_t v = 0; v < m; ++v) to[v] = from[source[v]];
+    };
+    gather(mesh.normals, out.normals);
+    gather(mesh.uvs, out.uvs);
+    gather(mesh.patch_ids, out.patch_ids);
+    gather(mesh.tess_coords, out.tess_coords);
+
+    out.triangles.reserve(mesh.triangles.size());
+    for (const auto& triangle : mesh.triangles) {
+        const std::array<std::uint32_t, 3> welded{result.vertex_map[triangle[0]],
+                                                  result.vertex_map[triangle[1]],
+                                                  result.vertex_map[triangle[2]]};
+        if (welded[0] == welded[1] || welded[1] == welded[2] || welded[2] == welded[0]) {
+            ++result.degenerate_triangles;
+            continue;
+        }
+        out.triangles.push_back(welded);
+    }
+    return result;
+}
+
+// ---------------------------------------------------------------------------------------
+// Writing
+
+namespace {
+
+// Every OpenMesh writer stores 32-bit floats (see mesh.h), so the kernel holds floats:
+// converting here or inside the writer gives the same (round-to-nearest) values.
+using ExportMesh = OpenMesh::TriMesh_ArrayKernelT<OpenMesh::DefaultTraits>;
+
+// Silences one of OpenMesh's log streams for a scope (it reports refused faces and chats
+// about every file it writes), restoring its previous state afterwards.
+class QuietStream {
+public:
+    explicit QuietStream(OpenMesh::mostream& stream) : stream_(stream), was_enabled_(stream.is_enabled()) {
+        stream_.disable();
+    }
+    ~QuietStream() {
+        if (was_enabled_) stream_.enable();
+    }
+    QuietStream(const QuietStream&) = delete;
+    QuietStream& operator=(const QuietStream&) = delete;
+
+private:
+    OpenMesh::mostream& stream_;
+    bool was_enabled_;
+};
+
+OpenMesh::Vec3f to_float(const glm::dvec3& v) {
+    return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
+}
+
+}  // namespace
+
+MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
+                           const MeshWriteOptions& options) {
+    const MeshFormat format = options.format;
+    if (options.binary && !mesh_format_has_binary(format)) {
+        throw Error(std::string(to_string(format)) + " has no binary form; drop --binary or "
+                                                     "write .ply, .off or .stl",
+                    where_file("--binary"));
+    }
+    if (options.ascii_digits < 1 || options.ascii_digits > 17) {
+        throw Error("ASCII digits must be within [1, 17], got " + std::to_string(options.ascii_digits));
+    }
+
+    WeldedMesh welded = weld_bitwise(mesh);
+    const SurfaceMesh& w = welded.mesh;
+    MeshWriteReport report;
+    report.emitted_vertices = mesh.positions.size();
+    report.welded_vertices = w.positions.size();
+    report.degenerate_triangles = welded.degenerate_triangles;
+
+    // What the format can carry, and what the mesh has.
+    const bool write_normals = format != MeshFormat::stl && !w.normals.empty();
+    const bool write_uvs = format != MeshFormat::stl && !w.uvs.empty();
+    const bool write_patch_ids = format == MeshFormat::ply && !w.patch_ids.empty();
+    const bool write_tess_coords = format == MeshFormat::ply && !w.tess_coords.empty();
+
+    ExportMesh om;
+    om.reserve(w.positions.size(), w.triangles.size() * 3 / 2 + 3, w.triangles.size());
+    if (write_normals) om.request_vertex_normals();
+    if (write_uvs) om.request_vertex_texcoords2D();
+    // PLY extra properties: OpenMesh's PLY writer emits every persistent vertex property
+    // of a supported scalar type under its own name, in the order they were added.
+    OpenMesh::VPropHandleT<int> patch_id_property;
+    OpenMesh::VPropHandleT<float> tess_u_property, tess_v_property, tess_w_property;
+    if (write_patch_ids) {
+        om.add_property(patch_id_property, "patch_id");
+        om.property(patch_id_property).set_persistent(true);
+    }
+    if (write_tess_coords) {
+        om.add_property(tess_u_property, "tess_u");
+        om.add_property(tess_v_property, "tess_v");
+        om.add_property(tess_w_property, "tess_w");
+        om.property(tess_u_property).set_persistent(true);
+        om.property(tess_v_property).set_persistent(true);
+        om.property(tess_w_property).set_persistent(true);
+    }
+
+    const auto add_vertex = [&](std::uint32_t v) {
+        const ExportMesh::VertexHandle vh = om.add_vertex(to_float(w.positions[v]));
+        if (write_normals) om.set_normal(vh, to_float(w.normals[v]));
+        if (write_uvs) {
+            om.set_texcoord2D(vh, ExportMesh::TexCoord2D(static_cast<float>(w.uvs[v].x),
+                                                         static_cast<float>(w.uvs[v].y)));
+        }
+        if (write_patch_ids) {
+            // PLY's `int`: patch ids beyond 2^31 - 1 would need more patches than any
+            // triangle budget allows.
+            om.property(patch_id_property, vh) = static_cast<int>(w.patch_ids[v]);
+        }
+        if (write_tess_coords) {
+            om.property(tess_u_property, vh) = w.tess_coords[v].x;
+            om.property(tess_v_property, vh) = w.tess_coords[v].y;
+            om.property(tess_w_property, vh) = w.tess_coords[v].z;
+        }
+        return vh;
+    };
+
+    for (std::uint32_t v = 0; v < w.positions.size(); ++v) add_vertex(v);
+    {
+        const QuietStream quiet(::omerr());  // refused faces are handled below
+        for (const auto& triangle : w.triangles) {
+            const ExportMesh::VertexHandle a(static_cast<int>(triangle[0]));
+            const ExportMesh::VertexHandle b(static_cast<int>(triangle[1]));
+            const ExportMesh::VertexHandle c(static_cast<int>(triangle[2]));
+            if (om.add_face(a, b, c).is_valid()) continue;
+            // Non-manifold here: the triangle goes on its own copies of its corners.
+            ++report.split_triangles;
+            om.add_face(add_vertex(triangle[0]), add_vertex(triangle[1]), add_vertex(triangle[2]));
+        }
+    }
+    report.written_vertices = om.n_vertices();
+    report.triangles = om.n_faces();
+
+    OpenMesh::IO::Options io_options;
+    if (options.binary) {
+        io_options += OpenMesh::IO::Options::Binary;
+        if (format == MeshFormat::ply) io_options += OpenMesh::IO::Options::LSB;
+    }
+    if (write_normals) io_options += OpenMesh::IO::Options::VertexNormal;
+    if (write_uvs) io_options += OpenMesh::IO::Options::VertexTexCoord;
+    if (write_patch_ids || write_tess_coords) io_options += OpenMesh::IO::Options::Custom;
+
+    bool written = false;
+    {
+        const QuietStream quiet_log(::omlog());
+        const QuietStream quiet_out(::omout());
+        written = OpenMesh::IO::write_mesh(om, out, std::string(to_string(format)), io_options,
+                                           options.ascii_digits);
+    }
+    out.flush();
+    if (!written) {
+        throw Error("OpenMesh could not write the mesh as " + std::string(to_string(format)));
+    }
+    if (!out) throw Error("cannot write the mesh: output stream failed");
+    return report;
+}
+
+}  // namespace tessref

@@ -1,0 +1,628 @@
+// tests/test_mesh.cpp — export of a SurfaceMesh through OpenMesh (include/tessref/mesh.h).
+//
+// The contract checked here:
+//  - welding merges exactly the bitwise-equal positions (one ulp apart stays apart), and
+//    the merged vertex takes its attributes from the copy with the lowest patch id;
+//  - every format reads back through OpenMesh's own readers (an independent parser of the
+//    file) with the positions we wrote: bitwise in binary; in ASCII the numbers carry 9
+//    significant digits, which is enough for any float to read back bitwise
+//    (FLT_DECIMAL_DIG = 9), so float-exact positions read back bitwise too;
+//  - normals and uv come back where the format carries them; PLY carries patch_id and
+//    tess_u/v/w as extra vertex properties, listed in its header;
+//  - a terrain exported from the shipped scenes has one boundary loop, the outline, and no
+//    T-junction (checked with a small edge map written here, independent of `check`).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+#include "tessref/error.h"
+#include "tessref/mesh.h"
+
+namespace fs = std::filesystem;
+using tessref::MeshFormat;
+using tessref::MeshWriteOptions;
+using tessref::SurfaceMesh;
+
+namespace {
+
+using ReadMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+// A fresh directory per test, removed afterwards.
+class MeshExport : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir_ = fs::temp_directory_path() /
+               ("tessref-test-mesh-" + std::to_string(::getpid()) + "-" + info->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    fs::path path(const std::string& name) const { return dir_ / name; }
+
+    fs::path write(const SurfaceMesh& mesh, const std::string& name, bool binary) const {
+        const fs::path file = path(name);
+        MeshWriteOptions options;
+        options.format = tessref::mesh_format_from_path(file.string());
+        options.binary = binary;
+        std::ofstream out(file, std::ios::binary);
+        tessref::write_mesh(mesh, out, options);
+        out.close();
+        EXPECT_TRUE(out) << file;
+        return file;
+    }
+
+    fs::path dir_;
+};
+
+std::string read_text(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+// The PLY header (up to and including end_header).
+std::string ply_header(const fs::path& file) {
+    const std::string text = read_text(file);
+    const std::size_t end = text.find("end_header");
+    return end == std::string::npos ? text : text.substr(0, end + 10);
+}
+
+glm::vec3 as_float(const glm::dvec3& p) { return glm::vec3(p); }
+
+bool bitwise_equal(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
+
+bool bitwise_equal(const OpenMesh::Vec3f& a, const glm::vec3& b) {
+    return bitwise_equal(a[0], b.x) && bitwise_equal(a[1], b.y) && bitwise_equal(a[2], b.z);
+}
+
+// A small terrain-like mesh: two patches side by side, each emitting its own copies of
+// the vertices of a 2x2-quad grid (9 vertices, 8 triangles), sharing the edge x = 1.
+// Coordinates are floats with long decimal expansions so that the 9-digit ASCII path is
+// really exercised; every vertex has a normal, a uv, a patch id and a tess coord.
+SurfaceMesh two_patch_mesh() {
+    SurfaceMesh mesh;
+    const float heights[3][5] = {{0.1f, 1.0f / 3.0f, -2.71828183f, 1234.5678f, 7e-8f},
+                                 {-0.2f, 2.0f / 3.0f, 3.14159274f, -98765.4f, 1e-30f},
+                                 {0.3f, 5.0f / 7.0f, -1.41421354f, 0.0f, 123456792.0f}};
+    for (std::uint32_t patch = 0; patch < 2; ++patch) {
+        const std::uint32_t base = static_cast<std::uint32_t>(mesh.positions.size());
+        for (int j = 0; j <= 2; ++j) {
+            for (int i = 0; i <= 2; ++i) {
+                const float u = static_cast<float>(i) / 2.0f;
+                const float v = static_cast<float>(j) / 2.0f;
+                const int column = static_cast<int>(patch) * 2 + i;  // 0..4, shared at 2
+                const float x = 0.7f * static_cast<float>(column);
+                const float y = 0.9f * static_cast<float>(j);
+                mesh.positions.emplace_back(x, y, heights[j][column]);
+                mesh.normals.push_back(glm::normalize(glm::dvec3(glm::vec3(0.1f * column, -0.2f * j, 1.0f))));
+                mesh.uvs.emplace_back(static_cast<float>(column) / 4.0f, static_cast<float>(j) / 2.0f);
+                mesh.patch_ids.push_back(patch);
+                mesh.tess_coords.emplace_back(u, v, 0.0f);
+            }
+        }
+        for (std::uint32_t j = 0; j < 2; ++j) {
+            for (std::uint32_t i = 0; i < 2; ++i) {
+                const std::uint32_t a = base + j * 3 + i, b = a + 1, c = a + 4, d = a + 3;
+                mesh.triangles.push_back({a, b, c});
+                mesh.triangles.push_back({a, c, d});
+            }
+        }
+    }
+    return mesh;
+}
+
+// The same shape with double positions that no float holds (an `exact` run).
+SurfaceMesh two_patch_mesh_double() {
+    SurfaceMesh mesh = two_patch_mesh();
+    for (glm::dvec3& p : mesh.positions) p = p * (1.0 + 1e-12) + glm::dvec3(0.0, 0.0, 1.0 / 3.0);
+    return mesh;
+}
+
+// ---------------------------------------------------------------------------------------
+// The edge map: boundary loops, T-junctions, non-manifold and mis-oriented edges of a
+// welded mesh. Written for this test, independent of the `check` command.
+
+struct EdgeReport {
+    std::size_t boundary_edges = 0;
+    std::size_t boundary_loops = 0;
+    std::size_t nonmanifold_edges = 0;    // used by 3+ triangles
+    std::size_t misoriented_edges = 0;    // two triangles traverse it the same way
+    std::size_t pinched_vertices = 0;     // 2+ boundary edges leave it
+    std::size_t t_junctions = 0;          // a vertex inside a boundary edge
+    std::size_t off_outline_vertices = 0; // boundary vertices not on the outline (see below)
+};
+
+// An edge map over the vertex indices: each undirected edge with the directions in which
+// triangles traverse it. A boundary edge has one triangle. A T-junction (a vertex of one
+// triangle lying inside another triangle's edge) can only sit on a boundary edge: the long
+// edge has triangles on one side only, because the other side is cut into shorter edges.
+// So the T-junction search tests every boundary vertex against every boundary edge.
+// The outline: a terrain is a height field over a rectangle in two of the three axes, so
+// its outline lies on that rectangle's sides; boundary vertices elsewhere belong to a hole.
+EdgeReport analyse_edges(const SurfaceMesh& welded) {
+    EdgeReport report;
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<bool>> edges;  // (lo,hi) -> forward?
+    for (const auto& t : welded.triangles) {
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+            edges[{std::min(a, b), std::max(a, b)}].push_back(a < b);
+        }
+    }
+    std::map<std::uint32_t, std::vector<std::uint32_t>> next;  // boundary: a -> b as traversed
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
+    for (const auto& [edge, directions] : edges) {
+        if (directions.size() == 1) {
+            const auto [lo, hi] = edge;
+            const std::uint32_t a = directions[0] ? lo : hi, b = directions[0] ? hi : lo;
+            next[a].push_back(b);
+            boundary.emplace_back(a, b);
+        } else if (directions.size() == 2) {
+            if (directions[0] == directions[1]) ++report.misoriented_edges;
+        } else {
+            ++report.nonmanifold_edges;
+        }
+    }
+    report.boundary_edges = boundary.size();
+    for (const auto& [a, outs] : next) {
+        if (outs.size() > 1) ++report.pinched_vertices;
+    }
+    // Loops: follow next[] from each unvisited boundary edge.
+    std::map<std::uint32_t, std::size_t> used;  // vertex -> outgoing edges consumed
+    for (const auto& [start, outs] : next) {
+        while (used[start] < outs.size()) {
+            ++report.boundary_loops;
+            std::uint32_t v = start;
+            do {
+                const auto& candidates = next[v];
+                if (used[v] >= candidates.size()) break;  // open chain: counted, stop
+                v = candidates[used[v]++];
+            } while (v != start);
+        }
+    }
+    // Outline: each boundary vertex on a side of the bounding rectangle, for one choice of
+    // the two horizontal axes (the pair that fits best; a terrain fits one exactly).
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (const auto& p : welded.positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    std::vector<std::uint32_t> boundary_vertices;
+    for (const auto& [a, b] : boundary) boundary_vertices.push_back(a);
+    std::sort(boundary_vertices.begin(), boundary_vertices.end());
+    boundary_vertices.erase(std::unique(boundary_vertices.begin(), boundary_vertices.end()),
+                            boundary_vertices.end());
+    std::size_t best = boundary_vertices.size();
+    for (const auto& [i, j] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}}) {
+        std::size_t off = 0;
+        for (const std::uint32_t v : boundary_vertices) {
+            const glm::dvec3& p = welded.positions[v];
+            const bool on_side = p[i] == lo[i] || p[i] == hi[i] || p[j] == lo[j] || p[j] == hi[j];
+            if (!on_side) ++off;
+        }
+        best = std::min(best, off);
+    }
+    report.off_outline_vertices = best;
+    // T-junctions: a boundary vertex strictly inside a boundary edge (collinear to a
+    // relative 1e-9 of the edge's length, parameter away from both ends). Vertices sorted
+    // by x so each edge looks only at those within its x extent.
+    std::vector<std::uint32_t> by_x = boundary_vertices;
+    std::sort(by_x.begin(), by_x.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return welded.positions[a].x < welded.positions[b].x;
+    });
+    for (const auto& [a, b] : boundary) {
+        const glm::dvec3 pa = welded.positions[a], pb = welded.positions[b];
+        const glm::dvec3 d = pb - pa;
+        const double length2 = glm::dot(d, d);
+        if (!(length2 > 0.0)) continue;
+        const double tolerance = 1e-9 * std::sqrt(length2);
+        const double x0 = std::min(pa.x, pb.x) - tolerance, x1 = std::max(pa.x, pb.x) + tolerance;
+        auto it = std::lower_bound(by_x.begin(), by_x.end(), x0, [&](std::uint32_t v, double x) {
+            return welded.positions[v].x < x;
+        });
+        for (; it != by_x.end() && welded.positions[*it].x <= x1; ++it) {
+            if (*it == a || *it == b) continue;
+            const glm::dvec3 pv = welded.positions[*it];
+            const double t = glm::dot(pv - pa, d) / length2;
+            if (t <= 1e-9 || t >= 1.0 - 1e-9) continue;
+            if (glm::length(pv - (pa + t * d)) <= tolerance) ++report.t_junctions;
+        }
+    }
+    return report;
+}
+
+// A grid of nx x ny unit patches, each emitting its own (level+1)^2 vertex copies with
+// z = f(x, y) (bilinear), as the pipeline does; levels[py][px] per patch (power of two, so every x
+// and y is an exact binary fraction and shared edges are bitwise equal).
+SurfaceMesh grid_terrain(const std::vector<std::vector<int>>& levels) {
+    SurfaceMesh mesh;
+    // Bilinear, so a vertex at an edge's midpoint lies exactly on that edge of the neighbour
+    // (a mismatch of levels is then a T-junction in the strict, geometric sense).
+    const auto height = [](double x, double y) { return 0.25 * x - 0.125 * x * y + 0.5 * y; };
+    std::uint32_t patch = 0;
+    for (std::size_t py = 0; py < levels.size(); ++py) {
+        for (std::size_t px = 0; px < levels[py].size(); ++px, ++patch) {
+            const int level = levels[py][px];
+            const std::uint32_t base = static_cast<std::uint32_t>(mesh.positions.size());
+            for (int j = 0; j <= level; ++j) {
+                for (int i = 0; i <= level; ++i) {
+                    const double u = static_cast<double>(i) / level, v = static_cast<double>(j) / level;
+                    const double x = static_cast<double>(px) + u, y = static_cast<double>(py) + v;
+                    mesh.positions.emplace_back(x, y, height(x, y));
+                    mesh.patch_ids.push_back(patch);
+                    mesh.tess_coords.emplace_back(static_cast<float>(u), static_cast<float>(v), 0.0f);
+                }
+            }
+            const std::uint32_t row = static_cast<std::uint32_t>(level) + 1;
+            for (std::uint32_t j = 0; j < static_cast<std::uint32_t>(level); ++j) {
+                for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(level); ++i) {
+                    const std::uint32_t a = base + j * row + i;
+                    mesh.triangles.push_back({a, a + 1, a + row + 1});
+                    mesh.triangles.push_back({a, a + row + 1, a + row});
+                }
+            }
+        }
+    }
+    return mesh;
+}
+
+// ---------------------------------------------------------------------------------------
+// Welding
+
+TEST(Weld, TwoTrianglesSharingAnEdgeWeldToFourVertices) {
+    // Two triangles emitted separately (6 vertices), sharing the edge (1,0,0)-(0,1,0).
+    SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+    const tessref::WeldedMesh welded = tessref::weld_bitwise(mesh);
+    EXPECT_EQ(welded.mesh.positions.size(), 4u);
+    ASSERT_EQ(welded.mesh.triangles.size(), 2u);
+    EXPECT_EQ(welded.vertex_map, (std::vector<std::uint32_t>{0, 1, 2, 1, 3, 2}));
+    // The shared edge is now one edge: traversed 1->2 by the first, 2->1 by the second.
+    const EdgeReport edges = analyse_edges(welded.mesh);
+    EXPECT_EQ(edges.boundary_edges, 4u);
+    EXPECT_EQ(edges.boundary_loops, 1u);
+}
+
+TEST(Weld, OneUlpApartDoesNotWeld) {
+    SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+    for (int axis = 0; axis < 3; ++axis) {
+        SurfaceMesh cracked = mesh;
+        cracked.positions[5][axis] = std::nextafter(cracked.positions[5][axis], 2.0);
+        const tessref::WeldedMesh welded = tessref::weld_bitwise(cracked);
+        EXPECT_EQ(welded.mesh.positions.size(), 5u) << "axis " << axis;
+        // The crack stays a hole: one boundary of 6 edges instead of 4.
+        EXPECT_EQ(analyse_edges(welded.mesh).boundary_edges, 6u) << "axis " << axis;
+    }
+    // Also one float ulp on a float-exact coordinate (what a gpu-precision crack is).
+    SurfaceMesh cracked = mesh;
+    cracked.positions[3].x = std::nextafter(1.0f, 2.0f);
+    EXPECT_EQ(tessref::weld_bitwise(cracked).mesh.positions.size(), 5u);
+}
+
+TEST(Weld, SignOfZeroIsIgnored) {
+    SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, -0.0, 0}, {1, 1, 0}, {-0.0, 1, -0.0}};
+    mesh.triangles = {{0, 1, 2}, {3, 4, 5}};
+    EXPECT_EQ(tessref::weld_bitwise(mesh).mesh.positions.size(), 4u);
+}
+
+TEST(Weld, NanPositionsWeldOnlyWithTheSameBits) {
+    SurfaceMesh mesh;
+    const double nan = std::nan("");
+    mesh.positions = {{nan, 0, 0}, {nan, 0, 0}, {-nan, 0, 0}};
+    EXPECT_EQ(tessref::weld_bitwise(mesh).mesh.positions.size(), 2u);
+}
+
+TEST(Weld, MergedVertexTakesTheAttributesOfTheLowestPatchId) {
+    // Three copies of one position from patches 7, 3, 3 (in that order), with different
+    // attributes: the welded vertex is patch 3's first copy, whole (not a mix).
+    SurfaceMesh mesh;
+    mesh.positions = {{1, 2, 3}, {1, 2, 3}, {1, 2, 3}, {0, 0, 0}};
+    mesh.normals = {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}};
+    mesh.uvs = {{0.7, 0.7}, {0.3, 0.3}, {0.9, 0.9}, {0, 0}};
+    mesh.patch_ids = {7, 3, 3, 0};
+    mesh.tess_coords = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 0}};
+    const tessref::WeldedMesh welded = tessref::weld_bitwise(mesh);
+    ASSERT_EQ(welded.mesh.positions.size(), 2u);
+    EXPECT_EQ(welded.mesh.patch_ids[0], 3u);
+    EXPECT_EQ(welded.mesh.normals[0], glm::dvec3(0, 1, 0));
+    EXPECT_EQ(welded.mesh.uvs[0], glm::dvec2(0.3, 0.3));
+    EXPECT_EQ(welded.mesh.tess_coords[0], glm::vec3(0, 1, 0));
+    // Numbered by first emitted copy: the (1,2,3) vertex first, though its source is #1.
+    EXPECT_EQ(welded.mesh.positions[1], glm::dvec3(0, 0, 0));
+}
+
+TEST(Weld, DegenerateTrianglesAreLeftOutAndCounted) {
+    SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 0}};
+    mesh.triangles = {{0, 1, 2}, {0, 1, 3}};  // 1 and 3 weld: the second has two corners
+    const tessref::WeldedMesh welded = tessref::weld_bitwise(mesh);
+    EXPECT_EQ(welded.mesh.triangles.size(), 1u);
+    EXPECT_EQ(welded.degenerate_triangles, 1u);
+}
+
+TEST(Weld, InconsistentMeshesAreErrors) {
+    SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    mesh.patch_ids = {0, 0, 0};
+    mesh.triangles = {{0, 1, 3}};
+    EXPECT_THROW(tessref::weld_bitwise(mesh), tessref::Error);
+    mesh.triangles = {{0, 1, 2}};
+    mesh.normals = {{0, 0, 1}};
+    EXPECT_THROW(tessref::weld_bitwise(mesh), tessref::Error);
+}
+
+// ---------------------------------------------------------------------------------------
+// The edge map itself (so the scene tests below can trust it)
+
+TEST(EdgeMap, ConformingGridHasOneOutlineLoopAndNoTJunction) {
+    const SurfaceMesh welded = tessref::weld_bitwise(grid_terrain({{2, 2, 2}, {2, 2, 2}})).mesh;
+    const EdgeReport edges = analyse_edges(welded);
+    EXPECT_EQ(edges.boundary_loops, 1u);
+    EXPECT_EQ(edges.boundary_edges, 2u * (6 + 4));  // 6 x 4 segments around the outline
+    EXPECT_EQ(edges.t_junctions, 0u);
+    EXPECT_EQ(edges.off_outline_vertices, 0u);
+    EXPECT_EQ(edges.nonmanifold_edges + edges.misoriented_edges + edges.pinched_vertices, 0u);
+}
+
+TEST(EdgeMap, FindsTheTJunctionsOfMismatchedLevels) {
+    // Patch (0,0) at level 2 beside (1,0) at level 1: the midpoint of the shared edge is a
+    // vertex of the left patch inside the right patch's edge. The hole is a sliver whose
+    // ends are on the outline, so the boundary pinches there (two boundary edges leave
+    // each end).
+    {
+        const EdgeReport edges = analyse_edges(tessref::weld_bitwise(grid_terrain({{2, 1}})).mesh);
+        EXPECT_EQ(edges.t_junctions, 1u);
+        EXPECT_EQ(edges.off_outline_vertices, 1u);
+        EXPECT_EQ(edges.pinched_vertices, 2u);
+    }
+    // A level-2 patch inside level-1 neighbours: one T-junction on each of its four edges,
+    // the slivers a hole inside the terrain, apart from the outline.
+    {
+        const EdgeReport edges =
+            analyse_edges(tessref::weld_bitwise(grid_terrain({{1, 1, 1}, {1, 2, 1}, {1, 1, 1}})).mesh);
+        EXPECT_EQ(edges.t_junctions, 4u);
+        EXPECT_EQ(edges.off_outline_vertices, 8u);  // 4 midpoints + 4 corners of the patch
+        EXPECT_GE(edges.boundary_loops, 2u);
+    }
+}
+
+TEST(EdgeMap, FindsACrack) {
+    SurfaceMesh mesh = grid_terrain({{2, 2}, {2, 2}});
+    // Move the centre vertex of the whole grid by one ulp in patch 3's copy only.
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        if (mesh.patch_ids[v] == 3 && mesh.positions[v] == glm::dvec3(1, 1, mesh.positions[v].z))
+            mesh.positions[v].z = std::nextafter(mesh.positions[v].z, 10.0);
+    }
+    const EdgeReport edges = analyse_edges(tessref::weld_bitwise(mesh).mesh);
+    EXPECT_EQ(edges.boundary_loops, 2u);
+    EXPECT_GT(edges.off_outline_vertices, 0u);
+}
+
+// ---------------------------------------------------------------------------------------
+// Formats and errors
+
+TEST(MeshFormat, FromPath) {
+    EXPECT_EQ(tessref::mesh_format_from_path("a/b.ply"), MeshFormat::ply);
+    EXPECT_EQ(tessref::mesh_format_from_path("T.OBJ"), MeshFormat::obj);
+    EXPECT_EQ(tessref::mesh_format_from_path("x.off"), MeshFormat::off);
+    EXPECT_EQ(tessref::mesh_format_from_path("x.Stl"), MeshFormat::stl);
+    EXPECT_THROW(tessref::mesh_format_from_path("x.vtk"), tessref::Error);
+    EXPECT_THROW(tessref::mesh_format_from_path("x"), tessref::Error);
+    EXPECT_THROW(tessref::mesh_format_from_path("x.ply.tmp"), tessref::Error);
+}
+
+TEST(MeshFormat, ObjHasNoBinaryForm) {
+    std::ostringstream out;
+    MeshWriteOptions options;
+    options.format = MeshFormat::obj;
+    options.binary = true;
+    EXPECT_THROW(tessref::write_mesh(two_patch_mesh(), out, options), tessref::Error);
+    EXPECT_TRUE(out.str().empty());
+}
+
+TEST(MeshFormat, WritingIsDeterministic) {
+    for (MeshFormat format : {MeshFormat::ply, MeshFormat::obj, MeshFormat::off, MeshFormat::stl}) {
+        for (bool binary : {false, true}) {
+            if (binary && !tessref::mesh_format_has_binary(format)) continue;
+            MeshWriteOptions options;
+            options.format = format;
+            options.binary = binary;
+            std::ostringstream a, b;
+            tessref::write_mesh(two_patch_mesh(), a, options);
+            tessref::write_mesh(two_patch_mesh(), b, options);
+            EXPECT_FALSE(a.str().empty());
+            EXPECT_EQ(a.str(), b.str()) << tessref::to_string(format) << (binary ? " binary" : "");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Round trips through OpenMesh's readers
+
+TEST_F(MeshExport, PlyHeaderListsTheExtraProperties) {
+    for (bool binary : {false, true}) {
+        const std::string header = ply_header(write(two_patch_mesh(), "m.ply", binary));
+        EXPECT_NE(header.find(binary ? "format binary_little_endian 1.0" : "format ascii 1.0"),
+                  std::string::npos);
+        for (const char* line : {"element vertex 15\n", "property float x\n", "property float nx\n",
+                                 "property float u\n", "property float v\n",
+                                 "property int patch_id\n", "property float tess_u\n",
+                                 "property float tess_v\n", "property float tess_w\n",
+                                 "element face 16\n"}) {
+            EXPECT_NE(header.find(line), std::string::npos) << line << " in\n" << header;
+        }
+    }
+}
+
+TEST_F(MeshExport, AsciiNumbersHaveNineSignificantDigits) {
+    // float(1/3) = 0.333333343267..., float(0.1) = 0.100000001490..., float(1234.5678) =
+    // 1234.56775: to 9 significant digits 0.333333343, 0.100000001, 1234.56775.
+    const std::string ply = read_text(write(two_patch_mesh(), "m.ply", false));
+    const std::string obj = read_text(write(two_patch_mesh(), "m.obj", false));
+    const std::string off = read_text(write(two_patch_mesh(), "m.off", false));
+    for (const std::string* text : {&ply, &obj, &off}) {
+        EXPECT_NE(text->find(" 0.333333343"), std::string::npos);
+        EXPECT_NE(text->find(" 0.100000001"), std::string::npos);
+        EXPECT_NE(text->find(" 1234.56775"), std::string::npos);
+        EXPECT_EQ(text->find("0.3333333433"), std::string::npos);  // not 10 digits
+    }
+}
+
+// Reads `file` back with OpenMesh and checks vertices, faces and every attribute the
+// format carries against the welded mesh. Positions (and normals, uvs) must come back as
+// the nearest floats of what we wrote, bitwise, in ASCII as in binary.
+void expect_round_trip(const SurfaceMesh& mesh, const fs::path& file, MeshFormat format, bool binary) {
+    SCOPED_TRACE(file.string() + (binary ? " (binary)" : " (ascii)"));
+    const tessref::WeldedMesh welded = tessref::weld_bitwise(mesh);
+    const SurfaceMesh& w = welded.mesh;
+    ReadMesh read;
+    read.request_vertex_normals();
+    read.request_vertex_texcoords2D();
+    OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord |
+                                    OpenMesh::IO::Options::Custom;
+    if (binary) options += OpenMesh::IO::Options::Binary;
+    ASSERT_TRUE(OpenMesh::IO::read_mesh(read, file.string(), options));
+    ASSERT_EQ(read.n_faces(), w.triangles.size());
+    ASSERT_EQ(read.n_vertices(), w.positions.size());
+
+    if (format == MeshFormat::stl) {
+        // STL stores corners per facet; OpenMesh's reader merges equal positions, in its own
+        // order. Compare facet by facet, in order, by position.
+        std::size_t f = 0;
+        for (const auto fh : read.faces()) {
+            std::vector<OpenMesh::Vec3f> corners;
+            for (const auto vh : read.fv_range(fh)) corners.push_back(read.point(vh));
+            ASSERT_EQ(corners.size(), 3u);
+            // OpenMesh may start the face at another corner; rotate to match corner 0.
+            const auto& t = w.triangles[f++];
+            int start = -1;
+            for (int k = 0; k < 3; ++k)
+                if (bitwise_equal(corners[k], as_float(w.positions[t[0]]))) start = k;
+            ASSERT_GE(start, 0);
+            for (int k = 0; k < 3; ++k)
+                EXPECT_TRUE(bitwise_equal(corners[(start + k) % 3], as_float(w.positions[t[k]])));
+        }
+        return;
+    }
+
+    for (std::size_t v = 0; v < w.positions.size(); ++v) {
+        const ReadMesh::VertexHandle vh(static_cast<int>(v));
+        EXPECT_TRUE(bitwise_equal(read.point(vh), as_float(w.positions[v]))) << "vertex " << v;
+        EXPECT_TRUE(bitwise_equal(read.normal(vh), glm::vec3(w.normals[v]))) << "normal " << v;
+        const auto uv = read.texcoord2D(vh);
+        EXPECT_TRUE(bitwise_equal(uv[0], static_cast<float>(w.uvs[v].x)) &&
+                    bitwise_equal(uv[1], static_cast<float>(w.uvs[v].y)))
+            << "uv " << v << ": " << uv[0] << " " << uv[1];
+    }
+    std::size_t f = 0;
+    for (const auto fh : read.faces()) {
+        std::vector<std::uint32_t> corners;
+        for (const auto vh : read.fv_range(fh)) corners.push_back(static_cast<std::uint32_t>(vh.idx()));
+        const auto& t = w.triangles[f++];
+        // Same triangle, same orientation (a rotation of the corners at most).
+        const bool same = (corners == std::vector<std::uint32_t>{t[0], t[1], t[2]}) ||
+                          (corners == std::vector<std::uint32_t>{t[1], t[2], t[0]}) ||
+                          (corners == std::vector<std::uint32_t>{t[2], t[0], t[1]});
+        EXPECT_TRUE(same) << "face " << f - 1;
+    }
+    if (format == MeshFormat::ply) {
+        OpenMesh::VPropHandleT<int> patch_id;
+        OpenMesh::VPropHandleT<float> tess_u, tess_v, tess_w;
+        ASSERT_TRUE(read.get_property_handle(patch_id, "patch_id"));
+        ASSERT_TRUE(read.get_property_handle(tess_u, "tess_u"));
+        ASSERT_TRUE(read.get_property_handle(tess_v, "tess_v"));
+        ASSERT_TRUE(read.get_property_handle(tess_w, "tess_w"));
+        for (std::size_t v = 0; v < w.positions.size(); ++v) {
+            const ReadMesh::VertexHandle vh(static_cast<int>(v));
+            EXPECT_EQ(read.property(patch_id, vh), static_cast<int>(w.patch_ids[v]));
+            EXPECT_TRUE(bitwise_equal(read.property(tess_u, vh), w.tess_coords[v].x));
+            EXPECT_TRUE(bitwise_equal(read.property(tess_v, vh), w.tess_coords[v].y));
+            EXPECT_TRUE(bitwise_equal(read.property(tess_w, vh), w.tess_coords[v].z));
+        }
+    }
+}
+
+TEST_F(MeshExport, RoundTripEveryFormat) {
+    const SurfaceMesh mesh = two_patch_mesh();
+    ASSERT_EQ(tessref::weld_bitwise(mesh).mesh.positions.size(), 15u);  // 18 - 3 shared
+    for (MeshFormat format : {MeshFormat::ply, MeshFormat::obj, MeshFormat::off, MeshFormat::stl}) {
+        for (bool binary : {false, true}) {
+            if (binary && !tessref::mesh_format_has_binary(format)) continue;
+            const std::string name = std::string(binary ? "b." : "a.") + std::string(tessref::to_string(format));
+            expect_round_trip(mesh, write(mesh, name, binary), format, binary);
+        }
+    }
+}
+
+TEST_F(MeshExport, FloatExactPositionsReadBackBitwise) {
+    // The gpu path: every position is a float, so the file holds it exactly.
+    const SurfaceMesh mesh = two_patch_mesh();
+    for (const char* name : {"a.ply", "a.obj", "a.off"}) {
+        ReadMesh read;
+        ASSERT_TRUE(OpenMesh::IO::read_mesh(read, write(mesh, name, false).string()));
+        const SurfaceMesh& w = tessref::weld_bitwise(mesh).mesh;
+        for (std::size_t v = 0; v < w.positions.size(); ++v) {
+            const auto p = read.point(ReadMesh::VertexHandle(static_cast<int>(v)));
+            EXPECT_EQ(glm::dvec3(p[0], p[1], p[2]), w.positions[v]) << name << " vertex " << v;
+        }
+    }
+}
+
+TEST_F(MeshExport, DoublePositionsAreWrittenAsTheirNearestFloats) {
+    // The exact path through OpenMesh 9's float writers (documented in mesh.h).
+    const SurfaceMesh mesh = two_patch_mesh_double();
+    for (MeshFormat format : {MeshFormat::ply, MeshFormat::off, MeshFormat::stl}) {
+        for (bool binary : {false, true}) {
+            const std::string name = std::string(binary ? "b." : "a.") + std::string(tessref::to_string(format));
+            expect_round_trip(mesh, write(mesh, name, binary), format, binary);
+        }
+    }
+}
+
+TEST_F(MeshExport, NonManifoldTrianglesAreWrittenOnTheirOwnVertices) {
+    // Three triangles on one edge (a fin): OpenMesh's half-edge mesh takes two of them,
+    // the third goes on copies of its corners, and nothing is lost.
+    SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 1}};
+    mesh.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+    std::ostringstream out;
+    MeshWriteOptions options;
+    const tessref::MeshWriteReport report = tessref::write_mesh(mesh, out, options);
+    EXPECT_EQ(report.triangles, 3u);
+    EXPECT_EQ(report.split_triangles, 1u);
+    EXPECT_EQ(report.welded_vertices, 5u);
+    EXPECT_EQ(report.written_vertices, 8u);
+}
+
+TEST_F(MeshExport, MeshWithoutOptionalAttributes) {
+    SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    mesh.triangles = {{0, 1, 2}};
+    const std::string header = ply_header(write(mesh, "m.ply", false));
+    EXPECT_EQ(header.find("nx"), std::string::npos);
+    EXPECT_EQ(header.find("patch_id"), std::string::npos);
+    ReadMesh read;
+    ASSERT_TRUE(OpenMesh::IO::read_mesh(read, write(mesh, "m.obj", false).string()));
+    EXPECT_EQ(read.n_faces(), 1u);
+}
+
+}  // namespace
