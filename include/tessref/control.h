@@ -89,8 +89,9 @@ template <typename T>
 using mat4_t = glm::mat<4, 4, T, glm::defaultp>;
 
 // GLSL's texture(sampler, uv): all four channels of a filtered sample (a one-channel map
-// returns its value in .r). The orchestrator wraps the height-field Texture in a lambda;
-// tests pass analytic functions.
+// returns its value in .r). Outside a fragment shader texture() samples the base level, so
+// the orchestrator wraps the height-field Texture's level-0 lookup in a lambda; tests pass
+// analytic functions.
 template <typename T>
 using Sampler2D = std::function<vec4_t<T>(vec2_t<T> uv)>;
 // GLSL's textureLod(sampler, uv, lod).
@@ -194,24 +195,33 @@ struct ThesisControl {
 // The three factors of one edge, each computed from that edge alone.
 template <typename T>
 struct ThesisEdgeFactors {
-    T distance = T(0);  // DistanceFactor(distance(midpoint, cameraPosition)), 0..5
-    T texture = T(0);   // texture(tessellationMap, midpoint.xy / scaleXY).r, 0..1
-    T normal = T(0);    // normalTessFactor over the edge's six probes, 0 or sum of angles
+    T distanceTessellation = T(0);  // DistanceFactor(distance(midpoint, cameraPosition)), 0..5
+    T textureTessellation = T(0);   // texture(tessellationMap, midpoint.xy / scaleXY).r, 0..1
+    T normalTessellation = T(0);    // normalTessFactor over the six probes: 0 or sum of angles
 };
+
+// Which way an edge runs: along_v for ab and dc (u constant, outer[0] and outer[2]; the
+// shader offsets their probes by left = a - b and right = b - a), along_u for ad and bc
+// (v constant, outer[1] and outer[3]; offsets down = b - a and up = a - b). The two
+// patches of a shared edge always see it running the same way.
+enum class ThesisEdgeDirection : std::uint8_t { along_v, along_u };
 
 // The factors of edge (p, q); only those the chosen factor needs are computed (the others
 // stay 0). Midpoint: a + (b - a)/2 on the canonical edge (thesis equation (1)).
-// Normal probes (the shader's abvertices[0..5] for edge a -> b, with left = a - b,
-// right = b - a): a, b, a + left, b + left, a + right, b + right, xy only, each decoded by
+// Normal probes (the shader's abvertices[0..5] for edge a -> b, with minus = left or down
+// and plus = right or up, see ThesisEdgeDirection): a, b, a + minus, b + minus, a + plus,
+// b + plus, xy only, each decoded by
 // normal_from_texture(texture(normalMap, probe / scaleXY).xyz); the factor is the sum
 // of the angles acos(n0.n3), acos(n2.n1), acos(n0.n5), acos(n1.n4) when any exceeds the
 // threshold, else 0 (normalTessFactor). The shader takes left/right from edge ab and
-// up/down from edge bc for all four edges; here each edge uses its own vector (the same
-// vectors for a parallelogram grid), so the factor depends on the edge alone.
+// up/down from edge bc for all four edges; here each edge uses its own vector (bit for bit
+// the same for ab and bc, and for dc and ad whenever the grid's differences are exact), so
+// the factor depends on the edge alone.
 // In double, the dot products are clamped into [-1, 1] before acos (their true value is);
 // in float they are not (GPU-faithful: a rounded-up 1 gives NaN).
 template <typename T>
 ThesisEdgeFactors<T> thesis_edge_factors(const vec3_t<T>& p, const vec3_t<T>& q,
+                                         ThesisEdgeDirection direction,
                                          const ThesisControl<T>& control);
 
 // Level from factors: formula (2) for ThesisFactor::all,
@@ -334,8 +344,9 @@ PatchLevels<T> pn_levels(const std::array<vec4_t<T>, 3>& glPosition,
 //   P300 = pos[2], P210 = E1[2], P120 = E2[2].
 // The Vlachos quadratic normal coefficients are added (not in the tutorial), one per edge i
 // (from P_i to P_next): n_i = normalize(N_i + N_next - v * (P_next - P_i)) with
-// v = 2 * dot(P_next - P_i, N_i + N_next) / dot(P_next - P_i, P_next - P_i), computed on
-// the canonically ordered edge so both patches of an edge get the same bits.
+// v = 2 * dot(P_next - P_i, N_i + N_next) / dot(P_next - P_i, P_next - P_i); swapping the
+// end points negates both v and the edge vector exactly, so both patches of an edge get
+// the same bits (as E1/E2, whose swap gives E2/E1 by the same operations).
 template <typename T>
 struct PnPatch {
     std::array<vec3_t<T>, 3> v3VertexPos{};

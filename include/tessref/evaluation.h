@@ -35,7 +35,8 @@ struct EvaluatedVertex {
     vec3_t<T> position{T(0)};           // world space, after displacement (the mesh vertex)
     vec4_t<T> glPosition{T(0)};         // gl_Position = mvp * vec4(position, 1)
     vec2_t<T> textureCoordinate{T(0)};  // the TES's texture coordinate output
-    vec3_t<T> normal{T(0)};             // only pn_evaluate writes one; zero otherwise
+    vec3_t<T> normal{T(0)};             // pn_evaluate, and lab4_evaluate with gridStep > 0;
+                                        // zero otherwise
 };
 
 // ---------------------------------------------------------------------------------------
@@ -93,6 +94,9 @@ struct Lab4Evaluation {
     T horizontalScale = T(1);  // world units per texture-coordinate unit
     T verticalScale = T(1);
     vec2_t<T> texCoordOffset{T(0)};
+    // > 0: also the appendix-A normal (lab4_vertex_normal in geometry.h) with this grid step
+    // h, sampled at the vertex's own lod, as the lab computes normals in this shader.
+    T gridStep = T(0);
 };
 // logTessellationLevel for a tess coord: u == 0 -> edge 0, v == 0 -> edge 1, u == 1 ->
 // edge 2, v == 1 -> edge 3; two of them at once -> that corner; otherwise logInner.

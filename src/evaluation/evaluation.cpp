@@ -1,0 +1,233 @@
+// The evaluation shaders: thesis, COSC422, lab 4 and PN triangles. Twins of
+// data/shaders/{thesis_terrain,cosc422_terrain,lab4_terrain,pn_triangles}.tese; local
+// names are the shaders', so the two read side by side.
+#include "tessref/evaluation.h"
+
+#include "tessref/geometry.h"
+
+namespace tessref {
+
+template <typename T>
+EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
+                                   const DomainPoint<T>& glTessCoord,
+                                   const ThesisEvaluation<T>& evaluation) {
+    // GLSL: thesis_terrain.tese:24 adPosition
+    const vec4_t<T> adPosition = glm::mix(tcPosition[0], tcPosition[3], glTessCoord.u);
+    const vec4_t<T> bcPosition = glm::mix(tcPosition[1], tcPosition[2], glTessCoord.u);
+    // GLSL: thesis_terrain.tese:28 position
+    const vec4_t<T> position = glm::mix(adPosition, bcPosition, glTessCoord.v);
+
+    EvaluatedVertex<T> out;
+    // GLSL: thesis_terrain.tese:31 textureCoordinate
+    out.textureCoordinate = vec2_t<T>(position.x, position.y) / evaluation.scaleXY;
+    // GLSL: thesis_terrain.tese:34 height
+    const T height = evaluation.heightMap(out.textureCoordinate).r * evaluation.scaleZ;
+    // GLSL: thesis_terrain.tese:36 positionWithHeight
+    const vec4_t<T> positionWithHeight(position.x, position.y, height, T(1));
+    out.position = vec3_t<T>(positionWithHeight);
+    // GLSL: thesis_terrain.tese:38 gl_Position
+    out.glPosition = evaluation.mvp * positionWithHeight;
+    return out;
+}
+
+template <typename T>
+EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>& glInPosition,
+                                    const DomainPoint<T>& glTessCoord,
+                                    const Cosc422Evaluation<T>& evaluation) {
+    const T u = glTessCoord.u;
+    const T v = glTessCoord.v;
+    // GLSL: cosc422_terrain.tese:29 posn
+    vec4_t<T> posn = glm::mix(glm::mix(glInPosition[0], glInPosition[3], u),
+                              glm::mix(glInPosition[1], glInPosition[2], u), v);
+    // GLSL: cosc422_terrain.tese:32 s
+    const T s = (posn.x - evaluation.xMin) / (evaluation.xMax - evaluation.xMin);
+    const T t = (posn.z - evaluation.zMin) / (evaluation.zMax - evaluation.zMin);
+    // GLSL: cosc422_terrain.tese:35 height
+    const T height = evaluation.heightMap(vec2_t<T>(s, t)).r * evaluation.heightScale;
+    posn.y = height;
+
+    EvaluatedVertex<T> out;
+    out.position = vec3_t<T>(posn);
+    out.textureCoordinate = vec2_t<T>(s, t);
+    // GLSL: cosc422_terrain.tese:40 gl_Position
+    out.glPosition = evaluation.mvpMatrix * posn;
+    return out;
+}
+
+template <typename T>
+T lab4_vertex_log_level(const DomainPoint<T>& glTessCoord, const Lab4Lod<T>& lod) {
+    // GLSL: lab4_terrain.tese:38 lab4_vertex_log_level
+    const bool u0 = glTessCoord.u == T(0);
+    const bool u1 = glTessCoord.u == T(1);
+    const bool v0 = glTessCoord.v == T(0);
+    const bool v1 = glTessCoord.v == T(1);
+    if (u0 && v0) return lod.logCorner[0];
+    if (u0 && v1) return lod.logCorner[1];
+    if (u1 && v1) return lod.logCorner[2];
+    if (u1 && v0) return lod.logCorner[3];
+    if (u0) return lod.logOuter[0];
+    if (v0) return lod.logOuter[1];
+    if (u1) return lod.logOuter[2];
+    if (v1) return lod.logOuter[3];
+    return lod.logInner;
+}
+
+template <typename T>
+EvaluatedVertex<T> lab4_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
+                                 const DomainPoint<T>& glTessCoord, const Lab4Lod<T>& lod,
+                                 const Lab4Evaluation<T>& evaluation) {
+    const T u = glTessCoord.u;
+    const T v = glTessCoord.v;
+    // GLSL: lab4_terrain.tese:75 position
+    vec4_t<T> position = glm::mix(glm::mix(tcPosition[0], tcPosition[3], u),
+                                  glm::mix(tcPosition[1], tcPosition[2], u), v);
+
+    const vec2_t<T> texCoord =
+        vec2_t<T>(position.x, position.z) / evaluation.horizontalScale + evaluation.texCoordOffset;
+    const T logTessellationLevel = lab4_vertex_log_level(glTessCoord, lod);
+    // GLSL: lab4_terrain.tese:80 lod
+    const T mipLevel = lod.maxLogTessellationLevel - logTessellationLevel;
+    // GLSL: lab4_terrain.tese:81 height
+    const T height = evaluation.heightMap(texCoord, mipLevel).r * evaluation.verticalScale;
+    position.y = height;
+
+    EvaluatedVertex<T> out;
+    out.position = vec3_t<T>(position);
+    out.textureCoordinate = texCoord;
+    if (evaluation.gridStep > T(0)) {
+        Lab4NormalSampling<T> sampling;
+        sampling.heightMap = evaluation.heightMap;
+        sampling.horizontalScale = evaluation.horizontalScale;
+        sampling.verticalScale = evaluation.verticalScale;
+        sampling.texCoordOffset = evaluation.texCoordOffset;
+        sampling.h = evaluation.gridStep;
+        sampling.lod = mipLevel;
+        out.normal = lab4_vertex_normal(position.x, position.z, sampling);
+    }
+    // GLSL: lab4_terrain.tese:87 gl_Position
+    out.glPosition = evaluation.mvp * position;
+    return out;
+}
+
+namespace {
+
+template <typename T>
+bool less_lexicographic(const vec3_t<T>& p, const vec3_t<T>& q) {
+    // GLSL: pn_triangles.tese:36 less_lexicographic
+    return p.x < q.x || (p.x == q.x && (p.y < q.y || (p.y == q.y && p.z < q.z)));
+}
+
+}  // namespace
+
+template <typename T>
+EvaluatedVertex<T> pn_evaluate(const PnPatch<T>& patch, const DomainPoint<T>& glTessCoord,
+                               const PnEvaluation<T>& evaluation) {
+    const auto& pos = patch.v3VertexPos;
+    const vec3_t<T>& v3P030 = pos[0];
+    const vec3_t<T>& v3P021 = patch.v3PatchE1[0];
+    const vec3_t<T>& v3P012 = patch.v3PatchE2[0];
+    const vec3_t<T>& v3P003 = pos[1];
+    const vec3_t<T>& v3P102 = patch.v3PatchE1[1];
+    const vec3_t<T>& v3P201 = patch.v3PatchE2[1];
+    const vec3_t<T>& v3P300 = pos[2];
+    const vec3_t<T>& v3P210 = patch.v3PatchE1[2];
+    const vec3_t<T>& v3P120 = patch.v3PatchE2[2];
+    const vec3_t<T>& v3P111 = patch.v3P111;
+
+    const T fU = glTessCoord.u;
+    const T fV = glTessCoord.v;
+    const T fW = glTessCoord.w;
+    const T fUU = fU * fU;
+    const T fVV = fV * fV;
+    const T fWW = fW * fW;
+    const T fUU3 = fUU * T(3);
+    const T fVV3 = fVV * T(3);
+    const T fWW3 = fWW * T(3);
+
+    const std::array<vec3_t<T>, 3> normals{glm::normalize(patch.v3VertexNormal[0]),
+                                           glm::normalize(patch.v3VertexNormal[1]),
+                                           glm::normalize(patch.v3VertexNormal[2])};
+
+    // GLSL: pn_triangles.tese:79 zeroCount
+    const int zeroCount = int(fU == T(0)) + int(fV == T(0)) + int(fW == T(0));
+    vec3_t<T> v3PNPoint, v3BasePosition, v3Linear, v3Quadratic;
+    vec2_t<T> v2UV;
+    if (evaluation.watertightEdges && zeroCount == 1) {
+        // GLSL: pn_triangles.tese:85 watertightEdges
+        int i = (fU == T(0)) ? 1 : 0;
+        int j = (fW == T(0)) ? 1 : 2;
+        const std::array<T, 3> weights{fU, fV, fW};
+        if (less_lexicographic(pos[j], pos[i])) std::swap(i, j);
+        // The control point (and quadratic-normal coefficient) of edge i-j next to corner i.
+        auto pn_edge_point = [&](int from, int to) {
+            return to == (from < 2 ? from + 1 : 0) ? patch.v3PatchE1[from] : patch.v3PatchE2[to];
+        };
+        auto pn_edge_normal = [&](int from, int to) {
+            return to == (from < 2 ? from + 1 : 0) ? patch.v3EdgeNormal[from] : patch.v3EdgeNormal[to];
+        };
+        const T ci = weights[i];
+        const T cj = weights[j];
+        const vec3_t<T>& Pi = pos[i];
+        const vec3_t<T>& Pj = pos[j];
+        // GLSL: pn_triangles.tese:102 v3PNPoint
+        v3PNPoint = Pi * (ci * ci) * ci + Pj * (cj * cj) * cj +
+                    pn_edge_point(i, j) * ((ci * ci) * T(3)) * cj +
+                    pn_edge_point(j, i) * ((cj * cj) * T(3)) * ci;
+        v3BasePosition = (Pi * ci) + (Pj * cj);
+        // GLSL: pn_triangles.tese:106 v3Linear
+        v3Linear = (patch.v3VertexNormal[i] * ci) + (patch.v3VertexNormal[j] * cj);
+        v3Quadratic = normals[i] * (ci * ci) + normals[j] * (cj * cj) + pn_edge_normal(i, j) * (ci * cj);
+        v2UV = (patch.v2VertexUV[i] * ci) + (patch.v2VertexUV[j] * cj);
+    } else {
+        // GLSL: pn_triangles.tese:112 v3PNPoint
+        v3PNPoint = v3P030 * fUU * fU +
+                    v3P003 * fVV * fV +
+                    v3P300 * fWW * fW +
+                    v3P021 * fUU3 * fV +
+                    v3P012 * fVV3 * fU +
+                    v3P102 * fVV3 * fW +
+                    v3P201 * fWW3 * fV +
+                    v3P210 * fWW3 * fU +
+                    v3P120 * fUU3 * fW +
+                    v3P111 * T(6) * fW * fU * fV;
+        // GLSL: pn_triangles.tese:122 v3BasePosition
+        v3BasePosition = (v3P030 * fU) + (v3P003 * fV) + (v3P300 * fW);
+        // GLSL: pn_triangles.tese:125 v3Linear
+        v3Linear = (patch.v3VertexNormal[0] * fU) + (patch.v3VertexNormal[1] * fV) +
+                   (patch.v3VertexNormal[2] * fW);
+        // GLSL: pn_triangles.tese:128 v3Quadratic
+        v3Quadratic = normals[0] * fUU + normals[1] * fVV + normals[2] * fWW +
+                      patch.v3EdgeNormal[0] * (fU * fV) + patch.v3EdgeNormal[1] * (fV * fW) +
+                      patch.v3EdgeNormal[2] * (fW * fU);
+        // GLSL: pn_triangles.tese:132 v2UV
+        v2UV = (patch.v2VertexUV[0] * fU) + (patch.v2VertexUV[1] * fV) + (patch.v2VertexUV[2] * fW);
+    }
+
+    EvaluatedVertex<T> out;
+    // GLSL: pn_triangles.tese:137 v3PositionOut
+    out.position = glm::mix(v3BasePosition, v3PNPoint, evaluation.fInfluence);
+    // GLSL: pn_triangles.tese:138 v3NormalOut
+    out.normal = evaluation.normal == PnNormal::linear ? v3Linear : glm::normalize(v3Quadratic);
+    out.textureCoordinate = v2UV;
+    // GLSL: pn_triangles.tese:141 gl_Position
+    out.glPosition = evaluation.m4ViewProjection * vec4_t<T>(out.position, T(1));
+    return out;
+}
+
+#define TESSREF_INSTANTIATE(T)                                                                    \
+    template EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>&,                  \
+                                                const DomainPoint<T>&, const ThesisEvaluation<T>&); \
+    template EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>&,                 \
+                                                 const DomainPoint<T>&,                           \
+                                                 const Cosc422Evaluation<T>&);                    \
+    template T lab4_vertex_log_level(const DomainPoint<T>&, const Lab4Lod<T>&);                   \
+    template EvaluatedVertex<T> lab4_evaluate(const std::array<vec4_t<T>, 4>&,                    \
+                                              const DomainPoint<T>&, const Lab4Lod<T>&,           \
+                                              const Lab4Evaluation<T>&);                          \
+    template EvaluatedVertex<T> pn_evaluate(const PnPatch<T>&, const DomainPoint<T>&,             \
+                                            const PnEvaluation<T>&);
+TESSREF_INSTANTIATE(float)
+TESSREF_INSTANTIATE(double)
+#undef TESSREF_INSTANTIATE
+
+}  // namespace tessref
