@@ -9,6 +9,7 @@ packages=(
   libtbb-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   fonts-dejavu-core admesh
+  glslang-tools
 )
 
 missing=()
