@@ -14,6 +14,12 @@
 // (large tessellated draws come out corrupted: see TESSELLATION.md); every batch is
 // checked with GL_PRIMITIVES_GENERATED / GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN queries.
 //
+// The shader files are read at run time from $TESSREF_DATA_DIR/shaders when that
+// environment variable is set, else from the source tree's data/shaders.
+//
+// llvmpipe runs its draws with denormals flushed to zero: a denormal outer level culls
+// the patch there (tessellate() models this); the calling thread's FP mode is left as is.
+//
 // A Context is current on the thread that created it; use it from that thread only.
 #pragma once
 
