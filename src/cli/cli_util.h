@@ -1,0 +1,131 @@
+// src/cli/cli_util.h — helpers shared by every subcommand of `tessref`.
+//
+//  - numbers from the command line, validated over the whole text, errors naming the flag;
+//  - output files written atomically (temporary name in the target's directory, renamed
+//    into place on success, removed on failure: never a partial or stale file);
+//  - progress on stderr, only when stderr is a terminal.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tessref/error.h"
+
+namespace tessref::cli {
+
+// A Where naming only a file, or a flag for command-line input ("--outer").
+inline Where where_file(std::string file) {
+    Where where;
+    where.file = std::move(file);
+    return where;
+}
+
+// ---------------------------------------------------------------------------------------
+// Numbers
+
+// Parses one float from `text`, the whole text (surrounding spaces allowed): decimal with
+// optional sign and exponent ("1", "-2.5", "1e9", "2.5e-3"), hexadecimal floats, and,
+// case-insensitively, "nan", "inf", "infinity" with optional sign. A magnitude beyond
+// float's range becomes +-inf, one below it becomes +-0 or a subnormal (as strtof does).
+// Returns nullopt when the text is not a number.
+std::optional<float> parse_float(std::string_view text);
+
+// Parses an integer (whole text, decimal, optional sign). nullopt when not an integer or
+// out of range.
+std::optional<long long> parse_integer(std::string_view text);
+
+// Parses a comma-separated list of exactly `count` floats given to `flag`, e.g. "1,2,nan,4".
+// Throws tessref::Error naming the flag and the item:
+//   "item 3: 'x' is not a number" (where: --outer), "expected 4 numbers, got 3" (--outer).
+std::vector<float> parse_float_list(std::string_view text, std::size_t count,
+                                    const std::string& flag);
+
+// "%.9g" (enough digits for a float to round-trip), with NaN as "nan" whatever its sign
+// bit and infinities as "inf" / "-inf".
+std::string format_float(float x);
+// The shortest "%.<n>g" (n = 1..9) that reads back as the same float: "3.3" rather than
+// "3.29999995". For text meant to be retyped (a command line); same NaN/inf spelling.
+std::string format_float_short(float x);
+// "%.17g" for doubles, same NaN/inf spelling.
+std::string format_double(double x);
+
+// ---------------------------------------------------------------------------------------
+// Output
+
+// An output file written atomically. The constructor reserves a fresh temporary file next
+// to the target (same directory, so the final rename never crosses file systems; same
+// extension, so writers that pick a codec by extension, such as OpenImageIO, still work).
+// Write to temp_path(), then commit() renames it over the target. If commit() is never
+// reached (an exception, an early return), the destructor removes the temporary file and
+// the target is left exactly as it was.
+class AtomicOutput {
+public:
+    explicit AtomicOutput(std::filesystem::path target);
+    ~AtomicOutput();
+    AtomicOutput(const AtomicOutput&) = delete;
+    AtomicOutput& operator=(const AtomicOutput&) = delete;
+
+    const std::filesystem::path& target() const { return target_; }
+    const std::filesystem::path& temp_path() const { return temp_; }
+
+    // Writes `bytes` to the temporary file (replacing what it held). Throws tessref::Error.
+    void write(std::string_view bytes);
+    // Renames the temporary file over the target. Throws tessref::Error (and removes the
+    // temporary file) when that fails.
+    void commit();
+
+private:
+    std::filesystem::path target_;
+    std::filesystem::path temp_;
+    bool committed_ = false;
+};
+
+// Writes `bytes` to `target` atomically, or to stdout when target is empty or "-".
+void write_output(const std::string& target, std::string_view bytes);
+
+// True when `target` names stdout (empty or "-").
+bool is_stdout(const std::string& target);
+
+// The extension of a path, lower-cased, without the dot ("png" for "a/B.PNG"); "" if none.
+std::string lowercase_extension(const std::string& path);
+
+// ---------------------------------------------------------------------------------------
+// Progress
+
+// Progress of a long loop on stderr, shown only when stderr is a terminal: in a pipe, a
+// log or a test it prints nothing, so output stays deterministic. Redraws at most a few
+// times a second; the line is cleared by finish() or the destructor.
+//   Progress progress("rendering", patch_count);
+//   for (...) { ...; progress.advance(); }
+class Progress {
+public:
+    Progress(std::string label, std::size_t total);
+    ~Progress();
+    Progress(const Progress&) = delete;
+    Progress& operator=(const Progress&) = delete;
+
+    bool enabled() const { return enabled_; }
+    void advance(std::size_t steps = 1);
+    void set(std::size_t done);
+    void finish();
+
+private:
+    void draw(bool force);
+
+    std::string label_;
+    std::size_t total_ = 0;
+    std::size_t done_ = 0;
+    bool enabled_ = false;
+    bool drawn_ = false;
+    std::chrono::steady_clock::time_point last_draw_{};
+};
+
+// True when stderr is a terminal (what Progress checks).
+bool stderr_is_terminal();
+
+}  // namespace tessref::cli

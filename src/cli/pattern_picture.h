@@ -1,0 +1,94 @@
+// src/cli/pattern_picture.h — a picture of a tessellation pattern in its domain, for
+// `tessref tessellate --format svg|png`.
+//
+// draw_pattern() lays the picture out once as a list of plain shapes (polygons, lines,
+// discs, text) in pixel coordinates, y down; picture_to_svg() and write_picture_image()
+// are two back-ends of that one list, so the SVG and the PNG show the same thing.
+//
+// What the picture shows: the domain (unit square for quads and isolines, the unit right
+// triangle for triangles), u to the right and v up; every primitive (triangles filled,
+// blue when counter-clockwise in (u, v), orange when clockwise, darker where they touch an
+// outer edge; isoline segments; point-mode dots); every point dotted (boundary points red);
+// point indices and winding arrows when the pattern is small enough to read them; a title
+// with domain, spacing and winding, the command that reproduces the picture, and beside it
+// the levels as given and as the generator used them, the counts and the gpu-vs-exact
+// distance.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+
+#include "tessref/tessellator.h"
+
+namespace tessref::cli {
+
+struct Color {
+    std::uint8_t r = 0, g = 0, b = 0;
+};
+
+struct PicturePolygon {
+    std::vector<glm::dvec2> points;  // convex, in pixels
+    Color fill{};
+    bool stroked = false;
+    Color stroke{};
+    double stroke_width = 1.0;
+};
+
+struct PictureLine {
+    glm::dvec2 from{}, to{};
+    Color color{};
+    double width = 1.0;
+    bool dashed = false;
+};
+
+struct PictureDisc {
+    glm::dvec2 centre{};
+    double radius = 1.0;
+    Color fill{};
+};
+
+enum class TextAnchor : std::uint8_t { start, middle, end };
+enum class TextFont : std::uint8_t { sans, sans_bold, mono };
+
+struct PictureText {
+    glm::dvec2 baseline{};  // the anchor point on the baseline
+    std::string text;       // UTF-8
+    double size = 13.0;     // pixels
+    Color color{};
+    TextAnchor anchor = TextAnchor::start;
+    TextFont font = TextFont::sans;
+};
+
+// Shapes are painted in this order: polygons, lines, discs, texts (each in list order).
+struct Picture {
+    int width = 0, height = 0;
+    Color background{255, 255, 255};
+    std::vector<PicturePolygon> polygons;
+    std::vector<PictureLine> lines;
+    std::vector<PictureDisc> discs;
+    std::vector<PictureText> texts;
+    std::string title;  // also the SVG <title>
+};
+
+struct PatternPictureInfo {
+    double gpu_exact_max_difference = 0.0;
+    std::string command_line;  // the command that reproduces the picture (subtitle)
+};
+
+Picture draw_pattern(const Pattern& pattern, const PatternPictureInfo& info);
+
+// A standalone SVG 1.1 document (starts with "<svg", ends with "</svg>\n").
+std::string picture_to_svg(const Picture& picture);
+
+// Rasterizes the picture with OpenImageIO (ImageBufAlgo::render_line / render_text, plus
+// plain pixel fills for polygons and discs, no antialiasing) and writes it to `path`; the
+// codec follows the extension of `path`. Text uses DejaVu Sans; when no font can be loaded
+// the picture is still written, without text, and the returned warnings say so.
+// Throws tessref::Error when the image cannot be written.
+std::vector<std::string> write_picture_image(const Picture& picture, const std::string& path,
+                                             const std::string& error_name);
+
+}  // namespace tessref::cli
