@@ -120,12 +120,13 @@ std::string format_double(double x) {
 // ---------------------------------------------------------------------------------------
 // Output
 
-AtomicOutput::AtomicOutput(std::filesystem::path target) : target_(std::move(target)) {
+AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extension)
+    : target_(std::move(target)) {
     if (target_.empty()) throw Error("empty output file name");
     if (target_.has_filename() == false || target_.filename() == "." || target_.filename() == "..")
         throw Error("not a file name", where_file(target_.string()));
     const std::filesystem::path dir = target_.parent_path();
-    const std::string extension = target_.extension().string();
+    const std::string extension = temp_extension.empty() ? target_.extension().string() : temp_extension;
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 100; ++attempt) {
         // ".<name>.<pid>-<n>.tmp<ext>": hidden, unique to this process, same extension.

@@ -65,7 +65,9 @@ std::string format_double(double x);
 // the target is left exactly as it was.
 class AtomicOutput {
 public:
-    explicit AtomicOutput(std::filesystem::path target);
+    // `temp_extension` (e.g. ".png") overrides the extension of the temporary name, for a
+    // writer that must produce a given format whatever the target is called.
+    explicit AtomicOutput(std::filesystem::path target, std::string temp_extension = {});
     ~AtomicOutput();
     AtomicOutput(const AtomicOutput&) = delete;
     AtomicOutput& operator=(const AtomicOutput&) = delete;

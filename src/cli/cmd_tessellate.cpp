@@ -276,7 +276,7 @@ int run_tessellate(const TessellateOptions& options, bool inner_given) {
         }
         case Format::png: {
             const Picture picture = draw_pattern(pattern, {difference, request.command_line});
-            AtomicOutput output(request.output);
+            AtomicOutput output(request.output, ".png");  // PNG whatever the target's name
             const std::vector<std::string> warnings =
                 write_picture_image(picture, output.temp_path().string(), request.output);
             output.commit();

@@ -653,6 +653,7 @@ std::vector<std::string> write_picture_image(const Picture& picture, const std::
     canvas.image().set_write_format(OIIO::TypeDesc::UINT8);
     if (!canvas.image().write(path)) {
         std::string reason = canvas.image().geterror();
+        if (reason.empty()) reason = OIIO::geterror();
         throw Error("cannot write image: " + (reason.empty() ? std::string("unknown error") : reason),
                     where_file(error_name));
     }
