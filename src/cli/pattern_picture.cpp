@@ -271,7 +271,7 @@ Picture draw_pattern(const Pattern& pattern, const PatternPictureInfo& info) {
         paint.text({c00.x - 24, (c00.y + c01.y) / 2 + 5}, "outer[0]", 13, ink, TextAnchor::end);
         paint.text({(c00.x + c10.x) / 2, c00.y + 40}, "outer[1]", 13, ink, TextAnchor::middle);
         const glm::dvec2 mid = (c10 + c01) / 2.0;
-        paint.text({mid.x + 16, mid.y - 12}, "outer[2]", 13, ink, TextAnchor::start);
+        paint.text({mid.x + 26, mid.y - 20}, "outer[2]", 13, ink, TextAnchor::start);
     } else {
         paint.text({c00.x, c00.y + 22}, "(u,v) = (0,0)", 12, label, TextAnchor::start);
         paint.text({c10.x, c10.y + 22}, "(1,0)", 12, label, TextAnchor::end);
