@@ -46,6 +46,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -109,6 +110,10 @@ struct MeshWriteOptions {
     MeshFormat format = MeshFormat::ply;
     bool binary = false;       // ply, off, stl; an Error for obj
     int ascii_digits = 9;      // significant digits of every ASCII number
+    // Called from the calling thread with a stage ("welding", "connecting", "writing") and
+    // the fraction of it done, a few hundred times at most; may be empty. OpenMesh's
+    // writer reports nothing while it runs, so "writing" comes at 0 and 1 only.
+    std::function<void(std::string_view stage, double fraction)> progress;
 };
 
 struct MeshWriteReport {

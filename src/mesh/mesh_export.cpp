@@ -9,7 +9,6 @@
 #include <filesystem>
 #include <limits>
 #include <ostream>
-#include <unordered_map>
 #include <utility>
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -153,24 +152,34 @@ WeldedMesh weld_bitwise(const SurfaceMesh& mesh) {
     WeldedMesh result;
     result.vertex_map.resize(n);
 
-    // The emitted copy each welded vertex takes its attributes from.
+    // The emitted copy each welded vertex takes its attributes from, and its key.
     std::vector<std::uint32_t> source;
+    std::vector<PositionKey> keys;
     source.reserve(n);
+    keys.reserve(n);
     {
-        std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> welded_of;
-        welded_of.reserve(n);
+        // Open addressing, linear probing, at most half full: a slot holds a welded
+        // vertex id (or `empty`). Several times faster than std::unordered_map here, which
+        // allocates a node per vertex.
+        constexpr std::uint32_t empty = std::numeric_limits<std::uint32_t>::max();
+        std::size_t capacity = 16;
+        while (capacity < 2 * n) capacity *= 2;
+        const std::size_t mask = capacity - 1;
+        std::vector<std::uint32_t> slots(capacity, empty);
         const bool has_patch_ids = !mesh.patch_ids.empty();
         for (std::uint32_t i = 0; i < n; ++i) {
-            const auto [it, inserted] =
-                welded_of.try_emplace(position_key(mesh.positions[i]),
-                                      static_cast<std::uint32_t>(source.size()));
-            if (inserted) {
+            const PositionKey key = position_key(mesh.positions[i]);
+            std::size_t slot = PositionKeyHash{}(key) & mask;
+            while (slots[slot] != empty && !(keys[slots[slot]] == key)) slot = (slot + 1) & mask;
+            if (slots[slot] == empty) {
+                slots[slot] = static_cast<std::uint32_t>(source.size());
                 source.push_back(i);
-            } else if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[it->second]]) {
+                keys.push_back(key);
+            } else if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[slots[slot]]]) {
                 // Lowest patch id wins; on a tie the earlier copy (already there) stays.
-                source[it->second] = i;
+                source[slots[slot]] = i;
             }
-            result.vertex_map[i] = it->second;
+            result.vertex_map[i] = slots[slot];
         }
     }
 
@@ -247,7 +256,12 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
         throw Error("ASCII digits must be within [1, 17], got " + std::to_string(options.ascii_digits));
     }
 
+    const auto progress = [&options](std::string_view stage, double fraction) {
+        if (options.progress) options.progress(stage, fraction);
+    };
+    progress("welding", 0.0);
     WeldedMesh welded = weld_bitwise(mesh);
+    progress("welding", 1.0);
     const SurfaceMesh& w = welded.mesh;
     MeshWriteReport report;
     report.emitted_vertices = mesh.positions.size();
@@ -304,7 +318,12 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     for (std::uint32_t v = 0; v < w.positions.size(); ++v) add_vertex(v);
     {
         const QuietStream quiet(::omerr());  // refused faces are handled below
-        for (const auto& triangle : w.triangles) {
+        constexpr std::size_t progress_step = std::size_t{1} << 16;
+        for (std::size_t t = 0; t < w.triangles.size(); ++t) {
+            if (t % progress_step == 0) {
+                progress("connecting", static_cast<double>(t) / static_cast<double>(w.triangles.size()));
+            }
+            const auto& triangle = w.triangles[t];
             const ExportMesh::VertexHandle a(static_cast<int>(triangle[0]));
             const ExportMesh::VertexHandle b(static_cast<int>(triangle[1]));
             const ExportMesh::VertexHandle c(static_cast<int>(triangle[2]));
@@ -314,6 +333,7 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
             om.add_face(add_vertex(triangle[0]), add_vertex(triangle[1]), add_vertex(triangle[2]));
         }
     }
+    progress("connecting", 1.0);
     report.written_vertices = om.n_vertices();
     report.triangles = om.n_faces();
 
@@ -327,6 +347,7 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     if (write_patch_ids || write_tess_coords) io_options += OpenMesh::IO::Options::Custom;
 
     bool written = false;
+    progress("writing", 0.0);
     {
         const QuietStream quiet_log(::omlog());
         const QuietStream quiet_out(::omout());
@@ -338,6 +359,7 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
         throw Error("OpenMesh could not write the mesh as " + std::string(to_string(format)));
     }
     if (!out) throw Error("cannot write the mesh: output stream failed");
+    progress("writing", 1.0);
     return report;
 }
 
