@@ -180,8 +180,8 @@ TEST(TessellatorProperties, OuterEdgeDivisionAndIndexIndependence) {
                 }
 }
 
-// Property 3: the points on an edge are symmetric: x and 1 - x are both present
-// (bitwise in gpu precision; to one double rounding in exact precision).
+// Property 3: the points on an edge are symmetric: x and 1 - x are both present, bitwise
+// (in exact precision too: its positions sit on a 2^-53 grid so that 1 - x is exact).
 TEST(TessellatorProperties, OuterEdgeSymmetry) {
     std::mt19937 rng(3);
     for (Precision prec : kPrecisions)
@@ -195,13 +195,9 @@ TEST(TessellatorProperties, OuterEdgeSymmetry) {
                     for (int e = 0; e < (d == Domain::quads ? 4 : 3); ++e) {
                         std::vector<double> t = edge_parameters(p, e);
                         for (std::size_t i = 0; i < t.size(); ++i) {
-                            const double sum = t[i] + t[t.size() - 1 - i];
-                            if (prec == Precision::gpu) {
-                                const float a = static_cast<float>(t[i]);
-                                ASSERT_EQ(1.0f - a, static_cast<float>(t[t.size() - 1 - i]));
-                            } else {
-                                ASSERT_NEAR(sum, 1.0, 0x1p-52);
-                            }
+                            ASSERT_EQ(1.0 - t[i], t[t.size() - 1 - i]) << "edge " << e;
+                            const float a = static_cast<float>(t[i]);
+                            if (prec == Precision::gpu) ASSERT_EQ(1.0f - a, static_cast<float>(t[t.size() - 1 - i]));
                         }
                     }
                 }
@@ -406,8 +402,8 @@ TEST(TessellatorPrecision, GpuQuantizesExactDoesNot) {
     std::vector<double> g = edge_parameters(gpu, 1), x = edge_parameters(exact, 1);
     ASSERT_EQ(g.size(), 4u);
     EXPECT_EQ(g[1], 0x5555 / 65536.0);  // round(65536/3) / 65536
-    EXPECT_EQ(x[1], 1.0 / 3.0);
-    EXPECT_EQ(x[2], 1.0 - 1.0 / 3.0);
+    EXPECT_NEAR(x[1], 1.0 / 3.0, 0x1p-54);  // on the 2^-53 grid, not 16.16
+    EXPECT_EQ(x[2], 1.0 - x[1]);
     EXPECT_NEAR(max_point_difference(gpu, exact), std::fabs(0x5555 / 65536.0 - 1.0 / 3.0), 1e-12);
 
     // The triangle centre: 0x5555 in gpu, exactly 1/3 in exact.

@@ -132,6 +132,10 @@ inline Location place_point(const LevelContext& c, int point) {
     const double floor_exact = c.floor_segments > 0 ? static_cast<double>(index_on_floor) / c.floor_segments : 0.0;
     const double ceil_exact = c.ceil_segments > 0 ? static_cast<double>(index_on_ceil) / c.ceil_segments : 0.0;
     double loc_exact = floor_exact * (1.0 - c.fraction_exact) + ceil_exact * c.fraction_exact;
+    // Snap to a multiple of 2^-53 (an error below 2^-54): then 1 - loc is exact in double,
+    // so the mirrored half is bitwise the complement of the first and a neighbour that
+    // walks the shared edge the other way sees exactly the same parameters.
+    loc_exact = std::nearbyint(loc_exact * 0x1p53) * 0x1p-53;
     if (flip) {
         loc = kOne - loc;
         loc_exact = 1.0 - loc_exact;
