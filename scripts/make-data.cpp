@@ -1,0 +1,266 @@
+// make-data.cpp — regenerates the synthetic data the shipped scenes use.
+//
+// Build and run with scripts/make-data.sh (it compiles this file against the Debian
+// OpenImageIO and OpenMesh packages and writes into data/). Everything here is
+// deterministic: a hash-based value noise with a fixed seed, no clock, no random device,
+// so running it again reproduces the committed files byte for byte.
+//
+// What it writes, and why each exists:
+//  - data/heightmaps/thesis-island.pgm   8-bit 512x512. Stand-in for the thesis's Sekken
+//    height map (not published): an island whose sea is exactly 0 (flat, so only the
+//    constant factor tessellates it, as the thesis's Sekken figure shows), a ridge of
+//    mountains and rolling hills. 8 bits because the thesis's maps were 0..255 grey.
+//  - data/tessmaps/thesis-roads.pgm      8-bit 256x256 tessellation map for the thesis's
+//    map factor, drawn as the thesis describes (section 4.7.3): main road white (255),
+//    a smaller road grey (160), a town grey (112), everything else black. Roads are wider
+//    than a patch of the shipped scenes (one sample per edge midpoint must not miss them).
+//  - data/heightmaps/canyon.pgm          16-bit 512x512 canyon for lab 4: a plateau cut
+//    by a meandering, stepped canyon. Power-of-two so the mip pyramid halves cleanly.
+//  - data/meshes/icosahedron.off, cube.off, bump.off: triangle meshes with averaged
+//    vertex normals (NOFF) for PN triangles. The cube's corner normals are the normalized
+//    sum of its three face planes, (+-1,+-1,+-1)/sqrt(3); the icosahedron's are radial; the
+//    bump is a flat 7x7 grid with a raised middle, so its outer faces are flat (all three
+//    normals exactly (0,0,1)) and exercise the "flat patch at level 1" rule.
+#include <OpenImageIO/imageio.h>
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Mesh = OpenMesh::PolyMesh_ArrayKernelT<>;
+
+// ---- noise -------------------------------------------------------------------------
+std::uint32_t hash2(int x, int y, std::uint32_t seed) {
+    std::uint32_t h = seed;
+    h ^= static_cast<std::uint32_t>(x) * 0x8da6b343u;
+    h ^= static_cast<std::uint32_t>(y) * 0xd8163841u;
+    h = (h ^ (h >> 13)) * 0x5bd1e995u;
+    h ^= h >> 15;
+    h *= 0x27d4eb2du;
+    h ^= h >> 16;
+    return h;
+}
+double lattice(int x, int y, std::uint32_t seed) { return hash2(x, y, seed) / 4294967295.0; }
+double smooth(double t) { return t * t * (3.0 - 2.0 * t); }
+
+double value_noise(double x, double y, std::uint32_t seed) {
+    const double fx = std::floor(x), fy = std::floor(y);
+    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+    const double tx = smooth(x - fx), ty = smooth(y - fy);
+    const double a = lattice(ix, iy, seed), b = lattice(ix + 1, iy, seed);
+    const double c = lattice(ix, iy + 1, seed), d = lattice(ix + 1, iy + 1, seed);
+    return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
+}
+
+double fbm(double x, double y, int octaves, std::uint32_t seed) {
+    double sum = 0, amplitude = 0.5, norm = 0;
+    for (int o = 0; o < octaves; ++o) {
+        sum += amplitude * value_noise(x, y, seed + 101u * o);
+        norm += amplitude;
+        x *= 2.03;
+        y *= 2.03;
+        amplitude *= 0.5;
+    }
+    return sum / norm;  // 0..1
+}
+
+double distance_to_segment(double px, double py, double ax, double ay, double bx, double by) {
+    const double vx = bx - ax, vy = by - ay;
+    const double t = std::clamp(((px - ax) * vx + (py - ay) * vy) / (vx * vx + vy * vy), 0.0, 1.0);
+    return std::hypot(px - (ax + t * vx), py - (ay + t * vy));
+}
+
+double distance_to_polyline(double px, double py, const std::vector<std::array<double, 2>>& line) {
+    double best = 1e30;
+    for (std::size_t i = 0; i + 1 < line.size(); ++i)
+        best = std::min(best, distance_to_segment(px, py, line[i][0], line[i][1], line[i + 1][0],
+                                                  line[i + 1][1]));
+    return best;
+}
+
+// ---- image output through OpenImageIO ---------------------------------------------
+template <typename T>
+void write_gray(const std::string& path, int size, const std::vector<T>& pixels,
+                OIIO::TypeDesc type) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) {
+        std::fprintf(stderr, "make-data: cannot create %s\n", path.c_str());
+        std::exit(1);
+    }
+    OIIO::ImageSpec spec(size, size, 1, type);
+    spec.attribute("pnm:binary", 1);
+    if (!out->open(path, spec) || !out->write_image(type, pixels.data()) || !out->close()) {
+        std::fprintf(stderr, "make-data: cannot write %s: %s\n", path.c_str(),
+                     out->geterror().c_str());
+        std::exit(1);
+    }
+    std::printf("wrote %s\n", path.c_str());
+}
+
+// ---- height and tessellation maps -------------------------------------------------
+void make_thesis_island(const std::string& dir) {
+    const int n = 512;
+    std::vector<std::uint8_t> pixels(n * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double x = (i + 0.5) / n, y = (j + 0.5) / n;
+            // Irregular coastline: radial falloff perturbed by low-frequency noise.
+            const double r = std::hypot(x - 0.5, y - 0.5) / 0.42 + 0.35 * (fbm(x * 3, y * 3, 3, 7) - 0.5);
+            const double land = std::clamp(1.0 - r, 0.0, 1.0);
+            // A mountain ridge running diagonally, plus hills everywhere.
+            const double ridge = std::exp(-std::pow(distance_to_segment(x, y, 0.3, 0.35, 0.7, 0.62) / 0.09, 2));
+            const double hills = fbm(x * 8, y * 8, 6, 11);
+            double h = land > 0 ? std::min(1.0, 1.6 * land) * (0.2 + 0.4 * hills + 0.6 * ridge * hills) : 0.0;
+            h = std::clamp(h - 0.04, 0.0, 1.0);  // the sea, and a beach at exactly 0
+            pixels[j * n + i] = static_cast<std::uint8_t>(std::lround(h * 255.0));
+        }
+    write_gray(dir + "/heightmaps/thesis-island.pgm", n, pixels, OIIO::TypeDesc::UINT8);
+}
+
+void make_thesis_roads(const std::string& dir) {
+    const int n = 256;
+    // In texture coordinates (0..1). The main road follows the coast; the smaller road
+    // crosses the ridge to a town.
+    const std::vector<std::array<double, 2>> main_road = {
+        {0.18, 0.30}, {0.30, 0.18}, {0.50, 0.14}, {0.70, 0.20}, {0.82, 0.36}, {0.84, 0.56}, {0.74, 0.76}};
+    const std::vector<std::array<double, 2>> small_road = {{0.50, 0.14}, {0.48, 0.40}, {0.56, 0.58}, {0.62, 0.70}};
+    const double town_x = 0.62, town_y = 0.70, town_radius = 0.07;
+    std::vector<std::uint8_t> pixels(n * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double x = (i + 0.5) / n, y = (j + 0.5) / n;
+            const double px = 1.0 / n;
+            // Coverage with a one-texel soft edge.
+            auto cover = [&](double d, double half_width) {
+                return std::clamp((half_width - d) / px + 0.5, 0.0, 1.0);
+            };
+            double v = 0;
+            v = std::max(v, 112.0 * cover(std::hypot(x - town_x, y - town_y), town_radius));
+            v = std::max(v, 160.0 * cover(distance_to_polyline(x, y, small_road), 0.025));
+            v = std::max(v, 255.0 * cover(distance_to_polyline(x, y, main_road), 0.04));
+            pixels[j * n + i] = static_cast<std::uint8_t>(std::lround(v));
+        }
+    write_gray(dir + "/tessmaps/thesis-roads.pgm", n, pixels, OIIO::TypeDesc::UINT8);
+}
+
+void make_canyon(const std::string& dir) {
+    const int n = 512;
+    std::vector<std::uint16_t> pixels(n * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const double x = (i + 0.5) / n, y = (j + 0.5) / n;
+            // Meandering river centre line x = c(y).
+            const double centre = 0.5 + 0.14 * std::sin(y * 2 * M_PI * 1.3) + 0.05 * std::sin(y * 2 * M_PI * 3.7 + 1.0);
+            const double d = std::abs(x - centre) + 0.03 * (fbm(x * 8, y * 8, 3, 23) - 0.5);
+            // Stepped walls: depth falls off with distance in terraces.
+            const double w = std::clamp(d / 0.22, 0.0, 1.0);
+            const double steps = 4.0;
+            const double terrace = (std::floor(w * steps) + smooth(std::pow(w * steps - std::floor(w * steps), 3))) / steps;
+            const double plateau = 0.72 + 0.22 * fbm(x * 4, y * 4, 6, 31);
+            const double floor_height = 0.08 + 0.04 * fbm(x * 16, y * 16, 3, 37);
+            const double h = floor_height + (plateau - floor_height) * terrace;
+            pixels[j * n + i] = static_cast<std::uint16_t>(std::lround(std::clamp(h, 0.0, 1.0) * 65535.0));
+        }
+    write_gray(dir + "/heightmaps/canyon.pgm", n, pixels, OIIO::TypeDesc::UINT16);
+}
+
+// ---- meshes through OpenMesh -------------------------------------------------------
+void write_mesh(const Mesh& mesh, const std::string& path) {
+    OpenMesh::IO::Options options(OpenMesh::IO::Options::VertexNormal);
+    if (!OpenMesh::IO::write_mesh(mesh, path, options, 9)) {
+        std::fprintf(stderr, "make-data: cannot write %s\n", path.c_str());
+        std::exit(1);
+    }
+    std::printf("wrote %s\n", path.c_str());
+}
+
+void make_cube(const std::string& dir) {
+    Mesh mesh;
+    mesh.request_vertex_normals();
+    std::array<Mesh::VertexHandle, 8> v;
+    for (int k = 0; k < 8; ++k) {
+        const float x = (k & 1) ? 1.f : -1.f, y = (k & 2) ? 1.f : -1.f, z = (k & 4) ? 1.f : -1.f;
+        v[k] = mesh.add_vertex(Mesh::Point(x, y, z));
+        // The normalized sum of the three face planes meeting at the corner.
+        mesh.set_normal(v[k], Mesh::Normal(x, y, z).normalize());
+    }
+    // Quads listed counter-clockwise seen from outside, each split into two triangles.
+    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads) {
+        mesh.add_face(v[q[0]], v[q[1]], v[q[2]]);
+        mesh.add_face(v[q[0]], v[q[2]], v[q[3]]);
+    }
+    write_mesh(mesh, dir + "/meshes/cube.off");
+}
+
+void make_icosahedron(const std::string& dir) {
+    Mesh mesh;
+    mesh.request_vertex_normals();
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    const double raw[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                               {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    std::array<Mesh::VertexHandle, 12> v;
+    for (int k = 0; k < 12; ++k) {
+        const double len = std::sqrt(raw[k][0] * raw[k][0] + raw[k][1] * raw[k][1] + raw[k][2] * raw[k][2]);
+        const Mesh::Point p(raw[k][0] / len, raw[k][1] / len, raw[k][2] / len);  // unit sphere
+        v[k] = mesh.add_vertex(p);
+        mesh.set_normal(v[k], p);  // averaged normal of a regular polyhedron = radial
+    }
+    const int faces[20][3] = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                              {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                              {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    for (const auto& f : faces) mesh.add_face(v[f[0]], v[f[1]], v[f[2]]);
+    write_mesh(mesh, dir + "/meshes/icosahedron.off");
+}
+
+void make_bump(const std::string& dir) {
+    Mesh mesh;
+    mesh.request_vertex_normals();
+    mesh.request_face_normals();
+    const int n = 7;  // 7x7 vertices on [-1,1]^2, z up
+    std::vector<Mesh::VertexHandle> v(n * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float x = -1.f + 2.f * i / (n - 1), y = -1.f + 2.f * j / (n - 1);
+            const int ring = std::max(std::abs(i - n / 2), std::abs(j - n / 2));
+            const float z = ring == 0 ? 0.6f : ring == 1 ? 0.2f : 0.f;
+            v[j * n + i] = mesh.add_vertex(Mesh::Point(x, y, z));
+        }
+    for (int j = 0; j + 1 < n; ++j)
+        for (int i = 0; i + 1 < n; ++i) {
+            const auto a = v[j * n + i], b = v[j * n + i + 1], c = v[(j + 1) * n + i + 1], d = v[(j + 1) * n + i];
+            mesh.add_face(a, b, c);  // counter-clockwise seen from +z
+            mesh.add_face(a, c, d);
+        }
+    // Averaged vertex normals: the normalized sum of the incident face normals. Faces in
+    // the z = 0 plane have the normal (0,0,1) exactly, so a vertex surrounded only by
+    // them gets exactly (0,0,1) and the faces made of such vertices are flat.
+    mesh.update_face_normals();
+    for (auto vh : mesh.vertices()) {
+        Mesh::Normal sum(0, 0, 0);
+        for (auto fh : mesh.vf_range(vh)) sum += mesh.normal(fh);
+        mesh.set_normal(vh, sum.normalize());
+    }
+    write_mesh(mesh, dir + "/meshes/bump.off");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    const std::string dir = argc > 1 ? argv[1] : "data";
+    make_thesis_island(dir);
+    make_thesis_roads(dir);
+    make_canyon(dir);
+    make_cube(dir);
+    make_icosahedron(dir);
+    make_bump(dir);
+    return 0;
+}

@@ -1,0 +1,271 @@
+// toml_reader.h — typed, position-aware reading of scene tables (private to src/scene/).
+//
+// Every read records the key as used; finish() then reports a key nobody read as unknown
+// (or as not used by the chosen model, when the table knows it). Every error is a
+// tessref::Error whose Where holds the scene file, the line and column of the offending
+// node (the key itself for an unknown key, the table header for a missing key) and the
+// dotted key.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <toml++/toml.h>
+
+#include "tessref/error.h"
+
+namespace tessref::scene_detail {
+
+inline Where where_at(const std::string& file, const toml::source_region& region,
+                      const std::string& key) {
+    Where w;
+    w.file = file;
+    w.line = static_cast<int>(region.begin.line);
+    w.column = static_cast<int>(region.begin.column);
+    w.key = key;
+    return w;
+}
+
+inline const char* type_name(const toml::node& node) {
+    switch (node.type()) {
+        case toml::node_type::table: return "a table";
+        case toml::node_type::array: return "an array";
+        case toml::node_type::string: return "a string";
+        case toml::node_type::integer: return "an integer";
+        case toml::node_type::floating_point: return "a real number";
+        case toml::node_type::boolean: return "a boolean";
+        case toml::node_type::date: return "a date";
+        case toml::node_type::time: return "a time";
+        case toml::node_type::date_time: return "a date-time";
+        default: return "nothing";
+    }
+}
+
+inline std::string format_number(double v) {
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "%.9g", v);
+    return buffer;
+}
+
+class TableReader {
+public:
+    // `name` is the dotted path of the table ("control", "mesh[1]").
+    // `known_keys`: every key the table may hold under any model. A key outside it is
+    // reported at once as unknown (before a missing key, since a misspelt key usually
+    // is the missing one).
+    TableReader(const std::string& file, const toml::table& table, std::string name,
+                std::vector<std::string> known_keys)
+        : file_(file), table_(table), name_(std::move(name)), known_(std::move(known_keys)) {
+        for (auto&& [k, n] : table_) {
+            const std::string ks(k.str());
+            if (std::find(known_.begin(), known_.end(), ks) == known_.end()) {
+                std::string list;
+                for (const auto& kk : known_) list += (list.empty() ? "" : ", ") + kk;
+                throw Error("unknown key " + key(ks) + " in [" + name_ + "] (known: " + list + ")",
+                            where_at(file_, k.source(), key(ks)));
+            }
+        }
+    }
+
+    const std::string& name() const { return name_; }
+    const std::string& file() const { return file_; }
+    std::string key(const std::string& k) const { return name_ + "." + k; }
+
+    bool has(const std::string& k) const { return table_.get(k) != nullptr; }
+
+    const toml::node* node(const std::string& k) {
+        const toml::node* n = table_.get(k);
+        if (n) used_.insert(k);
+        return n;
+    }
+
+    Where where(const std::string& k) const {
+        if (const toml::node* n = table_.get(k)) return where_at(file_, n->source(), key(k));
+        return where_at(file_, table_.source(), key(k));
+    }
+    Where where_table() const { return where_at(file_, table_.source(), name_); }
+
+    [[noreturn]] void fail(const std::string& k, const std::string& what) const {
+        throw Error(what, where(k));
+    }
+    [[noreturn]] void missing(const std::string& k, const std::string& why = "") const {
+        throw Error("missing key " + key(k) + (why.empty() ? "" : " (" + why + ")"), where(k));
+    }
+    [[noreturn]] void wrong_type(const std::string& k, const toml::node& n, const char* expected) const {
+        throw Error(key(k) + " must be " + expected + ", not " + type_name(n), where(k));
+    }
+
+    // ---- scalars ------------------------------------------------------------------
+    std::optional<std::string> string_opt(const std::string& k) {
+        const toml::node* n = node(k);
+        if (!n) return std::nullopt;
+        if (!n->is_string()) wrong_type(k, *n, "a string");
+        return n->as_string()->get();
+    }
+    std::string string(const std::string& k, const std::string& why = "") {
+        auto v = string_opt(k);
+        if (!v) missing(k, why);
+        return *v;
+    }
+    // One of `choices`; the error lists them.
+    std::optional<std::string> choice_opt(const std::string& k, const std::vector<std::string>& choices) {
+        auto v = string_opt(k);
+        if (!v) return std::nullopt;
+        for (const auto& c : choices)
+            if (*v == c) return v;
+        std::string list;
+        for (const auto& c : choices) list += (list.empty() ? "\"" : ", \"") + c + "\"";
+        fail(k, key(k) + " = \"" + *v + "\" is not one of " + list);
+    }
+    std::string choice(const std::string& k, const std::vector<std::string>& choices,
+                       const std::string& why = "") {
+        auto v = choice_opt(k, choices);
+        if (!v) missing(k, why);
+        return *v;
+    }
+
+    static std::optional<double> as_number(const toml::node& n) {
+        if (n.is_integer()) return static_cast<double>(n.as_integer()->get());
+        if (n.is_floating_point()) return n.as_floating_point()->get();
+        return std::nullopt;
+    }
+
+    // A finite real in [lo, hi] (inclusive unless the open flags say otherwise).
+    std::optional<double> real_opt(const std::string& k, double lo = -HUGE_VAL, double hi = HUGE_VAL,
+                                   bool lo_open = false, bool hi_open = false) {
+        const toml::node* n = node(k);
+        if (!n) return std::nullopt;
+        auto v = as_number(*n);
+        if (!v) wrong_type(k, *n, "a number");
+        check_range(k, *v, lo, hi, lo_open, hi_open);
+        return v;
+    }
+    double real(const std::string& k, double lo = -HUGE_VAL, double hi = HUGE_VAL,
+                bool lo_open = false, bool hi_open = false, const std::string& why = "") {
+        auto v = real_opt(k, lo, hi, lo_open, hi_open);
+        if (!v) missing(k, why);
+        return *v;
+    }
+    double real_or(const std::string& k, double fallback, double lo = -HUGE_VAL, double hi = HUGE_VAL,
+                   bool lo_open = false, bool hi_open = false) {
+        auto v = real_opt(k, lo, hi, lo_open, hi_open);
+        return v ? *v : fallback;
+    }
+
+    std::optional<std::int64_t> integer_opt(const std::string& k, std::int64_t lo, std::int64_t hi) {
+        const toml::node* n = node(k);
+        if (!n) return std::nullopt;
+        if (!n->is_integer()) wrong_type(k, *n, "an integer");
+        const std::int64_t v = n->as_integer()->get();
+        if (v < lo || v > hi)
+            fail(k, key(k) + " = " + std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
+                        std::to_string(hi) + "]");
+        return v;
+    }
+
+    std::optional<bool> boolean_opt(const std::string& k) {
+        const toml::node* n = node(k);
+        if (!n) return std::nullopt;
+        if (!n->is_boolean()) wrong_type(k, *n, "a boolean");
+        return n->as_boolean()->get();
+    }
+
+    // An array of exactly `count` numbers, each finite.
+    std::optional<std::vector<double>> reals_opt(const std::string& k, std::size_t count) {
+        const toml::node* n = node(k);
+        if (!n) return std::nullopt;
+        const toml::array* a = n->as_array();
+        if (!a) wrong_type(k, *n, ("an array of " + std::to_string(count) + " numbers").c_str());
+        if (a->size() != count)
+            fail(k, key(k) + " must have " + std::to_string(count) + " numbers, not " + std::to_string(a->size()));
+        std::vector<double> out;
+        for (std::size_t i = 0; i < a->size(); ++i) {
+            const toml::node& e = *a->get(i);
+            auto v = as_number(e);
+            const std::string ek = key(k) + "[" + std::to_string(i) + "]";
+            if (!v) throw Error(ek + " must be a number, not " + std::string(type_name(e)), where_at(file_, e.source(), ek));
+            if (!std::isfinite(*v)) throw Error(ek + " must be finite", where_at(file_, e.source(), ek));
+            out.push_back(*v);
+        }
+        return out;
+    }
+    std::optional<glm::dvec3> vec3_opt(const std::string& k) {
+        auto v = reals_opt(k, 3);
+        if (!v) return std::nullopt;
+        return glm::dvec3((*v)[0], (*v)[1], (*v)[2]);
+    }
+    std::optional<glm::dvec2> vec2_opt(const std::string& k) {
+        auto v = reals_opt(k, 2);
+        if (!v) return std::nullopt;
+        return glm::dvec2((*v)[0], (*v)[1]);
+    }
+    // An array of exactly `count` integers in [lo, hi].
+    std::optional<std::vector<std::int64_t>> integers_opt(const std::string& k, std::size_t count,
+                                                          std::int64_t lo, std::int64_t hi) {
+        const toml::node* n = node(k);
+        if (!n) return std::nullopt;
+        const toml::array* a = n->as_array();
+        if (!a) wrong_type(k, *n, ("an array of " + std::to_string(count) + " integers").c_str());
+        if (a->size() != count)
+            fail(k, key(k) + " must have " + std::to_string(count) + " integers, not " + std::to_string(a->size()));
+        std::vector<std::int64_t> out;
+        for (std::size_t i = 0; i < a->size(); ++i) {
+            const toml::node& e = *a->get(i);
+            const std::string ek = key(k) + "[" + std::to_string(i) + "]";
+            if (!e.is_integer())
+                throw Error(ek + " must be an integer, not " + std::string(type_name(e)), where_at(file_, e.source(), ek));
+            const std::int64_t v = e.as_integer()->get();
+            if (v < lo || v > hi)
+                throw Error(ek + " = " + std::to_string(v) + " is out of range [" + std::to_string(lo) + ", " +
+                                std::to_string(hi) + "]",
+                            where_at(file_, e.source(), ek));
+            out.push_back(v);
+        }
+        return out;
+    }
+
+    const toml::table* table_opt(const std::string& k) {
+        const toml::node* n = node(k);
+        if (!n) return nullptr;
+        if (!n->is_table()) wrong_type(k, *n, "a table");
+        return n->as_table();
+    }
+
+    // Reports the first key of the table that no read consumed (known to the table, but
+    // not used by the chosen model: `context` says which).
+    void finish(const std::string& context = "") const {
+        for (auto&& [k, n] : table_) {
+            const std::string ks(k.str());
+            if (used_.count(ks)) continue;
+            throw Error("key " + key(ks) + " is not used" + (context.empty() ? "" : " " + context),
+                        where_at(file_, k.source(), key(ks)));
+        }
+    }
+
+private:
+    void check_range(const std::string& k, double v, double lo, double hi, bool lo_open, bool hi_open) const {
+        if (!std::isfinite(v)) fail(k, key(k) + " must be finite");
+        const bool below = lo_open ? !(v > lo) : !(v >= lo);
+        const bool above = hi_open ? !(v < hi) : !(v <= hi);
+        if (below || above) {
+            std::string range = std::string(lo_open ? "(" : "[") + (std::isinf(lo) ? "-inf" : format_number(lo)) +
+                                ", " + (std::isinf(hi) ? "inf" : format_number(hi)) + (hi_open ? ")" : "]");
+            fail(k, key(k) + " = " + format_number(v) + " is out of range " + range);
+        }
+    }
+
+    const std::string& file_;
+    const toml::table& table_;
+    std::string name_;
+    std::vector<std::string> known_;
+    std::set<std::string> used_;
+};
+
+}  // namespace tessref::scene_detail
