@@ -1,0 +1,110 @@
+// Normals from a height field: the thesis's normal map and lab 4's appendix A normal
+// (see tessref/heightfield.h for the text they follow and the quirks kept).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "tessref/error.h"
+#include "tessref/heightfield.h"
+
+namespace tessref {
+
+std::vector<std::uint8_t> thesis_normal_map_codes(const Texture& height_map, double texel_spacing,
+                                                  double height_scale) {
+    if (height_map.empty()) throw Error("thesis_normal_map: the height map is empty");
+    if (!(texel_spacing > 0.0) || !std::isfinite(texel_spacing) || !std::isfinite(height_scale))
+        throw Error("thesis_normal_map: texel spacing must be positive and finite and the height "
+                    "scale finite");
+    const int width = height_map.width();
+    const int height = height_map.height();
+    // The position vector of pixel (x, y), neighbours clamped to the edge.
+    auto P = [&](int x, int y) {
+        x = std::clamp(x, 0, width - 1);
+        y = std::clamp(y, 0, height - 1);
+        return glm::dvec3(x * texel_spacing, y * texel_spacing,
+                          height_map.texel_exact(0, x, y, 0) * height_scale);
+    };
+    std::vector<std::uint8_t> codes(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const glm::dvec3 p = P(x, y);
+            // "the four vectors (one for each neighbour pixel)"
+            const glm::dvec3 right = P(x + 1, y) - p;
+            const glm::dvec3 up = P(x, y + 1) - p;
+            const glm::dvec3 left = P(x - 1, y) - p;
+            const glm::dvec3 down = P(x, y - 1) - p;
+            // "2 by 2 vectors are crossed ... 90 degrees of each other ... four normals for the
+            // current pixel, these are summed together and normalized"
+            const glm::dvec3 sum = glm::cross(right, up) + glm::cross(up, left) +
+                                   glm::cross(left, down) + glm::cross(down, right);
+            const double length = glm::length(sum);
+            // Only a degenerate height map (a single texel) leaves every product zero.
+            const glm::dvec3 normal = length > 0.0 ? sum / length : glm::dvec3(0.0, 0.0, 1.0);
+            // "Negative goes from 0 to 127, positive goes from 127 to 255."
+            const std::size_t base = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                                      static_cast<std::size_t>(x)) * 3;
+            for (int c = 0; c < 3; ++c) {
+                const double encoded = std::clamp((normal[c] * 0.5 + 0.5) * 255.0, 0.0, 255.0);
+                codes[base + static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(encoded);
+            }
+        }
+    }
+    return codes;
+}
+
+Texture thesis_normal_map(const Texture& height_map, double texel_spacing, double height_scale,
+                          MipmapRule rule) {
+    return Texture::from_unorm8(height_map.width(), height_map.height(), 3,
+                                thesis_normal_map_codes(height_map, texel_spacing, height_scale),
+                                rule);
+}
+
+glm::vec3 decode_unorm_normal(glm::vec3 rgb) { return rgb * 2.0f - 1.0f; }
+glm::dvec3 decode_unorm_normal(glm::dvec3 rgb) { return rgb * 2.0 - 1.0; }
+
+namespace {
+
+template <typename T>
+glm::vec<3, T, glm::defaultp> lab4_normal(const Texture& heightMap, glm::vec<2, T, glm::defaultp> st,
+                                          glm::vec<2, T, glm::defaultp> stStep, T h, T verticalScale,
+                                          T lod, HeightDifference difference) {
+    using vec2 = glm::vec<2, T, glm::defaultp>;
+    using vec3 = glm::vec<3, T, glm::defaultp>;
+    auto height = [&](vec2 uv) { return heightMap.textureLod(uv, lod).r * verticalScale; };
+    vec3 dX;  // H(x+h, z) - H(x, z)      (central: H(x+h, z) - H(x-h, z))
+    vec3 dZ;  // H(x, z+h) - H(x, z)      (central: H(x, z+h) - H(x, z-h))
+    if (difference == HeightDifference::forward) {
+        const T hC = height(st);
+        const T hX = height(st + vec2(stStep.x, T(0)));
+        const T hZ = height(st + vec2(T(0), stStep.y));
+        dX = vec3(h, hX - hC, T(0));
+        dZ = vec3(T(0), hZ - hC, h);
+    } else {
+        const T hXp = height(st + vec2(stStep.x, T(0)));
+        const T hXm = height(st - vec2(stStep.x, T(0)));
+        const T hZp = height(st + vec2(T(0), stStep.y));
+        const T hZm = height(st - vec2(T(0), stStep.y));
+        dX = vec3(T(2) * h, hXp - hXm, T(0));
+        dZ = vec3(T(0), hZp - hZm, T(2) * h);
+    }
+    // Appendix A: normalize(dX x dZ) points down (-y); the operands swapped give the upward
+    // normal, its exact negation.
+    return glm::normalize(glm::cross(dZ, dX));
+}
+
+}  // namespace
+
+glm::vec3 lab4_height_normal(const Texture& height_map, glm::vec2 st, glm::vec2 st_step, float h,
+                             float vertical_scale, float lod, HeightDifference difference) {
+    return lab4_normal<float>(height_map, st, st_step, h, vertical_scale, lod, difference);
+}
+
+glm::dvec3 lab4_height_normal(const Texture& height_map, glm::dvec2 st, glm::dvec2 st_step, double h,
+                              double vertical_scale, double lod, HeightDifference difference) {
+    return lab4_normal<double>(height_map, st, st_step, h, vertical_scale, lod, difference);
+}
+
+}  // namespace tessref

@@ -1,0 +1,550 @@
+// Texture: the mip pyramid as glGenerateMipmap builds it and texture()/textureLod() as a
+// GL 4.5 sampler with clamp-to-edge evaluates them (see tessref/heightfield.h for the
+// conventions and for what was measured against llvmpipe).
+//
+// The GPU path must not let the compiler fuse a multiply and an add that llvmpipe rounds
+// separately (u = s * width - 0.5f), nor split the fma that llvmpipe fuses (the lerp): the
+// lerp is written as std::fma and contraction is switched off for this file.
+#if defined(__clang__)
+#pragma clang fp contract(off)
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "tessref/error.h"
+#include "tessref/heightfield.h"
+
+namespace tessref {
+
+const char* to_string(TexelFormat format) {
+    switch (format) {
+        case TexelFormat::unorm8: return "unorm8";
+        case TexelFormat::unorm16: return "unorm16";
+        case TexelFormat::float32: return "float32";
+    }
+    return "?";
+}
+
+const char* to_string(MipmapRule rule) {
+    switch (rule) {
+        case MipmapRule::llvmpipe_blit: return "llvmpipe_blit";
+        case MipmapRule::mesa_software_box: return "mesa_software_box";
+    }
+    return "?";
+}
+
+namespace {
+
+constexpr float kUnorm8Scale = 1.0f / 255.0f;      // llvmpipe: code * (float)(1/255)
+constexpr float kUnorm16Scale = 1.0f / 65535.0f;   // llvmpipe: code * (float)(1/65535)
+
+// ---- GPU path (float), llvmpipe's SoA filter for float32 / unorm16 ----------------------
+
+// mix() as llvmpipe's lp_build_lerp emits it for floats: v0 + w * (v1 - v0), the multiply
+// and add fused (LLVM's fmuladd on an FMA CPU).
+inline float lerp_gpu(float v0, float v1, float w) { return std::fma(w, v1 - v0, v0); }
+
+struct AxisF {
+    int i0 = 0;
+    int i1 = 0;
+    float weight = 0.0f;
+};
+
+// Texel-space coordinate for GL_LINEAR with GL_CLAMP_TO_EDGE: u = s * size - 0.5, the two
+// texels floor(u) and floor(u) + 1 clamped to [0, size - 1], weight frac(u).
+inline AxisF axis_gpu(float s, int size) {
+    const float size_f = static_cast<float>(size);
+    float u = s * size_f;
+    u = u - 0.5f;
+    // Clamping u to [-1, size] changes no result (every texel index outside the texture
+    // clamps to the same edge texel, and mix(a, a, w) == a) but keeps NaN and huge
+    // coordinates away from the integer conversion: fmax/fmin return the non-NaN operand.
+    u = std::fmin(std::fmax(u, -1.0f), size_f);
+    const float fl = std::floor(u);
+    AxisF axis;
+    axis.weight = u - fl;
+    const int i = static_cast<int>(fl);
+    axis.i0 = std::clamp(i, 0, size - 1);
+    axis.i1 = std::clamp(i + 1, 0, size - 1);
+    return axis;
+}
+
+// ---- GPU path, llvmpipe's 8-bit fixed-point (AoS) filter for unorm8 ---------------------
+
+struct AxisU8 {
+    int i0 = 0;
+    int i1 = 0;
+    int weight = 0;  // 0..255, 8 fractional bits
+};
+
+inline AxisU8 axis_unorm8(float s, int size) {
+    // lp_build_sample_image_linear (AoS): s * float(size << 8), rounded to the nearest
+    // integer, minus 128 (half a texel), then >> 8 and & 255.
+    const float scaled_size = static_cast<float>(size * 256);
+    float x = s * scaled_size;
+    x = std::fmin(std::fmax(x, -1024.0f), scaled_size + 1024.0f);  // no effect; NaN-safe
+    const int fixed = static_cast<int>(std::nearbyint(x)) - 128;
+    AxisU8 axis;
+    axis.weight = fixed & 255;
+    const int i = fixed >> 8;  // arithmetic shift: floor
+    axis.i0 = std::clamp(i, 0, size - 1);
+    axis.i1 = std::clamp(i + 1, 0, size - 1);
+    return axis;
+}
+
+// lp_build_lerp on 8-bit unorm codes widened to 16 bits, weights prescaled (0..255 = w/256),
+// rounded: v0 + ((w * (v1 - v0) + 128) >> 8).
+inline int lerp_unorm8(int v0, int v1, int weight) {
+    return v0 + ((weight * (v1 - v0) + 128) >> 8);
+}
+
+// ---- double path --------------------------------------------------------------------------
+
+// mix(x, y, a) as x + a * (y - x): exactly x when x == y or a == 0, so a constant image stays
+// exactly constant through the pyramid and texel centres return texels.
+inline double mix_exact(double x, double y, double a) { return x + a * (y - x); }
+
+struct AxisD {
+    int i0 = 0;
+    int i1 = 0;
+    double weight = 0.0;
+};
+
+inline AxisD axis_exact(double s, int size) {
+    const double size_d = static_cast<double>(size);
+    double u = s * size_d - 0.5;
+    u = std::fmin(std::fmax(u, -1.0), size_d);
+    const double fl = std::floor(u);
+    AxisD axis;
+    axis.weight = u - fl;
+    const int i = static_cast<int>(fl);
+    axis.i0 = std::clamp(i, 0, size - 1);
+    axis.i1 = std::clamp(i + 1, 0, size - 1);
+    return axis;
+}
+
+// ---- per-level bilinear samples -----------------------------------------------------------
+
+inline std::size_t index_of(const TextureLevel& level, int channels, int x, int y, int c) {
+    return (static_cast<std::size_t>(y) * static_cast<std::size_t>(level.width) +
+            static_cast<std::size_t>(x)) * static_cast<std::size_t>(channels) +
+           static_cast<std::size_t>(c);
+}
+
+// Float filter on a float32/unorm16 level: out[c] for c < channels.
+void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4]) {
+    const AxisF ax = axis_gpu(st.x, level.width);
+    const AxisF ay = axis_gpu(st.y, level.height);
+    for (int c = 0; c < channels; ++c) {
+        const float t00 = level.texels[index_of(level, channels, ax.i0, ay.i0, c)];
+        const float t10 = level.texels[index_of(level, channels, ax.i1, ay.i0, c)];
+        const float t01 = level.texels[index_of(level, channels, ax.i0, ay.i1, c)];
+        const float t11 = level.texels[index_of(level, channels, ax.i1, ay.i1, c)];
+        // lp_build_lerp_2d: along s in both rows, then along t.
+        out[c] = lerp_gpu(lerp_gpu(t00, t10, ax.weight), lerp_gpu(t01, t11, ax.weight),
+                          ay.weight);
+    }
+}
+
+// 8-bit filter on a unorm8 level: 8-bit codes.
+void bilinear_unorm8(const TextureLevel& level, int channels, glm::vec2 st, int out[4]) {
+    const AxisU8 ax = axis_unorm8(st.x, level.width);
+    const AxisU8 ay = axis_unorm8(st.y, level.height);
+    for (int c = 0; c < channels; ++c) {
+        const int t00 = level.unorm8[index_of(level, channels, ax.i0, ay.i0, c)];
+        const int t10 = level.unorm8[index_of(level, channels, ax.i1, ay.i0, c)];
+        const int t01 = level.unorm8[index_of(level, channels, ax.i0, ay.i1, c)];
+        const int t11 = level.unorm8[index_of(level, channels, ax.i1, ay.i1, c)];
+        out[c] = lerp_unorm8(lerp_unorm8(t00, t10, ax.weight), lerp_unorm8(t01, t11, ax.weight),
+                             ay.weight);
+    }
+}
+
+double unorm_max(TexelFormat format) {
+    return format == TexelFormat::unorm8 ? 255.0 : format == TexelFormat::unorm16 ? 65535.0 : 1.0;
+}
+
+// Level 0's exact value is derived from the stored float (exact: for unorm the code is
+// recovered by rounding, for float32 the float itself); levels >= 1 hold their own doubles.
+inline double exact_value(const TextureLevel& level, TexelFormat format, int lod, std::size_t i) {
+    if (lod > 0) return level.exact[i];
+    const double v = static_cast<double>(level.texels[i]);
+    if (format == TexelFormat::float32) return v;
+    const double max = unorm_max(format);
+    return std::nearbyint(v * max) / max;
+}
+
+void bilinear_exact(const TextureLevel& level, TexelFormat format, int lod, int channels,
+                    glm::dvec2 st, double out[4]) {
+    const AxisD ax = axis_exact(st.x, level.width);
+    const AxisD ay = axis_exact(st.y, level.height);
+    for (int c = 0; c < channels; ++c) {
+        const double t00 = exact_value(level, format, lod, index_of(level, channels, ax.i0, ay.i0, c));
+        const double t10 = exact_value(level, format, lod, index_of(level, channels, ax.i1, ay.i0, c));
+        const double t01 = exact_value(level, format, lod, index_of(level, channels, ax.i0, ay.i1, c));
+        const double t11 = exact_value(level, format, lod, index_of(level, channels, ax.i1, ay.i1, c));
+        out[c] = mix_exact(mix_exact(t00, t10, ax.weight), mix_exact(t01, t11, ax.weight),
+                           ay.weight);
+    }
+}
+
+// ---- glGenerateMipmap --------------------------------------------------------------------
+
+// llvmpipe's blit draws the destination level as the rectangle v0 = (0, 0), v1 = (n, 0),
+// v2 = (n, m), v3 = (0, m) with texture coordinates (0,0), (1,0), (1,1), (0,1), as a
+// triangle fan that the draw module splits into (v1, v2, v0) and (v2, v3, v0). For each
+// triangle the setup (lp_state_setup.c, calc_coef4) computes a plane a0 + dadx * x + dady * y
+// relative to the framebuffer origin, in float, with the pixel centre offset 0.5; the
+// fragment shader evaluates it at integer pixel positions with two fmas. Measured bit-exact
+// for every level of every size tried (see the header).
+struct PlaneCoefficients {
+    float a0 = 0.0f;
+    float dadx = 0.0f;
+    float dady = 0.0f;
+};
+
+struct BlitTriangle {
+    PlaneCoefficients s;
+    PlaneCoefficients t;
+};
+
+BlitTriangle blit_triangle_setup(const float position[3][2], const float s[3], const float t[3]) {
+    const float dx01 = position[0][0] - position[1][0];
+    const float dy01 = position[0][1] - position[1][1];
+    const float dx20 = position[2][0] - position[0][0];
+    const float dy20 = position[2][1] - position[0][1];
+    const float e = dx01 * dy20;
+    const float f = dy01 * dx20;
+    const float ooa = 1.0f / (e - f);
+    const float dx20_ooa = dx20 * ooa;
+    const float dy20_ooa = dy20 * ooa;
+    const float dx01_ooa = dx01 * ooa;
+    const float dy01_ooa = dy01 * ooa;
+    const float x0_center = position[0][0] - 0.5f;
+    const float y0_center = position[0][1] - 0.5f;
+    auto coefficients = [&](const float a[3]) {
+        PlaneCoefficients p;
+        const float da01 = a[0] - a[1];
+        const float da20 = a[2] - a[0];
+        p.dadx = da01 * dy20_ooa - da20 * dy01_ooa;
+        p.dady = da20 * dx01_ooa - da01 * dx20_ooa;
+        p.a0 = a[0] - (p.dadx * x0_center + p.dady * y0_center);
+        return p;
+    };
+    return BlitTriangle{coefficients(s), coefficients(t)};
+}
+
+struct BlitSetup {
+    int width = 0;
+    int height = 0;
+    BlitTriangle upper;  // (v1, v2, v0): pixels at or above the diagonal through (0,0)-(n,m)
+    BlitTriangle lower;  // (v2, v3, v0)
+
+    explicit BlitSetup(int n, int m) : width(n), height(m) {
+        const float w = static_cast<float>(n);
+        const float h = static_cast<float>(m);
+        const float vx[4] = {0.0f, w, w, 0.0f};
+        const float vy[4] = {0.0f, 0.0f, h, h};
+        const float vs[4] = {0.0f, 1.0f, 1.0f, 0.0f};
+        const float vt[4] = {0.0f, 0.0f, 1.0f, 1.0f};
+        auto make = [&](int a, int b, int c) {
+            const float position[3][2] = {{vx[a], vy[a]}, {vx[b], vy[b]}, {vx[c], vy[c]}};
+            const float s[3] = {vs[a], vs[b], vs[c]};
+            const float t[3] = {vt[a], vt[b], vt[c]};
+            return blit_triangle_setup(position, s, t);
+        };
+        upper = make(1, 2, 0);
+        lower = make(2, 3, 0);
+    }
+
+    // The interpolated texture coordinate at the centre of destination pixel (i, j).
+    glm::vec2 coordinate(int i, int j) const {
+        const long long lhs = static_cast<long long>(2 * i + 1) * height;
+        const long long rhs = static_cast<long long>(2 * j + 1) * width;
+        const BlitTriangle& tri = lhs < rhs ? lower : upper;
+        const float x = static_cast<float>(i);
+        const float y = static_cast<float>(j);
+        const float s = std::fma(tri.s.dady, y, std::fma(tri.s.dadx, x, tri.s.a0));
+        const float t = std::fma(tri.t.dady, y, std::fma(tri.t.dadx, x, tri.t.a0));
+        return {s, t};
+    }
+};
+
+std::uint16_t float_to_unorm16(float v) {
+    // llvmpipe's store: clamp to [0, 1], scale by 65535 in float, round half to even.
+    const float clamped = std::fmin(std::fmax(v, 0.0f), 1.0f);  // NaN -> 0
+    return static_cast<std::uint16_t>(std::nearbyint(clamped * 65535.0f));
+}
+
+TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format, int channels,
+                        int dst_width, int dst_height) {
+    TextureLevel dst;
+    dst.width = dst_width;
+    dst.height = dst_height;
+    const std::size_t count = static_cast<std::size_t>(dst_width) *
+                              static_cast<std::size_t>(dst_height) *
+                              static_cast<std::size_t>(channels);
+    dst.texels.resize(count);
+    dst.exact.resize(count);
+    if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
+    const BlitSetup setup(dst_width, dst_height);
+    for (int j = 0; j < dst_height; ++j) {
+        for (int i = 0; i < dst_width; ++i) {
+            const glm::vec2 st = setup.coordinate(i, j);
+            const std::size_t base = index_of(dst, channels, i, j, 0);
+            if (format == TexelFormat::unorm8) {
+                int codes[4];
+                bilinear_unorm8(src, channels, st, codes);
+                for (int c = 0; c < channels; ++c) {
+                    dst.unorm8[base + c] = static_cast<std::uint8_t>(codes[c]);
+                    dst.texels[base + c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+                }
+            } else {
+                float values[4];
+                bilinear_gpu(src, channels, st, values);
+                for (int c = 0; c < channels; ++c) {
+                    if (format == TexelFormat::unorm16) {
+                        dst.texels[base + c] =
+                            static_cast<float>(float_to_unorm16(values[c])) * kUnorm16Scale;
+                    } else {
+                        dst.texels[base + c] = values[c];
+                    }
+                }
+            }
+            // Double path: the ideal sample point, no storage quantization.
+            const glm::dvec2 ideal((i + 0.5) / dst_width, (j + 0.5) / dst_height);
+            double exact[4];
+            bilinear_exact(src, format, src_lod, channels, ideal, exact);
+            for (int c = 0; c < channels; ++c) dst.exact[base + c] = exact[c];
+        }
+    }
+    return dst;
+}
+
+// Mesa main/mipmap.c, make_2d_mipmap + do_row.
+TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelFormat format,
+                                int channels, int dst_width, int dst_height) {
+    TextureLevel dst;
+    dst.width = dst_width;
+    dst.height = dst_height;
+    const std::size_t count = static_cast<std::size_t>(dst_width) *
+                              static_cast<std::size_t>(dst_height) *
+                              static_cast<std::size_t>(channels);
+    dst.texels.resize(count);
+    dst.exact.resize(count);
+    if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
+    // do_row: k0 = (srcWidth == dstWidth) ? 0 : 1, colStride = (srcWidth == dstWidth) ? 1 : 2.
+    const int col_k0 = src.width == dst_width ? 0 : 1;
+    const int col_stride = src.width == dst_width ? 1 : 2;
+    const int row_b0 = src.height == dst_height ? 0 : 1;
+    const int row_stride = src.height == dst_height ? 1 : 2;
+    for (int row = 0; row < dst_height; ++row) {
+        const int ya = row * row_stride;
+        const int yb = ya + row_b0;
+        for (int i = 0; i < dst_width; ++i) {
+            const int xj = i * col_stride;
+            const int xk = xj + col_k0;
+            for (int c = 0; c < channels; ++c) {
+                const std::size_t aj = index_of(src, channels, xj, ya, c);
+                const std::size_t ak = index_of(src, channels, xk, ya, c);
+                const std::size_t bj = index_of(src, channels, xj, yb, c);
+                const std::size_t bk = index_of(src, channels, xk, yb, c);
+                const std::size_t d = index_of(dst, channels, i, row, c);
+                if (format == TexelFormat::unorm8) {
+                    const int sum = src.unorm8[aj] + src.unorm8[ak] + src.unorm8[bj] + src.unorm8[bk];
+                    dst.unorm8[d] = static_cast<std::uint8_t>(sum / 4);
+                    dst.texels[d] = static_cast<float>(dst.unorm8[d]) * kUnorm8Scale;
+                } else if (format == TexelFormat::unorm16) {
+                    auto code = [&](std::size_t k) {
+                        return static_cast<int>(std::nearbyint(src.texels[k] * 65535.0));
+                    };
+                    const int sum = code(aj) + code(ak) + code(bj) + code(bk);
+                    dst.texels[d] = static_cast<float>(sum / 4) * kUnorm16Scale;
+                } else {
+                    dst.texels[d] = (src.texels[aj] + src.texels[ak] + src.texels[bj] + src.texels[bk]) * 0.25f;
+                }
+                // The mean of two means: exact for equal values (a constant stays constant).
+                const double top = 0.5 * (exact_value(src, format, src_lod, aj) + exact_value(src, format, src_lod, ak));
+                const double bottom = 0.5 * (exact_value(src, format, src_lod, bj) + exact_value(src, format, src_lod, bk));
+                dst.exact[d] = 0.5 * (top + bottom);
+            }
+        }
+    }
+    return dst;
+}
+
+}  // namespace
+
+Texture Texture::build(int width, int height, int channels, TexelFormat format, MipmapRule rule,
+                       TextureLevel level0) {
+    Texture texture;
+    texture.channels_ = channels;
+    texture.format_ = format;
+    texture.rule_ = rule;
+    texture.levels_.push_back(std::move(level0));
+    int w = width;
+    int h = height;
+    int lod = 0;
+    while (w > 1 || h > 1) {
+        const int dw = std::max(1, w / 2);
+        const int dh = std::max(1, h / 2);
+        const TextureLevel& src = texture.levels_.back();
+        TextureLevel next = rule == MipmapRule::llvmpipe_blit
+                                ? blit_level(src, lod, format, channels, dw, dh)
+                                : software_box_level(src, lod, format, channels, dw, dh);
+        texture.levels_.push_back(std::move(next));
+        w = dw;
+        h = dh;
+        ++lod;
+    }
+    return texture;
+}
+
+namespace {
+void check_shape(int width, int height, int channels, std::size_t size, const char* what) {
+    if (width < 1 || height < 1)
+        throw Error(std::string(what) + ": texture size " + std::to_string(width) + "x" +
+                    std::to_string(height) + " is empty");
+    if (channels < 1 || channels > 4)
+        throw Error(std::string(what) + ": " + std::to_string(channels) +
+                    " channels (a texture has 1 to 4)");
+    const std::size_t expected = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
+                                 static_cast<std::size_t>(channels);
+    if (size != expected)
+        throw Error(std::string(what) + ": " + std::to_string(size) + " values for a " +
+                    std::to_string(width) + "x" + std::to_string(height) + "x" +
+                    std::to_string(channels) + " texture (" + std::to_string(expected) + " expected)");
+}
+}  // namespace
+
+Texture Texture::from_float(int width, int height, int channels, std::vector<float> texels,
+                            MipmapRule rule) {
+    check_shape(width, height, channels, texels.size(), "Texture::from_float");
+    TextureLevel level0;
+    level0.width = width;
+    level0.height = height;
+    level0.texels = std::move(texels);
+    return build(width, height, channels, TexelFormat::float32, rule, std::move(level0));
+}
+
+Texture Texture::from_unorm8(int width, int height, int channels, std::vector<std::uint8_t> codes,
+                             MipmapRule rule) {
+    check_shape(width, height, channels, codes.size(), "Texture::from_unorm8");
+    TextureLevel level0;
+    level0.width = width;
+    level0.height = height;
+    level0.texels.resize(codes.size());
+    for (std::size_t i = 0; i < codes.size(); ++i)
+        level0.texels[i] = static_cast<float>(codes[i]) * kUnorm8Scale;
+    level0.unorm8 = std::move(codes);
+    return build(width, height, channels, TexelFormat::unorm8, rule, std::move(level0));
+}
+
+Texture Texture::from_unorm16(int width, int height, int channels, std::vector<std::uint16_t> codes,
+                              MipmapRule rule) {
+    check_shape(width, height, channels, codes.size(), "Texture::from_unorm16");
+    TextureLevel level0;
+    level0.width = width;
+    level0.height = height;
+    level0.texels.resize(codes.size());
+    for (std::size_t i = 0; i < codes.size(); ++i)
+        level0.texels[i] = static_cast<float>(codes[i]) * kUnorm16Scale;
+    return build(width, height, channels, TexelFormat::unorm16, rule, std::move(level0));
+}
+
+const TextureLevel& Texture::level(int lod) const {
+    if (lod < 0 || lod >= level_count())
+        throw Error("texture level " + std::to_string(lod) + " does not exist (the texture has " +
+                    std::to_string(level_count()) + " levels)");
+    return levels_[static_cast<std::size_t>(lod)];
+}
+
+namespace {
+void check_texel(const TextureLevel& level, int channels, int lod, int x, int y, int channel) {
+    if (x < 0 || y < 0 || x >= level.width || y >= level.height || channel < 0 ||
+        channel >= channels)
+        throw Error("texel (" + std::to_string(x) + ", " + std::to_string(y) + ") channel " +
+                    std::to_string(channel) + " is outside level " + std::to_string(lod) + " (" +
+                    std::to_string(level.width) + "x" + std::to_string(level.height) + "x" +
+                    std::to_string(channels) + ")");
+}
+}  // namespace
+
+float Texture::texel(int lod, int x, int y, int channel) const {
+    const TextureLevel& l = level(lod);
+    check_texel(l, channels_, lod, x, y, channel);
+    return l.texels[index_of(l, channels_, x, y, channel)];
+}
+
+double Texture::texel_exact(int lod, int x, int y, int channel) const {
+    const TextureLevel& l = level(lod);
+    check_texel(l, channels_, lod, x, y, channel);
+    return exact_value(l, format_, lod, index_of(l, channels_, x, y, channel));
+}
+
+glm::vec4 Texture::texture(glm::vec2 st) const { return textureLod(st, 0.0f); }
+glm::dvec4 Texture::texture(glm::dvec2 st) const { return textureLod(st, 0.0); }
+
+glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
+    if (empty()) throw Error("textureLod on an empty texture");
+    // GL_LINEAR ignores the pyramid; otherwise lod is clamped to [0, max_level] (a negative
+    // lod selects the magnification filter, GL_LINEAR on level 0: the same sample).
+    const float max_lod = static_cast<float>(max_level());
+    const float clamped = min_filter_ == MinFilter::linear ? 0.0f
+                                                           : std::fmin(std::fmax(lod, 0.0f), max_lod);
+    const float floor_lod = std::floor(clamped);
+    const int level0 = static_cast<int>(floor_lod);
+    const float fraction = clamped - floor_lod;
+    const int level1 = std::min(level0 + 1, max_level());
+    glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
+    if (format_ == TexelFormat::unorm8) {
+        int codes[4];
+        bilinear_unorm8(levels_[level0], channels_, st, codes);
+        // lp_build_sample_mipmap (AoS): weight trunc(frac * 256), lerp only when it is > 0.
+        const int weight = static_cast<int>(fraction * 256.0f);
+        if (weight > 0 && level1 != level0) {
+            int codes1[4];
+            bilinear_unorm8(levels_[level1], channels_, st, codes1);
+            for (int c = 0; c < channels_; ++c) codes[c] = lerp_unorm8(codes[c], codes1[c], weight);
+        }
+        for (int c = 0; c < channels_; ++c) out[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+        return out;
+    }
+    float values[4];
+    bilinear_gpu(levels_[level0], channels_, st, values);
+    if (fraction > 0.0f && level1 != level0) {
+        float values1[4];
+        bilinear_gpu(levels_[level1], channels_, st, values1);
+        for (int c = 0; c < channels_; ++c) values[c] = lerp_gpu(values[c], values1[c], fraction);
+    }
+    for (int c = 0; c < channels_; ++c) out[c] = values[c];
+    return out;
+}
+
+glm::dvec4 Texture::textureLod(glm::dvec2 st, double lod) const {
+    if (empty()) throw Error("textureLod on an empty texture");
+    const double max_lod = static_cast<double>(max_level());
+    const double clamped = min_filter_ == MinFilter::linear ? 0.0
+                                                            : std::fmin(std::fmax(lod, 0.0), max_lod);
+    const double floor_lod = std::floor(clamped);
+    const int level0 = static_cast<int>(floor_lod);
+    const double fraction = clamped - floor_lod;
+    const int level1 = std::min(level0 + 1, max_level());
+    double values[4];
+    bilinear_exact(levels_[level0], format_, level0, channels_, st, values);
+    if (fraction > 0.0 && level1 != level0) {
+        double values1[4];
+        bilinear_exact(levels_[level1], format_, level1, channels_, st, values1);
+        for (int c = 0; c < channels_; ++c) values[c] = mix_exact(values[c], values1[c], fraction);
+    }
+    glm::dvec4 out(0.0, 0.0, 0.0, 1.0);
+    for (int c = 0; c < channels_; ++c) out[c] = values[c];
+    return out;
+}
+
+}  // namespace tessref
