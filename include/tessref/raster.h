@@ -1,0 +1,148 @@
+// tessref/raster.h — the software rasterizer: clip-space triangles in, image buffers out.
+//
+// It computes which pixels Mesa's llvmpipe (the OSMesa/GL backend, Mesa 22.3) covers, so that a
+// golden image and an llvmpipe rendering agree pixel for pixel:
+//
+//  * clipping: homogeneous, against -w <= x, y, z <= w, no guard band, with the same plane
+//    order, clip distances, intersection parameters and float arithmetic as Mesa's draw
+//    module (draw_pipe_clip.c); a clipped polygon is emitted as a fan, like draw does;
+//  * window coordinates as draw computes them, in float: (x * (1/w)) * scale + translate,
+//    the last multiply-add fused or not depending on the path (see WindowTransform);
+//  * coverage as llvmpipe's setup computes it (lp_setup_tri.c): vertices snapped to 8
+//    sub-pixel bits (1/256 pixel) with round-to-nearest-even, pixel centres at +0.5, 64-bit
+//    integer edge functions, a strict inequality with a fill-rule bias that includes LEFT
+//    edges and BOTTOM edges in GL window coordinates; zero-area triangles are culled and
+//    clockwise ones swapped (or culled when culling is asked for);
+//  * wireframe (PolygonMode::line) as glPolygonMode(GL_FRONT_AND_BACK, GL_LINE) draws it on
+//    llvmpipe: each clipped triangle's original edges (not the ones along a clip plane, not
+//    the fan's diagonals) as one-pixel GL lines with llvmpipe's diamond-exit line setup
+//    (lp_setup_line.c: its own approximation of the diamond-exit rule, snapping with
+//    round-half-away-from-zero), in the order draw's unfilled stage emits them; culling there
+//    uses draw's float determinant, a zero one counting as back-facing.
+//
+// tests/test_raster_llvmpipe.cpp holds all of this to exact agreement with Mesa 22.3.6's
+// llvmpipe, fill and wireframe, with and without culling.
+//
+// A window-system framebuffer is emulated (OSMesa's own buffer, not a user FBO): Mesa
+// renders it upside down internally (row 0 on top), so window y is computed and snapped in
+// that orientation, as llvmpipe does. Rendering into a user FBO differs only in rare y
+// rounding ties.
+//
+// Attributes are not exact to llvmpipe's bits: depth (window z, interpolated linearly in
+// screen space, clamped to [0,1]) and the perspective-correct barycentric weights of the
+// source triangle are computed in float from the UNSNAPPED vertices (plane equations, divided
+// per pixel by the interpolated 1/w). Varyings, tess coords and ids of the visible surface are
+// resolved from those weights after the pass ("deferred"): with depth LESS and no blending
+// that is exactly what forward shading of the last fragment that passed would produce.
+//
+// Images: every per-pixel buffer is row-major with row 0 the TOP row of the picture (GL
+// window y = height - 1), the order image files are written in; GL window coordinates (x, y)
+// with y up map to index(x, y). OSMesa/glReadPixels buffers have row 0 at the bottom.
+//
+// Work is split into 64x64 tiles rasterized in parallel with oneTBB; every tile processes the
+// primitives that overlap it in submission order, so the output is byte-identical whatever
+// the thread count.
+//
+//   auto fb = tessref::Framebuffer::create(1280, 800, /*varying_count=*/3);
+//   tessref::RasterInput in;
+//   in.positions = clip_positions; in.triangles = tris; in.varyings = normals; in.varying_count = 3;
+//   tessref::rasterize(fb, in, {});
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace tessref {
+
+inline constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;  // triangle_id/patch_id of an empty pixel
+inline constexpr int kMaxVaryings = 16;                    // floats per vertex
+
+enum class PolygonMode { fill, line };
+enum class CullMode { none, back, front };   // front = counter-clockwise in GL window coordinates
+enum class DepthFunc { less, lequal, always };
+
+// Which of Mesa's two window transforms made the vertices' window coordinates (the clipper's
+// new vertices always use the second):
+//  * vertex_shader: llvmpipe's vertex-shader JIT, fma(x * (1/w), scale, translate) on a host
+//    with FMA (every x86-64 since 2013) — a draw with only a vertex shader;
+//  * tessellation: draw's C post-shader path, (x * (1/w)) * scale + translate rounded twice —
+//    every draw with a tessellation or geometry shader, which is what the GL backend renders.
+// They differ by an ulp now and then, which moves a snapped vertex on a rounding tie or
+// flips a line's diamond-exit decision at a pixel-exact endpoint.
+enum class WindowTransform { tessellation, vertex_shader };
+
+// What one pass draws. Plain views: the caller owns the data for the call's duration.
+struct RasterInput {
+    std::span<const glm::vec4> positions;                      // gl_Position of every vertex
+    std::span<const std::array<std::uint32_t, 3>> triangles;   // vertex indices, any winding
+    std::span<const float> varyings = {};                      // varying_count floats per vertex
+    int varying_count = 0;                                     // 0..kMaxVaryings
+    std::span<const std::uint32_t> triangle_ids = {};  // id written per triangle; default its index
+    std::span<const std::uint32_t> patch_ids = {};     // per triangle; default kNoTriangle
+    std::span<const glm::vec3> tess_coords = {};       // per vertex gl_TessCoord; default 0
+};
+
+struct RasterSettings {
+    PolygonMode polygon_mode = PolygonMode::fill;
+    CullMode cull = CullMode::none;
+    DepthFunc depth_func = DepthFunc::less;
+    bool depth_write = true;
+    WindowTransform window_transform = WindowTransform::tessellation;
+    glm::vec4 color{1.0f};  // written to Framebuffer::color by every fragment that passes
+    int threads = 0;        // 0: the calling oneTBB arena; N > 0: an arena of N threads
+};
+
+// The image buffers. All have width*height entries, row 0 = top row (see above).
+struct Framebuffer {
+    int width = 0;
+    int height = 0;
+    int varying_count = 0;
+    std::vector<glm::vec4> color;               // cleared to (0,0,0,0)
+    std::vector<float> depth;                   // window z in [0,1], cleared to 1
+    std::vector<std::uint32_t> triangle_id;     // visible triangle's id, kNoTriangle if none
+    std::vector<std::uint32_t> patch_id;        // its patch, kNoTriangle if none/unknown
+    std::vector<glm::vec3> barycentric;         // perspective-correct weights of its vertices
+    std::vector<glm::vec3> tess_coord;          // interpolated gl_TessCoord
+    std::vector<float> varyings;                // varying_count floats per pixel, interpolated
+    std::vector<std::uint8_t> front_facing;     // 1 if the visible primitive is front-facing
+    std::vector<std::uint32_t> fragment_count;  // fragments generated (before the depth test)
+
+    // Throws tessref::Error for a size outside 1..16384 or varying_count outside 0..16.
+    static Framebuffer create(int width, int height, int varying_count = 0);
+    void clear();  // every buffer to its cleared value
+
+    std::size_t index(int x, int y_gl) const {  // GL window coordinates, y up
+        return static_cast<std::size_t>(height - 1 - y_gl) * static_cast<std::size_t>(width) +
+               static_cast<std::size_t>(x);
+    }
+};
+
+struct RasterStats {
+    std::uint64_t triangles_in = 0;       // input triangles
+    std::uint64_t triangles_clipped = 0;  // that needed the clipper (partly outside)
+    std::uint64_t triangles_rejected = 0; // wholly outside one clip plane, or non-finite
+    std::uint64_t primitives = 0;         // set-up triangles (after clipping) or lines
+    std::uint64_t primitives_culled = 0;  // zero area, or culled by face
+    std::uint64_t fragments = 0;          // covered pixel samples
+    std::uint64_t fragments_passed = 0;   // that passed the depth test
+};
+
+// Draws one pass into fb (which keeps what earlier passes drew: clear() it first for a new
+// image). The viewport is the whole framebuffer, depth range [0,1]. Throws tessref::Error on
+// a vertex index out of range, varying_count out of range or spans of the wrong size.
+RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSettings& settings);
+
+// GL's float -> unorm8 conversion (clamp to [0,1], x*255 rounded to nearest), row 0 on top:
+// width*height*4 bytes RGBA.
+std::vector<std::uint8_t> to_rgba8(const Framebuffer& fb);
+
+// The fixed-point window position llvmpipe snaps a window-space coordinate to
+// (round-to-nearest-even of (v - 0.5) * 256); exposed for tests and debugging.
+std::int32_t snap_subpixel(float window_coordinate);
+
+}  // namespace tessref

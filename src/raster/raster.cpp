@@ -1,0 +1,448 @@
+// src/raster/raster.cpp — the rasterizer's driver: vertex preparation, clipping, setup and
+// binning in chunks, 64x64 tiles rasterized in parallel (oneTBB), and the deferred resolve of
+// ids, tess coords and varyings of the visible surface.
+//
+// Determinism: a chunk's primitives keep the submission order (an input triangle's clipped
+// fan, then the next triangle), every tile walks the chunks in order, and no pixel is touched
+// by two tiles, so the buffers do not depend on the thread count or on scheduling.
+#include "tessref/raster.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "raster/raster_internal.h"
+#include "tessref/error.h"
+
+namespace tessref {
+
+using raster::ClipVertex;
+using raster::Primitive;
+using raster::Viewport;
+
+namespace {
+Where key_where(std::string key) {
+    Where where;
+    where.key = std::move(key);
+    return where;
+}
+}  // namespace
+
+Framebuffer Framebuffer::create(int width, int height, int varying_count) {
+    if (width < 1 || height < 1 || width > 16384 || height > 16384) {
+        throw Error("framebuffer size " + std::to_string(width) + "x" + std::to_string(height) +
+                        " is outside 1..16384",
+                    key_where("framebuffer"));
+    }
+    if (varying_count < 0 || varying_count > kMaxVaryings) {
+        throw Error("varying count " + std::to_string(varying_count) + " is outside 0..16",
+                    key_where("varying_count"));
+    }
+    Framebuffer fb;
+    fb.width = width;
+    fb.height = height;
+    fb.varying_count = varying_count;
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    fb.color.resize(n);
+    fb.depth.resize(n);
+    fb.triangle_id.resize(n);
+    fb.patch_id.resize(n);
+    fb.barycentric.resize(n);
+    fb.tess_coord.resize(n);
+    fb.varyings.resize(n * static_cast<std::size_t>(varying_count));
+    fb.front_facing.resize(n);
+    fb.fragment_count.resize(n);
+    fb.clear();
+    return fb;
+}
+
+void Framebuffer::clear() {
+    std::fill(color.begin(), color.end(), glm::vec4(0.0f));
+    std::fill(depth.begin(), depth.end(), 1.0f);
+    std::fill(triangle_id.begin(), triangle_id.end(), kNoTriangle);
+    std::fill(patch_id.begin(), patch_id.end(), kNoTriangle);
+    std::fill(barycentric.begin(), barycentric.end(), glm::vec3(0.0f));
+    std::fill(tess_coord.begin(), tess_coord.end(), glm::vec3(0.0f));
+    std::fill(varyings.begin(), varyings.end(), 0.0f);
+    std::fill(front_facing.begin(), front_facing.end(), std::uint8_t{0});
+    std::fill(fragment_count.begin(), fragment_count.end(), 0u);
+}
+
+std::int32_t snap_subpixel(float window_coordinate) {
+    return raster::cvt_rne((window_coordinate - 0.5f) * 256.0f);
+}
+
+std::vector<std::uint8_t> to_rgba8(const Framebuffer& fb) {
+    std::vector<std::uint8_t> out(fb.color.size() * 4);
+    for (std::size_t i = 0; i < fb.color.size(); ++i) {
+        for (int c = 0; c < 4; ++c) {
+            float v = fb.color[i][c];
+            v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+            out[i * 4 + static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::lrint(v * 255.0f));
+        }
+    }
+    return out;
+}
+
+namespace {
+
+constexpr int kTileSize = 64;
+constexpr std::size_t kChunkTriangles = 2048;  // input triangles set up by one task
+constexpr std::size_t kChunksPerBatch = 32;    // chunks kept in memory at once
+
+struct PreparedVertex {
+    glm::vec4 clip;
+    glm::vec4 win;
+    unsigned clipmask;
+    bool finite;
+};
+
+struct Chunk {
+    std::vector<Primitive> prims;
+    std::vector<std::uint32_t> tile_start;  // tile t's primitives: tile_prims[start[t]..start[t+1])
+    std::vector<std::uint32_t> tile_prims;
+    RasterStats stats;
+};
+
+struct Context {
+    const RasterInput& input;
+    const RasterSettings& settings;
+    Framebuffer& fb;
+    Viewport viewport;
+    int tiles_x = 0;
+    int tiles_y = 0;
+    std::vector<PreparedVertex> vertices;
+    std::vector<std::uint32_t> source;  // per pixel: input triangle written by this pass
+};
+
+bool finite4(const glm::vec4& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+}
+
+// One triangle that left the clipper (or never needed it), with draw's edge flags
+// (bit 0: v0->v1, bit 1: v1->v2, bit 2: v2->v0), into primitives.
+void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
+                   const ClipVertex& c, unsigned edge_flags, std::uint32_t source, Chunk& chunk) {
+    if (!finite4(a.win) || !finite4(b.win) || !finite4(c.win)) {
+        ++chunk.stats.primitives_culled;
+        return;
+    }
+    const RasterSettings& s = ctx.settings;
+    if (s.polygon_mode == PolygonMode::fill) {
+        raster::Face face = raster::Face::both;
+        if (s.cull == CullMode::back) face = raster::Face::front_only;
+        if (s.cull == CullMode::front) face = raster::Face::back_only;
+        Primitive prim;
+        ++chunk.stats.primitives;
+        if (raster::setup_triangle(a, b, c, face, ctx.viewport, prim)) {
+            prim.source = source;
+            chunk.prims.push_back(prim);
+        } else {
+            ++chunk.stats.primitives_culled;
+        }
+        return;
+    }
+    // glPolygonMode(GL_LINE) runs draw's cull stage (draw_pipe_cull.c) on every triangle the
+    // clipper emits: the determinant in float window coordinates, det < 0 counter-clockwise
+    // in GL terms, and a zero determinant counts as back-facing (so a degenerate triangle's
+    // edges are drawn unless back faces are culled).
+    const float ex = a.win.x - c.win.x, ey = a.win.y - c.win.y;
+    const float fx = b.win.x - c.win.x, fy = b.win.y - c.win.y;
+    const float det = ex * fy - ey * fx;
+    const bool front = det < 0.0f;
+    if ((s.cull == CullMode::back && !front) || (s.cull == CullMode::front && front)) {
+        ++chunk.stats.primitives_culled;
+        return;
+    }
+    // draw_pipe_unfilled.c lines(): v2->v0, v0->v1, v1->v2, each if flagged and the start
+    // vertex's edge flag is set.
+    auto line = [&](const ClipVertex& p, const ClipVertex& q) {
+        Primitive prim;
+        ++chunk.stats.primitives;
+        if (raster::setup_line(p, q, ctx.viewport, prim)) {
+            prim.source = source;
+            prim.front = front;
+            chunk.prims.push_back(prim);
+        } else {
+            ++chunk.stats.primitives_culled;
+        }
+    };
+    if ((edge_flags & 4u) && c.edgeflag) line(c, a);
+    if ((edge_flags & 1u) && a.edgeflag) line(a, b);
+    if ((edge_flags & 2u) && b.edgeflag) line(b, c);
+}
+
+void setup_chunk(const Context& ctx, std::size_t first, std::size_t last, Chunk& chunk) {
+    chunk.prims.clear();
+    chunk.stats = {};
+    const auto& tris = ctx.input.triangles;
+    for (std::size_t t = first; t < last; ++t) {
+        ++chunk.stats.triangles_in;
+        ClipVertex cv[3];
+        bool finite = true;
+        for (int k = 0; k < 3; ++k) {
+            const PreparedVertex& pv = ctx.vertices[tris[t][static_cast<std::size_t>(k)]];
+            cv[k].clip = pv.clip;
+            cv[k].win = pv.win;
+            cv[k].clipmask = pv.clipmask;
+            cv[k].bary = glm::vec3(0.0f);
+            cv[k].bary[k] = 1.0f;
+            cv[k].edgeflag = true;
+            finite = finite && pv.finite;
+        }
+        const unsigned mask_or = cv[0].clipmask | cv[1].clipmask | cv[2].clipmask;
+        const unsigned mask_and = cv[0].clipmask & cv[1].clipmask & cv[2].clipmask;
+        if (!finite || mask_and != 0) {
+            ++chunk.stats.triangles_rejected;
+            continue;
+        }
+        const auto source = static_cast<std::uint32_t>(t);
+        if (mask_or == 0) {
+            emit_triangle(ctx, cv[0], cv[1], cv[2], 7u, source, chunk);
+            continue;
+        }
+        ++chunk.stats.triangles_clipped;
+        ClipVertex poly[raster::kMaxClipVertices];
+        bool edges[raster::kMaxClipVertices];
+        const int n = raster::clip_polygon(cv, mask_or, ctx.viewport, poly, edges);
+        if (n < 3) continue;
+        // draw_pipe_clip.c emit_poly() with the provoking vertex last: the fan
+        // (i-1, i, 0), edge flags FLAG_2 first, FLAG_0 middle, FLAG_1 last.
+        unsigned edge_first = edges[0] ? 4u : 0u;
+        const unsigned edge_middle = 1u, edge_last = 2u;
+        unsigned flags = edge_first | edge_middle;
+        for (int i = 2; i < n; ++i, flags = edge_middle) {
+            if (!edges[i - 1]) flags &= ~edge_middle;
+            if (i == n - 1 && edges[i]) flags |= edge_last;
+            emit_triangle(ctx, poly[i - 1], poly[i], poly[0], flags, source, chunk);
+        }
+    }
+
+    // Bin the chunk's primitives by tile (a stable counting sort).
+    const int tile_count = ctx.tiles_x * ctx.tiles_y;
+    chunk.tile_start.assign(static_cast<std::size_t>(tile_count) + 1, 0u);
+    for (const Primitive& p : chunk.prims) {
+        for (int ty = p.y0 / kTileSize; ty <= p.y1 / kTileSize; ++ty)
+            for (int tx = p.x0 / kTileSize; tx <= p.x1 / kTileSize; ++tx)
+                ++chunk.tile_start[static_cast<std::size_t>(ty * ctx.tiles_x + tx) + 1];
+    }
+    for (int t = 0; t < tile_count; ++t)
+        chunk.tile_start[static_cast<std::size_t>(t) + 1] += chunk.tile_start[static_cast<std::size_t>(t)];
+    chunk.tile_prims.resize(chunk.tile_start.back());
+    std::vector<std::uint32_t> fill(chunk.tile_start.begin(), chunk.tile_start.end() - 1);
+    for (std::size_t i = 0; i < chunk.prims.size(); ++i) {
+        const Primitive& p = chunk.prims[i];
+        for (int ty = p.y0 / kTileSize; ty <= p.y1 / kTileSize; ++ty)
+            for (int tx = p.x0 / kTileSize; tx <= p.x1 / kTileSize; ++tx)
+                chunk.tile_prims[fill[static_cast<std::size_t>(ty * ctx.tiles_x + tx)]++] =
+                    static_cast<std::uint32_t>(i);
+    }
+}
+
+inline float eval(const float plane[3], float fx, float fy) {
+    return plane[0] + plane[1] * fx + plane[2] * fy;
+}
+
+template <int Planes>
+void raster_primitive(Context& ctx, const Primitive& p, int tx0, int ty0, int tx1, int ty1,
+                      RasterStats& stats) {
+    const int x0 = std::max(p.x0, tx0), x1 = std::min(p.x1, tx1);
+    const int y0 = std::max(p.y0, ty0), y1 = std::min(p.y1, ty1);
+    if (x0 > x1 || y0 > y1) return;
+    Framebuffer& fb = ctx.fb;
+    const RasterSettings& s = ctx.settings;
+    const auto width = static_cast<std::size_t>(fb.width);
+    for (int py = y0; py <= y1; ++py) {
+        std::int64_t e[Planes];
+        for (int k = 0; k < Planes; ++k) e[k] = p.c[k] + p.dcdy[k] * py - p.dcdx[k] * x0;
+        for (int px = x0; px <= x1; ++px) {
+            bool inside = true;
+            for (int k = 0; k < Planes; ++k) inside = inside && e[k] > 0;
+            for (int k = 0; k < Planes; ++k) e[k] -= p.dcdx[k];
+            if (!inside) continue;
+            const std::size_t idx = static_cast<std::size_t>(py) * width + static_cast<std::size_t>(px);
+            ++fb.fragment_count[idx];
+            ++stats.fragments;
+            const float fx = static_cast<float>(px) - p.ox;
+            const float fy = static_cast<float>(py) - p.oy;
+            float z = eval(p.z, fx, fy);
+            z = std::isnan(z) ? 1.0f : std::clamp(z, 0.0f, 1.0f);  // depth clamp to the range
+            bool pass = true;
+            if (s.depth_func == DepthFunc::less) pass = z < fb.depth[idx];
+            else if (s.depth_func == DepthFunc::lequal) pass = z <= fb.depth[idx];
+            if (!pass) continue;
+            ++stats.fragments_passed;
+            if (s.depth_write) fb.depth[idx] = z;
+            const float oow = eval(p.oow, fx, fy);
+            glm::vec3 b;
+            for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], fx, fy) / oow;
+            fb.barycentric[idx] = b;
+            fb.color[idx] = s.color;
+            fb.front_facing[idx] = p.front ? 1 : 0;
+            ctx.source[idx] = p.source;
+        }
+    }
+}
+
+void raster_tile(Context& ctx, int tile, const std::vector<Chunk>& chunks, std::size_t chunk_count,
+                 RasterStats& stats) {
+    const int tx = tile % ctx.tiles_x, ty = tile / ctx.tiles_x;
+    const int x0 = tx * kTileSize, y0 = ty * kTileSize;
+    const int x1 = std::min(x0 + kTileSize, ctx.fb.width) - 1;
+    const int y1 = std::min(y0 + kTileSize, ctx.fb.height) - 1;
+    const auto t = static_cast<std::size_t>(tile);
+    for (std::size_t c = 0; c < chunk_count; ++c) {
+        const Chunk& chunk = chunks[c];
+        for (std::uint32_t i = chunk.tile_start[t]; i < chunk.tile_start[t + 1]; ++i) {
+            const Primitive& p = chunk.prims[chunk.tile_prims[i]];
+            if (p.plane_count == 3) raster_primitive<3>(ctx, p, x0, y0, x1, y1, stats);
+            else raster_primitive<4>(ctx, p, x0, y0, x1, y1, stats);
+        }
+    }
+}
+
+void validate(const Framebuffer& fb, const RasterInput& in) {
+    if (fb.width < 1 || fb.height < 1 ||
+        fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height)) {
+        throw Error("framebuffer is not allocated (use Framebuffer::create)", key_where("framebuffer"));
+    }
+    if (in.varying_count < 0 || in.varying_count > kMaxVaryings) {
+        throw Error("varying count " + std::to_string(in.varying_count) + " is outside 0..16",
+                    key_where("varying_count"));
+    }
+    if (in.varying_count > fb.varying_count) {
+        throw Error("input has " + std::to_string(in.varying_count) + " varyings, framebuffer " +
+                        std::to_string(fb.varying_count),
+                    key_where("varying_count"));
+    }
+    const std::size_t nv = in.positions.size();
+    if (in.varyings.size() != nv * static_cast<std::size_t>(in.varying_count)) {
+        throw Error("varyings hold " + std::to_string(in.varyings.size()) + " floats, expected " +
+                        std::to_string(nv * static_cast<std::size_t>(in.varying_count)),
+                    key_where("varyings"));
+    }
+    if (!in.tess_coords.empty() && in.tess_coords.size() != nv) {
+        throw Error("tess_coords must have one entry per vertex", key_where("tess_coords"));
+    }
+    if (!in.triangle_ids.empty() && in.triangle_ids.size() != in.triangles.size()) {
+        throw Error("triangle_ids must have one entry per triangle", key_where("triangle_ids"));
+    }
+    if (!in.patch_ids.empty() && in.patch_ids.size() != in.triangles.size()) {
+        throw Error("patch_ids must have one entry per triangle", key_where("patch_ids"));
+    }
+    for (std::size_t t = 0; t < in.triangles.size(); ++t) {
+        for (std::uint32_t v : in.triangles[t]) {
+            if (v >= nv) {
+                throw Error("vertex index " + std::to_string(v) + " out of range (" + std::to_string(nv) +
+                                " vertices)",
+                            key_where("triangles[" + std::to_string(t) + "]"));
+            }
+        }
+    }
+}
+
+void resolve(Context& ctx) {
+    Framebuffer& fb = ctx.fb;
+    const RasterInput& in = ctx.input;
+    const auto vc = static_cast<std::size_t>(fb.varying_count);
+    const auto ivc = static_cast<std::size_t>(in.varying_count);
+    tbb::parallel_for(tbb::blocked_range<int>(0, fb.height), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+            for (int x = 0; x < fb.width; ++x) {
+                const std::size_t idx = static_cast<std::size_t>(y) * static_cast<std::size_t>(fb.width) +
+                                        static_cast<std::size_t>(x);
+                const std::uint32_t src = ctx.source[idx];
+                if (src == kNoTriangle) continue;
+                const auto& tri = in.triangles[src];
+                const glm::vec3 b = fb.barycentric[idx];
+                fb.triangle_id[idx] = in.triangle_ids.empty() ? src : in.triangle_ids[src];
+                fb.patch_id[idx] = in.patch_ids.empty() ? kNoTriangle : in.patch_ids[src];
+                glm::vec3 tc(0.0f);
+                if (!in.tess_coords.empty()) {
+                    tc = b[0] * in.tess_coords[tri[0]] + b[1] * in.tess_coords[tri[1]] +
+                         b[2] * in.tess_coords[tri[2]];
+                }
+                fb.tess_coord[idx] = tc;
+                float* out = vc ? &fb.varyings[idx * vc] : nullptr;
+                for (std::size_t j = 0; j < vc; ++j) {
+                    out[j] = j < ivc ? b[0] * in.varyings[tri[0] * ivc + j] +
+                                           b[1] * in.varyings[tri[1] * ivc + j] +
+                                           b[2] * in.varyings[tri[2] * ivc + j]
+                                     : 0.0f;
+                }
+            }
+        }
+    });
+}
+
+RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings& settings) {
+    Context ctx{input, settings, fb, raster::make_viewport(fb.width, fb.height), 0, 0, {}, {}};
+    ctx.tiles_x = (fb.width + kTileSize - 1) / kTileSize;
+    ctx.tiles_y = (fb.height + kTileSize - 1) / kTileSize;
+    const int tile_count = ctx.tiles_x * ctx.tiles_y;
+
+    ctx.vertices.resize(input.positions.size());
+    const bool fused = settings.window_transform == WindowTransform::vertex_shader;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                              PreparedVertex& v = ctx.vertices[i];
+                              v.clip = input.positions[i];
+                              v.finite = finite4(v.clip);
+                              v.clipmask = raster::compute_clipmask(v.clip);
+                              v.win = raster::window_position(v.clip, ctx.viewport, fused);
+                          }
+                      });
+    ctx.source.assign(fb.depth.size(), kNoTriangle);
+
+    RasterStats total;
+    std::vector<Chunk> chunks(kChunksPerBatch);
+    std::vector<RasterStats> tile_stats(static_cast<std::size_t>(tile_count));
+    const std::size_t tri_count = input.triangles.size();
+    for (std::size_t batch_first = 0; batch_first < tri_count;
+         batch_first += kChunkTriangles * kChunksPerBatch) {
+        const std::size_t batch_last = std::min(tri_count, batch_first + kChunkTriangles * kChunksPerBatch);
+        const std::size_t chunk_count = (batch_last - batch_first + kChunkTriangles - 1) / kChunkTriangles;
+        tbb::parallel_for(std::size_t{0}, chunk_count, [&](std::size_t c) {
+            const std::size_t first = batch_first + c * kChunkTriangles;
+            setup_chunk(ctx, first, std::min(batch_last, first + kChunkTriangles), chunks[c]);
+        });
+        tbb::parallel_for(0, tile_count, [&](int tile) {
+            raster_tile(ctx, tile, chunks, chunk_count, tile_stats[static_cast<std::size_t>(tile)]);
+        });
+        for (std::size_t c = 0; c < chunk_count; ++c) {
+            const RasterStats& s = chunks[c].stats;
+            total.triangles_in += s.triangles_in;
+            total.triangles_clipped += s.triangles_clipped;
+            total.triangles_rejected += s.triangles_rejected;
+            total.primitives += s.primitives;
+            total.primitives_culled += s.primitives_culled;
+        }
+    }
+    for (const RasterStats& s : tile_stats) {
+        total.fragments += s.fragments;
+        total.fragments_passed += s.fragments_passed;
+    }
+    resolve(ctx);
+    return total;
+}
+
+}  // namespace
+
+RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSettings& settings) {
+    validate(fb, input);
+    if (settings.threads > 0) {
+        tbb::task_arena arena(settings.threads);
+        RasterStats stats;
+        arena.execute([&] { stats = run(fb, input, settings); });
+        return stats;
+    }
+    return run(fb, input, settings);
+}
+
+}  // namespace tessref
