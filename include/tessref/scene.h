@@ -21,7 +21,7 @@
 //   plane = "xy" | "xz"         "xy": ground plane z = 0, z up (thesis); "xz": y = 0, y up
 //                               (COSC422, lab 4)
 //   patches = [nu, nv]          patch count along the plane's first axis (x) and second
-//                               axis (y or z); each >= 1
+//                               axis (y or z); each >= 1, at most 2^26 patches in all
 //   x = [x0, x1]                extent: the grid's corner columns run from x0 to x1 and its
 //   y = [y0, y1]  (plane xy)    rows from y0 (or z0) to y1 (z1), equally spaced. Patch
 //   z = [z0, z1]  (plane xz)    (i, j) has corners c0 = (x_i, y_j), c1 = (x_i, y_j+1),

@@ -174,6 +174,11 @@ struct Loader {
         if (!patches) t.missing("patches");
         g.patches_u = static_cast<int>((*patches)[0]);
         g.patches_v = static_cast<int>((*patches)[1]);
+        // Per-patch state is allocated before the budget can be estimated from the levels.
+        if (static_cast<std::uint64_t>(g.patches_u) * static_cast<std::uint64_t>(g.patches_v) > (1u << 26))
+            t.fail("patches", "domain.patches asks for " +
+                                  std::to_string(static_cast<std::uint64_t>(g.patches_u) * g.patches_v) +
+                                  " patches; at most 67108864 (2^26) are supported");
         g.follow_camera = t.boolean_opt("follow_camera").value_or(false);
         const std::string second = g.plane == GroundPlane::xy ? "y" : "z";
         const std::string wrong_axis = g.plane == GroundPlane::xy ? "z" : "y";
