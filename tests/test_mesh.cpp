@@ -21,8 +21,10 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
 
@@ -31,6 +33,7 @@
 
 #include "tessref/error.h"
 #include "tessref/mesh.h"
+#include "tessref/scene.h"
 
 namespace fs = std::filesystem;
 using tessref::MeshFormat;
@@ -146,7 +149,30 @@ struct EdgeReport {
     std::size_t pinched_vertices = 0;     // 2+ boundary edges leave it
     std::size_t t_junctions = 0;          // a vertex inside a boundary edge
     std::size_t off_outline_vertices = 0; // boundary vertices not on the outline (see below)
+    std::vector<std::string> examples;    // a few located defects, for failure messages
 };
+
+std::ostream& operator<<(std::ostream& out, const EdgeReport& r) {
+    out << r.boundary_edges << " boundary edges in " << r.boundary_loops << " loops, "
+        << r.off_outline_vertices << " boundary vertices off the outline, " << r.t_junctions
+        << " T-junctions, " << r.pinched_vertices << " pinched vertices, " << r.nonmanifold_edges
+        << " non-manifold and " << r.misoriented_edges << " mis-oriented edges";
+    for (const std::string& example : r.examples) out << "\n  " << example;
+    return out;
+}
+
+std::string describe(const SurfaceMesh& mesh, std::uint32_t v) {
+    char text[256];
+    const glm::dvec3& p = mesh.positions[v];
+    std::snprintf(text, sizeof text, "vertex %u (%.17g, %.17g, %.17g)", v, p.x, p.y, p.z);
+    std::string out = text;
+    if (!mesh.patch_ids.empty()) {
+        const glm::vec3 tc = mesh.tess_coords.empty() ? glm::vec3(-1) : mesh.tess_coords[v];
+        std::snprintf(text, sizeof text, " of patch %u at tess coord (%.9g, %.9g)", mesh.patch_ids[v], tc.x, tc.y);
+        out += text;
+    }
+    return out;
+}
 
 // An edge map over the vertex indices: each undirected edge with the directions in which
 // triangles traverse it. A boundary edge has one triangle. A T-junction (a vertex of one
@@ -157,26 +183,36 @@ struct EdgeReport {
 // its outline lies on that rectangle's sides; boundary vertices elsewhere belong to a hole.
 EdgeReport analyse_edges(const SurfaceMesh& welded) {
     EdgeReport report;
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<bool>> edges;  // (lo,hi) -> forward?
+    // Every triangle side as (lo << 32 | hi) << 1 | forward, sorted: equal edges are
+    // neighbours (a sorted vector rather than a map: terrains have millions of edges).
+    std::vector<std::uint64_t> sides;
+    sides.reserve(welded.triangles.size() * 3);
     for (const auto& t : welded.triangles) {
         for (int k = 0; k < 3; ++k) {
-            const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-            edges[{std::min(a, b), std::max(a, b)}].push_back(a < b);
+            const std::uint64_t a = t[k], b = t[(k + 1) % 3];
+            sides.push_back(((std::min(a, b) << 32 | std::max(a, b)) << 1) | (a < b ? 1u : 0u));
         }
     }
+    std::sort(sides.begin(), sides.end());
     std::map<std::uint32_t, std::vector<std::uint32_t>> next;  // boundary: a -> b as traversed
     std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
-    for (const auto& [edge, directions] : edges) {
-        if (directions.size() == 1) {
-            const auto [lo, hi] = edge;
-            const std::uint32_t a = directions[0] ? lo : hi, b = directions[0] ? hi : lo;
+    for (std::size_t i = 0; i < sides.size();) {
+        std::size_t j = i;
+        while (j < sides.size() && (sides[j] >> 1) == (sides[i] >> 1)) ++j;
+        const std::size_t uses = j - i;
+        if (uses == 1) {
+            const auto lo = static_cast<std::uint32_t>(sides[i] >> 33);
+            const auto hi = static_cast<std::uint32_t>((sides[i] >> 1) & 0xffffffffu);
+            const bool forward = (sides[i] & 1u) != 0;
+            const std::uint32_t a = forward ? lo : hi, b = forward ? hi : lo;
             next[a].push_back(b);
             boundary.emplace_back(a, b);
-        } else if (directions.size() == 2) {
-            if (directions[0] == directions[1]) ++report.misoriented_edges;
+        } else if (uses == 2) {
+            if ((sides[i] & 1u) == (sides[i + 1] & 1u)) ++report.misoriented_edges;
         } else {
             ++report.nonmanifold_edges;
         }
+        i = j;
     }
     report.boundary_edges = boundary.size();
     for (const auto& [a, outs] : next) {
@@ -196,7 +232,10 @@ EdgeReport analyse_edges(const SurfaceMesh& welded) {
         }
     }
     // Outline: each boundary vertex on a side of the bounding rectangle, for one choice of
-    // the two horizontal axes (the pair that fits best; a terrain fits one exactly).
+    // the two horizontal axes (the pair that fits best). "On" within 1e-9 of the extent:
+    // the evaluation's bilinear mix of two equal coordinates, a*(1-t) + a*t, can miss a by
+    // an ulp or two, the same way on both sides of a seam (so it welds) and along the
+    // outline; a hole's boundary lies at least one tessellated segment inside.
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
     for (const auto& p : welded.positions) {
         lo = glm::min(lo, p);
@@ -207,17 +246,21 @@ EdgeReport analyse_edges(const SurfaceMesh& welded) {
     std::sort(boundary_vertices.begin(), boundary_vertices.end());
     boundary_vertices.erase(std::unique(boundary_vertices.begin(), boundary_vertices.end()),
                             boundary_vertices.end());
-    std::size_t best = boundary_vertices.size();
+    std::vector<std::uint32_t> best_off = boundary_vertices;
     for (const auto& [i, j] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}}) {
-        std::size_t off = 0;
+        std::vector<std::uint32_t> off;
+        const double ti = 1e-9 * (hi[i] - lo[i]), tj = 1e-9 * (hi[j] - lo[j]);
         for (const std::uint32_t v : boundary_vertices) {
             const glm::dvec3& p = welded.positions[v];
-            const bool on_side = p[i] == lo[i] || p[i] == hi[i] || p[j] == lo[j] || p[j] == hi[j];
-            if (!on_side) ++off;
+            const bool on_side = std::abs(p[i] - lo[i]) <= ti || std::abs(p[i] - hi[i]) <= ti ||
+                                 std::abs(p[j] - lo[j]) <= tj || std::abs(p[j] - hi[j]) <= tj;
+            if (!on_side) off.push_back(v);
         }
-        best = std::min(best, off);
+        if (off.size() < best_off.size()) best_off = std::move(off);
     }
-    report.off_outline_vertices = best;
+    report.off_outline_vertices = best_off.size();
+    for (std::size_t k = 0; k < best_off.size() && k < 3; ++k)
+        report.examples.push_back("off the outline: " + describe(welded, best_off[k]));
     // T-junctions: a boundary vertex strictly inside a boundary edge (collinear to a
     // relative 1e-9 of the edge's length, parameter away from both ends). Vertices sorted
     // by x so each edge looks only at those within its x extent.
@@ -240,7 +283,12 @@ EdgeReport analyse_edges(const SurfaceMesh& welded) {
             const glm::dvec3 pv = welded.positions[*it];
             const double t = glm::dot(pv - pa, d) / length2;
             if (t <= 1e-9 || t >= 1.0 - 1e-9) continue;
-            if (glm::length(pv - (pa + t * d)) <= tolerance) ++report.t_junctions;
+            if (glm::length(pv - (pa + t * d)) <= tolerance) {
+                if (++report.t_junctions <= 5) {
+                    report.examples.push_back("T-junction: " + describe(welded, *it) + " inside the edge from " +
+                                              describe(welded, a) + " to " + describe(welded, b));
+                }
+            }
         }
     }
     return report;
@@ -598,19 +646,24 @@ TEST_F(MeshExport, DoublePositionsAreWrittenAsTheirNearestFloats) {
     }
 }
 
-TEST_F(MeshExport, NonManifoldTrianglesAreWrittenOnTheirOwnVertices) {
-    // Three triangles on one edge (a fin): OpenMesh's half-edge mesh takes two of them,
-    // the third goes on copies of its corners, and nothing is lost.
+TEST_F(MeshExport, NonManifoldTrianglesAreWrittenAsTheyAre) {
+    // Three triangles on one edge (a fin), which a half-edge mesh cannot hold: the file
+    // still lists 5 vertices and the 3 triangles over them, as given.
     SurfaceMesh mesh;
     mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 1}};
     mesh.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
-    std::ostringstream out;
-    MeshWriteOptions options;
-    const tessref::MeshWriteReport report = tessref::write_mesh(mesh, out, options);
-    EXPECT_EQ(report.triangles, 3u);
-    EXPECT_EQ(report.split_triangles, 1u);
-    EXPECT_EQ(report.welded_vertices, 5u);
-    EXPECT_EQ(report.written_vertices, 8u);
+    const fs::path file = path("fin.ply");
+    {
+        std::ofstream out(file, std::ios::binary);
+        const tessref::MeshWriteReport report = tessref::write_mesh(mesh, out, MeshWriteOptions{});
+        EXPECT_EQ(report.triangles, 3u);
+        EXPECT_EQ(report.vertices, 5u);
+    }
+    const std::string text = read_text(file);
+    EXPECT_NE(text.find("element vertex 5\n"), std::string::npos);
+    EXPECT_NE(text.find("element face 3\n"), std::string::npos);
+    const std::string faces = text.substr(text.size() - std::string("3 0 1 2\n3 1 0 3\n3 0 1 4\n").size());
+    EXPECT_EQ(faces, "3 0 1 2\n3 1 0 3\n3 0 1 4\n");
 }
 
 TEST_F(MeshExport, MeshWithoutOptionalAttributes) {
@@ -623,6 +676,186 @@ TEST_F(MeshExport, MeshWithoutOptionalAttributes) {
     ReadMesh read;
     ASSERT_TRUE(OpenMesh::IO::read_mesh(read, write(mesh, "m.obj", false).string()));
     EXPECT_EQ(read.n_faces(), 1u);
+}
+
+// ---------------------------------------------------------------------------------------
+// Every shipped terrain scene: one boundary loop, the outline; no T-junction
+
+std::vector<std::string> shipped_scenes() {
+    std::vector<std::string> names;
+    const fs::path dir = fs::path(TESSREF_DATA_DIR) / "scenes";
+    if (!fs::is_directory(dir)) return names;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+        if (entry.path().extension() == ".toml") names.push_back(entry.path().stem().string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+class ShippedScene : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ShippedScene, TerrainExportHasOneBoundaryLoopTheOutlineAndNoTJunction) {
+    const fs::path path = fs::path(TESSREF_DATA_DIR) / "scenes" / (GetParam() + ".toml");
+    const tessref::Scene scene = tessref::load_scene(path.string());
+    if (!scene.grid) GTEST_SKIP() << GetParam() << " is not a terrain";
+    for (const tessref::Precision precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
+        SCOPED_TRACE(std::string(tessref::to_string(precision)) + " precision");
+        tessref::PipelineOptions options;
+        options.precision = precision;
+        const tessref::PipelineResult result = tessref::run_pipeline(scene, options);
+        ASSERT_FALSE(result.mesh.triangles.empty());
+        const tessref::WeldedMesh welded = tessref::weld_bitwise(result.mesh);
+        EXPECT_EQ(welded.degenerate_triangles, 0u);
+        const EdgeReport edges = analyse_edges(welded.mesh);
+        SCOPED_TRACE(::testing::PrintToString(edges));
+        // A patch the control stage culls (an outer level NaN or <= 0, which GL discards)
+        // leaves a hole: say so, since it is the likeliest cause of a second loop.
+        std::size_t culled = 0;
+        std::string culled_example;
+        for (std::size_t p = 0; p < result.levels.size(); ++p) {
+            const auto& outer = result.levels[p].outer;
+            if (std::none_of(outer.begin(), outer.end(), [](float level) { return !(level > 0.0f); })) continue;
+            if (culled++ == 0) {
+                culled_example = "e.g. patch " + std::to_string(p) + ": outer " + std::to_string(outer[0]) +
+                                 " " + std::to_string(outer[1]) + " " + std::to_string(outer[2]) + " " +
+                                 std::to_string(outer[3]);
+            }
+        }
+        SCOPED_TRACE(std::to_string(culled) + " of " + std::to_string(result.levels.size()) +
+                     " patches culled by their levels " + culled_example);
+        EXPECT_EQ(edges.boundary_loops, 1u);
+        EXPECT_EQ(edges.off_outline_vertices, 0u);
+        EXPECT_EQ(edges.t_junctions, 0u);
+        EXPECT_EQ(edges.pinched_vertices, 0u);
+        EXPECT_EQ(edges.nonmanifold_edges, 0u);
+        EXPECT_EQ(edges.misoriented_edges, 0u);
+        if (precision == tessref::Precision::gpu) {
+            // And the export writes exactly that mesh.
+            std::ostringstream out;
+            MeshWriteOptions write_options;
+            write_options.binary = true;
+            const tessref::MeshWriteReport report = tessref::write_mesh(result.mesh, out, write_options);
+            EXPECT_EQ(report.triangles, welded.mesh.triangles.size());
+            EXPECT_EQ(report.vertices, welded.mesh.positions.size());
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Data, ShippedScene, ::testing::ValuesIn(shipped_scenes()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                             std::string name = info.param;
+                             for (char& c : name)
+                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                             return name;
+                         });
+GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(ShippedScene);
+
+// ---------------------------------------------------------------------------------------
+// The command: tessref mesh
+
+struct RunResult {
+    int status = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string shell_quote(const std::string& arg) {
+    std::string quoted = "'";
+    for (const char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
+class MeshCommand : public MeshExport {
+protected:
+    RunResult run(const std::vector<std::string>& args) const {
+        std::string command = shell_quote(TESSREF_EXE) + " mesh";
+        for (const std::string& arg : args) command += " " + shell_quote(arg);
+        const fs::path captured = fs::temp_directory_path() /
+                                  ("tessref-test-mesh-captured-" + std::to_string(::getpid()));
+        const std::string out = captured.string() + ".out", err = captured.string() + ".err";
+        command += " >" + shell_quote(out) + " 2>" + shell_quote(err) + " </dev/null";
+        const int raw = std::system(command.c_str());
+        RunResult result;
+        result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+        result.out = read_text(out);
+        result.err = read_text(err);
+        fs::remove(out);
+        fs::remove(err);
+        return result;
+    }
+    std::set<std::string> files() const {
+        std::set<std::string> names;
+        for (const auto& entry : fs::directory_iterator(dir_)) names.insert(entry.path().filename().string());
+        return names;
+    }
+    static std::string scene(const std::string& name) {
+        return (fs::path(TESSREF_DATA_DIR) / "scenes" / (name + ".toml")).string();
+    }
+};
+
+TEST_F(MeshCommand, WritesTheSceneInEveryFormat) {
+    // thesis-constant-1: 16 x 16 patches at level 1, two triangles each, on a 17 x 17 grid
+    // of corners: 289 welded vertices, 512 triangles.
+    for (const char* name : {"t.ply", "t.obj", "t.off", "t.stl"}) {
+        for (bool binary : {false, true}) {
+            if (binary && std::string(name) == "t.obj") continue;
+            std::vector<std::string> args{scene("thesis-constant-1"), "-o", path(name).string()};
+            if (binary) args.push_back("--binary");
+            const RunResult result = run(args);
+            ASSERT_EQ(result.status, 0) << result.err;
+            EXPECT_EQ(files(), std::set<std::string>{name});
+            ReadMesh read;
+            ASSERT_TRUE(OpenMesh::IO::read_mesh(read, path(name).string()));
+            EXPECT_EQ(read.n_vertices(), 289u) << name;
+            EXPECT_EQ(read.n_faces(), 512u) << name;
+            fs::remove(path(name));
+        }
+    }
+}
+
+TEST_F(MeshCommand, PrecisionsAgreeOnTopology) {
+    ASSERT_EQ(run({scene("thesis-constant-1"), "-o", path("g.ply").string(), "--binary"}).status, 0);
+    ASSERT_EQ(run({scene("thesis-constant-1"), "-o", path("e.ply").string(), "--binary",
+                   "--precision", "exact", "--threads", "1"}).status, 0);
+    ReadMesh gpu, exact;
+    ASSERT_TRUE(OpenMesh::IO::read_mesh(gpu, path("g.ply").string()));
+    ASSERT_TRUE(OpenMesh::IO::read_mesh(exact, path("e.ply").string()));
+    EXPECT_EQ(gpu.n_vertices(), exact.n_vertices());
+    EXPECT_EQ(gpu.n_faces(), exact.n_faces());
+}
+
+TEST_F(MeshCommand, BadOutputIsAnErrorBeforeAnythingIsWritten) {
+    const std::string good = scene("thesis-constant-1");
+    struct Case {
+        std::vector<std::string> args;
+        const char* message;
+    };
+    const std::vector<Case> cases{
+        {{good, "-o", path("t.vtk").string()}, "unknown mesh format"},
+        {{good, "-o", path("t").string()}, "no extension"},
+        {{good, "-o", (dir_ / "missing" / "t.ply").string()}, "cannot create output file"},
+        {{good, "-o", path("t.obj").string(), "--binary"}, "no binary form"},
+        {{good, "-o", path("t.ply").string(), "--precision", "half"}, "unknown precision"},
+        {{(dir_ / "missing.toml").string(), "-o", path("t.ply").string()}, ""},
+    };
+    for (const Case& c : cases) {
+        const RunResult result = run(c.args);
+        EXPECT_EQ(result.status, 2) << c.args[2];
+        EXPECT_EQ(result.err.rfind("tessref: error: ", 0), 0u) << result.err;
+        EXPECT_NE(result.err.find(c.message), std::string::npos) << result.err;
+        EXPECT_TRUE(files().empty()) << c.args[2];  // no output, no temporary file
+    }
+}
+
+TEST_F(MeshCommand, AFailedRunLeavesAnExistingOutputAsItWas) {
+    {
+        std::ofstream old(path("t.ply"));
+        old << "old";
+    }
+    const RunResult result = run({(dir_ / "missing.toml").string(), "-o", path("t.ply").string()});
+    EXPECT_EQ(result.status, 2);
+    EXPECT_EQ(read_text(path("t.ply")), "old");
+    EXPECT_EQ(files(), std::set<std::string>{"t.ply"});
 }
 
 }  // namespace

@@ -35,12 +35,12 @@
 //     still happens on the double bit patterns); the ASCII STL writer prints vertex
 //     coordinates with 10 significant digits, not 9 (it hard-codes that).
 //
-// OpenMesh's half-edge structure cannot hold a non-manifold configuration (an edge with
-// three or more triangles, two fans meeting at one vertex). A triangle that OpenMesh
-// refuses is still written, on its own copies of its three vertices (the importers of
-// OpenMesh do the same); MeshWriteReport::split_triangles counts them. A triangle whose
-// corners weld into fewer than three distinct vertices has no area and no edges to
-// share; it is left out and counted in MeshWriteReport::degenerate_triangles.
+// The triangles reach OpenMesh's writers through its exporter interface as a plain list:
+// OpenMesh's half-edge structure is not built, so a mesh it could not hold (an edge with
+// three or more triangles, two fans meeting at one vertex) is still written exactly as it
+// is. A triangle whose corners weld into fewer than three distinct vertices has no area
+// and no edges to share; it is left out and counted in
+// MeshWriteReport::degenerate_triangles.
 #pragma once
 
 #include <array>
@@ -110,7 +110,7 @@ struct MeshWriteOptions {
     MeshFormat format = MeshFormat::ply;
     bool binary = false;       // ply, off, stl; an Error for obj
     int ascii_digits = 9;      // significant digits of every ASCII number
-    // Called from the calling thread with a stage ("welding", "connecting", "writing") and
+    // Called from the calling thread with a stage ("welding", "collecting", "writing") and
     // the fraction of it done, a few hundred times at most; may be empty. OpenMesh's
     // writer reports nothing while it runs, so "writing" comes at 0 and 1 only.
     std::function<void(std::string_view stage, double fraction)> progress;
@@ -118,11 +118,9 @@ struct MeshWriteOptions {
 
 struct MeshWriteReport {
     std::size_t emitted_vertices = 0;      // vertices of the SurfaceMesh
-    std::size_t welded_vertices = 0;       // distinct vertices after welding
-    std::size_t written_vertices = 0;      // welded + copies made for split triangles
+    std::size_t vertices = 0;              // vertices written (after welding)
     std::size_t triangles = 0;             // triangles written
     std::size_t degenerate_triangles = 0;  // left out (see above)
-    std::size_t split_triangles = 0;       // written on their own vertex copies (see above)
 };
 
 // Welds `mesh` and writes it to `out` (opened in binary mode for a binary format) through

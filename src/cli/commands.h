@@ -30,6 +30,7 @@ struct Command {
 // tessref tessellate — the primitive generator's pattern for one set of levels
 // (text, json, obj, svg, png). src/cli/cmd_tessellate.cpp
 Command add_tessellate_command(CLI::App& parent);
+Command add_mesh_command(CLI::App& parent);  // tessref mesh: src/cli/cmd_mesh.cpp
 
 // Later subcommands, one file each (declare here, list in main.cpp):
 //   Command add_mesh_command(CLI::App& parent);     // src/cli/cmd_mesh.cpp

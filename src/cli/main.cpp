@@ -24,6 +24,7 @@ constexpr int exit_bad_input = 2;
 std::vector<tessref::cli::Command> make_commands(CLI::App& app) {
     return {
         tessref::cli::add_tessellate_command(app),
+        tessref::cli::add_mesh_command(app),
     };
 }
 

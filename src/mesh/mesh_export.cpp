@@ -220,8 +220,43 @@ namespace {
 // converting here or inside the writer gives the same (round-to-nearest) values.
 using ExportMesh = OpenMesh::TriMesh_ArrayKernelT<OpenMesh::DefaultTraits>;
 
-// Silences one of OpenMesh's log streams for a scope (it reports refused faces and chats
-// about every file it writes), restoring its previous state afterwards.
+// OpenMesh's writers read a mesh through its exporter interface (IO::BaseExporter). This
+// exporter serves the vertices (and their properties) from an OpenMesh kernel that holds
+// vertices only, and the triangles straight from our list, so the half-edge structure is
+// never built: a triangle list that a half-edge mesh cannot hold (a non-manifold edge or
+// vertex) is written as it is, and the export skips the costliest step (connecting faces).
+class TriangleListExporter : public OpenMesh::IO::ExporterT<ExportMesh> {
+public:
+    TriangleListExporter(const ExportMesh& vertices, const std::vector<std::array<std::uint32_t, 3>>& triangles)
+        : OpenMesh::IO::ExporterT<ExportMesh>(vertices), triangles_(triangles) {}
+
+    unsigned int get_vhandles(OpenMesh::FaceHandle face,
+                              std::vector<OpenMesh::VertexHandle>& corners) const override {
+        const auto& triangle = triangles_[static_cast<std::size_t>(face.idx())];
+        corners.assign({OpenMesh::VertexHandle(static_cast<int>(triangle[0])),
+                        OpenMesh::VertexHandle(static_cast<int>(triangle[1])),
+                        OpenMesh::VertexHandle(static_cast<int>(triangle[2]))});
+        return 3;
+    }
+    std::size_t n_faces() const override { return triangles_.size(); }
+    std::size_t n_edges() const override { return 0; }  // no writer of ours reads it
+    bool is_triangle_mesh() const override { return true; }
+    // Per-corner texture coordinates live on half-edges, which do not exist here; only
+    // vertex texture coordinates are written (Options::FaceTexCoord is never set).
+    unsigned int get_face_texcoords(std::vector<OpenMesh::Vec2f>& texcoords) const override {
+        texcoords.clear();
+        return 0;
+    }
+    OpenMesh::HalfedgeHandle getHeh(OpenMesh::FaceHandle, OpenMesh::VertexHandle) const override {
+        return OpenMesh::HalfedgeHandle();
+    }
+
+private:
+    const std::vector<std::array<std::uint32_t, 3>>& triangles_;
+};
+
+// Silences one of OpenMesh's log streams for a scope (its writers chat about every file
+// they write), restoring its previous state afterwards.
 class QuietStream {
 public:
     explicit QuietStream(OpenMesh::mostream& stream) : stream_(stream), was_enabled_(stream.is_enabled()) {
@@ -255,17 +290,23 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     if (options.ascii_digits < 1 || options.ascii_digits > 17) {
         throw Error("ASCII digits must be within [1, 17], got " + std::to_string(options.ascii_digits));
     }
-
     const auto progress = [&options](std::string_view stage, double fraction) {
         if (options.progress) options.progress(stage, fraction);
     };
+
     progress("welding", 0.0);
-    WeldedMesh welded = weld_bitwise(mesh);
+    const WeldedMesh welded = weld_bitwise(mesh);
     progress("welding", 1.0);
     const SurfaceMesh& w = welded.mesh;
+    if (w.positions.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
+        w.triangles.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+        throw Error("mesh too large for OpenMesh's 32-bit handles: " + std::to_string(w.positions.size()) +
+                    " vertices, " + std::to_string(w.triangles.size()) + " triangles");
+    }
     MeshWriteReport report;
     report.emitted_vertices = mesh.positions.size();
-    report.welded_vertices = w.positions.size();
+    report.vertices = w.positions.size();
+    report.triangles = w.triangles.size();
     report.degenerate_triangles = welded.degenerate_triangles;
 
     // What the format can carry, and what the mesh has.
@@ -275,7 +316,7 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     const bool write_tess_coords = format == MeshFormat::ply && !w.tess_coords.empty();
 
     ExportMesh om;
-    om.reserve(w.positions.size(), w.triangles.size() * 3 / 2 + 3, w.triangles.size());
+    om.reserve(w.positions.size(), 0, 0);
     if (write_normals) om.request_vertex_normals();
     if (write_uvs) om.request_vertex_texcoords2D();
     // PLY extra properties: OpenMesh's PLY writer emits every persistent vertex property
@@ -295,7 +336,11 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
         om.property(tess_w_property).set_persistent(true);
     }
 
-    const auto add_vertex = [&](std::uint32_t v) {
+    constexpr std::size_t progress_step = std::size_t{1} << 16;
+    for (std::size_t v = 0; v < w.positions.size(); ++v) {
+        if (v % progress_step == 0) {
+            progress("collecting", static_cast<double>(v) / static_cast<double>(w.positions.size()));
+        }
         const ExportMesh::VertexHandle vh = om.add_vertex(to_float(w.positions[v]));
         if (write_normals) om.set_normal(vh, to_float(w.normals[v]));
         if (write_uvs) {
@@ -312,30 +357,8 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
             om.property(tess_v_property, vh) = w.tess_coords[v].y;
             om.property(tess_w_property, vh) = w.tess_coords[v].z;
         }
-        return vh;
-    };
-
-    for (std::uint32_t v = 0; v < w.positions.size(); ++v) add_vertex(v);
-    {
-        const QuietStream quiet(::omerr());  // refused faces are handled below
-        constexpr std::size_t progress_step = std::size_t{1} << 16;
-        for (std::size_t t = 0; t < w.triangles.size(); ++t) {
-            if (t % progress_step == 0) {
-                progress("connecting", static_cast<double>(t) / static_cast<double>(w.triangles.size()));
-            }
-            const auto& triangle = w.triangles[t];
-            const ExportMesh::VertexHandle a(static_cast<int>(triangle[0]));
-            const ExportMesh::VertexHandle b(static_cast<int>(triangle[1]));
-            const ExportMesh::VertexHandle c(static_cast<int>(triangle[2]));
-            if (om.add_face(a, b, c).is_valid()) continue;
-            // Non-manifold here: the triangle goes on its own copies of its corners.
-            ++report.split_triangles;
-            om.add_face(add_vertex(triangle[0]), add_vertex(triangle[1]), add_vertex(triangle[2]));
-        }
     }
-    progress("connecting", 1.0);
-    report.written_vertices = om.n_vertices();
-    report.triangles = om.n_faces();
+    progress("collecting", 1.0);
 
     OpenMesh::IO::Options io_options;
     if (options.binary) {
@@ -351,8 +374,9 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     {
         const QuietStream quiet_log(::omlog());
         const QuietStream quiet_out(::omout());
-        written = OpenMesh::IO::write_mesh(om, out, std::string(to_string(format)), io_options,
-                                           options.ascii_digits);
+        TriangleListExporter exporter(om, w.triangles);
+        written = OpenMesh::IO::IOManager().write(out, "." + std::string(to_string(format)), exporter,
+                                                  io_options, options.ascii_digits);
     }
     out.flush();
     if (!written) {
