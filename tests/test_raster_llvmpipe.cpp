@@ -14,7 +14,8 @@
 //
 // Cases (fixed seeds): small, large and sliver triangles, triangles on a quarter-pixel grid
 // (pixel-centre aligned edges and vertices, rounding ties), many sub-pixel positions, shared
-// edges (quads, fans), perspective w, huge coordinates, triangles crossing the near plane
+// edges (quads, fans), perspective w, huge coordinates (up to 1e7, w up to 1e18), triangles
+// crossing the near plane
 // and every other clip plane, vertices exactly on a clip plane; the same in
 // glPolygonMode(GL_LINE); back-face culling; and overlapping triangles with depth LESS.
 #include <gtest/gtest.h>
@@ -475,6 +476,20 @@ std::vector<Tri> perspective(Gen& g, int n) {
     return out;
 }
 
+// Huge coordinates: far outside the view volume, clip coordinates up to 1e7 and w up to 1e18,
+// where float clipping moves the clipped corners by whole pixels.
+std::vector<Tri> huge(Gen& g, int n) {
+    std::vector<Tri> out;
+    for (int i = 0; i < n; ++i) {
+        const float size = std::pow(10.0f, g.uniform(2.0f, 7.0f));
+        const float w = std::pow(10.0f, g.uniform(-3.0f, 18.0f));
+        Tri t;
+        for (auto& v : t) v = glm::vec4(g.uniform(-size, size), g.uniform(-size, size), g.uniform(-0.9f, 0.9f), 1.0f) * w;
+        out.push_back(t);
+    }
+    return out;
+}
+
 // One or two vertices behind the eye (w < 0), crossing the near (z = -w) plane.
 std::vector<Tri> near_plane(Gen& g, int n) {
     std::vector<Tri> out;
@@ -527,6 +542,7 @@ std::vector<Tri> all_cases(unsigned seed, int width, int height) {
     add(grid_triangles(g, 800, 1.0f / 512.0f, 1500));
     add(shared_edges(g, 200));
     add(perspective(g, 300));
+    add(huge(g, 300));
     add(near_plane(g, 400));
     add(on_planes(g, 300));
     return all;
