@@ -824,6 +824,16 @@ TEST_F(MeshCommand, PrecisionsAgreeOnTopology) {
     EXPECT_EQ(gpu.n_faces(), exact.n_faces());
 }
 
+TEST_F(MeshCommand, OutputIsTheSameWhateverTheThreadCount) {
+    for (const char* precision : {"gpu", "exact"}) {
+        ASSERT_EQ(run({scene("cosc422"), "-o", path("one.ply").string(), "--threads", "1", "--precision", precision}).status, 0);
+        ASSERT_EQ(run({scene("cosc422"), "-o", path("many.ply").string(), "--threads", "4", "--precision", precision}).status, 0);
+        const std::string one = read_text(path("one.ply"));
+        EXPECT_FALSE(one.empty());
+        EXPECT_EQ(one, read_text(path("many.ply"))) << precision;
+    }
+}
+
 TEST_F(MeshCommand, BadOutputIsAnErrorBeforeAnythingIsWritten) {
     const std::string good = scene("thesis-constant-1");
     struct Case {
