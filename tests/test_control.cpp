@@ -193,15 +193,30 @@ TEST(Thesis, NormalFactorSumsTheProbeAnglesAcrossACrease) {
                                   ThesisEdgeDirection::along_u, control)
                   .normalTessellation,
               0.0);
-    // The same crease in float: the sum, unless a unit normal's self-dot rounds above 1 and
-    // acos gives NaN (the quirk kept from the GPU).
+    // The same crease in float: the sum, never NaN (the dot is clamped before acos).
     ThesisControl<float> controlF;
     controlF.factor = ThesisFactor::normal;
     controlF.normalMap = crease_normal_map<float>();
     const float nf = thesis_edge_factors(glm::vec3(0, 0, 0), glm::vec3(10, 0, 0),
                                          ThesisEdgeDirection::along_u, controlF)
                          .normalTessellation;
-    EXPECT_TRUE(std::isnan(nf) || std::abs(nf - 2 * std::acos(0.6f)) < 1e-5f) << nf;
+    EXPECT_NEAR(nf, 2 * std::acos(0.6f), 1e-5f);
+    // A texel whose decoded unit normal has a float self-dot above 1: the unclamped acos of
+    // the seed would give NaN; the clamped one gives a zero angle, so the factor is 0.
+    glm::vec3 texel(0.0f);
+    bool found = false;
+    for (int code = 0; code < 256 * 256 && !found; ++code) {
+        texel = glm::vec3((code % 256) / 255.0f, (code / 256) / 255.0f, 1.0f);
+        const glm::vec3 n = normal_from_texture(texel);
+        found = glm::dot(n, n) > 1.0f;
+    }
+    ASSERT_TRUE(found);
+    ASSERT_TRUE(std::isnan(std::acos(glm::dot(normal_from_texture(texel), normal_from_texture(texel)))));
+    controlF.normalMap = [texel](glm::vec2) { return glm::vec4(texel, 1.0f); };
+    EXPECT_EQ(thesis_edge_factors(glm::vec3(0, 0, 0), glm::vec3(10, 0, 0), ThesisEdgeDirection::along_u,
+                                  controlF)
+                  .normalTessellation,
+              0.0f);
 }
 
 // ---------------------------------------------------------------------------------------

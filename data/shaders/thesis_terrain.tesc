@@ -75,13 +75,13 @@ float distance_factor(float factor)
 }
 
 // normalTessFactor: the angles between opposite probes; their sum when any exceeds the
-// threshold.
+// threshold. Clamped before acos (the thesis's shader is not: a rounded-up 1 gives NaN).
 float normal_tess_factor(vec3 vertexNormal[6])
 {
-    float testangle = acos(dot(vertexNormal[0], vertexNormal[3]));
-    float testangle90 = acos(dot(vertexNormal[2], vertexNormal[1]));
-    float testangle2 = acos(dot(vertexNormal[0], vertexNormal[5]));
-    float testangle902 = acos(dot(vertexNormal[1], vertexNormal[4]));
+    float testangle = acos(clamp(dot(vertexNormal[0], vertexNormal[3]), -1.0, 1.0));
+    float testangle90 = acos(clamp(dot(vertexNormal[2], vertexNormal[1]), -1.0, 1.0));
+    float testangle2 = acos(clamp(dot(vertexNormal[0], vertexNormal[5]), -1.0, 1.0));
+    float testangle902 = acos(clamp(dot(vertexNormal[1], vertexNormal[4]), -1.0, 1.0));
 
     if (testangle > normalAngleThreshold || testangle90 > normalAngleThreshold ||
         testangle2 > normalAngleThreshold || testangle902 > normalAngleThreshold)

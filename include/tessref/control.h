@@ -44,9 +44,7 @@
 //   thesis: DistanceFactor returns (50 - d)/10, i.e. 0..5, not 0..1 as the text says;
 //           the normal factor is a sum of four angles in radians (0 or > 0.9, up to 4*pi);
 //           so formula (2) can exceed 64 (the primitive generator clamps); the normal-map
-//           decode subtracts 0.5 from n/255, so no byte decodes to exactly 0; acos of a dot
-//           product of unit vectors that rounds above 1 is NaN in float (as on Mesa, whose
-//           acos goes through sqrt(1 - |x|)); the normal factor's probe points lie on the
+//           decode subtracts 0.5 from n/255, so no byte decodes to exactly 0; the normal factor's probe points lie on the
 //           edge's own line (offsets +-(b - a)), not across it as the thesis's figure 4 shows.
 //   cosc422: the ramp is not clamped: an eye-space z below -111.1 gives a level <= 0, which
 //           culls the patch, exactly as the shader would.
@@ -217,8 +215,9 @@ enum class ThesisEdgeDirection : std::uint8_t { along_v, along_u };
 // up/down from edge bc for all four edges; here each edge uses its own vector (bit for bit
 // the same for ab and bc, and for dc and ad whenever the grid's differences are exact), so
 // the factor depends on the edge alone.
-// In double, the dot products are clamped into [-1, 1] before acos (their true value is);
-// in float they are not (GPU-faithful: a rounded-up 1 gives NaN).
+// NOT kept: the seed's acos(dot) is unclamped, and in float a unit normal's self-dot that
+// rounds above 1 gives NaN, a NaN outer level and a culled patch (a hole). Both precisions
+// and the GLSL twin clamp the dot product into [-1, 1].
 template <typename T>
 ThesisEdgeFactors<T> thesis_edge_factors(const vec3_t<T>& p, const vec3_t<T>& q,
                                          ThesisEdgeDirection direction,

@@ -44,16 +44,15 @@ vec3_t<T> normal_from_texture(const vec3_t<T>& rgb) {
 
 namespace {
 
-// acos of a dot product of unit vectors. Float: as the shader (a value rounded above 1 gives
-// NaN, as Mesa's acos does). Double: clamped, because the true value is within [-1, 1].
+// acos of a dot product of unit vectors, clamped into [-1, 1] in both precisions. The
+// thesis's shader calls acos(dot(n1, n2)) unclamped; in float a decoded unit normal's
+// self-dot often rounds above 1 (8-24 % of the texels of the shipped normal maps), acos
+// gives NaN, the NaN outer level culls the patch on llvmpipe and on GPUs, and the terrain
+// gets holes. That is a bug of the shader, not a property of the hardware, so this twin
+// and data/shaders/thesis_terrain.tesc both clamp (a documented departure from the seed).
 template <typename T>
 T angle_between(const vec3_t<T>& n1, const vec3_t<T>& n2) {
-    const T cosine = glm::dot(n1, n2);
-    if constexpr (std::is_same_v<T, double>) {
-        return std::acos(std::clamp(cosine, -1.0, 1.0));
-    } else {
-        return std::acos(cosine);
-    }
+    return std::acos(std::clamp(glm::dot(n1, n2), T(-1), T(1)));
 }
 
 // GLSL: thesis_terrain.tesc:79 normal_tess_factor
