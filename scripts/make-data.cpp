@@ -105,6 +105,28 @@ void write_gray(const std::string& path, int size, const std::vector<T>& pixels,
     std::printf("wrote %s\n", path.c_str());
 }
 
+// OpenImageIO 2.4.7's PNM writer garbles 16-bit samples (and the file comes out with the
+// wrong values), so 16-bit PGM files are written here directly: a P5 header and big-endian
+// samples, as the netpbm format defines them. Reading stays with OpenImageIO.
+void write_pgm16(const std::string& path, int size, const std::vector<std::uint16_t>& pixels) {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) {
+        std::fprintf(stderr, "make-data: cannot create %s\n", path.c_str());
+        std::exit(1);
+    }
+    std::fprintf(f, "P5\n%d %d\n65535\n", size, size);
+    std::vector<unsigned char> bytes(pixels.size() * 2);
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+        bytes[2 * i] = static_cast<unsigned char>(pixels[i] >> 8);
+        bytes[2 * i + 1] = static_cast<unsigned char>(pixels[i] & 0xff);
+    }
+    if (std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size() || std::fclose(f) != 0) {
+        std::fprintf(stderr, "make-data: cannot write %s\n", path.c_str());
+        std::exit(1);
+    }
+    std::printf("wrote %s\n", path.c_str());
+}
+
 // ---- height and tessellation maps -------------------------------------------------
 void make_thesis_island(const std::string& dir) {
     const int n = 512;
@@ -169,7 +191,7 @@ void make_canyon(const std::string& dir) {
             const double h = floor_height + (plateau - floor_height) * terrace;
             pixels[j * n + i] = static_cast<std::uint16_t>(std::lround(std::clamp(h, 0.0, 1.0) * 65535.0));
         }
-    write_gray(dir + "/heightmaps/canyon.pgm", n, pixels, OIIO::TypeDesc::UINT16);
+    write_pgm16(dir + "/heightmaps/canyon.pgm", n, pixels);
 }
 
 // ---- meshes through OpenMesh -------------------------------------------------------
