@@ -17,15 +17,15 @@
 //     tess coord, patch id), the welded vertex takes ALL of them from one copy: the copy
 //     with the lowest patch id, and among those the one emitted first. The result does not
 //     depend on the order of the input vertices beyond that tie-break.
-//  3. Write through OpenMesh's writers (OpenMesh::IO::write_mesh on a stream). What each
-//     format carries:
+//  3. Write through OpenMesh's writers (OpenMesh::IO::IOManager, on a stream, fed by an
+//     exporter; see below). What each format carries:
 //       ply  positions, vertex normals (nx ny nz), uv (u v), and the provenance of every
 //            vertex as extra properties: `property int patch_id`, `property float tess_u`,
 //            `tess_v`, `tess_w`; ascii or --binary (little endian).
 //       obj  positions, normals (vn), uv (vt); ascii only (OBJ has no binary form:
 //            asking for one is an Error).
 //       off  positions, normals, uv (the "STNOFF" variant); ascii, or OpenMesh's binary
-//            OFF ("OFF BINARY" header) with binary = true.
+//            OFF (a "... BINARY" header line) with binary = true.
 //       stl  positions only (STL has no vertex attributes); facet normals are computed by
 //            OpenMesh from each triangle's (float) corners. ascii or binary.
 //     ASCII numbers are written with 9 significant digits (enough for any float to read
@@ -33,7 +33,8 @@
 //     format: every writer stores positions, normals and uvs as 32-bit float, so positions
 //     of an `exact` (double) run are rounded to the nearest float in the file (welding
 //     still happens on the double bit patterns); the ASCII STL writer prints vertex
-//     coordinates with 10 significant digits, not 9 (it hard-codes that).
+//     coordinates (and the facet normals after the first) with 10 significant digits, not
+//     9 (it hard-codes that).
 //
 // The triangles reach OpenMesh's writers through its exporter interface as a plain list:
 // OpenMesh's half-edge structure is not built, so a mesh it could not hold (an edge with
