@@ -78,7 +78,8 @@ using Tri = std::array<glm::vec4, 3>;
     X(BufferData, void, (GLenum, GLsizeiptr, const void*, GLenum))               \
     X(VertexAttribPointer, void, (GLuint, GLint, GLenum, GLboolean, GLsizei, const void*)) \
     X(EnableVertexAttribArray, void, (GLuint))                                   \
-    X(DrawArrays, void, (GLenum, GLint, GLsizei))
+    X(DrawArrays, void, (GLenum, GLint, GLsizei))                                \
+    X(PatchParameteri, void, (GLenum, GLint))
 
 struct Gl {
 #define RASTER_TEST_GL_MEMBER(name, ret, params) ret(*name) params = nullptr;
@@ -89,6 +90,28 @@ struct Gl {
 const char* kVertexShader = R"(#version 450 core
 layout(location = 0) in vec4 position;
 void main() { gl_Position = position; }
+)";
+
+// A pass-through tessellation (one patch = the triangle, every level 1: the generator emits
+// exactly its three corners, tess coords 0 and 1, so gl_Position is copied exactly). Drawn
+// this way, llvmpipe computes window coordinates in draw's C post-shader path, as for every
+// tessellated draw, instead of the vertex-shader JIT.
+const char* kTessControlShader = R"(#version 450 core
+layout(vertices = 3) out;
+void main() {
+    gl_out[gl_InvocationID].gl_Position = gl_in[gl_InvocationID].gl_Position;
+    gl_TessLevelOuter[0] = 1.0;
+    gl_TessLevelOuter[1] = 1.0;
+    gl_TessLevelOuter[2] = 1.0;
+    gl_TessLevelInner[0] = 1.0;
+}
+)";
+const char* kTessEvaluationShader = R"(#version 450 core
+layout(triangles, equal_spacing, ccw) in;
+void main() {
+    gl_Position = gl_TessCoord.x * gl_in[0].gl_Position + gl_TessCoord.y * gl_in[1].gl_Position +
+                  gl_TessCoord.z * gl_in[2].gl_Position;
+}
 )";
 
 // mode 0: add 16^(id % 6) to channel id / 6 (fragment counts); mode 1: write id + 1 in red.
@@ -126,11 +149,9 @@ public:
 #undef RASTER_TEST_GL_LOAD
         renderer_ = reinterpret_cast<const char*>(gl_.GetString(GL_RENDERER));
         version_ = reinterpret_cast<const char*>(gl_.GetString(GL_VERSION));
-        program_ = link();
-        if (!program_) { ok_ = false; return; }
-        gl_.UseProgram(program_);
-        mode_location_ = gl_.GetUniformLocation(program_, "mode");
-        id_location_ = gl_.GetUniformLocation(program_, "id");
+        program_ = link(false);
+        tess_program_ = link(true);
+        if (!program_ || !tess_program_) { ok_ = false; return; }
         GLuint vao = 0;
         gl_.GenVertexArrays(1, &vao);
         gl_.BindVertexArray(vao);
@@ -164,6 +185,7 @@ public:
         bool lines = false;
         bool cull_back = false;
         bool depth_less = false;
+        bool tessellation = false;  // through the pass-through tessellation shaders
     };
 
     // Draws the triangles (vertex i*3+k), triangle i with id i; returns the RGBA float buffer,
@@ -171,11 +193,14 @@ public:
     const std::vector<float>& draw(const std::vector<Tri>& tris, int mode, const DrawState& state) {
         std::vector<glm::vec4> positions;
         for (const Tri& t : tris) positions.insert(positions.end(), t.begin(), t.end());
-        positions.push_back({4.0f, 4.0f, 0.0f, 1.0f});  // outside the view volume
         gl_.BindBuffer(GL_ARRAY_BUFFER, position_buffer_);
         gl_.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(positions.size() * sizeof(glm::vec4)),
                        positions.data(), GL_STREAM_DRAW);
-        gl_.Uniform1i(mode_location_, mode);
+        const GLuint program = state.tessellation ? tess_program_ : program_;
+        gl_.UseProgram(program);
+        gl_.Uniform1i(gl_.GetUniformLocation(program, "mode"), mode);
+        const GLint id_location = gl_.GetUniformLocation(program, "id");
+        if (state.tessellation) gl_.PatchParameteri(GL_PATCH_VERTICES, 3);
         gl_.ClearColor(0, 0, 0, 0);
         gl_.ClearDepth(1.0);
         gl_.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -201,9 +226,8 @@ public:
         }
         gl_.PolygonMode(GL_FRONT_AND_BACK, state.lines ? GL_LINE : GL_FILL);
         for (std::size_t i = 0; i < tris.size(); ++i) {
-            gl_.Uniform1i(id_location_, static_cast<GLint>(i));
-            gl_.DrawArrays(GL_TRIANGLES, static_cast<GLint>(3 * i), 3);
-            gl_.DrawArrays(GL_POINTS, static_cast<GLint>(3 * tris.size()), 1);
+            gl_.Uniform1i(id_location, static_cast<GLint>(i));
+            gl_.DrawArrays(state.tessellation ? GL_PATCHES : GL_TRIANGLES, static_cast<GLint>(3 * i), 3);
         }
         gl_.Finish();
         gl_.Finish();
@@ -227,13 +251,20 @@ private:
         }
         return shader;
     }
-    GLuint link() {
+    GLuint link(bool tessellation) {
         const GLuint vs = compile(GL_VERTEX_SHADER, kVertexShader);
         const GLuint fs = compile(GL_FRAGMENT_SHADER, kFragmentShader);
         if (!vs || !fs) return 0;
         const GLuint program = gl_.CreateProgram();
         gl_.AttachShader(program, vs);
         gl_.AttachShader(program, fs);
+        if (tessellation) {
+            const GLuint tcs = compile(GL_TESS_CONTROL_SHADER, kTessControlShader);
+            const GLuint tes = compile(GL_TESS_EVALUATION_SHADER, kTessEvaluationShader);
+            if (!tcs || !tes) return 0;
+            gl_.AttachShader(program, tcs);
+            gl_.AttachShader(program, tes);
+        }
         gl_.LinkProgram(program);
         GLint status = 0;
         gl_.GetProgramiv(program, GL_LINK_STATUS, &status);
@@ -251,8 +282,7 @@ private:
     bool ok_ = false;
     std::string error_ = "OSMesaCreateContextAttribs failed";
     std::string renderer_, version_;
-    GLuint program_ = 0, position_buffer_ = 0;
-    GLint mode_location_ = -1, id_location_ = -1;
+    GLuint program_ = 0, tess_program_ = 0, position_buffer_ = 0;
     int width_ = 0, height_ = 0;
     std::vector<float> buffer_;
     GLenum last_error_ = GL_NO_ERROR;
@@ -288,8 +318,11 @@ std::string describe(const Tri& t) {
 }
 
 // Per-triangle coverage by both, compared pixel for pixel.
+// tessellation: draw through the pass-through tessellation shaders and rasterize with
+// WindowTransform::tessellation (else a plain vertex-shader draw and ::vertex_shader);
+// wrong_transform: rasterize with the other transform (to show that the test tells them apart).
 Result compare_coverage(const std::vector<Tri>& tris, int width, int height, bool lines,
-                        bool cull_back) {
+                        bool cull_back, bool tessellation = false, bool wrong_transform = false) {
     Llvmpipe& gl = llvmpipe();
     gl.resize(width, height);
     Result result;
@@ -298,7 +331,8 @@ Result compare_coverage(const std::vector<Tri>& tris, int width, int height, boo
     settings.polygon_mode = lines ? tessref::PolygonMode::line : tessref::PolygonMode::fill;
     settings.cull = cull_back ? tessref::CullMode::back : tessref::CullMode::none;
     settings.depth_func = tessref::DepthFunc::always;
-    settings.window_transform = tessref::WindowTransform::vertex_shader;  // a plain VS draw
+    settings.window_transform = tessellation != wrong_transform ? tessref::WindowTransform::tessellation
+                                                                : tessref::WindowTransform::vertex_shader;
 
     constexpr std::size_t kPerPass = 24;
     for (std::size_t first = 0; first < tris.size(); first += kPerPass) {
@@ -308,6 +342,7 @@ Result compare_coverage(const std::vector<Tri>& tris, int width, int height, boo
         Llvmpipe::DrawState state;
         state.lines = lines;
         state.cull_back = cull_back;
+        state.tessellation = tessellation;
         const std::vector<float>& buffer = gl.draw(pass, 0, state);
         EXPECT_EQ(gl.last_error(), static_cast<GLenum>(GL_NO_ERROR));
         for (std::size_t i = 0; i < count; ++i) {
@@ -586,7 +621,7 @@ TEST_F(RasterLlvmpipe, BackFaceCullingIsIdentical) {
 }
 
 TEST_F(RasterLlvmpipe, WireframeCoverageIsIdentical) {
-    const std::vector<Tri> tris = all_cases(4242u, 128, 96);
+    const std::vector<Tri> tris = all_cases(9090u, 128, 96);
     const Result r = compare_coverage(tris, 128, 96, true, false);
     report("polygon mode line 128x96", tris, r);
     EXPECT_TRUE(r.mismatches.empty()) << r.mismatches.size() << " pixels differ";
@@ -597,6 +632,26 @@ TEST_F(RasterLlvmpipe, WireframeWithBackFaceCullingIsIdentical) {
     const Result r = compare_coverage(tris, 96, 64, true, true);
     report("polygon mode line, cull back", tris, r);
     EXPECT_TRUE(r.mismatches.empty()) << r.mismatches.size() << " pixels differ";
+}
+
+TEST_F(RasterLlvmpipe, FillThroughTessellationShadersIsIdentical) {
+    const std::vector<Tri> tris = all_cases(8080u, 128, 96);
+    const Result r = compare_coverage(tris, 128, 96, false, false, true);
+    report("fill, tessellation path", tris, r);
+    EXPECT_TRUE(r.mismatches.empty()) << r.mismatches.size() << " pixels differ";
+}
+
+TEST_F(RasterLlvmpipe, WireframeThroughTessellationShadersIsIdentical) {
+    const std::vector<Tri> tris = all_cases(4242u, 128, 96);
+    const Result r = compare_coverage(tris, 128, 96, true, false, true);
+    report("line, tessellation path", tris, r);
+    EXPECT_TRUE(r.mismatches.empty()) << r.mismatches.size() << " pixels differ";
+    // The same with the vertex-shader window transform (fma) must NOT agree everywhere:
+    // otherwise this test could not tell the two paths apart.
+    const Result wrong = compare_coverage(tris, 128, 96, true, false, true, true);
+    std::printf("[llvmpipe] (with the vertex-shader transform instead: %zu mismatches)\n",
+                wrong.mismatches.size());
+    EXPECT_GT(wrong.mismatches.size(), 0u);
 }
 
 TEST_F(RasterLlvmpipe, DepthLessPicksTheSameTriangle) {

@@ -53,21 +53,21 @@ int clip_polygon(const ClipVertex (&in)[3], unsigned clipmask, const Viewport& v
 // One primitive ready for rasterization: a set-up triangle (3 planes) or line (4 planes).
 struct Primitive {
     // Inclusive pixel bounding box in raster coordinates, clamped to the framebuffer.
-    int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
-    int plane_count = 0;
+    int x0, y0, x1, y1;
+    int plane_count;
     // Edge functions: E(px, py) = c + dcdy * py - dcdx * px (dcdx, dcdy already scaled by
     // 256, c with the fill-rule bias); pixel (px, py) is covered iff E > 0 for every plane.
-    std::int64_t c[4] = {};
-    std::int64_t dcdx[4] = {};
-    std::int64_t dcdy[4] = {};
+    std::int64_t c[4];
+    std::int64_t dcdx[4];
+    std::int64_t dcdy[4];
     // Float attribute planes a(px, py) = a[0] + a[1] * (px - ox) + a[2] * (py - oy), at pixel
     // centres (px, py integer): depth, 1/w and the three barycentric weights times 1/w.
-    float ox = 0.0f, oy = 0.0f;
-    float z[3] = {};
-    float oow[3] = {};
-    float bw[3][3] = {};
-    std::uint32_t source = 0;  // index of the input triangle
-    bool front = true;
+    float ox, oy;
+    float z[3];
+    float oow[3];
+    float bw[3][3];
+    std::uint32_t source;  // index of the input triangle
+    bool front;
 };
 
 // llvmpipe's triangle setup (calc_fixed_position + do_triangle_ccw). Returns false when the

@@ -100,12 +100,18 @@ bool setup_triangle(const ClipVertex& in0, const ClipVertex& in1, const ClipVert
     }
     prim.front = front;
 
-    // do_triangle_ccw bounding box; bottom_edge_rule = 1 gives adj = 1.
+    // do_triangle_ccw bounding box; bottom_edge_rule = 1 gives adj = 1. Its x0 and y0 may
+    // name a column/row whose centre lies left of / above the snapped triangle, or is its
+    // topmost vertex, which the fill rule leaves out (llvmpipe lets the edge functions
+    // reject them); tightening them changes no coverage and drops most sub-pixel triangles
+    // before any plane is set up.
     const int adj = 1;
-    prim.x0 = std::min({x[0], x[1], x[2]}) >> kFixedOrder;
-    prim.x1 = (std::max({x[0], x[1], x[2]}) - 1) >> kFixedOrder;
-    prim.y0 = (std::min({y[0], y[1], y[2]}) + adj) >> kFixedOrder;
-    prim.y1 = (std::max({y[0], y[1], y[2]}) - 1 + adj) >> kFixedOrder;
+    const std::int32_t min_x = std::min({x[0], x[1], x[2]}), max_x = std::max({x[0], x[1], x[2]});
+    const std::int32_t min_y = std::min({y[0], y[1], y[2]}), max_y = std::max({y[0], y[1], y[2]});
+    prim.x0 = std::max(min_x >> kFixedOrder, (min_x + kFixedOne - 1) >> kFixedOrder);
+    prim.x1 = (max_x - 1) >> kFixedOrder;
+    prim.y0 = std::max((min_y + adj) >> kFixedOrder, (min_y + kFixedOne) >> kFixedOrder);
+    prim.y1 = (max_y - 1 + adj) >> kFixedOrder;
     if (!clamp_bbox(prim, vp)) return false;
     make_planes(x, y, 3, prim);
 
@@ -179,25 +185,26 @@ bool setup_line(const ClipVertex& in1, const ClipVertex& in2, const Viewport& vp
             const float yintersect = fracf(v2->win.y) + x2diff * dydx;
             draw_end = (yintersect < 1.0f && yintersect > 0.0f);
         }
+        // Are we already drawing start/end? (Mesa 22.3's form: an end exactly on a pixel
+        // centre column counts as drawn; later Mesa changed that for dx < 0, which moves the
+        // end of such lines by a rounding step: the differential test has such a case.)
+        will_draw_start = sign(-x1diff) != sign(dx);
+        will_draw_end = (sign(x2diff) == sign(-dx)) || x2diff == 0;
         if (dx < 0.0f) {
             std::swap(v1, v2);  // v2 is to the right of v1
-            will_draw_start = x1diff <= 0.f;
             if (will_draw_start != draw_start) {
                 x_offset_end = -x1diff - 0.5f;
                 y_offset_end = x_offset_end * dydx;
             }
-            will_draw_end = x2diff > 0.f;
             if (will_draw_end != draw_end) {
                 x_offset = -x2diff - 0.5f;
                 y_offset = x_offset * dydx;
             }
         } else {
-            will_draw_start = x1diff > 0.f;
             if (will_draw_start != draw_start) {
                 x_offset = -x1diff + 0.5f;
                 y_offset = x_offset * dydx;
             }
-            will_draw_end = x2diff <= 0.f;
             if (will_draw_end != draw_end) {
                 x_offset_end = -x2diff + 0.5f;
                 y_offset_end = x_offset_end * dydx;
@@ -235,10 +242,10 @@ bool setup_line(const ClipVertex& in1, const ClipVertex& in2, const Viewport& vp
             const float xintersect = fracf(v2->win.x) + y2diff * dxdy;
             draw_end = (xintersect < 1.0f && xintersect >= 0.0f);
         }
+        will_draw_start = sign(y1diff) == sign(dy);
+        will_draw_end = (sign(-y2diff) == sign(dy)) || y2diff == 0;
         if (dy > 0.0f) {
             std::swap(v1, v2);  // v2 is on top of v1
-            will_draw_start = y1diff >= 0.f;
-            will_draw_end = y2diff < 0.f;
             if (will_draw_start != draw_start) {
                 y_offset_end = -y1diff + 0.5f;
                 x_offset_end = y_offset_end * dxdy;
@@ -248,8 +255,6 @@ bool setup_line(const ClipVertex& in1, const ClipVertex& in2, const Viewport& vp
                 x_offset = y_offset * dxdy;
             }
         } else {
-            will_draw_start = y1diff < 0.f;
-            will_draw_end = y2diff >= 0.f;
             if (will_draw_start != draw_start) {
                 y_offset = -y1diff - 0.5f;
                 x_offset = y_offset * dxdy;
