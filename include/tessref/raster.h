@@ -79,7 +79,10 @@ enum class WindowTransform { tessellation, vertex_shader };
 // What one pass draws. Plain views: the caller owns the data for the call's duration.
 struct RasterInput {
     std::span<const glm::vec4> positions;                      // gl_Position of every vertex
-    std::span<const std::array<std::uint32_t, 3>> triangles;   // vertex indices, any winding
+    // Vertex indices, any winding. As on the GPU, a triangle's vertex order decides the
+    // direction of its wireframe lines (and so their end pixels) and, when it is clipped,
+    // the fan: keep the order the GPU sees (the primitive generator's, for tessellation).
+    std::span<const std::array<std::uint32_t, 3>> triangles;
     std::span<const float> varyings = {};                      // varying_count floats per vertex
     int varying_count = 0;                                     // 0..kMaxVaryings
     std::span<const std::uint32_t> triangle_ids = {};  // id written per triangle; default its index

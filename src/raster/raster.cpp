@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 
@@ -92,8 +94,10 @@ std::vector<std::uint8_t> to_rgba8(const Framebuffer& fb) {
 namespace {
 
 constexpr int kTileSize = 64;
-constexpr std::size_t kChunkTriangles = 2048;  // input triangles set up by one task
-constexpr std::size_t kChunksPerBatch = 32;    // chunks kept in memory at once
+constexpr std::size_t kChunkTriangles = 2048;       // input triangles set up by one task
+constexpr std::size_t kChunksPerWave = 32;          // chunks set up in parallel at once
+constexpr std::size_t kBatchPrimitives = 1u << 18;  // primitives kept before rasterizing (~50 MB)
+constexpr std::size_t kMaxChunksPerBatch = 1024;
 
 struct PreparedVertex {
     glm::vec4 clip;
@@ -109,15 +113,47 @@ struct Chunk {
     RasterStats stats;
 };
 
+// Working memory of one rasterize() call, kept in a small pool and reused: allocating tens of
+// megabytes per call costs more in page faults (serialized in the kernel) than the work.
+struct Scratch {
+    std::vector<PreparedVertex> vertices;
+    std::vector<std::uint32_t> source;  // per pixel: input triangle written by this pass
+    std::vector<Chunk> chunks;
+};
+
+class ScratchPool {
+public:
+    std::unique_ptr<Scratch> acquire() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (free_.empty()) return std::make_unique<Scratch>();
+        std::unique_ptr<Scratch> s = std::move(free_.back());
+        free_.pop_back();
+        return s;
+    }
+    void release(std::unique_ptr<Scratch> s) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (free_.size() < 2) free_.push_back(std::move(s));
+    }
+
+private:
+    std::mutex mutex_;
+    std::vector<std::unique_ptr<Scratch>> free_;
+};
+
+ScratchPool& scratch_pool() {
+    static ScratchPool pool;
+    return pool;
+}
+
 struct Context {
     const RasterInput& input;
     const RasterSettings& settings;
     Framebuffer& fb;
     Viewport viewport;
-    int tiles_x = 0;
-    int tiles_y = 0;
-    std::vector<PreparedVertex> vertices;
-    std::vector<std::uint32_t> source;  // per pixel: input triangle written by this pass
+    int tiles_x;
+    int tiles_y;
+    std::vector<PreparedVertex>& vertices;
+    std::vector<std::uint32_t>& source;
 };
 
 bool finite4(const glm::vec4& v) {
@@ -248,44 +284,73 @@ inline float eval(const float plane[3], float fx, float fy) {
     return plane[0] + plane[1] * fx + plane[2] * fy;
 }
 
+// floor(n / d) for d > 0.
+inline std::int64_t floor_div(std::int64_t n, std::int64_t d) {
+    return n >= 0 ? n / d : -((-n + d - 1) / d);
+}
+
+// One covered pixel sample: depth test, then the visible surface's data.
+inline void fragment(Context& ctx, const Primitive& p, int px, int py, RasterStats& stats) {
+    Framebuffer& fb = ctx.fb;
+    const RasterSettings& s = ctx.settings;
+    const std::size_t idx = static_cast<std::size_t>(py) * static_cast<std::size_t>(fb.width) +
+                            static_cast<std::size_t>(px);
+    ++fb.fragment_count[idx];
+    ++stats.fragments;
+    const float fx = static_cast<float>(px) - p.ox;
+    const float fy = static_cast<float>(py) - p.oy;
+    float z = eval(p.z, fx, fy);
+    z = std::isnan(z) ? 1.0f : std::clamp(z, 0.0f, 1.0f);  // depth clamp to the range
+    bool pass = true;
+    if (s.depth_func == DepthFunc::less) pass = z < fb.depth[idx];
+    else if (s.depth_func == DepthFunc::lequal) pass = z <= fb.depth[idx];
+    if (!pass) return;
+    ++stats.fragments_passed;
+    if (s.depth_write) fb.depth[idx] = z;
+    const float oow = eval(p.oow, fx, fy);
+    glm::vec3 b;
+    for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], fx, fy) / oow;
+    fb.barycentric[idx] = b;
+    fb.color[idx] = s.color;
+    fb.front_facing[idx] = p.front ? 1 : 0;
+    ctx.source[idx] = p.source;
+}
+
+// Every pixel (px, py) of the primitive's box within the tile with all edge functions
+// E = c + dcdy * py - dcdx * px > 0, in row order. Narrow boxes test pixel by pixel; wider
+// ones solve each row's span exactly in integers (the same set, fewer tests).
 template <int Planes>
 void raster_primitive(Context& ctx, const Primitive& p, int tx0, int ty0, int tx1, int ty1,
                       RasterStats& stats) {
     const int x0 = std::max(p.x0, tx0), x1 = std::min(p.x1, tx1);
     const int y0 = std::max(p.y0, ty0), y1 = std::min(p.y1, ty1);
     if (x0 > x1 || y0 > y1) return;
-    Framebuffer& fb = ctx.fb;
-    const RasterSettings& s = ctx.settings;
-    const auto width = static_cast<std::size_t>(fb.width);
+    const bool narrow = x1 - x0 < 6;
     for (int py = y0; py <= y1; ++py) {
         std::int64_t e[Planes];
-        for (int k = 0; k < Planes; ++k) e[k] = p.c[k] + p.dcdy[k] * py - p.dcdx[k] * x0;
-        for (int px = x0; px <= x1; ++px) {
-            bool inside = true;
-            for (int k = 0; k < Planes; ++k) inside = inside && e[k] > 0;
-            for (int k = 0; k < Planes; ++k) e[k] -= p.dcdx[k];
-            if (!inside) continue;
-            const std::size_t idx = static_cast<std::size_t>(py) * width + static_cast<std::size_t>(px);
-            ++fb.fragment_count[idx];
-            ++stats.fragments;
-            const float fx = static_cast<float>(px) - p.ox;
-            const float fy = static_cast<float>(py) - p.oy;
-            float z = eval(p.z, fx, fy);
-            z = std::isnan(z) ? 1.0f : std::clamp(z, 0.0f, 1.0f);  // depth clamp to the range
-            bool pass = true;
-            if (s.depth_func == DepthFunc::less) pass = z < fb.depth[idx];
-            else if (s.depth_func == DepthFunc::lequal) pass = z <= fb.depth[idx];
-            if (!pass) continue;
-            ++stats.fragments_passed;
-            if (s.depth_write) fb.depth[idx] = z;
-            const float oow = eval(p.oow, fx, fy);
-            glm::vec3 b;
-            for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], fx, fy) / oow;
-            fb.barycentric[idx] = b;
-            fb.color[idx] = s.color;
-            fb.front_facing[idx] = p.front ? 1 : 0;
-            ctx.source[idx] = p.source;
+        for (int k = 0; k < Planes; ++k) e[k] = p.c[k] + p.dcdy[k] * py;
+        if (narrow) {
+            for (int k = 0; k < Planes; ++k) e[k] -= p.dcdx[k] * x0;
+            for (int px = x0; px <= x1; ++px) {
+                bool inside = true;
+                for (int k = 0; k < Planes; ++k) inside = inside && e[k] > 0;
+                for (int k = 0; k < Planes; ++k) e[k] -= p.dcdx[k];
+                if (inside) fragment(ctx, p, px, py, stats);
+            }
+            continue;
         }
+        std::int64_t lo = x0, hi = x1;
+        for (int k = 0; k < Planes && lo <= hi; ++k) {
+            const std::int64_t b = p.dcdx[k];
+            if (b > 0) {
+                hi = std::min(hi, floor_div(e[k] - 1, b));  // b * px < e
+            } else if (b < 0) {
+                lo = std::max(lo, -floor_div(e[k] - 1, -b));  // -b * px > -e
+            } else if (e[k] <= 0) {
+                hi = lo - 1;
+            }
+        }
+        for (std::int64_t px = lo; px <= hi; ++px) fragment(ctx, p, static_cast<int>(px), py, stats);
     }
 }
 
@@ -381,7 +446,9 @@ void resolve(Context& ctx) {
 }
 
 RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings& settings) {
-    Context ctx{input, settings, fb, raster::make_viewport(fb.width, fb.height), 0, 0, {}, {}};
+    std::unique_ptr<Scratch> scratch = scratch_pool().acquire();
+    Context ctx{input,    settings, fb, raster::make_viewport(fb.width, fb.height), 0, 0,
+                scratch->vertices, scratch->source};
     ctx.tiles_x = (fb.width + kTileSize - 1) / kTileSize;
     ctx.tiles_y = (fb.height + kTileSize - 1) / kTileSize;
     const int tile_count = ctx.tiles_x * ctx.tiles_y;
@@ -400,22 +467,19 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
                       });
     ctx.source.assign(fb.depth.size(), kNoTriangle);
 
+    // Set up chunks in parallel waves and rasterize the tiles once enough primitives have
+    // piled up. Batches must be large: a batch of consecutive triangles of a tessellated
+    // surface covers few tiles, which would leave the tile phase to one thread.
     RasterStats total;
-    std::vector<Chunk> chunks(kChunksPerBatch);
+    std::vector<Chunk>& chunks = scratch->chunks;  // storage reused across batches and calls
+    std::size_t used = 0, batch_prims = 0;
     std::vector<RasterStats> tile_stats(static_cast<std::size_t>(tile_count));
-    const std::size_t tri_count = input.triangles.size();
-    for (std::size_t batch_first = 0; batch_first < tri_count;
-         batch_first += kChunkTriangles * kChunksPerBatch) {
-        const std::size_t batch_last = std::min(tri_count, batch_first + kChunkTriangles * kChunksPerBatch);
-        const std::size_t chunk_count = (batch_last - batch_first + kChunkTriangles - 1) / kChunkTriangles;
-        tbb::parallel_for(std::size_t{0}, chunk_count, [&](std::size_t c) {
-            const std::size_t first = batch_first + c * kChunkTriangles;
-            setup_chunk(ctx, first, std::min(batch_last, first + kChunkTriangles), chunks[c]);
-        });
+    auto flush = [&] {
+        if (used == 0) return;
         tbb::parallel_for(0, tile_count, [&](int tile) {
-            raster_tile(ctx, tile, chunks, chunk_count, tile_stats[static_cast<std::size_t>(tile)]);
+            raster_tile(ctx, tile, chunks, used, tile_stats[static_cast<std::size_t>(tile)]);
         });
-        for (std::size_t c = 0; c < chunk_count; ++c) {
+        for (std::size_t c = 0; c < used; ++c) {
             const RasterStats& s = chunks[c].stats;
             total.triangles_in += s.triangles_in;
             total.triangles_clipped += s.triangles_clipped;
@@ -423,12 +487,29 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
             total.primitives += s.primitives;
             total.primitives_culled += s.primitives_culled;
         }
+        used = 0;
+        batch_prims = 0;
+    };
+    const std::size_t tri_count = input.triangles.size();
+    for (std::size_t wave_first = 0; wave_first < tri_count; wave_first += kChunkTriangles * kChunksPerWave) {
+        const std::size_t wave_last = std::min(tri_count, wave_first + kChunkTriangles * kChunksPerWave);
+        const std::size_t wave = (wave_last - wave_first + kChunkTriangles - 1) / kChunkTriangles;
+        if (chunks.size() < used + wave) chunks.resize(used + wave);
+        tbb::parallel_for(std::size_t{0}, wave, [&](std::size_t c) {
+            const std::size_t first = wave_first + c * kChunkTriangles;
+            setup_chunk(ctx, first, std::min(wave_last, first + kChunkTriangles), chunks[used + c]);
+        });
+        for (std::size_t c = 0; c < wave; ++c) batch_prims += chunks[used + c].prims.size();
+        used += wave;
+        if (batch_prims >= kBatchPrimitives || used >= kMaxChunksPerBatch) flush();
     }
+    flush();
     for (const RasterStats& s : tile_stats) {
         total.fragments += s.fragments;
         total.fragments_passed += s.fragments_passed;
     }
     resolve(ctx);
+    scratch_pool().release(std::move(scratch));
     return total;
 }
 
