@@ -31,6 +31,7 @@ struct Command {
 // (text, json, obj, svg, png). src/cli/cmd_tessellate.cpp
 Command add_tessellate_command(CLI::App& parent);
 Command add_mesh_command(CLI::App& parent);  // tessref mesh: src/cli/cmd_mesh.cpp
+Command add_check_command(CLI::App& parent);  // tessref check: src/cli/cmd_check.cpp
 
 // Later subcommands, one file each (declare here, list in main.cpp):
 //   Command add_mesh_command(CLI::App& parent);     // src/cli/cmd_mesh.cpp

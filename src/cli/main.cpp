@@ -25,6 +25,7 @@ std::vector<tessref::cli::Command> make_commands(CLI::App& app) {
     return {
         tessref::cli::add_tessellate_command(app),
         tessref::cli::add_mesh_command(app),
+        tessref::cli::add_check_command(app),
     };
 }
 

@@ -1,0 +1,212 @@
+// tessref/check.h — watertightness and crack checks for any mesh, tessref's own or a user's.
+//
+// A mesh is read exactly as its file lists it (read_mesh_for_check): OpenMesh's readers
+// parse the file, but every face they hand over is recorded before OpenMesh's kernel gets
+// a chance to refuse it, so non-manifold input is analysed as it is, not as a half-edge
+// structure would like it to be. check_mesh() then finds, each as a class with a count and
+// located instances (coordinates, face ids, vertex ids):
+//
+//   boundary_loop              boundary edges, chained into loops (edge count, length);
+//                              the outer outline of an open (terrain) mesh is allowed,
+//                              everything else is a defect
+//   non_manifold_edge          an edge shared by more than two faces
+//   non_manifold_vertex        a vertex whose faces form more than one fan
+//   refused_face               a face OpenMesh's kernel refused (complex edge or vertex)
+//                              or its reader skipped (an STL facet with repeated corners)
+//   inconsistent_orientation   an edge its two faces traverse in the same direction
+//   inverted_volume            a closed component with a negative signed volume
+//   degenerate_face            a repeated vertex, or a height below the tolerance
+//   duplicate_face             a face over the same vertex set as an earlier face
+//   coincident_vertices        distinct vertices at bitwise-equal positions (unwelded)
+//   near_coincident_vertices   distinct vertices closer than the tolerance, not equal and
+//                              not joined by an edge
+//   t_junction                 a vertex on the interior of a boundary edge of another
+//                              face: within the tolerance in 3D, or, on a terrain, within
+//                              the tolerance seen from above (the crack between two patches
+//                              whose shared edge was tessellated differently)
+//   probe_miss                 terrain: a vertical ray inside the outline that hits nothing
+//   probe_odd_parity           closed mesh: a line through the mesh crossing it an odd
+//                              number of times
+//   probe_escape               closed mesh: a ray from inside that leaves without a hit
+//
+// Faces with a repeated vertex and later copies of duplicate faces are reported and then
+// left out of the topology (edges, fans, loops, orientation), so one defect is reported as
+// itself rather than as a cascade of others.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "tessref/mesh.h"
+
+namespace tessref {
+
+// A polygon mesh as listed by a file: positions, and faces as lists of vertex ids. Face f
+// is face_vertices[face_start[f] .. face_start[f+1]). Vertex and face ids are the file's
+// (0-based, in file order).
+struct IndexedMesh {
+    std::vector<glm::dvec3> positions;
+    std::vector<std::uint32_t> face_start{0};  // face_count() + 1 entries
+    std::vector<std::uint32_t> face_vertices;
+
+    // Faces the file lists that OpenMesh's kernel refused to connect (it adds them as
+    // separate copies instead), and faces its reader skipped before its kernel saw them
+    // (STL facets whose corners coincide). Both are part of the face list above.
+    std::vector<std::uint32_t> kernel_refused_faces;
+    std::vector<std::uint32_t> reader_skipped_faces;
+
+    std::string source;  // the file it was read from ("" when built in memory)
+    std::string format;  // "ply", "obj", "off", "stl" ("" when built in memory)
+
+    std::size_t vertex_count() const { return positions.size(); }
+    std::size_t face_count() const { return face_start.size() - 1; }
+    std::span<const std::uint32_t> face(std::size_t f) const {
+        return {face_vertices.data() + face_start[f], face_start[f + 1] - face_start[f]};
+    }
+    void add_face(std::span<const std::uint32_t> vertex_ids);
+    void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c);
+};
+
+// Reads a PLY, OBJ, OFF or STL file (chosen by extension) through OpenMesh's readers.
+// Throws tessref::Error naming the file when it cannot be read: missing or unreadable, an
+// unknown extension, a file the reader rejects, a truncated binary STL, a face referring
+// to a vertex the file does not have.
+IndexedMesh read_mesh_for_check(const std::string& path);
+
+// The mesh `tessref mesh` would export: positions welded where they are bitwise equal
+// (the same rule as the exporter, so a crack between patches stays a crack).
+IndexedMesh indexed_mesh_from(const SurfaceMesh& surface);
+
+enum class Expect { automatic, closed, open };
+
+struct CheckOptions {
+    // closed: no boundary edge at all. open: boundary edges allowed only as one loop, the
+    // outer outline (a terrain). automatic: closed rules, unless the mesh has boundary
+    // edges and looks like a terrain (every face seen from one side along one axis).
+    Expect expect = Expect::automatic;
+    // Absolute distance under which vertices coincide, a vertex lies on an edge, and a face
+    // is degenerate (thinner than this across its longest edge). Default: 1e-7 times the
+    // larger of the bounding box diagonal and the largest coordinate's distance from the
+    // origin -- about what single-precision rounding moves a vertex at the mesh's scale.
+    std::optional<double> tolerance;
+    // The Embree ray-cast crack probe; resolution is the number of rays per side of the
+    // probe grid (terrain: resolution^2 vertical rays; closed: resolution^2 lines along
+    // each of three axes, plus as many escape rays from inside).
+    bool ray_probe = true;
+    int probe_resolution = 512;
+    // Located instances kept per class (counts stay exact).
+    std::size_t max_locations = 1000;
+    // Called with a stage name and the fraction of the whole check done, from the calling
+    // thread only.
+    std::function<void(std::string_view stage, double fraction)> progress;
+};
+
+enum class DefectClass {
+    boundary_loop,
+    non_manifold_edge,
+    non_manifold_vertex,
+    refused_face,
+    inconsistent_orientation,
+    inverted_volume,
+    degenerate_face,
+    duplicate_face,
+    coincident_vertices,
+    near_coincident_vertices,
+    t_junction,
+    probe_miss,
+    probe_odd_parity,
+    probe_escape,
+};
+inline constexpr int defect_class_count = 14;
+std::string_view defect_class_name(DefectClass kind);         // "t_junction"
+std::string_view defect_class_description(DefectClass kind);  // "T-junction"
+
+// One located defect: where it is and what it touches.
+struct Defect {
+    glm::dvec3 position{0.0};           // a representative point
+    std::vector<std::uint32_t> faces;   // face ids involved
+    std::vector<std::uint32_t> vertices;
+    double measure = 0.0;  // class-specific: loop length, face height, distance, ray count
+    std::string detail;    // one line for people
+};
+
+struct DefectReport {
+    DefectClass kind{};
+    std::size_t count = 0;          // exact
+    std::vector<Defect> locations;  // the first max_locations, in a deterministic order
+};
+
+struct BoundaryLoop {
+    std::vector<std::uint32_t> vertices;  // in the direction the faces traverse them
+    std::size_t edge_count = 0;
+    double length = 0.0;
+    double area = 0.0;      // magnitude of the loop's vector area
+    bool closed = true;     // false: a chain that could not be closed (orientation breaks)
+    bool allowed = false;   // the outer outline of an open mesh
+    glm::dvec3 centroid{0.0};
+};
+
+struct ProbeStats {
+    std::string mode = "none";  // "terrain", "closed" or "none"
+    std::string skipped_because;  // when mode is "none"
+    std::size_t rays = 0;
+    std::size_t failed_rays = 0;
+};
+
+struct CheckReport {
+    std::string source;
+    std::string format;
+    std::size_t vertex_count = 0;
+    std::size_t face_count = 0;
+    std::size_t triangle_count = 0;  // after fan-triangulating polygons
+    std::size_t edge_count = 0;
+    std::size_t unreferenced_vertices = 0;
+    std::size_t component_count = 0;  // connected through shared vertices
+    std::size_t boundary_edge_count = 0;
+    std::size_t topology_excluded_faces = 0;  // repeated-vertex faces and duplicate copies
+    long long euler_characteristic = 0;       // V - E + F over the analysed faces
+    glm::dvec3 bbox_min{0.0}, bbox_max{0.0};
+    double surface_area = 0.0;
+    double signed_volume = 0.0;  // meaningful for closed meshes
+    double tolerance = 0.0;
+    int up_axis = 2;           // the axis most faces face along (terrain "up")
+    bool terrain_like = false; // open, and every face seen from one side along up_axis
+    bool closed = false;       // no boundary edge
+    bool manifold = false;
+    bool consistently_oriented = false;
+    Expect expect = Expect::automatic;
+    std::string judged_as;     // "closed" or "open": the rules applied
+    std::vector<BoundaryLoop> boundary_loops;  // at most max_locations, largest first
+    std::vector<std::uint32_t> flipped_faces;  // minority orientation within a component
+    ProbeStats probe;
+    std::vector<DefectReport> defects;  // one per DefectClass, in enum order
+    bool passed = false;
+
+    const DefectReport& of(DefectClass kind) const { return defects[static_cast<int>(kind)]; }
+    std::size_t count(DefectClass kind) const { return of(kind).count; }
+};
+
+// Runs every check. Deterministic: the same mesh and options give the same report,
+// whatever the thread count.
+CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options = {});
+
+// The whole report as JSON text (pretty-printed, ends with a newline).
+std::string report_json(const CheckReport& report);
+// A human-readable summary: counts per class and the first few locations of each.
+std::string report_text(const CheckReport& report, std::size_t locations_per_class = 5);
+
+// A top view (along report.up_axis) of the mesh drawn lightly, the defects marked in one
+// colour per class, with a legend. Written through OpenImageIO to `path` as is (the caller
+// makes it atomic). Throws tessref::Error when the image cannot be written.
+void write_defect_image(const IndexedMesh& mesh, const CheckReport& report,
+                        const std::string& path, int width = 1024);
+
+}  // namespace tessref

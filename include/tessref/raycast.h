@@ -1,0 +1,58 @@
+// tessref/raycast.h — ray casting against a triangle mesh with Embree 3.
+//
+// RayScene builds an Embree BVH over a triangle list once; intersect() may then be called
+// from many threads at once. The scene is built in robust (watertight) mode, so a ray
+// through a shared edge of two welded triangles never slips between them: a miss means a
+// real gap. Coordinates are shifted to the centre of the mesh's bounding box before Embree
+// sees them in single precision, so meshes placed at large world coordinates (UTM terrain)
+// keep their resolution.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace tessref {
+
+struct RayHit {
+    bool hit = false;
+    double t = 0.0;              // origin + t * direction is the hit point
+    std::uint32_t triangle = 0;  // index into the triangle list given to the scene
+    // +1 when the ray leaves through the triangle's counter-clockwise side (the direction
+    // is along its normal), -1 when it enters through it, 0 for a ray in its plane.
+    int side = 0;
+};
+
+class RayScene {
+public:
+    // Throws tessref::Error when Embree cannot build the scene.
+    RayScene(std::span<const glm::dvec3> positions,
+             std::span<const std::array<std::uint32_t, 3>> triangles);
+    ~RayScene();
+    RayScene(RayScene&&) noexcept;
+    RayScene& operator=(RayScene&&) noexcept;
+    RayScene(const RayScene&) = delete;
+    RayScene& operator=(const RayScene&) = delete;
+
+    // The nearest hit with t in [t_near, t_far]. Thread-safe.
+    RayHit intersect(const glm::dvec3& origin, const glm::dvec3& direction, double t_near = 0.0,
+                     double t_far = std::numeric_limits<double>::infinity()) const;
+
+    // Every hit along the ray with t in [t_near, t_far], sorted by t (then triangle). A ray
+    // through a shared edge or vertex hits each triangle there. Thread-safe.
+    std::vector<RayHit> all_hits(const glm::dvec3& origin, const glm::dvec3& direction, double t_near = 0.0,
+                                 double t_far = std::numeric_limits<double>::infinity()) const;
+
+    std::size_t triangle_count() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tessref

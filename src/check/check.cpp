@@ -1,0 +1,234 @@
+// check_mesh(): runs the steps of src/check/ in order over one CheckState and decides.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <unordered_map>
+
+#include "check/check_internal.h"
+#include "tessref/error.h"
+
+namespace tessref {
+
+std::string_view defect_class_name(DefectClass kind) {
+    switch (kind) {
+        case DefectClass::boundary_loop: return "boundary_loop";
+        case DefectClass::non_manifold_edge: return "non_manifold_edge";
+        case DefectClass::non_manifold_vertex: return "non_manifold_vertex";
+        case DefectClass::refused_face: return "refused_face";
+        case DefectClass::inconsistent_orientation: return "inconsistent_orientation";
+        case DefectClass::inverted_volume: return "inverted_volume";
+        case DefectClass::degenerate_face: return "degenerate_face";
+        case DefectClass::duplicate_face: return "duplicate_face";
+        case DefectClass::coincident_vertices: return "coincident_vertices";
+        case DefectClass::near_coincident_vertices: return "near_coincident_vertices";
+        case DefectClass::t_junction: return "t_junction";
+        case DefectClass::probe_miss: return "probe_miss";
+        case DefectClass::probe_odd_parity: return "probe_odd_parity";
+        case DefectClass::probe_escape: return "probe_escape";
+    }
+    return "unknown";
+}
+
+std::string_view defect_class_description(DefectClass kind) {
+    switch (kind) {
+        case DefectClass::boundary_loop: return "boundary loops (holes, cracks, open edges)";
+        case DefectClass::non_manifold_edge: return "non-manifold edges (more than two faces)";
+        case DefectClass::non_manifold_vertex: return "non-manifold vertices (more than one fan)";
+        case DefectClass::refused_face: return "faces OpenMesh refused or skipped";
+        case DefectClass::inconsistent_orientation: return "edges with inconsistent orientation";
+        case DefectClass::inverted_volume: return "closed components facing inward";
+        case DefectClass::degenerate_face: return "degenerate faces";
+        case DefectClass::duplicate_face: return "duplicate faces";
+        case DefectClass::coincident_vertices: return "unwelded vertices at equal positions";
+        case DefectClass::near_coincident_vertices: return "unwelded vertices within the tolerance";
+        case DefectClass::t_junction: return "T-junctions";
+        case DefectClass::probe_miss: return "probe: rays through the terrain";
+        case DefectClass::probe_odd_parity: return "probe: lines with odd crossings";
+        case DefectClass::probe_escape: return "probe: rays escaping from inside";
+    }
+    return "unknown";
+}
+
+namespace {
+
+using namespace check_detail;
+
+constexpr std::uint8_t face_non_finite = 4;
+
+void classify_faces(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    state.face_status.assign(mesh.face_count(), face_kept);
+    state.vertex_referenced.assign(mesh.vertex_count(), 0);
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+        const auto face = mesh.face(f);
+        bool finite = true;
+        for (std::uint32_t v : face) {
+            if (v >= mesh.vertex_count())
+                throw Error("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) + ", but the mesh has " +
+                                std::to_string(mesh.vertex_count()) + " vertices",
+                            check_detail::where_in(mesh.source));
+            state.vertex_referenced[v] = 1;
+            const glm::dvec3& p = mesh.positions[v];
+            finite = finite && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+        }
+        bool repeated = false;
+        for (std::size_t i = 0; i < face.size() && !repeated; ++i)
+            for (std::size_t j = i + 1; j < face.size(); ++j)
+                if (face[i] == face[j]) {
+                    repeated = true;
+                    break;
+                }
+        if (face.size() < 3) state.face_status[f] = face_too_few_vertices;
+        else if (repeated) state.face_status[f] = face_repeated_vertex;
+        else if (!finite) state.face_status[f] = face_non_finite;
+        if (state.face_status[f] == face_kept) continue;
+
+        Defect d;
+        glm::dvec3 centre(0.0);
+        std::size_t finite_corners = 0;
+        for (std::uint32_t v : face) {
+            const glm::dvec3& p = mesh.positions[v];
+            if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
+                centre += p;
+                ++finite_corners;
+            }
+        }
+        d.position = finite_corners ? centre / double(finite_corners) : glm::dvec3(0.0);
+        d.faces = {static_cast<std::uint32_t>(f)};
+        d.vertices.assign(face.begin(), face.end());
+        d.detail = "face " + std::to_string(f) +
+                   (state.face_status[f] == face_too_few_vertices ? " has fewer than three vertices"
+                    : state.face_status[f] == face_repeated_vertex ? " repeats a vertex"
+                                                                    : " has a vertex with non-finite coordinates");
+        state.add_defect(DefectClass::degenerate_face, std::move(d));
+    }
+}
+
+void report_refused_faces(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    std::vector<std::pair<std::uint32_t, bool>> refused;  // (face, by the reader)
+    for (std::uint32_t f : mesh.kernel_refused_faces) refused.emplace_back(f, false);
+    for (std::uint32_t f : mesh.reader_skipped_faces) refused.emplace_back(f, true);
+    std::sort(refused.begin(), refused.end());
+    for (const auto& [f, by_reader] : refused) {
+        if (f >= mesh.face_count()) continue;
+        Defect d;
+        const auto face = mesh.face(f);
+        glm::dvec3 centre(0.0);
+        for (std::uint32_t v : face) centre += mesh.positions[v];
+        d.position = face.empty() ? glm::dvec3(0.0) : centre / double(face.size());
+        d.faces = {f};
+        d.vertices.assign(face.begin(), face.end());
+        d.detail = by_reader ? "OpenMesh's " + mesh.format + " reader dropped or shortened face " + std::to_string(f) +
+                                   " (a repeated corner)"
+                             : "OpenMesh's kernel refused face " + std::to_string(f) +
+                                   " (a complex edge or vertex) and added it on copies of its vertices";
+        state.add_defect(DefectClass::refused_face, std::move(d));
+    }
+}
+
+// Vertex defects name their vertices; add the faces around them.
+void attach_faces(CheckState& state) {
+    std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> faces_of;
+    for (DefectClass kind : {DefectClass::coincident_vertices, DefectClass::near_coincident_vertices})
+        for (const Defect& d : state.report.of(kind).locations)
+            for (std::uint32_t v : d.vertices) faces_of.try_emplace(v);
+    if (faces_of.empty()) return;
+    const IndexedMesh& mesh = state.mesh;
+    for (std::uint32_t f = 0; f < mesh.face_count(); ++f)
+        for (std::uint32_t v : mesh.face(f))
+            if (auto it = faces_of.find(v); it != faces_of.end() && it->second.size() < 8) it->second.push_back(f);
+    for (DefectClass kind : {DefectClass::coincident_vertices, DefectClass::near_coincident_vertices})
+        for (Defect& d : state.report.defects[int(kind)].locations) {
+            for (std::uint32_t v : d.vertices) {
+                const auto& faces = faces_of[v];
+                d.faces.insert(d.faces.end(), faces.begin(), faces.end());
+            }
+            std::sort(d.faces.begin(), d.faces.end());
+            d.faces.erase(std::unique(d.faces.begin(), d.faces.end()), d.faces.end());
+        }
+}
+
+}  // namespace
+
+CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
+    CheckReport report;
+    report.source = mesh.source;
+    report.format = mesh.format;
+    report.vertex_count = mesh.vertex_count();
+    report.face_count = mesh.face_count();
+    report.expect = options.expect;
+    for (int k = 0; k < defect_class_count; ++k) report.defects.push_back({static_cast<DefectClass>(k), 0, {}});
+    if (options.tolerance && !(*options.tolerance >= 0.0 && std::isfinite(*options.tolerance)))
+        throw Error("the tolerance must be a finite number >= 0", check_detail::where_in("--tolerance"));
+
+    CheckState state{mesh, options, report};
+    state.progress("topology", 0.0);
+    classify_faces(state);
+
+    // The bounding box of the vertices the faces use.
+    bool any = false;
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+        const glm::dvec3& p = mesh.positions[v];
+        if (!state.vertex_referenced[v] || !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+        state.bbox_min = any ? glm::min(state.bbox_min, p) : p;
+        state.bbox_max = any ? glm::max(state.bbox_max, p) : p;
+        any = true;
+    }
+    state.diagonal = glm::distance(state.bbox_min, state.bbox_max);
+    report.bbox_min = state.bbox_min;
+    report.bbox_max = state.bbox_max;
+    // Default: about what single-precision rounding can move a vertex at the mesh's scale
+    // (2^-24 of the largest coordinate is 6e-8 of it), so that copies of one point computed
+    // twice coincide within it, while points placed apart on purpose do not.
+    const double magnitude = std::max({state.diagonal, glm::length(state.bbox_min), glm::length(state.bbox_max)});
+    state.tolerance = options.tolerance.value_or(1e-7 * magnitude);
+    report.tolerance = state.tolerance;
+    report.unreferenced_vertices = static_cast<std::size_t>(
+        std::count(state.vertex_referenced.begin(), state.vertex_referenced.end(), std::uint8_t{0}));
+
+    report_refused_faces(state);
+    build_half_edges(state);
+    state.progress("topology", 0.15);
+    find_duplicate_faces(state);
+    classify_edges(state);
+    report.closed = state.boundary.empty();
+    state.progress("topology", 0.3);
+    find_non_manifold_vertices(state);
+    state.progress("topology", 0.4);
+    find_components(state);
+    check_orientation(state);
+    state.progress("coincident vertices", 0.45);
+    find_coincident_vertices(state);
+    state.half_edges.clear();
+    state.half_edges.shrink_to_fit();
+    state.half_edge_start.clear();
+    state.half_edge_start.shrink_to_fit();
+    state.progress("geometry", 0.5);
+    analyse_face_geometry(state);
+    trace_boundary_loops(state);
+    judge_boundary(state);
+    state.progress("T-junctions", 0.7);
+    find_t_junctions(state);
+    run_ray_probe(state);
+    attach_faces(state);
+
+    std::size_t kept_faces = 0;
+    std::vector<std::uint8_t> in_kept(mesh.vertex_count(), 0);
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+        if (state.face_status[f] != face_kept) continue;
+        ++kept_faces;
+        for (std::uint32_t v : mesh.face(f)) in_kept[v] = 1;
+    }
+    report.topology_excluded_faces = mesh.face_count() - kept_faces;
+    report.euler_characteristic = static_cast<long long>(std::count(in_kept.begin(), in_kept.end(), std::uint8_t{1})) -
+                                  static_cast<long long>(report.edge_count) + static_cast<long long>(kept_faces);
+    report.manifold = report.count(DefectClass::non_manifold_edge) == 0 && report.count(DefectClass::non_manifold_vertex) == 0;
+    report.consistently_oriented =
+        report.count(DefectClass::inconsistent_orientation) == 0 && report.count(DefectClass::inverted_volume) == 0;
+    report.passed = std::all_of(report.defects.begin(), report.defects.end(), [](const DefectReport& r) { return r.count == 0; });
+    state.progress("done", 1.0);
+    return report;
+}
+
+}  // namespace tessref

@@ -1,0 +1,177 @@
+// src/check/check_internal.h — the state shared by the steps of check_mesh() (private).
+//
+// check_mesh() runs its steps in a fixed order over one CheckState: each step reads what
+// earlier steps left in it and adds its defects to the report. Parallel steps split their
+// input into fixed chunks and merge the chunks' results in chunk order, so the report does
+// not depend on the thread count.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <limits>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "tessref/check.h"
+#include "tessref/error.h"
+
+namespace tessref::check_detail {
+
+inline constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+
+// Why a face is left out of the topology.
+enum FaceStatus : std::uint8_t {
+    face_kept = 0,
+    face_too_few_vertices = 1,
+    face_repeated_vertex = 2,
+    face_duplicate = 3,
+};
+
+// A half-edge filed under its smaller vertex: the other vertex, and face << 1 | forward,
+// where forward means the face traverses the edge from the smaller vertex to the larger.
+struct HalfEdgeEntry {
+    std::uint32_t other;
+    std::uint32_t face_and_direction;
+    std::uint32_t face() const { return face_and_direction >> 1; }
+    bool forward() const { return face_and_direction & 1u; }
+};
+
+struct BoundaryHalfEdge {
+    std::uint32_t from, to, face;
+    auto operator<=>(const BoundaryHalfEdge&) const = default;
+};
+
+// Where an error was found, for a file (and a line).
+inline Where where_in(const std::string& file, int line = 0) {
+    Where where;
+    where.file = file;
+    where.line = line;
+    return where;
+}
+
+struct CheckState {
+    CheckState(const IndexedMesh& m, const CheckOptions& o, CheckReport& r) : mesh(m), options(o), report(r) {}
+    const IndexedMesh& mesh;
+    const CheckOptions& options;
+    CheckReport& report;
+    double tolerance = 0.0;
+    glm::dvec3 bbox_min{0.0}, bbox_max{0.0};
+    double diagonal = 0.0;
+
+    std::vector<std::uint8_t> face_status;      // FaceStatus per face
+    std::vector<std::uint8_t> vertex_referenced; // by any face
+
+    // Half-edges of kept faces, grouped by their smaller vertex, sorted within a group.
+    std::vector<std::uint32_t> half_edge_start;  // vertex_count + 1
+    std::vector<HalfEdgeEntry> half_edges;
+
+    std::vector<BoundaryHalfEdge> boundary;        // sorted
+    std::size_t inconsistent_edges = 0;
+    std::size_t non_manifold_edges = 0;
+
+    // At vertices with more than one fan: (vertex << 32 | face) -> the face's fan there.
+    std::unordered_map<std::uint64_t, std::uint32_t> fan_at_pinch;
+
+    std::vector<std::uint32_t> vertex_component;  // per vertex, none if in no kept face
+    std::vector<std::uint8_t> component_has_boundary;  // or a non-manifold edge
+    std::vector<std::uint8_t> face_flipped;       // empty when every piece is consistent
+
+    // Boundary loops in trace order (before sorting for the report), and for each boundary
+    // half-edge (index into `boundary`) the loop it belongs to.
+    std::vector<BoundaryLoop> loops;
+    std::vector<std::uint32_t> loop_of_boundary;
+    int allowed_loop = -1;  // index into loops
+
+    int up_axis = 2;
+    double up_sign = 1.0;
+
+    void add_defect(DefectClass kind, Defect defect) {
+        DefectReport& r = report.defects[static_cast<int>(kind)];
+        ++r.count;
+        if (r.locations.size() < options.max_locations) r.locations.push_back(std::move(defect));
+    }
+    void progress(std::string_view stage, double fraction) const {
+        if (options.progress) options.progress(stage, fraction);
+    }
+    glm::dvec3 position(std::uint32_t v) const { return mesh.positions[v]; }
+};
+
+// Runs fn(chunk_begin, chunk_end, result&) over [0, n) in fixed chunks, in parallel, and
+// returns the per-chunk results in chunk order.
+template <class Result, class Fn>
+std::vector<Result> map_chunks(std::size_t n, std::size_t chunk, Fn&& fn) {
+    const std::size_t chunks = (n + chunk - 1) / chunk;
+    std::vector<Result> results(chunks);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t c = r.begin(); c != r.end(); ++c)
+            fn(c * chunk, std::min(n, (c + 1) * chunk), results[c]);
+    });
+    return results;
+}
+
+template <class T>
+std::vector<T> concatenate(std::vector<std::vector<T>>&& parts) {
+    std::size_t total = 0;
+    for (const auto& p : parts) total += p.size();
+    std::vector<T> out;
+    out.reserve(total);
+    for (auto& p : parts) out.insert(out.end(), std::make_move_iterator(p.begin()), std::make_move_iterator(p.end()));
+    return out;
+}
+
+// Lock-free union-find: roots link under smaller roots, so every set ends with its
+// smallest element as root, whatever the order of the unions.
+class ConcurrentDisjointSets {
+public:
+    explicit ConcurrentDisjointSets(std::size_t n) : parent_(n) {
+        for (std::size_t i = 0; i < n; ++i) parent_[i].store(static_cast<std::uint32_t>(i), std::memory_order_relaxed);
+    }
+    std::uint32_t find(std::uint32_t v) {
+        while (true) {
+            std::uint32_t p = parent_[v].load(std::memory_order_relaxed);
+            if (p == v) return v;
+            const std::uint32_t gp = parent_[p].load(std::memory_order_relaxed);
+            if (gp != p) parent_[v].compare_exchange_weak(p, gp, std::memory_order_relaxed);
+            v = gp;
+        }
+    }
+    void unite(std::uint32_t a, std::uint32_t b) {
+        while (true) {
+            a = find(a);
+            b = find(b);
+            if (a == b) return;
+            if (a < b) std::swap(a, b);  // link the larger root under the smaller
+            std::uint32_t expected = a;
+            if (parent_[a].compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
+        }
+    }
+
+private:
+    std::vector<std::atomic<std::uint32_t>> parent_;
+};
+
+// Steps of check_mesh(), in the order they run.
+void build_half_edges(CheckState& state);
+void find_duplicate_faces(CheckState& state);
+void classify_edges(CheckState& state);
+void find_non_manifold_vertices(CheckState& state);
+void find_components(CheckState& state);
+void check_orientation(CheckState& state);
+void analyse_face_geometry(CheckState& state);
+void trace_boundary_loops(CheckState& state);
+void judge_boundary(CheckState& state);
+void find_coincident_vertices(CheckState& state);
+void find_t_junctions(CheckState& state);
+void run_ray_probe(CheckState& state);
+
+// Shared geometry helpers.
+glm::dvec3 face_vector_area(const IndexedMesh& mesh, std::size_t f);  // Newell, half the normal sum
+std::string format_point(const glm::dvec3& p);
+std::string format_number(double x);
+
+}  // namespace tessref::check_detail

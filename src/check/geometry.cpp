@@ -1,0 +1,450 @@
+// Geometry of the faces and vertices: areas, the signed volume, degenerate faces, the up
+// axis of a terrain, unwelded coincident vertices and T-junctions. Neighbour searches use
+// hashed uniform grids (cells a few tolerances wide), so they stay linear in the mesh size.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+
+#include <tbb/parallel_sort.h>
+
+#include "check/check_internal.h"
+
+namespace tessref::check_detail {
+
+namespace {
+
+constexpr std::size_t face_chunk = 1 << 14;
+constexpr std::size_t vertex_chunk = 1 << 14;
+
+std::uint64_t mix(std::uint64_t h) {
+    h ^= h >> 33;
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 33;
+    h *= 0xc4ceb9fe1a85ec53ull;
+    h ^= h >> 33;
+    return h;
+}
+
+std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
+    return mix(static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull ^ mix(static_cast<std::uint64_t>(y) + 0x632BE59BD9B4E019ull) ^
+               mix(static_cast<std::uint64_t>(z) * 0x85EBCA77C2B2AE63ull + 1));
+}
+
+// A hashed uniform grid over a set of points: cell -> the points in it.
+class PointGrid {
+public:
+    PointGrid(const std::vector<glm::dvec3>& points, const std::vector<std::uint32_t>& ids, glm::dvec3 origin,
+              double cell)
+        : origin_(origin), cell_(cell) {
+        entries_.resize(ids.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ids.size(), 1 << 14), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const glm::i64vec3 c = cell_of(points[ids[i]]);
+                entries_[i] = {cell_key(c.x, c.y, c.z), ids[i]};
+            }
+        });
+        tbb::parallel_sort(entries_.begin(), entries_.end());
+        // Open addressing: key -> first entry of its run.
+        std::size_t runs = 0;
+        for (std::size_t i = 0; i < entries_.size(); ++i) runs += i == 0 || entries_[i].first != entries_[i - 1].first;
+        table_.assign(std::bit_ceil(std::max<std::size_t>(16, runs * 2)), none);
+        for (std::size_t i = 0; i < entries_.size(); ++i) {
+            if (i > 0 && entries_[i].first == entries_[i - 1].first) continue;
+            std::size_t slot = entries_[i].first & (table_.size() - 1);
+            while (table_[slot] != none) slot = (slot + 1) & (table_.size() - 1);
+            table_[slot] = static_cast<std::uint32_t>(i);
+        }
+    }
+
+    glm::i64vec3 cell_of(const glm::dvec3& p) const {
+        return glm::i64vec3(glm::floor((p - origin_) / cell_));
+    }
+
+    // Calls fn(id) for every point filed under cell c (and, rarely, a hash neighbour's).
+    template <class Fn>
+    void visit(const glm::i64vec3& c, Fn&& fn) const {
+        const std::uint64_t key = cell_key(c.x, c.y, c.z);
+        std::size_t slot = key & (table_.size() - 1);
+        while (table_[slot] != none) {
+            std::size_t i = table_[slot];
+            if (entries_[i].first == key) {
+                for (; i < entries_.size() && entries_[i].first == key; ++i) fn(entries_[i].second);
+                return;
+            }
+            slot = (slot + 1) & (table_.size() - 1);
+        }
+    }
+
+    double cell() const { return cell_; }
+
+private:
+    glm::dvec3 origin_;
+    double cell_;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> entries_;
+    std::vector<std::uint32_t> table_;
+};
+
+// Point-to-segment: the parameter along a->b of the closest point, and the distance.
+struct SegmentDistance {
+    double t;
+    double distance;
+};
+SegmentDistance segment_distance(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
+    const glm::dvec3 ab = b - a;
+    const double len2 = glm::dot(ab, ab);
+    const double t = len2 > 0.0 ? glm::dot(p - a, ab) / len2 : 0.0;
+    return {t, glm::distance(p, a + glm::clamp(t, 0.0, 1.0) * ab)};
+}
+
+}  // namespace
+
+glm::dvec3 face_vector_area(const IndexedMesh& mesh, std::size_t f) {
+    const auto face = mesh.face(f);
+    if (face.size() < 3) return glm::dvec3(0.0);
+    const glm::dvec3 o = mesh.positions[face[0]];
+    glm::dvec3 sum(0.0);
+    for (std::size_t k = 1; k + 1 < face.size(); ++k)
+        sum += glm::cross(mesh.positions[face[k]] - o, mesh.positions[face[k + 1]] - o);
+    return 0.5 * sum;
+}
+
+std::string format_number(double x) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.6g", x);
+    return buffer;
+}
+
+std::string format_point(const glm::dvec3& p) {
+    return "(" + format_number(p.x) + ", " + format_number(p.y) + ", " + format_number(p.z) + ")";
+}
+
+void analyse_face_geometry(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    CheckReport& report = state.report;
+    const glm::dvec3 reference = 0.5 * (state.bbox_min + state.bbox_max);
+    const bool have_flips = !state.face_flipped.empty();
+    struct ComponentSums {
+        double volume = 0.0;  // with flipped faces turned back
+        std::size_t faces = 0;
+        std::uint32_t first_face = none;
+    };
+    struct ChunkResult {
+        double area = 0.0, volume_as_listed = 0.0;
+        glm::dvec3 vector_area{0.0};
+        std::size_t triangles = 0;
+        std::map<std::uint32_t, ComponentSums> components;
+        std::vector<Defect> degenerate;
+        std::size_t degenerate_count = 0;
+    };
+    const std::size_t cap = state.options.max_locations;
+    const double tolerance = state.tolerance;
+    auto results = map_chunks<ChunkResult>(mesh.face_count(), face_chunk, [&](std::size_t f0, std::size_t f1, ChunkResult& out) {
+        for (std::size_t f = f0; f < f1; ++f) {
+            const auto face = mesh.face(f);
+            if (face.size() >= 3) out.triangles += face.size() - 2;
+            if (state.face_status[f] != face_kept) continue;
+            const glm::dvec3 a = face_vector_area(mesh, f);
+            const double area = glm::length(a);
+            double volume = 0.0;
+            const glm::dvec3 o = mesh.positions[face[0]] - reference;
+            for (std::size_t k = 1; k + 1 < face.size(); ++k)
+                volume += glm::dot(o, glm::cross(mesh.positions[face[k]] - reference, mesh.positions[face[k + 1]] - reference));
+            volume /= 6.0;
+            const double sign = have_flips && state.face_flipped[f] ? -1.0 : 1.0;
+            out.area += area;
+            out.volume_as_listed += volume;
+            out.vector_area += sign * a;
+            ComponentSums& c = out.components[state.vertex_component[face[0]]];
+            c.volume += sign * volume;
+            ++c.faces;
+            c.first_face = std::min(c.first_face, static_cast<std::uint32_t>(f));
+
+            // Degenerate: the face is thinner than the tolerance across its longest edge.
+            double longest = 0.0;
+            for (std::size_t k = 0; k < face.size(); ++k)
+                longest = std::max(longest, glm::distance(mesh.positions[face[k]], mesh.positions[face[(k + 1) % face.size()]]));
+            const double height = longest > 0.0 ? 2.0 * area / longest : 0.0;
+            if (height <= tolerance) {
+                ++out.degenerate_count;
+                if (out.degenerate.size() < cap) {
+                    Defect d;
+                    glm::dvec3 centre(0.0);
+                    for (std::uint32_t v : face) centre += mesh.positions[v];
+                    d.position = centre / double(face.size());
+                    d.faces = {static_cast<std::uint32_t>(f)};
+                    d.vertices.assign(face.begin(), face.end());
+                    d.measure = height;
+                    d.detail = "face " + std::to_string(f) + " has zero area (height " + format_number(height) +
+                               " across its longest edge " + format_number(longest) + ")";
+                    out.degenerate.push_back(std::move(d));
+                }
+            }
+        }
+    });
+
+    std::vector<ComponentSums> components(report.component_count);
+    glm::dvec3 vector_area(0.0);
+    auto& degenerate = report.defects[int(DefectClass::degenerate_face)];
+    for (ChunkResult& r : results) {
+        report.surface_area += r.area;
+        report.signed_volume += r.volume_as_listed;
+        report.triangle_count += r.triangles;
+        vector_area += r.vector_area;
+        for (const auto& [id, sums] : r.components) {
+            ComponentSums& c = components[id];
+            c.volume += sums.volume;
+            c.faces += sums.faces;
+            c.first_face = std::min(c.first_face, sums.first_face);
+        }
+        degenerate.count += r.degenerate_count;
+        for (Defect& d : r.degenerate)
+            if (degenerate.locations.size() < cap) degenerate.locations.push_back(std::move(d));
+    }
+    // Faces with a repeated vertex are degenerate too (reported before the zero-area ones).
+    state.report.triangle_count = report.triangle_count;
+
+    // Up: the axis the surface faces along most.
+    const glm::dvec3 magnitude = glm::abs(vector_area);
+    state.up_axis = magnitude.x >= magnitude.y && magnitude.x >= magnitude.z ? 0 : (magnitude.y >= magnitude.z ? 1 : 2);
+    state.up_sign = vector_area[state.up_axis] < 0.0 ? -1.0 : 1.0;
+    report.up_axis = state.up_axis;
+
+    // A terrain: open, and no face turned away from up (vertical walls allowed).
+    if (!report.closed && magnitude[state.up_axis] > 0.0) {
+        std::atomic<bool> facing_down{false};
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
+            for (std::size_t f = r.begin(); f != r.end() && !facing_down.load(std::memory_order_relaxed); ++f) {
+                if (state.face_status[f] != face_kept) continue;
+                const glm::dvec3 a = face_vector_area(mesh, f) * (have_flips && state.face_flipped[f] ? -1.0 : 1.0);
+                if (state.up_sign * a[state.up_axis] < -1e-6 * glm::length(a)) facing_down = true;
+            }
+        });
+        report.terrain_like = !facing_down.load();
+    }
+
+    // Closed components must enclose a positive volume (faces pointing outward).
+    for (std::uint32_t c = 0; c < components.size(); ++c) {
+        if (state.component_has_boundary[c] || components[c].faces == 0) continue;
+        if (components[c].volume >= 0.0) continue;
+        Defect d;
+        const std::uint32_t f = components[c].first_face;
+        const auto face = mesh.face(f);
+        glm::dvec3 centre(0.0);
+        for (std::uint32_t v : face) centre += mesh.positions[v];
+        d.position = centre / double(face.size());
+        d.faces = {f};
+        d.measure = components[c].volume;
+        d.detail = "closed component " + std::to_string(c) + " (" + std::to_string(components[c].faces) +
+                   " faces, starting at face " + std::to_string(f) + ") encloses a negative volume " +
+                   format_number(components[c].volume) + ": its faces point inward";
+        state.add_defect(DefectClass::inverted_volume, std::move(d));
+    }
+}
+
+void find_coincident_vertices(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    std::vector<std::uint32_t> ids;
+    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v)
+        if (state.vertex_referenced[v]) ids.push_back(v);
+    const double tolerance = state.tolerance;
+    auto equal_position = [&](std::uint32_t a, std::uint32_t b) { return mesh.positions[a] == mesh.positions[b]; };
+
+    // Pairs (v, u), v < u, closer than the tolerance (or equal when the tolerance is 0).
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    if (tolerance > 0.0) {
+        const double cell = 4.0 * tolerance;
+        const PointGrid grid(mesh.positions, ids, state.bbox_min, cell);
+        auto parts = map_chunks<std::vector<std::pair<std::uint32_t, std::uint32_t>>>(
+            ids.size(), vertex_chunk, [&](std::size_t i0, std::size_t i1, auto& out) {
+                for (std::size_t i = i0; i < i1; ++i) {
+                    const std::uint32_t v = ids[i];
+                    const glm::dvec3 p = mesh.positions[v];
+                    const glm::i64vec3 c = grid.cell_of(p);
+                    const glm::dvec3 local = (p - state.bbox_min) / cell - glm::dvec3(c);
+                    // Neighbour cells only where p lies within a tolerance of the cell face.
+                    int lo[3], hi[3];
+                    for (int k = 0; k < 3; ++k) {
+                        lo[k] = local[k] * cell <= tolerance ? -1 : 0;
+                        hi[k] = (1.0 - local[k]) * cell <= tolerance ? 1 : 0;
+                    }
+                    for (int dx = lo[0]; dx <= hi[0]; ++dx)
+                        for (int dy = lo[1]; dy <= hi[1]; ++dy)
+                            for (int dz = lo[2]; dz <= hi[2]; ++dz)
+                                grid.visit(c + glm::i64vec3(dx, dy, dz), [&](std::uint32_t u) {
+                                    if (u > v && glm::distance(p, mesh.positions[u]) <= tolerance) out.emplace_back(v, u);
+                                });
+                }
+            });
+        pairs = concatenate(std::move(parts));
+        tbb::parallel_sort(pairs.begin(), pairs.end());
+        pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    } else {
+        std::vector<std::uint32_t> sorted = ids;
+        auto less = [&](std::uint32_t a, std::uint32_t b) {
+            const glm::dvec3 &p = mesh.positions[a], &q = mesh.positions[b];
+            if (p.x != q.x) return p.x < q.x;
+            if (p.y != q.y) return p.y < q.y;
+            if (p.z != q.z) return p.z < q.z;
+            return a < b;
+        };
+        tbb::parallel_sort(sorted.begin(), sorted.end(), less);
+        for (std::size_t i = 0; i < sorted.size();) {
+            std::size_t j = i + 1;
+            while (j < sorted.size() && equal_position(sorted[i], sorted[j])) ++j;
+            for (std::size_t k = i + 1; k < j; ++k) pairs.emplace_back(sorted[i], sorted[k]);
+            i = j;
+        }
+        std::sort(pairs.begin(), pairs.end());
+    }
+    if (pairs.empty()) return;
+
+    // Group: equal positions into one class, chains of near pairs into the other.
+    std::unordered_map<std::uint32_t, std::uint32_t> exact_parent, near_parent;
+    auto find = [](std::unordered_map<std::uint32_t, std::uint32_t>& parent, std::uint32_t x) {
+        auto it = parent.try_emplace(x, x).first;
+        while (it->second != x) {
+            x = it->second;
+            it = parent.find(x);
+        }
+        return x;
+    };
+    auto unite = [&](std::unordered_map<std::uint32_t, std::uint32_t>& parent, std::uint32_t a, std::uint32_t b) {
+        a = find(parent, a);
+        b = find(parent, b);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    };
+    // Two vertices joined by an edge are a short edge, not a weld that was missed (a face
+    // too thin to matter is reported as degenerate instead).
+    auto joined = [&](std::uint32_t v, std::uint32_t u) {
+        const std::uint32_t lo = std::min(v, u), hi = std::max(v, u);
+        const auto first = state.half_edges.begin() + state.half_edge_start[lo];
+        const auto last = state.half_edges.begin() + state.half_edge_start[lo + 1];
+        return std::any_of(first, last, [&](const HalfEdgeEntry& h) {
+            return h.other == hi && state.face_status[h.face()] == face_kept;
+        });
+    };
+    for (const auto& [v, u] : pairs) {
+        if (equal_position(v, u)) unite(exact_parent, v, u);
+        else if (!joined(v, u)) unite(near_parent, v, u);
+    }
+    auto emit = [&](std::unordered_map<std::uint32_t, std::uint32_t>& parent, DefectClass kind) {
+        std::map<std::uint32_t, std::vector<std::uint32_t>> groups;  // by smallest vertex
+        for (const auto& [v, p] : parent) groups[find(parent, v)].push_back(v);
+        for (auto& [root, members] : groups) {
+            std::sort(members.begin(), members.end());
+            Defect d;
+            d.position = mesh.positions[root];
+            double spread = 0.0;
+            for (std::uint32_t m : members) spread = std::max(spread, glm::distance(mesh.positions[root], mesh.positions[m]));
+            d.measure = spread;
+            d.detail = std::to_string(members.size()) + " vertices " +
+                       (kind == DefectClass::coincident_vertices ? std::string("at the same position")
+                                                                 : "within " + format_number(spread) + " of each other") +
+                       ", not welded";
+            if (members.size() > 32) members.resize(32);
+            d.vertices = std::move(members);
+            state.add_defect(kind, std::move(d));
+        }
+    };
+    emit(exact_parent, DefectClass::coincident_vertices);
+    emit(near_parent, DefectClass::near_coincident_vertices);
+}
+
+void find_t_junctions(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    const auto& boundary = state.boundary;
+    if (boundary.empty()) return;
+    const double tolerance = state.tolerance;
+    // On a terrain, look from above: a patch edge whose midpoint was displaced differently
+    // on its two sides opens a crack that is vertical, far wider than the tolerance in 3D
+    // but nothing seen from above.
+    const bool from_above = state.report.terrain_like;
+    const int up = state.up_axis;
+    auto flat = [&](glm::dvec3 p) {
+        if (from_above) p[up] = 0.0;
+        return p;
+    };
+
+    std::vector<std::uint32_t> vertices;
+    vertices.reserve(2 * boundary.size());
+    double total_length = 0.0;
+    for (const BoundaryHalfEdge& h : boundary) {
+        vertices.push_back(h.from);
+        vertices.push_back(h.to);
+        total_length += glm::distance(flat(mesh.positions[h.from]), flat(mesh.positions[h.to]));
+    }
+    std::sort(vertices.begin(), vertices.end());
+    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+    std::vector<glm::dvec3> flat_positions(mesh.vertex_count());
+    for (std::uint32_t v : vertices) flat_positions[v] = flat(mesh.positions[v]);
+
+    const double mean_length = total_length / double(boundary.size());
+    const double cell = std::max({mean_length, 4.0 * tolerance, 1e-12 * std::max(1.0, state.diagonal)});
+    glm::dvec3 origin = flat(state.bbox_min);
+    // (Seen from above, the up coordinate is zero everywhere, so the grid is one cell thick.)
+    const PointGrid grid(flat_positions, vertices, origin, cell);
+
+    struct Found {
+        std::uint32_t vertex, edge;
+        double distance_3d, distance_flat;
+    };
+    auto parts = map_chunks<std::vector<Found>>(boundary.size(), 1 << 12, [&](std::size_t e0, std::size_t e1, std::vector<Found>& out) {
+        for (std::size_t e = e0; e < e1; ++e) {
+            const BoundaryHalfEdge& h = boundary[e];
+            const glm::dvec3 a = flat_positions[h.from], b = flat_positions[h.to];
+            const double length = glm::distance(a, b);
+            if (length <= 2.0 * tolerance) continue;
+            const glm::i64vec3 c0 = grid.cell_of(glm::min(a, b) - glm::dvec3(tolerance));
+            const glm::i64vec3 c1 = grid.cell_of(glm::max(a, b) + glm::dvec3(tolerance));
+            const std::int64_t cells = (c1.x - c0.x + 1) * (c1.y - c0.y + 1) * (c1.z - c0.z + 1);
+            const auto own = mesh.face(h.face);
+            auto test = [&](std::uint32_t v) {
+                if (std::find(own.begin(), own.end(), v) != own.end()) return;  // another face's edge only
+                const glm::dvec3 p = flat_positions[v];
+                const SegmentDistance s = segment_distance(p, a, b);
+                if (s.distance > tolerance) return;
+                // Strictly inside the edge: farther than the tolerance from both ends.
+                if (glm::distance(p, a) <= tolerance || glm::distance(p, b) <= tolerance) return;
+                const double d3 = segment_distance(mesh.positions[v], mesh.positions[h.from], mesh.positions[h.to]).distance;
+                out.push_back({v, static_cast<std::uint32_t>(e), d3, s.distance});
+            };
+            if (cells > 4096) {
+                // A very long edge against a fine grid: test every boundary vertex instead.
+                for (std::uint32_t v : vertices) test(v);
+                continue;
+            }
+            for (std::int64_t x = c0.x; x <= c1.x; ++x)
+                for (std::int64_t y = c0.y; y <= c1.y; ++y)
+                    for (std::int64_t z = c0.z; z <= c1.z; ++z) grid.visit(glm::i64vec3(x, y, z), test);
+        }
+    });
+    std::vector<Found> found = concatenate(std::move(parts));
+    std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) {
+        return x.edge != y.edge ? x.edge < y.edge : x.vertex < y.vertex;
+    });
+    found.erase(std::unique(found.begin(), found.end(), [](const Found& x, const Found& y) {
+                    return x.edge == y.edge && x.vertex == y.vertex;
+                }),
+                found.end());
+    for (const Found& t : found) {
+        const BoundaryHalfEdge& h = boundary[t.edge];
+        Defect d;
+        d.position = mesh.positions[t.vertex];
+        d.vertices = {t.vertex, h.from, h.to};
+        d.faces = {h.face};
+        d.measure = t.distance_3d;
+        d.detail = "vertex " + std::to_string(t.vertex) + " lies on edge " + std::to_string(h.from) + "-" +
+                   std::to_string(h.to) + " of face " + std::to_string(h.face);
+        if (t.distance_3d > tolerance)
+            d.detail += " seen from above; the surfaces there are " + format_number(t.distance_3d) + " apart (a crack)";
+        else
+            d.detail += " (distance " + format_number(t.distance_3d) + ")";
+        state.add_defect(DefectClass::t_junction, std::move(d));
+    }
+}
+
+}  // namespace tessref::check_detail

@@ -1,0 +1,194 @@
+// The defect picture: a top view of the mesh, drawn lightly (grey, darker where steep),
+// with every located defect marked in its class colour, and a legend.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include "check/check_internal.h"
+#include "tessref/error.h"
+
+namespace tessref {
+
+namespace {
+
+using Colour = std::array<float, 3>;
+
+Colour class_colour(DefectClass kind) {
+    switch (kind) {
+        case DefectClass::boundary_loop: return {0.90f, 0.10f, 0.10f};
+        case DefectClass::non_manifold_edge: return {0.60f, 0.00f, 0.80f};
+        case DefectClass::non_manifold_vertex: return {0.95f, 0.40f, 0.80f};
+        case DefectClass::refused_face: return {0.45f, 0.30f, 0.15f};
+        case DefectClass::inconsistent_orientation: return {1.00f, 0.55f, 0.00f};
+        case DefectClass::inverted_volume: return {0.55f, 0.55f, 0.00f};
+        case DefectClass::degenerate_face: return {0.00f, 0.65f, 0.65f};
+        case DefectClass::duplicate_face: return {0.00f, 0.35f, 0.80f};
+        case DefectClass::coincident_vertices: return {0.10f, 0.70f, 0.10f};
+        case DefectClass::near_coincident_vertices: return {0.50f, 0.85f, 0.20f};
+        case DefectClass::t_junction: return {0.85f, 0.00f, 0.45f};
+        case DefectClass::probe_miss: return {0.05f, 0.05f, 0.05f};
+        case DefectClass::probe_odd_parity: return {0.30f, 0.30f, 0.30f};
+        case DefectClass::probe_escape: return {0.20f, 0.20f, 0.55f};
+    }
+    return {0.0f, 0.0f, 0.0f};
+}
+
+class TopView {
+public:
+    TopView(const CheckReport& report, int width) : up_(report.up_axis), u_((up_ + 1) % 3), w_((up_ + 2) % 3) {
+        lo_ = {report.bbox_min[u_], report.bbox_min[w_]};
+        hi_ = {report.bbox_max[u_], report.bbox_max[w_]};
+        glm::dvec2 extent = hi_ - lo_;
+        const double side = std::max({extent.x, extent.y, 1e-300});
+        // Square-ish frame around the footprint, at least 5% of the larger side each way.
+        lo_ -= 0.05 * side;
+        hi_ += 0.05 * side;
+        extent = hi_ - lo_;
+        width_ = std::clamp(width, 64, 8192);
+        height_ = std::clamp(static_cast<int>(std::lround(width_ * extent.y / std::max(extent.x, 1e-300))), 64, 8192);
+        scale_ = std::min(width_ / extent.x, height_ / extent.y);
+    }
+    int width() const { return width_; }
+    int height() const { return height_; }
+    // Pixel coordinates (x right, y down) of a point, looking down the up axis.
+    glm::dvec2 pixel(const glm::dvec3& p) const {
+        return {(p[u_] - lo_.x) * scale_, height_ - (p[w_] - lo_.y) * scale_};
+    }
+    int up() const { return up_; }
+
+private:
+    int up_, u_, w_;
+    glm::dvec2 lo_, hi_;
+    int width_ = 0, height_ = 0;
+    double scale_ = 1.0;
+};
+
+void fill_triangle(std::vector<float>& grey, int width, int height, glm::dvec2 a, glm::dvec2 b, glm::dvec2 c, float value) {
+    const double area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x, b.x, c.x}))));
+    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({a.x, b.x, c.x}))));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y, b.y, c.y}))));
+    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({a.y, b.y, c.y}))));
+    if (x0 > x1 || y0 > y1) return;
+    if (std::abs(area) < 1.0) {
+        // Smaller than a pixel: a dot is what it looks like.
+        const int x = std::clamp(static_cast<int>((a.x + b.x + c.x) / 3.0), 0, width - 1);
+        const int y = std::clamp(static_cast<int>((a.y + b.y + c.y) / 3.0), 0, height - 1);
+        grey[std::size_t(y) * width + x] = std::min(grey[std::size_t(y) * width + x], value);
+        return;
+    }
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            const glm::dvec2 p(x + 0.5, y + 0.5);
+            const double e0 = ((b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)) / area;
+            const double e1 = ((c.x - b.x) * (p.y - b.y) - (c.y - b.y) * (p.x - b.x)) / area;
+            const double e2 = ((a.x - c.x) * (p.y - c.y) - (a.y - c.y) * (p.x - c.x)) / area;
+            if (e0 >= 0 && e1 >= 0 && e2 >= 0) {
+                float& g = grey[std::size_t(y) * width + x];
+                g = std::min(g, value);
+            }
+        }
+}
+
+}  // namespace
+
+void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, const std::string& path, int width) {
+    const TopView view(report, width);
+    const int w = view.width(), h = view.height();
+    std::vector<float> grey(std::size_t(w) * h, 1.0f);
+    const bool draw_edges = mesh.face_count() <= 20000;
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+        const auto face = mesh.face(f);
+        if (face.size() < 3) continue;
+        const glm::dvec3 a = check_detail::face_vector_area(mesh, f);
+        const double len = glm::length(a);
+        const float steep = len > 0.0 ? static_cast<float>(std::abs(a[view.up()]) / len) : 0.0f;
+        const float value = 0.70f + 0.20f * steep;
+        for (std::size_t k = 1; k + 1 < face.size(); ++k)
+            fill_triangle(grey, w, h, view.pixel(mesh.positions[face[0]]), view.pixel(mesh.positions[face[k]]),
+                          view.pixel(mesh.positions[face[k + 1]]), value);
+    }
+
+    OIIO::ImageBuf image(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::UINT8));
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float g = grey[std::size_t(y) * w + x];
+            const float rgb[3] = {g, g, g};
+            image.setpixel(x, y, rgb);
+        }
+    if (draw_edges) {
+        const float edge[3] = {0.55f, 0.55f, 0.55f};
+        for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+            const auto face = mesh.face(f);
+            for (std::size_t k = 0; k < face.size(); ++k) {
+                const glm::dvec2 p = view.pixel(mesh.positions[face[k]]);
+                const glm::dvec2 q = view.pixel(mesh.positions[face[(k + 1) % face.size()]]);
+                OIIO::ImageBufAlgo::render_line(image, int(p.x), int(p.y), int(q.x), int(q.y), edge);
+            }
+        }
+    }
+
+    // Boundary loops that are defects: traced in the class colour.
+    const Colour loop_colour = class_colour(DefectClass::boundary_loop);
+    for (const BoundaryLoop& loop : report.boundary_loops) {
+        const Colour c = loop.allowed ? Colour{0.35f, 0.35f, 0.35f} : loop_colour;
+        for (std::size_t i = 0; i + 1 < loop.vertices.size() + (loop.closed ? 1 : 0); ++i) {
+            const glm::dvec2 p = view.pixel(mesh.positions[loop.vertices[i]]);
+            const glm::dvec2 q = view.pixel(mesh.positions[loop.vertices[(i + 1) % loop.vertices.size()]]);
+            for (int d = -1; d <= (loop.allowed ? -1 : 1); ++d)
+                OIIO::ImageBufAlgo::render_line(image, int(p.x) + (loop.allowed ? 0 : d), int(p.y), int(q.x) + (loop.allowed ? 0 : d),
+                                                int(q.y), c);
+        }
+    }
+    // Every located defect: a ring in its class colour.
+    for (const DefectReport& d : report.defects) {
+        const Colour c = class_colour(d.kind);
+        const int radius = 5 + static_cast<int>(d.kind) % 4 * 2;  // nested rings stay visible
+        for (const Defect& x : d.locations) {
+            const glm::dvec2 p = view.pixel(x.position);
+            for (int r = radius; r <= radius + 1; ++r)
+                for (int step = 0; step < 64; ++step) {
+                    const double angle = step * (2.0 * 3.141592653589793 / 64.0);
+                    OIIO::ImageBufAlgo::render_point(image, int(p.x + r * std::cos(angle)), int(p.y + r * std::sin(angle)), c);
+                }
+        }
+    }
+
+    // Legend, top left.
+    std::vector<std::string> lines;
+    std::vector<Colour> swatches;
+    for (const DefectReport& d : report.defects) {
+        if (d.count == 0) continue;
+        lines.push_back(std::string(defect_class_name(d.kind)) + " (" + std::to_string(d.count) + ")");
+        swatches.push_back(class_colour(d.kind));
+    }
+    if (lines.empty()) {
+        lines.push_back("no defects");
+        swatches.push_back({0.2f, 0.6f, 0.2f});
+    }
+    const int row = 18, pad = 6;
+    const std::string font = std::filesystem::exists("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
+                                 ? "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
+                                 : "";
+    const float white[3] = {1.0f, 1.0f, 1.0f}, black[3] = {0.0f, 0.0f, 0.0f};
+    const int legend_width = 260, legend_height = pad * 2 + row * int(lines.size());
+    OIIO::ImageBufAlgo::render_box(image, 2, 2, std::min(w - 1, 2 + legend_width), std::min(h - 1, 2 + legend_height), white, true);
+    OIIO::ImageBufAlgo::render_box(image, 2, 2, std::min(w - 1, 2 + legend_width), std::min(h - 1, 2 + legend_height), black, false);
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+        const int y = 2 + pad + row * int(i);
+        OIIO::ImageBufAlgo::render_box(image, 2 + pad, y + 3, 2 + pad + 12, y + 15, swatches[i], true);
+        // Without a font the swatches still tell the classes apart; the text is a bonus.
+        OIIO::ImageBufAlgo::render_text(image, 2 + pad + 20, y + 14, lines[i], 13, font, black);
+    }
+    (void)image.geterror();
+
+    if (!image.write(path)) throw Error("cannot write the defect image: " + image.geterror(), check_detail::where_in(path));
+}
+
+}  // namespace tessref

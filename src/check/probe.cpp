@@ -1,0 +1,428 @@
+// The ray-cast crack probe (Embree): an independent, geometric second opinion on what the
+// topology says. It does not look at edges or vertex ids at all, only at whether rays get
+// through the surface:
+//  - terrain: vertical rays on a dense grid over the footprint; a ray inside the outline
+//    that hits nothing went through a hole or a crack;
+//  - closed mesh: lines along the three axes through the bounding box cross a closed
+//    surface an even number of times, so an odd count means a leak; and rays cast from
+//    points found inside in every direction must hit the surface, so a miss escaped
+//    through a gap.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <string>
+
+#include "check/check_internal.h"
+#include "tessref/raycast.h"
+
+namespace tessref::check_detail {
+
+namespace {
+
+// Fixed sub-cell offsets of the probe grid, so that rays do not run exactly through the
+// vertices and edges of meshes made on a regular grid (a measure-zero case, but a common
+// one: terrain grids).
+constexpr double jitter_u = 0.5371;
+constexpr double jitter_w = 0.5953;
+
+struct GridFailure {
+    int axis;
+    int i, j;
+    auto operator<=>(const GridFailure&) const = default;
+};
+
+// 4-connected clusters of failed grid cells (per axis), each as the list of its cells.
+std::vector<std::vector<GridFailure>> cluster(std::vector<GridFailure> failures) {
+    std::sort(failures.begin(), failures.end());
+    std::vector<std::uint32_t> parent(failures.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](std::uint32_t x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+    };
+    auto index_of = [&](const GridFailure& g) -> std::int64_t {
+        auto it = std::lower_bound(failures.begin(), failures.end(), g);
+        return it != failures.end() && *it == g ? it - failures.begin() : -1;
+    };
+    for (std::size_t n = 0; n < failures.size(); ++n) {
+        const GridFailure& g = failures[n];
+        for (const GridFailure& h : {GridFailure{g.axis, g.i + 1, g.j}, GridFailure{g.axis, g.i, g.j + 1}}) {
+            const std::int64_t m = index_of(h);
+            if (m < 0) continue;
+            const std::uint32_t a = find(static_cast<std::uint32_t>(n)), b = find(static_cast<std::uint32_t>(m));
+            if (a != b) parent[std::max(a, b)] = std::min(a, b);
+        }
+    }
+    std::map<std::uint32_t, std::vector<GridFailure>> groups;
+    for (std::size_t n = 0; n < failures.size(); ++n) groups[find(static_cast<std::uint32_t>(n))].push_back(failures[n]);
+    std::vector<std::vector<GridFailure>> out;
+    for (auto& [root, cells] : groups) out.push_back(std::move(cells));
+    return out;
+}
+
+double distance_2d_to_segment(glm::dvec2 p, glm::dvec2 a, glm::dvec2 b) {
+    const glm::dvec2 ab = b - a;
+    const double len2 = glm::dot(ab, ab);
+    const double t = len2 > 0.0 ? glm::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+    return glm::distance(p, a + t * ab);
+}
+
+// The boundary vertices that are not on the allowed outline, and the faces at each.
+struct OpenBoundary {
+    std::vector<std::uint32_t> vertices;
+    std::map<std::uint32_t, std::uint32_t> loop_of;
+    std::map<std::uint32_t, std::vector<std::uint32_t>> faces_of;
+};
+
+OpenBoundary open_boundary(const CheckState& state) {
+    OpenBoundary out;
+    for (std::size_t i = 0; i < state.boundary.size(); ++i) {
+        const std::uint32_t loop = state.loop_of_boundary[i];
+        if (static_cast<int>(loop) == state.allowed_loop) continue;
+        const BoundaryHalfEdge& h = state.boundary[i];
+        for (std::uint32_t v : {h.from, h.to}) {
+            out.loop_of.emplace(v, loop);
+            auto& faces = out.faces_of[v];
+            if (std::find(faces.begin(), faces.end(), h.face) == faces.end()) faces.push_back(h.face);
+        }
+    }
+    for (const auto& [v, loop] : out.loop_of) out.vertices.push_back(v);
+    return out;
+}
+
+constexpr double association_budget = 2e7;  // point-to-vertex distance evaluations
+
+void terrain_probe(CheckState& state, const RayScene& scene) {
+    const IndexedMesh& mesh = state.mesh;
+    CheckReport& report = state.report;
+    const int k = state.up_axis, iu = (k + 1) % 3, iw = (k + 2) % 3;
+    int outline = state.allowed_loop;
+    if (outline < 0) {
+        double best = -1.0;
+        for (std::size_t i = 0; i < state.loops.size(); ++i)
+            if (state.loops[i].closed && state.loops[i].area > best) {
+                best = state.loops[i].area;
+                outline = static_cast<int>(i);
+            }
+    }
+    if (outline < 0) {
+        report.probe.mode = "none";
+        report.probe.skipped_because = "the terrain has no closed outline";
+        return;
+    }
+    report.probe.mode = "terrain";
+    std::vector<glm::dvec2> polygon;
+    for (std::uint32_t v : state.loops[outline].vertices) polygon.emplace_back(mesh.positions[v][iu], mesh.positions[v][iw]);
+    glm::dvec2 lo = polygon[0], hi = polygon[0];
+    for (const glm::dvec2& p : polygon) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const int resolution = std::max(1, state.options.probe_resolution);
+    const glm::dvec2 step = (hi - lo) / double(resolution);
+    const double margin = state.tolerance + 1e-5 * std::max(hi.x - lo.x, hi.y - lo.y);
+    const double height = state.bbox_max[k] - state.bbox_min[k];
+    glm::dvec3 direction(0.0);
+    direction[k] = -state.up_sign;
+    const double start = state.up_sign > 0 ? state.bbox_max[k] + 0.01 * height + margin : state.bbox_min[k] - 0.01 * height - margin;
+
+    struct RowResult {
+        std::size_t rays = 0;
+        std::vector<GridFailure> failures;
+    };
+    std::vector<RowResult> rows(resolution);
+    const int batch = 16;
+    for (int j0 = 0; j0 < resolution; j0 += batch) {
+        const int j1 = std::min(resolution, j0 + batch);
+        tbb::parallel_for(tbb::blocked_range<int>(j0, j1, 1), [&](const tbb::blocked_range<int>& r) {
+            std::vector<double> crossings;
+            for (int j = r.begin(); j != r.end(); ++j) {
+                const double w = lo.y + (j + jitter_w) * step.y;
+                crossings.clear();
+                for (std::size_t e = 0; e < polygon.size(); ++e) {
+                    const glm::dvec2 p = polygon[e], q = polygon[(e + 1) % polygon.size()];
+                    if ((p.y > w) != (q.y > w)) crossings.push_back(p.x + (w - p.y) * (q.x - p.x) / (q.y - p.y));
+                }
+                std::sort(crossings.begin(), crossings.end());
+                std::size_t passed = 0;
+                for (int i = 0; i < resolution; ++i) {
+                    const double u = lo.x + (i + jitter_u) * step.x;
+                    while (passed < crossings.size() && crossings[passed] < u) ++passed;
+                    if (passed % 2 == 0) continue;  // outside the outline
+                    ++rows[j].rays;
+                    glm::dvec3 origin(0.0);
+                    origin[k] = start;
+                    origin[iu] = u;
+                    origin[iw] = w;
+                    if (scene.intersect(origin, direction).hit) continue;
+                    // Rays grazing the outline may slip past its edge in single precision.
+                    double near_outline = std::numeric_limits<double>::infinity();
+                    for (std::size_t e = 0; e < polygon.size(); ++e)
+                        near_outline = std::min(near_outline, distance_2d_to_segment({u, w}, polygon[e], polygon[(e + 1) % polygon.size()]));
+                    if (near_outline > margin) rows[j].failures.push_back({k, i, j});
+                }
+            }
+        });
+        state.progress("ray probe", 0.8 + 0.2 * double(j1) / resolution);
+    }
+    std::vector<GridFailure> failures;
+    for (RowResult& r : rows) {
+        report.probe.rays += r.rays;
+        failures.insert(failures.end(), r.failures.begin(), r.failures.end());
+    }
+    report.probe.failed_rays = failures.size();
+    if (failures.empty()) return;
+
+    const OpenBoundary open = open_boundary(state);
+    const auto clusters = cluster(failures);
+    const bool associate = double(clusters.size()) * double(open.vertices.size()) <= association_budget;
+    const double mid_height = 0.5 * (state.bbox_min[k] + state.bbox_max[k]);
+    for (const auto& cells : clusters) {
+        glm::dvec2 centre(0.0);
+        for (const GridFailure& g : cells)
+            centre += glm::dvec2(lo.x + (g.i + jitter_u) * step.x, lo.y + (g.j + jitter_w) * step.y);
+        centre /= double(cells.size());
+        Defect d;
+        d.position[iu] = centre.x;
+        d.position[iw] = centre.y;
+        d.position[k] = mid_height;
+        d.measure = double(cells.size());
+        d.detail = std::to_string(cells.size()) + " vertical ray" + (cells.size() == 1 ? "" : "s") +
+                   " inside the outline hit nothing";
+        if (associate && !open.vertices.empty()) {
+            std::uint32_t best = open.vertices[0];
+            double best_distance = std::numeric_limits<double>::infinity();
+            for (std::uint32_t v : open.vertices) {
+                const double dist = glm::distance(centre, glm::dvec2(mesh.positions[v][iu], mesh.positions[v][iw]));
+                if (dist < best_distance) {
+                    best_distance = dist;
+                    best = v;
+                }
+            }
+            d.position[k] = mesh.positions[best][k];
+            d.vertices = {best};
+            d.faces = open.faces_of.at(best);
+            d.detail += "; nearest open boundary vertex " + std::to_string(best) + " at " +
+                        format_point(mesh.positions[best]);
+        }
+        state.add_defect(DefectClass::probe_miss, std::move(d));
+    }
+}
+
+void closed_probe(CheckState& state, const RayScene& scene) {
+    CheckReport& report = state.report;
+    report.probe.mode = "closed";
+    const int resolution = std::max(1, state.options.probe_resolution);
+    const glm::dvec3 extent = state.bbox_max - state.bbox_min;
+    const double margin = 0.01 * state.diagonal + state.tolerance + 1e-12;
+    // Hits closer than this along a line are one point seen in several triangles: a few
+    // single-precision steps at the mesh's scale.
+    const double same_point = 4e-7 * (state.diagonal + margin);
+
+    struct LineResult {
+        std::size_t rays = 0;
+        std::vector<GridFailure> odd;
+        std::vector<glm::dvec3> inside;  // a point between the first two crossings
+    };
+    struct Line {
+        glm::dvec3 origin, direction;
+    };
+    auto line = [&](int axis, int i, int j) {
+        const int iu = (axis + 1) % 3, iw = (axis + 2) % 3;
+        Line l{glm::dvec3(0.0), glm::dvec3(0.0)};
+        l.origin[axis] = state.bbox_min[axis] - margin;
+        l.origin[iu] = state.bbox_min[iu] + (i + jitter_u) * extent[iu] / resolution;
+        l.origin[iw] = state.bbox_min[iw] + (j + jitter_w) * extent[iw] / resolution;
+        l.direction[axis] = 1.0;
+        return l;
+    };
+    std::vector<LineResult> rows(3 * static_cast<std::size_t>(resolution));
+    const int batch = 16;
+    for (int r0 = 0; r0 < 3 * resolution; r0 += batch) {
+        const int r1 = std::min(3 * resolution, r0 + batch);
+        tbb::parallel_for(tbb::blocked_range<int>(r0, r1, 1), [&](const tbb::blocked_range<int>& range) {
+            for (int row = range.begin(); row != range.end(); ++row) {
+                const int axis = row / resolution, j = row % resolution;
+                for (int i = 0; i < resolution; ++i) {
+                    const Line l = line(axis, i, j);
+                    ++rows[row].rays;
+                    // Hits at one point (a ray through a shared edge or vertex hits every
+                    // triangle there) count once when the triangles face the same way (the
+                    // ray passes through the surface), not at all when they do not (it
+                    // grazes a ridge or a fold).
+                    const std::vector<RayHit> hits = scene.all_hits(l.origin, l.direction);
+                    std::size_t crossings = 0;
+                    double first = 0.0, second = 0.0;
+                    for (std::size_t a = 0; a < hits.size();) {
+                        std::size_t b = a + 1;
+                        bool mixed = false;
+                        while (b < hits.size() && hits[b].t - hits[b - 1].t <= same_point) {
+                            mixed = mixed || hits[b].side != hits[a].side;
+                            ++b;
+                        }
+                        if (!mixed) {
+                            if (crossings == 0) first = hits[a].t;
+                            if (crossings == 1) second = hits[a].t;
+                            ++crossings;
+                        }
+                        a = b;
+                    }
+                    if (crossings % 2 == 1) rows[row].odd.push_back({axis, i, j});
+                    else if (crossings >= 2 && axis == 0) rows[row].inside.push_back(l.origin + 0.5 * (first + second) * l.direction);
+                }
+            }
+        });
+        state.progress("ray probe", 0.8 + 0.15 * double(r1) / (3 * resolution));
+    }
+    std::vector<GridFailure> odd;
+    std::vector<glm::dvec3> inside;
+    for (LineResult& r : rows) {
+        report.probe.rays += r.rays;
+        odd.insert(odd.end(), r.odd.begin(), r.odd.end());
+        inside.insert(inside.end(), r.inside.begin(), r.inside.end());
+    }
+
+    // Escape rays: from each inside point, one direction of a spiral over the sphere.
+    const std::size_t directions = 4096;
+    std::vector<std::uint8_t> escaped(inside.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, inside.size(), 256), [&](const auto& r) {
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            const double index = double(n % directions) + 0.5;
+            const double z = 1.0 - 2.0 * index / double(directions);
+            const double phi = index * 2.399963229728653;  // golden angle
+            const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+            const glm::dvec3 direction(s * std::cos(phi), s * std::sin(phi), z);
+            escaped[n] = !scene.intersect(inside[n], direction).hit;
+        }
+    });
+    state.progress("ray probe", 1.0);
+    report.probe.rays += inside.size();
+    std::vector<std::size_t> escapes;
+    for (std::size_t n = 0; n < inside.size(); ++n)
+        if (escaped[n]) escapes.push_back(n);
+    report.probe.failed_rays = odd.size() + escapes.size();
+    if (odd.empty() && escapes.empty()) return;
+
+    // Locate: the open boundary vertex nearest each failed ray, grouped by its loop.
+    const OpenBoundary open = open_boundary(state);
+    const std::size_t failures = odd.size() + escapes.size();
+    const bool associate = !open.vertices.empty() && double(failures) * double(open.vertices.size()) <= association_budget;
+    auto nearest = [&](const glm::dvec3& origin, const glm::dvec3& direction, bool whole_line) {
+        std::uint32_t best = open.vertices[0];
+        double best_distance = std::numeric_limits<double>::infinity();
+        for (std::uint32_t v : open.vertices) {
+            const glm::dvec3 p = state.mesh.positions[v] - origin;
+            double t = glm::dot(p, direction);
+            if (!whole_line) t = std::max(t, 0.0);
+            const double dist = glm::length(p - t * direction);
+            if (dist < best_distance) {
+                best_distance = dist;
+                best = v;
+            }
+        }
+        return best;
+    };
+    struct Group {
+        std::size_t rays = 0;
+        std::uint32_t vertex = 0;
+        glm::dvec3 first_origin{0.0};
+    };
+    auto emit = [&](DefectClass kind, std::vector<std::pair<glm::dvec3, glm::dvec3>> rays, bool whole_line,
+                    const std::string& what) {
+        if (rays.empty()) return;
+        if (associate) {
+            std::map<std::uint32_t, Group> by_loop;
+            for (const auto& [o, d] : rays) {
+                const std::uint32_t v = nearest(o, d, whole_line);
+                Group& g = by_loop[open.loop_of.at(v)];
+                if (g.rays++ == 0) {
+                    g.vertex = v;
+                    g.first_origin = o;
+                }
+            }
+            for (const auto& [loop, g] : by_loop) {
+                Defect d;
+                d.position = state.mesh.positions[g.vertex];
+                d.vertices = {g.vertex};
+                d.faces = open.faces_of.at(g.vertex);
+                d.measure = double(g.rays);
+                d.detail = std::to_string(g.rays) + " " + what + "; nearest open boundary vertex " +
+                           std::to_string(g.vertex) + " at " + format_point(d.position);
+                state.add_defect(kind, std::move(d));
+            }
+            return;
+        }
+        for (const auto& [o, d] : rays) {
+            Defect defect;
+            defect.position = o;
+            defect.measure = 1.0;
+            defect.detail = "1 " + what + " from " + format_point(o) + " towards " + format_point(d);
+            state.add_defect(kind, std::move(defect));
+        }
+    };
+    if (associate) {
+        std::vector<std::pair<glm::dvec3, glm::dvec3>> rays;
+        for (const GridFailure& g : odd) {
+            const Line l = line(g.axis, g.i, g.j);
+            rays.emplace_back(l.origin, l.direction);
+        }
+        emit(DefectClass::probe_odd_parity, std::move(rays), true, "lines crossed the surface an odd number of times");
+    } else {
+        for (const auto& cells : cluster(odd)) {
+            const Line l = line(cells[0].axis, cells[0].i, cells[0].j);
+            Defect d;
+            d.position = l.origin;
+            d.measure = double(cells.size());
+            d.detail = std::to_string(cells.size()) + " line(s) along axis " + std::to_string(cells[0].axis) +
+                       " crossed the surface an odd number of times, the first from " + format_point(l.origin);
+            state.add_defect(DefectClass::probe_odd_parity, std::move(d));
+        }
+    }
+    std::vector<std::pair<glm::dvec3, glm::dvec3>> escape_rays;
+    for (std::size_t n : escapes) {
+        const double index = double(n % directions) + 0.5;
+        const double z = 1.0 - 2.0 * index / double(directions);
+        const double phi = index * 2.399963229728653;
+        const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+        escape_rays.emplace_back(inside[n], glm::dvec3(s * std::cos(phi), s * std::sin(phi), z));
+    }
+    emit(DefectClass::probe_escape, std::move(escape_rays), false, "rays from inside escaped without a hit");
+}
+
+}  // namespace
+
+void run_ray_probe(CheckState& state) {
+    CheckReport& report = state.report;
+    if (!state.options.ray_probe) {
+        report.probe.skipped_because = "disabled";
+        return;
+    }
+    const bool terrain = report.terrain_like;
+    const bool closed = !terrain && report.judged_as == "closed";
+    if (!terrain && !closed) {
+        report.probe.skipped_because = "an open mesh that is not a terrain has no inside to probe";
+        return;
+    }
+    // Fan-triangulate the analysed faces.
+    const IndexedMesh& mesh = state.mesh;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    triangles.reserve(report.triangle_count);
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+        if (state.face_status[f] != face_kept) continue;
+        const auto face = mesh.face(f);
+        for (std::size_t k = 1; k + 1 < face.size(); ++k) triangles.push_back({face[0], face[k], face[k + 1]});
+    }
+    if (triangles.empty()) {
+        report.probe.skipped_because = "no faces to probe";
+        return;
+    }
+    state.progress("ray probe: building the BVH", 0.8);
+    const RayScene scene(mesh.positions, triangles);
+    triangles.clear();
+    triangles.shrink_to_fit();
+    if (terrain) terrain_probe(state, scene);
+    else closed_probe(state, scene);
+}
+
+}  // namespace tessref::check_detail

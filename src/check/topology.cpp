@@ -1,0 +1,515 @@
+// Topology of the face list as the file gives it: edges, fans, components, orientation and
+// boundary loops, computed on our own half-edge table so that non-manifold input is seen
+// exactly (a half-edge data structure cannot even hold it).
+#include <algorithm>
+#include <atomic>
+#include <numeric>
+#include <queue>
+#include <string>
+
+#include "check/check_internal.h"
+#include "tessref/error.h"
+
+namespace tessref::check_detail {
+
+namespace {
+
+constexpr std::size_t vertex_chunk = 1 << 14;
+constexpr std::size_t face_chunk = 1 << 14;
+
+bool same_vertex_set(const IndexedMesh& mesh, std::uint32_t f, std::uint32_t g) {
+    const auto a = mesh.face(f);
+    const auto b = mesh.face(g);
+    if (a.size() != b.size()) return false;
+    if (a.size() == 3) {
+        std::uint32_t x[3] = {a[0], a[1], a[2]}, y[3] = {b[0], b[1], b[2]};
+        std::sort(x, x + 3);
+        std::sort(y, y + 3);
+        return x[0] == y[0] && x[1] == y[1] && x[2] == y[2];
+    }
+    std::vector<std::uint32_t> x(a.begin(), a.end()), y(b.begin(), b.end());
+    std::sort(x.begin(), x.end());
+    std::sort(y.begin(), y.end());
+    return x == y;
+}
+
+// Calls fn(lo, hi, begin, end) for every undirected edge: the half-edges [begin, end) of
+// vertex lo's group that go to hi.
+template <class Fn>
+void for_each_edge_in(const CheckState& state, std::size_t v0, std::size_t v1, Fn&& fn) {
+    for (std::size_t v = v0; v < v1; ++v) {
+        std::uint32_t i = state.half_edge_start[v];
+        const std::uint32_t end = state.half_edge_start[v + 1];
+        while (i < end) {
+            std::uint32_t j = i + 1;
+            while (j < end && state.half_edges[j].other == state.half_edges[i].other) ++j;
+            fn(static_cast<std::uint32_t>(v), state.half_edges[i].other, i, j);
+            i = j;
+        }
+    }
+}
+
+}  // namespace
+
+void build_half_edges(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    const std::size_t vertex_count = mesh.vertex_count();
+    const std::size_t face_count = mesh.face_count();
+    if (face_count >= (std::size_t(1) << 31))
+        throw Error("mesh too large to check: more than 2^31 faces", check_detail::where_in(mesh.source));
+
+    std::vector<std::uint32_t> counts(vertex_count + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
+        for (std::size_t f = r.begin(); f != r.end(); ++f) {
+            if (state.face_status[f] != face_kept) continue;
+            const auto face = mesh.face(f);
+            for (std::size_t k = 0; k < face.size(); ++k) {
+                const std::uint32_t a = face[k], b = face[(k + 1) % face.size()];
+                std::atomic_ref<std::uint32_t>(counts[std::min(a, b)]).fetch_add(1, std::memory_order_relaxed);
+            }
+        }
+    });
+    state.half_edge_start.assign(vertex_count + 1, 0);
+    std::uint64_t total = 0;
+    for (std::size_t v = 0; v < vertex_count; ++v) {
+        state.half_edge_start[v] = static_cast<std::uint32_t>(total);
+        total += counts[v];
+    }
+    state.half_edge_start[vertex_count] = static_cast<std::uint32_t>(total);
+    std::vector<std::uint32_t>& cursor = counts;
+    std::copy(state.half_edge_start.begin(), state.half_edge_start.end(), cursor.begin());
+
+    state.half_edges.resize(total);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
+        for (std::size_t f = r.begin(); f != r.end(); ++f) {
+            if (state.face_status[f] != face_kept) continue;
+            const auto face = mesh.face(f);
+            for (std::size_t k = 0; k < face.size(); ++k) {
+                const std::uint32_t a = face[k], b = face[(k + 1) % face.size()];
+                const std::uint32_t lo = std::min(a, b), hi = std::max(a, b);
+                const std::uint32_t slot =
+                    std::atomic_ref<std::uint32_t>(cursor[lo]).fetch_add(1, std::memory_order_relaxed);
+                state.half_edges[slot] = {hi, static_cast<std::uint32_t>(f) << 1 | (a < b ? 1u : 0u)};
+            }
+        }
+    });
+    // Sorting each group fixes the order the atomic scatter left undetermined.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, vertex_chunk), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v)
+            std::sort(state.half_edges.begin() + state.half_edge_start[v],
+                      state.half_edges.begin() + state.half_edge_start[v + 1],
+                      [](const HalfEdgeEntry& x, const HalfEdgeEntry& y) {
+                          return x.other != y.other ? x.other < y.other : x.face_and_direction < y.face_and_direction;
+                      });
+    });
+}
+
+void find_duplicate_faces(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    // Two faces over the same vertex set share every edge, so comparing the faces met on
+    // each edge finds every duplicate; the earliest face of a set is the original.
+    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), none);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), vertex_chunk), [&](const auto& r) {
+        for_each_edge_in(state, r.begin(), r.end(), [&](std::uint32_t, std::uint32_t, std::uint32_t b, std::uint32_t e) {
+            for (std::uint32_t i = b; i < e; ++i)
+                for (std::uint32_t j = i + 1; j < e; ++j) {
+                    std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
+                    if (f == g || !same_vertex_set(mesh, f, g)) continue;
+                    if (f > g) std::swap(f, g);
+                    std::atomic_ref<std::uint32_t> slot(duplicate_of[g]);
+                    std::uint32_t current = slot.load(std::memory_order_relaxed);
+                    while (f < current && !slot.compare_exchange_weak(current, f, std::memory_order_relaxed)) {
+                    }
+                }
+        });
+    });
+    for (std::uint32_t g = 0; g < mesh.face_count(); ++g) {
+        if (duplicate_of[g] == none) continue;
+        state.face_status[g] = face_duplicate;
+        Defect d;
+        const auto face = mesh.face(g);
+        glm::dvec3 centre(0.0);
+        for (std::uint32_t v : face) centre += mesh.positions[v];
+        d.position = centre / double(face.size());
+        d.faces = {duplicate_of[g], g};
+        d.vertices.assign(face.begin(), face.end());
+        d.detail = "face " + std::to_string(g) + " repeats face " + std::to_string(duplicate_of[g]) +
+                   (std::ranges::equal(mesh.face(duplicate_of[g]), face) ? "" : " (same vertices, other order)");
+        state.add_defect(DefectClass::duplicate_face, std::move(d));
+    }
+}
+
+void classify_edges(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    struct ChunkResult {
+        std::size_t edges = 0;
+        std::vector<BoundaryHalfEdge> boundary;
+        std::vector<Defect> non_manifold;
+        std::vector<Defect> inconsistent;
+        std::size_t non_manifold_count = 0, inconsistent_count = 0;
+    };
+    const std::size_t cap = state.options.max_locations;
+    auto results = map_chunks<ChunkResult>(mesh.vertex_count(), vertex_chunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
+        std::vector<std::uint32_t> kept;
+        for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t b, std::uint32_t e) {
+            kept.clear();
+            for (std::uint32_t i = b; i < e; ++i)
+                if (state.face_status[state.half_edges[i].face()] == face_kept) kept.push_back(i);
+            if (kept.empty()) return;
+            ++out.edges;
+            const glm::dvec3 mid = 0.5 * (mesh.positions[lo] + mesh.positions[hi]);
+            if (kept.size() == 1) {
+                const HalfEdgeEntry& h = state.half_edges[kept[0]];
+                out.boundary.push_back(h.forward() ? BoundaryHalfEdge{lo, hi, h.face()} : BoundaryHalfEdge{hi, lo, h.face()});
+            } else if (kept.size() == 2) {
+                const HalfEdgeEntry& h0 = state.half_edges[kept[0]];
+                const HalfEdgeEntry& h1 = state.half_edges[kept[1]];
+                if (h0.forward() == h1.forward()) {
+                    ++out.inconsistent_count;
+                    if (out.inconsistent.size() < cap) {
+                        Defect d;
+                        d.position = mid;
+                        d.faces = {h0.face(), h1.face()};
+                        d.vertices = h0.forward() ? std::vector<std::uint32_t>{lo, hi} : std::vector<std::uint32_t>{hi, lo};
+                        d.detail = "faces " + std::to_string(h0.face()) + " and " + std::to_string(h1.face()) +
+                                   " both run from vertex " + std::to_string(d.vertices[0]) + " to " +
+                                   std::to_string(d.vertices[1]);
+                        out.inconsistent.push_back(std::move(d));
+                    }
+                }
+            } else {
+                ++out.non_manifold_count;
+                if (out.non_manifold.size() < cap) {
+                    Defect d;
+                    d.position = mid;
+                    d.vertices = {lo, hi};
+                    for (std::uint32_t i : kept) d.faces.push_back(state.half_edges[i].face());
+                    d.measure = double(kept.size());
+                    d.detail = "edge " + std::to_string(lo) + "-" + std::to_string(hi) + " is shared by " +
+                               std::to_string(kept.size()) + " faces";
+                    out.non_manifold.push_back(std::move(d));
+                }
+            }
+        });
+    });
+    std::size_t edges = 0;
+    for (ChunkResult& r : results) {
+        edges += r.edges;
+        state.boundary.insert(state.boundary.end(), r.boundary.begin(), r.boundary.end());
+        state.inconsistent_edges += r.inconsistent_count;
+        state.non_manifold_edges += r.non_manifold_count;
+        // Counts are exact; only the first `cap` locations are kept, in vertex order.
+        auto& inc = state.report.defects[int(DefectClass::inconsistent_orientation)];
+        auto& nm = state.report.defects[int(DefectClass::non_manifold_edge)];
+        inc.count += r.inconsistent_count;
+        nm.count += r.non_manifold_count;
+        for (Defect& d : r.inconsistent)
+            if (inc.locations.size() < cap) inc.locations.push_back(std::move(d));
+        for (Defect& d : r.non_manifold)
+            if (nm.locations.size() < cap) nm.locations.push_back(std::move(d));
+    }
+    std::sort(state.boundary.begin(), state.boundary.end());
+    state.report.edge_count = edges;
+    state.report.boundary_edge_count = state.boundary.size();
+}
+
+void find_non_manifold_vertices(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    const std::size_t vertex_count = mesh.vertex_count();
+    // Faces around each vertex (kept faces only).
+    std::vector<std::uint32_t> start(vertex_count + 1, 0);
+    for (std::size_t f = 0; f < mesh.face_count(); ++f)
+        if (state.face_status[f] == face_kept)
+            for (std::uint32_t v : mesh.face(f)) ++start[v + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<std::uint32_t> corner_faces(start.back());
+    {
+        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+        for (std::size_t f = 0; f < mesh.face_count(); ++f)
+            if (state.face_status[f] == face_kept)
+                for (std::uint32_t v : mesh.face(f)) corner_faces[cursor[v]++] = static_cast<std::uint32_t>(f);
+    }
+
+    // A fan: faces around v connected through edges at v. More than one fan: the surface
+    // is pinched at v (two cones touching at their tips, a bow tie).
+    struct ChunkResult {
+        std::vector<Defect> defects;
+        std::size_t count = 0;
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> fans;  // (vertex << 32 | face, fan)
+    };
+    const std::size_t cap = state.options.max_locations;
+    auto results = map_chunks<ChunkResult>(vertex_count, vertex_chunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> by_neighbour;  // (neighbour, local face)
+        std::vector<std::uint32_t> parent;
+        for (std::size_t v = v0; v < v1; ++v) {
+            const std::uint32_t b = start[v], e = start[v + 1];
+            if (e - b < 2) continue;
+            by_neighbour.clear();
+            for (std::uint32_t i = b; i < e; ++i) {
+                const auto face = mesh.face(corner_faces[i]);
+                const std::size_t n = face.size();
+                std::size_t k = 0;
+                while (face[k] != v) ++k;
+                by_neighbour.emplace_back(face[(k + n - 1) % n], i - b);
+                by_neighbour.emplace_back(face[(k + 1) % n], i - b);
+            }
+            std::sort(by_neighbour.begin(), by_neighbour.end());
+            parent.resize(e - b);
+            std::iota(parent.begin(), parent.end(), 0u);
+            auto find = [&](std::uint32_t x) {
+                while (parent[x] != x) x = parent[x] = parent[parent[x]];
+                return x;
+            };
+            std::uint32_t fans = e - b;
+            for (std::size_t i = 1; i < by_neighbour.size(); ++i) {
+                if (by_neighbour[i].first != by_neighbour[i - 1].first) continue;
+                const std::uint32_t x = find(by_neighbour[i].second), y = find(by_neighbour[i - 1].second);
+                if (x != y) {
+                    parent[std::max(x, y)] = std::min(x, y);
+                    --fans;
+                }
+            }
+            if (fans <= 1) continue;
+            for (std::uint32_t i = b; i < e; ++i)
+                out.fans.emplace_back(std::uint64_t(v) << 32 | corner_faces[i], find(i - b));
+            ++out.count;
+            if (out.defects.size() >= cap) continue;
+            Defect d;
+            d.position = mesh.positions[v];
+            d.vertices = {static_cast<std::uint32_t>(v)};
+            for (std::uint32_t i = b; i < e && d.faces.size() < 32; ++i) d.faces.push_back(corner_faces[i]);
+            d.measure = fans;
+            d.detail = "vertex " + std::to_string(v) + " joins " + std::to_string(fans) + " separate fans of faces";
+            out.defects.push_back(std::move(d));
+        }
+    });
+    auto& report = state.report.defects[int(DefectClass::non_manifold_vertex)];
+    for (ChunkResult& r : results) {
+        report.count += r.count;
+        for (Defect& d : r.defects)
+            if (report.locations.size() < cap) report.locations.push_back(std::move(d));
+        state.fan_at_pinch.insert(r.fans.begin(), r.fans.end());
+    }
+}
+
+void find_components(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    ConcurrentDisjointSets sets(mesh.vertex_count());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
+        for (std::size_t f = r.begin(); f != r.end(); ++f) {
+            if (state.face_status[f] != face_kept) continue;
+            const auto face = mesh.face(f);
+            for (std::size_t k = 1; k < face.size(); ++k) sets.unite(face[0], face[k]);
+        }
+    });
+    std::vector<std::uint8_t> in_kept_face(mesh.vertex_count(), 0);
+    for (std::size_t f = 0; f < mesh.face_count(); ++f)
+        if (state.face_status[f] == face_kept)
+            for (std::uint32_t v : mesh.face(f)) in_kept_face[v] = 1;
+    // Roots are the smallest vertex of their set, so numbering roots in vertex order numbers
+    // components by their smallest vertex.
+    state.vertex_component.assign(mesh.vertex_count(), none);
+    std::uint32_t components = 0;
+    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+        if (!in_kept_face[v]) continue;
+        const std::uint32_t root = sets.find(v);
+        if (root == v) state.vertex_component[v] = components++;
+        else state.vertex_component[v] = state.vertex_component[root];
+    }
+    state.report.component_count = components;
+    state.component_has_boundary.assign(components, 0);
+    for (const BoundaryHalfEdge& h : state.boundary) state.component_has_boundary[state.vertex_component[h.from]] = 1;
+    for (const Defect& d : state.report.of(DefectClass::non_manifold_edge).locations)
+        state.component_has_boundary[state.vertex_component[d.vertices[0]]] = 1;
+    if (state.report.count(DefectClass::non_manifold_edge) > state.report.of(DefectClass::non_manifold_edge).locations.size()) {
+        // Not every non-manifold edge is listed: mark their components from the table.
+        for_each_edge_in(state, 0, mesh.vertex_count(), [&](std::uint32_t lo, std::uint32_t, std::uint32_t b, std::uint32_t e) {
+            std::uint32_t kept = 0;
+            for (std::uint32_t i = b; i < e; ++i) kept += state.face_status[state.half_edges[i].face()] == face_kept;
+            if (kept > 2) state.component_has_boundary[state.vertex_component[lo]] = 1;
+        });
+    }
+}
+
+void check_orientation(CheckState& state) {
+    if (state.inconsistent_edges == 0) return;
+    const IndexedMesh& mesh = state.mesh;
+    const std::size_t face_count = mesh.face_count();
+    // Faces joined by manifold edges, with whether they disagree across that edge.
+    std::vector<std::uint32_t> degree(face_count + 1, 0);
+    struct Link {
+        std::uint32_t f, g;
+        bool disagree;
+    };
+    std::vector<Link> links;
+    for_each_edge_in(state, 0, mesh.vertex_count(), [&](std::uint32_t, std::uint32_t, std::uint32_t b, std::uint32_t e) {
+        std::uint32_t kept[2], n = 0;
+        for (std::uint32_t i = b; i < e; ++i)
+            if (state.face_status[state.half_edges[i].face()] == face_kept) {
+                if (n < 2) kept[n] = i;
+                ++n;
+            }
+        if (n != 2) return;
+        const HalfEdgeEntry& h0 = state.half_edges[kept[0]];
+        const HalfEdgeEntry& h1 = state.half_edges[kept[1]];
+        links.push_back({h0.face(), h1.face(), h0.forward() == h1.forward()});
+    });
+    for (const Link& l : links) {
+        ++degree[l.f + 1];
+        ++degree[l.g + 1];
+    }
+    std::partial_sum(degree.begin(), degree.end(), degree.begin());
+    std::vector<std::pair<std::uint32_t, bool>> adjacent(degree.back());
+    {
+        std::vector<std::uint32_t> cursor(degree.begin(), degree.end() - 1);
+        for (const Link& l : links) {
+            adjacent[cursor[l.f]++] = {l.g, l.disagree};
+            adjacent[cursor[l.g]++] = {l.f, l.disagree};
+        }
+    }
+    links.clear();
+    links.shrink_to_fit();
+
+    // Two-colour each piece by relative orientation; the smaller colour class is flipped
+    // (on a tie, the class of the piece's first face is taken as right).
+    std::vector<std::int8_t> side(face_count, -1);
+    state.face_flipped.assign(face_count, 0);
+    std::vector<std::uint32_t> piece;
+    std::queue<std::uint32_t> queue;
+    for (std::uint32_t seed = 0; seed < face_count; ++seed) {
+        if (state.face_status[seed] != face_kept || side[seed] >= 0) continue;
+        piece.clear();
+        side[seed] = 0;
+        queue.push(seed);
+        std::size_t ones = 0;
+        while (!queue.empty()) {
+            const std::uint32_t f = queue.front();
+            queue.pop();
+            piece.push_back(f);
+            ones += side[f];
+            for (std::uint32_t i = degree[f]; i < degree[f + 1]; ++i) {
+                const auto [g, disagree] = adjacent[i];
+                if (side[g] >= 0) continue;  // a conflict here means a non-orientable piece
+                side[g] = static_cast<std::int8_t>(side[f] ^ (disagree ? 1 : 0));
+                queue.push(g);
+            }
+        }
+        const std::int8_t flipped_side = ones * 2 > piece.size() ? 0 : 1;
+        for (std::uint32_t f : piece)
+            if (side[f] == flipped_side) state.face_flipped[f] = 1;
+    }
+    for (std::uint32_t f = 0; f < face_count; ++f)
+        if (state.face_flipped[f]) state.report.flipped_faces.push_back(f);
+}
+
+void trace_boundary_loops(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    const auto& boundary = state.boundary;  // sorted by (from, to, face)
+    state.loop_of_boundary.assign(boundary.size(), none);
+    auto first_out = [&](std::uint32_t v) {
+        return static_cast<std::size_t>(
+            std::lower_bound(boundary.begin(), boundary.end(), BoundaryHalfEdge{v, 0, 0}) - boundary.begin());
+    };
+    for (std::size_t start = 0; start < boundary.size(); ++start) {
+        if (state.loop_of_boundary[start] != none) continue;
+        const auto loop_id = static_cast<std::uint32_t>(state.loops.size());
+        BoundaryLoop loop;
+        std::size_t current = start;
+        while (true) {
+            const BoundaryHalfEdge& h = boundary[current];
+            state.loop_of_boundary[current] = loop_id;
+            loop.vertices.push_back(h.from);
+            loop.length += glm::distance(mesh.positions[h.from], mesh.positions[h.to]);
+            ++loop.edge_count;
+            if (h.to == boundary[start].from) break;
+            // Continue with an unused boundary half-edge leaving h.to; where the surface is
+            // pinched there (several fans), with one of the same fan as h's face, so that
+            // each loop follows one sheet of faces.
+            std::size_t next = boundary.size();
+            const auto fan_of = [&](std::uint32_t face) {
+                const auto it = state.fan_at_pinch.find(std::uint64_t(h.to) << 32 | face);
+                return it == state.fan_at_pinch.end() ? none : it->second;
+            };
+            const std::uint32_t fan_in = state.fan_at_pinch.empty() ? none : fan_of(h.face);
+            for (std::size_t c = first_out(h.to); c < boundary.size() && boundary[c].from == h.to; ++c) {
+                if (state.loop_of_boundary[c] != none) continue;
+                if (next == boundary.size()) next = c;
+                if (fan_in != none && fan_of(boundary[c].face) == fan_in) {
+                    next = c;
+                    break;
+                }
+            }
+            if (next >= boundary.size()) {
+                loop.closed = false;
+                loop.vertices.push_back(h.to);
+                break;
+            }
+            current = next;
+        }
+        // Vector area (Newell) about the first vertex, and the centroid.
+        glm::dvec3 area(0.0), centroid(0.0);
+        const glm::dvec3 origin = mesh.positions[loop.vertices[0]];
+        for (std::size_t i = 0; i < loop.vertices.size(); ++i) {
+            const glm::dvec3 p = mesh.positions[loop.vertices[i]] - origin;
+            const glm::dvec3 q = mesh.positions[loop.vertices[(i + 1) % loop.vertices.size()]] - origin;
+            area += 0.5 * glm::cross(p, q);
+            centroid += p;
+        }
+        loop.area = glm::length(area);
+        loop.centroid = origin + centroid / double(loop.vertices.size());
+        state.loops.push_back(std::move(loop));
+    }
+}
+
+void judge_boundary(CheckState& state) {
+    CheckReport& report = state.report;
+    const bool open_rules = report.expect == Expect::open ||
+                            (report.expect == Expect::automatic && !report.closed && report.terrain_like);
+    report.judged_as = open_rules ? "open" : "closed";
+    if (open_rules) {
+        // The outer outline: the closed loop that bounds the most area.
+        double best = -1.0;
+        for (std::size_t i = 0; i < state.loops.size(); ++i)
+            if (state.loops[i].closed && state.loops[i].area > best) {
+                best = state.loops[i].area;
+                state.allowed_loop = static_cast<int>(i);
+            }
+        if (state.allowed_loop >= 0) state.loops[state.allowed_loop].allowed = true;
+    }
+
+    // Faces of each loop's edges, for locating.
+    std::vector<std::vector<std::uint32_t>> loop_faces(std::min(state.loops.size(), state.options.max_locations + 1));
+    for (std::size_t i = 0; i < state.boundary.size(); ++i) {
+        const std::uint32_t loop = state.loop_of_boundary[i];
+        if (loop < loop_faces.size() && loop_faces[loop].size() < 64) loop_faces[loop].push_back(state.boundary[i].face);
+    }
+    for (std::size_t i = 0; i < state.loops.size(); ++i) {
+        const BoundaryLoop& loop = state.loops[i];
+        if (loop.allowed) continue;
+        Defect d;
+        d.position = loop.centroid;
+        d.vertices.assign(loop.vertices.begin(), loop.vertices.begin() + std::min<std::size_t>(loop.vertices.size(), 64));
+        if (i < loop_faces.size()) {
+            d.faces = loop_faces[i];
+            std::sort(d.faces.begin(), d.faces.end());
+            d.faces.erase(std::unique(d.faces.begin(), d.faces.end()), d.faces.end());
+        }
+        d.measure = loop.length;
+        d.detail = std::string(loop.closed ? "boundary loop" : "open boundary chain") + " of " +
+                   std::to_string(loop.edge_count) + " edges, length " + format_number(loop.length) +
+                   (open_rules ? ", not the outer outline" : "");
+        state.add_defect(DefectClass::boundary_loop, std::move(d));
+    }
+
+    // Loops for the report: largest first.
+    std::vector<std::size_t> order(state.loops.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        if (state.loops[a].allowed != state.loops[b].allowed) return state.loops[a].allowed;
+        return state.loops[a].area > state.loops[b].area;
+    });
+    for (std::size_t i = 0; i < order.size() && i < state.options.max_locations; ++i)
+        report.boundary_loops.push_back(state.loops[order[i]]);
+}
+
+}  // namespace tessref::check_detail

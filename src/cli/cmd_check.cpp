@@ -1,0 +1,90 @@
+// tessref check — watertightness and crack checks for any mesh (PLY, OBJ, OFF, STL).
+// Exit status: 0 the mesh passes, 1 it has defects, 2 it cannot be read.
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "cli/cli_util.h"
+#include "cli/commands.h"
+#include "tessref/check.h"
+#include "tessref/error.h"
+
+namespace tessref::cli {
+
+namespace {
+
+struct CheckCommandOptions {
+    std::string mesh;
+    std::string expect = "auto";
+    double tolerance = -1.0;  // < 0: the default, relative to the mesh size
+    bool json = false;
+    std::string image;
+    int probe_resolution = 512;
+    bool no_probe = false;
+    std::size_t max_locations = 1000;
+};
+
+int run_check(const CheckCommandOptions& options) {
+    std::unique_ptr<Progress> progress = std::make_unique<Progress>("check: reading", 1);
+    progress->set(0);
+    const IndexedMesh mesh = read_mesh_for_check(options.mesh);
+
+    CheckOptions check;
+    check.expect = options.expect == "closed" ? Expect::closed : options.expect == "open" ? Expect::open : Expect::automatic;
+    if (options.tolerance >= 0.0) check.tolerance = options.tolerance;
+    check.ray_probe = !options.no_probe;
+    check.probe_resolution = options.probe_resolution;
+    check.max_locations = options.max_locations;
+    std::string stage;
+    check.progress = [&](std::string_view name, double fraction) {
+        if (name != stage) {
+            stage = name;
+            progress = std::make_unique<Progress>("check: " + stage, 1000);
+        }
+        progress->set(static_cast<std::size_t>(fraction * 1000.0));
+    };
+    const CheckReport report = check_mesh(mesh, check);
+    progress.reset();
+
+    if (!options.image.empty()) {
+        AtomicOutput output(options.image);
+        write_defect_image(mesh, report, output.temp_path().string());
+        output.commit();
+    }
+    std::cout << (options.json ? report_json(report) : report_text(report)) << std::flush;
+    return report.passed ? 0 : 1;
+}
+
+}  // namespace
+
+Command add_check_command(CLI::App& parent) {
+    auto options = std::make_shared<CheckCommandOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "check",
+        "Check a mesh (PLY, OBJ, OFF, STL) for holes, cracks, T-junctions, non-manifold edges and vertices, "
+        "flipped or degenerate or duplicate faces and unwelded vertices, with an Embree ray-cast probe. "
+        "Exit status 0: it passes, 1: it has defects, 2: it cannot be read.");
+    app->add_option("mesh", options->mesh, "The mesh file")->required();
+    app->add_option("--expect", options->expect,
+                    "closed: no boundary edge at all; open: boundary edges only as one outer outline (a terrain); "
+                    "auto: closed unless the mesh is open and looks like a terrain")
+        ->check(CLI::IsMember({"auto", "closed", "open"}))
+        ->default_str("auto");
+    app->add_option("--tolerance", options->tolerance,
+                    "Distance under which vertices coincide, a vertex lies on an edge and a face is degenerate "
+                    "(default: 1e-7 of the larger of the bounding box diagonal and the largest coordinate, about single-precision rounding)")
+        ->check(CLI::NonNegativeNumber);
+    app->add_flag("--json", options->json, "Print the whole report as JSON");
+    app->add_option("--image", options->image, "Write a top view with the defects marked (PNG, or any image OpenImageIO writes)");
+    app->add_option("--probe-resolution", options->probe_resolution, "Rays per side of the ray-cast probe's grid")
+        ->check(CLI::Range(1, 8192))
+        ->default_str("512");
+    app->add_flag("--no-probe", options->no_probe, "Skip the ray-cast probe");
+    app->add_option("--max-locations", options->max_locations, "Located defects kept per class (counts stay exact)")
+        ->default_str("1000");
+    return Command{app, [options] { return run_check(*options); }};
+}
+
+}  // namespace tessref::cli

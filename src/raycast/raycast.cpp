@@ -1,0 +1,173 @@
+#include "tessref/raycast.h"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include "tessref/error.h"
+
+namespace tessref {
+
+struct RayScene::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    glm::dvec3 shift{0.0};
+    std::size_t triangles = 0;
+    // Embree's copies of the geometry (owned by the geometry, alive with the scene).
+    const float* vertices = nullptr;
+    const unsigned* indices = nullptr;
+
+    int side(std::uint32_t triangle, const glm::dvec3& direction) const {
+        const unsigned* t = indices + 3 * std::size_t(triangle);
+        const glm::dvec3 a(vertices[3 * t[0]], vertices[3 * t[0] + 1], vertices[3 * t[0] + 2]);
+        const glm::dvec3 b(vertices[3 * t[1]], vertices[3 * t[1] + 1], vertices[3 * t[1] + 2]);
+        const glm::dvec3 c(vertices[3 * t[2]], vertices[3 * t[2] + 1], vertices[3 * t[2] + 2]);
+        const double d = glm::dot(glm::cross(b - a, c - a), direction);
+        return d > 0.0 ? 1 : (d < 0.0 ? -1 : 0);
+    }
+
+    ~Impl() {
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+};
+
+namespace {
+
+[[noreturn]] void embree_failure(RTCDevice device, const std::string& what) {
+    const RTCError code = device ? rtcGetDeviceError(device) : RTC_ERROR_UNKNOWN;
+    throw Error("Embree: " + what + " (error " + std::to_string(static_cast<int>(code)) + ")");
+}
+
+}  // namespace
+
+RayScene::RayScene(std::span<const glm::dvec3> positions,
+                   std::span<const std::array<std::uint32_t, 3>> triangles)
+    : impl_(std::make_unique<Impl>()) {
+    impl_->triangles = triangles.size();
+    impl_->device = rtcNewDevice("verbose=0");
+    if (!impl_->device) embree_failure(nullptr, "cannot create a device");
+
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const glm::dvec3& p : positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    if (!positions.empty()) impl_->shift = 0.5 * (lo + hi);
+
+    impl_->scene = rtcNewScene(impl_->device);
+    if (!impl_->scene) embree_failure(impl_->device, "cannot create a scene");
+    rtcSetSceneFlags(impl_->scene, static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_LOW);
+
+    RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    if (!geometry) embree_failure(impl_->device, "cannot create a triangle geometry");
+    // Embree owns these buffers (it may read 16 bytes past the last vertex; it pads them).
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), positions.size()));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles.size()));
+    if ((!vertices && !positions.empty()) || (!indices && !triangles.empty())) {
+        rtcReleaseGeometry(geometry);
+        embree_failure(impl_->device, "cannot allocate geometry buffers");
+    }
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        const glm::dvec3 p = positions[i] - impl_->shift;
+        vertices[3 * i + 0] = static_cast<float>(p.x);
+        vertices[3 * i + 1] = static_cast<float>(p.y);
+        vertices[3 * i + 2] = static_cast<float>(p.z);
+    }
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+        for (int k = 0; k < 3; ++k) indices[3 * i + k] = triangles[i][k];
+    impl_->vertices = vertices;
+    impl_->indices = indices;
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(impl_->scene, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(impl_->scene);
+    if (rtcGetDeviceError(impl_->device) != RTC_ERROR_NONE)
+        embree_failure(impl_->device, "cannot build the scene");
+}
+
+RayScene::~RayScene() = default;
+RayScene::RayScene(RayScene&&) noexcept = default;
+RayScene& RayScene::operator=(RayScene&&) noexcept = default;
+
+std::size_t RayScene::triangle_count() const { return impl_->triangles; }
+
+namespace {
+
+// The context of an all-hits query: Embree's context first, so the filter can find the rest.
+struct CollectingContext {
+    RTCIntersectContext context;
+    std::vector<std::pair<float, unsigned>>* hits;
+};
+
+// Records each candidate hit and rejects it, so that traversal goes on to the next one.
+void collect_hit(const RTCFilterFunctionNArguments* args) {
+    auto* context = reinterpret_cast<CollectingContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        context->hits->emplace_back(RTCRayN_tfar(args->ray, args->N, i), RTCHitN_primID(args->hit, args->N, i));
+        args->valid[i] = 0;
+    }
+}
+
+void set_ray(RTCRay& ray, const glm::dvec3& o, const glm::dvec3& direction, double t_near, double t_far) {
+    ray.org_x = static_cast<float>(o.x);
+    ray.org_y = static_cast<float>(o.y);
+    ray.org_z = static_cast<float>(o.z);
+    ray.dir_x = static_cast<float>(direction.x);
+    ray.dir_y = static_cast<float>(direction.y);
+    ray.dir_z = static_cast<float>(direction.z);
+    ray.tnear = static_cast<float>(t_near);
+    ray.tfar = t_far == std::numeric_limits<double>::infinity() ? std::numeric_limits<float>::infinity()
+                                                                : static_cast<float>(t_far);
+    ray.mask = 0xFFFFFFFFu;
+    ray.flags = 0;
+}
+
+}  // namespace
+
+std::vector<RayHit> RayScene::all_hits(const glm::dvec3& origin, const glm::dvec3& direction, double t_near,
+                                       double t_far) const {
+    std::vector<std::pair<float, unsigned>> raw;
+    CollectingContext collecting;
+    rtcInitIntersectContext(&collecting.context);
+    collecting.context.filter = collect_hit;
+    collecting.hits = &raw;
+    RTCRayHit query{};
+    set_ray(query.ray, origin - impl_->shift, direction, t_near, t_far);
+    query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &collecting.context, &query);
+    std::sort(raw.begin(), raw.end());
+    raw.erase(std::unique(raw.begin(), raw.end()), raw.end());  // a leaf may be visited twice
+    std::vector<RayHit> hits;
+    hits.reserve(raw.size());
+    for (const auto& [t, triangle] : raw) hits.push_back({true, t, triangle, impl_->side(triangle, direction)});
+    return hits;
+}
+
+RayHit RayScene::intersect(const glm::dvec3& origin, const glm::dvec3& direction, double t_near,
+                           double t_far) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit query{};
+    set_ray(query.ray, origin - impl_->shift, direction, t_near, t_far);
+    query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &context, &query);
+
+    RayHit hit;
+    if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    hit.hit = true;
+    hit.t = query.ray.tfar;
+    hit.triangle = query.hit.primID;
+    hit.side = impl_->side(hit.triangle, direction);
+    return hit;
+}
+
+}  // namespace tessref

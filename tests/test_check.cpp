@@ -1,0 +1,854 @@
+// Tests of `tessref check` and the check library (include/tessref/check.h, solid.h).
+//
+// The contract, and where each expectation comes from:
+//  - the corpus tests/data/check/ (made by make_corpus.py, each file's defect stated in
+//    that script): every defect is found in its class, at the place the script put it;
+//    clean meshes pass;
+//  - meshes built here by code: a grid terrain (counts of an N x N vertex grid: V = N^2,
+//    F = 2 (N-1)^2, E = 3 (N-1)^2 + 2 (N-1), 4 (N-1) boundary edges, Euler characteristic
+//    1), an icosphere (V - E + F = 2, E = 3F/2, its volume between the balls it contains
+//    and is contained in), two patches with mismatched outer levels (the T-junctions sit
+//    where the finer patch has vertices the coarser lacks; the crack's width is a
+//    point-to-line distance worked out by hand);
+//  - solids closed from terrains: their volume is the sum of the prisms under the
+//    terrain's triangles (area seen from above times mean height above the base), a
+//    formula the check does not use;
+//  - admesh, an independent STL checker (Debian package), reads every corpus STL and must
+//    agree on the facet count, on closed versus open, and on whether there is a defect;
+//  - the command: exit 0 / 1 / 2, `tessref: error:` naming the file, JSON, the picture.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "tessref/check.h"
+#include "tessref/error.h"
+#include "tessref/scene.h"
+#include "tessref/solid.h"
+
+namespace fs = std::filesystem;
+using tessref::CheckOptions;
+using tessref::CheckReport;
+using tessref::DefectClass;
+using tessref::Expect;
+using tessref::IndexedMesh;
+using tessref::SurfaceMesh;
+
+namespace {
+
+const fs::path corpus_dir = fs::path(TESSREF_SOURCE_DIR) / "tests" / "data" / "check";
+
+fs::path corpus(const std::string& name) { return corpus_dir / name; }
+
+CheckOptions quick(Expect expect = Expect::automatic) {
+    CheckOptions options;
+    options.expect = expect;
+    options.probe_resolution = 96;
+    return options;
+}
+
+CheckReport check_file(const std::string& name, CheckOptions options = quick()) {
+    return tessref::check_mesh(tessref::read_mesh_for_check(corpus(name).string()), options);
+}
+
+bool near(const glm::dvec3& a, const glm::dvec3& b, double eps = 1e-6) { return glm::distance(a, b) <= eps; }
+
+std::set<std::uint32_t> as_set(const std::vector<std::uint32_t>& ids) { return {ids.begin(), ids.end()}; }
+
+// The classes with a nonzero count.
+std::set<DefectClass> failing_classes(const CheckReport& r) {
+    std::set<DefectClass> out;
+    for (const auto& d : r.defects)
+        if (d.count > 0) out.insert(d.kind);
+    return out;
+}
+
+bool is_probe(DefectClass k) {
+    return k == DefectClass::probe_miss || k == DefectClass::probe_odd_parity || k == DefectClass::probe_escape;
+}
+
+// The id of the vertex at position p (the corpus welds positions, so there is one).
+std::uint32_t vertex_at(const IndexedMesh& mesh, const glm::dvec3& p) {
+    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v)
+        if (near(mesh.positions[v], p, 1e-9)) return v;
+    ADD_FAILURE() << "no vertex at " << p.x << " " << p.y << " " << p.z;
+    return 0;
+}
+
+// ---------------------------------------------------------------------------------------
+// Meshes made by code
+
+// A terrain of patches x patches patches, each cells x cells quads, emitted patch by patch
+// with every patch's own copy of its border vertices (as the pipeline emits them); the
+// copies are computed from the same global grid index, so they are bitwise equal.
+SurfaceMesh grid_terrain(int patches, int cells, double (*height)(double, double), int up_axis = 2) {
+    SurfaceMesh mesh;
+    const int n = patches * cells;
+    const int u = (up_axis + 1) % 3, w = (up_axis + 2) % 3;
+    for (int pj = 0; pj < patches; ++pj)
+        for (int pi = 0; pi < patches; ++pi) {
+            const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+            for (int j = 0; j <= cells; ++j)
+                for (int i = 0; i <= cells; ++i) {
+                    const double x = 10.0 * (pi * cells + i) / n, y = 10.0 * (pj * cells + j) / n;
+                    glm::dvec3 p(0.0);
+                    p[u] = x;
+                    p[w] = y;
+                    p[up_axis] = height(x, y);
+                    mesh.positions.push_back(p);
+                    mesh.patch_ids.push_back(static_cast<std::uint32_t>(pj * patches + pi));
+                    mesh.tess_coords.emplace_back(float(i) / cells, float(j) / cells, 0.0f);
+                }
+            for (int j = 0; j < cells; ++j)
+                for (int i = 0; i < cells; ++i) {
+                    const std::uint32_t a = base + j * (cells + 1) + i, b = a + 1, c = b + cells + 1, d = a + cells + 1;
+                    mesh.triangles.push_back({a, b, c});
+                    mesh.triangles.push_back({a, c, d});
+                }
+        }
+    return mesh;
+}
+
+double hills(double x, double y) { return 1.0 + 0.4 * std::sin(0.8 * x) * std::cos(0.6 * y) + 0.05 * x; }
+double flat(double, double) { return 0.0; }
+
+// Two patches side by side, [0,1]^2 and [1,2] x [0,1], with `left_segments` and
+// `right_segments` quads along y (each one quad wide along x), on z = height(x, y).
+SurfaceMesh two_patches(int left_segments, int right_segments, double (*height)(double, double)) {
+    SurfaceMesh mesh;
+    for (int patch = 0; patch < 2; ++patch) {
+        const int segments = patch == 0 ? left_segments : right_segments;
+        const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+        for (int j = 0; j <= segments; ++j)
+            for (int i = 0; i <= 1; ++i) {
+                const double x = patch + i, y = double(j) / segments;
+                mesh.positions.emplace_back(x, y, height(x, y));
+                mesh.patch_ids.push_back(static_cast<std::uint32_t>(patch));
+            }
+        for (int j = 0; j < segments; ++j) {
+            const std::uint32_t a = base + 2 * j, b = a + 1, c = a + 3, d = a + 2;
+            mesh.triangles.push_back({a, b, c});
+            mesh.triangles.push_back({a, c, d});
+        }
+    }
+    return mesh;
+}
+
+double bowl(double, double y) { return 0.2 * y * y; }
+
+// An icosphere: the icosahedron, each triangle split in four `levels` times, pushed onto
+// the unit sphere.
+IndexedMesh icosphere(int levels) {
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<glm::dvec3> p = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    for (auto& v : p) v = glm::normalize(v);
+    std::vector<std::array<std::uint32_t, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                                   {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                                   {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                                   {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+    for (int l = 0; l < levels; ++l) {
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> middle;
+        auto mid = [&](std::uint32_t a, std::uint32_t b) {
+            const auto key = std::minmax(a, b);
+            auto [it, inserted] = middle.try_emplace({key.first, key.second}, static_cast<std::uint32_t>(p.size()));
+            if (inserted) p.push_back(glm::normalize(p[a] + p[b]));
+            return it->second;
+        };
+        std::vector<std::array<std::uint32_t, 3>> next;
+        for (const auto& tri : f) {
+            const std::uint32_t ab = mid(tri[0], tri[1]), bc = mid(tri[1], tri[2]), ca = mid(tri[2], tri[0]);
+            next.push_back({tri[0], ab, ca});
+            next.push_back({tri[1], bc, ab});
+            next.push_back({tri[2], ca, bc});
+            next.push_back({ab, bc, ca});
+        }
+        f = std::move(next);
+    }
+    IndexedMesh mesh;
+    mesh.positions = p;
+    for (const auto& tri : f) mesh.add_triangle(tri[0], tri[1], tri[2]);
+    return mesh;
+}
+
+// Volume under a terrain's triangles down to the plane `base` along up: the sum of the
+// prisms (area seen from above times mean height above the base), exact for flat triangles.
+double prism_volume(const SurfaceMesh& terrain, double base, int up_axis) {
+    const int u = (up_axis + 1) % 3, w = (up_axis + 2) % 3;
+    double volume = 0.0;
+    for (const auto& t : terrain.triangles) {
+        const glm::dvec3 &a = terrain.positions[t[0]], &b = terrain.positions[t[1]], &c = terrain.positions[t[2]];
+        const double area = 0.5 * ((b[u] - a[u]) * (c[w] - a[w]) - (b[w] - a[w]) * (c[u] - a[u]));
+        volume += area * ((a[up_axis] + b[up_axis] + c[up_axis]) / 3.0 - base);
+    }
+    return volume;
+}
+
+// ---------------------------------------------------------------------------------------
+// Running programs
+
+struct RunResult {
+    int status = -1;
+    std::string out, err;
+};
+
+std::string read_text(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+std::string quote(const std::string& arg) {
+    std::string q = "'";
+    for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+fs::path scratch_dir() {
+    const fs::path dir = fs::temp_directory_path() / ("tessref_test_check_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    return dir;
+}
+
+RunResult run(const std::string& program, const std::vector<std::string>& args) {
+    const fs::path dir = scratch_dir();
+    std::string command = quote(program);
+    for (const auto& a : args) command += " " + quote(a);
+    command += " >" + quote((dir / "out.txt").string()) + " 2>" + quote((dir / "err.txt").string());
+    const int raw = std::system(command.c_str());
+    RunResult r;
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = read_text(dir / "out.txt");
+    r.err = read_text(dir / "err.txt");
+    return r;
+}
+
+RunResult tessref_check(std::vector<std::string> args) {
+    args.insert(args.begin(), "check");
+    return run(TESSREF_EXE, args);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Clean meshes pass
+
+TEST(CheckClean, CubeInEveryFormatPasses) {
+    for (const char* name : {"cube.off", "cube.obj", "cube.ply", "cube_binary.ply", "cube.stl", "cube_binary.stl"}) {
+        SCOPED_TRACE(name);
+        const CheckReport r = check_file(name);
+        EXPECT_TRUE(r.passed) << tessref::report_text(r);
+        EXPECT_EQ(r.vertex_count, 8u);
+        EXPECT_EQ(r.face_count, 12u);
+        EXPECT_EQ(r.edge_count, 18u);
+        EXPECT_TRUE(r.closed);
+        EXPECT_TRUE(r.manifold);
+        EXPECT_EQ(r.euler_characteristic, 2);
+        EXPECT_NEAR(r.signed_volume, 1.0, 1e-12);  // the unit cube
+        EXPECT_NEAR(r.surface_area, 6.0, 1e-12);
+        EXPECT_EQ(r.judged_as, "closed");
+        EXPECT_EQ(r.probe.mode, "closed");
+        EXPECT_GT(r.probe.rays, 0u);
+        EXPECT_EQ(r.probe.failed_rays, 0u);
+    }
+}
+
+TEST(CheckClean, CubeOfQuadsPasses) {
+    const CheckReport r = check_file("cube_quads.obj");
+    EXPECT_TRUE(r.passed) << tessref::report_text(r);
+    EXPECT_EQ(r.face_count, 6u);
+    EXPECT_EQ(r.triangle_count, 12u);
+    EXPECT_EQ(r.edge_count, 12u);  // a cube's edges: the quads have no diagonals
+    EXPECT_EQ(r.euler_characteristic, 2);
+    EXPECT_NEAR(r.signed_volume, 1.0, 1e-12);
+}
+
+TEST(CheckClean, IcospherePasses) {
+    const IndexedMesh sphere = icosphere(3);
+    const CheckReport r = tessref::check_mesh(sphere, quick());
+    EXPECT_TRUE(r.passed) << tessref::report_text(r);
+    EXPECT_EQ(r.face_count, 1280u);
+    EXPECT_EQ(r.edge_count, 1920u);  // 3F/2
+    EXPECT_EQ(r.vertex_count, 642u);
+    EXPECT_EQ(r.euler_characteristic, 2);
+    // Inscribed in the unit sphere, and containing the ball of its smallest face distance.
+    double inner = 1.0;
+    for (std::size_t f = 0; f < sphere.face_count(); ++f) {
+        const auto t = sphere.face(f);
+        const glm::dvec3 a = sphere.positions[t[0]], b = sphere.positions[t[1]], c = sphere.positions[t[2]];
+        inner = std::min(inner, std::abs(glm::dot(glm::normalize(glm::cross(b - a, c - a)), a)));
+    }
+    const double ball = 4.0 / 3.0 * M_PI;
+    EXPECT_LT(r.signed_volume, ball);
+    EXPECT_GT(r.signed_volume, ball * inner * inner * inner);
+}
+
+TEST(CheckClean, TerrainFromPatchesPassesAsOpen) {
+    const SurfaceMesh terrain = grid_terrain(4, 5, hills);
+    const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(terrain), quick());
+    EXPECT_TRUE(r.passed) << tessref::report_text(r);
+    const std::size_t n = 4 * 5 + 1;  // vertices per side
+    EXPECT_EQ(r.vertex_count, n * n);
+    EXPECT_EQ(r.face_count, 2 * (n - 1) * (n - 1));
+    EXPECT_EQ(r.edge_count, 3 * (n - 1) * (n - 1) + 2 * (n - 1));
+    EXPECT_EQ(r.boundary_edge_count, 4 * (n - 1));
+    EXPECT_EQ(r.euler_characteristic, 1);
+    EXPECT_TRUE(r.terrain_like);
+    EXPECT_EQ(r.up_axis, 2);
+    EXPECT_EQ(r.judged_as, "open");
+    ASSERT_EQ(r.boundary_loops.size(), 1u);
+    EXPECT_TRUE(r.boundary_loops[0].allowed);
+    EXPECT_EQ(r.probe.mode, "terrain");
+    EXPECT_EQ(r.probe.failed_rays, 0u);
+    // The same terrain is not a closed mesh.
+    const CheckReport closed = tessref::check_mesh(tessref::indexed_mesh_from(terrain), quick(Expect::closed));
+    EXPECT_FALSE(closed.passed);
+    EXPECT_EQ(failing_classes(closed), std::set<DefectClass>{DefectClass::boundary_loop});
+}
+
+TEST(CheckClean, TerrainFileAndExpectations) {
+    EXPECT_TRUE(check_file("terrain.obj").passed);
+    EXPECT_TRUE(check_file("terrain.obj", quick(Expect::open)).passed);
+    const CheckReport closed = check_file("terrain.obj", quick(Expect::closed));
+    EXPECT_FALSE(closed.passed);
+    ASSERT_EQ(closed.count(DefectClass::boundary_loop), 1u);
+    // The outline of the 6 x 6 grid: 24 edges.
+    EXPECT_EQ(closed.of(DefectClass::boundary_loop).locations[0].vertices.size(), 24u);
+    // A closed cube is not an open terrain: --expect open still passes it (no boundary at
+    // all is allowed too), and finds nothing else.
+    EXPECT_TRUE(check_file("cube.off", quick(Expect::open)).passed);
+}
+
+// ---------------------------------------------------------------------------------------
+// The defect corpus: each defect in its class, at its place
+
+TEST(CheckCorpus, HoleIsABoundaryLoopAroundTheMissingFace) {
+    for (const char* name : {"hole.off", "hole.stl"}) {
+        SCOPED_TRACE(name);
+        const IndexedMesh mesh = tessref::read_mesh_for_check(corpus(name).string());
+        const CheckReport r = tessref::check_mesh(mesh, quick());
+        ASSERT_EQ(r.count(DefectClass::boundary_loop), 1u);
+        const auto& loop = r.of(DefectClass::boundary_loop).locations[0];
+        // The missing face (4,5,6): corners (0,0,1), (1,0,1), (1,1,1).
+        const std::set<std::uint32_t> corners = {vertex_at(mesh, {0, 0, 1}), vertex_at(mesh, {1, 0, 1}), vertex_at(mesh, {1, 1, 1})};
+        EXPECT_EQ(as_set(loop.vertices), corners);
+        EXPECT_NEAR(loop.measure, 2.0 + std::sqrt(2.0), 1e-9);  // its perimeter
+        EXPECT_TRUE(near(loop.position, {2.0 / 3.0, 1.0 / 3.0, 1.0}));
+        for (DefectClass k : failing_classes(r))
+            EXPECT_TRUE(k == DefectClass::boundary_loop || is_probe(k)) << tessref::defect_class_name(k);
+        // The probe sees the leak too, and points at the hole.
+        EXPECT_GT(r.probe.failed_rays, 0u);
+        for (DefectClass k : {DefectClass::probe_odd_parity, DefectClass::probe_escape})
+            for (const auto& d : r.of(k).locations) EXPECT_EQ(d.position.z, 1.0);
+    }
+}
+
+TEST(CheckCorpus, FlippedFaceIsFoundByItsThreeEdges) {
+    for (const char* name : {"flipped_face.obj", "flipped_face.stl"}) {
+        SCOPED_TRACE(name);
+        const CheckReport r = check_file(name);
+        EXPECT_EQ(r.count(DefectClass::inconsistent_orientation), 3u);
+        for (const auto& d : r.of(DefectClass::inconsistent_orientation).locations) {
+            EXPECT_TRUE(as_set(d.faces).count(0)) << d.detail;
+            EXPECT_EQ(d.position.z, 0.0);  // face 0 lies in the bottom face of the cube
+        }
+        EXPECT_EQ(r.flipped_faces, std::vector<std::uint32_t>{0});
+        EXPECT_TRUE(r.closed);
+        EXPECT_EQ(r.count(DefectClass::inverted_volume), 0u);
+        // OpenMesh's kernel cannot hold it: some face is refused, and reported.
+        EXPECT_GT(r.count(DefectClass::refused_face), 0u);
+    }
+}
+
+TEST(CheckCorpus, InsideOutCubeHasANegativeVolume) {
+    for (const char* name : {"inverted.off", "inverted.stl"}) {
+        SCOPED_TRACE(name);
+        const CheckReport r = check_file(name);
+        EXPECT_EQ(failing_classes(r), std::set<DefectClass>{DefectClass::inverted_volume});
+        EXPECT_NEAR(r.signed_volume, -1.0, 1e-12);
+        EXPECT_NEAR(r.of(DefectClass::inverted_volume).locations.at(0).measure, -1.0, 1e-12);
+    }
+}
+
+TEST(CheckCorpus, DuplicateFaceIsFoundAndSetAside) {
+    for (const char* name : {"duplicate_face.off", "duplicate_face.stl"}) {
+        SCOPED_TRACE(name);
+        const CheckReport r = check_file(name);
+        ASSERT_EQ(r.count(DefectClass::duplicate_face), 1u);
+        EXPECT_EQ(r.of(DefectClass::duplicate_face).locations[0].faces, (std::vector<std::uint32_t>{3, 12}));
+        // Without the copy the cube is whole.
+        EXPECT_TRUE(r.closed);
+        EXPECT_TRUE(r.manifold);
+        EXPECT_EQ(r.topology_excluded_faces, 1u);
+        for (DefectClass k : failing_classes(r))
+            EXPECT_TRUE(k == DefectClass::duplicate_face || k == DefectClass::refused_face) << tessref::defect_class_name(k);
+    }
+}
+
+TEST(CheckCorpus, UnweldedVertexIsFoundWithTheCrackItOpens) {
+    for (const char* name : {"duplicate_vertex.off", "duplicate_vertex.ply"}) {
+        SCOPED_TRACE(name);
+        const CheckReport r = check_file(name);
+        ASSERT_EQ(r.count(DefectClass::coincident_vertices), 1u);
+        const auto& d = r.of(DefectClass::coincident_vertices).locations[0];
+        EXPECT_EQ(d.vertices, (std::vector<std::uint32_t>{6, 8}));
+        EXPECT_TRUE(near(d.position, {1, 1, 1}));
+        EXPECT_EQ(r.count(DefectClass::near_coincident_vertices), 0u);
+        // The top faces are cut loose along the two edges at the copy.
+        ASSERT_EQ(r.count(DefectClass::boundary_loop), 1u);
+        const auto loop = as_set(r.of(DefectClass::boundary_loop).locations[0].vertices);
+        EXPECT_TRUE(loop.count(6) && loop.count(8));
+    }
+}
+
+TEST(CheckCorpus, NearlyCoincidentVertexAndTheTolerance) {
+    const CheckReport r = check_file("near_vertex.off");
+    ASSERT_EQ(r.count(DefectClass::near_coincident_vertices), 1u);
+    EXPECT_EQ(r.of(DefectClass::near_coincident_vertices).locations[0].vertices, (std::vector<std::uint32_t>{6, 8}));
+    EXPECT_EQ(r.count(DefectClass::coincident_vertices), 0u);
+    // 1e-7 apart (as float: 1.19e-7): within 1e-6, not within 1e-8.
+    CheckOptions loose = quick(), tight = quick();
+    loose.tolerance = 1e-6;
+    tight.tolerance = 1e-8;
+    EXPECT_EQ(check_file("near_vertex.off", loose).count(DefectClass::near_coincident_vertices), 1u);
+    EXPECT_EQ(check_file("near_vertex.off", tight).count(DefectClass::near_coincident_vertices), 0u);
+}
+
+TEST(CheckCorpus, NonManifoldEdge) {
+    for (const char* name : {"nonmanifold_edge.off", "nonmanifold_edge.stl"}) {
+        SCOPED_TRACE(name);
+        const IndexedMesh mesh = tessref::read_mesh_for_check(corpus(name).string());
+        const CheckReport r = tessref::check_mesh(mesh, quick());
+        ASSERT_EQ(r.count(DefectClass::non_manifold_edge), 1u);
+        const auto& d = r.of(DefectClass::non_manifold_edge).locations[0];
+        EXPECT_EQ(as_set(d.vertices), (std::set<std::uint32_t>{vertex_at(mesh, {1, 1, 0}), vertex_at(mesh, {1, 1, 1})}));
+        EXPECT_TRUE(near(d.position, {1, 1, 0.5}));
+        EXPECT_EQ(d.faces.size(), 4u);  // two faces of each cube
+        EXPECT_TRUE(r.closed);
+        EXPECT_EQ(r.count(DefectClass::non_manifold_vertex), 0u);
+        EXPECT_NEAR(r.signed_volume, 2.0, 1e-12);
+        for (DefectClass k : failing_classes(r))
+            EXPECT_TRUE(k == DefectClass::non_manifold_edge || k == DefectClass::refused_face) << tessref::defect_class_name(k);
+    }
+}
+
+TEST(CheckCorpus, NonManifoldVertexJoiningTwoFans) {
+    for (const char* name : {"nonmanifold_vertex.off", "nonmanifold_vertex.stl"}) {
+        SCOPED_TRACE(name);
+        const IndexedMesh mesh = tessref::read_mesh_for_check(corpus(name).string());
+        const CheckReport r = tessref::check_mesh(mesh, quick());
+        ASSERT_EQ(r.count(DefectClass::non_manifold_vertex), 1u);
+        const auto& d = r.of(DefectClass::non_manifold_vertex).locations[0];
+        EXPECT_EQ(d.vertices, std::vector<std::uint32_t>{vertex_at(mesh, {1, 1, 1})});
+        EXPECT_EQ(d.measure, 2.0);  // two fans
+        std::size_t around = 0;  // faces of the file at that corner
+        for (std::size_t f = 0; f < mesh.face_count(); ++f)
+            for (std::uint32_t v : mesh.face(f)) around += v == d.vertices[0];
+        EXPECT_EQ(d.faces.size(), around);
+        EXPECT_TRUE(r.closed);
+        EXPECT_EQ(r.count(DefectClass::non_manifold_edge), 0u);
+        for (DefectClass k : failing_classes(r))
+            EXPECT_TRUE(k == DefectClass::non_manifold_vertex || k == DefectClass::refused_face) << tessref::defect_class_name(k);
+    }
+}
+
+TEST(CheckCorpus, TJunctionOnTheCube) {
+    for (const char* name : {"t_junction.off", "t_junction.stl"}) {
+        SCOPED_TRACE(name);
+        const IndexedMesh mesh = tessref::read_mesh_for_check(corpus(name).string());
+        const CheckReport r = tessref::check_mesh(mesh, quick());
+        ASSERT_EQ(r.count(DefectClass::t_junction), 1u);
+        const auto& d = r.of(DefectClass::t_junction).locations[0];
+        const std::uint32_t m = vertex_at(mesh, {0.5, 0, 0}), a = vertex_at(mesh, {0, 0, 0}), b = vertex_at(mesh, {1, 0, 0});
+        EXPECT_EQ(d.vertices[0], m);
+        EXPECT_EQ(as_set({d.vertices[1], d.vertices[2]}), (std::set<std::uint32_t>{a, b}));
+        EXPECT_TRUE(near(d.position, {0.5, 0, 0}));
+        EXPECT_EQ(d.measure, 0.0);
+        // The face (0,1,5) whose edge 0-1 has the vertex on it: face 4 of the file.
+        if (std::string(name).ends_with(".off")) EXPECT_EQ(d.faces, std::vector<std::uint32_t>{4});
+        // The crack is a loop of three edges: 0.5 + 0.5 + 1.
+        ASSERT_EQ(r.count(DefectClass::boundary_loop), 1u);
+        EXPECT_NEAR(r.of(DefectClass::boundary_loop).locations[0].measure, 2.0, 1e-12);
+        EXPECT_EQ(failing_classes(r), (std::set<DefectClass>{DefectClass::boundary_loop, DefectClass::t_junction}));
+    }
+}
+
+TEST(CheckCorpus, SliverIsDegenerate) {
+    for (const char* name : {"sliver.off", "sliver.stl"}) {
+        SCOPED_TRACE(name);
+        const CheckReport r = check_file(name);
+        EXPECT_EQ(failing_classes(r), std::set<DefectClass>{DefectClass::degenerate_face});
+        ASSERT_EQ(r.count(DefectClass::degenerate_face), 1u);
+        const auto& d = r.of(DefectClass::degenerate_face).locations[0];
+        EXPECT_EQ(d.faces, std::vector<std::uint32_t>{13});
+        EXPECT_EQ(d.measure, 0.0);  // collinear corners: no height at all
+        EXPECT_TRUE(near(d.position, {0.5, 0, 0}));
+        EXPECT_TRUE(r.closed);
+    }
+}
+
+TEST(CheckCorpus, RepeatedVertexIsDegenerateAndNeverDropped) {
+    for (const char* name : {"repeated_vertex.off", "repeated_vertex.obj", "repeated_vertex.stl"}) {
+        SCOPED_TRACE(name);
+        const IndexedMesh mesh = tessref::read_mesh_for_check(corpus(name).string());
+        // OpenMesh's OBJ and STL readers drop this face; it is here all the same.
+        ASSERT_EQ(mesh.face_count(), 13u);
+        const CheckReport r = tessref::check_mesh(mesh, quick());
+        ASSERT_EQ(r.count(DefectClass::degenerate_face), 1u);
+        EXPECT_EQ(r.of(DefectClass::degenerate_face).locations[0].faces, std::vector<std::uint32_t>{12});
+        EXPECT_NE(r.of(DefectClass::degenerate_face).locations[0].detail.find("repeats a vertex"), std::string::npos);
+        ASSERT_EQ(r.count(DefectClass::refused_face), 1u);
+        EXPECT_EQ(r.of(DefectClass::refused_face).locations[0].faces, std::vector<std::uint32_t>{12});
+        EXPECT_TRUE(r.closed);
+        EXPECT_EQ(failing_classes(r), (std::set<DefectClass>{DefectClass::degenerate_face, DefectClass::refused_face}));
+    }
+}
+
+TEST(CheckCorpus, HoleInATerrain) {
+    const CheckReport r = check_file("terrain_hole.obj");
+    EXPECT_EQ(r.judged_as, "open");
+    ASSERT_EQ(r.count(DefectClass::boundary_loop), 1u);  // the outline is allowed, the hole not
+    const auto& hole = r.of(DefectClass::boundary_loop).locations[0];
+    EXPECT_EQ(hole.vertices.size(), 4u);
+    EXPECT_NEAR(hole.measure, 4.0, 0.1);  // a unit square, a little longer on the slope
+    EXPECT_NEAR(hole.position.x, 2.5, 1e-9);
+    EXPECT_NEAR(hole.position.y, 3.5, 1e-9);
+    // Vertical rays fall through it, and only there.
+    ASSERT_GE(r.count(DefectClass::probe_miss), 1u);
+    for (const auto& d : r.of(DefectClass::probe_miss).locations) {
+        EXPECT_GT(d.position.x, 2.0);
+        EXPECT_LT(d.position.x, 3.0);
+        EXPECT_GT(d.position.y, 3.0);
+        EXPECT_LT(d.position.y, 4.0);
+    }
+    // 96 x 96 rays over 6 x 6 units: a unit square holds about 96^2 / 36 of them.
+    EXPECT_NEAR(double(r.probe.failed_rays), 96.0 * 96.0 / 36.0, 30.0);
+}
+
+TEST(CheckCorpus, PatchesWithMismatchedOuterLevels) {
+    const IndexedMesh mesh = tessref::read_mesh_for_check(corpus("patches_mismatched.obj").string());
+    const CheckReport r = tessref::check_mesh(mesh, quick());
+    ASSERT_EQ(r.count(DefectClass::t_junction), 1u);
+    const auto& d = r.of(DefectClass::t_junction).locations[0];
+    EXPECT_EQ(d.vertices[0], vertex_at(mesh, {1, 0.5, 0.05}));
+    // Seen from above it lies on the right patch's edge (1,0,0)-(1,1,0.2); in 3D it is
+    // |(0,0.5,0.05) x (0,1,0.2)| / |(0,1,0.2)| = 0.05 / sqrt(1.04) below it.
+    EXPECT_NEAR(d.measure, 0.05 / std::sqrt(1.04), 1e-7);
+    EXPECT_FALSE(r.passed);
+    // The two patches touch only at the ends of the shared edge: pinched there.
+    EXPECT_EQ(r.count(DefectClass::non_manifold_vertex), 2u);
+}
+
+TEST(CheckCorpus, MismatchedLevelsMadeByCode) {
+    // Levels 4 and 2 along the shared edge: the finer patch's vertices at y = 1/4 and 3/4
+    // lie on the coarser patch's edges; the one at y = 1/2 welds with the coarser one's.
+    for (auto height : {flat, bowl}) {
+        const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(two_patches(4, 2, height)), quick());
+        ASSERT_EQ(r.count(DefectClass::t_junction), 2u) << tessref::report_text(r);
+        std::set<double> ys;
+        for (const auto& d : r.of(DefectClass::t_junction).locations) {
+            EXPECT_EQ(d.position.x, 1.0);
+            ys.insert(d.position.y);
+        }
+        EXPECT_EQ(ys, (std::set<double>{0.25, 0.75}));
+        EXPECT_FALSE(r.passed);
+    }
+    // Matching levels: no crack at all.
+    EXPECT_TRUE(tessref::check_mesh(tessref::indexed_mesh_from(two_patches(3, 3, bowl)), quick()).passed);
+}
+
+// ---------------------------------------------------------------------------------------
+// Solids closed from terrains
+
+TEST(CheckSolid, ClosedTerrainPassesExpectClosed) {
+    for (int up : {2, 1}) {
+        SCOPED_TRACE(up);
+        const SurfaceMesh terrain = grid_terrain(3, 4, hills, up);
+        const double base = -0.5;
+        const SurfaceMesh solid = tessref::close_terrain_into_solid(terrain, base, up);
+        const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(solid), quick(Expect::closed));
+        EXPECT_TRUE(r.passed) << tessref::report_text(r);
+        EXPECT_TRUE(r.closed);
+        EXPECT_EQ(r.euler_characteristic, 2);
+        EXPECT_EQ(r.component_count, 1u);
+        EXPECT_NEAR(r.signed_volume, prism_volume(terrain, base, up), 1e-9 * prism_volume(terrain, base, up));
+        // Attributes follow the positions.
+        EXPECT_EQ(solid.patch_ids.size(), solid.positions.size());
+        EXPECT_EQ(solid.tess_coords.size(), solid.positions.size());
+    }
+}
+
+TEST(CheckSolid, CrackedTerrainStaysCracked) {
+    const SurfaceMesh solid = tessref::close_terrain_into_solid(two_patches(4, 2, bowl), -1.0);
+    const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(solid), quick(Expect::closed));
+    EXPECT_FALSE(r.passed);
+    // Seen in 3D the crack is an open gap (0.0125 wide at y = 1/4): a boundary loop along
+    // the shared edge, which the probe's lines leak through.
+    ASSERT_EQ(r.count(DefectClass::boundary_loop), 1u);
+    EXPECT_EQ(r.of(DefectClass::boundary_loop).locations[0].position.x, 1.0);
+    EXPECT_GE(r.count(DefectClass::probe_odd_parity), 1u);
+}
+
+TEST(CheckSolid, RejectsABaseAboveTheTerrain) {
+    const SurfaceMesh terrain = grid_terrain(1, 2, hills);
+    double lowest = std::numeric_limits<double>::infinity();
+    for (const auto& p : terrain.positions) lowest = std::min(lowest, p.z);
+    EXPECT_THROW(tessref::close_terrain_into_solid(terrain, lowest), tessref::Error);
+    EXPECT_THROW(tessref::close_terrain_into_solid(terrain, lowest + 0.01), tessref::Error);
+    EXPECT_NO_THROW(tessref::close_terrain_into_solid(terrain, lowest - 0.01));
+    EXPECT_THROW(tessref::close_terrain_into_solid(SurfaceMesh{}, 0.0), tessref::Error);
+}
+
+// ---------------------------------------------------------------------------------------
+// Every shipped scene's export passes
+
+TEST(CheckScenes, EveryShippedSceneExportPasses) {
+    std::vector<fs::path> scenes;
+    for (const auto& entry : fs::directory_iterator(fs::path(TESSREF_SOURCE_DIR) / "data" / "scenes"))
+        if (entry.path().extension() == ".toml") scenes.push_back(entry.path());
+    std::sort(scenes.begin(), scenes.end());
+    ASSERT_FALSE(scenes.empty());
+    for (const fs::path& path : scenes) {
+        SCOPED_TRACE(path.filename().string());
+        const tessref::Scene scene = tessref::load_scene(path.string());
+        const tessref::PipelineResult result = tessref::run_pipeline(scene);
+        // Terrains are open; the PN scene holds an open bump beside closed meshes, so
+        // every scene is checked with boundary edges allowed as one outline.
+        const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(result.mesh), quick(Expect::open));
+        EXPECT_TRUE(r.passed) << tessref::report_text(r);
+        if (!scene.grid) continue;
+        const int up = scene.grid->plane == tessref::GroundPlane::xy ? 2 : 1;
+        EXPECT_EQ(r.up_axis, up);
+        double lowest = std::numeric_limits<double>::infinity();
+        for (const auto& p : result.mesh.positions) lowest = std::min(lowest, p[up]);
+        const SurfaceMesh solid = tessref::close_terrain_into_solid(result.mesh, lowest - 1.0, up);
+        const CheckReport closed = tessref::check_mesh(tessref::indexed_mesh_from(solid), quick(Expect::closed));
+        EXPECT_TRUE(closed.passed) << tessref::report_text(closed);
+        EXPECT_GT(closed.signed_volume, 0.0);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Reports
+
+TEST(CheckReport, SameReportWhateverTheThreadCount) {
+    const IndexedMesh mesh = tessref::indexed_mesh_from(grid_terrain(6, 12, hills));
+    std::string one, many;
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = tessref::report_json(tessref::check_mesh(mesh, quick()));
+    }
+    many = tessref::report_json(tessref::check_mesh(mesh, quick()));
+    EXPECT_EQ(one, many);
+    const IndexedMesh broken = tessref::read_mesh_for_check(corpus("flipped_face.obj").string());
+    {
+        tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+        one = tessref::report_json(tessref::check_mesh(broken, quick()));
+    }
+    EXPECT_EQ(one, tessref::report_json(tessref::check_mesh(broken, quick())));
+}
+
+TEST(CheckReport, LocationsAreCappedCountsAreNot) {
+    CheckOptions options = quick();
+    options.max_locations = 1;
+    const CheckReport r = check_file("flipped_face.obj", options);
+    EXPECT_EQ(r.count(DefectClass::inconsistent_orientation), 3u);
+    EXPECT_EQ(r.of(DefectClass::inconsistent_orientation).locations.size(), 1u);
+}
+
+// ---------------------------------------------------------------------------------------
+// admesh, an independent peer, on every corpus STL
+
+namespace {
+
+struct AdmeshVerdict {
+    long facets = -1, disconnected = -1, parts = -1, degenerate = -1, reversed = -1;
+    double volume = 0.0;
+};
+
+std::optional<AdmeshVerdict> run_admesh(const fs::path& stl) {
+    // -e -d: match facets by exact edges and check normal directions; nothing else, so
+    // the "Original" statistics describe the file as it is.
+    const RunResult r = run("admesh", {"-e", "-d", stl.string()});
+    if (r.status != 0) return std::nullopt;
+    AdmeshVerdict v;
+    auto number = [&](const std::string& label) -> double {
+        const std::regex pattern(label + R"(\s*:\s*(-?[0-9.]+))");
+        std::smatch m;
+        return std::regex_search(r.out, m, pattern) ? std::stod(m[1]) : -1.0;
+    };
+    v.facets = long(number("Number of facets"));
+    v.disconnected = long(number("Total disconnected facets"));
+    v.parts = long(number("Number of parts"));
+    v.degenerate = long(number("Degenerate facets"));
+    v.reversed = long(number("Facets reversed"));
+    v.volume = number("Volume");
+    return v;
+}
+
+}  // namespace
+
+TEST(CheckAdmesh, AgreesOnEveryCorpusStl) {
+    if (std::system("command -v admesh >/dev/null 2>&1") != 0) GTEST_SKIP() << "admesh not installed (scripts/install-deps.sh)";
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(corpus_dir))
+        if (entry.path().extension() == ".stl") files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    ASSERT_GE(files.size(), 12u);
+    for (const fs::path& file : files) {
+        const std::string name = file.filename().string();
+        SCOPED_TRACE(name);
+        const auto peer = run_admesh(file);
+        ASSERT_TRUE(peer) << "admesh failed on " << name;
+        const CheckReport r = tessref::check_mesh(tessref::read_mesh_for_check(file.string()), quick());
+
+        // Both read every facet of the file.
+        EXPECT_EQ(peer->facets, long(r.face_count));
+        // Degenerate facets, in admesh's sense: two equal corners.
+        long repeated = 0;
+        for (const auto& d : r.of(DefectClass::degenerate_face).locations)
+            repeated += d.detail.find("repeats a vertex") != std::string::npos;
+        EXPECT_EQ(peer->degenerate, repeated);
+        // Closed or open. admesh pairs facets edge by edge, so a duplicated facet finds no
+        // free partner and counts as disconnected; tessref sets duplicates aside and
+        // reports them as such.
+        const bool peer_open = peer->disconnected > 0;
+        EXPECT_EQ(peer_open, !r.closed || r.count(DefectClass::duplicate_face) > 0)
+            << "admesh: " << peer->disconnected << " disconnected facets";
+        // admesh's volume (after it turned facets to agree, -d) against tessref's.
+        if (r.closed && r.count(DefectClass::duplicate_face) == 0 && r.count(DefectClass::inconsistent_orientation) == 0)
+            EXPECT_NEAR(peer->volume, r.signed_volume, 1e-5 * std::max(1.0, std::abs(r.signed_volume)));
+
+        // A defect or not. admesh's signs: disconnected facets, degenerate facets, facets
+        // it had to reverse, a negative volume, or more parts (joined by edges) than
+        // tessref's components (joined by vertices): pieces that touch only at a vertex
+        // or along a non-manifold edge.
+        if (name == "terrain.stl") {
+            EXPECT_TRUE(r.passed);  // open by design: a terrain
+            continue;
+        }
+        const bool peer_defect = peer->disconnected > 0 || peer->degenerate > 0 || peer->reversed > 0 ||
+                                 (peer_open ? false : peer->volume < 0.0) || peer->parts > long(r.component_count);
+        if (name == "sliver.stl") {
+            // admesh does not measure facet areas: a zero-area facet with three distinct
+            // corners is invisible to it.
+            EXPECT_FALSE(peer_defect);
+            EXPECT_FALSE(r.passed);
+            continue;
+        }
+        EXPECT_EQ(peer_defect, !r.passed) << tessref::report_text(r);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The command
+
+TEST(CheckCommand, ExitStatusAndSummary) {
+    RunResult r = tessref_check({corpus("cube.off").string()});
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("PASS"), std::string::npos);
+    r = tessref_check({corpus("t_junction.off").string()});
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.out.find("t_junction: 1"), std::string::npos) << r.out;
+    EXPECT_EQ(tessref_check({corpus("terrain.obj").string(), "--expect", "open"}).status, 0);
+    EXPECT_EQ(tessref_check({corpus("terrain.obj").string(), "--expect", "closed"}).status, 1);
+    EXPECT_EQ(tessref_check({corpus("near_vertex.off").string(), "--tolerance", "1e-8"}).status, 1);  // still the crack
+    EXPECT_EQ(tessref_check({corpus("cube.off").string(), "--expect", "sideways"}).status, 2);
+}
+
+TEST(CheckCommand, JsonHoldsTheWholeReport) {
+    const RunResult r = tessref_check({corpus("nonmanifold_edge.off").string(), "--json"});
+    EXPECT_EQ(r.status, 1);
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["passed"], false);
+    EXPECT_EQ(j["counts"]["faces"], 24);
+    EXPECT_EQ(j["closed"], true);
+    EXPECT_EQ(j["defects"]["non_manifold_edge"]["count"], 1);
+    const auto& location = j["defects"]["non_manifold_edge"]["locations"][0];
+    EXPECT_EQ(location["position"], nlohmann::json::array({1.0, 1.0, 0.5}));
+    EXPECT_EQ(location["faces"].size(), 4u);
+    EXPECT_EQ(j["defects"].size(), std::size_t(tessref::defect_class_count));
+}
+
+TEST(CheckCommand, UnreadableInputExitsTwoNamingTheFile) {
+    const fs::path dir = scratch_dir();
+    std::vector<fs::path> bad;
+    bad.push_back(dir / "missing.stl");
+    {
+        // A binary STL cut short: 200 of its 684 bytes.
+        const std::string whole = read_text(corpus("cube_binary.stl"));
+        ASSERT_EQ(whole.size(), 84u + 50u * 12u);
+        std::ofstream(dir / "truncated.stl", std::ios::binary) << whole.substr(0, 200);
+        bad.push_back(dir / "truncated.stl");
+    }
+    std::ofstream(dir / "garbage.ply", std::ios::binary) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nxx \x01\x02\x03";
+    bad.push_back(dir / "garbage.ply");
+    std::ofstream(dir / "noise.ply", std::ios::binary) << "\x7f\x45\x4c\x46 not a mesh at all";
+    bad.push_back(dir / "noise.ply");
+    std::ofstream(dir / "out_of_range.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n";
+    bad.push_back(dir / "out_of_range.obj");
+    std::ofstream(dir / "out_of_range.off") << "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 7\n";
+    bad.push_back(dir / "out_of_range.off");
+    std::ofstream(dir / "short.ply") << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                        "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                        "end_header\n0 0 0\n1 0 0\n";
+    bad.push_back(dir / "short.ply");
+    std::ofstream(dir / "empty.off");
+    bad.push_back(dir / "empty.off");
+    std::ofstream(dir / "mesh.xyz") << "1 2 3\n";
+    bad.push_back(dir / "mesh.xyz");
+    for (const fs::path& path : bad) {
+        SCOPED_TRACE(path.filename().string());
+        const RunResult r = tessref_check({path.string()});
+        EXPECT_EQ(r.status, 2) << r.out << r.err;
+        EXPECT_EQ(r.err.rfind("tessref: error: ", 0), 0u) << r.err;
+        EXPECT_NE(r.err.find(path.string()), std::string::npos) << r.err;
+        EXPECT_TRUE(r.out.empty()) << r.out;
+        EXPECT_THROW(tessref::read_mesh_for_check(path.string()), tessref::Error);
+    }
+}
+
+TEST(CheckCommand, PictureMarksTheDefects) {
+    const fs::path dir = scratch_dir();
+    const fs::path png = dir / "defects.png";
+    fs::remove(png);
+    const RunResult r = tessref_check({corpus("terrain_hole.obj").string(), "--image", png.string()});
+    EXPECT_EQ(r.status, 1) << r.err;
+    OIIO::ImageBuf image(png.string());
+    ASSERT_TRUE(image.read()) << image.geterror();
+    ASSERT_EQ(image.nchannels(), 3);
+    // The hole is ringed in red (the boundary loop class colour) around its centre.
+    const int w = image.spec().width, h = image.spec().height;
+    EXPECT_EQ(w, 1024);
+    std::size_t red = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float rgb[3];
+            image.getpixel(x, y, rgb);
+            red += rgb[0] > 0.8f && rgb[1] < 0.2f && rgb[2] < 0.2f;
+        }
+    EXPECT_GT(red, 20u);
+    // Nothing is left behind but the picture.
+    std::size_t files = 0;
+    for (const auto& entry : fs::directory_iterator(dir)) files += entry.path().extension() == ".png";
+    EXPECT_EQ(files, 1u);
+}
