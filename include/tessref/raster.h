@@ -68,8 +68,9 @@ enum class DepthFunc { less, lequal, always };
 
 // Which of Mesa's two window transforms made the vertices' window coordinates (the clipper's
 // new vertices always use the second):
-//  * vertex_shader: llvmpipe's vertex-shader JIT, fma(x * (1/w), scale, translate) on a host
-//    with FMA (every x86-64 since 2013) — a draw with only a vertex shader;
+//  * vertex_shader: llvmpipe's vertex-shader JIT, fma(x * (1/w), scale, translate) where the
+//    CPU has FMA (every x86-64 since 2013; checked at run time, as LLVM does) — a draw with
+//    only a vertex shader;
 //  * tessellation: draw's C post-shader path, (x * (1/w)) * scale + translate rounded twice —
 //    every draw with a tessellation or geometry shader, which is what the GL backend renders.
 // They differ by an ulp now and then, which moves a snapped vertex on a rounding tie or

@@ -156,6 +156,16 @@ struct Context {
     std::vector<std::uint32_t>& source;
 };
 
+// LLVM fuses llvmpipe's viewport multiply-add only where the CPU has FMA.
+bool host_has_fma() {
+#if defined(__x86_64__) || defined(__i386__)
+    static const bool fma = __builtin_cpu_supports("fma");
+    return fma;
+#else
+    return true;
+#endif
+}
+
 bool finite4(const glm::vec4& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
 }
@@ -454,7 +464,7 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
     const int tile_count = ctx.tiles_x * ctx.tiles_y;
 
     ctx.vertices.resize(input.positions.size());
-    const bool fused = settings.window_transform == WindowTransform::vertex_shader;
+    const bool fused = settings.window_transform == WindowTransform::vertex_shader && host_has_fma();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                           for (std::size_t i = r.begin(); i < r.end(); ++i) {
