@@ -17,7 +17,9 @@
 // edges (quads, fans), perspective w, huge coordinates (up to 1e7, w up to 1e18), triangles
 // crossing the near plane
 // and every other clip plane, vertices exactly on a clip plane; the same in
-// glPolygonMode(GL_LINE); back-face culling; and overlapping triangles with depth LESS.
+// glPolygonMode(GL_LINE); back-face culling; the same through pass-through tessellation
+// shaders (draw's other window transform); overlapping triangles with depth LESS; and the
+// shipped scenes' tessellated surfaces drawn whole (per-pixel fragment counts).
 #include <gtest/gtest.h>
 
 #include <GL/osmesa.h>
@@ -34,6 +36,7 @@
 #include <vector>
 
 #include "tessref/raster.h"
+#include "tessref/scene.h"
 
 namespace {
 
@@ -186,6 +189,7 @@ public:
         bool cull_back = false;
         bool depth_less = false;
         bool tessellation = false;  // through the pass-through tessellation shaders
+        bool one_id = false;        // all triangles with id 0, in large draw calls
     };
 
     // Draws the triangles (vertex i*3+k), triangle i with id i; returns the RGBA float buffer,
@@ -225,9 +229,19 @@ public:
             gl_.Disable(GL_CULL_FACE);
         }
         gl_.PolygonMode(GL_FRONT_AND_BACK, state.lines ? GL_LINE : GL_FILL);
-        for (std::size_t i = 0; i < tris.size(); ++i) {
-            gl_.Uniform1i(id_location, static_cast<GLint>(i));
-            gl_.DrawArrays(state.tessellation ? GL_PATCHES : GL_TRIANGLES, static_cast<GLint>(3 * i), 3);
+        if (state.one_id) {
+            gl_.Uniform1i(id_location, 0);
+            constexpr std::size_t kPerDraw = 50000;  // well below llvmpipe's trouble zone
+            for (std::size_t first = 0; first < tris.size(); first += kPerDraw) {
+                const std::size_t count = std::min(kPerDraw, tris.size() - first);
+                gl_.DrawArrays(state.tessellation ? GL_PATCHES : GL_TRIANGLES, static_cast<GLint>(3 * first),
+                               static_cast<GLsizei>(3 * count));
+            }
+        } else {
+            for (std::size_t i = 0; i < tris.size(); ++i) {
+                gl_.Uniform1i(id_location, static_cast<GLint>(i));
+                gl_.DrawArrays(state.tessellation ? GL_PATCHES : GL_TRIANGLES, static_cast<GLint>(3 * i), 3);
+            }
         }
         gl_.Finish();
         gl_.Finish();
@@ -652,6 +666,63 @@ TEST_F(RasterLlvmpipe, WireframeThroughTessellationShadersIsIdentical) {
     std::printf("[llvmpipe] (with the vertex-shader transform instead: %zu mismatches)\n",
                 wrong.mismatches.size());
     EXPECT_GT(wrong.mismatches.size(), 0u);
+}
+
+// A shipped scene's tessellated surface (run_pipeline, gpu precision) projected with its
+// camera, as the vertex shader would (gl_Position = mvp * vec4(position, 1) in float), drawn
+// whole at the scene's 1280 x 800 with depth test off: the number of fragments at every
+// pixel must be identical (shared edges of real tessellations: no pixel lost or doubled).
+void compare_scene(const char* name, bool lines) {
+    const tessref::Scene scene =
+        tessref::load_scene(std::string(TESSREF_DATA_DIR) + "/scenes/" + name + ".toml");
+    const tessref::PipelineResult result = tessref::run_pipeline(scene);
+    const tessref::SceneCamera camera = scene.camera.value_or(tessref::SceneCamera{});
+    const int W = camera.viewport.x, H = camera.viewport.y;
+    const glm::mat4 mvp(camera.view_projection());
+    std::vector<glm::vec4> positions;
+    for (const glm::dvec3& p : result.mesh.positions) positions.push_back(mvp * glm::vec4(glm::vec3(p), 1.0f));
+    std::vector<Tri> tris;
+    for (const auto& t : result.mesh.triangles) tris.push_back({positions[t[0]], positions[t[1]], positions[t[2]]});
+
+    Llvmpipe& gl = llvmpipe();
+    gl.resize(W, H);
+    Llvmpipe::DrawState state;
+    state.one_id = true;
+    state.lines = lines;
+    const std::vector<float>& buffer = gl.draw(tris, 0, state);
+    ASSERT_EQ(gl.last_error(), static_cast<GLenum>(GL_NO_ERROR));
+
+    tessref::Framebuffer fb = tessref::Framebuffer::create(W, H);
+    tessref::RasterSettings settings;
+    settings.depth_func = tessref::DepthFunc::always;
+    settings.window_transform = tessref::WindowTransform::vertex_shader;
+    settings.polygon_mode = lines ? tessref::PolygonMode::line : tessref::PolygonMode::fill;
+    tessref::RasterInput input;
+    input.positions = positions;
+    input.triangles = result.mesh.triangles;
+    const tessref::RasterStats stats = tessref::rasterize(fb, input, settings);
+    std::size_t mismatches = 0;
+    std::uint64_t theirs_total = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const auto theirs = static_cast<std::uint32_t>(buffer[(static_cast<std::size_t>(y) * W + x) * 4]);
+            theirs_total += theirs;
+            if (theirs != fb.fragment_count[fb.index(x, y)] && ++mismatches <= 8)
+                std::printf("    pixel (%d, %d): llvmpipe %u, tessref %u fragments\n", x, y, theirs,
+                            fb.fragment_count[fb.index(x, y)]);
+        }
+    std::printf("[llvmpipe] scene %-14s %-5s %8zu triangles (%llu clipped), %7d pixels, %9llu fragments, %zu mismatches\n",
+                name, lines ? "line" : "fill", tris.size(), static_cast<unsigned long long>(stats.triangles_clipped),
+                W * H, static_cast<unsigned long long>(theirs_total), mismatches);
+    EXPECT_EQ(theirs_total, stats.fragments);
+    EXPECT_EQ(mismatches, 0u);
+}
+
+TEST_F(RasterLlvmpipe, ShippedScenesGiveTheSameFragmentCounts) {
+    for (const char* name : {"thesis-all-10", "jacksboro", "lab4-canyon"}) {
+        compare_scene(name, false);
+        compare_scene(name, true);
+    }
 }
 
 TEST_F(RasterLlvmpipe, DepthLessPicksTheSameTriangle) {
