@@ -32,6 +32,8 @@ struct Command {
 Command add_tessellate_command(CLI::App& parent);
 Command add_mesh_command(CLI::App& parent);  // tessref mesh: src/cli/cmd_mesh.cpp
 Command add_check_command(CLI::App& parent);  // tessref check: src/cli/cmd_check.cpp
+Command add_render_command(CLI::App& parent);  // tessref render: src/cli/cmd_render.cpp
+Command add_inspect_command(CLI::App& parent);  // tessref inspect: src/cli/cmd_inspect.cpp
 
 // Later subcommands, one file each (declare here, list in main.cpp):
 //   Command add_mesh_command(CLI::App& parent);     // src/cli/cmd_mesh.cpp

@@ -26,6 +26,8 @@ std::vector<tessref::cli::Command> make_commands(CLI::App& app) {
         tessref::cli::add_tessellate_command(app),
         tessref::cli::add_mesh_command(app),
         tessref::cli::add_check_command(app),
+        tessref::cli::add_render_command(app),
+        tessref::cli::add_inspect_command(app),
     };
 }
 

@@ -1,0 +1,301 @@
+// tessref/render.h — a scene to a picture: the golden image and the provenance of every pixel.
+//
+//   scene ─► run_pipeline ─► gl_Position = mvp * vec4(position, 1) (float, as the shaders)
+//         ─► rasterize (raster.h: llvmpipe's coverage, depth LESS) ─► shade (shading.h)
+//
+// render_scene() runs the scene's pipeline, projects the tessellated surface with the scene's
+// camera, rasterizes it and runs the fragment stage named by the scene's [shading] table on
+// every visible pixel. Besides the colour it keeps, per pixel, where the pixel came from
+// (RenderResult): the patch, the triangle, the interpolated gl_TessCoord, the tessellation
+// level that governed the triangle, the depth. pixel_provenance() gathers them for one pixel.
+//
+// raytrace_scene() is the ground truth for the speed/accuracy study: the same camera and the
+// same fragment stage, but the surface is the full-resolution height field itself, not a
+// tessellation, intersected with Embree (raycast.h).
+//
+// ======================================================================================
+// THE [shading] TABLE (scene.h keeps it as text; parsed here by shading_model()). Keys are
+// snake_case forms of the shaders' uniforms; a key the chosen model does not read is an
+// error, as elsewhere in the scene schema. Colours are [r, g, b] or [r, g, b, a].
+//
+// [shading]
+//   model = "depth"               flat | depth | thesis_single | thesis_multi | lab4 |
+//                                 cosc422 | pn (shading.h). Without a [shading] table the
+//                                 model is "depth" with the "linear" mapping.
+//   background = [0, 0, 0, 0]     glClearColor (GL's default: transparent black)
+//   wireframe_colour = [0,0,0,1]  the lines of --overlay-wireframe
+//   flat:          colour = [1, 1, 1, 1]
+//   depth:         mapping = "linear" | "window"   (near/far from the camera)
+//   thesis_single, thesis_multi:
+//                  light_position = [x, y, z], diffuse_material = [r, g, b],
+//                  ambient_material = [...] (thesis_single), specular_material = [...],
+//                  shininess = s                   (shading.h ThesisLight; its defaults)
+//   lab4:          light_direction, sand_colour, rock_colour, sand_height, blend_width
+//                  (cameraPosition is the camera's eye)
+//   cosc422:       light_direction, ambient
+//   pn:            light_direction, diffuse_colour, shininess (v3CameraPosition = eye)
+//   textures = { <sampler> = <texture>, ... }   the samplers of the model's shader, by their
+//                  GLSL names (shading.h sampler_names: "diffuse", ..., "heightMap"); each
+//                  texture is one of
+//                    "path"                          an image (heightfield.h load_texture),
+//                                                    relative to the scene file;
+//                    { path = "...", luminance = true }   a one-channel image read as
+//                                                    (r, r, r, 1): GL_TEXTURE_SWIZZLE_RGBA =
+//                                                    (RED, RED, RED, ONE) on the GPU;
+//                    [r, g, b, a]                    a 1x1 texture of that colour.
+//                  cosc422's heightMap defaults to the scene's height map (the texture its
+//                  evaluation stage samples). A sampler the model reads and nobody bound is
+//                  an error (GL would read (0, 0, 0, 1) from it).
+// ======================================================================================
+//
+// IMAGES. Every per-pixel vector has width * height entries, row-major, row 0 the TOP row of
+// the picture (raster.h's order, the order image files are written in). Pixel (x, y) in
+// this header means column x from the left and row y from the top, as an image viewer
+// shows it; GL window coordinates are (x, height - 1 - y).
+//
+// FRAGMENT INPUTS. The rasterizer's perspective-correct weights of the visible triangle
+// interpolate the mesh's positions, normals and uvs (FragmentInputs). A face-normal scene
+// ([geometry] normals = "face") reads its triangle's normal, as the geometry shader emits it
+// on all three vertices. dFdx/dFdy of the texture coordinate are per 2x2 quad, as llvmpipe
+// computes them: for a pixel in the quad whose top-left pixel is (qx, qy), the visible
+// triangle's interpolation evaluated at the centres of (qx + 1, qy) minus (qx, qy), and of
+// (qx, qy) minus (qx, qy + 1) (window y grows upwards), evaluating the triangle's plane
+// outside the triangle where the quad leaves it (helper pixels).
+//
+// LEVEL. The "level" of a pixel is the tessellation level, as the control stage wrote it
+// (gl_TessLevelOuter/Inner before any rounding), that governed its triangle: a triangle
+// with a vertex on an outer edge of its patch belongs to that edge's strip and reads
+// gl_TessLevelOuter[edge] (the edge holding most of its vertices; ties go to the lower edge
+// index); a triangle with no vertex on an outer edge reads the inner level (quads: the
+// larger of gl_TessLevelInner[0] and [1]).
+//
+// DETERMINISM. Every pass is a function of the pixel (or a deterministic reduction), so the
+// result is byte-identical whatever the number of threads (oneTBB: the caller's arena or
+// tbb::global_control).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "tessref/raster.h"
+#include "tessref/scene.h"
+#include "tessref/shading.h"
+#include "tessref/tessellator.h"
+
+namespace tessref {
+
+// ---- the [shading] table -------------------------------------------------------------
+
+struct RenderShading {
+    ShadingModel model{};                      // model.kind = depth unless the table says
+    glm::vec4 background{0.0f};                // glClearColor
+    glm::vec4 wireframe_colour{0.0f, 0.0f, 0.0f, 1.0f};
+};
+
+// The scene's [shading] table parsed and its textures loaded (default: depth shading when
+// the scene has none). Camera-dependent uniforms (lab 4 cameraPosition, PN v3CameraPosition,
+// depth near/far) come from scene.camera. Throws tessref::Error with the scene file, line,
+// column and key ("shading.light_position") of the first problem; line and column are known
+// when the scene was loaded from a file that still exists.
+RenderShading shading_model(const Scene& scene);
+
+// ---- rendering -------------------------------------------------------------------------
+
+enum class RenderMode : std::uint8_t {
+    fill,                 // filled triangles
+    wireframe,            // glPolygonMode(GL_FRONT_AND_BACK, GL_LINE): the fragment shader
+                          // runs on the lines' pixels, depth LESS among the lines
+    fill_with_wireframe,  // fill, then the lines in RenderShading::wireframe_colour where
+                          // they are not behind the filled surface (see render_scene)
+};
+
+struct RenderOptions {
+    // Image size; {0, 0}: the camera's viewport. A size replaces the camera's viewport
+    // (aspect ratio and the PN control stage's pixel measure follow it, as they would in an
+    // application whose window had that size).
+    glm::ivec2 size{0, 0};
+    RenderMode mode = RenderMode::fill;
+    Precision precision = Precision::gpu;   // of the pipeline (the rasterizer is float)
+    // Called from the calling thread with a stage name and the fraction of it done; may be
+    // empty.
+    std::function<void(std::string_view stage, double fraction)> progress;
+};
+
+struct RenderStats {
+    std::uint64_t triangles = 0;        // tessellated triangles drawn
+    std::uint64_t vertices = 0;
+    std::uint64_t covered_pixels = 0;   // pixels with a visible surface
+    RasterStats raster{};               // of the fill (or line) pass
+    double seconds_pipeline = 0.0;      // wall-clock per phase (informative only)
+    double seconds_raster = 0.0;
+    double seconds_shade = 0.0;
+};
+
+constexpr std::uint32_t kNoPixelId = kNoTriangle;  // patch/triangle id of an empty pixel
+
+struct RenderResult {
+    int width = 0;
+    int height = 0;
+    RenderShading shading{};
+    SceneCamera camera{};              // the camera as used (viewport = image size)
+    Domain domain = Domain::quads;     // the generator's domain (for the level rule)
+    glm::mat4 mvp{1.0f};               // float(camera.view_projection()), the shaders' mvp
+    // Per pixel (row 0 on top):
+    std::vector<glm::vec4> colour;     // the fragment stage's output, unclamped; background
+                                       // where nothing is visible
+    std::vector<float> depth;          // window z in [0, 1]; 1 where nothing is visible
+    std::vector<std::uint32_t> patch_id;     // kNoPixelId where nothing is visible
+    std::vector<std::uint32_t> triangle_id;  // index into pipeline.mesh.triangles
+    std::vector<glm::vec3> tess_coord;       // interpolated gl_TessCoord
+    std::vector<glm::vec3> barycentric;      // perspective-correct weights of the triangle
+    std::vector<float> level;                // see LEVEL above; NaN where nothing is visible
+    // What produced it (kept for pixel_provenance; null for a ray-traced image).
+    std::shared_ptr<const PipelineResult> pipeline;
+    RenderStats stats{};
+
+    std::size_t index(int x, int y) const {
+        return static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+               static_cast<std::size_t>(x);
+    }
+};
+
+// Renders the scene. Throws tessref::Error when the scene has no [camera], the size is
+// outside 1..16384, the [shading] table is wrong, or the pipeline refuses the scene.
+//
+// fill_with_wireframe: the lines are rasterized into a buffer of their own (depth LESS among
+// lines); a line pixel is drawn over the filled image when nothing is filled there or its
+// depth is <= the filled depth plus the filled triangle's depth slope at that pixel (the
+// larger of its window-z change over one pixel in x and in y) plus 2^-20: the offset
+// glPolygonOffset(1, units) would give the filled pass, so that edges on the visible surface
+// show and edges behind it do not.
+RenderResult render_scene(const Scene& scene, const RenderOptions& options = {});
+
+// What render_scene does after the pipeline: renders a surface that run_pipeline(scene)
+// produced (with the camera's viewport set to the image size when options.size is given,
+// as render_scene runs it). Lets a caller render one tessellation several times (modes,
+// benchmarks) without running the pipeline again. Throws tessref::Error when `pipeline` is
+// null or inconsistent with the scene.
+RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineResult> pipeline,
+                            const RenderOptions& options = {});
+
+// ---- the ground truth ------------------------------------------------------------------
+
+struct RaytraceStats {
+    std::uint64_t triangles = 0;     // of the full-resolution surface
+    std::uint64_t vertices = 0;
+    int grid_columns = 0;            // vertex columns and rows of the surface
+    int grid_rows = 0;
+    std::uint64_t covered_pixels = 0;
+};
+
+// The same camera and fragment stage on the full-resolution height field, ray-traced with
+// Embree. Terrain scenes only ([domain]); throws tessref::Error for a mesh scene.
+//
+// The surface: the height the evaluation shader would compute at level "infinity", i.e.
+// the height map sampled at mip level 0 (in double: the texel values exactly, bilinear in
+// between), as TWO TRIANGLES PER TEXEL QUAD. Vertex columns lie at every texel centre inside
+// the grid's extent plus the extent's two borders (rows likewise): between texel centres
+// GL_LINEAR sampling is bilinear, and the two triangles of each quad (split along the
+// diagonal from its (low u, low v) corner to its (high u, high v) corner) agree with it at
+// the four corners; in the half-texel border strips clamp-to-edge makes the height constant
+// across the strip, so there the triangles are exact. Lab 4's mip-matched heights are not
+// modelled: the ground truth is mip 0 everywhere.
+//
+// Fragment inputs at a hit: worldPosition = the hit point; texCoord = the evaluation model's
+// mapping of the hit's ground coordinates (thesis xy / scale_xy, COSC422 the extent, lab 4
+// xz / scale_xy + offset); derivatives per 2x2 quad as in render_scene, from the quad's
+// other rays intersected with the plane of the hit triangle; normal = the scene's geometry
+// stage evaluated at the hit instead of at a tessellated vertex: normal_map -> the normal map
+// sampled at texCoord (NormalFromTexture), height_field -> lab 4 appendix A at mip 0, face ->
+// the hit triangle's normal, smooth -> the area-weighted vertex normals of the surface
+// interpolated; no [geometry] -> none, as in render_scene (terrain evaluation gives none).
+// patch_id/triangle_id/tess_coord/level are kNoPixelId/texel triangle index/0/NaN.
+RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options = {},
+                            RaytraceStats* stats = nullptr);
+
+// ---- provenance -----------------------------------------------------------------------
+
+struct PixelProvenance {
+    int x = 0, y = 0;                  // image pixel (row 0 on top)
+    int window_x = 0, window_y = 0;    // GL window coordinates (y up)
+    bool covered = false;              // false: background, the fields below are defaults
+    glm::vec4 colour{0.0f};
+    float depth = 1.0f;                // window z
+    std::uint32_t patch_id = kNoPixelId;
+    std::uint32_t triangle_id = kNoPixelId;
+    std::array<std::uint32_t, 3> vertices{};      // mesh vertex indices of the triangle
+    std::array<glm::vec3, 3> vertex_tess_coords{};
+    glm::vec3 barycentric{0.0f};
+    glm::vec3 tess_coord{0.0f};
+    float level = 0.0f;                // see LEVEL
+    std::string level_source;          // "outer[2]" or "inner"
+    TessLevels patch_levels{};         // what the control stage wrote for the patch
+    glm::dvec3 world_position{0.0};    // the triangle's positions interpolated
+    std::optional<glm::dvec3> normal;  // when the mesh has normals
+    std::optional<glm::dvec2> uv;      // when the mesh has texture coordinates
+};
+
+// The provenance of pixel (x, y) of a rendered image. Throws tessref::Error (key "pixel")
+// when (x, y) is outside the image.
+PixelProvenance pixel_provenance(const RenderResult& result, int x, int y);
+
+// The level a triangle reads (see LEVEL) and where it comes from ("outer[e]" / "inner").
+float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_t triangle,
+                     std::string* source = nullptr);
+
+// ---- images ----------------------------------------------------------------------------
+
+// The colour map of the level heat map: log2(level) over [0, 6] (levels 1..64) through
+// blue, cyan, green, yellow, red; levels below 1 read blue, above 64 red; NaN black.
+glm::vec3 level_heat_colour(float level);
+
+// GL's unorm8 conversion of the colour (clamp to [0, 1], * 255, round to nearest), RGBA,
+// row 0 on top.
+std::vector<std::uint8_t> to_rgba8(const RenderResult& result);
+
+enum class ImageFormat : std::uint8_t { png, tiff, exr };
+// From the output path's extension: .png, .tif/.tiff, .exr (any case). Throws tessref::Error
+// naming the path otherwise.
+ImageFormat image_format_from_path(const std::string& path);
+
+// The arbitrary output variables an EXR can carry besides RGBA.
+struct AovSelection {
+    bool depth = false;      // channel "Z": window depth (1 = nothing)
+    bool patch = false;      // "patch_id": the patch id as a float, -1 = nothing
+    bool triangle = false;   // "triangle_id": likewise (exact up to 2^24 triangles)
+    bool tesscoord = false;  // "tess_coord.u", "tess_coord.v", "tess_coord.w"
+    bool level = false;      // "level" (the value, NaN = nothing) and the heat map
+                             // "level_heat.R", "level_heat.G", "level_heat.B"
+    bool any() const { return depth || patch || triangle || tesscoord || level; }
+};
+// Parses "depth,patch,triangle,tesscoord,level" (any subset, any order). Throws
+// tessref::Error (key "--aov") naming an unknown item.
+AovSelection parse_aovs(std::string_view list);
+
+// Writes the image through OpenImageIO to `path` in `format`: png and tiff as 8-bit RGBA
+// (to_rgba8); exr as 32-bit float R, G, B, A (the unclamped colour) plus the selected AOV
+// channels. AOVs need exr (an Error otherwise). The file at `path` is written directly:
+// callers that must not leave a partial file write to a temporary name and rename.
+void write_image(const RenderResult& result, const std::string& path, ImageFormat format,
+                 const AovSelection& aovs = {});
+
+// Colour difference of two images of the same size (Error otherwise): root mean square over
+// every pixel and the R, G, B channels of the colours clamped to [0, 1] (what a unorm8
+// framebuffer holds, before its quantization), and the pixels covered in one image only.
+struct ImageDifference {
+    double rmse = 0.0;
+    double max_abs = 0.0;
+    std::uint64_t coverage_mismatch = 0;
+    std::uint64_t pixels = 0;
+};
+ImageDifference compare_images(const RenderResult& a, const RenderResult& b);
+
+}  // namespace tessref

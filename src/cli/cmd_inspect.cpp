@@ -1,0 +1,205 @@
+// tessref inspect — where one pixel of a rendered scene came from: the patch, the triangle,
+// the tess coord, the tessellation levels, the world position, the depth and the colour
+// (include/tessref/render.h, pixel_provenance).
+//
+//   tessref inspect SCENE --pixel X,Y [--json] [--size WxH] [--precision gpu|exact]
+//                   [--wireframe] [--threads N]
+//
+// X, Y: column from the left and row from the top of the image `tessref render` writes with
+// the same options (as an image viewer shows it).
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "cli/cli_util.h"
+#include "cli/commands.h"
+#include "tessref/error.h"
+#include "tessref/render.h"
+#include "tessref/scene.h"
+#include "tessref/tessellator.h"
+
+namespace tessref::cli {
+
+namespace {
+
+struct InspectOptions {
+    std::string scene;
+    std::string pixel;
+    bool json = false;
+    std::string size;
+    std::string precision = "gpu";
+    bool wireframe = false;
+    int threads = 0;
+};
+
+Where flag_where(const std::string& flag) {
+    Where where;
+    where.file = flag;
+    return where;
+}
+
+// "X,Y" (non-negative integers; the image's bounds are checked after rendering).
+glm::ivec2 parse_pixel(const std::string& text) {
+    const std::size_t comma = text.find(',');
+    const std::optional<long long> x = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(0, comma));
+    const std::optional<long long> y = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(comma + 1));
+    if (!x || !y) throw Error("pixel '" + text + "' is not X,Y (e.g. 640,400)", flag_where("--pixel"));
+    if (*x < 0 || *y < 0 || *x > 16383 || *y > 16383)
+        throw Error("pixel " + text + " is outside the image (coordinates start at 0,0 top left)", flag_where("--pixel"));
+    return {static_cast<int>(*x), static_cast<int>(*y)};
+}
+
+glm::ivec2 parse_size(const std::string& text) {
+    const std::size_t x = text.find_first_of("xX");
+    const std::optional<long long> w = x == std::string::npos ? std::nullopt : parse_integer(text.substr(0, x));
+    const std::optional<long long> h = x == std::string::npos ? std::nullopt : parse_integer(text.substr(x + 1));
+    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", flag_where("--size"));
+    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384)
+        throw Error("image size " + text + " is outside 1..16384 in width or height", flag_where("--size"));
+    return {static_cast<int>(*w), static_cast<int>(*h)};
+}
+
+using Json = nlohmann::ordered_json;
+
+Json number(float x) {
+    if (std::isfinite(x)) return x;
+    return format_float(x);  // JSON has no NaN or infinity
+}
+Json number(double x) {
+    if (std::isfinite(x)) return x;
+    return format_double(x);
+}
+template <int N, typename T>
+Json vector_json(const glm::vec<N, T>& v) {
+    Json a = Json::array();
+    for (int i = 0; i < N; ++i) a.push_back(number(v[i]));
+    return a;
+}
+template <int N, typename T>
+std::string vector_text(const glm::vec<N, T>& v) {
+    std::string s;
+    for (int i = 0; i < N; ++i) {
+        if (i) s += " ";
+        if constexpr (std::is_same_v<T, float>) s += format_float(v[i]);
+        else s += format_double(v[i]);
+    }
+    return s;
+}
+
+std::string levels_text(const TessLevels& l) {
+    return "outer " + vector_text(glm::vec4(l.outer[0], l.outer[1], l.outer[2], l.outer[3])) + ", inner " +
+           vector_text(glm::vec2(l.inner[0], l.inner[1]));
+}
+
+int run_inspect(const InspectOptions& options) {
+    const glm::ivec2 pixel = parse_pixel(options.pixel);
+    const std::optional<Precision> precision = parse_precision(options.precision);
+    if (!precision)
+        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", flag_where("--precision"));
+    if (options.threads < 0)
+        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
+                    flag_where("--threads"));
+    RenderOptions render_options;
+    if (!options.size.empty()) render_options.size = parse_size(options.size);
+    render_options.precision = *precision;
+    render_options.mode = options.wireframe ? RenderMode::wireframe : RenderMode::fill;
+
+    std::optional<tbb::global_control> thread_limit;
+    if (options.threads > 0)
+        thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options.threads));
+
+    const Scene scene = load_scene(options.scene);
+    const RenderResult result = render_scene(scene, render_options);
+    if (pixel.x >= result.width || pixel.y >= result.height)
+        throw Error("pixel " + options.pixel + " is outside the " + std::to_string(result.width) + "x" +
+                        std::to_string(result.height) + " image",
+                    flag_where("--pixel"));
+    const PixelProvenance p = pixel_provenance(result, pixel.x, pixel.y);
+
+    if (options.json) {
+        Json doc;
+        doc["scene"] = scene.name;
+        doc["image"] = {result.width, result.height};
+        doc["pixel"] = {p.x, p.y};
+        doc["window"] = {p.window_x, p.window_y};
+        doc["covered"] = p.covered;
+        doc["colour"] = vector_json(p.colour);
+        doc["depth"] = number(p.depth);
+        if (p.covered) {
+            doc["patch_id"] = p.patch_id;
+            doc["triangle_id"] = p.triangle_id;
+            doc["vertices"] = {p.vertices[0], p.vertices[1], p.vertices[2]};
+            doc["vertex_tess_coords"] = {vector_json(p.vertex_tess_coords[0]), vector_json(p.vertex_tess_coords[1]),
+                                         vector_json(p.vertex_tess_coords[2])};
+            doc["barycentric"] = vector_json(p.barycentric);
+            doc["tess_coord"] = vector_json(p.tess_coord);
+            doc["level"] = number(p.level);
+            doc["level_source"] = p.level_source;
+            Json outer = Json::array(), inner = Json::array();
+            for (const float x : p.patch_levels.outer) outer.push_back(number(x));
+            for (const float x : p.patch_levels.inner) inner.push_back(number(x));
+            doc["patch_levels"] = {{"outer", outer}, {"inner", inner}};
+            doc["world_position"] = vector_json(p.world_position);
+            if (p.normal) doc["normal"] = vector_json(*p.normal);
+            if (p.uv) doc["uv"] = vector_json(*p.uv);
+        }
+        std::cout << doc.dump(2) << "\n";
+        return 0;
+    }
+
+    std::ostringstream out;
+    out << "pixel " << p.x << "," << p.y << " (GL window " << p.window_x << "," << p.window_y << ") of "
+        << scene.name << " at " << result.width << "x" << result.height << "\n";
+    out << "colour: " << vector_text(p.colour) << "\n";
+    out << "depth: " << format_float(p.depth) << "\n";
+    if (!p.covered) {
+        out << "covered: no (background)\n";
+    } else {
+        out << "covered: yes\n";
+        out << "patch: " << p.patch_id << " (levels " << levels_text(p.patch_levels) << ")\n";
+        out << "triangle: " << p.triangle_id << " (vertices " << p.vertices[0] << " " << p.vertices[1] << " "
+            << p.vertices[2] << ")\n";
+        out << "vertex tess coords: " << vector_text(p.vertex_tess_coords[0]) << " | "
+            << vector_text(p.vertex_tess_coords[1]) << " | " << vector_text(p.vertex_tess_coords[2]) << "\n";
+        out << "barycentric: " << vector_text(p.barycentric) << "\n";
+        out << "tess coord: " << vector_text(p.tess_coord) << "\n";
+        out << "level: " << format_float(p.level) << " (" << p.level_source << ")\n";
+        out << "world position: " << vector_text(p.world_position) << "\n";
+        if (p.normal) out << "normal: " << vector_text(*p.normal) << "\n";
+        if (p.uv) out << "uv: " << vector_text(*p.uv) << "\n";
+    }
+    std::cout << out.str();
+    return 0;
+}
+
+}  // namespace
+
+Command add_inspect_command(CLI::App& parent) {
+    auto options = std::make_shared<InspectOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "inspect",
+        "Render a scene as `tessref render` does and print where one pixel came from: its patch and the "
+        "patch's tessellation levels, its triangle, tess coord, level, world position, depth and colour.");
+    app->add_option("scene", options->scene, "Scene file (TOML)")->required();
+    app->add_option("--pixel", options->pixel,
+                    "The pixel: column X from the left, row Y from the top (0,0 is the top-left corner)")
+        ->required()
+        ->type_name("X,Y");
+    app->add_flag("--json", options->json, "Print JSON instead of text");
+    app->add_option("--size", options->size, "Image size WIDTHxHEIGHT, as given to `tessref render`")
+        ->type_name("WxH");
+    app->add_option("--precision", options->precision, "Pipeline precision: gpu or exact")->default_val("gpu");
+    app->add_flag("--wireframe", options->wireframe, "Inspect the --wireframe image (the lines' pixels)");
+    app->add_option("--threads", options->threads, "Worker threads (0: every core)")->default_val(0);
+    return Command{app, [options] { return run_inspect(*options); }};
+}
+
+}  // namespace tessref::cli

@@ -1,0 +1,175 @@
+// tessref render — a scene to a picture (include/tessref/render.h): the software
+// rasterizer's golden image, or with --raytrace the Embree ground truth of the full-resolution
+// height field.
+//
+//   tessref render SCENE -o OUT.{png,exr,tif} [--wireframe | --overlay-wireframe]
+//                  [--aov depth,patch,triangle,tesscoord,level] [--threads N]
+//                  [--precision gpu|exact] [--size WxH] [--raytrace]
+//
+// Every flag and the output name are checked before the scene is loaded; the image goes to a
+// temporary file next to OUT and is renamed over it only when complete.
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include "cli/cli_util.h"
+#include "cli/commands.h"
+#include "tessref/error.h"
+#include "tessref/render.h"
+#include "tessref/scene.h"
+#include "tessref/tessellator.h"
+
+namespace tessref::cli {
+
+namespace {
+
+struct RenderCommandOptions {
+    std::string scene;
+    std::string output;
+    bool wireframe = false;
+    bool overlay_wireframe = false;
+    std::string aov;
+    int threads = 0;  // 0: every core
+    std::string precision = "gpu";
+    std::string size;  // empty: the camera's viewport
+    bool raytrace = false;
+};
+
+Where flag_where(const std::string& flag) {
+    Where where;
+    where.file = flag;
+    return where;
+}
+
+// "WxH", both 1..16384.
+glm::ivec2 parse_size(const std::string& text) {
+    const std::size_t x = text.find_first_of("xX");
+    const std::optional<long long> w = x == std::string::npos ? std::nullopt : parse_integer(text.substr(0, x));
+    const std::optional<long long> h = x == std::string::npos ? std::nullopt : parse_integer(text.substr(x + 1));
+    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", flag_where("--size"));
+    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384)
+        throw Error("image size " + text + " is outside 1..16384 in width or height", flag_where("--size"));
+    return {static_cast<int>(*w), static_cast<int>(*h)};
+}
+
+// Progress of the render's stages, one line per stage, on a terminal only.
+class StageProgress {
+public:
+    void operator()(std::string_view stage, double fraction) {
+        if (stage != stage_) {
+            progress_.reset();
+            stage_ = std::string(stage);
+            progress_ = std::make_unique<Progress>(stage_, kSteps);
+        }
+        progress_->set(static_cast<std::size_t>(fraction * static_cast<double>(kSteps)));
+    }
+
+private:
+    static constexpr std::size_t kSteps = 1000;
+    std::string stage_;
+    std::unique_ptr<Progress> progress_;
+};
+
+int run_render(const RenderCommandOptions& options) {
+    // Flags and output first: nothing is computed for a command line that cannot succeed.
+    const ImageFormat format = image_format_from_path(options.output);
+    const AovSelection aovs = options.aov.empty() ? AovSelection{} : parse_aovs(options.aov);
+    if (aovs.any() && format != ImageFormat::exr)
+        throw Error("--aov writes float channels: the output must be an .exr file", flag_where("--aov"));
+    if (aovs.any() && options.raytrace && (aovs.patch || aovs.tesscoord || aovs.level))
+        throw Error("a ray-traced image has no patches, tess coords or levels: with --raytrace, --aov takes depth "
+                    "and triangle only",
+                    flag_where("--aov"));
+    if (options.wireframe && options.overlay_wireframe)
+        throw Error("--wireframe and --overlay-wireframe exclude each other", flag_where("--overlay-wireframe"));
+    if (options.raytrace && (options.wireframe || options.overlay_wireframe))
+        throw Error("--raytrace renders the height field itself: it has no tessellation to draw as lines",
+                    flag_where("--raytrace"));
+    const std::optional<Precision> precision = parse_precision(options.precision);
+    if (!precision)
+        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", flag_where("--precision"));
+    if (options.threads < 0)
+        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
+                    flag_where("--threads"));
+    RenderOptions render_options;
+    if (!options.size.empty()) render_options.size = parse_size(options.size);
+    render_options.precision = *precision;
+    render_options.mode = options.wireframe           ? RenderMode::wireframe
+                          : options.overlay_wireframe ? RenderMode::fill_with_wireframe
+                                                      : RenderMode::fill;
+    AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
+
+    std::optional<tbb::global_control> thread_limit;
+    if (options.threads > 0)
+        thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options.threads));
+
+    const Scene scene = load_scene(options.scene);
+    StageProgress stage_progress;
+    render_options.progress = [&stage_progress](std::string_view stage, double fraction) {
+        stage_progress(stage, fraction);
+    };
+    RaytraceStats raytrace_stats;
+    const RenderResult result = options.raytrace ? raytrace_scene(scene, render_options, &raytrace_stats)
+                                                 : render_scene(scene, render_options);
+    write_image(result, output.temp_path().string(), format, aovs);
+    output.commit();
+
+    std::cout << options.output << ": " << result.width << "x" << result.height << ", "
+              << to_string(result.shading.model.kind) << " shading, ";
+    if (options.raytrace) {
+        std::cout << "ray-traced height field of " << raytrace_stats.grid_columns << "x" << raytrace_stats.grid_rows
+                  << " vertices (" << raytrace_stats.triangles << " triangles), ";
+    } else {
+        std::cout << to_string(*precision) << " precision, " << result.stats.triangles << " triangles, ";
+    }
+    std::cout << result.stats.covered_pixels << " covered pixels\n";
+    return 0;
+}
+
+}  // namespace
+
+Command add_render_command(CLI::App& parent) {
+    auto options = std::make_shared<RenderCommandOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "render",
+        "Render a scene with the software rasterizer (llvmpipe's coverage, depth LESS, the scene's [shading] "
+        "fragment stage): the golden image a GPU must reproduce. EXR output can carry the provenance of every "
+        "pixel (--aov). --raytrace renders the full-resolution height field with Embree instead: the ground "
+        "truth.");
+    app->add_option("scene", options->scene, "Scene file (TOML)")->required();
+    app->add_option("-o,--output", options->output,
+                    "Output image; the format follows the extension: .png and .tif (8-bit RGBA), .exr (float RGBA "
+                    "and the --aov channels)")
+        ->required();
+    app->add_flag("--wireframe", options->wireframe,
+                  "Draw the triangles' edges only, as glPolygonMode(GL_FRONT_AND_BACK, GL_LINE) does (the fragment "
+                  "stage shades the lines)");
+    app->add_flag("--overlay-wireframe", options->overlay_wireframe,
+                  "Draw the filled image, then the edges on the visible surface in the [shading] wireframe_colour");
+    app->add_option("--aov", options->aov,
+                    "EXR channels besides RGBA, comma-separated: depth (Z), patch (patch_id), triangle "
+                    "(triangle_id), tesscoord (tess_coord.u/v/w), level (level and the heat map level_heat.R/G/B)")
+        ->type_name("LIST");
+    app->add_option("--threads", options->threads,
+                    "Worker threads (0: every core); the image is the same whatever the count")
+        ->default_val(0);
+    app->add_option("--precision", options->precision,
+                    "Pipeline precision: gpu (float stages, as the GPU) or exact (double stages)")
+        ->default_val("gpu");
+    app->add_option("--size", options->size,
+                    "Image size WIDTHxHEIGHT (default: the camera's viewport); it replaces the viewport, so the "
+                    "aspect ratio follows it")
+        ->type_name("WxH");
+    app->add_flag("--raytrace", options->raytrace,
+                  "Ground truth: ray-trace the full-resolution height field (two triangles per texel quad, Embree) "
+                  "with the same camera and shading, no tessellation (terrain scenes)");
+    app->footer("Example: tessref render data/scenes/thesis-all-10.toml -o thesis.exr --size 640x400 --aov "
+                "depth,patch,level");
+    return Command{app, [options] { return run_render(*options); }};
+}
+
+}  // namespace tessref::cli

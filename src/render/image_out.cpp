@@ -1,0 +1,120 @@
+// Images of a render through OpenImageIO: 8-bit PNG/TIFF for eyes, float EXR with the
+// provenance channels (render.h).
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+
+#include "render/render_internal.h"
+#include "tessref/error.h"
+#include "tessref/render.h"
+
+namespace tessref {
+
+namespace {
+
+Where file_where(const std::string& path) {
+    Where w;
+    w.file = path;
+    return w;
+}
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+}  // namespace
+
+ImageFormat image_format_from_path(const std::string& path) {
+    const std::string extension = lower(std::filesystem::path(path).extension().string());
+    if (extension == ".png") return ImageFormat::png;
+    if (extension == ".tif" || extension == ".tiff") return ImageFormat::tiff;
+    if (extension == ".exr") return ImageFormat::exr;
+    throw Error("cannot tell the image format of '" + path + "': the name must end in .png, .exr, .tif or .tiff",
+                file_where(path));
+}
+
+AovSelection parse_aovs(std::string_view list) {
+    AovSelection aovs;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        std::string item(list.substr(start, comma - start));
+        item.erase(0, item.find_first_not_of(" \t"));
+        item.erase(item.find_last_not_of(" \t") + 1);
+        if (item == "depth") aovs.depth = true;
+        else if (item == "patch") aovs.patch = true;
+        else if (item == "triangle") aovs.triangle = true;
+        else if (item == "tesscoord") aovs.tesscoord = true;
+        else if (item == "level") aovs.level = true;
+        else
+            throw Error("unknown AOV '" + item + "'; expected a comma-separated list of depth, patch, triangle, "
+                        "tesscoord, level",
+                        render_detail::where_key("--aov"));
+        start = comma + 1;
+    }
+    return aovs;
+}
+
+void write_image(const RenderResult& result, const std::string& path, ImageFormat format, const AovSelection& aovs) {
+    if (aovs.any() && format != ImageFormat::exr)
+        throw Error("AOV channels need an EXR file (float channels): name the output *.exr", file_where(path));
+    const int width = result.width, height = result.height;
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
+    if (!out) throw Error("cannot write an image here: " + OIIO::geterror(), file_where(path));
+
+    if (format != ImageFormat::exr) {
+        const std::vector<std::uint8_t> pixels = to_rgba8(result);
+        OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+        spec.attribute("Software", "tessref " TESSREF_VERSION);
+        spec.attribute("DateTime", "");  // no time stamp: the same render gives the same bytes
+        if (format == ImageFormat::tiff) spec.attribute("compression", "zip");
+        if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close())
+            throw Error("cannot write the image: " + out->geterror(), file_where(path));
+        return;
+    }
+
+    std::vector<std::string> names{"R", "G", "B", "A"};
+    if (aovs.depth) names.push_back("Z");
+    if (aovs.patch) names.push_back("patch_id");
+    if (aovs.triangle) names.push_back("triangle_id");
+    if (aovs.tesscoord) names.insert(names.end(), {"tess_coord.u", "tess_coord.v", "tess_coord.w"});
+    if (aovs.level) names.insert(names.end(), {"level", "level_heat.R", "level_heat.G", "level_heat.B"});
+    const std::size_t channels = names.size();
+    std::vector<float> pixels(n * channels);
+    auto id_value = [](std::uint32_t id) { return id == kNoPixelId ? -1.0f : static_cast<float>(id); };
+    for (std::size_t i = 0; i < n; ++i) {
+        float* p = &pixels[i * channels];
+        std::size_t c = 0;
+        for (int k = 0; k < 4; ++k) p[c++] = result.colour[i][k];
+        if (aovs.depth) p[c++] = result.depth[i];
+        if (aovs.patch) p[c++] = id_value(result.patch_id[i]);
+        if (aovs.triangle) p[c++] = id_value(result.triangle_id[i]);
+        if (aovs.tesscoord)
+            for (int k = 0; k < 3; ++k) p[c++] = result.tess_coord[i][k];
+        if (aovs.level) {
+            p[c++] = result.level[i];
+            const glm::vec3 heat = level_heat_colour(result.level[i]);
+            for (int k = 0; k < 3; ++k) p[c++] = heat[k];
+        }
+    }
+    OIIO::ImageSpec spec(width, height, static_cast<int>(channels), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.alpha_channel = 3;
+    spec.z_channel = aovs.depth ? 4 : -1;
+    spec.attribute("compression", "zip");
+    spec.attribute("Software", "tessref " TESSREF_VERSION);
+    spec.attribute("DateTime", "");  // OpenImageIO stamps TIFF and EXR files with the time unless told
+    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close())
+        throw Error("cannot write the image: " + out->geterror(), file_where(path));
+}
+
+}  // namespace tessref

@@ -1,0 +1,376 @@
+// The renderer: scene -> pipeline -> gl_Position -> rasterizer -> fragment stage (render.h).
+#include "tessref/render.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include "render/render_internal.h"
+#include "tessref/error.h"
+
+namespace tessref {
+
+using render_detail::perspective_weights;
+using render_detail::pixel_ndc;
+using render_detail::quad_of;
+using render_detail::where_key;
+using render_detail::window_depth;
+
+namespace render_detail {
+
+void allocate(RenderResult& r, int width, int height) {
+    r.width = width;
+    r.height = height;
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    r.colour.assign(n, r.shading.background);
+    r.depth.assign(n, 1.0f);
+    r.patch_id.assign(n, kNoPixelId);
+    r.triangle_id.assign(n, kNoPixelId);
+    r.tess_coord.assign(n, glm::vec3(0.0f));
+    r.barycentric.assign(n, glm::vec3(0.0f));
+    r.level.assign(n, std::numeric_limits<float>::quiet_NaN());
+}
+
+SceneCamera camera_for(const Scene& scene, const RenderOptions& options) {
+    if (!scene.camera) {
+        Where w;
+        w.file = scene.file;
+        w.key = "camera";
+        throw Error("rendering needs a [camera] in the scene", w);
+    }
+    SceneCamera camera = *scene.camera;
+    if (options.size != glm::ivec2(0, 0)) camera.viewport = options.size;
+    const glm::ivec2 s = camera.viewport;
+    if (s.x < 1 || s.y < 1 || s.x > 16384 || s.y > 16384)
+        throw Error("image size " + std::to_string(s.x) + "x" + std::to_string(s.y) + " is outside 1..16384",
+                    where_key("size"));
+    return camera;
+}
+
+}  // namespace render_detail
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Everything the per-pixel passes read.
+struct SurfaceView {
+    const SurfaceMesh& mesh;
+    const PipelineResult& pipeline;
+    const std::vector<glm::vec4>& clip;
+    bool face_normals = false;
+
+    std::array<glm::dvec4, 3> clip_corners(std::uint32_t triangle) const {
+        const auto& t = mesh.triangles[triangle];
+        return {glm::dvec4(clip[t[0]]), glm::dvec4(clip[t[1]]), glm::dvec4(clip[t[2]])};
+    }
+    // texCoord of the triangle at weights b, in float as a varying is interpolated.
+    glm::vec2 uv_at(std::uint32_t triangle, const glm::vec3& b) const {
+        const auto& t = mesh.triangles[triangle];
+        return b[0] * glm::vec2(mesh.uvs[t[0]]) + b[1] * glm::vec2(mesh.uvs[t[1]]) + b[2] * glm::vec2(mesh.uvs[t[2]]);
+    }
+};
+
+// The fragment inputs of a pixel whose visible triangle and weights are known.
+FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs, std::uint32_t triangle,
+                               const glm::vec3& b, float depth, int x, int row, int width, int height) {
+    FragmentInputs f;
+    const auto& t = s.mesh.triangles[triangle];
+    f.depth = depth;
+    if (needs.worldPosition) {
+        f.worldPosition = b[0] * glm::vec3(s.mesh.positions[t[0]]) + b[1] * glm::vec3(s.mesh.positions[t[1]]) +
+                          b[2] * glm::vec3(s.mesh.positions[t[2]]);
+    }
+    if (needs.normal) {
+        if (s.face_normals) {
+            f.normal = glm::vec3(s.pipeline.face_normals[triangle]);
+        } else if (!s.mesh.normals.empty()) {
+            f.normal = b[0] * glm::vec3(s.mesh.normals[t[0]]) + b[1] * glm::vec3(s.mesh.normals[t[1]]) +
+                       b[2] * glm::vec3(s.mesh.normals[t[2]]);
+        }
+    }
+    if (needs.texCoord && !s.mesh.uvs.empty()) {
+        f.texCoord = s.uv_at(triangle, b);
+        if (needs.texCoord_derivatives) {
+            // llvmpipe's per-quad derivatives of the visible primitive (render.h).
+            const auto q = quad_of(x, row);
+            const auto c = s.clip_corners(triangle);
+            auto uv = [&](int px, int prow) {
+                const glm::dvec3 w = perspective_weights(c, pixel_ndc(px, prow, width, height));
+                return s.uv_at(triangle, glm::vec3(w));
+            };
+            const glm::vec2 top_left = uv(q.x0, q.row0);
+            f.texCoord_dx = uv(q.x0 + 1, q.row0) - top_left;
+            f.texCoord_dy = top_left - uv(q.x0, q.row0 + 1);
+        }
+    }
+    return f;
+}
+
+// Window depth of the triangle's plane at the centre of pixel (x, row).
+double plane_depth(const std::array<glm::dvec4, 3>& c, int x, int row, int width, int height) {
+    const glm::dvec3 w = perspective_weights(c, pixel_ndc(x, row, width, height));
+    return window_depth(w.x * c[0] + w.y * c[1] + w.z * c[2]);
+}
+
+}  // namespace
+
+float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_t triangle, std::string* source) {
+    const SurfaceMesh& mesh = pipeline.mesh;
+    const auto& t = mesh.triangles.at(triangle);
+    const std::uint32_t patch = mesh.patch_ids[t[0]];
+    const TessLevels& levels = pipeline.levels.at(patch);
+    const int edges = domain == Domain::quads ? 4 : 3;
+    int best_edge = -1, best_count = 0;
+    for (int e = 0; e < edges; ++e) {
+        int count = 0;
+        for (const std::uint32_t v : t) count += on_outer_edge(domain, mesh.tess_coords[v], e) ? 1 : 0;
+        if (count > best_count) {
+            best_count = count;
+            best_edge = e;
+        }
+    }
+    if (best_edge >= 0) {
+        if (source) *source = "outer[" + std::to_string(best_edge) + "]";
+        return levels.outer[static_cast<std::size_t>(best_edge)];
+    }
+    if (source) *source = "inner";
+    return domain == Domain::quads ? std::max(levels.inner[0], levels.inner[1]) : levels.inner[0];
+}
+
+RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
+    const SceneCamera camera = render_detail::camera_for(scene, options);
+    shading_model(scene);  // a wrong [shading] table fails before the pipeline runs
+    const auto start = Clock::now();
+    PipelineOptions pipeline_options;
+    pipeline_options.precision = options.precision;
+    if (options.progress) {
+        pipeline_options.progress = [&](std::size_t done, std::size_t total) {
+            options.progress("tessellating", total ? static_cast<double>(done) / static_cast<double>(total) : 1.0);
+        };
+    }
+    // The pipeline sees the image's viewport, as it would see the application's window.
+    std::shared_ptr<const PipelineResult> pipeline;
+    if (camera.viewport == scene.camera->viewport) {
+        pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene, pipeline_options));
+    } else {
+        Scene resized = scene;
+        resized.camera = camera;
+        pipeline = std::make_shared<const PipelineResult>(run_pipeline(resized, pipeline_options));
+    }
+    const double seconds_pipeline = seconds_since(start);
+    RenderResult result = render_surface(scene, std::move(pipeline), options);
+    result.stats.seconds_pipeline = seconds_pipeline;
+    return result;
+}
+
+RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineResult> pipeline,
+                            const RenderOptions& options) {
+    if (!pipeline) throw Error("render_surface needs a pipeline result", where_key("pipeline"));
+    RenderResult result;
+    result.camera = render_detail::camera_for(scene, options);
+    result.shading = shading_model(scene);
+    const int width = result.camera.viewport.x, height = result.camera.viewport.y;
+    result.mvp = glm::mat4(result.camera.view_projection());
+    auto progress = [&](std::string_view stage, double fraction) {
+        if (options.progress) options.progress(stage, fraction);
+    };
+    result.pipeline = std::move(pipeline);
+    const PipelineResult& pipe = *result.pipeline;
+    const SurfaceMesh& mesh = pipe.mesh;
+    if (mesh.patch_ids.size() != mesh.positions.size() || mesh.tess_coords.size() != mesh.positions.size() ||
+        (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size()) ||
+        (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size()) ||
+        pipe.levels.size() != scene.patch_count())
+        throw Error("the pipeline result does not fit the scene (vertex attributes or patch count)",
+                    where_key("pipeline"));
+    const bool face_normals = scene.geometry && scene.geometry->normals == GeometryNormals::face;
+    if (face_normals && pipe.face_normals.size() != mesh.triangles.size())
+        throw Error("the pipeline result has no face normals", where_key("pipeline"));
+    result.stats.triangles = mesh.triangles.size();
+    result.stats.vertices = mesh.positions.size();
+
+    // ---- gl_Position = mvp * vec4(position, 1.0) (thesis_terrain.tese:38), in float ---------
+    auto start = Clock::now();
+    progress("rasterizing", 0.0);
+    std::vector<glm::vec4> clip(mesh.positions.size());
+    const glm::mat4 mvp = result.mvp;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, clip.size(), 16384), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) clip[i] = mvp * glm::vec4(glm::vec3(mesh.positions[i]), 1.0f);
+    });
+
+    RasterInput input;
+    input.positions = clip;
+    input.triangles = mesh.triangles;
+    RasterSettings settings;
+    settings.depth_func = DepthFunc::less;
+    settings.polygon_mode = options.mode == RenderMode::wireframe ? PolygonMode::line : PolygonMode::fill;
+    Framebuffer fb = Framebuffer::create(width, height, 0);
+    result.stats.raster = rasterize(fb, input, settings);
+
+    Framebuffer lines;
+    if (options.mode == RenderMode::fill_with_wireframe) {
+        lines = Framebuffer::create(width, height, 0);
+        RasterSettings line_settings = settings;
+        line_settings.polygon_mode = PolygonMode::line;
+        rasterize(lines, input, line_settings);
+    }
+    result.stats.seconds_raster = seconds_since(start);
+
+    // ---- resolve and shade every pixel -----------------------------------------------------
+    start = Clock::now();
+    progress("shading", 0.0);
+    render_detail::allocate(result, width, height);
+    const SurfaceView view{mesh, pipe, clip, face_normals};
+    const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
+    const Domain domain = scene.generator.domain;
+    result.domain = domain;
+    const auto covered = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, height), std::uint64_t{0},
+        [&](const tbb::blocked_range<int>& rows, std::uint64_t count) {
+            for (int row = rows.begin(); row < rows.end(); ++row) {
+                for (int x = 0; x < width; ++x) {
+                    const std::size_t i = result.index(x, row);  // same layout as the framebuffer
+                    const std::uint32_t tri = fb.triangle_id[i];
+                    if (tri == kNoTriangle) continue;
+                    ++count;
+                    const glm::vec3 b = fb.barycentric[i];
+                    const auto& t = mesh.triangles[tri];
+                    result.triangle_id[i] = tri;
+                    result.patch_id[i] = mesh.patch_ids[t[0]];
+                    result.barycentric[i] = b;
+                    result.tess_coord[i] = b[0] * mesh.tess_coords[t[0]] + b[1] * mesh.tess_coords[t[1]] +
+                                           b[2] * mesh.tess_coords[t[2]];
+                    result.depth[i] = fb.depth[i];
+                    result.level[i] = triangle_level(pipe, domain, tri);
+                    const FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i], x, row, width, height);
+                    result.colour[i] = shade(result.shading.model, f);
+                }
+            }
+            return count;
+        },
+        std::plus<>());
+    result.stats.covered_pixels = covered;
+
+    if (options.mode == RenderMode::fill_with_wireframe) {
+        // The lines over the filled image where they are not behind it (render.h).
+        tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+            for (int row = rows.begin(); row < rows.end(); ++row) {
+                for (int x = 0; x < width; ++x) {
+                    const std::size_t i = result.index(x, row);
+                    if (lines.triangle_id[i] == kNoTriangle) continue;
+                    const std::uint32_t tri = fb.triangle_id[i];
+                    bool visible = tri == kNoTriangle;
+                    if (!visible) {
+                        const auto c = view.clip_corners(tri);
+                        const double z = plane_depth(c, x, row, width, height);
+                        const double slope = std::max(std::abs(plane_depth(c, x + 1, row, width, height) - z),
+                                                      std::abs(plane_depth(c, x, row + 1, width, height) - z));
+                        const double offset = (std::isfinite(slope) ? slope : 0.0) + std::ldexp(1.0, -20);
+                        visible = static_cast<double>(lines.depth[i]) <= static_cast<double>(fb.depth[i]) + offset;
+                    }
+                    if (visible) result.colour[i] = result.shading.wireframe_colour;
+                }
+            }
+        });
+    }
+    result.stats.seconds_shade = seconds_since(start);
+    progress("shading", 1.0);
+    return result;
+}
+
+PixelProvenance pixel_provenance(const RenderResult& result, int x, int y) {
+    if (x < 0 || y < 0 || x >= result.width || y >= result.height)
+        throw Error("pixel " + std::to_string(x) + "," + std::to_string(y) + " is outside the " +
+                        std::to_string(result.width) + "x" + std::to_string(result.height) + " image",
+                    where_key("pixel"));
+    PixelProvenance p;
+    p.x = x;
+    p.y = y;
+    p.window_x = x;
+    p.window_y = result.height - 1 - y;
+    const std::size_t i = result.index(x, y);
+    p.colour = result.colour[i];
+    p.depth = result.depth[i];
+    p.triangle_id = result.triangle_id[i];
+    p.patch_id = result.patch_id[i];
+    p.covered = p.triangle_id != kNoPixelId;
+    if (!p.covered) return p;
+    p.barycentric = result.barycentric[i];
+    p.tess_coord = result.tess_coord[i];
+    p.level = result.level[i];
+    if (!result.pipeline) return p;  // a ray-traced image: no tessellation
+    const PipelineResult& pipe = *result.pipeline;
+    const SurfaceMesh& mesh = pipe.mesh;
+    const auto& t = mesh.triangles[p.triangle_id];
+    p.vertices = t;
+    const glm::dvec3 b(p.barycentric);
+    for (int k = 0; k < 3; ++k) {
+        p.vertex_tess_coords[static_cast<std::size_t>(k)] = mesh.tess_coords[t[static_cast<std::size_t>(k)]];
+        p.world_position += b[k] * mesh.positions[t[static_cast<std::size_t>(k)]];
+    }
+    if (!pipe.face_normals.empty()) {
+        p.normal = pipe.face_normals[p.triangle_id];
+    } else if (!mesh.normals.empty()) {
+        p.normal = b[0] * mesh.normals[t[0]] + b[1] * mesh.normals[t[1]] + b[2] * mesh.normals[t[2]];
+    }
+    if (!mesh.uvs.empty()) p.uv = b[0] * mesh.uvs[t[0]] + b[1] * mesh.uvs[t[1]] + b[2] * mesh.uvs[t[2]];
+    p.patch_levels = pipe.levels.at(p.patch_id);
+    triangle_level(pipe, result.domain, p.triangle_id, &p.level_source);
+    return p;
+}
+
+glm::vec3 level_heat_colour(float level) {
+    if (std::isnan(level)) return glm::vec3(0.0f);
+    const float t = std::clamp(std::log2(std::max(level, 1.0f)) / 6.0f, 0.0f, 1.0f);
+    static const glm::vec3 stops[5] = {{0.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 1.0f}, {0.0f, 1.0f, 0.0f},
+                                       {1.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f}};
+    const float s = t * 4.0f;
+    const int k = std::min(3, static_cast<int>(s));
+    return glm::mix(stops[k], stops[k + 1], s - static_cast<float>(k));
+}
+
+std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
+    std::vector<std::uint8_t> out(result.colour.size() * 4);
+    for (std::size_t i = 0; i < result.colour.size(); ++i) {
+        for (int c = 0; c < 4; ++c) {
+            float v = result.colour[i][c];
+            v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+            out[i * 4 + static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::lrint(v * 255.0f));
+        }
+    }
+    return out;
+}
+
+ImageDifference compare_images(const RenderResult& a, const RenderResult& b) {
+    if (a.width != b.width || a.height != b.height)
+        throw Error("images of different sizes: " + std::to_string(a.width) + "x" + std::to_string(a.height) +
+                        " and " + std::to_string(b.width) + "x" + std::to_string(b.height),
+                    where_key("size"));
+    ImageDifference d;
+    d.pixels = a.colour.size();
+    double sum = 0.0;
+    auto clamp01 = [](float v) { return std::isnan(v) ? 0.0 : std::clamp(static_cast<double>(v), 0.0, 1.0); };
+    for (std::size_t i = 0; i < a.colour.size(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const double e = clamp01(a.colour[i][c]) - clamp01(b.colour[i][c]);
+            sum += e * e;
+            d.max_abs = std::max(d.max_abs, std::abs(e));
+        }
+        if ((a.triangle_id[i] == kNoPixelId) != (b.triangle_id[i] == kNoPixelId)) ++d.coverage_mismatch;
+    }
+    d.rmse = d.pixels ? std::sqrt(sum / (3.0 * static_cast<double>(d.pixels))) : 0.0;
+    return d;
+}
+
+}  // namespace tessref

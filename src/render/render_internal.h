@@ -1,0 +1,63 @@
+// render_internal.h — pieces shared by the rasterized and the ray-traced renderers
+// (private to src/render/).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "tessref/error.h"
+#include "tessref/render.h"
+
+namespace tessref::render_detail {
+
+// Normalized device coordinates of the centre of image pixel (x, row) (row 0 on top): the
+// inverse of the viewport transform win = (ndc + 1) * size / 2 at window (x + 0.5,
+// height - 1 - row + 0.5).
+inline glm::dvec2 pixel_ndc(double x, double row, int width, int height) {
+    const double wy = static_cast<double>(height) - 1.0 - row;
+    return {(x + 0.5) * 2.0 / width - 1.0, (wy + 0.5) * 2.0 / height - 1.0};
+}
+
+// The perspective-correct weights, at NDC point p, of the triangle with clip-space corners
+// c[0..2]: the affine weights beta (sum 1) of the clip-space point sum(beta_i c_i) whose
+// projection is p. With h_i = (x_i, y_i, w_i), sum(beta_i h_i) is proportional to
+// (p.x, p.y, 1), so by Cramer's rule beta_i is proportional to det(p, h_j, h_k) for (i, j, k)
+// cyclic. No division by w_i: corners behind the eye are fine. Evaluates the triangle's
+// plane outside the triangle too (helper pixels). NaN or inf where the plane is seen
+// edge-on (the weights' sum vanishes).
+inline glm::dvec3 perspective_weights(const std::array<glm::dvec4, 3>& c, glm::dvec2 p) {
+    const glm::dvec3 h0(c[0].x, c[0].y, c[0].w), h1(c[1].x, c[1].y, c[1].w), h2(c[2].x, c[2].y, c[2].w);
+    const glm::dvec3 q(p, 1.0);
+    const glm::dvec3 b(glm::dot(q, glm::cross(h1, h2)), glm::dot(q, glm::cross(h2, h0)),
+                       glm::dot(q, glm::cross(h0, h1)));
+    return b / (b.x + b.y + b.z);
+}
+
+// Window z (depth range [0, 1]) of a clip-space point.
+inline double window_depth(const glm::dvec4& clip) { return 0.5 * (clip.z / clip.w) + 0.5; }
+
+// The pixels of the 2x2 quad of (x, row) that llvmpipe's derivatives read: its top-left,
+// top-right and bottom-left pixels (image rows; the framebuffer of a window is stored top
+// row first, so the quads are aligned on even image rows). A quad cut by the image border
+// still has its pixel positions: helper pixels outside the image are evaluated too.
+struct QuadPixels {
+    int x0, row0;
+};
+inline QuadPixels quad_of(int x, int row) { return {x & ~1, row & ~1}; }
+
+// Resizes and clears the per-pixel buffers of `result` for a width x height image.
+void allocate(RenderResult& result, int width, int height);
+
+// The camera with the image size applied (RenderOptions::size), and the size checked.
+SceneCamera camera_for(const Scene& scene, const RenderOptions& options);
+
+inline Where where_key(std::string key) {
+    Where w;
+    w.key = std::move(key);
+    return w;
+}
+
+}  // namespace tessref::render_detail
