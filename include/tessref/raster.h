@@ -21,12 +21,14 @@
 //    uses draw's float determinant, a zero one counting as back-facing.
 //
 // tests/test_raster_llvmpipe.cpp holds all of this to exact agreement with Mesa 22.3.6's
-// llvmpipe, fill and wireframe, with and without culling.
+// llvmpipe (Debian bookworm), fill and wireframe, with and without culling, plain and
+// tessellated draws, and the shipped scenes. Other Mesa versions differ in details (later
+// ones changed the clipper's handling of vertices on a plane and a line-end rule).
 //
 // A window-system framebuffer is emulated (OSMesa's own buffer, not a user FBO): Mesa
 // renders it upside down internally (row 0 on top), so window y is computed and snapped in
-// that orientation, as llvmpipe does. Rendering into a user FBO differs only in rare y
-// rounding ties.
+// that orientation, as llvmpipe does. A user FBO (rendered the other way up, with the mirror
+// fill convention) is not modelled: it can differ where y rounds differently.
 //
 // Attributes are not exact to llvmpipe's bits: depth (window z, interpolated linearly in
 // screen space, clamped to [0,1]) and the perspective-correct barycentric weights of the
