@@ -127,6 +127,9 @@ struct RenderOptions {
     // Called from the calling thread with a stage name and the fraction of it done; may be
     // empty.
     std::function<void(std::string_view stage, double fraction)> progress;
+    // The fragment stage to use; null: shading_model(scene) (the scene's [shading] table,
+    // its textures loaded for this call). Set it to render a scene repeatedly.
+    std::shared_ptr<const RenderShading> shading;
 };
 
 struct RenderStats {

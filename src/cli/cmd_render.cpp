@@ -108,6 +108,7 @@ int run_render(const RenderCommandOptions& options) {
         thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options.threads));
 
     const Scene scene = load_scene(options.scene);
+    render_options.shading = std::make_shared<const RenderShading>(shading_model(scene));
     StageProgress stage_progress;
     render_options.progress = [&stage_progress](std::string_view stage, double fraction) {
         stage_progress(stage, fraction);

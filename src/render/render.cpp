@@ -19,7 +19,6 @@ namespace tessref {
 
 using render_detail::perspective_weights;
 using render_detail::pixel_ndc;
-using render_detail::quad_of;
 using render_detail::where_key;
 using render_detail::window_depth;
 
@@ -81,9 +80,10 @@ struct SurfaceView {
     }
 };
 
-// The fragment inputs of a pixel whose visible triangle and weights are known.
+// The fragment inputs of a pixel whose visible triangle and weights are known (the texture
+// coordinate's derivatives are the caller's: quad_derivatives).
 FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs, std::uint32_t triangle,
-                               const glm::vec3& b, float depth, int x, int row, int width, int height) {
+                               const glm::vec3& b, float depth) {
     FragmentInputs f;
     const auto& t = s.mesh.triangles[triangle];
     f.depth = depth;
@@ -99,22 +99,24 @@ FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs,
                        b[2] * glm::vec3(s.mesh.normals[t[2]]);
         }
     }
-    if (needs.texCoord && !s.mesh.uvs.empty()) {
-        f.texCoord = s.uv_at(triangle, b);
-        if (needs.texCoord_derivatives) {
-            // llvmpipe's per-quad derivatives of the visible primitive (render.h).
-            const auto q = quad_of(x, row);
-            const auto c = s.clip_corners(triangle);
-            auto uv = [&](int px, int prow) {
-                const glm::dvec3 w = perspective_weights(c, pixel_ndc(px, prow, width, height));
-                return s.uv_at(triangle, glm::vec3(w));
-            };
-            const glm::vec2 top_left = uv(q.x0, q.row0);
-            f.texCoord_dx = uv(q.x0 + 1, q.row0) - top_left;
-            f.texCoord_dy = top_left - uv(q.x0, q.row0 + 1);
-        }
-    }
+    if (needs.texCoord && !s.mesh.uvs.empty()) f.texCoord = s.uv_at(triangle, b);
     return f;
+}
+
+// llvmpipe's per-quad derivatives of the visible primitive's texture coordinate (render.h):
+// the triangle's interpolation at the quad's top-left, top-right and bottom-left pixel
+// centres, inside the triangle or not (helper pixels).
+struct Derivatives {
+    glm::vec2 dx{0.0f}, dy{0.0f};
+};
+Derivatives quad_derivatives(const SurfaceView& s, std::uint32_t triangle, int x0, int row0, int width, int height) {
+    const auto c = s.clip_corners(triangle);
+    auto uv = [&](int px, int prow) {
+        const glm::dvec3 w = perspective_weights(c, pixel_ndc(px, prow, width, height));
+        return s.uv_at(triangle, glm::vec3(w));
+    };
+    const glm::vec2 top_left = uv(x0, row0);
+    return {uv(x0 + 1, row0) - top_left, top_left - uv(x0, row0 + 1)};
 }
 
 // Window depth of the triangle's plane at the centre of pixel (x, row).
@@ -150,7 +152,9 @@ float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_
 
 RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
     const SceneCamera camera = render_detail::camera_for(scene, options);
-    shading_model(scene);  // a wrong [shading] table fails before the pipeline runs
+    RenderOptions surface_options = options;
+    if (!surface_options.shading)  // a wrong [shading] table fails before the pipeline runs
+        surface_options.shading = std::make_shared<const RenderShading>(shading_model(scene));
     const auto start = Clock::now();
     PipelineOptions pipeline_options;
     pipeline_options.precision = options.precision;
@@ -169,7 +173,7 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
         pipeline = std::make_shared<const PipelineResult>(run_pipeline(resized, pipeline_options));
     }
     const double seconds_pipeline = seconds_since(start);
-    RenderResult result = render_surface(scene, std::move(pipeline), options);
+    RenderResult result = render_surface(scene, std::move(pipeline), surface_options);
     result.stats.seconds_pipeline = seconds_pipeline;
     return result;
 }
@@ -179,7 +183,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     if (!pipeline) throw Error("render_surface needs a pipeline result", where_key("pipeline"));
     RenderResult result;
     result.camera = render_detail::camera_for(scene, options);
-    result.shading = shading_model(scene);
+    result.shading = options.shading ? *options.shading : shading_model(scene);
     const int width = result.camera.viewport.x, height = result.camera.viewport.y;
     result.mvp = glm::mat4(result.camera.view_projection());
     auto progress = [&](std::string_view stage, double fraction) {
@@ -235,26 +239,48 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
     const Domain domain = scene.generator.domain;
     result.domain = domain;
+    const bool derivatives = needs.texCoord && needs.texCoord_derivatives && !mesh.uvs.empty();
+    // Quad by quad (2x2 pixels, as llvmpipe shades): the pixels of a quad that show the same
+    // triangle share its derivatives (and its level).
     const auto covered = tbb::parallel_reduce(
-        tbb::blocked_range<int>(0, height), std::uint64_t{0},
-        [&](const tbb::blocked_range<int>& rows, std::uint64_t count) {
-            for (int row = rows.begin(); row < rows.end(); ++row) {
-                for (int x = 0; x < width; ++x) {
-                    const std::size_t i = result.index(x, row);  // same layout as the framebuffer
-                    const std::uint32_t tri = fb.triangle_id[i];
-                    if (tri == kNoTriangle) continue;
-                    ++count;
-                    const glm::vec3 b = fb.barycentric[i];
-                    const auto& t = mesh.triangles[tri];
-                    result.triangle_id[i] = tri;
-                    result.patch_id[i] = mesh.patch_ids[t[0]];
-                    result.barycentric[i] = b;
-                    result.tess_coord[i] = b[0] * mesh.tess_coords[t[0]] + b[1] * mesh.tess_coords[t[1]] +
-                                           b[2] * mesh.tess_coords[t[2]];
-                    result.depth[i] = fb.depth[i];
-                    result.level[i] = triangle_level(pipe, domain, tri);
-                    const FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i], x, row, width, height);
-                    result.colour[i] = shade(result.shading.model, f);
+        tbb::blocked_range<int>(0, (height + 1) / 2), std::uint64_t{0},
+        [&](const tbb::blocked_range<int>& quad_rows, std::uint64_t count) {
+            for (int quad_row = quad_rows.begin(); quad_row < quad_rows.end(); ++quad_row) {
+                const int row0 = 2 * quad_row;
+                for (int x0 = 0; x0 < width; x0 += 2) {
+                    std::uint32_t cached_triangle[4];
+                    Derivatives cached[4];
+                    float cached_level[4];
+                    int cached_count = 0;
+                    for (int row = row0; row < std::min(row0 + 2, height); ++row) {
+                        for (int x = x0; x < std::min(x0 + 2, width); ++x) {
+                            const std::size_t i = result.index(x, row);  // the framebuffer's layout too
+                            const std::uint32_t tri = fb.triangle_id[i];
+                            if (tri == kNoTriangle) continue;
+                            ++count;
+                            const glm::vec3 b = fb.barycentric[i];
+                            const auto& t = mesh.triangles[tri];
+                            result.triangle_id[i] = tri;
+                            result.patch_id[i] = mesh.patch_ids[t[0]];
+                            result.barycentric[i] = b;
+                            result.tess_coord[i] = b[0] * mesh.tess_coords[t[0]] + b[1] * mesh.tess_coords[t[1]] +
+                                                   b[2] * mesh.tess_coords[t[2]];
+                            result.depth[i] = fb.depth[i];
+                            int k = 0;
+                            while (k < cached_count && cached_triangle[k] != tri) ++k;
+                            if (k == cached_count) {
+                                cached_triangle[k] = tri;
+                                cached_level[k] = triangle_level(pipe, domain, tri);
+                                if (derivatives) cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
+                                ++cached_count;
+                            }
+                            result.level[i] = cached_level[k];
+                            FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
+                            f.texCoord_dx = cached[k].dx;
+                            f.texCoord_dy = cached[k].dy;
+                            result.colour[i] = shade(result.shading.model, f);
+                        }
+                    }
                 }
             }
             return count;
