@@ -118,6 +118,9 @@ int run_render(const RenderCommandOptions& options) {
                                                  : render_scene(scene, render_options);
     write_image(result, output.temp_path().string(), format, aovs);
     output.commit();
+    if (aovs.triangle && result.stats.triangles > (1u << 24))
+        std::cerr << "tessref: warning: " << result.stats.triangles
+                  << " triangles: ids above 16777216 are not exact in the float channel triangle_id\n";
 
     std::cout << options.output << ": " << result.width << "x" << result.height << ", "
               << to_string(result.shading.model.kind) << " shading, ";
