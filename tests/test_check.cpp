@@ -576,6 +576,62 @@ TEST(CheckCorpus, MismatchedLevelsMadeByCode) {
     EXPECT_TRUE(tessref::check_mesh(tessref::indexed_mesh_from(two_patches(3, 3, bowl)), quick()).passed);
 }
 
+// A 3 x 3 patch terrain (2 x 2 quads a patch) whose centre patch is re-tessellated as a
+// fan from its centre with 4 segments on its left edge, where its left neighbour keeps 2:
+// a crack inside the terrain, away from the outline.
+SurfaceMesh terrain_with_inner_crack() {
+    SurfaceMesh mesh = grid_terrain(3, 2, hills);
+    // Drop the centre patch (patch 4) and add its fan.
+    const std::size_t per_patch = 8;  // triangles
+    mesh.triangles.erase(mesh.triangles.begin() + 4 * per_patch, mesh.triangles.begin() + 5 * per_patch);
+    const double n = 6.0;  // quads per side of the whole terrain
+    auto point = [&](double gi, double gj) {  // global grid coordinates, as grid_terrain computes them
+        const double x = 10.0 * gi / n, y = 10.0 * gj / n;
+        mesh.positions.emplace_back(x, y, hills(x, y));
+        mesh.patch_ids.push_back(4);
+        mesh.tess_coords.emplace_back(0.0f, 0.0f, 0.0f);
+        return static_cast<std::uint32_t>(mesh.positions.size() - 1);
+    };
+    // The centre patch spans gi, gj in [2, 4]; its outline counter-clockwise from (2, 2).
+    std::vector<std::uint32_t> ring;
+    for (double gi : {2.0, 3.0}) ring.push_back(point(gi, 2.0));
+    for (double gj : {2.0, 3.0}) ring.push_back(point(4.0, gj));
+    for (double gi : {4.0, 3.0}) ring.push_back(point(gi, 4.0));
+    for (double gj : {4.0, 3.5, 3.0, 2.5}) ring.push_back(point(2.0, gj));  // the finer left edge
+    const std::uint32_t centre = point(3.0, 3.0);
+    for (std::size_t i = 0; i < ring.size(); ++i) mesh.triangles.push_back({centre, ring[i], ring[(i + 1) % ring.size()]});
+    return mesh;
+}
+
+TEST(CheckCorpus, CrackInsideATerrain) {
+    const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(terrain_with_inner_crack()), quick());
+    EXPECT_EQ(r.judged_as, "open");
+    // The finer edge's vertices at y = 2.5 and 3.5 units of the grid (x = 10/3) lie on the
+    // coarser patch's edges; the surface is curved there, so the crack opens vertically.
+    ASSERT_EQ(r.count(DefectClass::t_junction), 2u) << tessref::report_text(r);
+    std::set<double> ys;
+    for (const auto& d : r.of(DefectClass::t_junction).locations) {
+        EXPECT_NEAR(d.position.x, 10.0 / 3.0, 1e-12);
+        ys.insert(d.position.y);
+        EXPECT_GT(d.measure, 0.0);
+    }
+    EXPECT_EQ(ys, (std::set<double>{10.0 * 2.5 / 6.0, 10.0 * 3.5 / 6.0}));
+    // The outline stays the one allowed loop (6 quads a side); the crack is one loop inside
+    // of 2 + 4 edges, passing twice through the vertex both patches share in the middle of
+    // the edge, where the surface is pinched.
+    ASSERT_EQ(r.boundary_loops.size(), 2u);
+    EXPECT_TRUE(r.boundary_loops[0].allowed);
+    EXPECT_EQ(r.boundary_loops[0].edge_count, 4u * 6u);
+    ASSERT_EQ(r.count(DefectClass::boundary_loop), 1u);
+    EXPECT_EQ(r.boundary_loops[1].edge_count, 6u);
+    EXPECT_NEAR(r.of(DefectClass::boundary_loop).locations[0].position.x, 10.0 / 3.0, 1e-9);
+    ASSERT_EQ(r.count(DefectClass::non_manifold_vertex), 1u);
+    EXPECT_EQ(r.of(DefectClass::non_manifold_vertex).locations[0].position.y, 5.0);
+    // Closed into a solid, it still leaks.
+    const SurfaceMesh solid = tessref::close_terrain_into_solid(terrain_with_inner_crack(), 0.0);
+    EXPECT_FALSE(tessref::check_mesh(tessref::indexed_mesh_from(solid), quick(Expect::closed)).passed);
+}
+
 // ---------------------------------------------------------------------------------------
 // Solids closed from terrains
 

@@ -20,21 +20,27 @@ namespace {
 constexpr std::size_t face_chunk = 1 << 14;
 constexpr std::size_t vertex_chunk = 1 << 14;
 
-std::uint64_t mix(std::uint64_t h) {
-    h ^= h >> 33;
-    h *= 0xff51afd7ed558ccdull;
-    h ^= h >> 33;
-    h *= 0xc4ceb9fe1a85ec53ull;
-    h ^= h >> 33;
-    return h;
+// Spreads the low 21 bits of x to every third bit.
+std::uint64_t spread_bits(std::uint64_t x) {
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
 }
 
+// The Morton (Z-order) code of a cell: nearby cells get nearby codes, so points sorted by
+// it are visited in space order (and their positions read nearly in memory order). Cells
+// 2^21 apart share a code; they only cost a distance test.
 std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
-    return mix(static_cast<std::uint64_t>(x) * 0x9E3779B97F4A7C15ull ^ mix(static_cast<std::uint64_t>(y) + 0x632BE59BD9B4E019ull) ^
-               mix(static_cast<std::uint64_t>(z) * 0x85EBCA77C2B2AE63ull + 1));
+    return spread_bits(static_cast<std::uint64_t>(x)) | spread_bits(static_cast<std::uint64_t>(y)) << 1 |
+           spread_bits(static_cast<std::uint64_t>(z)) << 2;
 }
 
-// A hashed uniform grid over a set of points: cell -> the points in it.
+// A uniform grid over a set of points: their entries sorted by cell, so a cell's points
+// are adjacent and a cell is found by binary search.
 class PointGrid {
 public:
     PointGrid(const std::vector<glm::dvec3>& points, const std::vector<std::uint32_t>& ids, glm::dvec3 origin,
@@ -48,44 +54,29 @@ public:
             }
         });
         tbb::parallel_sort(entries_.begin(), entries_.end());
-        // Open addressing: key -> first entry of its run.
-        std::size_t runs = 0;
-        for (std::size_t i = 0; i < entries_.size(); ++i) runs += i == 0 || entries_[i].first != entries_[i - 1].first;
-        table_.assign(std::bit_ceil(std::max<std::size_t>(16, runs * 2)), none);
-        for (std::size_t i = 0; i < entries_.size(); ++i) {
-            if (i > 0 && entries_[i].first == entries_[i - 1].first) continue;
-            std::size_t slot = entries_[i].first & (table_.size() - 1);
-            while (table_[slot] != none) slot = (slot + 1) & (table_.size() - 1);
-            table_[slot] = static_cast<std::uint32_t>(i);
-        }
     }
 
     glm::i64vec3 cell_of(const glm::dvec3& p) const {
         return glm::i64vec3(glm::floor((p - origin_) / cell_));
     }
 
-    // Calls fn(id) for every point filed under cell c (and, rarely, a hash neighbour's).
+    // Calls fn(id) for every point filed under cell c (and, rarely, a cell sharing its code).
     template <class Fn>
     void visit(const glm::i64vec3& c, Fn&& fn) const {
         const std::uint64_t key = cell_key(c.x, c.y, c.z);
-        std::size_t slot = key & (table_.size() - 1);
-        while (table_[slot] != none) {
-            std::size_t i = table_[slot];
-            if (entries_[i].first == key) {
-                for (; i < entries_.size() && entries_[i].first == key; ++i) fn(entries_[i].second);
-                return;
-            }
-            slot = (slot + 1) & (table_.size() - 1);
-        }
+        auto it = std::lower_bound(entries_.begin(), entries_.end(), std::make_pair(key, std::uint32_t{0}));
+        for (; it != entries_.end() && it->first == key; ++it) fn(it->second);
     }
 
     double cell() const { return cell_; }
+    // The points in cell order: entry(i) = (cell key, id); a cell's points are adjacent.
+    std::size_t size() const { return entries_.size(); }
+    const std::pair<std::uint64_t, std::uint32_t>& entry(std::size_t i) const { return entries_[i]; }
 
 private:
     glm::dvec3 origin_;
     double cell_;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> entries_;
-    std::vector<std::uint32_t> table_;
 };
 
 // Point-to-segment: the parameter along a->b of the closest point, and the distance.
@@ -256,27 +247,38 @@ void find_coincident_vertices(CheckState& state) {
     // Pairs (v, u), v < u, closer than the tolerance (or equal when the tolerance is 0).
     std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     if (tolerance > 0.0) {
-        const double cell = 4.0 * tolerance;
+        // Cells much wider than the tolerance: a point looks into a neighbour cell only when
+        // it lies within the tolerance of the face between them (a few percent of points),
+        // and into its own cell by walking its run of the grid's sorted entries.
+        const double cell = std::max(32.0 * tolerance, 1e-12 * std::max(1.0, state.diagonal));
         const PointGrid grid(mesh.positions, ids, state.bbox_min, cell);
         auto parts = map_chunks<std::vector<std::pair<std::uint32_t, std::uint32_t>>>(
-            ids.size(), vertex_chunk, [&](std::size_t i0, std::size_t i1, auto& out) {
+            grid.size(), vertex_chunk, [&](std::size_t i0, std::size_t i1, auto& out) {
                 for (std::size_t i = i0; i < i1; ++i) {
-                    const std::uint32_t v = ids[i];
+                    const auto [key, v] = grid.entry(i);
                     const glm::dvec3 p = mesh.positions[v];
+                    for (std::size_t j = i + 1; j < grid.size() && grid.entry(j).first == key; ++j) {
+                        const std::uint32_t u = grid.entry(j).second;
+                        if (glm::distance(p, mesh.positions[u]) <= tolerance) out.emplace_back(std::min(u, v), std::max(u, v));
+                    }
                     const glm::i64vec3 c = grid.cell_of(p);
                     const glm::dvec3 local = (p - state.bbox_min) / cell - glm::dvec3(c);
-                    // Neighbour cells only where p lies within a tolerance of the cell face.
                     int lo[3], hi[3];
+                    bool near_face = false;
                     for (int k = 0; k < 3; ++k) {
                         lo[k] = local[k] * cell <= tolerance ? -1 : 0;
                         hi[k] = (1.0 - local[k]) * cell <= tolerance ? 1 : 0;
+                        near_face = near_face || lo[k] != 0 || hi[k] != 0;
                     }
+                    if (!near_face) continue;
                     for (int dx = lo[0]; dx <= hi[0]; ++dx)
                         for (int dy = lo[1]; dy <= hi[1]; ++dy)
-                            for (int dz = lo[2]; dz <= hi[2]; ++dz)
+                            for (int dz = lo[2]; dz <= hi[2]; ++dz) {
+                                if (dx == 0 && dy == 0 && dz == 0) continue;
                                 grid.visit(c + glm::i64vec3(dx, dy, dz), [&](std::uint32_t u) {
                                     if (u > v && glm::distance(p, mesh.positions[u]) <= tolerance) out.emplace_back(v, u);
                                 });
+                            }
                 }
             });
         pairs = concatenate(std::move(parts));

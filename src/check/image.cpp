@@ -115,7 +115,25 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
                           view.pixel(mesh.positions[face[k + 1]]), value);
     }
 
-    OIIO::ImageBuf image(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::UINT8));
+    // The legend goes in a strip under the view, one row per class found.
+    std::vector<std::string> lines;
+    std::vector<Colour> swatches;
+    for (const DefectReport& d : report.defects) {
+        if (d.count == 0) continue;
+        lines.push_back(std::string(defect_class_name(d.kind)) + " (" + std::to_string(d.count) + ")");
+        swatches.push_back(class_colour(d.kind));
+    }
+    if (lines.empty()) {
+        lines.push_back("no defects");
+        swatches.push_back({0.2f, 0.6f, 0.2f});
+    }
+    const int row = 18, pad = 6, columns = std::max(1, w / 260);
+    const int legend_rows = (static_cast<int>(lines.size()) + columns - 1) / columns;
+    const int legend_height = 2 * pad + row * legend_rows;
+
+    OIIO::ImageBuf image(OIIO::ImageSpec(w, h + legend_height, 3, OIIO::TypeDesc::UINT8));
+    const float white[3] = {1.0f, 1.0f, 1.0f}, black[3] = {0.0f, 0.0f, 0.0f};
+    OIIO::ImageBufAlgo::fill(image, white);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const float g = grey[std::size_t(y) * w + x];
@@ -141,50 +159,36 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
         for (std::size_t i = 0; i + 1 < loop.vertices.size() + (loop.closed ? 1 : 0); ++i) {
             const glm::dvec2 p = view.pixel(mesh.positions[loop.vertices[i]]);
             const glm::dvec2 q = view.pixel(mesh.positions[loop.vertices[(i + 1) % loop.vertices.size()]]);
-            for (int d = -1; d <= (loop.allowed ? -1 : 1); ++d)
-                OIIO::ImageBufAlgo::render_line(image, int(p.x) + (loop.allowed ? 0 : d), int(p.y), int(q.x) + (loop.allowed ? 0 : d),
-                                                int(q.y), c);
+            const int thick = loop.allowed ? 0 : 1;
+            for (int dx = -thick; dx <= thick; ++dx)
+                for (int dy = -thick; dy <= thick; ++dy)
+                    OIIO::ImageBufAlgo::render_line(image, int(p.x) + dx, int(p.y) + dy, int(q.x) + dx, int(q.y) + dy, c);
         }
     }
     // Every located defect: a ring in its class colour.
     for (const DefectReport& d : report.defects) {
         const Colour c = class_colour(d.kind);
-        const int radius = 5 + static_cast<int>(d.kind) % 4 * 2;  // nested rings stay visible
+        const int radius = 7 + static_cast<int>(d.kind) % 4 * 3;  // nested rings stay visible
         for (const Defect& x : d.locations) {
             const glm::dvec2 p = view.pixel(x.position);
             for (int r = radius; r <= radius + 1; ++r)
-                for (int step = 0; step < 64; ++step) {
-                    const double angle = step * (2.0 * 3.141592653589793 / 64.0);
+                for (int step = 0; step < 8 * r; ++step) {
+                    const double angle = step * (2.0 * 3.141592653589793 / (8 * r));
                     OIIO::ImageBufAlgo::render_point(image, int(p.x + r * std::cos(angle)), int(p.y + r * std::sin(angle)), c);
                 }
         }
     }
 
-    // Legend, top left.
-    std::vector<std::string> lines;
-    std::vector<Colour> swatches;
-    for (const DefectReport& d : report.defects) {
-        if (d.count == 0) continue;
-        lines.push_back(std::string(defect_class_name(d.kind)) + " (" + std::to_string(d.count) + ")");
-        swatches.push_back(class_colour(d.kind));
-    }
-    if (lines.empty()) {
-        lines.push_back("no defects");
-        swatches.push_back({0.2f, 0.6f, 0.2f});
-    }
-    const int row = 18, pad = 6;
     const std::string font = std::filesystem::exists("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
                                  ? "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
                                  : "";
-    const float white[3] = {1.0f, 1.0f, 1.0f}, black[3] = {0.0f, 0.0f, 0.0f};
-    const int legend_width = 260, legend_height = pad * 2 + row * int(lines.size());
-    OIIO::ImageBufAlgo::render_box(image, 2, 2, std::min(w - 1, 2 + legend_width), std::min(h - 1, 2 + legend_height), white, true);
-    OIIO::ImageBufAlgo::render_box(image, 2, 2, std::min(w - 1, 2 + legend_width), std::min(h - 1, 2 + legend_height), black, false);
+    OIIO::ImageBufAlgo::render_line(image, 0, h, w - 1, h, black);
     for (std::size_t i = 0; i < lines.size(); ++i) {
-        const int y = 2 + pad + row * int(i);
-        OIIO::ImageBufAlgo::render_box(image, 2 + pad, y + 3, 2 + pad + 12, y + 15, swatches[i], true);
+        const int x = pad + 260 * (static_cast<int>(i) % columns);
+        const int y = h + pad + row * (static_cast<int>(i) / columns);
+        OIIO::ImageBufAlgo::render_box(image, x, y + 3, x + 12, y + 15, swatches[i], true);
         // Without a font the swatches still tell the classes apart; the text is a bonus.
-        OIIO::ImageBufAlgo::render_text(image, 2 + pad + 20, y + 14, lines[i], 13, font, black);
+        OIIO::ImageBufAlgo::render_text(image, x + 20, y + 14, lines[i], 13, font, black);
     }
     (void)image.geterror();
 

@@ -59,7 +59,9 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
 
     impl_->scene = rtcNewScene(impl_->device);
     if (!impl_->scene) embree_failure(impl_->device, "cannot create a scene");
-    rtcSetSceneFlags(impl_->scene, static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+    // Compact: a smaller BVH, which for large meshes also builds faster (fewer pages to fault in).
+    rtcSetSceneFlags(impl_->scene, static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_COMPACT |
+                                                              RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_LOW);
 
     RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
