@@ -229,6 +229,16 @@ fs::path scratch_dir() {
     return dir;
 }
 
+// Removes the scratch directory when the suite ends.
+class ScratchCleanup : public ::testing::Environment {
+public:
+    void TearDown() override {
+        std::error_code ec;
+        fs::remove_all(fs::temp_directory_path() / ("tessref_test_check_" + std::to_string(::getpid())), ec);
+    }
+};
+[[maybe_unused]] const auto* const scratch_cleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+
 RunResult run(const std::string& program, const std::vector<std::string>& args) {
     const fs::path dir = scratch_dir();
     std::string command = quote(program);

@@ -80,6 +80,9 @@ struct IndexedMesh {
 // unknown extension, a file the reader rejects, a truncated binary STL, a face referring
 // to a vertex the file does not have.
 IndexedMesh read_mesh_for_check(const std::string& path);
+// The same, calling progress(fraction read) now and then (from the calling thread) where the
+// file says how much it holds (PLY, OFF, binary STL).
+IndexedMesh read_mesh_for_check(const std::string& path, const std::function<void(double)>& progress);
 
 // The mesh `tessref mesh` would export: positions welded where they are bitwise equal
 // (the same rule as the exporter, so a crack between patches stays a crack).
@@ -171,6 +174,7 @@ struct CheckReport {
     std::size_t unreferenced_vertices = 0;
     std::size_t component_count = 0;  // connected through shared vertices
     std::size_t boundary_edge_count = 0;
+    std::size_t boundary_loop_count = 0;      // all of them (boundary_loops keeps the first)
     std::size_t topology_excluded_faces = 0;  // repeated-vertex faces and duplicate copies
     long long euler_characteristic = 0;       // V - E + F over the analysed faces
     glm::dvec3 bbox_min{0.0}, bbox_max{0.0};

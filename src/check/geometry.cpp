@@ -239,8 +239,10 @@ void analyse_face_geometry(CheckState& state) {
 void find_coincident_vertices(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     std::vector<std::uint32_t> ids;
-    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v)
-        if (state.vertex_referenced[v]) ids.push_back(v);
+    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+        const glm::dvec3& p = mesh.positions[v];
+        if (state.vertex_referenced[v] && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) ids.push_back(v);
+    }
     const double tolerance = state.tolerance;
     auto equal_position = [&](std::uint32_t a, std::uint32_t b) { return mesh.positions[a] == mesh.positions[b]; };
 

@@ -60,6 +60,11 @@ public:
     glm::dvec2 pixel(const glm::dvec3& p) const {
         return {(p[u_] - lo_.x) * scale_, height_ - (p[w_] - lo_.y) * scale_};
     }
+    // Whether a point lands near enough the picture to be drawn (not NaN, not far off).
+    bool drawable(const glm::dvec3& p) const {
+        const glm::dvec2 q = pixel(p);
+        return std::isfinite(q.x) && std::isfinite(q.y) && std::abs(q.x) < 1e6 && std::abs(q.y) < 1e6;
+    }
     int up() const { return up_; }
 
 private:
@@ -105,7 +110,8 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
     const bool draw_edges = mesh.face_count() <= 20000;
     for (std::size_t f = 0; f < mesh.face_count(); ++f) {
         const auto face = mesh.face(f);
-        if (face.size() < 3) continue;
+        if (face.size() < 3 || !std::all_of(face.begin(), face.end(), [&](std::uint32_t v) { return view.drawable(mesh.positions[v]); }))
+            continue;
         const glm::dvec3 a = check_detail::face_vector_area(mesh, f);
         const double len = glm::length(a);
         const float steep = len > 0.0 ? static_cast<float>(std::abs(a[view.up()]) / len) : 0.0f;
@@ -145,6 +151,7 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
         for (std::size_t f = 0; f < mesh.face_count(); ++f) {
             const auto face = mesh.face(f);
             for (std::size_t k = 0; k < face.size(); ++k) {
+                if (!view.drawable(mesh.positions[face[k]]) || !view.drawable(mesh.positions[face[(k + 1) % face.size()]])) continue;
                 const glm::dvec2 p = view.pixel(mesh.positions[face[k]]);
                 const glm::dvec2 q = view.pixel(mesh.positions[face[(k + 1) % face.size()]]);
                 OIIO::ImageBufAlgo::render_line(image, int(p.x), int(p.y), int(q.x), int(q.y), edge);
@@ -157,6 +164,9 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
     for (const BoundaryLoop& loop : report.boundary_loops) {
         const Colour c = loop.allowed ? Colour{0.35f, 0.35f, 0.35f} : loop_colour;
         for (std::size_t i = 0; i + 1 < loop.vertices.size() + (loop.closed ? 1 : 0); ++i) {
+            if (!view.drawable(mesh.positions[loop.vertices[i]]) ||
+                !view.drawable(mesh.positions[loop.vertices[(i + 1) % loop.vertices.size()]]))
+                continue;
             const glm::dvec2 p = view.pixel(mesh.positions[loop.vertices[i]]);
             const glm::dvec2 q = view.pixel(mesh.positions[loop.vertices[(i + 1) % loop.vertices.size()]]);
             const int thick = loop.allowed ? 0 : 1;
@@ -170,6 +180,7 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
         const Colour c = class_colour(d.kind);
         const int radius = 7 + static_cast<int>(d.kind) % 4 * 3;  // nested rings stay visible
         for (const Defect& x : d.locations) {
+            if (!view.drawable(x.position)) continue;
             const glm::dvec2 p = view.pixel(x.position);
             for (int r = radius; r <= radius + 1; ++r)
                 for (int step = 0; step < 8 * r; ++step) {

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <unordered_map>
@@ -52,6 +53,12 @@ public:
     using Base = OpenMesh::IO::ImporterT<OmMesh>;
     RecordingImporter(OmMesh& om, IndexedMesh& out) : Base(om), om_(om), out_(out) {}
 
+    // Progress: elements (vertices + faces) expected, and whom to tell.
+    void set_progress(std::uint64_t expected, const std::function<void(double)>* progress) {
+        expected_ = expected;
+        progress_ = progress;
+    }
+
     OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
         record_vertex({p[0], p[1], p[2]});
         return Base::add_vertex(p);
@@ -72,6 +79,7 @@ public:
 
     OpenMesh::FaceHandle add_face(const VHandles& handles) override {
         const auto face_id = static_cast<std::uint32_t>(out_.face_count());
+        tick();
         // A reader that misparsed a header can run on, adding empty faces, far beyond
         // anything the file could hold: stop it.
         if (face_id >= face_limit_) throw FaceLimit{};
@@ -108,7 +116,12 @@ public:
     std::size_t recorded_vertices() const { return recorded_; }
 
 private:
+    void tick() {
+        if (progress_ && expected_ > 0 && ++elements_ % 65536 == 0)
+            (*progress_)(std::min(1.0, double(elements_) / double(expected_)));
+    }
     void record_vertex(const glm::dvec3& p) {
+        tick();
         // OpenMesh handles are the kernel's vertex indices; the kernel also grows when the
         // importer copies vertices of a refused face, so keep our own mapping.
         kernel_to_file_.resize(om_.n_vertices() + 1, -1);
@@ -129,6 +142,8 @@ private:
     std::optional<BadFace> bad_face_;
     std::size_t recorded_ = 0;
     std::size_t face_limit_ = std::numeric_limits<std::size_t>::max();
+    std::uint64_t expected_ = 0, elements_ = 0;
+    const std::function<void(double)>* progress_ = nullptr;
 };
 
 // Sends OpenMesh's diagnostics (its omerr/omlog streams, and the readers that write to
@@ -490,7 +505,9 @@ void merge_obj_faces_as_listed(const std::string& path, IndexedMesh& mesh) {
 
 }  // namespace
 
-IndexedMesh read_mesh_for_check(const std::string& path) {
+IndexedMesh read_mesh_for_check(const std::string& path) { return read_mesh_for_check(path, {}); }
+
+IndexedMesh read_mesh_for_check(const std::string& path, const std::function<void(double)>& progress) {
     const Where where = check_detail::where_in(path);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw Error("no such mesh file", where);
@@ -515,6 +532,12 @@ IndexedMesh read_mesh_for_check(const std::string& path) {
     mesh.format = ext;
     OmMesh om;
     RecordingImporter importer(om, mesh);
+    std::uint64_t expected = 0;
+    // Binary STL: its facets, and about half as many distinct corners (a closed surface).
+    if (ext == "stl" && stl_kind.binary) expected = stl_kind.facets + stl_kind.facets / 2;
+    for (const DeclaredCounts* counts : {&ply_counts, &off_counts})
+        if (counts->vertices && counts->faces) expected = *counts->vertices + *counts->faces;
+    if (progress) importer.set_progress(expected, &progress);
     OpenMesh::IO::Options options;
     bool ok = false;
     std::string reader_message;

@@ -55,6 +55,7 @@ std::string report_json(const CheckReport& r) {
                    {"triangles", r.triangle_count},
                    {"edges", r.edge_count},
                    {"boundary_edges", r.boundary_edge_count},
+                   {"boundary_loops", r.boundary_loop_count},
                    {"components", r.component_count},
                    {"unreferenced_vertices", r.unreferenced_vertices},
                    {"topology_excluded_faces", r.topology_excluded_faces}};
@@ -106,8 +107,10 @@ std::string report_text(const CheckReport& r, std::size_t locations_per_class) {
     out << "  mesh        " << r.vertex_count << " vertices, " << r.face_count << " faces (" << r.triangle_count
         << " triangles), " << r.edge_count << " edges, " << r.component_count << " component"
         << (r.component_count == 1 ? "" : "s") << ", Euler characteristic " << r.euler_characteristic << "\n";
-    out << "  shape       " << (r.closed ? "closed" : "open (" + std::to_string(r.boundary_edge_count) + " boundary edges in " +
-                                                        std::to_string(r.boundary_loops.size()) + " loops)")
+    out << "  shape       "
+        << (r.closed ? std::string("closed")
+                     : "open (" + std::to_string(r.boundary_edge_count) + " boundary edges in " +
+                           std::to_string(r.boundary_loop_count) + (r.boundary_loop_count == 1 ? " loop)" : " loops)"))
         << ", " << (r.manifold ? "manifold" : "not manifold") << ", "
         << (r.consistently_oriented ? "consistently oriented" : "not consistently oriented");
     if (r.closed) out << ", signed volume " << format_number(r.signed_volume);

@@ -501,7 +501,8 @@ void judge_boundary(CheckState& state) {
         state.add_defect(DefectClass::boundary_loop, std::move(d));
     }
 
-    // Loops for the report: largest first.
+    report.boundary_loop_count = state.loops.size();
+    // Loops for the report: the allowed one, then the largest.
     std::vector<std::size_t> order(state.loops.size());
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {

@@ -27,9 +27,10 @@ struct CheckCommandOptions {
 };
 
 int run_check(const CheckCommandOptions& options) {
-    std::unique_ptr<Progress> progress = std::make_unique<Progress>("check: reading", 1);
+    std::unique_ptr<Progress> progress = std::make_unique<Progress>("check: reading", 1000);
     progress->set(0);
-    const IndexedMesh mesh = read_mesh_for_check(options.mesh);
+    const IndexedMesh mesh =
+        read_mesh_for_check(options.mesh, [&](double fraction) { progress->set(static_cast<std::size_t>(fraction * 1000.0)); });
 
     CheckOptions check;
     check.expect = options.expect == "closed" ? Expect::closed : options.expect == "open" ? Expect::open : Expect::automatic;
