@@ -63,6 +63,9 @@ struct IndexedMesh {
     std::vector<std::uint32_t> kernel_refused_faces;
     std::vector<std::uint32_t> reader_skipped_faces;
 
+    // What the reading could not do exactly as described above (empty normally).
+    std::vector<std::string> reader_notes;
+
     std::string source;  // the file it was read from ("" when built in memory)
     std::string format;  // "ply", "obj", "off", "stl" ("" when built in memory)
 
@@ -167,6 +170,7 @@ struct ProbeStats {
 struct CheckReport {
     std::string source;
     std::string format;
+    std::vector<std::string> reader_notes;  // from IndexedMesh::reader_notes
     std::size_t vertex_count = 0;
     std::size_t face_count = 0;
     std::size_t triangle_count = 0;  // after fan-triangulating polygons

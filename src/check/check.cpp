@@ -120,7 +120,7 @@ void report_refused_faces(CheckState& state) {
         d.faces = {f};
         d.vertices.assign(face.begin(), face.end());
         d.detail = by_reader ? "OpenMesh's " + mesh.format + " reader dropped or shortened face " + std::to_string(f) +
-                                   " (a repeated corner)"
+                                   " (a repeated corner, or fewer than three)"
                              : "OpenMesh's kernel refused face " + std::to_string(f) +
                                    " (a complex edge or vertex) and added it on copies of its vertices";
         state.add_defect(DefectClass::refused_face, std::move(d));
@@ -155,6 +155,7 @@ CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
     CheckReport report;
     report.source = mesh.source;
     report.format = mesh.format;
+    report.reader_notes = mesh.reader_notes;
     report.vertex_count = mesh.vertex_count();
     report.face_count = mesh.face_count();
     report.expect = options.expect;

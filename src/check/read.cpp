@@ -311,8 +311,12 @@ void recover_skipped_stl_facets(const std::string& path, const StlKind& kind, In
     for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
         vertex_of.emplace(FloatPointKey(glm::vec3(mesh.positions[v])), v);
 
+    // Where our view of the file and OpenMesh's part, OpenMesh's reading stands, with a note.
+    const auto give_up = [&] {
+        mesh.reader_notes.push_back("the STL reader skipped " + std::to_string(facets.size() - mesh.face_count()) +
+                                    " facets that could not be recovered");
+    };
     IndexedMesh rebuilt;
-    rebuilt.positions = std::move(mesh.positions);
     std::vector<std::uint32_t> refused_by_old_id(mesh.face_count(), 0);
     for (std::uint32_t f : mesh.kernel_refused_faces) refused_by_old_id[f] = 1;
     std::size_t next_read = 0;
@@ -324,13 +328,8 @@ void recover_skipped_stl_facets(const std::string& path, const StlKind& kind, In
             std::uint32_t ids[3];
             for (int i = 0; i < 3; ++i) {
                 const auto it = vertex_of.find(FloatPointKey(corners[i]));
-                if (it == vertex_of.end()) {
-                    // Every corner is added as a vertex before the reader skips the facet;
-                    // anything else means our view of the file differs from OpenMesh's.
-                    throw Error("STL facet " + std::to_string(new_id) +
-                                    " could not be matched with what OpenMesh read",
-                                check_detail::where_in(path));
-                }
+                // Every corner is added as a vertex before the reader skips the facet.
+                if (it == vertex_of.end()) return give_up();
                 ids[i] = it->second;
             }
             rebuilt.add_face(ids);
@@ -342,10 +341,11 @@ void recover_skipped_stl_facets(const std::string& path, const StlKind& kind, In
             ++next_read;
         }
     }
-    if (next_read != mesh.face_count())
-        throw Error("STL facets could not be matched with what OpenMesh read", check_detail::where_in(path));
+    if (next_read != mesh.face_count()) return give_up();
+    rebuilt.positions = std::move(mesh.positions);
     rebuilt.source = mesh.source;
     rebuilt.format = mesh.format;
+    rebuilt.reader_notes = std::move(mesh.reader_notes);
     mesh = std::move(rebuilt);
 }
 
@@ -479,6 +479,13 @@ void merge_obj_faces_as_listed(const std::string& path, IndexedMesh& mesh) {
     merged.format = mesh.format;
     std::vector<char> refused(mesh.face_count(), 0);
     for (std::uint32_t f : mesh.kernel_refused_faces) refused[f] = 1;
+    // Where our view of the file and OpenMesh's part (a construct the scan does not know),
+    // OpenMesh's reading stands, with a note.
+    const auto give_up = [&](std::size_t f) {
+        mesh.reader_notes.push_back("OBJ face " + std::to_string(f) +
+                                    ": the face lines could not be matched with OpenMesh's reading; faces its reader "
+                                    "dropped or shortened (repeated vertices) are not recovered");
+    };
     std::size_t next = 0;
     std::vector<std::uint32_t> sorted;
     for (std::size_t f = 0; f < listed.face_count(); ++f) {
@@ -488,8 +495,7 @@ void merge_obj_faces_as_listed(const std::string& path, IndexedMesh& mesh) {
         const auto unique = static_cast<std::size_t>(std::unique(sorted.begin(), sorted.end()) - sorted.begin());
         const auto id = static_cast<std::uint32_t>(merged.face_count());
         if (unique == face.size() && face.size() >= 3) {
-            if (next >= mesh.face_count() || !std::ranges::equal(mesh.face(next), face))
-                throw Error("OBJ face " + std::to_string(f) + " differs from what OpenMesh read", where);
+            if (next >= mesh.face_count() || !std::ranges::equal(mesh.face(next), face)) return give_up(f);
             if (refused[next]) merged.kernel_refused_faces.push_back(id);
             ++next;
         } else {
@@ -498,8 +504,9 @@ void merge_obj_faces_as_listed(const std::string& path, IndexedMesh& mesh) {
         }
         merged.add_face(face);
     }
-    if (next != mesh.face_count()) throw Error("OBJ faces differ from what OpenMesh read", where);
+    if (next != mesh.face_count()) return give_up(listed.face_count());
     merged.positions = std::move(mesh.positions);
+    merged.reader_notes = std::move(mesh.reader_notes);
     mesh = std::move(merged);
 }
 

@@ -47,6 +47,7 @@ std::string report_json(const CheckReport& r) {
     json j;
     j["source"] = r.source;
     j["format"] = r.format;
+    j["reader_notes"] = r.reader_notes;
     j["passed"] = r.passed;
     j["expect"] = expect_name(r.expect);
     j["judged_as"] = r.judged_as;
@@ -125,6 +126,7 @@ std::string report_text(const CheckReport& r, std::size_t locations_per_class) {
     if (!r.flipped_faces.empty())
         out << "  flipped     " << r.flipped_faces.size() << " face" << (r.flipped_faces.size() == 1 ? "" : "s")
             << " against their neighbours: " << id_list(r.flipped_faces) << "\n";
+    for (const std::string& note : r.reader_notes) out << "  note        " << note << "\n";
     std::size_t failing = 0;
     for (const DefectReport& d : r.defects) failing += d.count > 0;
     out << "  result      " << (r.passed ? "PASS" : "FAIL: " + std::to_string(failing) + " defect class" + (failing == 1 ? "" : "es"))
