@@ -545,7 +545,8 @@ protected:
         context_ = nullptr;
     }
     void SetUp() override {
-        if (context_ == nullptr) GTEST_SKIP() << "no OSMesa OpenGL 4.5 core context";
+        // The llvmpipe comparison is the contract: no context is a failure, not a skip.
+        ASSERT_NE(context_, nullptr) << "no OSMesa OpenGL 4.5 core context";
     }
     static OSMesaContext context_;
     static std::vector<float> framebuffer_;
