@@ -873,3 +873,33 @@ TEST_F(MeshCommand, AFailedRunLeavesAnExistingOutputAsItWas) {
 }
 
 }  // namespace
+
+// `tessref mesh --solid`: every shipped terrain closes into a watertight solid that
+// `tessref check --expect closed` passes; independently of check, the file is a closed
+// genus-0 triangle surface, so Euler's formula gives F = 2V - 4.
+TEST_F(MeshCommand, SolidOfEveryShippedTerrainIsClosed) {
+    for (const std::string& name : shipped_scenes()) {
+        SCOPED_TRACE(name);
+        const fs::path out = path(name + "-solid.ply");
+        const RunResult made = run({scene(name), "--solid", "--binary", "-o", out.string()});
+        ASSERT_EQ(made.status, 0) << made.err;
+        ReadMesh read;
+        ASSERT_TRUE(OpenMesh::IO::read_mesh(read, out.string()));
+        EXPECT_EQ(read.n_faces(), 2 * read.n_vertices() - 4);
+        const std::string check = shell_quote(TESSREF_EXE) + " check " + shell_quote(out.string()) +
+                                  " --expect closed >/dev/null 2>&1";
+        const int raw = std::system(check.c_str());
+        EXPECT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 0) << "tessref check --expect closed failed";
+        fs::remove(out);
+    }
+}
+
+TEST_F(MeshCommand, SolidRefusesMeshScenesAndABaseAboveTheTerrain) {
+    const RunResult pn = run({scene("pn-triangles"), "--solid", "-o", path("pn.ply").string()});
+    EXPECT_EQ(pn.status, 2);
+    EXPECT_NE(pn.err.find("tessref: error:"), std::string::npos);
+    const RunResult high = run({scene("thesis-constant-1"), "--solid", "--base", "1e9", "-o", path("h.ply").string()});
+    EXPECT_EQ(high.status, 2);
+    EXPECT_NE(high.err.find("--base"), std::string::npos);
+    EXPECT_TRUE(files().empty());
+}

@@ -2,14 +2,16 @@
 // through OpenMesh (PLY, OBJ, OFF, STL; see include/tessref/mesh.h for what each carries
 // and how vertices are welded).
 //
-//   tessref mesh SCENE -o OUT.{ply,obj,off,stl} [--precision gpu|exact] [--binary]
+//   tessref mesh SCENE -o OUT.{ply,obj,off,stl} [--precision gpu|exact] [--binary] [--solid [--base B]]
 //                [--threads N]
 //
 // Output goes to a temporary file next to OUT and is renamed over it only when complete;
 // the output name is checked (extension, writable directory) before the pipeline runs.
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,6 +24,7 @@
 #include "tessref/error.h"
 #include "tessref/mesh.h"
 #include "tessref/scene.h"
+#include "tessref/solid.h"
 #include "tessref/tessellator.h"
 
 namespace tessref::cli {
@@ -34,6 +37,8 @@ struct MeshCommandOptions {
     std::string precision = "gpu";
     bool binary = false;
     int threads = 0;  // 0: every core
+    bool solid = false;
+    std::optional<double> base;  // --base: the solid's bottom; default below the lowest vertex
 };
 
 Where flag_where(const std::string& flag) {
@@ -87,6 +92,8 @@ int run_mesh(const MeshCommandOptions& options) {
     }
 
     const Scene scene = load_scene(options.scene);
+    if (options.solid && !scene.grid)
+        throw Error("--solid closes a terrain; this scene has no [domain] grid", flag_where(options.scene));
 
     PipelineResult result;
     {
@@ -97,8 +104,24 @@ int run_mesh(const MeshCommandOptions& options) {
         result = run_pipeline(scene, pipeline_options);
     }
 
-    // --solid (next issue): closing the terrain into a solid (walls down to a base plane,
-    // and the base) belongs here, on result.mesh, before the export welds and writes it.
+    if (options.solid) {
+        // Skirts from the outline down to a base plane, and the base: a watertight solid
+        // that `tessref check --expect closed` passes unless the terrain itself cracks.
+        const int up_axis = scene.grid->plane == GroundPlane::xy ? 2 : 1;
+        double low = std::numeric_limits<double>::infinity(), high = -low;
+        for (const glm::dvec3& p : result.mesh.positions) {
+            low = std::min(low, p[up_axis]);
+            high = std::max(high, p[up_axis]);
+        }
+        // Default base: 5 % of the relief (at least 1 unit) below the lowest vertex.
+        const double base = options.base.value_or(low - std::max(1.0, 0.05 * (high - low)));
+        if (!(base < low)) {
+            throw Error("the base (" + std::to_string(base) + ") must lie below the lowest vertex (" +
+                            std::to_string(low) + ")",
+                        flag_where("--base"));
+        }
+        result.mesh = close_terrain_into_solid(result.mesh, base, up_axis);
+    }
 
     MeshWriteReport report;
     {
@@ -147,6 +170,13 @@ Command add_mesh_command(CLI::App& parent) {
     app->add_flag("--binary", options->binary,
                   "Binary file (PLY little endian, OFF binary, STL binary); OBJ has none");
     app->add_option("--threads", options->threads, "Worker threads (0: every core)")->default_val(0);
+    app->add_flag("--solid", options->solid,
+                  "Close the terrain into a watertight solid: skirts from its outline down to a base "
+                  "plane, and the base (for 3D printing; `tessref check --expect closed` passes it)");
+    app->add_option("--base", options->base,
+                    "Height of the solid's base plane (default: below the lowest vertex by 5 % of "
+                    "the relief, at least 1)")
+        ->needs("--solid");
     return Command{app, [options] { return run_mesh(*options); }};
 }
 
