@@ -108,8 +108,8 @@
 //                               at the vertex's mip level; other terrain: level 0)
 //           | "smooth"          area-weighted vertex normals of the tessellated surface
 //
-// [shading]                     reserved for the renderer (a later issue): accepted and kept
-//                               as text (Scene::shading_toml), not validated here
+// [shading]                     the fragment stage: kept here as text (Scene::shading_toml)
+//                               and parsed, with its own errors, by include/tessref/render.h
 //
 // [limits]
 //   max_triangles = 50000000    the run is refused (before tessellating) when an upper
@@ -273,7 +273,7 @@ struct Scene {
     std::optional<ControlStage> control;   // absent: every level 1
     EvaluationStage evaluation{};
     std::optional<GeometryStage> geometry; // absent: evaluation normals or none
-    std::optional<std::string> shading_toml;  // reserved [shading] table, as TOML text
+    std::optional<std::string> shading_toml;  // [shading] table as TOML text (render.h parses it)
     std::uint64_t max_triangles = 50'000'000;
     Where max_triangles_where;  // where the budget was set (or the scene file): for errors
 
