@@ -239,4 +239,23 @@ void Progress::finish() {
     enabled_ = false;
 }
 
+glm::ivec2 parse_image_size(const std::string& text, const std::string& flag) {
+    const std::size_t x = text.find_first_of("xX");
+    const std::optional<long long> w = x == std::string::npos ? std::nullopt : parse_integer(text.substr(0, x));
+    const std::optional<long long> h = x == std::string::npos ? std::nullopt : parse_integer(text.substr(x + 1));
+    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", where_file(flag));
+    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384)
+        throw Error("image size " + text + " is outside 1..16384 in width or height", where_file(flag));
+    return {static_cast<int>(*w), static_cast<int>(*h)};
+}
+
+void StageProgress::operator()(std::string_view stage, double fraction) {
+    if (stage != stage_) {
+        progress_.reset();  // clears the previous stage's line
+        stage_ = std::string(stage);
+        progress_ = std::make_unique<Progress>(stage_, kSteps);
+    }
+    progress_->set(static_cast<std::size_t>(fraction * static_cast<double>(kSteps)));
+}
+
 }  // namespace tessref::cli

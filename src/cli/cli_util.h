@@ -14,6 +14,10 @@
 #include <string_view>
 #include <vector>
 
+#include <memory>
+
+#include <glm/glm.hpp>
+
 #include "tessref/error.h"
 
 namespace tessref::cli {
@@ -38,6 +42,9 @@ std::optional<float> parse_float(std::string_view text);
 // Parses an integer (whole text, decimal, optional sign). nullopt when not an integer or
 // out of range.
 std::optional<long long> parse_integer(std::string_view text);
+
+// Parses an image size "WxH" given to `flag` (both 1..16384). Throws tessref::Error.
+glm::ivec2 parse_image_size(const std::string& text, const std::string& flag = "--size");
 
 // Parses a comma-separated list of exactly `count` floats given to `flag`, e.g. "1,2,nan,4".
 // Throws tessref::Error naming the flag and the item:
@@ -129,5 +136,17 @@ private:
 
 // True when stderr is a terminal (what Progress checks).
 bool stderr_is_terminal();
+
+// Progress of a command's successive stages ("welding", "writing", ...), one line per
+// stage, each from 0 to 1; callable as the library's (stage, fraction) progress callbacks.
+class StageProgress {
+public:
+    void operator()(std::string_view stage, double fraction);
+
+private:
+    static constexpr std::size_t kSteps = 1000;
+    std::string stage_;
+    std::unique_ptr<Progress> progress_;
+};
 
 }  // namespace tessref::cli

@@ -27,10 +27,9 @@ struct CheckCommandOptions {
 };
 
 int run_check(const CheckCommandOptions& options) {
-    std::unique_ptr<Progress> progress = std::make_unique<Progress>("check: reading", 1000);
-    progress->set(0);
+    StageProgress progress;
     const IndexedMesh mesh =
-        read_mesh_for_check(options.mesh, [&](double fraction) { progress->set(static_cast<std::size_t>(fraction * 1000.0)); });
+        read_mesh_for_check(options.mesh, [&progress](double fraction) { progress("check: reading", fraction); });
 
     CheckOptions check;
     check.expect = options.expect == "closed" ? Expect::closed : options.expect == "open" ? Expect::open : Expect::automatic;
@@ -38,16 +37,11 @@ int run_check(const CheckCommandOptions& options) {
     check.ray_probe = !options.no_probe;
     check.probe_resolution = options.probe_resolution;
     check.max_locations = options.max_locations;
-    std::string stage;
-    check.progress = [&](std::string_view name, double fraction) {
-        if (name != stage) {
-            stage = name;
-            progress = std::make_unique<Progress>("check: " + stage, 1000);
-        }
-        progress->set(static_cast<std::size_t>(fraction * 1000.0));
+    check.progress = [&progress](std::string_view name, double fraction) {
+        progress("check: " + std::string(name), fraction);
     };
     const CheckReport report = check_mesh(mesh, check);
-    progress.reset();
+    progress = StageProgress();  // clears the last stage's line
 
     if (!options.image.empty()) {
         AtomicOutput output(options.image);

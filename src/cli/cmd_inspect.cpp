@@ -40,31 +40,15 @@ struct InspectOptions {
     int threads = 0;
 };
 
-Where flag_where(const std::string& flag) {
-    Where where;
-    where.file = flag;
-    return where;
-}
-
 // "X,Y" (non-negative integers; the image's bounds are checked after rendering).
 glm::ivec2 parse_pixel(const std::string& text) {
     const std::size_t comma = text.find(',');
     const std::optional<long long> x = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(0, comma));
     const std::optional<long long> y = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(comma + 1));
-    if (!x || !y) throw Error("pixel '" + text + "' is not X,Y (e.g. 640,400)", flag_where("--pixel"));
+    if (!x || !y) throw Error("pixel '" + text + "' is not X,Y (e.g. 640,400)", where_file("--pixel"));
     if (*x < 0 || *y < 0 || *x > 16383 || *y > 16383)
-        throw Error("pixel " + text + " is outside the image (coordinates start at 0,0 top left)", flag_where("--pixel"));
+        throw Error("pixel " + text + " is outside the image (coordinates start at 0,0 top left)", where_file("--pixel"));
     return {static_cast<int>(*x), static_cast<int>(*y)};
-}
-
-glm::ivec2 parse_size(const std::string& text) {
-    const std::size_t x = text.find_first_of("xX");
-    const std::optional<long long> w = x == std::string::npos ? std::nullopt : parse_integer(text.substr(0, x));
-    const std::optional<long long> h = x == std::string::npos ? std::nullopt : parse_integer(text.substr(x + 1));
-    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", flag_where("--size"));
-    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384)
-        throw Error("image size " + text + " is outside 1..16384 in width or height", flag_where("--size"));
-    return {static_cast<int>(*w), static_cast<int>(*h)};
 }
 
 using Json = nlohmann::ordered_json;
@@ -103,12 +87,12 @@ int run_inspect(const InspectOptions& options) {
     const glm::ivec2 pixel = parse_pixel(options.pixel);
     const std::optional<Precision> precision = parse_precision(options.precision);
     if (!precision)
-        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", flag_where("--precision"));
+        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", where_file("--precision"));
     if (options.threads < 0)
         throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
-                    flag_where("--threads"));
+                    where_file("--threads"));
     RenderOptions render_options;
-    if (!options.size.empty()) render_options.size = parse_size(options.size);
+    if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.precision = *precision;
     render_options.mode = options.wireframe ? RenderMode::wireframe : RenderMode::fill;
 
@@ -121,7 +105,7 @@ int run_inspect(const InspectOptions& options) {
     if (pixel.x >= result.width || pixel.y >= result.height)
         throw Error("pixel " + options.pixel + " is outside the " + std::to_string(result.width) + "x" +
                         std::to_string(result.height) + " image",
-                    flag_where("--pixel"));
+                    where_file("--pixel"));
     const PixelProvenance p = pixel_provenance(result, pixel.x, pixel.y);
 
     if (options.json) {

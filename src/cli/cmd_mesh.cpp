@@ -41,30 +41,6 @@ struct MeshCommandOptions {
     std::optional<double> base;  // --base: the solid's bottom; default below the lowest vertex
 };
 
-Where flag_where(const std::string& flag) {
-    Where where;
-    where.file = flag;
-    return where;
-}
-
-// Progress of the export stages ("welding", "collecting", "writing"), one line per stage.
-class StageProgress {
-public:
-    void operator()(std::string_view stage, double fraction) {
-        if (stage != stage_) {
-            progress_.reset();  // clears the previous stage's line
-            stage_ = std::string(stage);
-            progress_ = std::make_unique<Progress>(stage_, kSteps);
-        }
-        progress_->set(static_cast<std::size_t>(fraction * static_cast<double>(kSteps)));
-    }
-
-private:
-    static constexpr std::size_t kSteps = 1000;
-    std::string stage_;
-    std::unique_ptr<Progress> progress_;
-};
-
 int run_mesh(const MeshCommandOptions& options) {
     // Everything about the output is checked before the (possibly long) pipeline runs.
     MeshWriteOptions write_options;
@@ -72,16 +48,16 @@ int run_mesh(const MeshCommandOptions& options) {
     write_options.binary = options.binary;
     if (options.binary && !mesh_format_has_binary(write_options.format)) {
         throw Error("obj has no binary form; drop --binary or write .ply, .off or .stl",
-                    flag_where("--binary"));
+                    where_file("--binary"));
     }
     const std::optional<Precision> precision = parse_precision(options.precision);
     if (!precision) {
         throw Error("unknown precision '" + options.precision + "'; expected gpu or exact",
-                    flag_where("--precision"));
+                    where_file("--precision"));
     }
     if (options.threads < 0) {
         throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
-                    flag_where("--threads"));
+                    where_file("--threads"));
     }
     AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
 
@@ -93,7 +69,7 @@ int run_mesh(const MeshCommandOptions& options) {
 
     const Scene scene = load_scene(options.scene);
     if (options.solid && !scene.grid)
-        throw Error("--solid closes a terrain; this scene has no [domain] grid", flag_where(options.scene));
+        throw Error("--solid closes a terrain; this scene has no [domain] grid", where_file(options.scene));
 
     PipelineResult result;
     {
@@ -118,7 +94,7 @@ int run_mesh(const MeshCommandOptions& options) {
         if (!(base < low)) {
             throw Error("the base (" + std::to_string(base) + ") must lie below the lowest vertex (" +
                             std::to_string(low) + ")",
-                        flag_where("--base"));
+                        where_file("--base"));
         }
         result.mesh = close_terrain_into_solid(result.mesh, base, up_axis);
     }
@@ -130,10 +106,10 @@ int run_mesh(const MeshCommandOptions& options) {
             stage_progress(stage, fraction);
         };
         std::ofstream file(output.temp_path(), std::ios::binary | std::ios::trunc);
-        if (!file) throw Error("cannot write output file", flag_where(options.output));
+        if (!file) throw Error("cannot write output file", where_file(options.output));
         report = write_mesh(result.mesh, file, write_options);
         file.close();
-        if (!file) throw Error("cannot write output file", flag_where(options.output));
+        if (!file) throw Error("cannot write output file", where_file(options.output));
     }
     output.commit();
 

@@ -39,64 +39,29 @@ struct RenderCommandOptions {
     bool raytrace = false;
 };
 
-Where flag_where(const std::string& flag) {
-    Where where;
-    where.file = flag;
-    return where;
-}
-
-// "WxH", both 1..16384.
-glm::ivec2 parse_size(const std::string& text) {
-    const std::size_t x = text.find_first_of("xX");
-    const std::optional<long long> w = x == std::string::npos ? std::nullopt : parse_integer(text.substr(0, x));
-    const std::optional<long long> h = x == std::string::npos ? std::nullopt : parse_integer(text.substr(x + 1));
-    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", flag_where("--size"));
-    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384)
-        throw Error("image size " + text + " is outside 1..16384 in width or height", flag_where("--size"));
-    return {static_cast<int>(*w), static_cast<int>(*h)};
-}
-
-// Progress of the render's stages, one line per stage, on a terminal only.
-class StageProgress {
-public:
-    void operator()(std::string_view stage, double fraction) {
-        if (stage != stage_) {
-            progress_.reset();
-            stage_ = std::string(stage);
-            progress_ = std::make_unique<Progress>(stage_, kSteps);
-        }
-        progress_->set(static_cast<std::size_t>(fraction * static_cast<double>(kSteps)));
-    }
-
-private:
-    static constexpr std::size_t kSteps = 1000;
-    std::string stage_;
-    std::unique_ptr<Progress> progress_;
-};
-
 int run_render(const RenderCommandOptions& options) {
     // Flags and output first: nothing is computed for a command line that cannot succeed.
     const ImageFormat format = image_format_from_path(options.output);
     const AovSelection aovs = options.aov.empty() ? AovSelection{} : parse_aovs(options.aov);
     if (aovs.any() && format != ImageFormat::exr)
-        throw Error("--aov writes float channels: the output must be an .exr file", flag_where("--aov"));
+        throw Error("--aov writes float channels: the output must be an .exr file", where_file("--aov"));
     if (aovs.any() && options.raytrace && (aovs.patch || aovs.tesscoord || aovs.level))
         throw Error("a ray-traced image has no patches, tess coords or levels: with --raytrace, --aov takes depth "
                     "and triangle only",
-                    flag_where("--aov"));
+                    where_file("--aov"));
     if (options.wireframe && options.overlay_wireframe)
-        throw Error("--wireframe and --overlay-wireframe exclude each other", flag_where("--overlay-wireframe"));
+        throw Error("--wireframe and --overlay-wireframe exclude each other", where_file("--overlay-wireframe"));
     if (options.raytrace && (options.wireframe || options.overlay_wireframe))
         throw Error("--raytrace renders the height field itself: it has no tessellation to draw as lines",
-                    flag_where("--raytrace"));
+                    where_file("--raytrace"));
     const std::optional<Precision> precision = parse_precision(options.precision);
     if (!precision)
-        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", flag_where("--precision"));
+        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", where_file("--precision"));
     if (options.threads < 0)
         throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
-                    flag_where("--threads"));
+                    where_file("--threads"));
     RenderOptions render_options;
-    if (!options.size.empty()) render_options.size = parse_size(options.size);
+    if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.precision = *precision;
     render_options.mode = options.wireframe           ? RenderMode::wireframe
                           : options.overlay_wireframe ? RenderMode::fill_with_wireframe
