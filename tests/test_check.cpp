@@ -18,6 +18,8 @@
 //  - the command: exit 0 / 1 / 2, `tessref: error:` naming the file, JSON, the picture.
 #include <gtest/gtest.h>
 
+#include "run_program.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -205,23 +207,10 @@ double prism_volume(const SurfaceMesh& terrain, double base, int up_axis) {
 // ---------------------------------------------------------------------------------------
 // Running programs
 
-struct RunResult {
-    int status = -1;
-    std::string out, err;
-};
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-std::string quote(const std::string& arg) {
-    std::string q = "'";
-    for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
+using tessref::test::read_file;
+using tessref::test::run_program;
+using tessref::test::RunResult;
+using tessref::test::shell_quote;
 
 fs::path scratch_dir() {
     const fs::path dir = fs::temp_directory_path() / ("tessref_test_check_" + std::to_string(::getpid()));
@@ -240,16 +229,7 @@ public:
 [[maybe_unused]] const auto* const scratch_cleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
 
 RunResult run(const std::string& program, const std::vector<std::string>& args) {
-    const fs::path dir = scratch_dir();
-    std::string command = quote(program);
-    for (const auto& a : args) command += " " + quote(a);
-    command += " >" + quote((dir / "out.txt").string()) + " 2>" + quote((dir / "err.txt").string());
-    const int raw = std::system(command.c_str());
-    RunResult r;
-    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    r.out = read_text(dir / "out.txt");
-    r.err = read_text(dir / "err.txt");
-    return r;
+    return run_program(program, args, scratch_dir());
 }
 
 RunResult tessref_check(std::vector<std::string> args) {
@@ -862,7 +842,7 @@ TEST(CheckCommand, UnreadableInputExitsTwoNamingTheFile) {
     bad.push_back(dir / "missing.stl");
     {
         // A binary STL cut short: 200 of its 684 bytes.
-        const std::string whole = read_text(corpus("cube_binary.stl"));
+        const std::string whole = read_file(corpus("cube_binary.stl"));
         ASSERT_EQ(whole.size(), 84u + 50u * 12u);
         std::ofstream(dir / "truncated.stl", std::ios::binary) << whole.substr(0, 200);
         bad.push_back(dir / "truncated.stl");

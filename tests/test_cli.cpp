@@ -8,6 +8,8 @@
 // float the library produced).
 #include <gtest/gtest.h>
 
+#include "run_program.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -31,34 +33,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct RunResult {
-    int status = -1;
-    std::string out;
-    std::string err;
-};
-
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-void write_file(const fs::path& path, const std::string& bytes) {
-    std::ofstream out(path, std::ios::binary);
-    out << bytes;
-}
-
-std::string shell_quote(const std::string& arg) {
-    std::string quoted = "'";
-    for (const char c : arg) {
-        if (c == '\'')
-            quoted += "'\\''";
-        else
-            quoted += c;
-    }
-    return quoted + "'";
-}
+using tessref::test::read_file;
+using tessref::test::run_program;
+using tessref::test::RunResult;
+using tessref::test::shell_quote;
+using tessref::test::write_file;
 
 // A fresh, empty directory per test, removed afterwards.
 class CliTest : public ::testing::Test {
@@ -72,20 +51,7 @@ protected:
     }
     void TearDown() override { fs::remove_all(dir_); }
 
-    RunResult run(const std::vector<std::string>& args) {
-        std::string command = shell_quote(TESSREF_EXE);
-        for (const std::string& arg : args) command += " " + shell_quote(arg);
-        const fs::path out = dir_ / "captured.stdout", err = dir_ / "captured.stderr";
-        command += " >" + shell_quote(out.string()) + " 2>" + shell_quote(err.string()) + " </dev/null";
-        const int raw = std::system(command.c_str());
-        RunResult result;
-        result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-        result.out = read_file(out);
-        result.err = read_file(err);
-        fs::remove(out);
-        fs::remove(err);
-        return result;
-    }
+    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_); }
 
     // The names in the test directory (what a command left there).
     std::set<std::string> files() const {

@@ -13,6 +13,8 @@
 //    T-junction (checked with a small edge map written here, independent of `check`).
 #include <gtest/gtest.h>
 
+#include "run_program.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -757,34 +759,20 @@ TEST(ShippedScenes, EveryTerrainSceneIsExercised) { EXPECT_GE(shipped_scenes().s
 // ---------------------------------------------------------------------------------------
 // The command: tessref mesh
 
-struct RunResult {
-    int status = -1;
-    std::string out;
-    std::string err;
-};
-
-std::string shell_quote(const std::string& arg) {
-    std::string quoted = "'";
-    for (const char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
+using tessref::test::run_program;
+using tessref::test::RunResult;
+using tessref::test::shell_quote;
 
 class MeshCommand : public MeshExport {
 protected:
+    // Runs `tessref mesh ARGS`; the output is captured outside dir_, which files() lists.
     RunResult run(const std::vector<std::string>& args) const {
-        std::string command = shell_quote(TESSREF_EXE) + " mesh";
-        for (const std::string& arg : args) command += " " + shell_quote(arg);
-        const fs::path captured = fs::temp_directory_path() /
-                                  ("tessref-test-mesh-captured-" + std::to_string(::getpid()));
-        const std::string out = captured.string() + ".out", err = captured.string() + ".err";
-        command += " >" + shell_quote(out) + " 2>" + shell_quote(err) + " </dev/null";
-        const int raw = std::system(command.c_str());
-        RunResult result;
-        result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-        result.out = read_text(out);
-        result.err = read_text(err);
-        fs::remove(out);
-        fs::remove(err);
+        std::vector<std::string> command{"mesh"};
+        command.insert(command.end(), args.begin(), args.end());
+        const fs::path capture = fs::temp_directory_path() / ("tessref-test-mesh-captured-" + std::to_string(::getpid()));
+        fs::create_directories(capture);
+        RunResult result = run_program(TESSREF_EXE, command, capture);
+        fs::remove_all(capture);
         return result;
     }
     std::set<std::string> files() const {

@@ -12,6 +12,8 @@
 //    (scripts/regenerate-golden.sh), compared exactly; see golden/README.md.
 #include <gtest/gtest.h>
 
+#include "run_program.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -40,44 +42,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using tessref::test::read_file;
+using tessref::test::run_program;
+using tessref::test::RunResult;
+using tessref::test::shell_quote;
+using tessref::test::write_file;
+
 const fs::path kSource = TESSREF_SOURCE_DIR;
-
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-void write_file(const fs::path& path, const std::string& bytes) {
-    std::ofstream out(path, std::ios::binary);
-    out << bytes;
-}
-
-std::string shell_quote(const std::string& arg) {
-    std::string quoted = "'";
-    for (const char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
-struct RunResult {
-    int status = -1;
-    std::string out;
-    std::string err;
-};
 
 // Runs `tessref ARGS` from the repository root, stdout and stderr captured.
 RunResult run_tessref(const std::vector<std::string>& args, const fs::path& capture_dir) {
-    std::string command = "cd " + shell_quote(kSource.string()) + " && " + shell_quote(TESSREF_EXE);
-    for (const std::string& arg : args) command += " " + shell_quote(arg);
-    const fs::path out = capture_dir / "captured.stdout", err = capture_dir / "captured.stderr";
-    command += " >" + shell_quote(out.string()) + " 2>" + shell_quote(err.string()) + " </dev/null";
-    const int raw = std::system(command.c_str());
-    RunResult r;
-    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    r.out = read_file(out);
-    r.err = read_file(err);
-    return r;
+    return run_program(TESSREF_EXE, args, capture_dir, kSource);
 }
 
 std::vector<std::string> split_words(const std::string& text) {
