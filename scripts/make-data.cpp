@@ -128,6 +128,37 @@ void write_pgm16(const std::string& path, int size, const std::vector<std::uint1
 }
 
 // ---- height and tessellation maps -------------------------------------------------
+// The colour texture of the island scenes (the thesis's own texture is not published): a
+// hypsometric tint of the height map — sea, beach, grass, forest, rock, snow — blended
+// linearly between bands, 8-bit RGB PNG, the same texel grid as the height map.
+void make_island_colour(const std::string& dir, int n, const std::vector<std::uint8_t>& heights) {
+    struct Band {
+        double height;
+        double r, g, b;
+    };
+    static const Band bands[] = {{0.00, 0.16, 0.32, 0.52}, {0.004, 0.84, 0.78, 0.58}, {0.06, 0.42, 0.62, 0.28},
+                                 {0.30, 0.22, 0.44, 0.18}, {0.55, 0.50, 0.44, 0.38}, {0.80, 0.62, 0.60, 0.58},
+                                 {0.92, 0.96, 0.96, 0.98}};
+    std::vector<std::uint8_t> rgb(static_cast<std::size_t>(n) * n * 3);
+    for (std::size_t t = 0; t < heights.size(); ++t) {
+        const double h = heights[t] / 255.0;
+        std::size_t k = 0;
+        while (k + 2 < std::size(bands) && h >= bands[k + 1].height) ++k;
+        const Band &a = bands[k], &b = bands[k + 1];
+        const double w = std::clamp((h - a.height) / (b.height - a.height), 0.0, 1.0);
+        const double c[3] = {a.r + (b.r - a.r) * w, a.g + (b.g - a.g) * w, a.b + (b.b - a.b) * w};
+        for (int ch = 0; ch < 3; ++ch) rgb[t * 3 + ch] = static_cast<std::uint8_t>(std::lround(c[ch] * 255.0));
+    }
+    const std::string path = dir + "/textures/thesis-island-colour.png";
+    auto out = OIIO::ImageOutput::create(path);
+    OIIO::ImageSpec spec(n, n, 3, OIIO::TypeDesc::UINT8);
+    if (!out || !out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close()) {
+        std::fprintf(stderr, "make-data: cannot write %s\n", path.c_str());
+        std::exit(1);
+    }
+    std::printf("wrote %s\n", path.c_str());
+}
+
 void make_thesis_island(const std::string& dir) {
     const int n = 512;
     std::vector<std::uint8_t> pixels(n * n);
@@ -145,6 +176,7 @@ void make_thesis_island(const std::string& dir) {
             pixels[j * n + i] = static_cast<std::uint8_t>(std::lround(h * 255.0));
         }
     write_gray(dir + "/heightmaps/thesis-island.pgm", n, pixels, OIIO::TypeDesc::UINT8);
+    make_island_colour(dir, n, pixels);
 }
 
 void make_thesis_roads(const std::string& dir) {

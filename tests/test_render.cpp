@@ -162,12 +162,13 @@ TEST(RenderShading, ShippedScenesNameTheirShaders) {
         EXPECT_TRUE(tessref::missing_textures(s.model).empty()) << name;
     }
     // The luminance texture reads (r, r, r, 1) and the camera feeds lab 4's cameraPosition.
-    const tessref::Scene thesis = tessref::load_scene(scene_path("thesis-all-10").string());
-    const auto diffuse = tessref::shading_model(thesis).model.textures.diffuse;
+    // (jacksboro textures itself with its own height map, grey.)
+    const tessref::Scene terrain = tessref::load_scene(scene_path("jacksboro").string());
+    const auto diffuse = tessref::shading_model(terrain).model.textures.diffuse;
     ASSERT_TRUE(diffuse);
     EXPECT_EQ(diffuse->channels(), 3);
     const glm::vec4 texel = diffuse->textureLod(glm::vec2(0.37f, 0.61f), 0.0f);
-    const glm::vec4 grey = thesis.grid->heightmap->texture.textureLod(glm::vec2(0.37f, 0.61f), 0.0f);
+    const glm::vec4 grey = terrain.grid->heightmap->texture.textureLod(glm::vec2(0.37f, 0.61f), 0.0f);
     EXPECT_EQ(texel, glm::vec4(grey.r, grey.r, grey.r, 1.0f));
     const tessref::Scene lab4 = tessref::load_scene(scene_path("lab4-canyon").string());
     EXPECT_EQ(tessref::shading_model(lab4).model.lab4.cameraPosition, glm::vec3(lab4.camera->eye));
