@@ -140,6 +140,16 @@ public:
     std::uint32_t add_point(Location u, Location v) { return add_point(u.fixed, v.fixed, u.exact, v.exact); }
     std::uint32_t point_count() const { return static_cast<std::uint32_t>(fixed_u_.size()); }
 
+    // Sizes the buffers once: a level-64 quad pattern is about 100 KB per array, and
+    // growing it by doubling costs more in page faults than the tessellation itself.
+    void reserve(std::size_t points, std::size_t indices) {
+        fixed_u_.reserve(points);
+        fixed_v_.reserve(points);
+        exact_u_.reserve(points);
+        exact_v_.reserve(points);
+        indices_.reserve(indices);
+    }
+
     // The generator thinks in triangles wound counter-clockwise in (u right, v up);
     // layout(cw) swaps the last two vertices.
     void triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
@@ -319,6 +329,15 @@ Row reversed(Row r) {
 // Quads
 
 void tessellate_quads(Builder& b, const Level outer[4], const Level inner[2]) {
+    {
+        // Exact point count: the outer ring plus (nU - 2)(nV - 2) inside it; a triangulated
+        // disk has fewer than two triangles per point.
+        const int nu = std::max(inner[0].odd ? 4 : 3, inner[0].num_points);
+        const int nv = std::max(inner[1].odd ? 4 : 3, inner[1].num_points);
+        std::size_t points = static_cast<std::size_t>((nu - 2) * (nv - 2));
+        for (int e = 0; e < 4; ++e) points += static_cast<std::size_t>(outer[e].num_points - 1);
+        b.reserve(points, 6 * points);
+    }
     // Outer ring, edges 0..3 (u=0 v down, v=0 u up, u=1 v up, v=1 u down).
     int outer_points[4];
     for (int e = 0; e < 4; ++e) {
@@ -415,6 +434,13 @@ void tessellate_quads(Builder& b, const Level outer[4], const Level inner[2]) {
 // Triangles
 
 void tessellate_triangles(Builder& b, const Level outer[3], const Level& inner) {
+    {
+        // An upper bound: the outer ring plus an n x n grid inside it.
+        const std::size_t n = static_cast<std::size_t>(std::max(4, inner.num_points));
+        std::size_t points = n * n;
+        for (int e = 0; e < 3; ++e) points += static_cast<std::size_t>(outer[e].num_points - 1);
+        b.reserve(points, 6 * points);
+    }
     int outer_points[3];
     for (int e = 0; e < 3; ++e) {
         outer_points[e] = outer[e].num_points;
@@ -492,6 +518,7 @@ void tessellate_triangles(Builder& b, const Level outer[3], const Level& inner) 
 void tessellate_isolines(Builder& b, const Level& density, const Level& detail_level) {
     const int lines = density.num_points - 1;  // the v = 1 line is never drawn
     const int per_line = detail_level.num_points;
+    b.reserve(static_cast<std::size_t>(lines) * per_line, 2 * static_cast<std::size_t>(lines) * per_line);
     for (int line = 0; line < lines; ++line) {
         const Location v = detail::place_point(density.ctx, line);
         for (int p = 0; p < per_line; ++p) {
