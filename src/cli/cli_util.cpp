@@ -258,4 +258,16 @@ void StageProgress::operator()(std::string_view stage, double fraction) {
     progress_->set(static_cast<std::size_t>(fraction * static_cast<double>(kSteps)));
 }
 
+Precision parse_precision_flag(const std::string& text) {
+    const std::optional<Precision> precision = parse_precision(text);
+    if (!precision) throw Error("unknown precision '" + text + "'; expected gpu or exact", where_file("--precision"));
+    return *precision;
+}
+
+ThreadLimit::ThreadLimit(int threads) {
+    if (threads < 0)
+        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(threads), where_file("--threads"));
+    if (threads > 0) control_.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+}
+
 }  // namespace tessref::cli

@@ -17,8 +17,10 @@
 #include <memory>
 
 #include <glm/glm.hpp>
+#include <tbb/global_control.h>
 
 #include "tessref/error.h"
+#include "tessref/tessellator.h"
 
 namespace tessref::cli {
 
@@ -42,6 +44,19 @@ std::optional<float> parse_float(std::string_view text);
 // Parses an integer (whole text, decimal, optional sign). nullopt when not an integer or
 // out of range.
 std::optional<long long> parse_integer(std::string_view text);
+
+// Parses --precision: "gpu" or "exact". Throws tessref::Error naming the flag.
+Precision parse_precision_flag(const std::string& text);
+
+// --threads N for the rest of a command: 0 means every core, N > 0 caps oneTBB's
+// parallelism while the object lives, a negative N is a tessref::Error naming the flag.
+class ThreadLimit {
+public:
+    explicit ThreadLimit(int threads);
+
+private:
+    std::optional<tbb::global_control> control_;
+};
 
 // Parses an image size "WxH" given to `flag` (both 1..16384). Throws tessref::Error.
 glm::ivec2 parse_image_size(const std::string& text, const std::string& flag = "--size");

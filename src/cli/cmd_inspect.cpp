@@ -17,7 +17,6 @@
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
@@ -85,20 +84,12 @@ std::string levels_text(const TessLevels& l) {
 
 int run_inspect(const InspectOptions& options) {
     const glm::ivec2 pixel = parse_pixel(options.pixel);
-    const std::optional<Precision> precision = parse_precision(options.precision);
-    if (!precision)
-        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", where_file("--precision"));
-    if (options.threads < 0)
-        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
-                    where_file("--threads"));
+    const Precision precision = parse_precision_flag(options.precision);
+    const ThreadLimit thread_limit(options.threads);
     RenderOptions render_options;
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
-    render_options.precision = *precision;
+    render_options.precision = precision;
     render_options.mode = options.wireframe ? RenderMode::wireframe : RenderMode::fill;
-
-    std::optional<tbb::global_control> thread_limit;
-    if (options.threads > 0)
-        thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options.threads));
 
     const Scene scene = load_scene(options.scene);
     const RenderResult result = render_scene(scene, render_options);

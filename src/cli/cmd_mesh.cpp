@@ -17,7 +17,6 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
@@ -50,22 +49,9 @@ int run_mesh(const MeshCommandOptions& options) {
         throw Error("obj has no binary form; drop --binary or write .ply, .off or .stl",
                     where_file("--binary"));
     }
-    const std::optional<Precision> precision = parse_precision(options.precision);
-    if (!precision) {
-        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact",
-                    where_file("--precision"));
-    }
-    if (options.threads < 0) {
-        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
-                    where_file("--threads"));
-    }
+    const Precision precision = parse_precision_flag(options.precision);
+    const ThreadLimit thread_limit(options.threads);
     AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
-
-    std::optional<tbb::global_control> thread_limit;
-    if (options.threads > 0) {
-        thread_limit.emplace(tbb::global_control::max_allowed_parallelism,
-                             static_cast<std::size_t>(options.threads));
-    }
 
     const Scene scene = load_scene(options.scene);
     if (options.solid && !scene.grid)
@@ -75,7 +61,7 @@ int run_mesh(const MeshCommandOptions& options) {
     {
         Progress progress("tessellating patches", scene.patch_count());
         PipelineOptions pipeline_options;
-        pipeline_options.precision = *precision;
+        pipeline_options.precision = precision;
         pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
         result = run_pipeline(scene, pipeline_options);
     }
@@ -118,7 +104,7 @@ int run_mesh(const MeshCommandOptions& options) {
                   << " triangles whose corners weld together (zero area) were left out\n";
     }
     std::cout << options.output << ": " << to_string(write_options.format)
-              << (options.binary ? " binary" : " ascii") << ", " << to_string(*precision)
+              << (options.binary ? " binary" : " ascii") << ", " << to_string(precision)
               << " precision, " << scene.patch_count() << " patches, " << report.triangles
               << " triangles, " << report.vertices << " vertices (welded from "
               << report.emitted_vertices << ")\n";

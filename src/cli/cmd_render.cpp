@@ -14,7 +14,6 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
-#include <tbb/global_control.h>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
@@ -54,23 +53,15 @@ int run_render(const RenderCommandOptions& options) {
     if (options.raytrace && (options.wireframe || options.overlay_wireframe))
         throw Error("--raytrace renders the height field itself: it has no tessellation to draw as lines",
                     where_file("--raytrace"));
-    const std::optional<Precision> precision = parse_precision(options.precision);
-    if (!precision)
-        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact", where_file("--precision"));
-    if (options.threads < 0)
-        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(options.threads),
-                    where_file("--threads"));
+    const Precision precision = parse_precision_flag(options.precision);
+    const ThreadLimit thread_limit(options.threads);
     RenderOptions render_options;
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
-    render_options.precision = *precision;
+    render_options.precision = precision;
     render_options.mode = options.wireframe           ? RenderMode::wireframe
                           : options.overlay_wireframe ? RenderMode::fill_with_wireframe
                                                       : RenderMode::fill;
     AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
-
-    std::optional<tbb::global_control> thread_limit;
-    if (options.threads > 0)
-        thread_limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(options.threads));
 
     const Scene scene = load_scene(options.scene);
     render_options.shading = std::make_shared<const RenderShading>(shading_model(scene));
@@ -93,7 +84,7 @@ int run_render(const RenderCommandOptions& options) {
         std::cout << "ray-traced height field of " << raytrace_stats.grid_columns << "x" << raytrace_stats.grid_rows
                   << " vertices (" << raytrace_stats.triangles << " triangles), ";
     } else {
-        std::cout << to_string(*precision) << " precision, " << result.stats.triangles << " triangles, ";
+        std::cout << to_string(precision) << " precision, " << result.stats.triangles << " triangles, ";
     }
     std::cout << result.stats.covered_pixels << " covered pixels\n";
     return 0;

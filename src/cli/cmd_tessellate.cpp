@@ -78,13 +78,10 @@ TessellateRequest resolve(const TessellateOptions& options, bool inner_given) {
     const auto winding = parse_winding(options.winding);
     if (!winding)
         throw Error("unknown winding '" + options.winding + "'; expected ccw or cw", where_file("--winding"));
-    const auto precision = parse_precision(options.precision);
-    if (!precision)
-        throw Error("unknown precision '" + options.precision + "'; expected gpu or exact",
-                    where_file("--precision"));
+    const Precision precision = parse_precision_flag(options.precision);
 
     request.settings = {*domain, *spacing, *winding, options.point_mode};
-    request.precision = *precision;
+    request.precision = precision;
 
     const std::vector<float> outer = parse_float_list(options.outer, 4, "--outer");
     std::copy(outer.begin(), outer.end(), request.levels.outer.begin());
