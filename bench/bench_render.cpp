@@ -93,7 +93,9 @@ void BM_RenderSurface(benchmark::State& state) {
     set_counters(state, surface->mesh.triangles.size(), pixels, wall);
 }
 
-void BM_RenderScene(benchmark::State& state) {
+// Times `render(scene, options)` at 1280x800 on the state's scene and thread count.
+template <typename Render>
+void time_scene_renders(benchmark::State& state, Render render) {
     const int which = static_cast<int>(state.range(0));
     const tessref::Scene& scene = bench_scene(which);
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(state.range(1)));
@@ -101,7 +103,7 @@ void BM_RenderScene(benchmark::State& state) {
     std::uint64_t pixels = 0, triangles = 0;
     for (auto _ : state) {
         const auto start = Clock::now();
-        tessref::RenderResult image = tessref::render_scene(scene, options_1280x800(which));
+        tessref::RenderResult image = render(scene, options_1280x800(which));
         wall += std::chrono::duration<double>(Clock::now() - start).count();
         pixels = image.colour.size();
         triangles = image.stats.triangles;
@@ -110,21 +112,12 @@ void BM_RenderScene(benchmark::State& state) {
     set_counters(state, triangles, pixels, wall);
 }
 
+void BM_RenderScene(benchmark::State& state) {
+    time_scene_renders(state, [](const tessref::Scene& s, const tessref::RenderOptions& o) { return tessref::render_scene(s, o); });
+}
+
 void BM_Raytrace(benchmark::State& state) {
-    const int which = static_cast<int>(state.range(0));
-    const tessref::Scene& scene = bench_scene(which);
-    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(state.range(1)));
-    double wall = 0.0;
-    std::uint64_t pixels = 0, triangles = 0;
-    for (auto _ : state) {
-        const auto start = Clock::now();
-        tessref::RenderResult image = tessref::raytrace_scene(scene, options_1280x800(which));
-        wall += std::chrono::duration<double>(Clock::now() - start).count();
-        pixels = image.colour.size();
-        triangles = image.stats.triangles;
-        benchmark::DoNotOptimize(image.colour.data());
-    }
-    set_counters(state, triangles, pixels, wall);
+    time_scene_renders(state, [](const tessref::Scene& s, const tessref::RenderOptions& o) { return tessref::raytrace_scene(s, o); });
 }
 
 void scene_and_threads(benchmark::internal::Benchmark* b) {
