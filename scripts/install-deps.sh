@@ -13,6 +13,10 @@ packages=(
   # OpenImageIO's CMake package lists /usr/include/opencv4 among its include
   # directories; without the OpenCV headers CMake refuses the imported target.
   libopencv-core-dev
+  # OpenImageIO's CMake package also imports its command-line tools (iconvert, oiiotool,
+  # ...) and refuses to configure when /usr/bin/iconvert is missing; --no-install-recommends
+  # leaves them out, so they are named here.
+  openimageio-tools
 )
 
 missing=()
