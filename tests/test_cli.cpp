@@ -3,7 +3,7 @@
 //
 // Expected values come from hand derivations (the minimal patches, isoline spacing, the
 // fixed-point centre of a triangle), from the generator's documented counting formulas
-// (/work/shared/TESSELLATION.md: "Reference counts"), or from the library itself where
+// (docs/GENERATOR.md: "Reference counts"), or from the library itself where
 // the point is the command's faithfulness (every printed number reads back as the exact
 // float the library produced).
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // The primitive generator's contract, independent of llvmpipe: the eight invariance
-// properties of shared/TESSELLATION.md (the ones the Khronos CTS checks with exact
+// properties of docs/GENERATOR.md (the ones the Khronos CTS checks with exact
 // equality), on both precisions; reference point and primitive counts for integer
 // levels; and the level-processing rules (cull, clamp, picture frame, minimal patch).
 // Bit-exactness against llvmpipe itself is tests/test_gl_differential.cpp.
@@ -312,7 +312,7 @@ TEST(TessellatorProperties, ComponentsInUnitIntervalAndComplementExact) {
 }
 
 // Reference counts for integer levels (equal spacing), from the formulas of
-// shared/TESSELLATION.md; triangle domains use Euler's formula for a triangulated disk
+// docs/GENERATOR.md; triangle domains use Euler's formula for a triangulated disk
 // (T = 2V - B - 2) with the interior point count of nested rings.
 TEST(TessellatorCounts, IntegerLevels) {
     std::mt19937 rng(9);

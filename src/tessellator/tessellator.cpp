@@ -1,7 +1,7 @@
 // The primitive generator: level processing, point generation and connectivity for the
 // quad, triangle and isoline domains, as the D3D11 functional specification defines the
-// fixed-function tessellator that GPUs and llvmpipe implement (see
-// shared/TESSELLATION.md for the facts this follows).
+// fixed-function tessellator that GPUs and llvmpipe implement (docs/GENERATOR.md
+// states the facts this follows).
 //
 // Where the reference formulation patches point indices on the fly so that its stitch
 // routines can pretend two rings are consecutive runs of indices, this implementation
