@@ -15,6 +15,7 @@
 #include "cli/cli_util.h"
 #include "cli/commands.h"
 #include "tessref/error.h"
+#include "tessref/limits.h"
 
 namespace {
 
@@ -49,6 +50,14 @@ int main(int argc, char** argv) {
 
     try {
         const std::vector<tessref::cli::Command> commands = make_commands(app);
+        // One memory budget for the whole process (tessref/limits.h): loaders and commands
+        // refuse, before allocating, inputs that would need more. Accepted before or after
+        // the command's name.
+        std::string max_memory;
+        app.add_option("--max-memory", max_memory,
+                       "Refuse inputs and work needing more memory than this, e.g. 4G or 512M "
+                       "(default: 3/4 of physical memory, or TESSREF_MAX_MEMORY)");
+        for (const tessref::cli::Command& command : commands) command.app->fallthrough();
         // CLI11 reports a mistyped command as "A subcommand is required"; name it instead.
         const auto names_a_command = [&commands](const std::string& word) {
             for (const tessref::cli::Command& command : commands)
@@ -72,6 +81,13 @@ int main(int argc, char** argv) {
             print_error(error.message());
             std::cerr << "Run 'tessref --help' or 'tessref <command> --help' for usage." << std::endl;
             return exit_bad_input;
+        }
+        if (!max_memory.empty()) {
+            const auto bytes = tessref::parse_byte_size(max_memory);
+            if (!bytes)
+                throw tessref::Error("'" + max_memory + "' is not a memory size (e.g. 4G, 512M, 1000000)",
+                                     tessref::cli::where_file("--max-memory"));
+            tessref::set_memory_limit(*bytes);
         }
         for (const tessref::cli::Command& command : commands) {
             if (command.app->parsed()) return command.run();
