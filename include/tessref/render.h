@@ -290,6 +290,12 @@ AovSelection parse_aovs(std::string_view list);
 void write_image(const RenderResult& result, const std::string& path, ImageFormat format,
                  const AovSelection& aovs = {});
 
+// The peak memory, in bytes, that rendering (or ray tracing) an image of `size` and writing
+// it as `format` with `aovs` needs beyond the scene and its tessellated surface, for
+// refusing with require_memory() before the pipeline runs. From measured peaks (render.cpp).
+std::uint64_t estimate_render_memory(glm::ivec2 size, RenderMode mode, bool raytrace, ImageFormat format,
+                                     const AovSelection& aovs);
+
 // Colour difference of two images of the same size (Error otherwise): root mean square over
 // every pixel and the R, G, B channels of the colours clamped to [0, 1] (what a unorm8
 // framebuffer holds, before its quantization), and the pixels covered in one image only.

@@ -203,7 +203,12 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
     }
     (void)image.geterror();
 
-    if (!image.write(path)) throw Error("cannot write the defect image: " + image.geterror(), check_detail::where_in(path));
+    if (!image.write(path)) {
+        std::string reason = image.geterror();
+        if (reason.empty()) reason = OIIO::geterror();
+        if (reason.empty()) reason = "OpenImageIO gave no reason";
+        throw Error("cannot write the defect image: " + reason, check_detail::where_in(path));
+    }
 }
 
 }  // namespace tessref

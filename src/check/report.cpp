@@ -99,7 +99,9 @@ std::string report_json(const CheckReport& r) {
                                                            {"locations", std::move(locations)}};
     }
     j["defects"] = std::move(defects);
-    return j.dump(2) + "\n";
+    // File names and details are bytes, not always UTF-8 (a name in Latin-1): invalid
+    // sequences become U+FFFD rather than a failed dump.
+    return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
 }
 
 std::string report_text(const CheckReport& r, std::size_t locations_per_class) {

@@ -8,7 +8,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <climits>
+#include <csignal>
 #include <fcntl.h>
+#include <iostream>
+#include <sys/stat.h>
 #include <system_error>
 #include <unistd.h>
 
@@ -45,6 +49,16 @@ std::optional<float> parse_float(std::string_view text) {
     if (end != copy.c_str() + copy.size()) return std::nullopt;
     // ERANGE: overflow gives +-HUGE_VALF (= +-inf), underflow the nearest float; both are
     // what the user wrote, as far as a float can say it.
+    return value;
+}
+
+std::optional<double> parse_double(std::string_view text) {
+    text = trim(text);
+    if (text.empty()) return std::nullopt;
+    const std::string copy(text);
+    char* end = nullptr;
+    const double value = std::strtod(copy.c_str(), &end);
+    if (end != copy.c_str() + copy.size()) return std::nullopt;
     return value;
 }
 
@@ -120,51 +134,181 @@ std::string format_double(double x) {
 // ---------------------------------------------------------------------------------------
 // Output
 
+namespace {
+
+// Live temporary files, for the signal handler: it may only read memory that no one frees
+// or moves under it, so each slot is a fixed path buffer behind a lock-free state.
+constexpr int kSlotFree = 0, kSlotFilling = 1, kSlotLive = 2;
+struct TempSlot {
+    std::atomic<int> state{kSlotFree};
+    char path[PATH_MAX];
+};
+TempSlot temp_slots[64];
+
+// Returns the slot, or -1 when none is free or the path is too long (the file is then
+// still removed on errors, only not on signals).
+int register_temp(const std::filesystem::path& path) {
+    std::error_code error;
+    const std::string absolute = std::filesystem::absolute(path, error).string();
+    if (error || absolute.size() >= PATH_MAX) return -1;
+    for (int i = 0; i < static_cast<int>(std::size(temp_slots)); ++i) {
+        int expected = kSlotFree;
+        if (!temp_slots[i].state.compare_exchange_strong(expected, kSlotFilling)) continue;
+        std::memcpy(temp_slots[i].path, absolute.c_str(), absolute.size() + 1);
+        temp_slots[i].state.store(kSlotLive);
+        return i;
+    }
+    return -1;
+}
+
+void unregister_temp(int slot) {
+    if (slot >= 0) temp_slots[slot].state.store(kSlotFree);
+}
+
+extern "C" void remove_temps_and_die(int signal_number) {
+    // Only async-signal-safe calls: unlink, signal, raise.
+    for (TempSlot& slot : temp_slots)
+        if (slot.state.load() == kSlotLive) ::unlink(slot.path);
+    ::signal(signal_number, SIG_DFL);
+    ::raise(signal_number);  // pending until this handler returns, then the default action
+}
+
+// The descriptor a path names without being a file of its own: /dev/stdout, /dev/stderr,
+// /dev/fd/N, /proc/self/fd/N. Writing there must go to the descriptor (its offset, its
+// O_APPEND), not to a reopened or renamed file: `-o /dev/stdout >> log` appends.
+std::optional<int> descriptor_path(const std::filesystem::path& path) {
+    const std::string text = path.lexically_normal().string();
+    if (text == "/dev/stdout") return STDOUT_FILENO;
+    if (text == "/dev/stderr") return STDERR_FILENO;
+    for (const std::string_view prefix : {"/dev/fd/", "/proc/self/fd/"}) {
+        if (text.starts_with(prefix)) {
+            const std::optional<long long> fd = parse_integer(std::string_view(text).substr(prefix.size()));
+            if (fd && *fd >= 0 && *fd <= INT_MAX) return static_cast<int>(*fd);
+        }
+    }
+    return std::nullopt;
+}
+
+// `path` with every symlink of its last component followed, also when the last one dangles
+// (the file it names is then created, and the link stays a link).
+std::filesystem::path follow_links(std::filesystem::path path, const std::string& given) {
+    for (int hop = 0; hop < 40; ++hop) {
+        std::error_code error;
+        if (!std::filesystem::is_symlink(std::filesystem::symlink_status(path, error))) return path;
+        const std::filesystem::path link = std::filesystem::read_symlink(path, error);
+        if (error) throw Error("cannot follow the symlink: " + error.message(), where_file(given));
+        path = link.is_absolute() ? link : path.parent_path() / link;
+    }
+    throw Error("cannot write output file: " + errno_text(ELOOP), where_file(given));
+}
+
+// Writes all of `bytes` to `fd`, retrying short writes; returns 0 or the errno.
+int write_all(int fd, const char* bytes, std::size_t size) {
+    std::size_t written = 0;
+    while (written < size) {
+        const ssize_t n = ::write(fd, bytes + written, size - written);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            return errno;
+        }
+        written += static_cast<std::size_t>(n);
+    }
+    return 0;
+}
+
+}  // namespace
+
+void install_signal_cleanup() {
+    // SIGPIPE too: a reader of a FIFO or pipe output that goes away kills us the same way.
+    for (const int signal_number : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) {
+        struct sigaction current {};
+        if (::sigaction(signal_number, nullptr, &current) != 0 || current.sa_handler == SIG_IGN) continue;
+        struct sigaction action {};
+        action.sa_handler = remove_temps_and_die;
+        sigemptyset(&action.sa_mask);
+        ::sigaction(signal_number, &action, nullptr);
+    }
+}
+
 AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extension)
     : target_(std::move(target)) {
     if (target_.empty()) throw Error("empty output file name");
     if (target_.has_filename() == false || target_.filename() == "." || target_.filename() == "..")
         throw Error("not a file name", where_file(target_.string()));
-    const std::filesystem::path dir = target_.parent_path();
+    const std::string given = target_.string();
+
+    // What the name is now decides between a rename and a write-through (see the header).
+    if (const std::optional<int> fd = descriptor_path(target_)) {
+        write_through_ = true;
+        write_through_fd_ = *fd;
+    }
+    struct stat info {};
+    if (::stat(target_.c_str(), &info) == 0) {
+        if (S_ISDIR(info.st_mode)) throw Error("cannot write output file: it is a directory", where_file(given));
+        if (!S_ISREG(info.st_mode)) write_through_ = true;
+        if (!write_through_) replaced_ = follow_links(target_, given);
+        if (write_through_ && write_through_fd_ < 0 && ::access(target_.c_str(), W_OK) != 0)
+            throw Error("cannot write output file: " + errno_text(errno), where_file(given));
+    } else if (errno == ENOENT && !write_through_) {
+        replaced_ = follow_links(target_, given);
+    } else if (!write_through_) {
+        throw Error("cannot write output file: " + errno_text(errno), where_file(given));
+    }
+
+    // The temporary file: beside the file a rename replaces (same file system), or in the
+    // temp directory for a write-through (no file may be created beside /dev/null).
+    std::filesystem::path dir;
+    std::string prefix;
+    if (write_through_) {
+        std::error_code error;
+        dir = std::filesystem::temp_directory_path(error);
+        if (error) dir = "/tmp";
+        prefix = "tessref-" + target_.filename().string();
+    } else {
+        dir = replaced_.parent_path();
+        prefix = "." + replaced_.filename().string();
+    }
     const std::string extension = temp_extension.empty() ? target_.extension().string() : temp_extension;
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 100; ++attempt) {
-        // ".<name>.<pid>-<n>.tmp<ext>": hidden, unique to this process, same extension.
-        const std::string name = "." + target_.filename().string() + "." +
-                                 std::to_string(::getpid()) + "-" +
+        // "<prefix>.<pid>-<n>.tmp<ext>": unique to this process, the target's extension.
+        const std::string name = prefix + "." + std::to_string(::getpid()) + "-" +
                                  std::to_string(counter.fetch_add(1)) + ".tmp" + extension;
         const std::filesystem::path candidate = dir.empty() ? std::filesystem::path(name) : dir / name;
+        // Registered before it exists, so no signal can come between creating and listing it.
+        const int slot = register_temp(candidate);
         const int fd = ::open(candidate.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd >= 0) {
             ::close(fd);
             temp_ = candidate;
+            temp_slot_ = slot;
             return;
         }
-        if (errno != EEXIST) {
-            throw Error("cannot create output file: " + errno_text(errno),
-                        where_file(target_.string()));
-        }
+        const int error = errno;
+        unregister_temp(slot);
+        if (error != EEXIST) throw Error("cannot create output file: " + errno_text(error), where_file(given));
     }
-    throw Error("cannot create a temporary file next to the output", where_file(target_.string()));
+    throw Error("cannot create a temporary file next to the output", where_file(given));
 }
 
 AtomicOutput::~AtomicOutput() {
-    if (!committed_ && !temp_.empty()) ::unlink(temp_.c_str());
+    if (!committed_) discard();
+}
+
+void AtomicOutput::discard() {
+    if (!temp_.empty()) ::unlink(temp_.c_str());
+    unregister_temp(temp_slot_);
+    temp_slot_ = -1;
+    committed_ = true;  // nothing left to clean up
 }
 
 void AtomicOutput::write(std::string_view bytes) {
     const int fd = ::open(temp_.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
     if (fd < 0) throw Error("cannot write output file: " + errno_text(errno), where_file(target_.string()));
-    std::size_t written = 0;
-    while (written < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-        if (n < 0) {
-            if (errno == EINTR) continue;
-            const int error = errno;
-            ::close(fd);
-            throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
-        }
-        written += static_cast<std::size_t>(n);
+    const int error = write_all(fd, bytes.data(), bytes.size());
+    if (error != 0) {
+        ::close(fd);
+        throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
     }
     if (::close(fd) != 0)
         throw Error("cannot write output file: " + errno_text(errno), where_file(target_.string()));
@@ -172,13 +316,42 @@ void AtomicOutput::write(std::string_view bytes) {
 
 void AtomicOutput::commit() {
     if (committed_) return;
-    if (::rename(temp_.c_str(), target_.c_str()) != 0) {
-        const int error = errno;
-        ::unlink(temp_.c_str());
-        committed_ = true;  // nothing left to clean up
-        throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
+    if (!write_through_) {
+        if (::rename(temp_.c_str(), replaced_.c_str()) != 0) {
+            const int error = errno;
+            discard();
+            throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
+        }
+        unregister_temp(temp_slot_);
+        temp_slot_ = -1;
+        committed_ = true;
+        return;
     }
-    committed_ = true;
+    // Write-through: copy the finished temporary file to the device, FIFO or descriptor.
+    int error = 0;
+    const int in = ::open(temp_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (in < 0) error = errno;
+    int out = write_through_fd_;
+    if (error == 0 && out < 0) {
+        out = ::open(target_.c_str(), O_WRONLY | O_CLOEXEC);  // a FIFO waits here for its reader
+        if (out < 0) error = errno;
+    }
+    if (error == 0 && write_through_fd_ == STDOUT_FILENO) {
+        std::cout.flush();  // what the command printed before stays before the file
+        std::fflush(stdout);
+    }
+    std::vector<char> buffer(1 << 20);
+    while (error == 0) {
+        const ssize_t n = ::read(in, buffer.data(), buffer.size());
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) error = errno;
+        if (n <= 0) break;
+        error = write_all(out, buffer.data(), static_cast<std::size_t>(n));
+    }
+    if (in >= 0) ::close(in);
+    if (out >= 0 && write_through_fd_ < 0 && ::close(out) != 0 && error == 0) error = errno;
+    discard();
+    if (error != 0) throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
 }
 
 bool is_stdout(const std::string& target) { return target.empty() || target == "-"; }

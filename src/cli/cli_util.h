@@ -41,6 +41,9 @@ inline Where where_file(std::string file) {
 // Returns nullopt when the text is not a number.
 std::optional<float> parse_float(std::string_view text);
 
+// The same for a double (strtod: the same forms as parse_float, double's range).
+std::optional<double> parse_double(std::string_view text);
+
 // Parses an integer (whole text, decimal, optional sign). nullopt when not an integer or
 // out of range.
 std::optional<long long> parse_integer(std::string_view text);
@@ -81,10 +84,19 @@ std::string format_double(double x);
 
 // An output file written atomically. The constructor reserves a fresh temporary file next
 // to the target (same directory, so the final rename never crosses file systems; same
-// extension, so writers that pick a codec by extension, such as OpenImageIO, still work).
-// Write to temp_path(), then commit() renames it over the target. If commit() is never
-// reached (an exception, an early return), the destructor removes the temporary file and
-// the target is left exactly as it was.
+// extension as the name given, so writers that pick a codec by extension, such as
+// OpenImageIO, still work). Write to temp_path(), then commit() puts it in place. If
+// commit() is never reached (an exception, an early return, SIGINT/SIGTERM/SIGHUP once
+// install_signal_cleanup() ran), the temporary file is removed and the target is left
+// exactly as it was.
+//
+// What the target is decides how commit() puts the bytes there:
+//  - a regular file or a new name: renamed over it (atomic);
+//  - a symlink: followed to the file it names, which is replaced as above; the link stays;
+//  - a device, FIFO or socket (/dev/null, /dev/stdout, a pipe): written through, never
+//    replaced; the temporary file then lives in the temp directory, and a failed write
+//    (/dev/full: "No space left on device") is an Error;
+//  - a directory: an Error in the constructor.
 class AtomicOutput {
 public:
     // `temp_extension` (e.g. ".png") overrides the extension of the temporary name, for a
@@ -99,15 +111,26 @@ public:
 
     // Writes `bytes` to the temporary file (replacing what it held). Throws tessref::Error.
     void write(std::string_view bytes);
-    // Renames the temporary file over the target. Throws tessref::Error (and removes the
-    // temporary file) when that fails.
+    // Puts the temporary file's bytes at the target (rename, or write-through for a device
+    // or FIFO). Throws tessref::Error (and removes the temporary file) when that fails.
     void commit();
 
 private:
-    std::filesystem::path target_;
+    void discard();
+
+    std::filesystem::path target_;    // the name the user gave (for messages)
+    std::filesystem::path replaced_;  // the regular file a rename replaces (symlinks followed)
+    bool write_through_ = false;      // the target is a device, FIFO or socket
+    int write_through_fd_ = -1;       // /dev/stdout, /dev/fd/N: that descriptor, not a reopen
     std::filesystem::path temp_;
+    int temp_slot_ = -1;              // the temporary file's entry for the signal handler
     bool committed_ = false;
 };
+
+// Installs handlers for SIGINT, SIGTERM and SIGHUP (unless ignored, as under nohup) that
+// remove every live AtomicOutput temporary file, then die of the same signal with its
+// default action, so the exit status still says "killed by signal".
+void install_signal_cleanup();
 
 // Writes `bytes` to `target` atomically, or to stdout when target is empty or "-".
 void write_output(const std::string& target, std::string_view bytes);

@@ -1,10 +1,13 @@
 // tessref check — watertightness and crack checks for any mesh (PLY, OBJ, OFF, STL).
 // Exit status: 0 the mesh passes, 1 it has defects, 2 it cannot be read.
+#include <cmath>
 #include <iostream>
+#include <optional>
 #include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <OpenImageIO/imageio.h>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
@@ -18,7 +21,7 @@ namespace {
 struct CheckCommandOptions {
     std::string mesh;
     std::string expect = "auto";
-    double tolerance = -1.0;  // < 0: the default, relative to the mesh size
+    std::string tolerance;  // empty: the default, relative to the mesh size
     bool json = false;
     std::string image;
     int probe_resolution = 512;
@@ -26,14 +29,32 @@ struct CheckCommandOptions {
     std::size_t max_locations = 1000;
 };
 
+// --tolerance as typed: a finite distance >= 0. Read here rather than by CLI11, whose
+// range check words its message with DBL_MAX written out (309 digits) and lets NaN by.
+double parse_tolerance(const std::string& text) {
+    const std::optional<double> value = parse_double(text);
+    if (!value) throw Error("'" + text + "' is not a number", where_file("--tolerance"));
+    if (!std::isfinite(*value) || *value < 0.0)
+        throw Error("'" + text + "' is not a distance: give a finite number >= 0", where_file("--tolerance"));
+    return *value;
+}
+
 int run_check(const CheckCommandOptions& options) {
+    // Flags first: nothing is read for a command line that cannot succeed.
+    const std::optional<double> tolerance =
+        options.tolerance.empty() ? std::nullopt : std::optional<double>(parse_tolerance(options.tolerance));
+    if (!options.image.empty() && !OIIO::ImageOutput::create(options.image)) {
+        throw Error("no image format for '" + options.image +
+                        "': give the name an extension OpenImageIO writes, such as .png, .tif or .exr",
+                    where_file("--image"));
+    }
     StageProgress progress;
     const IndexedMesh mesh =
         read_mesh_for_check(options.mesh, [&progress](double fraction) { progress("check: reading", fraction); });
 
     CheckOptions check;
     check.expect = options.expect == "closed" ? Expect::closed : options.expect == "open" ? Expect::open : Expect::automatic;
-    if (options.tolerance >= 0.0) check.tolerance = options.tolerance;
+    if (tolerance) check.tolerance = *tolerance;
     check.ray_probe = !options.no_probe;
     check.probe_resolution = options.probe_resolution;
     check.max_locations = options.max_locations;
@@ -45,7 +66,11 @@ int run_check(const CheckCommandOptions& options) {
 
     if (!options.image.empty()) {
         AtomicOutput output(options.image);
-        write_defect_image(mesh, report, output.temp_path().string());
+        try {
+            write_defect_image(mesh, report, output.temp_path().string());
+        } catch (const Error& error) {
+            throw Error(error.what(), where_file(options.image));  // the name given, not the temporary one
+        }
         output.commit();
     }
     std::cout << (options.json ? report_json(report) : report_text(report)) << std::flush;
@@ -70,7 +95,7 @@ Command add_check_command(CLI::App& parent) {
     app->add_option("--tolerance", options->tolerance,
                     "Distance under which vertices coincide, a vertex lies on an edge and a face is degenerate "
                     "(default: 1e-7 of the larger of the bounding box diagonal and the largest coordinate, about single-precision rounding)")
-        ->check(CLI::NonNegativeNumber);
+        ->type_name("DISTANCE");
     app->add_flag("--json", options->json, "Print the whole report as JSON");
     app->add_option("--image", options->image, "Write a top view with the defects marked (PNG, or any image OpenImageIO writes)");
     app->add_option("--probe-resolution", options->probe_resolution, "Rays per side of the ray-cast probe's grid")

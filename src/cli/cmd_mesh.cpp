@@ -8,12 +8,14 @@
 // Output goes to a temporary file next to OUT and is renamed over it only when complete;
 // the output name is checked (extension, writable directory) before the pipeline runs.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -37,7 +39,7 @@ struct MeshCommandOptions {
     bool binary = false;
     int threads = 0;  // 0: every core
     bool solid = false;
-    std::optional<double> base;  // --base: the solid's bottom; default below the lowest vertex
+    std::string base;  // --base as typed: the solid's bottom; empty: below the lowest vertex
 };
 
 int run_mesh(const MeshCommandOptions& options) {
@@ -51,6 +53,12 @@ int run_mesh(const MeshCommandOptions& options) {
     }
     const Precision precision = parse_precision_flag(options.precision);
     const ThreadLimit thread_limit(options.threads);
+    std::optional<double> given_base;
+    if (!options.base.empty()) {
+        given_base = parse_double(options.base);
+        if (!given_base || !std::isfinite(*given_base))
+            throw Error("'" + options.base + "' is not a height: give a finite number", where_file("--base"));
+    }
     AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
 
     const Scene scene = load_scene(options.scene);
@@ -76,11 +84,12 @@ int run_mesh(const MeshCommandOptions& options) {
             high = std::max(high, p[up_axis]);
         }
         // Default base: 5 % of the relief (at least 1 unit) below the lowest vertex.
-        const double base = options.base.value_or(low - std::max(1.0, 0.05 * (high - low)));
+        const double base = given_base.value_or(low - std::max(1.0, 0.05 * (high - low)));
         if (!(base < low)) {
-            throw Error("the base (" + std::to_string(base) + ") must lie below the lowest vertex (" +
-                            std::to_string(low) + ")",
-                        where_file("--base"));
+            std::ostringstream what;
+            what << "the base " << (given_base ? "'" + options.base + "'" : std::to_string(base))
+                 << " must lie below the terrain's lowest vertex, at " << "xyz"[up_axis] << " = " << low;
+            throw Error(what.str(), where_file(given_base ? "--base" : options.scene));
         }
         result.mesh = close_terrain_into_solid(result.mesh, base, up_axis);
     }

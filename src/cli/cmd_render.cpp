@@ -18,6 +18,7 @@
 #include "cli/cli_util.h"
 #include "cli/commands.h"
 #include "tessref/error.h"
+#include "tessref/limits.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"
@@ -64,6 +65,13 @@ int run_render(const RenderCommandOptions& options) {
     AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
 
     const Scene scene = load_scene(options.scene);
+    if (scene.camera) {
+        // Refused here, before the pipeline, rather than after it as an "out of memory".
+        const glm::ivec2 size = options.size.empty() ? scene.camera->viewport : render_options.size;
+        require_memory(estimate_render_memory(size, render_options.mode, options.raytrace, format, aovs),
+                       "an image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
+                       where_file(options.size.empty() ? options.scene : "--size " + options.size));
+    }
     render_options.shading = std::make_shared<const RenderShading>(shading_model(scene));
     StageProgress stage_progress;
     render_options.progress = [&stage_progress](std::string_view stage, double fraction) {

@@ -49,6 +49,7 @@ struct TessellateRequest {
     Precision precision = Precision::gpu;
     Format format = Format::text;
     std::string output;
+    bool inner_given = true;   // false: isolines without --inner (they have no inner levels)
     std::string command_line;  // canonical form of the request, for headers and pictures
 };
 
@@ -81,6 +82,7 @@ TessellateRequest resolve(const TessellateOptions& options, bool inner_given) {
     const Precision precision = parse_precision_flag(options.precision);
 
     request.settings = {*domain, *spacing, *winding, options.point_mode};
+    request.inner_given = inner_given;
     request.precision = precision;
 
     const std::vector<float> outer = parse_float_list(options.outer, 4, "--outer");
@@ -112,7 +114,7 @@ TessellateRequest resolve(const TessellateOptions& options, bool inner_given) {
           std::string(to_string(request.settings.winding));
     if (request.settings.point_mode) cmd += " --point-mode";
     cmd += " --outer " + join_levels(request.levels.outer.data(), 4, ",", true);
-    cmd += " --inner " + join_levels(request.levels.inner.data(), 2, ",", true);
+    if (inner_given) cmd += " --inner " + join_levels(request.levels.inner.data(), 2, ",", true);
     cmd += " --precision " + std::string(to_string(request.precision));
     return request;
 }
@@ -139,7 +141,9 @@ std::string comment_header(const TessellateRequest& request, const Pattern& patt
     const TessLevels& given = pattern.levels();
     const TessLevels& effective = pattern.effective_levels();
     out += "# levels given: outer " + join_levels(given.outer.data(), 4, " ") + ", inner " +
-           join_levels(given.inner.data(), 2, " ") + "\n";
+           (request.inner_given ? join_levels(given.inner.data(), 2, " ")
+                                : std::string("not given (isolines have no inner levels)")) +
+           "\n";
     out += "# levels effective: outer " + join_levels(effective.outer.data(), 4, " ") + ", inner " +
            join_levels(effective.inner.data(), 2, " ") + "\n";
     out += "# counts: " + counted(pattern.points().size(), "point") + ", " +
@@ -190,11 +194,12 @@ Json level_json(float x) {
     return format_float(x);
 }
 
-Json levels_json(const TessLevels& levels) {
+// `inner_given` false: "inner" is null (isolines without --inner).
+Json levels_json(const TessLevels& levels, bool inner_given = true) {
     Json outer = Json::array(), inner = Json::array();
     for (const float x : levels.outer) outer.push_back(level_json(x));
     for (const float x : levels.inner) inner.push_back(level_json(x));
-    return {{"outer", outer}, {"inner", inner}};
+    return {{"outer", outer}, {"inner", inner_given ? inner : Json(nullptr)}};
 }
 
 // The document with one top-level key per line and one point or primitive per line:
@@ -229,7 +234,7 @@ std::string to_json(const TessellateRequest& request, const Pattern& pattern, do
                        {"winding", to_string(s.winding)},
                        {"point_mode", s.point_mode},
                        {"precision", to_string(pattern.precision())}};
-    doc["levels"] = {{"given", levels_json(pattern.levels())}, {"effective", levels_json(pattern.effective_levels())}};
+    doc["levels"] = {{"given", levels_json(pattern.levels(), request.inner_given)}, {"effective", levels_json(pattern.effective_levels())}};
     doc["culled"] = pattern.culled();
     Json points = Json::array();
     for (const TessCoord& p : pattern.points()) points.push_back({p.u, p.v, p.w});

@@ -40,6 +40,8 @@ void print_error(const std::string& message) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // Ctrl-C or a kill while an output is being written must not leave its temporary file.
+    tessref::cli::install_signal_cleanup();
     CLI::App app{"tessref — a CPU reference of the GPU tessellation pipeline: control stage, "
                  "primitive generator, evaluation, geometry, raster and shading.",
                  "tessref"};
