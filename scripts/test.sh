@@ -1,7 +1,46 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing, builds, and runs the whole suite with ctest.
+#
+#   scripts/test.sh [ctest arguments...]                        plain build in build/
+#   scripts/test.sh --sanitize address,undefined [ctest args]   ASan + UBSan in build-asan/
+#   scripts/test.sh --sanitize thread [ctest args]              TSan in build-tsan/
+#
+# Sanitized builds leave out the benchmarks and run the same suite; any sanitizer report
+# fails the test that caused it (the tessref executable the end-to-end tests start is
+# sanitized too). Suppressions, each with its reason, are in scripts/sanitizers/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+root=$(pwd)
+
+sanitize=""
+if [[ "${1:-}" == "--sanitize" ]]; then
+  sanitize=${2:?"--sanitize needs address,undefined or thread"}
+  shift 2
+elif [[ "${1:-}" == --sanitize=* ]]; then
+  sanitize=${1#--sanitize=}
+  shift
+fi
+
+case "$sanitize" in
+  "") ;;
+  address,undefined|undefined,address)
+    export BUILD_DIR=${BUILD_DIR:-build-asan}
+    export CMAKE_ARGS="${CMAKE_ARGS:-} -DTESSREF_SANITIZE=address,undefined -DTESSREF_BUILD_BENCH=OFF"
+    export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1"
+    export LSAN_OPTIONS="suppressions=$root/scripts/sanitizers/lsan.supp:print_suppressions=0"
+    export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:suppressions=$root/scripts/sanitizers/ubsan.supp"
+    ;;
+  thread)
+    export BUILD_DIR=${BUILD_DIR:-build-tsan}
+    export CMAKE_ARGS="${CMAKE_ARGS:-} -DTESSREF_SANITIZE=thread -DTESSREF_BUILD_BENCH=OFF"
+    export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$root/scripts/sanitizers/tsan.supp"
+    ;;
+  *)
+    echo "test.sh: --sanitize takes address,undefined or thread, not '$sanitize'" >&2
+    exit 2
+    ;;
+esac
+
 scripts/install-deps.sh
 scripts/build.sh
 BUILD_DIR=${BUILD_DIR:-build}
