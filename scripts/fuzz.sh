@@ -85,15 +85,17 @@ fuzz_one() {
   set -e
   [ "$jobs" -gt 1 ] && cat "$(dirname "$log")"/fuzz-*.log >>"$log" 2>/dev/null && rm -f "$(dirname "$log")"/fuzz-*.log
   local execs cov
-  execs=$(grep -E '^stat::number_of_executed_units' "$log" | awk '{s += $2} END {print s + 0}')
-  cov=$(grep -oE 'cov: [0-9]+' "$log" | tail -1 | awk '{print $2}')
+  execs=$(grep -aE '^stat::number_of_executed_units' "$log" | awk '{s += $2} END {print s + 0}')
+  # A run stopped by a finding prints no final stats: take its last progress line.
+  [ "$execs" -eq 0 ] && execs=$(grep -aoE '^#[0-9]+' "$log" | tail -1 | tr -d '#')
+  cov=$(grep -aoE 'cov: [0-9]+' "$log" | tail -1 | awk '{print $2}')
   echo "fuzz.sh: $target: executions $execs, cov: edges ${cov:-?}, exit $rc"
   local after
   after=$(find "$findings" -type f | wc -l)
   if [ "$rc" -ne 0 ] || [ "$after" -gt "$before" ]; then
     echo "fuzz.sh: $target: FINDING(S):"
     find "$findings" -type f -newer "$log.start" 2>/dev/null | sed 's/^/  /' || true
-    grep -E '^==[0-9]+==ERROR|runtime error|SUMMARY|deadly signal|Test unit written' "$log" | head -20 | sed 's/^/  /'
+    grep -aE '^==[0-9]+== ?ERROR|runtime error|SUMMARY|deadly signal|ALARM|Test unit written' "$log" | head -20 | sed 's/^/  /'
     return 1
   fi
   return 0
