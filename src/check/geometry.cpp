@@ -257,7 +257,10 @@ void find_coincident_vertices(CheckState& state) {
         auto parts = map_chunks<std::vector<std::pair<std::uint32_t, std::uint32_t>>>(
             grid.size(), vertex_chunk, [&](std::size_t i0, std::size_t i1, auto& out) {
                 for (std::size_t i = i0; i < i1; ++i) {
-                    const auto [key, v] = grid.entry(i);
+                    // Not a structured binding: the lambda below captures v, which clang 15
+                    // (the fuzz build's compiler) cannot do for a binding.
+                    const auto key = grid.entry(i).first;
+                    const std::uint32_t v = grid.entry(i).second;
                     const glm::dvec3 p = mesh.positions[v];
                     for (std::size_t j = i + 1; j < grid.size() && grid.entry(j).first == key; ++j) {
                         const std::uint32_t u = grid.entry(j).second;
