@@ -182,3 +182,33 @@ TEST(CheckProbe, NarrowSlitIsFoundAtEveryResolution) {
         EXPECT_EQ(closed.probe.dismissed_rays, 0u);
     }
 }
+
+// A slab 1e-9 thick at x = 0.75, beside a cube that stretches the box to x = -1: in single
+// precision (2^-24 of 0.75 is 4e-8) its two big faces are one plane, and the points the
+// probe takes as inside it lie on that plane, so rays from them may leave without a hit.
+// The mesh is closed (every edge has two faces), so no ray can get out: what the probe saw
+// is rounding, counted as dismissed, never a probe defect. (The slab's thin faces are
+// degenerate, which the check reports.)
+TEST(CheckProbe, TopologyDismissesWhatRoundingDoes) {
+    tessref::IndexedMesh mesh;
+    auto box = [&](glm::dvec3 lo, glm::dvec3 hi) {
+        const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+        for (int k = 0; k < 8; ++k) mesh.positions.emplace_back(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+        const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+        for (const auto& q : quads) {
+            mesh.add_triangle(base + q[0], base + q[1], base + q[2]);
+            mesh.add_triangle(base + q[0], base + q[2], base + q[3]);
+        }
+    };
+    box({-1.0, 0.0, 0.0}, {-0.5, 0.5, 0.5});
+    box({0.75, 0.0, 0.0}, {0.75 + 1e-9, 1.0, 1.0});
+    CheckOptions options;
+    options.expect = Expect::closed;
+    options.probe_resolution = 64;
+    const CheckReport r = tessref::check_mesh(mesh, options);
+    ASSERT_TRUE(r.closed && r.manifold && r.consistently_oriented) << describe(r);
+    EXPECT_GT(r.probe.dismissed_rays, 0u) << describe(r);
+    EXPECT_EQ(r.probe.failed_rays, 0u);
+    for (DefectClass k : {DefectClass::probe_miss, DefectClass::probe_odd_parity, DefectClass::probe_escape})
+        EXPECT_EQ(r.count(k), 0u) << describe(r);
+}
