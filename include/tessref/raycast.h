@@ -26,6 +26,10 @@ struct RayHit {
     // +1 when the ray leaves through the triangle's counter-clockwise side (the direction
     // is along its normal), -1 when it enters through it, 0 for a ray in its plane.
     int side = 0;
+    // How far the hit point lies from the nearest edge of its triangle. Under
+    // RayScene::resolution() the ray may as well have hit the neighbour across that edge,
+    // both, or (at a ridge) neither: the hit says nothing about which side it went.
+    double edge_distance = 0.0;
 };
 
 class RayScene {
@@ -49,6 +53,11 @@ public:
                                  double t_far = std::numeric_limits<double>::infinity()) const;
 
     std::size_t triangle_count() const;
+
+    // The distance under which Embree's single-precision arithmetic cannot tell on which
+    // side of an edge a ray passes: 16 units in the last place of the scene's largest
+    // coordinate (after the shift to its centre).
+    double resolution() const;
 
 private:
     struct Impl;

@@ -7,10 +7,18 @@
 //    surface an even number of times, so an odd count means a leak; and rays cast from
 //    points found inside in every direction must hit the surface, so a miss escaped
 //    through a gap.
+// Neither verdict may rest on a grazing hit. Where a ray passes within single-precision
+// rounding of an edge or a vertex, Embree may report the triangles on both sides, one, or
+// (at a ridge) none, so such a hit says nothing about whether the ray crossed the surface
+// there: the ray is cast again beside itself, off the edge, and the clean cast decides. And
+// where the topology rules a leak out (every edge has exactly two faces, but for a
+// terrain's outline), the surface is a closed cycle that every line crosses an even number
+// of times, whatever it is made of: failures there are rounding, dismissed, not reported.
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <string>
 
 #include "check/check_internal.h"
@@ -20,11 +28,32 @@ namespace tessref::check_detail {
 
 namespace {
 
-// Fixed sub-cell offsets of the probe grid, so that rays do not run exactly through the
-// vertices and edges of meshes made on a regular grid (a measure-zero case, but a common
-// one: terrain grids).
-constexpr double jitter_u = 0.5371;
-constexpr double jitter_w = 0.5953;
+// A ray that grazed an edge or a vertex is cast again beside itself, across its direction:
+// 16 to 128 scene resolutions away (far enough to leave the edge's rounding behind, close
+// enough to stay in a crack it went through), turning by the golden angle so that the
+// tries leave a vertex between different pairs of its edges.
+constexpr int recasts = 8;
+
+glm::dvec3 beside(const glm::dvec3& origin, const glm::dvec3& across_u, const glm::dvec3& across_w, int attempt,
+                  double resolution) {
+    const double radius = 16.0 * attempt * resolution;
+    const double angle = 2.399963229728653 * attempt;  // the golden angle
+    return origin + radius * (std::cos(angle) * across_u + std::sin(angle) * across_w);
+}
+
+bool grazes(const RayHit& hit, const RayScene& scene) {
+    return hit.side == 0 || hit.edge_distance <= scene.resolution();
+}
+
+// Whether a ray could get through the surface at all: only where some edge lacks its second
+// face (a boundary edge other than the outline loop the terrain probe allows) or has more
+// than two.
+bool topology_allows_leaks(const CheckState& state, int outline) {
+    if (state.non_manifold_edges > 0) return true;
+    for (std::size_t i = 0; i < state.boundary.size(); ++i)
+        if (static_cast<int>(state.loop_of_boundary[i]) != outline) return true;
+    return false;
+}
 
 struct GridFailure {
     int axis;
@@ -127,8 +156,13 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
     direction[k] = -state.up_sign;
     const double start = state.up_sign > 0 ? state.bbox_max[k] + 0.01 * height + margin : state.bbox_min[k] - 0.01 * height - margin;
 
+    const glm::dvec2 offset = state.options.probe_offset;
+    glm::dvec3 across_u(0.0), across_w(0.0);
+    across_u[iu] = 1.0;
+    across_w[iw] = 1.0;
+
     struct RowResult {
-        std::size_t rays = 0;
+        std::size_t rays = 0, recast = 0;
         std::vector<GridFailure> failures;
     };
     std::vector<RowResult> rows(resolution);
@@ -138,7 +172,7 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
         tbb::parallel_for(tbb::blocked_range<int>(j0, j1, 1), [&](const tbb::blocked_range<int>& r) {
             std::vector<double> crossings;
             for (int j = r.begin(); j != r.end(); ++j) {
-                const double w = lo.y + (j + jitter_w) * step.y;
+                const double w = lo.y + (j + offset.y) * step.y;
                 crossings.clear();
                 for (std::size_t e = 0; e < polygon.size(); ++e) {
                     const glm::dvec2 p = polygon[e], q = polygon[(e + 1) % polygon.size()];
@@ -147,7 +181,7 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
                 std::sort(crossings.begin(), crossings.end());
                 std::size_t passed = 0;
                 for (int i = 0; i < resolution; ++i) {
-                    const double u = lo.x + (i + jitter_u) * step.x;
+                    const double u = lo.x + (i + offset.x) * step.x;
                     while (passed < crossings.size() && crossings[passed] < u) ++passed;
                     if (passed % 2 == 0) continue;  // outside the outline
                     ++rows[j].rays;
@@ -160,7 +194,12 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
                     double near_outline = std::numeric_limits<double>::infinity();
                     for (std::size_t e = 0; e < polygon.size(); ++e)
                         near_outline = std::min(near_outline, distance_2d_to_segment({u, w}, polygon[e], polygon[(e + 1) % polygon.size()]));
-                    if (near_outline > margin) rows[j].failures.push_back({k, i, j});
+                    if (near_outline <= margin) continue;
+                    // A miss is a hole only if a ray beside it, off any edge this one may have
+                    // slipped past, misses too (as it does in any crack wider than that step).
+                    ++rows[j].recast;
+                    if (scene.intersect(beside(origin, across_u, across_w, 1, scene.resolution()), direction).hit) continue;
+                    rows[j].failures.push_back({k, i, j});
                 }
             }
         });
@@ -169,10 +208,15 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
     std::vector<GridFailure> failures;
     for (RowResult& r : rows) {
         report.probe.rays += r.rays;
+        report.probe.recast_rays += r.recast;
         failures.insert(failures.end(), r.failures.begin(), r.failures.end());
     }
-    report.probe.failed_rays = failures.size();
     if (failures.empty()) return;
+    if (!topology_allows_leaks(state, outline)) {
+        report.probe.dismissed_rays = failures.size();
+        return;
+    }
+    report.probe.failed_rays = failures.size();
 
     const OpenBoundary open = open_boundary(state);
     const auto clusters = cluster(failures);
@@ -181,7 +225,7 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
     for (const auto& cells : clusters) {
         glm::dvec2 centre(0.0);
         for (const GridFailure& g : cells)
-            centre += glm::dvec2(lo.x + (g.i + jitter_u) * step.x, lo.y + (g.j + jitter_w) * step.y);
+            centre += glm::dvec2(lo.x + (g.i + offset.x) * step.x, lo.y + (g.j + offset.y) * step.y);
         centre /= double(cells.size());
         Defect d;
         d.position[iu] = centre.x;
@@ -216,12 +260,10 @@ void closed_probe(CheckState& state, const RayScene& scene) {
     const int resolution = std::max(1, state.options.probe_resolution);
     const glm::dvec3 extent = state.bbox_max - state.bbox_min;
     const double margin = 0.01 * state.diagonal + state.tolerance + 1e-12;
-    // Hits closer than this along a line are one point seen in several triangles: a few
-    // single-precision steps at the mesh's scale.
-    const double same_point = 4e-7 * (state.diagonal + margin);
+    const glm::dvec2 offset = state.options.probe_offset;
 
     struct LineResult {
-        std::size_t rays = 0;
+        std::size_t rays = 0, recast = 0, undecided = 0;
         std::vector<GridFailure> odd;
         std::vector<glm::dvec3> inside;  // a point between the first two crossings
     };
@@ -232,10 +274,26 @@ void closed_probe(CheckState& state, const RayScene& scene) {
         const int iu = (axis + 1) % 3, iw = (axis + 2) % 3;
         Line l{glm::dvec3(0.0), glm::dvec3(0.0)};
         l.origin[axis] = state.bbox_min[axis] - margin;
-        l.origin[iu] = state.bbox_min[iu] + (i + jitter_u) * extent[iu] / resolution;
-        l.origin[iw] = state.bbox_min[iw] + (j + jitter_w) * extent[iw] / resolution;
+        l.origin[iu] = state.bbox_min[iu] + (i + offset.x) * extent[iu] / resolution;
+        l.origin[iw] = state.bbox_min[iw] + (j + offset.y) * extent[iw] / resolution;
         l.direction[axis] = 1.0;
         return l;
+    };
+    // Every hit of a line that grazes nothing is a crossing of the surface from one side to
+    // the other; a line with a grazing hit has no count.
+    struct Crossings {
+        std::size_t count = 0;
+        double first = 0.0, second = 0.0;
+    };
+    auto crossings_along = [&](const glm::dvec3& origin, const glm::dvec3& direction) -> std::optional<Crossings> {
+        Crossings c;
+        for (const RayHit& hit : scene.all_hits(origin, direction)) {
+            if (grazes(hit, scene)) return std::nullopt;
+            if (c.count == 0) c.first = hit.t;
+            if (c.count == 1) c.second = hit.t;
+            ++c.count;
+        }
+        return c;
     };
     std::vector<LineResult> rows(3 * static_cast<std::size_t>(resolution));
     const int batch = 16;
@@ -244,32 +302,27 @@ void closed_probe(CheckState& state, const RayScene& scene) {
         tbb::parallel_for(tbb::blocked_range<int>(r0, r1, 1), [&](const tbb::blocked_range<int>& range) {
             for (int row = range.begin(); row != range.end(); ++row) {
                 const int axis = row / resolution, j = row % resolution;
+                glm::dvec3 across_u(0.0), across_w(0.0);
+                across_u[(axis + 1) % 3] = 1.0;
+                across_w[(axis + 2) % 3] = 1.0;
+                LineResult& result = rows[row];
                 for (int i = 0; i < resolution; ++i) {
-                    const Line l = line(axis, i, j);
-                    ++rows[row].rays;
-                    // Hits at one point (a ray through a shared edge or vertex hits every
-                    // triangle there) count once when the triangles face the same way (the
-                    // ray passes through the surface), not at all when they do not (it
-                    // grazes a ridge or a fold).
-                    const std::vector<RayHit> hits = scene.all_hits(l.origin, l.direction);
-                    std::size_t crossings = 0;
-                    double first = 0.0, second = 0.0;
-                    for (std::size_t a = 0; a < hits.size();) {
-                        std::size_t b = a + 1;
-                        bool mixed = false;
-                        while (b < hits.size() && hits[b].t - hits[b - 1].t <= same_point) {
-                            mixed = mixed || hits[b].side != hits[a].side;
-                            ++b;
-                        }
-                        if (!mixed) {
-                            if (crossings == 0) first = hits[a].t;
-                            if (crossings == 1) second = hits[a].t;
-                            ++crossings;
-                        }
-                        a = b;
+                    Line l = line(axis, i, j);
+                    ++result.rays;
+                    std::optional<Crossings> crossings = crossings_along(l.origin, l.direction);
+                    if (!crossings) ++result.recast;
+                    const glm::dvec3 origin = l.origin;
+                    for (int attempt = 1; !crossings && attempt <= recasts; ++attempt) {
+                        l.origin = beside(origin, across_u, across_w, attempt, scene.resolution());
+                        crossings = crossings_along(l.origin, l.direction);
                     }
-                    if (crossings % 2 == 1) rows[row].odd.push_back({axis, i, j});
-                    else if (crossings >= 2 && axis == 0) rows[row].inside.push_back(l.origin + 0.5 * (first + second) * l.direction);
+                    if (!crossings) {
+                        ++result.undecided;
+                        continue;
+                    }
+                    if (crossings->count % 2 == 1) result.odd.push_back({axis, i, j});
+                    else if (crossings->count >= 2 && axis == 0)
+                        result.inside.push_back(l.origin + 0.5 * (crossings->first + crossings->second) * l.direction);
                 }
             }
         });
@@ -279,6 +332,8 @@ void closed_probe(CheckState& state, const RayScene& scene) {
     std::vector<glm::dvec3> inside;
     for (LineResult& r : rows) {
         report.probe.rays += r.rays;
+        report.probe.recast_rays += r.recast;
+        report.probe.undecided_rays += r.undecided;
         odd.insert(odd.end(), r.odd.begin(), r.odd.end());
         inside.insert(inside.end(), r.inside.begin(), r.inside.end());
     }
@@ -301,8 +356,12 @@ void closed_probe(CheckState& state, const RayScene& scene) {
     std::vector<std::size_t> escapes;
     for (std::size_t n = 0; n < inside.size(); ++n)
         if (escaped[n]) escapes.push_back(n);
-    report.probe.failed_rays = odd.size() + escapes.size();
     if (odd.empty() && escapes.empty()) return;
+    if (!topology_allows_leaks(state, -1)) {
+        report.probe.dismissed_rays = odd.size() + escapes.size();
+        return;
+    }
+    report.probe.failed_rays = odd.size() + escapes.size();
 
     // Locate: the open boundary vertex nearest each failed ray, grouped by its loop.
     const OpenBoundary open = open_boundary(state);

@@ -84,6 +84,9 @@ std::string report_json(const CheckReport& r) {
     j["probe"] = {{"mode", r.probe.mode},
                   {"rays", r.probe.rays},
                   {"failed_rays", r.probe.failed_rays},
+                  {"recast_rays", r.probe.recast_rays},
+                  {"undecided_rays", r.probe.undecided_rays},
+                  {"dismissed_rays", r.probe.dismissed_rays},
                   {"skipped_because", r.probe.skipped_because}};
     json defects = json::object();
     for (const DefectReport& d : r.defects) {

@@ -1,6 +1,7 @@
 #include "tessref/raycast.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -19,13 +20,30 @@ struct RayScene::Impl {
     const float* vertices = nullptr;
     const unsigned* indices = nullptr;
 
-    int side(std::uint32_t triangle, const glm::dvec3& direction) const {
+    double resolution = 0.0;
+
+    std::array<glm::dvec3, 3> corners(std::uint32_t triangle) const {
         const unsigned* t = indices + 3 * std::size_t(triangle);
-        const glm::dvec3 a(vertices[3 * t[0]], vertices[3 * t[0] + 1], vertices[3 * t[0] + 2]);
-        const glm::dvec3 b(vertices[3 * t[1]], vertices[3 * t[1] + 1], vertices[3 * t[1] + 2]);
-        const glm::dvec3 c(vertices[3 * t[2]], vertices[3 * t[2] + 1], vertices[3 * t[2] + 2]);
-        const double d = glm::dot(glm::cross(b - a, c - a), direction);
-        return d > 0.0 ? 1 : (d < 0.0 ? -1 : 0);
+        std::array<glm::dvec3, 3> out;
+        for (int k = 0; k < 3; ++k) out[k] = glm::dvec3(vertices[3 * t[k]], vertices[3 * t[k] + 1], vertices[3 * t[k] + 2]);
+        return out;
+    }
+
+    // The hit with its side and its distance from the triangle's edges, from Embree's
+    // barycentric coordinates (the point is (1-u-v) a + u b + v c): the distance from the
+    // edge opposite a corner is that corner's weight times the triangle's height over it.
+    RayHit hit(float t, std::uint32_t triangle, float u, float v, const glm::dvec3& direction) const {
+        const auto [a, b, c] = corners(triangle);
+        const glm::dvec3 normal = glm::cross(b - a, c - a);
+        const double d = glm::dot(normal, direction);
+        const double twice_area = glm::length(normal);
+        const double weights[3] = {std::max(0.0, 1.0 - double(u) - double(v)), std::max(0.0, double(u)),
+                                   std::max(0.0, double(v))};
+        const double opposite[3] = {glm::distance(b, c), glm::distance(c, a), glm::distance(a, b)};
+        double edge_distance = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < 3; ++k)
+            edge_distance = std::min(edge_distance, opposite[k] > 0.0 ? weights[k] * twice_area / opposite[k] : 0.0);
+        return {true, t, triangle, d > 0.0 ? 1 : (d < 0.0 ? -1 : 0), edge_distance};
     }
 
     ~Impl() {
@@ -75,12 +93,15 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
         rtcReleaseGeometry(geometry);
         embree_failure(impl_->device, "cannot allocate geometry buffers");
     }
+    double largest = 0.0;
     for (std::size_t i = 0; i < positions.size(); ++i) {
         const glm::dvec3 p = positions[i] - impl_->shift;
         vertices[3 * i + 0] = static_cast<float>(p.x);
         vertices[3 * i + 1] = static_cast<float>(p.y);
         vertices[3 * i + 2] = static_cast<float>(p.z);
+        largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
     }
+    impl_->resolution = std::ldexp(largest, -20);  // 16 ulps: 2^-24 is half an ulp at `largest`
     for (std::size_t i = 0; i < triangles.size(); ++i)
         for (int k = 0; k < 3; ++k) indices[3 * i + k] = triangles[i][k];
     impl_->vertices = vertices;
@@ -99,12 +120,21 @@ RayScene& RayScene::operator=(RayScene&&) noexcept = default;
 
 std::size_t RayScene::triangle_count() const { return impl_->triangles; }
 
+double RayScene::resolution() const { return impl_->resolution; }
+
 namespace {
+
+struct RawHit {
+    float t;
+    unsigned triangle;
+    float u, v;
+    auto operator<=>(const RawHit&) const = default;
+};
 
 // The context of an all-hits query: Embree's context first, so the filter can find the rest.
 struct CollectingContext {
     RTCIntersectContext context;
-    std::vector<std::pair<float, unsigned>>* hits;
+    std::vector<RawHit>* hits;
 };
 
 // Records each candidate hit and rejects it, so that traversal goes on to the next one.
@@ -112,7 +142,8 @@ void collect_hit(const RTCFilterFunctionNArguments* args) {
     auto* context = reinterpret_cast<CollectingContext*>(args->context);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] == 0) continue;
-        context->hits->emplace_back(RTCRayN_tfar(args->ray, args->N, i), RTCHitN_primID(args->hit, args->N, i));
+        context->hits->push_back({RTCRayN_tfar(args->ray, args->N, i), RTCHitN_primID(args->hit, args->N, i),
+                                  RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)});
         args->valid[i] = 0;
     }
 }
@@ -135,7 +166,7 @@ void set_ray(RTCRay& ray, const glm::dvec3& o, const glm::dvec3& direction, doub
 
 std::vector<RayHit> RayScene::all_hits(const glm::dvec3& origin, const glm::dvec3& direction, double t_near,
                                        double t_far) const {
-    std::vector<std::pair<float, unsigned>> raw;
+    std::vector<RawHit> raw;
     CollectingContext collecting;
     rtcInitIntersectContext(&collecting.context);
     collecting.context.filter = collect_hit;
@@ -146,10 +177,12 @@ std::vector<RayHit> RayScene::all_hits(const glm::dvec3& origin, const glm::dvec
     query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &collecting.context, &query);
     std::sort(raw.begin(), raw.end());
-    raw.erase(std::unique(raw.begin(), raw.end()), raw.end());  // a leaf may be visited twice
+    raw.erase(std::unique(raw.begin(), raw.end(),
+                          [](const RawHit& a, const RawHit& b) { return a.t == b.t && a.triangle == b.triangle; }),
+              raw.end());  // a leaf may be visited twice
     std::vector<RayHit> hits;
     hits.reserve(raw.size());
-    for (const auto& [t, triangle] : raw) hits.push_back({true, t, triangle, impl_->side(triangle, direction)});
+    for (const RawHit& h : raw) hits.push_back(impl_->hit(h.t, h.triangle, h.u, h.v, direction));
     return hits;
 }
 
@@ -163,13 +196,8 @@ RayHit RayScene::intersect(const glm::dvec3& origin, const glm::dvec3& direction
     query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &query);
 
-    RayHit hit;
-    if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-    hit.hit = true;
-    hit.t = query.ray.tfar;
-    hit.triangle = query.hit.primID;
-    hit.side = impl_->side(hit.triangle, direction);
-    return hit;
+    if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
+    return impl_->hit(query.ray.tfar, query.hit.primID, query.hit.u, query.hit.v, direction);
 }
 
 }  // namespace tessref

@@ -1,0 +1,214 @@
+// Tests of the Embree crack probe of `tessref check` (src/check/probe.cpp): a ray that grazes
+// an edge or a vertex never becomes a defect, and real cracks are still found.
+//
+// Where the expectations come from:
+//  - meshes built here put their vertices exactly on the probe's rays, by the formula
+//    include/tessref/check.h states for CheckOptions::probe_offset (evaluated in the same
+//    order, so the doubles are bitwise equal): lines then run through vertices and along
+//    edges, where single-precision rounding decides which triangles they hit;
+//  - a closed solid (a height field closed down to a base) crosses every line an even number
+//    of times and lets no ray out, so any probe failure on it is wrong, whatever the
+//    resolution;
+//  - a slit cut into such a terrain (its vertices on one side of a grid line moved `width`
+//    away) is a hole seen from above of width `width`, which vertical lines fall through.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "tessref/check.h"
+#include "tessref/solid.h"
+
+using tessref::CheckOptions;
+using tessref::CheckReport;
+using tessref::DefectClass;
+using tessref::Expect;
+using tessref::SurfaceMesh;
+
+namespace {
+
+constexpr double side = 16.0;  // the terrain covers [0, side]^2
+constexpr double top = 8.0;    // its highest vertex; the solid's base is at 0
+
+// Where the probe's ray of cell k runs along an axis of the box [0, extent] (check.h).
+double on_ray(int k, double offset, double extent, int resolution) { return (k + offset) * extent / resolution; }
+
+// A rough terrain over an n x n grid whose vertices lie on the probe's rays at `resolution`
+// (offsets as in CheckOptions::probe_offset): lines along x run at y on offset.x's grid and
+// z on offset.y's; lines along y at z on offset.x's and x on offset.y's. So x is on
+// offset.y's grid, y on offset.x's, and the heights alternate between the two, so that both
+// families of lines pass exactly through vertices (and, lying in the vertical planes of the
+// grid lines, along and across edges). With slit_width > 0 the vertices of column n/2 zigzag
+// about x = side/2 (half a unit either way: a slit along one column of rays could fall
+// between them), and the faces right of that column use copies of its vertices moved
+// slit_width along x, from row n/4 to row n - n/4 (the copies at both ends shared), which
+// opens a slit there.
+SurfaceMesh aligned_terrain(int resolution, glm::dvec2 offset, int n, double slit_width = 0.0, unsigned seed = 1) {
+    std::mt19937 random(seed);
+    std::uniform_int_distribution<int> cell(resolution / 8, resolution - resolution / 8 - 1);
+    auto coordinate = [&](int p, double grid_offset) {
+        if (p == 0) return 0.0;
+        if (p == n) return side;
+        return on_ray(p * resolution / n, grid_offset, side, resolution);
+    };
+    SurfaceMesh mesh;
+    auto add = [&](glm::dvec3 p) {
+        mesh.positions.push_back(p);
+        mesh.patch_ids.push_back(0);
+        mesh.tess_coords.emplace_back(0.0f);
+        return static_cast<std::uint32_t>(mesh.positions.size() - 1);
+    };
+    std::vector<std::uint32_t> id((n + 1) * (n + 1));
+    for (int q = 0; q <= n; ++q)
+        for (int p = 0; p <= n; ++p) {
+            const double height = p == 0 && q == 0 ? top : on_ray(cell(random), (p + q) % 2 ? offset.x : offset.y, top, resolution);
+            const double x = slit_width > 0.0 && p == n / 2 ? side / 2 + (q % 2 ? 0.5 : -0.5) : coordinate(p, offset.y);
+            id[q * (n + 1) + p] = add({x, coordinate(q, offset.x), height});
+        }
+    // The right side's copies of the slit's vertices.
+    std::vector<std::uint32_t> right = id;
+    const int column = n / 2;
+    if (slit_width > 0.0)
+        for (int q = n / 4 + 1; q < n - n / 4; ++q) {
+            glm::dvec3 p = mesh.positions[id[q * (n + 1) + column]];
+            p.x += slit_width;
+            right[q * (n + 1) + column] = add(p);
+        }
+    for (int q = 0; q < n; ++q)
+        for (int p = 0; p < n; ++p) {
+            const auto& ids = p >= column ? right : id;
+            const std::uint32_t a = ids[q * (n + 1) + p], b = ids[q * (n + 1) + p + 1], c = ids[(q + 1) * (n + 1) + p + 1],
+                                d = ids[(q + 1) * (n + 1) + p];
+            // Alternate the diagonals, so that lines cross both kinds.
+            if ((p + q) % 2) {
+                mesh.triangles.push_back({a, b, c});
+                mesh.triangles.push_back({a, c, d});
+            } else {
+                mesh.triangles.push_back({a, b, d});
+                mesh.triangles.push_back({b, c, d});
+            }
+        }
+    return mesh;
+}
+
+const glm::dvec2 default_offset = CheckOptions{}.probe_offset;
+
+CheckReport check(const SurfaceMesh& mesh, int resolution, Expect expect, glm::dvec2 offset = default_offset) {
+    CheckOptions options;
+    options.expect = expect;
+    options.probe_resolution = resolution;
+    options.probe_offset = offset;
+    return tessref::check_mesh(tessref::indexed_mesh_from(mesh), options);
+}
+
+std::string describe(const CheckReport& r) {
+    return tessref::report_text(r) + "recast " + std::to_string(r.probe.recast_rays) + ", undecided " +
+           std::to_string(r.probe.undecided_rays) + ", dismissed " + std::to_string(r.probe.dismissed_rays) + "\n";
+}
+
+// A closed mesh's probe must pass on its own, without the topology's help.
+void expect_clean_probe(const CheckReport& r) {
+    EXPECT_TRUE(r.passed) << describe(r);
+    EXPECT_EQ(r.probe.failed_rays, 0u);
+    EXPECT_EQ(r.probe.dismissed_rays, 0u) << describe(r);
+}
+
+const int resolutions[] = {256, 511, 512, 513, 1024, 2048};
+
+}  // namespace
+
+// The case: a closed, manifold, consistently oriented solid that fails at some
+// resolutions and passes at others. Each resolution gets a solid whose vertices lie on its
+// own rays; the solid made for 512 is also checked at every other resolution.
+TEST(CheckProbe, GrazingLinesNeverFailAClosedSolid) {
+    const SurfaceMesh at512 = tessref::close_terrain_into_solid(aligned_terrain(512, default_offset, 8), 0.0);
+    for (int resolution : resolutions) {
+        SCOPED_TRACE(resolution);
+        const SurfaceMesh solid = tessref::close_terrain_into_solid(aligned_terrain(resolution, default_offset, 8), 0.0);
+        const CheckReport aligned = check(solid, resolution, Expect::closed);
+        ASSERT_TRUE(aligned.closed && aligned.manifold && aligned.consistently_oriented) << describe(aligned);
+        expect_clean_probe(aligned);
+        // The lines did run through vertices and edges.
+        EXPECT_GT(aligned.probe.recast_rays, 0u);
+        EXPECT_LT(aligned.probe.undecided_rays, aligned.probe.recast_rays);
+        expect_clean_probe(check(at512, resolution, Expect::closed));
+    }
+}
+
+// Every line through the middle of its cell, and a vertex in the middle of every cell: all
+// lines run through vertices or along edges.
+TEST(CheckProbe, EveryLineThroughVerticesAndEdges) {
+    const int resolution = 64;
+    const glm::dvec2 middle(0.5, 0.5);
+    const SurfaceMesh terrain = aligned_terrain(resolution, middle, resolution);
+    const SurfaceMesh solid = tessref::close_terrain_into_solid(terrain, 0.0);
+    const CheckReport closed = check(solid, resolution, Expect::closed, middle);
+    expect_clean_probe(closed);
+    EXPECT_GT(closed.probe.recast_rays, closed.probe.rays / 4);
+    EXPECT_EQ(closed.probe.undecided_rays, 0u);
+    // The terrain alone: every vertical ray falls on a vertex.
+    const CheckReport open = check(terrain, resolution, Expect::open, middle);
+    EXPECT_EQ(open.probe.mode, "terrain");
+    expect_clean_probe(open);
+}
+
+// A slit 0.02 wide (1/800 of the terrain's side, under a cell of the probe's grid at every
+// resolution here; 8 units long, so about 0.16 / cell^2 of the grid's rays fall into it) is
+// found at every resolution, in the terrain and in the solid made of it.
+TEST(CheckProbe, NarrowSlitIsFoundAtEveryResolution) {
+    const double width = 0.02;
+    for (int resolution : {96, 256, 511, 512, 513, 1024}) {
+        SCOPED_TRACE(resolution);
+        const SurfaceMesh terrain = aligned_terrain(resolution, default_offset, 8, width);
+        const CheckReport open = check(terrain, resolution, Expect::open);
+        EXPECT_FALSE(open.passed);
+        EXPECT_EQ(open.count(DefectClass::boundary_loop), 1u) << describe(open);
+        EXPECT_GE(open.count(DefectClass::probe_miss), 1u) << describe(open);
+        for (const auto& d : open.of(DefectClass::probe_miss).locations) {
+            EXPECT_GE(d.position.x, side / 2 - 0.5);
+            EXPECT_LE(d.position.x, side / 2 + 0.5 + width);
+        }
+        EXPECT_EQ(open.probe.dismissed_rays, 0u);
+
+        const SurfaceMesh solid = tessref::close_terrain_into_solid(terrain, 0.0);
+        const CheckReport closed = check(solid, resolution, Expect::closed);
+        EXPECT_FALSE(closed.passed);
+        EXPECT_EQ(closed.count(DefectClass::boundary_loop), 1u) << describe(closed);
+        EXPECT_GE(closed.count(DefectClass::probe_odd_parity), 1u) << describe(closed);
+        EXPECT_EQ(closed.probe.dismissed_rays, 0u);
+    }
+}
+
+// A slab 1e-9 thick at x = 0.75, beside a cube that stretches the box to x = -1: in single
+// precision (2^-24 of 0.75 is 4e-8) its two big faces are one plane, and the points the
+// probe takes as inside it lie on that plane, so rays from them may leave without a hit.
+// The mesh is closed (every edge has two faces), so no ray can get out: what the probe saw
+// is rounding, counted as dismissed, never a probe defect. (The slab's thin faces are
+// degenerate, which the check reports.)
+TEST(CheckProbe, TopologyDismissesWhatRoundingDoes) {
+    tessref::IndexedMesh mesh;
+    auto box = [&](glm::dvec3 lo, glm::dvec3 hi) {
+        const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+        for (int k = 0; k < 8; ++k) mesh.positions.emplace_back(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+        const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+        for (const auto& q : quads) {
+            mesh.add_triangle(base + q[0], base + q[1], base + q[2]);
+            mesh.add_triangle(base + q[0], base + q[2], base + q[3]);
+        }
+    };
+    box({-1.0, 0.0, 0.0}, {-0.5, 0.5, 0.5});
+    box({0.75, 0.0, 0.0}, {0.75 + 1e-9, 1.0, 1.0});
+    CheckOptions options;
+    options.expect = Expect::closed;
+    options.probe_resolution = 64;
+    const CheckReport r = tessref::check_mesh(mesh, options);
+    ASSERT_TRUE(r.closed && r.manifold && r.consistently_oriented) << describe(r);
+    EXPECT_GT(r.probe.dismissed_rays, 0u) << describe(r);
+    EXPECT_EQ(r.probe.failed_rays, 0u);
+    for (DefectClass k : {DefectClass::probe_miss, DefectClass::probe_odd_parity, DefectClass::probe_escape})
+        EXPECT_EQ(r.count(k), 0u) << describe(r);
+}
