@@ -470,6 +470,20 @@ TEST_F(CompareFiles, BadFlagsExit2BeforeReading) {
     }
 }
 
+TEST_F(CompareFiles, DiffNamingAnInputIsRefused) {
+    write_png8(path("a.png"), 1, 1, 3, {10, 20, 30});
+    write_png8(path("b.png"), 1, 1, 3, {90, 20, 30});
+    fs::create_symlink(path("b.png"), path("link.png"));
+    const std::string a = tessref::test::read_file(path("a.png")), b = tessref::test::read_file(path("b.png"));
+    for (const std::string& diff : {path("a.png"), path("b.png"), path("link.png")}) {
+        const RunResult r = run({"compare", path("a.png"), path("b.png"), "--diff", diff});
+        EXPECT_EQ(r.status, 2) << diff;
+        EXPECT_NE(r.err.find("(--diff)"), std::string::npos) << r.err;
+    }
+    EXPECT_EQ(tessref::test::read_file(path("a.png")), a);
+    EXPECT_EQ(tessref::test::read_file(path("b.png")), b);
+}
+
 TEST_F(CompareFiles, IgnoreAlphaFlag) {
     write_png8(path("a.png"), 1, 1, 4, {10, 20, 30, 255});
     write_png8(path("b.png"), 1, 1, 4, {10, 20, 30, 0});

@@ -3,10 +3,12 @@
 // the two differ in size or channel count, or a flag is wrong (then nothing is written).
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
 #include <string>
+#include <system_error>
 
 #include <CLI/CLI.hpp>
 #include <OpenImageIO/imageio.h>
@@ -131,6 +133,14 @@ int run_compare(const CompareCommandOptions& options) {
         throw Error("no image format for '" + options.diff +
                         "': give the name an extension OpenImageIO writes, such as .png, .tif or .exr",
                     where_file("--diff"));
+    }
+
+    // A diff written over an input would destroy the golden image it was compared with.
+    for (const std::string* input : {&options.reference, &options.test}) {
+        std::error_code ec;
+        if (!options.diff.empty() && std::filesystem::equivalent(options.diff, *input, ec))
+            throw Error("'" + options.diff + "' is the image " + *input + ": the diff would overwrite it",
+                        where_file("--diff"));
     }
 
     const FloatImage reference = read_float_image(options.reference);
