@@ -296,9 +296,11 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
 std::uint64_t estimate_render_memory(glm::ivec2 size, RenderMode mode, bool raytrace, ImageFormat format,
                                      const AovSelection& aovs);
 
-// Colour difference of two images of the same size (Error otherwise): root mean square over
-// every pixel and the R, G, B channels of the colours clamped to [0, 1] (what a unorm8
-// framebuffer holds, before its quantization), and the pixels covered in one image only.
+// Colour difference of two renders of the same size (Error otherwise): compare_images() of
+// tessref/compare.h over the R, G, B channels of the colours clamped to [0, 1] (what a
+// unorm8 framebuffer holds, before its quantization; NaN as 0): its RMSE and max error,
+// plus the pixels covered in one render only. For the pass/fail rule with a threshold and
+// a position deviation, call compare.h directly.
 struct ImageDifference {
     double rmse = 0.0;
     double max_abs = 0.0;

@@ -34,6 +34,7 @@ Command add_mesh_command(CLI::App& parent);  // tessref mesh: src/cli/cmd_mesh.c
 Command add_check_command(CLI::App& parent);  // tessref check: src/cli/cmd_check.cpp
 Command add_render_command(CLI::App& parent);  // tessref render: src/cli/cmd_render.cpp
 Command add_inspect_command(CLI::App& parent);  // tessref inspect: src/cli/cmd_inspect.cpp
+Command add_compare_command(CLI::App& parent);  // tessref compare: src/cli/cmd_compare.cpp
 
 // Later subcommands, one file each (declare here, list in main.cpp):
 //   Command add_mesh_command(CLI::App& parent);     // src/cli/cmd_mesh.cpp

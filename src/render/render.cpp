@@ -13,6 +13,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include "render/render_internal.h"
+#include "tessref/compare.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
 
@@ -404,23 +405,28 @@ std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
 }
 
 ImageDifference compare_images(const RenderResult& a, const RenderResult& b) {
-    if (a.width != b.width || a.height != b.height)
-        throw Error("images of different sizes: " + std::to_string(a.width) + "x" + std::to_string(a.height) +
-                        " and " + std::to_string(b.width) + "x" + std::to_string(b.height),
-                    where_key("size"));
+    // The clamped R, G, B a unorm8 framebuffer would hold (before quantization), through
+    // the one comparison of compare.h; coverage is what only a render knows.
+    const auto clamped_rgb = [](const RenderResult& r) {
+        FloatImage image;
+        image.width = r.width;
+        image.height = r.height;
+        image.channels = 3;
+        image.samples.resize(r.colour.size() * 3);
+        for (std::size_t i = 0; i < r.colour.size(); ++i)
+            for (int c = 0; c < 3; ++c) {
+                const float v = r.colour[i][c];
+                image.samples[i * 3 + static_cast<std::size_t>(c)] = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+            }
+        return image;
+    };
+    const CompareResult compared = compare_images(clamped_rgb(a), clamped_rgb(b));
     ImageDifference d;
-    d.pixels = a.colour.size();
-    double sum = 0.0;
-    auto clamp01 = [](float v) { return std::isnan(v) ? 0.0 : std::clamp(static_cast<double>(v), 0.0, 1.0); };
-    for (std::size_t i = 0; i < a.colour.size(); ++i) {
-        for (int c = 0; c < 3; ++c) {
-            const double e = clamp01(a.colour[i][c]) - clamp01(b.colour[i][c]);
-            sum += e * e;
-            d.max_abs = std::max(d.max_abs, std::abs(e));
-        }
+    d.pixels = compared.pixels;
+    d.rmse = compared.rmse;
+    d.max_abs = compared.max_error;
+    for (std::size_t i = 0; i < a.triangle_id.size() && i < b.triangle_id.size(); ++i)
         if ((a.triangle_id[i] == kNoPixelId) != (b.triangle_id[i] == kNoPixelId)) ++d.coverage_mismatch;
-    }
-    d.rmse = d.pixels ? std::sqrt(sum / (3.0 * static_cast<double>(d.pixels))) : 0.0;
     return d;
 }
 

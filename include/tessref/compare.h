@@ -1,0 +1,119 @@
+// tessref/compare.h — is a picture the same as a reference picture, up to rasterization?
+//
+// Two renderers that both follow GL's rules still disagree on a few pixels along edges
+// (sub-pixel precision, the order of additions in the interpolation) and by a code or two
+// in colour (8-bit rounding). This is the comparison the Khronos conformance tests (the
+// dEQP/CTS "threshold position deviation" compare) use for rasterized pictures, so that a
+// GPU's or llvmpipe's picture can be held against tessref's golden image without hiding a
+// missing line or a wrong colour.
+//
+// ======================================================================================
+// THE RULE. REF and TEST have the same width, height and channel count (else an Error).
+// Every sample is a float; an 8-bit file's samples are code/255, a 16-bit file's
+// code/65535, float and half files as stored; colour is not premultiplied by alpha (the
+// file's values as stored, as a GL upload sees them). Every channel counts, alpha included
+// (CompareOptions::ignore_alpha leaves out the channel the file names as alpha).
+//
+//   match(P, Q)  <=>  for EVERY compared channel c:  |P[c] - Q[c]| <= T       (T = threshold)
+//
+// computed in double from the two float samples, so a difference exactly equal to T
+// passes. Two samples that are equal (two NaNs, the same infinity) differ by 0; a NaN
+// against a number differs by +inf and never matches. For an 8-bit file, code/255 is
+// rounded to float, so a difference of k codes is not exactly k/255: give T with slack,
+// e.g. (k + 0.5) / 255 to accept k codes.
+//
+// N(x, y) is the neighbourhood of (x, y) with position deviation PX: the pixels (sx, sy)
+// with |sx - x| <= PX and |sy - y| <= PX that lie inside the image, at most (2*PX+1)^2 of
+// them (fewer at the borders: nothing outside the image is compared).
+//
+// Pixel (x, y) PASSES when
+//   match(REF(x, y), TEST(x, y))                                  (same position), or
+//   [ some (sx, sy) in N(x, y) has match(REF(x, y), TEST(sx, sy))  and
+//     some (sx, sy) in N(x, y) has match(TEST(x, y), REF(sx, sy)) ]      (both ways)
+// and FAILS otherwise. "Both ways" is what catches a thin line present in REF and missing
+// in TEST: every TEST pixel (background) finds background in REF next to the line, but the
+// line's REF pixels find no line in TEST. PX = 0 is a plain per-pixel threshold compare.
+// The comparison PASSES when failing_pixels <= max_failing_pixels.
+//
+// STATISTICS are of the same-position differences, whatever PX is, over every pixel and
+// every compared channel: RMSE = sqrt(mean of (REF - TEST)^2); PSNR = 10 log10(1 / MSE) dB
+// with peak 1 (the unit of an 8-bit file's code/255), +inf when RMSE is 0; max error = the
+// largest |REF - TEST|, also per channel. A NaN against a number makes them +inf (PSNR
+// -inf).
+// ======================================================================================
+//
+// Pixel (x, y) means column x from the left, row y from the top (row 0 first, as image
+// files store it), as in render.h.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace tessref {
+
+// A picture in float: width * height pixels of `channels` interleaved samples, row 0 on
+// top. channel_names and alpha_channel come from the file (alpha_channel -1: none).
+struct FloatImage {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    std::vector<float> samples;
+    std::vector<std::string> channel_names;
+    int alpha_channel = -1;
+
+    std::size_t index(int x, int y, int c = 0) const {
+        return (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) *
+                   static_cast<std::size_t>(channels) +
+               static_cast<std::size_t>(c);
+    }
+    float at(int x, int y, int c) const { return samples[index(x, y, c)]; }
+};
+
+struct CompareOptions {
+    int max_position_deviation = 0;         // PX >= 0
+    double threshold = 0.0;                 // T >= 0, per channel, in the samples' units
+    std::uint64_t max_failing_pixels = 0;
+    bool ignore_alpha = false;              // leave out REF's alpha channel (when it has one)
+};
+
+struct CompareResult {
+    int width = 0;
+    int height = 0;
+    std::vector<int> compared_channels;     // channel indices that counted
+    std::uint64_t pixels = 0;               // width * height
+    std::uint64_t failing_pixels = 0;
+    bool passed = true;                     // failing_pixels <= max_failing_pixels
+    double rmse = 0.0;
+    double psnr = 0.0;                      // +inf when rmse == 0
+    double max_error = 0.0;
+    std::vector<double> channel_max_error;  // one per compared channel, in that order
+    std::vector<std::uint8_t> failing;      // width * height, row 0 on top: 1 = fails
+};
+
+// Compares TEST against REF by THE RULE above. Throws tessref::Error (key "size" or
+// "channels") when the sizes or channel counts differ, and (key "--threshold",
+// "--max-position-deviation") for a negative or NaN option.
+CompareResult compare_images(const FloatImage& reference, const FloatImage& test,
+                             const CompareOptions& options = {});
+
+// Reads subimage 0, mip level 0 of an image file through OpenImageIO (PNG, TIFF, EXR and
+// whatever else it reads) into floats as THE RULE says. Throws tessref::Error naming the
+// path when the file is missing, unreadable, empty, deep or a volume, or when its pixels
+// would exceed the memory limit (limits.h).
+FloatImage read_float_image(const std::string& path);
+
+// The diff picture: RGB, failing pixels pure red (1, 0, 0), every other pixel the
+// reference dimmed to a quarter: kDiffDim * REF's colour clamped to [0, 1] (channels 0..2;
+// a one- or two-channel REF is grey from channel 0; alpha is not drawn).
+constexpr float kDiffDim = 0.25f;
+FloatImage difference_picture(const FloatImage& reference, const CompareResult& result);
+
+// Writes the picture through OpenImageIO, the format from the extension of `path`: 8-bit
+// for formats that have it (PNG, TIFF: round(v * 255) of v clamped to [0, 1]), float for
+// EXR. Writes `path` directly (callers wanting atomicity write to a temporary name).
+// Throws tessref::Error naming `path`.
+void write_float_image(const FloatImage& image, const std::string& path);
+
+}  // namespace tessref
