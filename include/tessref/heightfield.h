@@ -166,6 +166,12 @@ private:
     MinFilter min_filter_ = MinFilter::linear_mipmap_linear;
 };
 
+// Bytes a Texture of this size and format holds, its whole mip pyramid included (saturating
+// at UINT64_MAX). Building a texture calls require_memory() (tessref/limits.h) for the
+// levels above 0 before computing them; the loaders check this figure, plus the file's own
+// samples, before reading a single pixel.
+std::uint64_t texture_memory_bytes(int width, int height, int channels, TexelFormat format);
+
 // ---- Loading through OpenImageIO -------------------------------------------------------
 
 // What a missing sample (NaN, +-inf, or equal to HeightFieldOptions::nodata_value) does.
