@@ -47,8 +47,11 @@ Where file_where(const std::string& path) {
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) { throw Error(what, file_where(path)); }
 
+// OpenImageIO's error text on one line: trailing newlines dropped, inner ones joined by "; ".
 std::string trimmed(std::string text) {
     while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    for (std::size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+        text.replace(at, 1, "; ");
     return text;
 }
 
@@ -202,7 +205,9 @@ RawImage read_raw(const std::string& path, int max_dimension, int max_channels, 
             ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::FLOAT, raw.f32.data());
             break;
     }
-    if (!ok) {
+    // OpenImageIO 2.4.7's TIFF reader can report success with its error set (a strip past
+    // the end of the file reads as zeros): either one means the pixels are not the file's.
+    if (!ok || input->has_error()) {
         const std::string reason = trimmed(input->geterror());
         fail(path, what_kind + " is truncated or corrupt: its " + std::to_string(raw.width) + " x " +
                        std::to_string(raw.height) + " pixels cannot be read" +
