@@ -79,6 +79,11 @@ std::vector<std::string> pnm_header_tokens(const std::string& path, std::size_t 
     return tokens;
 }
 
+// A header token for a message: as typed, but short.
+std::string shown(const std::string& token) {
+    return token.size() <= 24 ? token : token.substr(0, 24) + "...";
+}
+
 // What OpenImageIO 2.4.7's PNM reader accepts but the format does not allow: a maxval
 // outside 1..65535 (maxval 0 makes it divide by zero and read every sample as 1; above
 // 65535 it reads 16-bit samples scaled by a maxval they cannot reach) and a PFM scale that
@@ -94,7 +99,7 @@ void check_pnm_header(const std::string& path, const std::string& what_kind) {
         char* end = nullptr;
         const double scale = std::strtod(begin, &end);
         if (end == begin || *end != '\0' || !std::isfinite(scale) || scale == 0.0)
-            fail(path, what_kind + " is a PFM whose scale '" + tokens[3] +
+            fail(path, what_kind + " is a PFM whose scale '" + shown(tokens[3]) +
                            "' is not a non-zero number (its sign gives the byte order)");
         return;
     }
@@ -105,7 +110,7 @@ void check_pnm_header(const std::string& path, const std::string& what_kind) {
     const bool whole = ec == std::errc() && ptr == text.data() + text.size();
     if (!whole || maxval < 1 || maxval > 65535)
         fail(path, what_kind + " is a " + (magic == "P2" || magic == "P5" ? "PGM" : "PPM") +
-                       " with maxval " + text + "; the format allows 1 to 65535");
+                       " with maxval " + shown(text) + "; the format allows 1 to 65535");
 }
 
 bool looks_like_pnm(const std::string& path) {
