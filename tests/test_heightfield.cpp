@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -27,8 +28,10 @@
 #include <string>
 #include <vector>
 
+#include "run_program.h"
 #include "tessref/error.h"
 #include "tessref/heightfield.h"
+#include "tessref/limits.h"
 
 namespace fs = std::filesystem;
 using tessref::HeightDifference;
@@ -567,7 +570,7 @@ TEST(BadInput, EachGivesAnErrorNamingTheFile) {
 
     const std::string truncated = dir.file("truncated.pgm");
     write_bytes(truncated, "P5\n10 10\n255\nabcde");
-    expect_error([&] { tessref::load_height_field(truncated); }, truncated, "cannot read");
+    expect_error([&] { tessref::load_height_field(truncated); }, truncated, "truncated or corrupt");
 
     const std::string zero = dir.file("zero.pgm");
     write_bytes(zero, "P5\n0 0\n255\n");
@@ -673,6 +676,218 @@ TEST(BadInput, FillPoliciesReplaceMissingTexels) {
     const std::string hopeless = dir.file("hopeless.tif");
     write_image(hopeless, 2, 2, 1, OIIO::TypeDesc::FLOAT, all_nan.data());
     expect_error([&] { tessref::load_height_field(hopeless, mean); }, hopeless, "every height map texel is missing");
+}
+
+// ---- hostile files (tests/data/heightfield/, made by make_files.py: each file's defect is
+// stated there) -----------------------------------------------------------------------------
+
+std::string hostile(const std::string& name) {
+    return (fs::path(TESSREF_SOURCE_DIR) / "tests" / "data" / "heightfield" / name).string();
+}
+
+// Sets the process memory limit for one scope (tessref/limits.h), restoring the default.
+class MemoryLimit {
+public:
+    explicit MemoryLimit(std::uint64_t bytes) { tessref::set_memory_limit(bytes); }
+    ~MemoryLimit() { tessref::set_memory_limit(0); }
+    MemoryLimit(const MemoryLimit&) = delete;
+    MemoryLimit& operator=(const MemoryLimit&) = delete;
+};
+
+// A terrain scene over `heightmap` in `dir`, for running the command on a height map.
+std::string terrain_scene(const TempDir& dir, const std::string& heightmap) {
+    const std::string path = dir.file("scene.toml");
+    write_bytes(path, "[scene]\nname = \"hostile\"\n[domain]\nplane = \"xy\"\npatches = [2, 2]\n"
+                      "x = [0.0, 1.0]\ny = [0.0, 1.0]\nheightmap = \"" + heightmap + "\"\n"
+                      "scale_xy = 1.0\nscale_z = 1.0\n[generator]\ndomain = \"quads\"\n"
+                      "[control]\nmodel = \"constant\"\nlevel = 2.0\n[evaluation]\nmodel = \"thesis\"\n");
+    return path;
+}
+
+tessref::test::RunResult run_mesh(const TempDir& dir, const std::vector<std::string>& extra) {
+    std::vector<std::string> args{"mesh", dir.file("scene.toml"), "-o", dir.file("out.ply")};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return tessref::test::run_program(TESSREF_EXE, args, fs::path(dir.file("")));
+}
+
+TEST(HostileHeader, DeclaredHugeImageIsRefusedBeforeAllocating) {
+    // The header says 100000 x 100000 (10^10 samples); the file holds 4 bytes. The loader
+    // must refuse from the header, before allocating gigabytes, naming the file and size.
+    const std::string huge = hostile("declares_100000x100000.pgm");
+    {
+        const MemoryLimit limit(std::uint64_t{1} << 30);
+        const auto start = std::chrono::steady_clock::now();
+        expect_error([&] { tessref::load_height_field(huge); }, huge, "height map of 100000 x 100000 samples needs");
+        expect_error([&] { tessref::load_height_field(huge); }, huge, "more than the limit of 1.0 GiB");
+        expect_error([&] { tessref::load_texture(huge); }, huge, "texture of 100000 x 100000 texels needs");
+        EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+    }
+    // The command: exit 2 with that message, quickly, nothing written. With the default
+    // limit (3/4 of physical memory) the refusal is the memory one below 140 GB of RAM and
+    // the per-side limit (16384) above; either way it names the file and the size.
+    TempDir dir;
+    terrain_scene(dir, huge);
+    const auto start = std::chrono::steady_clock::now();
+    const auto limited = run_mesh(dir, {"--max-memory", "1G"});
+    EXPECT_EQ(limited.status, 2) << limited.err;
+    EXPECT_NE(limited.err.find("height map of 100000 x 100000 samples needs"), std::string::npos) << limited.err;
+    EXPECT_NE(limited.err.find(huge), std::string::npos) << limited.err;
+    const auto by_default = run_mesh(dir, {});
+    EXPECT_EQ(by_default.status, 2) << by_default.err;
+    EXPECT_NE(by_default.err.find("100000"), std::string::npos) << by_default.err;
+    EXPECT_NE(by_default.err.find(huge), std::string::npos) << by_default.err;
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+    EXPECT_FALSE(fs::exists(dir.file("out.ply")));
+}
+
+TEST(HostileHeader, ARaisedLimitGetsAsFarAsTheTruncation) {
+    // 3000 x 3000 declared over 4 bytes: about 100 MB with the mip pyramid. Under a 10 MB
+    // limit it is refused from the header; under 4 GB it is read and found truncated.
+    const std::string file = hostile("declares_3000x3000.pgm");
+    {
+        const MemoryLimit limit(10 << 20);
+        expect_error([&] { tessref::load_height_field(file); }, file, "height map of 3000 x 3000 samples needs");
+        expect_error([&] { tessref::load_texture(file); }, file, "texture of 3000 x 3000 texels needs");
+    }
+    {
+        const MemoryLimit limit(std::uint64_t{4} << 30);
+        expect_error([&] { tessref::load_height_field(file); }, file, "truncated or corrupt");
+        expect_error([&] { tessref::load_texture(file); }, file, "truncated or corrupt");
+    }
+    TempDir dir;
+    terrain_scene(dir, file);
+    const auto refused = run_mesh(dir, {"--max-memory", "10M"});
+    EXPECT_EQ(refused.status, 2);
+    EXPECT_NE(refused.err.find("3000 x 3000 samples needs"), std::string::npos) << refused.err;
+    const auto truncated = run_mesh(dir, {"--max-memory", "4G"});
+    EXPECT_EQ(truncated.status, 2);
+    EXPECT_NE(truncated.err.find("truncated or corrupt"), std::string::npos) << truncated.err;
+    EXPECT_NE(truncated.err.find(file), std::string::npos) << truncated.err;
+    EXPECT_FALSE(fs::exists(dir.file("out.ply")));
+}
+
+TEST(HostileHeader, TheMipChainIsCheckedAgainstTheLimit) {
+    // 1024 x 1024 floats (4 MiB, held by the caller); levels 1.. hold about 349525 samples
+    // at 12 bytes (float and double), about 4 MiB more: over a 1 MiB limit.
+    std::vector<float> texels(1024 * 1024, 0.5f);
+    const MemoryLimit limit(1 << 20);
+    try {
+        Texture::from_float(1024, 1024, 1, std::move(texels));
+        ADD_FAILURE() << "mip chain built over the limit";
+    } catch (const tessref::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("mip chain of a 1024 x 1024 texture"), std::string::npos) << e.what();
+    }
+    // The figure itself, by hand: levels 1024^2, 512^2, ..., 1^2; level 0 at 4 bytes, the
+    // others at 12 (and one more per sample everywhere for unorm8 codes).
+    std::uint64_t above = 0;
+    for (std::uint64_t side = 512; side >= 1; side /= 2) above += side * side;
+    EXPECT_EQ(tessref::texture_memory_bytes(1024, 1024, 1, TexelFormat::float32), 4 * 1024 * 1024 + 12 * above);
+    EXPECT_EQ(tessref::texture_memory_bytes(1024, 1024, 1, TexelFormat::unorm8), 5 * 1024 * 1024 + 13 * above);
+    // A 4 x 1 RGBA texture: levels 4x1, 2x1, 1x1.
+    EXPECT_EQ(tessref::texture_memory_bytes(4, 1, 4, TexelFormat::unorm16), 4 * 4 * 4 + 12 * 4 * (2 + 1));
+    EXPECT_GT(tessref::texture_memory_bytes(100000, 100000, 4, TexelFormat::float32), 160'000'000'000u);
+    // 2^62 samples of 16 bytes: saturates instead of wrapping around to a small figure.
+    const int most = std::numeric_limits<int>::max();
+    EXPECT_EQ(tessref::texture_memory_bytes(most, most, 4, TexelFormat::float32),
+              std::numeric_limits<std::uint64_t>::max());
+}
+
+TEST(HostileHeader, PgmMaxvalMustBeWithinOneTo65535) {
+    // netpbm: 0 < maxval < 65536. OpenImageIO 2.4.7 accepts 0 (reading every sample as 1)
+    // and 70000 (reading 16-bit samples scaled by 70000).
+    const std::string zero = hostile("maxval_0.pgm");
+    expect_error([&] { tessref::load_height_field(zero); }, zero, "PGM with maxval 0;");
+    expect_error([&] { tessref::load_texture(zero); }, zero, "PGM with maxval 0;");
+    const std::string above = hostile("maxval_70000.pgm");
+    expect_error([&] { tessref::load_height_field(above); }, above, "PGM with maxval 70000;");
+    // 65535 is the largest valid maxval: codes 0, 100, 1000, 30000 read as code / 65535.
+    const tessref::HeightField field = tessref::load_height_field(hostile("maxval_65535.pgm"));
+    EXPECT_EQ(field.texture.format(), TexelFormat::unorm16);
+    EXPECT_EQ(field.info.bits_per_sample, 16);
+    const int codes[4] = {0, 100, 1000, 30000};
+    for (int i = 0; i < 4; ++i)
+        EXPECT_EQ(field.texture.texel_exact(0, i % 2, i / 2), codes[i] / 65535.0) << i;
+    // A maxval of 1023 is valid: 10 bits per sample, as heightfield.h says.
+    TempDir dir;
+    const std::string ten_bits = dir.file("ten.pgm");
+    write_bytes(ten_bits, std::string("P5\n2 2\n1023\n") + std::string("\x00\x00\x01\x00\x02\x00\x03\xff", 8));
+    EXPECT_EQ(tessref::load_height_field(ten_bits).info.bits_per_sample, 10);
+}
+
+TEST(HostileHeader, PfmHeaderLines) {
+    const std::string bad_scale = hostile("pfm_bad_scale.pfm");
+    expect_error([&] { tessref::load_height_field(bad_scale); }, bad_scale, "PFM whose scale 'abc'");
+    // Scale 0 has no sign, so no byte order; OpenImageIO 2.4.7 reads it as big endian.
+    const std::string zero_scale = hostile("pfm_zero_scale.pfm");
+    expect_error([&] { tessref::load_height_field(zero_scale); }, zero_scale, "PFM whose scale '0'");
+    expect_error([&] { tessref::load_texture(zero_scale); }, zero_scale, "PFM whose scale '0'");
+    const std::string negative = hostile("pfm_negative_width.pfm");
+    expect_error([&] { tessref::load_height_field(negative); }, negative, "has no pixels: its header says -2 x 2");
+    expect_error([&] { tessref::load_texture(negative); }, negative, "has no pixels: its header says -2 x 2");
+    const std::string zero_width = hostile("pfm_zero_width.pfm");
+    expect_error([&] { tessref::load_height_field(zero_width); }, zero_width, "has no pixels: its header says 0 x 2");
+}
+
+TEST(HostileHeader, ZeroSizeAndOneByOne) {
+    const std::string zero = hostile("zero_size.pgm");
+    expect_error([&] { tessref::load_height_field(zero); }, zero, "has no pixels: its header says 0 x 0");
+    expect_error([&] { tessref::load_texture(zero); }, zero, "has no pixels: its header says 0 x 0");
+    // One sample has no extent as a height field, but is a valid (constant) texture.
+    const std::string one = hostile("one_by_one.pgm");
+    expect_error([&] { tessref::load_height_field(one); }, one, "at least 2x2");
+    const Texture texture = tessref::load_texture(one);
+    EXPECT_EQ(texture.width(), 1);
+    EXPECT_EQ(texture.level_count(), 1);
+    EXPECT_EQ(texture.texel_exact(0, 0, 0), 7.0 / 255.0);
+}
+
+TEST(HostileHeader, CorruptPngAndTiff) {
+    struct Case {
+        const char* name;
+        const char* fragment;
+    };
+    const Case cases[] = {
+        {"png_bad_header_crc.png", "cannot read"},            // refused at open (header)
+        {"png_bad_pixel_data.png", "truncated or corrupt"},   // refused reading pixels
+        {"tiff_bad_ifd_offset.tif", "cannot read"},
+        // OpenImageIO 2.4.7 reports success here with its error set: must not pass as zeros.
+        {"tiff_strip_past_end.tif", "truncated or corrupt"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const std::string path = hostile(c.name);
+        expect_error([&] { tessref::load_height_field(path); }, path, c.fragment);
+        expect_error([&] { tessref::load_texture(path); }, path, c.fragment);
+    }
+}
+
+TEST(BadInput, NanSampleIsMissingInEveryFloatFormat) {
+    // PFM, float TIFF, float and half EXR: the NaN policy sees the samples after
+    // OpenImageIO's conversion, whatever the file's type (PGM and PNG hold integers only;
+    // their missing samples are the nodata value, tested above).
+    const std::string pfm = hostile("nan_sample.pfm");
+    try {
+        tessref::load_height_field(pfm);
+        ADD_FAILURE() << "NaN accepted";
+    } catch (const tessref::Error& e) {
+        EXPECT_EQ(e.where().key, "texel(1,2)");  // stored bottom row, column 1: see make_files.py
+        EXPECT_NE(std::string(e.what()).find("is NaN"), std::string::npos) << e.what();
+    }
+    HeightFieldOptions mean;
+    mean.nodata_policy = NodataPolicy::fill_neighbour_mean;
+    EXPECT_EQ(tessref::load_height_field(pfm, mean).texture.texel(0, 1, 2), 1.0f);
+    TempDir dir;
+    std::vector<float> values(3 * 2, 0.25f);
+    values[1 * 3 + 2] = std::numeric_limits<float>::quiet_NaN();  // (2, 1)
+    for (const char* name : {"nan.tif", "nan.exr"}) {
+        const std::string path = dir.file(name);
+        write_image(path, 3, 2, 1, OIIO::TypeDesc::FLOAT, values.data());
+        expect_error([&] { tessref::load_height_field(path); }, path, "texel (2, 1) is NaN");
+    }
+    const std::string half = dir.file("nan_half.exr");
+    write_image(half, 3, 2, 1, OIIO::TypeDesc::HALF, std::vector<std::uint16_t>{0x3400, 0x3400, 0x3400, 0x3400,
+                                                                               0x3400, 0x7e00}.data());
+    expect_error([&] { tessref::load_height_field(half); }, half, "texel (2, 1) is NaN");
 }
 
 // ---- normals ------------------------------------------------------------------------------

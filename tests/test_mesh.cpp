@@ -680,6 +680,68 @@ TEST_F(MeshExport, MeshWithoutOptionalAttributes) {
     EXPECT_EQ(read.n_faces(), 1u);
 }
 
+TEST_F(MeshExport, FloatStorageLossIsMeasured) {
+    // Two quads' worth of double vertices at y = 9.1e6, where floats are 1 apart
+    // (2^23 <= 9.1e6 < 2^24): y + 0.25 rounds back to y, so the four distinct vertices fall
+    // on two float points and both triangles lose their area in the file.
+    SurfaceMesh far;
+    far.positions = {{0, 9.1e6, 0}, {1, 9.1e6, 0}, {0, 9.1e6 + 0.25, 0}, {1, 9.1e6 + 0.25, 0}};
+    far.triangles = {{0, 1, 2}, {1, 3, 2}};
+    std::ostringstream out;
+    const tessref::MeshWriteReport report = tessref::write_mesh(far, out, MeshWriteOptions{});
+    EXPECT_EQ(report.vertices, 4u);
+    EXPECT_EQ(report.float_distinct_vertices, 2u);
+    EXPECT_EQ(report.float_degenerate_triangles, 2u);
+    EXPECT_EQ(report.largest_coordinate, 9.1e6 + 0.25);
+    EXPECT_EQ(report.float_spacing, 1.0);
+    const std::string warning = report.precision_warning();
+    EXPECT_EQ(warning.find('\n'), std::string::npos);
+    EXPECT_NE(warning.find("the 4 distinct vertices fall on 2 points"), std::string::npos) << warning;
+    EXPECT_NE(warning.find("2 of 2 triangles"), std::string::npos) << warning;
+    EXPECT_NE(warning.find("largest coordinate 9100000.25, float spacing there 1)"), std::string::npos) << warning;
+
+    // Collinear in float though no two corners coincide: (0, Y), (1, Y + 0.25), (2, Y) with
+    // Y = 9.1e6 flattens to one line.
+    SurfaceMesh sliver;
+    sliver.positions = {{0, 9.1e6, 0}, {2, 9.1e6, 0}, {1, 9.1e6 + 0.25, 0}};
+    sliver.triangles = {{0, 1, 2}};
+    const tessref::MeshWriteReport flat = tessref::write_mesh(sliver, out, MeshWriteOptions{});
+    EXPECT_EQ(flat.float_distinct_vertices, 3u);
+    EXPECT_EQ(flat.float_degenerate_triangles, 1u);
+    EXPECT_FALSE(flat.precision_warning().empty());
+
+    // Float-exact positions (what gpu precision produces) lose nothing: no warning.
+    const tessref::MeshWriteReport exact = tessref::write_mesh(two_patch_mesh(), out, MeshWriteOptions{});
+    EXPECT_EQ(exact.float_distinct_vertices, exact.vertices);
+    EXPECT_EQ(exact.float_degenerate_triangles, 0u);
+    EXPECT_EQ(exact.precision_warning(), "");
+    // Nor do doubles near the origin whose float roundings stay apart and keep their area.
+    EXPECT_EQ(tessref::write_mesh(two_patch_mesh_double(), out, MeshWriteOptions{}).precision_warning(), "");
+}
+
+TEST_F(MeshExport, PositionsAFileCannotHoldAreErrors) {
+    // Files store 32-bit floats: 1e39 would be written as inf, NaN as nan.
+    for (const double bad : {1e39, -1e39, std::numeric_limits<double>::infinity(), std::nan("")}) {
+        SCOPED_TRACE(bad);
+        SurfaceMesh mesh;
+        mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, bad}};
+        mesh.triangles = {{0, 1, 2}};
+        mesh.patch_ids = {3, 3, 3};
+        mesh.tess_coords = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+        std::ostringstream out;
+        try {
+            tessref::write_mesh(mesh, out, MeshWriteOptions{});
+            ADD_FAILURE() << "written";
+        } catch (const tessref::Error& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(e.where().patch_id, 3);
+            EXPECT_NE(what.find("at tess coord (0, 1, 0)"), std::string::npos) << what;
+            EXPECT_NE(what.find(std::isfinite(bad) ? "beyond the 32-bit float range" : "is not finite"),
+                      std::string::npos) << what;
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Every shipped terrain scene: one boundary loop, the outline; no T-junction
 
@@ -733,15 +795,15 @@ TEST_P(ShippedScene, TerrainExportHasOneBoundaryLoopTheOutlineAndNoTJunction) {
         EXPECT_EQ(edges.pinched_vertices, 0u);
         EXPECT_EQ(edges.nonmanifold_edges, 0u);
         EXPECT_EQ(edges.misoriented_edges, 0u);
-        if (precision == tessref::Precision::gpu) {
-            // And the export writes exactly that mesh.
-            std::ostringstream out;
-            MeshWriteOptions write_options;
-            write_options.binary = true;
-            const tessref::MeshWriteReport report = tessref::write_mesh(result.mesh, out, write_options);
-            EXPECT_EQ(report.triangles, welded.mesh.triangles.size());
-            EXPECT_EQ(report.vertices, welded.mesh.positions.size());
-        }
+        // The export writes exactly that mesh; the shipped scenes lie near the origin, so an
+        // exact run's floats keep every vertex and every triangle's area (no warning).
+        std::ostringstream out;
+        MeshWriteOptions write_options;
+        write_options.binary = true;
+        const tessref::MeshWriteReport report = tessref::write_mesh(result.mesh, out, write_options);
+        EXPECT_EQ(report.triangles, welded.mesh.triangles.size());
+        EXPECT_EQ(report.vertices, welded.mesh.positions.size());
+        EXPECT_EQ(report.precision_warning(), "");
     }
 }
 
@@ -846,6 +908,65 @@ TEST_F(MeshCommand, BadOutputIsAnErrorBeforeAnythingIsWritten) {
         EXPECT_EQ(result.err.rfind("tessref: error: ", 0), 0u) << result.err;
         EXPECT_NE(result.err.find(c.message), std::string::npos) << result.err;
         EXPECT_TRUE(files().empty()) << c.args[2];  // no output, no temporary file
+    }
+}
+
+std::string heightfield_data(const std::string& name) {
+    return (fs::path(TESSREF_SOURCE_DIR) / "tests" / "data" / "heightfield" / name).string();
+}
+
+std::size_t count_lines(const std::string& text, const std::string& prefix) {
+    std::size_t n = 0;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) n += line.rfind(prefix, 0) == 0;
+    return n;
+}
+
+TEST_F(MeshCommand, ExactRunFarFromTheOriginWarnsWhatFloatStorageLoses) {
+    // tests/data/heightfield/far_from_origin.toml: 16 x 16 quads of 0.25 at y = 9100000 +
+    // 0.25 j (j = 0..16), where floats are 1 apart. Rounded to nearest-even the 17 rows land
+    // on 5 float rows (j 0-2, 3-5, 6-10, 11-13, 14-16): 5 x 17 = 85 points; only the bands
+    // j = 2-3, 5-6, 10-11, 13-14 keep their area, 4 x 32 of the 512 triangles.
+    const std::string far = heightfield_data("far_from_origin.toml");
+    const RunResult exact = run({far, "-o", path("e.ply").string(), "--precision", "exact"});
+    ASSERT_EQ(exact.status, 0) << exact.err;
+    EXPECT_EQ(count_lines(exact.err, "tessref: warning: "), 1u) << exact.err;
+    EXPECT_NE(exact.err.find("the 289 distinct vertices fall on 85 points and 384 of 512 triangles"),
+              std::string::npos) << exact.err;
+    EXPECT_NE(exact.err.find("largest coordinate 9100004, float spacing there 1)"), std::string::npos) << exact.err;
+    // gpu precision computes in float: the collapse happens in the pipeline, and the export
+    // says so by leaving out the triangles whose corners weld (nothing is lost in storage).
+    const RunResult gpu = run({far, "-o", path("g.ply").string()});
+    ASSERT_EQ(gpu.status, 0) << gpu.err;
+    EXPECT_EQ(gpu.err.find("32-bit floats"), std::string::npos) << gpu.err;
+    EXPECT_NE(gpu.err.find("384 triangles whose corners weld together"), std::string::npos) << gpu.err;
+}
+
+TEST_F(MeshCommand, NonFiniteHeightIsAnErrorNamingPatchTessCoordAndTexel) {
+    // tests/data/heightfield/huge_sample.toml: one texel of 3e38, scale_z = 10. The PFM's
+    // stored row 1 (from the bottom) of 4 is texel row 2 top-first: texel (1, 2).
+    const std::string scene_file = heightfield_data("huge_sample.toml");
+    const RunResult gpu = run({scene_file, "-o", path("g.ply").string()});
+    EXPECT_EQ(gpu.status, 2);
+    EXPECT_EQ(gpu.err.rfind("tessref: error: patch ", 0), 0u) << gpu.err;
+    for (const char* part : {"non-finite vertex", "inf)", "at tess coord (", "gpu (float) precision",
+                             "texels up to (1, 2) = 3.00000001e+38", "huge_sample.pfm", "domain.scale_z = 10",
+                             "key domain.heightmap, patch "})
+        EXPECT_NE(gpu.err.find(part), std::string::npos) << part << " in " << gpu.err;
+    // Exact precision holds 7.5e38 in double, which no mesh file (32-bit floats) can.
+    const RunResult exact = run({scene_file, "-o", path("e.ply").string(), "--precision", "exact"});
+    EXPECT_EQ(exact.status, 2);
+    EXPECT_NE(exact.err.find("beyond the 32-bit float range"), std::string::npos) << exact.err;
+    EXPECT_NE(exact.err.find("at tess coord ("), std::string::npos) << exact.err;
+    EXPECT_TRUE(files().empty());
+    // The pipeline itself refuses (so render and check get no infinite vertex either).
+    const tessref::Scene scene = tessref::load_scene(scene_file);
+    try {
+        tessref::run_pipeline(scene);
+        ADD_FAILURE() << "no error";
+    } catch (const tessref::Error& e) {
+        EXPECT_GE(e.where().patch_id, 0);
+        EXPECT_EQ(e.where().key, "domain.heightmap");
     }
 }
 

@@ -80,6 +80,14 @@
 // v - 1 there (so 32768 and 32769 both read as 32768; jacksboro's top sample 65535 reads as
 // 65534). 16-bit PNG is read exactly. Colour channels are read as stored
 // ("oiio:UnassociatedAlpha"), not premultiplied by alpha.
+// Hostile files: what the header declares is checked before any pixel is read or memory
+// is allocated for it. The image and its mip pyramid must fit the process memory limit
+// (require_memory, tessref/limits.h; "height map of W x H samples needs ..."), so a
+// 100-byte file declaring 100000 x 100000 is refused at once. PNM headers are also checked
+// where OpenImageIO 2.4.7 does not: maxval must be 1..65535 (it accepts 0 and reads every
+// sample as 1) and a PFM's scale a non-zero number. A file with fewer or damaged pixels
+// than its header declares is "truncated or corrupt", also when OpenImageIO reports the read
+// as successful with its error set (a TIFF strip past the end of the file).
 // NaN and infinite samples, and samples equal to an optional nodata value (compared with the
 // file's raw value: the integer code for integer files), are "missing"; NodataPolicy says
 // what happens to them (default: an error naming the file and the first missing texel).
@@ -166,6 +174,12 @@ private:
     MinFilter min_filter_ = MinFilter::linear_mipmap_linear;
 };
 
+// Bytes a Texture of this size and format holds, its whole mip pyramid included (saturating
+// at UINT64_MAX). Building a texture calls require_memory() (tessref/limits.h) for the
+// levels above 0 before computing them; the loaders check this figure, plus the file's own
+// samples, before reading a single pixel.
+std::uint64_t texture_memory_bytes(int width, int height, int channels, TexelFormat format);
+
 // ---- Loading through OpenImageIO -------------------------------------------------------
 
 // What a missing sample (NaN, +-inf, or equal to HeightFieldOptions::nodata_value) does.
@@ -207,9 +221,15 @@ struct HeightField {
 };
 
 // Loads a height map. Throws tessref::Error (Where::file = path) when the file is missing,
-// empty (0 bytes), unreadable or corrupt, has zero width or height, is smaller than 2x2 (a
-// height field needs two samples along each axis — a 1x1 map has no extent), is larger than
-// max_dimension along either axis, or has missing samples under NodataPolicy::error.
+// empty (0 bytes), unreadable, truncated or corrupt, has no pixels (a width or height of 0
+// or below in its header), a PNM maxval outside 1..65535 or a PFM scale of 0, is smaller
+// than 2x2 (a height field needs two samples along each axis — a 1x1 map has no extent),
+// would need more memory than the process limit, is larger than max_dimension along either
+// axis, or has missing samples under NodataPolicy::error.
+// Samples are not checked against the scene's scale: a finite sample so large that the
+// evaluated height overflows is refused after evaluation by run_pipeline (scene.h), which
+// names the patch, tess coord and texel, and a double beyond the float range by
+// write_mesh (mesh.h).
 // uint8 files become unorm8 textures, uint16 files unorm16, every other sample type
 // float32 (other integer types read through OpenImageIO's normalization to 0..1).
 HeightField load_height_field(const std::string& path, const HeightFieldOptions& options = {});
@@ -223,7 +243,8 @@ struct TextureLoadOptions {
 // Loads a colour texture (RGB/RGBA 8-bit PNG or JPEG, 16-bit PNG, float EXR, ...): uint8
 // files become unorm8, uint16 unorm16, others float32. A 1x1 texture is allowed. Throws
 // tessref::Error naming the file on a missing, empty, unreadable, zero-sized or too large
-// image. NaN samples are kept (a colour texture has no nodata policy).
+// image, and with the height map's header checks (memory limit, PNM maxval, PFM scale,
+// truncation). NaN samples are kept (a colour texture has no nodata policy).
 Texture load_texture(const std::string& path, const TextureLoadOptions& options = {});
 
 // ---- Normals from a height field -------------------------------------------------------

@@ -32,7 +32,8 @@
 //     back bitwise). Caveats of OpenMesh 9.0's writers, kept rather than hand-writing a
 //     format: every writer stores positions, normals and uvs as 32-bit float, so positions
 //     of an `exact` (double) run are rounded to the nearest float in the file (welding
-//     still happens on the double bit patterns); the ASCII STL writer prints vertex
+//     still happens on the double bit patterns; MeshWriteReport says what the rounding
+//     lost, and `tessref mesh` warns); the ASCII STL writer prints vertex
 //     coordinates (and the facet normals after the first) with 10 significant digits, not
 //     9 (it hard-codes that).
 //
@@ -122,11 +123,24 @@ struct MeshWriteReport {
     std::size_t vertices = 0;              // vertices written (after welding)
     std::size_t triangles = 0;             // triangles written
     std::size_t degenerate_triangles = 0;  // left out (see above)
+    // What the file's 32-bit floats keep of the positions (an `exact` run computes them in
+    // double): how many distinct float points the `vertices` fall on, and how many written
+    // triangles have area in double but none with float corners. Both show precision lost,
+    // typically far from the origin (at 9.1e6 floats are 1 apart).
+    std::size_t float_distinct_vertices = 0;
+    std::size_t float_degenerate_triangles = 0;
+    double largest_coordinate = 0.0;  // max |x|, |y|, |z| written
+    double float_spacing = 0.0;       // between the float at largest_coordinate and the next
+
+    // One line saying what float storage lost (counts, largest coordinate, spacing there);
+    // empty when it lost nothing.
+    std::string precision_warning() const;
 };
 
 // Welds `mesh` and writes it to `out` (opened in binary mode for a binary format) through
-// OpenMesh. Throws tessref::Error when the mesh is inconsistent, the options ask for what
-// the format cannot do, or the stream fails. `out` may then hold part of a file: a caller
+// OpenMesh. Throws tessref::Error when the mesh is inconsistent, a position is not finite
+// or beyond the float range (files store floats; the error names the vertex, its patch and
+// tess coord), the options ask for what the format cannot do, or the stream fails. `out` may then hold part of a file: a caller
 // writing a file writes a temporary file next to it and renames it only on success, as
 // `tessref mesh` does (cli::AtomicOutput).
 MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,

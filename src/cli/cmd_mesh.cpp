@@ -112,6 +112,8 @@ int run_mesh(const MeshCommandOptions& options) {
         std::cerr << "tessref: warning: " << report.degenerate_triangles
                   << " triangles whose corners weld together (zero area) were left out\n";
     }
+    if (const std::string lost = report.precision_warning(); !lost.empty())
+        std::cerr << "tessref: warning: " << lost << "\n";
     std::cout << options.output << ": " << to_string(write_options.format)
               << (options.binary ? " binary" : " ascii") << ", " << to_string(precision)
               << " precision, " << scene.patch_count() << " patches, " << report.triangles

@@ -1,11 +1,16 @@
 // Height maps and colour textures through OpenImageIO (see tessref/heightfield.h).
 #include <algorithm>
+#include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
@@ -13,6 +18,7 @@
 
 #include "tessref/error.h"
 #include "tessref/heightfield.h"
+#include "tessref/limits.h"
 
 namespace tessref {
 
@@ -33,19 +39,97 @@ struct RawImage {
     std::vector<float> f32;
 };
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
+Where file_where(const std::string& path) {
     Where where;
     where.file = path;
-    throw Error(what, where);
+    return where;
 }
 
+[[noreturn]] void fail(const std::string& path, const std::string& what) { throw Error(what, file_where(path)); }
+
+// OpenImageIO's error text on one line: trailing newlines dropped, inner ones joined by "; ".
 std::string trimmed(std::string text) {
     while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    for (std::size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+        text.replace(at, 1, "; ");
     return text;
 }
 
-RawImage read_raw(const std::string& path, int max_dimension, int max_channels,
-                  const char* kind) {
+// The first `count` whitespace-separated tokens of a PNM header, comments skipped, as typed.
+// Only the first 4 KiB are looked at: a header is a few dozen bytes.
+std::vector<std::string> pnm_header_tokens(const std::string& path, std::size_t count) {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
+    std::vector<std::string> tokens;
+    std::size_t i = 0;
+    while (tokens.size() < count && i < head.size()) {
+        const unsigned char c = static_cast<unsigned char>(head[i]);
+        if (c == '#') {
+            while (i < head.size() && head[i] != '\n' && head[i] != '\r') ++i;
+        } else if (std::isspace(c)) {
+            ++i;
+        } else {
+            const std::size_t start = i;
+            while (i < head.size() && !std::isspace(static_cast<unsigned char>(head[i]))) ++i;
+            tokens.push_back(head.substr(start, i - start));
+        }
+    }
+    return tokens;
+}
+
+// A header token for a message: as typed, but short.
+std::string shown(const std::string& token) {
+    return token.size() <= 24 ? token : token.substr(0, 24) + "...";
+}
+
+// What OpenImageIO 2.4.7's PNM reader accepts but the format does not allow: a maxval
+// outside 1..65535 (maxval 0 makes it divide by zero and read every sample as 1; above
+// 65535 it reads 16-bit samples scaled by a maxval they cannot reach) and a PFM scale that
+// is 0 or not a number (its sign is the byte order; 0 gives none). OpenImageIO keeps
+// neither value, so the header's four tokens are read again here, to check them and to
+// name them as the file gives them.
+void check_pnm_header(const std::string& path, const std::string& what_kind) {
+    const std::vector<std::string> tokens = pnm_header_tokens(path, 4);
+    if (tokens.size() < 4) return;  // P1/P4 bitmaps have no fourth token to check
+    const std::string& magic = tokens[0];
+    if (magic == "Pf" || magic == "PF") {
+        const char* begin = tokens[3].c_str();
+        char* end = nullptr;
+        const double scale = std::strtod(begin, &end);
+        if (end == begin || *end != '\0' || !std::isfinite(scale) || scale == 0.0)
+            fail(path, what_kind + " is a PFM whose scale '" + shown(tokens[3]) +
+                           "' is not a non-zero number (its sign gives the byte order)");
+        return;
+    }
+    if (magic != "P2" && magic != "P3" && magic != "P5" && magic != "P6") return;
+    long long maxval = -1;
+    const std::string& text = tokens[3];
+    const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), maxval);
+    const bool whole = ec == std::errc() && ptr == text.data() + text.size();
+    if (!whole || maxval < 1 || maxval > 65535)
+        fail(path, what_kind + " is a " + (magic == "P2" || magic == "P5" ? "PGM" : "PPM") +
+                       " with maxval " + shown(text) + "; the format allows 1 to 65535");
+}
+
+bool looks_like_pnm(const std::string& path) {
+    const std::vector<std::string> tokens = pnm_header_tokens(path, 1);
+    if (tokens.empty() || tokens[0].size() != 2 || tokens[0][0] != 'P') return false;
+    return std::string_view("123456fF").find(tokens[0][1]) != std::string_view::npos;
+}
+
+// The file's bits per sample: OpenImageIO's PNM reader stores it as a float, its other
+// readers as an int; `fallback` where the reader says nothing.
+int bits_per_sample(const OIIO::ImageSpec& spec, int fallback) {
+    const OIIO::ParamValue* attribute = spec.find_attribute("oiio:BitsPerSample");
+    if (attribute == nullptr) return fallback;
+    const float bits = attribute->get_float(static_cast<float>(fallback));
+    return std::isfinite(bits) && bits >= 1.0f && bits <= 64.0f ? static_cast<int>(bits) : fallback;
+}
+
+RawImage read_raw(const std::string& path, int max_dimension, int max_channels, const char* kind,
+                  std::uint64_t extra_bytes_per_texel) {
     const std::string what_kind(kind);
     std::error_code ec;
     const std::filesystem::path fs_path(path);
@@ -63,47 +147,76 @@ RawImage read_raw(const std::string& path, int max_dimension, int max_channels,
     auto input = OIIO::ImageInput::open(path, &config);
     if (!input) {
         const std::string reason = trimmed(OIIO::geterror());
+        // OpenImageIO names no cause for a PNM header it rejects ("could not find a format
+        // reader"); the header check names the bad value where it is one it knows.
+        if (looks_like_pnm(path)) check_pnm_header(path, what_kind);
         fail(path, "cannot read " + what_kind + ": " +
                        (reason.empty() ? std::string("unknown image format") : reason));
     }
+    // Everything below checks the header (OpenImageIO has read only that so far) before
+    // anything is allocated for the pixels.
     const OIIO::ImageSpec& spec = input->spec();
     RawImage raw;
     raw.width = spec.width;
     raw.height = spec.height;
     raw.file_channels = spec.nchannels;
     raw.pixel_type = spec.format.c_str();
-    raw.bits_per_sample = spec.get_int_attribute("oiio:BitsPerSample",
-                                                 static_cast<int>(spec.format.size() * 8));
+    raw.bits_per_sample = bits_per_sample(spec, static_cast<int>(spec.format.size() * 8));
     if (spec.width <= 0 || spec.height <= 0 || spec.depth > 1 || spec.nchannels <= 0)
-        fail(path, what_kind + " has zero size (" + std::to_string(spec.width) + "x" +
-                       std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) +
-                       " channels)");
+        fail(path, what_kind + " has no pixels: its header says " + std::to_string(spec.width) + " x " +
+                       std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) + " channel(s)");
+    if (std::string_view(input->format_name()) == "pnm") check_pnm_header(path, what_kind);
+    raw.channels = std::min(spec.nchannels, max_channels);
+    if (spec.format == OIIO::TypeDesc::UINT8)
+        raw.format = TexelFormat::unorm8;
+    else if (spec.format == OIIO::TypeDesc::UINT16)
+        raw.format = TexelFormat::unorm16;
+    else
+        raw.format = TexelFormat::float32;
+    const std::uint64_t texels = saturating_bytes(static_cast<std::uint64_t>(raw.width),
+                                                  static_cast<std::uint64_t>(raw.height));
+    const std::uint64_t sample_bytes = raw.format == TexelFormat::unorm8    ? 1
+                                       : raw.format == TexelFormat::unorm16 ? 2
+                                                                            : 4;
+    const std::uint64_t file_samples = saturating_bytes(texels, static_cast<std::uint64_t>(raw.channels) * sample_bytes);
+    const std::uint64_t texture = texture_memory_bytes(raw.width, raw.height, raw.channels, raw.format);
+    const std::uint64_t extra = saturating_bytes(texels, extra_bytes_per_texel);
+    std::uint64_t needed = file_samples;
+    for (const std::uint64_t part : {texture, extra})
+        needed = part > UINT64_MAX - needed ? UINT64_MAX : needed + part;
+    require_memory(needed,
+                   what_kind + " of " + std::to_string(raw.width) + " x " + std::to_string(raw.height) +
+                       (what_kind == "texture" ? " texels" : " samples"),
+                   file_where(path));
     if (spec.width > max_dimension || spec.height > max_dimension)
         fail(path, what_kind + " is " + std::to_string(spec.width) + "x" +
                        std::to_string(spec.height) + ", larger than the limit of " +
                        std::to_string(max_dimension) + " texels per side");
-    raw.channels = std::min(spec.nchannels, max_channels);
     const std::size_t count = static_cast<std::size_t>(raw.width) *
                               static_cast<std::size_t>(raw.height) *
                               static_cast<std::size_t>(raw.channels);
     bool ok = false;
-    if (spec.format == OIIO::TypeDesc::UINT8) {
-        raw.format = TexelFormat::unorm8;
-        raw.u8.resize(count);
-        ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::UINT8, raw.u8.data());
-    } else if (spec.format == OIIO::TypeDesc::UINT16) {
-        raw.format = TexelFormat::unorm16;
-        raw.u16.resize(count);
-        ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::UINT16, raw.u16.data());
-    } else {
-        raw.format = TexelFormat::float32;
-        raw.f32.resize(count);
-        ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::FLOAT, raw.f32.data());
+    switch (raw.format) {
+        case TexelFormat::unorm8:
+            raw.u8.resize(count);
+            ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::UINT8, raw.u8.data());
+            break;
+        case TexelFormat::unorm16:
+            raw.u16.resize(count);
+            ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::UINT16, raw.u16.data());
+            break;
+        case TexelFormat::float32:
+            raw.f32.resize(count);
+            ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::FLOAT, raw.f32.data());
+            break;
     }
-    if (!ok) {
-        std::string reason = trimmed(input->geterror());
-        fail(path, "cannot read the pixels of " + what_kind + ": " +
-                       (reason.empty() ? std::string("corrupt or truncated file") : reason));
+    // OpenImageIO 2.4.7's TIFF reader can report success with its error set (a strip past
+    // the end of the file reads as zeros): either one means the pixels are not the file's.
+    if (!ok || input->has_error()) {
+        const std::string reason = trimmed(input->geterror());
+        fail(path, what_kind + " is truncated or corrupt: its " + std::to_string(raw.width) + " x " +
+                       std::to_string(raw.height) + " pixels cannot be read" +
+                       (reason.empty() ? std::string() : " (" + reason + ")"));
     }
     input->close();
     return raw;
@@ -151,7 +264,9 @@ Texture make_texture(RawImage& raw, MipmapRule rule) {
 }  // namespace
 
 HeightField load_height_field(const std::string& path, const HeightFieldOptions& options) {
-    RawImage raw = read_raw(path, options.max_dimension, 1, "height map");
+    // Per texel beyond the image: the missing-sample mask, and the doubles of a mean fill.
+    const std::uint64_t fill_bytes = 1 + (options.nodata_policy == NodataPolicy::fill_neighbour_mean ? sizeof(double) : 0);
+    RawImage raw = read_raw(path, options.max_dimension, 1, "height map", fill_bytes);
     if (raw.width < 2 || raw.height < 2)
         fail(path, "height map is " + std::to_string(raw.width) + "x" + std::to_string(raw.height) +
                        ": a height field needs at least 2x2 samples");
@@ -257,7 +372,7 @@ HeightField load_height_field(const std::string& path, const HeightFieldOptions&
 
 Texture load_texture(const std::string& path, const TextureLoadOptions& options) {
     const int max_channels = std::clamp(options.max_channels, 1, 4);
-    RawImage raw = read_raw(path, options.max_dimension, max_channels, "texture");
+    RawImage raw = read_raw(path, options.max_dimension, max_channels, "texture", 0);
     return make_texture(raw, options.mipmap_rule);
 }
 

@@ -13,11 +13,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <utility>
 
 #include "tessref/error.h"
 #include "tessref/heightfield.h"
+#include "tessref/limits.h"
 
 namespace tessref {
 
@@ -380,8 +382,44 @@ TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelForma
 
 }  // namespace
 
+namespace {
+
+// Bytes of the mip pyramid's levels from `first_lod` on. Per sample: the float the sampler
+// reads, the 8-bit code of a unorm8 texture, and on levels >= 1 the double of the
+// accuracy path (level 0 derives it from the float).
+std::uint64_t pyramid_bytes(int width, int height, int channels, TexelFormat format, int first_lod) {
+    if (width < 1 || height < 1 || channels < 1) return 0;
+    const std::uint64_t code_bytes = format == TexelFormat::unorm8 ? 1 : 0;
+    std::uint64_t total = 0;
+    std::uint64_t w = static_cast<std::uint64_t>(width);
+    std::uint64_t h = static_cast<std::uint64_t>(height);
+    for (int lod = 0;; ++lod) {
+        if (lod >= first_lod) {
+            const std::uint64_t samples =
+                saturating_bytes(saturating_bytes(w, h), static_cast<std::uint64_t>(channels));
+            const std::uint64_t each = sizeof(float) + code_bytes + (lod > 0 ? sizeof(double) : 0);
+            const std::uint64_t level = saturating_bytes(samples, each);
+            total = level > UINT64_MAX - total ? UINT64_MAX : total + level;
+        }
+        if (w == 1 && h == 1) break;
+        w = std::max<std::uint64_t>(1, w / 2);
+        h = std::max<std::uint64_t>(1, h / 2);
+    }
+    return total;
+}
+
+}  // namespace
+
+std::uint64_t texture_memory_bytes(int width, int height, int channels, TexelFormat format) {
+    return pyramid_bytes(width, height, channels, format, 0);
+}
+
 Texture Texture::build(int width, int height, int channels, TexelFormat format, MipmapRule rule,
                        TextureLevel level0) {
+    // Level 0 is already held; the levels above it are refused here if they cannot fit
+    // (the loaders check the whole texture before reading a file).
+    require_memory(pyramid_bytes(width, height, channels, format, 1),
+                   "mip chain of a " + std::to_string(width) + " x " + std::to_string(height) + " texture");
     Texture texture;
     texture.channels_ = channels;
     texture.format_ = format;

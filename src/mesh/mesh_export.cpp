@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <bit>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -277,7 +279,85 @@ OpenMesh::Vec3f to_float(const glm::dvec3& v) {
     return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
 }
 
+std::string number(double x) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.9g", x);
+    return buffer;
+}
+
+// The file stores floats: a position beyond the float range would be written as inf, and
+// a non-finite one as inf or nan. Neither is geometry; the export stops, naming the vertex.
+void require_finite_floats(const SurfaceMesh& w) {
+    for (std::size_t v = 0; v < w.positions.size(); ++v) {
+        const glm::dvec3& p = w.positions[v];
+        const OpenMesh::Vec3f f = to_float(p);
+        if (std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2])) continue;
+        const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+        std::string what = "vertex (" + number(p.x) + ", " + number(p.y) + ", " + number(p.z) + ")";
+        if (!w.tess_coords.empty()) {
+            const glm::vec3 tc = w.tess_coords[v];
+            what += " at tess coord (" + number(tc.x) + ", " + number(tc.y) + ", " + number(tc.z) + ")";
+        }
+        what += finite ? " is beyond the 32-bit float range (largest " +
+                             number(std::numeric_limits<float>::max()) + ") that mesh files store"
+                       : " is not finite";
+        Where where;
+        if (!w.patch_ids.empty()) where.patch_id = w.patch_ids[v];
+        throw Error(what, where);
+    }
+}
+
+// What storing positions as float loses of a double computation: distinct vertices that
+// round to one float point, and triangles with area whose float corners have none.
+// Nothing when every position is already a float (gpu precision).
+void measure_float_storage(const SurfaceMesh& w, MeshWriteReport& report) {
+    double largest = 0.0;
+    bool all_floats = true;
+    for (const glm::dvec3& p : w.positions) {
+        for (int c = 0; c < 3; ++c) {
+            largest = std::max(largest, std::abs(p[c]));
+            all_floats = all_floats && static_cast<double>(static_cast<float>(p[c])) == p[c];
+        }
+    }
+    const float largest_f = static_cast<float>(largest);
+    report.largest_coordinate = largest;
+    report.float_spacing = static_cast<double>(std::nextafter(largest_f, std::numeric_limits<float>::infinity())) -
+                           static_cast<double>(largest_f);
+    report.float_distinct_vertices = w.positions.size();
+    if (all_floats) return;
+
+    const auto stored = [&w](std::uint32_t v) { return glm::dvec3(glm::vec3(w.positions[v])); };
+    std::vector<std::array<std::uint32_t, 3>> keys(w.positions.size());
+    for (std::uint32_t v = 0; v < keys.size(); ++v) {
+        const glm::vec3 f(w.positions[v]);
+        for (int c = 0; c < 3; ++c) keys[v][c] = std::bit_cast<std::uint32_t>(f[c] == 0.0f ? 0.0f : f[c]);
+    }
+    std::sort(keys.begin(), keys.end());
+    report.float_distinct_vertices =
+        static_cast<std::size_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+
+    // A zero area is seen exactly: differences of floats are exact in double (short of a
+    // 2^29 spread in magnitude), and products that are equal round alike.
+    const auto zero_area = [](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+        return glm::cross(b - a, c - a) == glm::dvec3(0.0);
+    };
+    for (const auto& t : w.triangles) {
+        if (zero_area(stored(t[0]), stored(t[1]), stored(t[2])) &&
+            !zero_area(w.positions[t[0]], w.positions[t[1]], w.positions[t[2]]))
+            ++report.float_degenerate_triangles;
+    }
+}
+
 }  // namespace
+
+std::string MeshWriteReport::precision_warning() const {
+    if (float_distinct_vertices == vertices && float_degenerate_triangles == 0) return {};
+    return "stored as 32-bit floats, the " + std::to_string(vertices) + " distinct vertices fall on " +
+           std::to_string(float_distinct_vertices) + " points and " + std::to_string(float_degenerate_triangles) +
+           " of " + std::to_string(triangles) + " triangles lose all their area (largest coordinate " +
+           number(largest_coordinate) + ", float spacing there " + number(float_spacing) +
+           "): the file does not hold what the double computation had; move the scene nearer the origin";
+}
 
 MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
                            const MeshWriteOptions& options) {
@@ -308,6 +388,8 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     report.vertices = w.positions.size();
     report.triangles = w.triangles.size();
     report.degenerate_triangles = welded.degenerate_triangles;
+    require_finite_floats(w);
+    measure_float_storage(w, report);
 
     // What the format can carry, and what the mesh has.
     const bool write_normals = format != MeshFormat::stl && !w.normals.empty();

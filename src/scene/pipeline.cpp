@@ -14,7 +14,9 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
+#include <string>
 #include <span>
 #include <type_traits>
 
@@ -409,6 +411,55 @@ struct Run {
                                             static_cast<T>(g.scale_z), T(0)));
     }
 
+    // A vertex at infinity or NaN (a height texel that scale_z carries past the float range,
+    // say) would reach the mesh file or the rasterizer silently; the run stops instead,
+    // naming the first such vertex (lowest index, so the same whatever the thread count),
+    // its patch and tess coord, and for a terrain the largest texel its height was read from.
+    // (A post-evaluation check rather than one at load: whether a texel overflows depends
+    // on the model, the precision and the interpolation, which only evaluation knows.)
+    void require_finite_positions(const SurfaceMesh& mesh) const {
+        const auto finite = [](const glm::dvec3& p) {
+            return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+        };
+        const auto bad = std::find_if_not(mesh.positions.begin(), mesh.positions.end(), finite);
+        if (bad == mesh.positions.end()) return;
+        const std::size_t v = static_cast<std::size_t>(bad - mesh.positions.begin());
+        const auto number = [](double x) {
+            char buffer[32];
+            std::snprintf(buffer, sizeof buffer, "%.9g", x);
+            return std::string(buffer);
+        };
+        const glm::vec3 tc = mesh.tess_coords[v];
+        std::string what = "patch " + std::to_string(mesh.patch_ids[v]) + " evaluates to a non-finite vertex (" +
+                           number(bad->x) + ", " + number(bad->y) + ", " + number(bad->z) + ") at tess coord (" +
+                           number(tc.x) + ", " + number(tc.y) + ", " + number(tc.z) + ") in " +
+                           (precision == Precision::gpu ? "gpu (float)" : "exact (double)") + " precision";
+        Where where{scene.file, 0, 0, "", static_cast<long long>(mesh.patch_ids[v])};
+        if (scene.grid && !mesh.uvs.empty()) {
+            // The level-0 texels of the bilinear footprint at the vertex's texture coordinate
+            // (clamped to the edge); the one of largest magnitude is the likely culprit.
+            const Texture& t = *height_texture;
+            const glm::dvec2 st = mesh.uvs[v];
+            const auto footprint = [](double s, int size) {
+                const double u = std::isfinite(s) ? std::clamp(s * size - 0.5, -1.0, double(size)) : 0.0;
+                const int i = static_cast<int>(std::floor(u));
+                return std::array<int, 2>{std::clamp(i, 0, size - 1), std::clamp(i + 1, 0, size - 1)};
+            };
+            const auto xs = footprint(st.x, t.width());
+            const auto ys = footprint(st.y, t.height());
+            int tx = xs[0], ty = ys[0];
+            for (int x : xs)
+                for (int y : ys)
+                    if (std::abs(t.texel_exact(0, x, y)) > std::abs(t.texel_exact(0, tx, ty))) tx = x, ty = y;
+            what += ": its height is read at texture coordinate (" + number(st.x) + ", " + number(st.y) +
+                    ") from texels up to (" + std::to_string(tx) + ", " + std::to_string(ty) + ") = " +
+                    number(t.texel_exact(0, tx, ty)) + " of " + scene.grid->heightmap_path +
+                    ", times domain.scale_z = " + number(scene.grid->scale_z);
+            where.key = "domain.heightmap";
+        }
+        throw Error(what, where);
+    }
+
     PipelineResult run() {
         setup();
         PipelineResult result;
@@ -500,6 +551,8 @@ struct Run {
                 }
             }
         });
+
+        require_finite_positions(mesh);
 
         if (scene.geometry && scene.geometry->normals == GeometryNormals::smooth) {
             std::vector<vec3_t<T>> positions(vertices);
