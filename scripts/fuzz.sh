@@ -73,6 +73,9 @@ fuzz_one() {
   before=$(find "$findings" -type f | wc -l)
   echo "fuzz.sh: $target: corpus $(find "$corpus" -type f | wc -l) files, log $log"
   set +e
+  # Leaks inside system libraries that tessref cannot free are suppressed, each with its
+  # reason, in the same file the sanitized test suite uses.
+  export LSAN_OPTIONS="suppressions=$root/scripts/sanitizers/lsan.supp:print_suppressions=0"
   # -rss_limit_mb and -timeout make out-of-memory and hangs findings; the library's own
   # memory limit is set lower by the harness (fuzz/fuzz_common.h) so oversized inputs are
   # refused before libFuzzer's limit is reached. -jobs > 1 makes libFuzzer write

@@ -11,6 +11,7 @@
 #include <GL/glext.h>
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <OpenImageIO/imageio.h>
 
@@ -594,6 +595,19 @@ TEST(BadInput, EachGivesAnErrorNamingTheFile) {
     small_texture.max_dimension = 8;
     expect_error([&] { tessref::load_texture(wide, small_texture); }, wide, "larger than the limit");
     EXPECT_NO_THROW(tessref::load_height_field(wide));
+}
+
+// A device or FIFO has no end: OpenImageIO would read /dev/zero forever (a fuzzer's
+// finding: a scene naming heightmap = "/dev/zero" hung the loader).
+TEST(BadInput, DevicesAndFifosAreRefusedNotRead) {
+    for (const std::string device : {"/dev/zero", "/dev/urandom", "/dev/null"}) {
+        expect_error([&] { tessref::load_height_field(device); }, device, "not a regular file");
+        expect_error([&] { tessref::load_texture(device); }, device, "not a regular file");
+    }
+    TempDir dir;
+    const std::string fifo = dir.file("fifo.pgm");
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    expect_error([&] { tessref::load_height_field(fifo); }, fifo, "not a regular file");
 }
 
 TEST(BadInput, NanTexelIsAnErrorByDefault) {

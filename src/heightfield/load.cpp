@@ -137,6 +137,10 @@ RawImage read_raw(const std::string& path, int max_dimension, int max_channels, 
         fail(path, what_kind + " not found");
     if (std::filesystem::is_directory(fs_path, ec))
         fail(path, what_kind + " is a directory, not an image");
+    // A device, FIFO or socket has no end to read to (/dev/zero, /dev/urandom would keep
+    // OpenImageIO reading forever) and no header to check before reading: only files.
+    if (!std::filesystem::is_regular_file(fs_path, ec))
+        fail(path, what_kind + " is not a regular file (a device, FIFO or socket), not an image");
     const auto bytes = std::filesystem::file_size(fs_path, ec);
     if (!ec && bytes == 0) fail(path, what_kind + " is an empty file (0 bytes)");
 
