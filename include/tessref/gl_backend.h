@@ -129,6 +129,7 @@ struct CapturedVertex {
     glm::vec3 tess_coord{0.0f};
     glm::vec3 position{0.0f};
     glm::vec3 normal{0.0f};
+    TessLevels levels{};  // the patch's gl_TessLevelOuter/Inner as the evaluation shader read them
 };
 
 struct SceneRenderStats {

@@ -308,22 +308,29 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
         if (s.stage == GL_TESS_EVALUATION_SHADER) {
             const std::string out = plan.has_geometry_shader ? "tessref_te_" : "tessref_cap_";
             c.prefix = "out vec3 " + out + "tess_coord;\nout int " + out + "patch_id;\nout vec3 " + out +
-                       "position;\n" + (plan.has_geometry_shader ? "" : "out vec3 tessref_cap_normal;\n") +
+                       "position;\nout vec4 " + out + "outer;\nout vec2 " + out + "inner;\n" +
+                       (plan.has_geometry_shader ? "" : "out vec3 tessref_cap_normal;\n") +
                        "#define main tessref_twin_main\n";
             c.suffix = "#undef main\nvoid main()\n{\n    tessref_twin_main();\n    " + out +
                        "tess_coord = gl_TessCoord;\n    " + out + "patch_id = gl_PrimitiveID;\n    " + out +
-                       "position = " + plan.position_expression + ";\n" +
+                       "position = " + plan.position_expression + ";\n    " + out +
+                       "outer = vec4(gl_TessLevelOuter[0], gl_TessLevelOuter[1], gl_TessLevelOuter[2], "
+                       "gl_TessLevelOuter[3]);\n    " + out + "inner = vec2(gl_TessLevelInner[0], gl_TessLevelInner[1]);\n" +
                        (plan.has_geometry_shader ? "" : "    tessref_cap_normal = " + normal + ";\n") + "}\n";
         } else if (s.stage == GL_GEOMETRY_SHADER) {
             c.prefix =
                 "in vec3 tessref_te_tess_coord[];\nin int tessref_te_patch_id[];\nin vec3 tessref_te_position[];\n"
+                "in vec4 tessref_te_outer[];\nin vec2 tessref_te_inner[];\n"
                 "out vec3 tessref_cap_tess_coord;\nout int tessref_cap_patch_id;\nout vec3 tessref_cap_position;\n"
+                "out vec4 tessref_cap_outer;\nout vec2 tessref_cap_inner;\n"
                 "out vec3 tessref_cap_normal;\nint tessref_emitted = 0;\nvoid tessref_emit();\n"
                 "#define EmitVertex() tessref_emit()\n";
             c.suffix = "#undef EmitVertex\nvoid tessref_emit()\n{\n"
                        "    tessref_cap_tess_coord = tessref_te_tess_coord[tessref_emitted];\n"
                        "    tessref_cap_patch_id = tessref_te_patch_id[tessref_emitted];\n"
                        "    tessref_cap_position = tessref_te_position[tessref_emitted];\n"
+                       "    tessref_cap_outer = tessref_te_outer[tessref_emitted];\n"
+                       "    tessref_cap_inner = tessref_te_inner[tessref_emitted];\n"
                        "    tessref_cap_normal = " + normal + ";\n"
                        "    EmitVertex();\n    tessref_emitted = tessref_emitted + 1;\n}\n";
         }
@@ -654,8 +661,10 @@ struct FeedbackRecord {
     std::int32_t patch_id;
     float position[3];
     float normal[3];
+    float outer[4];
+    float inner[2];
 };
-static_assert(sizeof(FeedbackRecord) == 40);
+static_assert(sizeof(FeedbackRecord) == 64);
 
 }  // namespace
 
@@ -793,7 +802,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     start = Clock::now();
     objects.programs.push_back(link(gl, capture_stages(plan),
                                     {"tessref_cap_tess_coord", "tessref_cap_patch_id", "tessref_cap_position",
-                                     "tessref_cap_normal"}));
+                                     "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"}));
     const GLuint capture_program = objects.programs.back();
     set_uniforms(gl, capture_program, scene, result.shading, m, size);
     if (plan.identity_mvp_for_capture) Uniforms{gl, capture_program}.m4("mvp", glm::mat4(1.0f));
@@ -852,6 +861,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
             v.tess_coord = glm::vec3(r.tess_coord[0], r.tess_coord[1], r.tess_coord[2]);
             v.position = glm::vec3(r.position[0], r.position[1], r.position[2]);
             v.normal = glm::vec3(r.normal[0], r.normal[1], r.normal[2]);
+            std::memcpy(v.levels.outer.data(), r.outer, sizeof r.outer);
+            std::memcpy(v.levels.inner.data(), r.inner, sizeof r.inner);
             result.capture.push_back(v);
         }
     }
