@@ -8,7 +8,7 @@
 // colours that land on a rounding boundary of the unorm8 conversion after the GPU's
 // transcendental functions (pow, normalize's inverse square root: llvmpipe's are not
 // libm's) and its FMA-contracted arithmetic moved them by a few float ulps. Hence threshold
-// 1/255, no position deviation, no failing pixel. Jacksboro is the exception, see its test.
+// 1/255, no position deviation, no failing pixel. Jacksboro is the exception, see its case.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -92,8 +92,12 @@ INSTANTIATE_TEST_SUITE_P(
                       SceneCase{"cosc422", kOneCode, "0"}, SceneCase{"cosc422-eye", kOneCode, "0"},
                       SceneCase{"lab4-canyon", kOneCode, "0"}, SceneCase{"pn-triangles", kOneCode, "0"},
                       SceneCase{"olinda", kOneCode, "0"},
-                      // JACKSBORO_TOLERANCE
-                      SceneCase{"jacksboro", kOneCode, "0"}),
+                      // Jacksboro: 2 pixels beyond one code at 320x200 (max 8 codes), on ridges.
+                      // GL's control shader writes levels other than the CPU's in 380 of its 576
+                      // patches (the normal factor's acos/normalize; test GlCapture), so the
+                      // surface is tessellated differently and a ridge pixel can switch
+                      // surfaces. Twice the measured count.
+                      SceneCase{"jacksboro", kOneCode, "4"}),
     [](const auto& info) {
         std::string name = info.param.name;
         std::replace(name.begin(), name.end(), '-', '_');
