@@ -322,6 +322,29 @@ TEST_F(GlBackend, WrongDrawCountGivesExit1NamingTheDrawAndWritesNoImage) {
     EXPECT_EQ(left, 0u) << "a temporary file was left behind";
 }
 
+// A context below 4.5 (Mesa told to offer 3.3 only): a clear error, exit 2, no image.
+TEST_F(GlBackend, ContextBelow45IsAClearErrorAndExit2) {
+    const fs::path out = dir_ / "x.png";
+    const RunResult r = run_program("env", {"MESA_GL_VERSION_OVERRIDE=3.3", kExe, "gl",
+                                            scene_path("thesis-constant-1").string(), "-o", out.string(), "--size",
+                                            "64x40"},
+                                    dir_);
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("OpenGL 4.5"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+// --wireframe: every draw count as predicted. (Its picture is not held against `tessref
+// render --wireframe`: at 320x200 thesis-all-10 differs in 2230 pixels, in the far field
+// where many lines meet in a pixel and depth LESS among lines picks the winner; not
+// explained yet, see the README.)
+TEST_F(GlBackend, WireframeDrawsWithEveryCountAsPredicted) {
+    const RunResult r = run({"gl", scene_path("thesis-all-10").string(), "-o", (dir_ / "w.png").string(), "--size",
+                             "160x100", "--wireframe"});
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("every count as predicted"), std::string::npos) << r.out;
+}
+
 TEST_F(GlBackend, WrongCaptureExtensionIsExit2) {
     const RunResult r = run({"gl", scene_path("thesis-constant-1").string(), "-o", (dir_ / "a.png").string(),
                              "--capture", (dir_ / "c.obj").string()});
