@@ -29,6 +29,10 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
+#include "tessref/render.h"
+#include "tessref/scene.h"
 #include "tessref/tessellator.h"
 
 namespace tessref::gl {
@@ -85,5 +89,79 @@ CapturedPatch capture_pattern(Context& context, const TessSettings& settings,
 // Human-readable dump of one captured patch, one primitive a line, each coordinate as
 // %.9g and as the hexadecimal float bits: for debugging a mismatch by hand.
 std::string dump(const CapturedPatch& patch);
+
+// ---- A scene through its GLSL twins (`tessref gl`) ---------------------------------------
+//
+// render_scene() draws a scene with the shaders of data/shaders/ on llvmpipe: the vertex and
+// evaluation shader of the [evaluation] model, the control shader of the [control] model (a
+// constant control stage: a pass-through control shader writing the level, or none when the
+// evaluation shader reads gl_in directly, with GL_PATCH_DEFAULT_*_LEVEL set), the geometry
+// shader of [geometry] where the model has one (thesis normal_map, cosc422 face; lab 4's
+// height-field normals are computed in its evaluation shader), and the fragment shader of
+// [shading]. The evaluation shader's layout(...) in; line is replaced by the scene's
+// [generator] settings, as the CPU pipeline uses them. Uniforms come from the scene's
+// settings structs (one function per model, scene_render.cpp), textures are uploaded from
+// the very Texture objects the CPU samples (same format and codes, glGenerateMipmap,
+// clamp-to-edge, GL_LINEAR / GL_LINEAR_MIPMAP_LINEAR). Camera and image size as
+// `tessref render` (render.h): --size replaces the viewport.
+//
+// The CPU pipeline runs first: its per-patch triangle counts size the draws (at most
+// max_primitives_per_draw predicted primitives per draw, at least one patch) and every
+// draw's GL_PRIMITIVES_GENERATED must equal its prediction. A draw that disagrees ends the
+// render: batch_failure names it and no image is returned (llvmpipe corrupts large
+// tessellated draws silently; a level computed differently by the GLSL twin shows here too).
+struct SceneRenderOptions {
+    glm::ivec2 size{0, 0};  // {0, 0}: the camera's viewport
+    bool wireframe = false; // glPolygonMode(GL_FRONT_AND_BACK, GL_LINE)
+    bool capture = false;   // also record every evaluated vertex by transform feedback
+    std::size_t max_primitives_per_draw = 32768;
+    // Test hook: the prediction of this draw (0-based) is made one too high, so that the
+    // check must fail there. -1: none.
+    long long corrupt_prediction_of_batch = -1;
+};
+
+// One vertex of one primitive as transform feedback recorded it (three per triangle, in
+// the order the pipeline emitted them). position: world space as the evaluation shader
+// computed it; normal: what the last stage before rasterization hands on (the geometry
+// shader's gNormal / faceNormal, lab 4's and PN's evaluation normal; zero where none).
+struct CapturedVertex {
+    std::uint32_t patch_id = 0;  // gl_PrimitiveID of the evaluation shader + the draw's first patch
+    glm::vec3 tess_coord{0.0f};
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};
+    TessLevels levels{};  // the patch's gl_TessLevelOuter/Inner as the evaluation shader read them
+};
+
+struct SceneRenderStats {
+    std::uint64_t triangles = 0;  // GL_PRIMITIVES_GENERATED summed over the draws
+    std::size_t draws = 0;
+    double seconds_pipeline = 0.0;  // the CPU pipeline (predictions)
+    double seconds_gl = 0.0;        // the GL draws, the read-back included
+    double seconds_capture = 0.0;
+};
+
+struct SceneRender {
+    int width = 0;
+    int height = 0;
+    RenderShading shading{};
+    std::vector<glm::vec4> colour;  // row 0 on top (OSMesa's rows flipped), unclamped float
+    std::vector<CapturedVertex> capture;  // with SceneRenderOptions::capture
+    std::string batch_failure;  // non-empty: a draw's primitive count was wrong (no image)
+    std::shared_ptr<const PipelineResult> pipeline;  // the CPU pipeline the counts came from
+    SceneRenderStats stats{};
+};
+
+// Throws tessref::Error on a scene the GL backend cannot draw (no camera, a stage
+// combination without a GLSL twin), an unreadable shader file, a shader that does not
+// compile or link (the driver's log; Where: the file and, from the log, the line) or a GL
+// error.
+SceneRender render_scene(Context& context, const Scene& scene, const SceneRenderOptions& options = {});
+
+// The capture as a SurfaceMesh (three vertices per triangle, not welded; write_mesh welds),
+// patch ids and tess coords included, for `tessref mesh`'s PLY layout.
+SurfaceMesh capture_mesh(const std::vector<CapturedVertex>& capture);
+// The capture as text: a header comment, then one line per vertex "patch u v w x y z nx ny
+// nz" (%.9g, floats round-trip), three lines per triangle.
+std::string capture_text(const std::vector<CapturedVertex>& capture);
 
 }  // namespace tessref::gl

@@ -58,7 +58,38 @@ namespace tessref::gl {
     X(BeginQuery, void, (GLenum, GLuint))                                                       \
     X(EndQuery, void, (GLenum))                                                                 \
     X(GetQueryObjectuiv, void, (GLuint, GLenum, GLuint*))                                       \
-    X(DrawArrays, void, (GLenum, GLint, GLsizei))
+    X(DrawArrays, void, (GLenum, GLint, GLsizei))                                               \
+    X(Viewport, void, (GLint, GLint, GLsizei, GLsizei))                                         \
+    X(ClearColor, void, (GLfloat, GLfloat, GLfloat, GLfloat))                                   \
+    X(ClearDepth, void, (GLdouble))                                                             \
+    X(Clear, void, (GLbitfield))                                                                \
+    X(DepthFunc, void, (GLenum))                                                                \
+    X(PolygonMode, void, (GLenum, GLenum))                                                      \
+    X(GetUniformLocation, GLint, (GLuint, const GLchar*))                                       \
+    X(Uniform1i, void, (GLint, GLint))                                                          \
+    X(Uniform1f, void, (GLint, GLfloat))                                                        \
+    X(Uniform2f, void, (GLint, GLfloat, GLfloat))                                               \
+    X(Uniform3f, void, (GLint, GLfloat, GLfloat, GLfloat))                                      \
+    X(Uniform4f, void, (GLint, GLfloat, GLfloat, GLfloat, GLfloat))                             \
+    X(UniformMatrix3fv, void, (GLint, GLsizei, GLboolean, const GLfloat*))                      \
+    X(UniformMatrix4fv, void, (GLint, GLsizei, GLboolean, const GLfloat*))                      \
+    X(GenTextures, void, (GLsizei, GLuint*))                                                    \
+    X(DeleteTextures, void, (GLsizei, const GLuint*))                                           \
+    X(BindTexture, void, (GLenum, GLuint))                                                      \
+    X(ActiveTexture, void, (GLenum))                                                            \
+    X(TexImage2D, void, (GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum,        \
+                         const void*))                                                          \
+    X(TexParameteri, void, (GLenum, GLenum, GLint))                                             \
+    X(GenerateMipmap, void, (GLenum))                                                           \
+    X(PixelStorei, void, (GLenum, GLint))                                                       \
+    X(VertexAttribPointer, void, (GLuint, GLint, GLenum, GLboolean, GLsizei, const void*))      \
+    X(DisableVertexAttribArray, void, (GLuint))                                                 \
+    X(PatchParameterfv, void, (GLenum, const GLfloat*))
+
+// $TESSREF_DATA_DIR when set, else the source tree's data/ (shaders are read at run time).
+std::string shader_data_dir();
+// The text of data/shaders/<name>; throws tessref::Error naming the path when unreadable.
+std::string read_shader(const std::string& name);
 
 struct GlFunctions {
 #define TESSREF_GL_MEMBER(name, ret, params) ret(GLAPIENTRY* name) params = nullptr;
@@ -89,6 +120,10 @@ struct Context::Impl {
 
     ~Impl();
     void make_current();  // makes this context current on the calling thread if it is not
+    // Draws into `pixels` (RGBA float, row 0 at the BOTTOM, as OSMesa lays it out) from now
+    // on; release_color_buffer() goes back to the context's own 1x1 buffer.
+    void bind_color_buffer(float* pixels, int width, int height);
+    void release_color_buffer();
     void check_error(const char* what);  // throws tessref::Error if glGetError reports one
 };
 

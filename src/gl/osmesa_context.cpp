@@ -1,5 +1,6 @@
 // The offscreen OSMesa OpenGL 4.5 core context (Mesa llvmpipe).
 #include <cstdio>
+#include <string>
 #include <utility>
 
 #include "gl/gl_api.h"
@@ -24,6 +25,17 @@ const char* error_name(GLenum error) {
 
 void Context::Impl::make_current() {
     if (OSMesaGetCurrentContext() == osmesa) return;
+    if (!OSMesaMakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1))
+        throw Error("OSMesa: cannot make the GL context current");
+}
+
+void Context::Impl::bind_color_buffer(float* pixels, int width, int height) {
+    if (!OSMesaMakeCurrent(osmesa, pixels, GL_FLOAT, width, height))
+        throw Error("OSMesa: cannot bind a " + std::to_string(width) + "x" + std::to_string(height) +
+                    " float colour buffer");
+}
+
+void Context::Impl::release_color_buffer() {
     if (!OSMesaMakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1))
         throw Error("OSMesa: cannot make the GL context current");
 }
@@ -56,7 +68,7 @@ Context Context::create() {
     const int attributes[] = {OSMESA_FORMAT,
                               OSMESA_RGBA,
                               OSMESA_DEPTH_BITS,
-                              0,
+                              24,  // the scene renderer's depth test (scene_render.cpp)
                               OSMESA_STENCIL_BITS,
                               0,
                               OSMESA_ACCUM_BITS,

@@ -18,6 +18,24 @@
 
 namespace tessref::gl {
 
+std::string shader_data_dir() {
+    if (const char* env = std::getenv("TESSREF_DATA_DIR"); env && *env) return env;
+    return TESSREF_DATA_DIR;
+}
+
+std::string read_shader(const std::string& name) {
+    const std::string path = shader_data_dir() + "/shaders/" + name;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        Where where;
+        where.file = path;
+        throw Error("cannot read shader file", where);
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
 namespace {
 
 // llvmpipe corrupts tessellated draws that produce a few hundred thousand primitives
@@ -46,19 +64,7 @@ Where patch_where(std::size_t patch) {
     return where;
 }
 
-std::string data_dir() {
-    if (const char* env = std::getenv("TESSREF_DATA_DIR"); env && *env) return env;
-    return TESSREF_DATA_DIR;
-}
-
-std::string read_shader(const std::string& name) {
-    const std::string path = data_dir() + "/shaders/" + name;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot read shader file", file_where(path));
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
+std::string data_dir() { return shader_data_dir(); }
 
 const char* domain_qualifier(Domain d) {
     switch (d) {

@@ -1,0 +1,127 @@
+// tessref gl — a scene through its GLSL twins (data/shaders/) on an OSMesa 4.5 core context
+// (Mesa llvmpipe): the picture a GPU driver makes of the scene, beside `tessref render`'s.
+//
+//   tessref gl SCENE -o OUT.{png,exr,tif} [--size WxH] [--wireframe] [--capture OUT.{txt,ply}]
+//
+// Exit 1, with no image written, when a draw's GL_PRIMITIVES_GENERATED differs from the CPU
+// primitive generator's count (gl_backend.h). TESSREF_GL_CORRUPT_BATCH=N (a test hook) makes
+// the prediction of draw N one too high.
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "cli/cli_util.h"
+#include "cli/commands.h"
+#include "tessref/error.h"
+#include "tessref/gl_backend.h"
+#include "tessref/limits.h"
+#include "tessref/mesh.h"
+#include "tessref/render.h"
+#include "tessref/scene.h"
+
+namespace tessref::cli {
+
+namespace {
+
+struct GlCommandOptions {
+    std::string scene;
+    std::string output;
+    std::string size;
+    bool wireframe = false;
+    std::string capture;
+};
+
+int run_gl(const GlCommandOptions& options) {
+    const ImageFormat format = image_format_from_path(options.output);
+    bool capture_ply = false;
+    if (!options.capture.empty()) {
+        const std::string ext = lowercase_extension(options.capture);
+        if (ext != "txt" && ext != "ply")
+            throw Error("--capture writes .txt or .ply, not '" + options.capture + "'", where_file("--capture"));
+        capture_ply = ext == "ply";
+    }
+    gl::SceneRenderOptions render_options;
+    if (!options.size.empty()) render_options.size = parse_image_size(options.size);
+    render_options.wireframe = options.wireframe;
+    render_options.capture = !options.capture.empty();
+    if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)
+        render_options.corrupt_prediction_of_batch = std::atoll(hook);
+    AtomicOutput output(options.output);
+    std::unique_ptr<AtomicOutput> capture_output;
+    if (!options.capture.empty()) capture_output = std::make_unique<AtomicOutput>(options.capture);
+
+    const Scene scene = load_scene(options.scene);
+    if (scene.camera) {
+        const glm::ivec2 size = options.size.empty() ? scene.camera->viewport : render_options.size;
+        require_memory(estimate_render_memory(size, RenderMode::fill, false, format, {}),
+                       "an image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
+                       where_file(options.size.empty() ? options.scene : "--size " + options.size));
+    }
+    gl::Context context = gl::Context::create();
+    const gl::SceneRender r = gl::render_scene(context, scene, render_options);
+    if (!r.batch_failure.empty()) {
+        std::cerr << "tessref: gl: " << r.batch_failure << "; no image written\n";
+        return 1;
+    }
+
+    RenderResult image;
+    image.width = r.width;
+    image.height = r.height;
+    image.colour = r.colour;
+    write_image(image, output.temp_path().string(), format, {});
+    if (capture_output) {
+        if (capture_ply) {
+            std::ofstream out(capture_output->temp_path(), std::ios::binary);
+            MeshWriteOptions mesh_options;
+            mesh_options.format = MeshFormat::ply;
+            write_mesh(gl::capture_mesh(r.capture), out, mesh_options);
+            out.close();
+            if (!out) throw Error("cannot write the capture", where_file(options.capture));
+        } else {
+            std::ofstream out(capture_output->temp_path(), std::ios::binary);
+            out << gl::capture_text(r.capture);
+            out.close();
+            if (!out) throw Error("cannot write the capture", where_file(options.capture));
+        }
+        capture_output->commit();
+    }
+    output.commit();
+    std::cout << options.output << ": " << r.width << "x" << r.height << ", " << to_string(r.shading.model.kind)
+              << " shading, " << context.renderer() << ", " << r.stats.triangles << " triangles in "
+              << r.stats.draws << " draws (every count as predicted), " << r.stats.seconds_gl << " s GL";
+    if (capture_output) std::cout << ", " << r.capture.size() / 3 << " triangles captured to " << options.capture;
+    std::cout << "\n";
+    return 0;
+}
+
+}  // namespace
+
+Command add_gl_command(CLI::App& parent) {
+    auto options = std::make_shared<GlCommandOptions>();
+    CLI::App* app = parent.add_subcommand(
+        "gl",
+        "Render a scene through its GLSL 4.50 twins (data/shaders/) on Mesa llvmpipe (OSMesa, OpenGL 4.5 core): "
+        "only the stages the scene names, its uniforms and textures, the camera of `tessref render`. Draws are "
+        "batched and each one's primitive count is checked against the CPU primitive generator (exit 1, no image, "
+        "when they differ).");
+    app->add_option("scene", options->scene, "Scene file (TOML)")->required();
+    app->add_option("-o,--output", options->output,
+                    "Output image: .png and .tif (8-bit RGBA), .exr (float RGBA)")
+        ->required();
+    app->add_option("--size", options->size,
+                    "Image size WIDTHxHEIGHT (default: the camera's viewport); it replaces the viewport")
+        ->type_name("WxH");
+    app->add_flag("--wireframe", options->wireframe, "glPolygonMode(GL_FRONT_AND_BACK, GL_LINE)");
+    app->add_option("--capture", options->capture,
+                    "Also record every vertex of every primitive by transform feedback (patch id, tess coord, "
+                    "position, normal): .ply (tessref mesh's layout) or .txt")
+        ->type_name("FILE");
+    app->footer("Example: tessref gl data/scenes/thesis-all-10.toml -o gl.png --size 320x200");
+    return Command{app, [options] { return run_gl(*options); }};
+}
+
+}  // namespace tessref::cli

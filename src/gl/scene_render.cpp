@@ -1,0 +1,908 @@
+// A scene through its GLSL twins on llvmpipe (gl_backend.h, render_scene): `tessref gl`.
+//
+// Per draw: the patches' corners (terrain) or triangles (PN) -> the twins -> a float colour
+// buffer with a 24-bit depth buffer, depth LESS, as `tessref render` draws. Every draw's
+// GL_PRIMITIVES_GENERATED is held against the CPU pipeline's count of the same patches.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <regex>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gl/gl_api.h"
+#include "tessref/error.h"
+#include "tessref/limits.h"
+
+namespace tessref::gl {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+Where file_line(const std::string& path, int line) {
+    Where where;
+    where.file = path;
+    where.line = line;
+    return where;
+}
+
+// The first "0:LINE(COLUMN)" of a Mesa info log: the line in the file (the sources are
+// given with "#line 2" after the #version line, so the numbers are the file's).
+int log_line(const std::string& log) {
+    std::smatch m;
+    if (std::regex_search(log, m, std::regex(R"(\d+:(\d+)\(\d+\))"))) return std::stoi(m[1].str());
+    return 0;
+}
+
+// One stage's source: a file of data/shaders/ (path set) or built-in text, with text
+// inserted after the #version line and appended at the end.
+struct StageSource {
+    GLenum stage = 0;
+    std::string file;  // data/shaders/<file>; empty for built-in text
+    std::string text;  // the source (read from the file when file is set)
+    std::string prefix;
+    std::string suffix;
+};
+
+std::string stage_path(const StageSource& s) {
+    return s.file.empty() ? std::string("(built-in shader)") : shader_data_dir() + "/shaders/" + s.file;
+}
+
+GLuint compile(GlFunctions& gl, const StageSource& s) {
+    std::size_t split = 0;
+    if (s.text.compare(0, 8, "#version") == 0) {
+        split = s.text.find('\n');
+        split = split == std::string::npos ? s.text.size() : split + 1;
+    }
+    const std::string head = s.text.substr(0, split);
+    const std::string inserted = s.prefix + "#line 2\n";
+    const std::string tail = s.text.substr(split) + "\n" + s.suffix;
+    const GLchar* parts[] = {head.c_str(), inserted.c_str(), tail.c_str()};
+    const GLuint shader = gl.CreateShader(s.stage);
+    gl.ShaderSource(shader, 3, parts, nullptr);
+    gl.CompileShader(shader);
+    GLint ok = GL_FALSE;
+    gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        GLint length = 0;
+        gl.GetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
+        gl.GetShaderInfoLog(shader, length, nullptr, log.data());
+        gl.DeleteShader(shader);
+        log = log.c_str();
+        while (!log.empty() && (log.back() == '\n' || log.back() == ' ')) log.pop_back();
+        throw Error("GLSL compile error in " + stage_path(s) + ": " + log, file_line(stage_path(s), log_line(log)));
+    }
+    return shader;
+}
+
+GLuint link(GlFunctions& gl, const std::vector<StageSource>& stages, const std::vector<const char*>& varyings) {
+    std::vector<GLuint> shaders;
+    try {
+        for (const StageSource& s : stages) shaders.push_back(compile(gl, s));
+    } catch (...) {
+        for (GLuint shader : shaders) gl.DeleteShader(shader);
+        throw;
+    }
+    const GLuint program = gl.CreateProgram();
+    for (GLuint shader : shaders) gl.AttachShader(program, shader);
+    if (!varyings.empty())
+        gl.TransformFeedbackVaryings(program, static_cast<GLsizei>(varyings.size()), varyings.data(),
+                                     GL_INTERLEAVED_ATTRIBS);
+    gl.LinkProgram(program);
+    for (GLuint shader : shaders) gl.DeleteShader(shader);
+    GLint ok = GL_FALSE;
+    gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        GLint length = 0;
+        gl.GetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
+        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
+        gl.GetProgramInfoLog(program, length, nullptr, log.data());
+        gl.DeleteProgram(program);
+        std::string files;
+        for (const StageSource& s : stages) files += (files.empty() ? "" : ", ") + stage_path(s);
+        Where where;
+        where.file = files;
+        throw Error("GLSL link error: " + std::string(log.c_str()), where);
+    }
+    return program;
+}
+
+const char* domain_qualifier(Domain d) {
+    switch (d) {
+        case Domain::quads: return "quads";
+        case Domain::triangles: return "triangles";
+        case Domain::isolines: return "isolines";
+    }
+    return "quads";
+}
+const char* spacing_qualifier(Spacing s) {
+    switch (s) {
+        case Spacing::equal: return "equal_spacing";
+        case Spacing::fractional_odd: return "fractional_odd_spacing";
+        case Spacing::fractional_even: return "fractional_even_spacing";
+    }
+    return "equal_spacing";
+}
+
+// The scene's [generator] in place of the evaluation shader's own layout(...) in; line, so
+// that GL tessellates as the CPU pipeline does (the twins' lines are the scenes' defaults).
+std::string with_generator(const std::string& text, const TessSettings& g, const std::string& path) {
+    static const std::regex layout(R"(layout\s*\(\s*(quads|triangles|isolines)[^)]*\)\s*in\s*;)");
+    std::string replacement = std::string("layout(") + domain_qualifier(g.domain) + ", " +
+                              spacing_qualifier(g.spacing) + ", " + (g.winding == Winding::cw ? "cw" : "ccw") +
+                              (g.point_mode ? ", point_mode" : "") + ") in;";
+    std::smatch m;
+    if (!std::regex_search(text, m, layout))
+        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", file_line(path, 0));
+    return m.prefix().str() + replacement + m.suffix().str();
+}
+
+// ---- the programs: which twin for which scene ------------------------------------------
+
+// The constant control stage for the twins whose vertex shader hands on VertexData and
+// whose evaluation shader reads ControlData (thesis): GL has no constant control shader of
+// its own, and without one the blocks of the two stages would not match.
+const char* kConstantControlShader = R"(#version 450 core
+layout(vertices = 4) out;
+layout(location = 0) in VertexData { vec4 vPosition; } vertexIn[];
+layout(location = 0) out ControlData { vec4 tcPosition; } controlOut[];
+uniform float constantLevel;
+void main()
+{
+    controlOut[gl_InvocationID].tcPosition = vertexIn[gl_InvocationID].vPosition;
+    gl_TessLevelOuter[0] = constantLevel;
+    gl_TessLevelOuter[1] = constantLevel;
+    gl_TessLevelOuter[2] = constantLevel;
+    gl_TessLevelOuter[3] = constantLevel;
+    gl_TessLevelInner[0] = constantLevel;
+    gl_TessLevelInner[1] = constantLevel;
+}
+)";
+
+// The "no shading" modes of shading.h have no twin: flat_colour and depth_colour here.
+const char* kFlatFragmentShader = R"(#version 450 core
+layout(location = 0) out vec4 fragment;
+uniform vec4 colour;
+void main() { fragment = colour; }
+)";
+const char* kDepthFragmentShader = R"(#version 450 core
+layout(location = 0) out vec4 fragment;
+uniform int windowMapping;
+uniform double nearPlane;
+uniform double farPlane;
+void main()
+{
+    if (windowMapping == 1) { fragment = vec4(vec3(gl_FragCoord.z), 1.0); return; }
+    double zNdc = 2.0 * double(gl_FragCoord.z) - 1.0;
+    double zEye = 2.0 * nearPlane * farPlane / (farPlane + nearPlane - zNdc * (farPlane - nearPlane));
+    fragment = vec4(vec3(float((zEye - nearPlane) / (farPlane - nearPlane))), 1.0);
+}
+)";
+
+struct Plan {
+    std::vector<StageSource> stages;
+    bool has_control_shader = false;
+    bool has_geometry_shader = false;
+    std::string position_expression;  // world position in the evaluation shader (capture)
+    std::string normal_expression;    // the normal in the last stage before rasterization
+    bool identity_mvp_for_capture = false;
+};
+
+StageSource file_stage(GLenum stage, const std::string& file) {
+    StageSource s;
+    s.stage = stage;
+    s.file = file;
+    s.text = read_shader(file);
+    return s;
+}
+StageSource text_stage(GLenum stage, const char* text) {
+    StageSource s;
+    s.stage = stage;
+    s.text = text;
+    return s;
+}
+
+Where scene_key(const Scene& scene, const std::string& key) {
+    Where where;
+    where.file = scene.file;
+    where.key = key;
+    return where;
+}
+
+Plan plan_for(const Scene& scene, const RenderShading& shading) {
+    Plan plan;
+    const EvaluationModel em = scene.evaluation.model;
+    std::string base;
+    switch (em) {
+        case EvaluationModel::thesis:
+            base = "thesis_terrain";
+            plan.position_expression = "gl_Position.xyz";  // mvp = identity in the capture pass
+            plan.identity_mvp_for_capture = true;
+            break;
+        case EvaluationModel::cosc422:
+            base = "cosc422_terrain";
+            plan.position_expression = "evaluationOut.worldPosition";
+            break;
+        case EvaluationModel::lab4:
+            base = "lab4_terrain";
+            plan.position_expression = "evaluationOut.worldPosition";
+            plan.normal_expression = "evaluationOut.normal";
+            break;
+        case EvaluationModel::pn:
+            base = "pn_triangles";
+            plan.position_expression = "evaluationOut.v3PositionOut";
+            plan.normal_expression = "evaluationOut.v3NormalOut";
+            break;
+    }
+    plan.stages.push_back(file_stage(GL_VERTEX_SHADER, base + ".vert"));
+
+    // Control: the model's twin; constant (or none, levels 1): a pass-through shader or none.
+    if (scene.control && scene.control->model != ControlModel::constant) {
+        switch (scene.control->model) {
+            case ControlModel::thesis: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "thesis_terrain.tesc")); break;
+            case ControlModel::cosc422: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "cosc422_terrain.tesc")); break;
+            case ControlModel::lab4: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "lab4_terrain.tesc")); break;
+            case ControlModel::pn: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "pn_triangles.tesc")); break;
+            case ControlModel::constant: break;
+        }
+        plan.has_control_shader = true;
+    } else if (em == EvaluationModel::thesis) {
+        plan.stages.push_back(text_stage(GL_TESS_CONTROL_SHADER, kConstantControlShader));
+        plan.has_control_shader = true;
+    } else if (em != EvaluationModel::cosc422) {
+        throw Error(std::string("tessref gl: a constant control stage with evaluation model '") + to_string(em) +
+                        "' has no GLSL twin (its evaluation shader reads the outputs of its own control shader)",
+                    scene_key(scene, "control.model"));
+    }
+
+    StageSource tese = file_stage(GL_TESS_EVALUATION_SHADER, base + ".tese");
+    tese.text = with_generator(tese.text, scene.generator, stage_path(tese));
+    plan.stages.push_back(std::move(tese));
+
+    if (scene.geometry) {
+        const GeometryNormals n = scene.geometry->normals;
+        if (em == EvaluationModel::thesis && n == GeometryNormals::normal_map) {
+            plan.stages.push_back(file_stage(GL_GEOMETRY_SHADER, "thesis_terrain.geom"));
+            plan.normal_expression = "geometryOut.gNormal";
+        } else if (em == EvaluationModel::cosc422 && n == GeometryNormals::face) {
+            plan.stages.push_back(file_stage(GL_GEOMETRY_SHADER, "cosc422_terrain.geom"));
+            plan.normal_expression = "geometryOut.faceNormal";
+        } else if (!(em == EvaluationModel::lab4 && n == GeometryNormals::height_field)) {
+            throw Error(std::string("tessref gl: [geometry] normals = \"") + to_string(n) + "\" with evaluation model '" +
+                            to_string(em) + "' has no GLSL twin",
+                        scene_key(scene, "geometry.normals"));
+        }
+        plan.has_geometry_shader = plan.stages.back().stage == GL_GEOMETRY_SHADER;
+    }
+
+    switch (shading.model.kind) {
+        case ShadingKind::flat: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kFlatFragmentShader)); break;
+        case ShadingKind::depth: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kDepthFragmentShader)); break;
+        case ShadingKind::thesis_single: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain_single.frag")); break;
+        case ShadingKind::thesis_multi: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain.frag")); break;
+        case ShadingKind::lab4: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "lab4_terrain.frag")); break;
+        case ShadingKind::cosc422: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "cosc422_terrain.frag")); break;
+        case ShadingKind::pn: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pn_triangles.frag")); break;
+    }
+    return plan;
+}
+
+// The capture program: the same stages, no fragment shader; the evaluation shader also hands
+// on gl_TessCoord, gl_PrimitiveID and the world position, and the geometry shader (if any)
+// passes them through with each EmitVertex (the twins' main and EmitVertex are renamed by the
+// preprocessor and wrapped, the twins' text is not changed).
+std::vector<StageSource> capture_stages(const Plan& plan) {
+    std::vector<StageSource> stages;
+    const std::string normal = plan.normal_expression.empty() ? "vec3(0.0)" : plan.normal_expression;
+    for (const StageSource& s : plan.stages) {
+        if (s.stage == GL_FRAGMENT_SHADER) continue;
+        StageSource c = s;
+        if (s.stage == GL_TESS_EVALUATION_SHADER) {
+            const std::string out = plan.has_geometry_shader ? "tessref_te_" : "tessref_cap_";
+            c.prefix = "out vec3 " + out + "tess_coord;\nout int " + out + "patch_id;\nout vec3 " + out +
+                       "position;\nout vec4 " + out + "outer;\nout vec2 " + out + "inner;\n" +
+                       (plan.has_geometry_shader ? "" : "out vec3 tessref_cap_normal;\n") +
+                       "#define main tessref_twin_main\n";
+            c.suffix = "#undef main\nvoid main()\n{\n    tessref_twin_main();\n    " + out +
+                       "tess_coord = gl_TessCoord;\n    " + out + "patch_id = gl_PrimitiveID;\n    " + out +
+                       "position = " + plan.position_expression + ";\n    " + out +
+                       "outer = vec4(gl_TessLevelOuter[0], gl_TessLevelOuter[1], gl_TessLevelOuter[2], "
+                       "gl_TessLevelOuter[3]);\n    " + out + "inner = vec2(gl_TessLevelInner[0], gl_TessLevelInner[1]);\n" +
+                       (plan.has_geometry_shader ? "" : "    tessref_cap_normal = " + normal + ";\n") + "}\n";
+        } else if (s.stage == GL_GEOMETRY_SHADER) {
+            c.prefix =
+                "in vec3 tessref_te_tess_coord[];\nin int tessref_te_patch_id[];\nin vec3 tessref_te_position[];\n"
+                "in vec4 tessref_te_outer[];\nin vec2 tessref_te_inner[];\n"
+                "out vec3 tessref_cap_tess_coord;\nout int tessref_cap_patch_id;\nout vec3 tessref_cap_position;\n"
+                "out vec4 tessref_cap_outer;\nout vec2 tessref_cap_inner;\n"
+                "out vec3 tessref_cap_normal;\nint tessref_emitted = 0;\nvoid tessref_emit();\n"
+                "#define EmitVertex() tessref_emit()\n";
+            c.suffix = "#undef EmitVertex\nvoid tessref_emit()\n{\n"
+                       "    tessref_cap_tess_coord = tessref_te_tess_coord[tessref_emitted];\n"
+                       "    tessref_cap_patch_id = tessref_te_patch_id[tessref_emitted];\n"
+                       "    tessref_cap_position = tessref_te_position[tessref_emitted];\n"
+                       "    tessref_cap_outer = tessref_te_outer[tessref_emitted];\n"
+                       "    tessref_cap_inner = tessref_te_inner[tessref_emitted];\n"
+                       "    tessref_cap_normal = " + normal + ";\n"
+                       "    EmitVertex();\n    tessref_emitted = tessref_emitted + 1;\n}\n";
+        }
+        stages.push_back(std::move(c));
+    }
+    return stages;
+}
+
+// ---- uniforms: one function per model, from the scene's settings structs ------------------
+
+struct Uniforms {
+    GlFunctions& gl;
+    GLuint program;
+    GLint at(const char* name) const { return gl.GetUniformLocation(program, name); }
+    void i(const char* name, int v) const { gl.Uniform1i(at(name), v); }
+    void f(const char* name, double v) const { gl.Uniform1f(at(name), static_cast<float>(v)); }
+    void v2(const char* name, glm::vec2 v) const { gl.Uniform2f(at(name), v.x, v.y); }
+    void v3(const char* name, glm::vec3 v) const { gl.Uniform3f(at(name), v.x, v.y, v.z); }
+    void v4(const char* name, glm::vec4 v) const { gl.Uniform4f(at(name), v.x, v.y, v.z, v.w); }
+    void m3(const char* name, const glm::mat3& m) const { gl.UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]); }
+    void m4(const char* name, const glm::mat4& m) const { gl.UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]); }
+};
+
+// The matrices as the CPU pipeline rounds them (pipeline.cpp: mat4_t<float>(camera.view_projection())).
+struct Matrices {
+    glm::mat4 view{1.0f};
+    glm::mat4 view_projection{1.0f};
+    glm::vec3 eye{0.0f};
+};
+
+void thesis_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
+    const TerrainGrid& g = *scene.grid;
+    u.f("scaleXY", g.scale_xy);
+    u.f("scaleZ", g.scale_z);
+    u.m4("mvp", m.view_projection);
+    u.m3("normalMatrix", glm::mat3(1.0f));  // the model matrix is the identity
+}
+
+void thesis_control_uniforms(const Uniforms& u, const Scene& scene, const ThesisControlSettings& c,
+                             const Matrices& m) {
+    u.f("tessellationLevel", c.level);
+    u.f("scaleXY", scene.grid->scale_xy);
+    u.v3("cameraPosition", m.eye);
+    u.i("thesisFactor", static_cast<int>(c.factor));  // distance 0, map 1, normal 2, all 3
+    u.f("distanceLimit", c.distance.limit);
+    u.f("distanceDivisor", c.distance.divisor);
+    u.f("normalAngleThreshold", c.normal_threshold);
+    u.f("normalTessellationWeight", c.weights.normal);
+    u.f("textureTessellationWeight", c.weights.texture);
+    u.f("distanceTessellationWeight", c.weights.distance);
+    u.f("constantTessellationWeight", c.weights.constant);
+}
+
+void cosc422_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
+    const TerrainGrid& g = *scene.grid;
+    u.m4("mvpMatrix", m.view_projection);
+    u.m4("mvMatrix", m.view);
+    u.f("xMin", g.extent_u.x);
+    u.f("xMax", g.extent_u.y);
+    u.f("zMin", g.extent_v.x);
+    u.f("zMax", g.extent_v.y);
+    u.f("heightScale", g.scale_z);
+    if (scene.control && scene.control->model == ControlModel::cosc422)
+        u.i("levelSpace", scene.control->cosc422_space == Cosc422Space::eye ? 1 : 0);
+}
+
+void lab4_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
+    const TerrainGrid& g = *scene.grid;
+    u.m4("mvp", m.view_projection);
+    u.f("horizontalScale", g.scale_xy);
+    u.f("verticalScale", g.scale_z);
+    u.v2("texCoordOffset", glm::vec2(g.texcoord_offset));
+    u.f("gridStep", g.scale_xy / g.heightmap->texture.width());  // pipeline.cpp: one texel
+}
+
+void lab4_control_uniforms(const Uniforms& u, const Lab4ControlSettings& c, const Matrices& m) {
+    u.v3("cameraPosition", m.eye);
+    u.f("firstZoneEnd", c.first_zone_end);
+    u.f("zoneGrowth", c.zone_growth);
+    u.f("maxLevel", c.max_level);
+    u.f("minLevel", c.min_level);
+    u.i("edgeRule", c.edge_rule == Lab4EdgeRule::lower ? 0 : 1);
+}
+
+void pn_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m, glm::ivec2 viewport) {
+    u.m4("m4Transform", glm::mat4(1.0f));  // the meshes are translated and scaled at load
+    u.m4("m4ViewProjection", m.view_projection);
+    u.f("fInfluence", scene.evaluation.pn_influence);
+    u.i("normalMode", scene.evaluation.pn_normal == PnNormal::linear ? 0 : 1);
+    u.i("watertightEdges", scene.evaluation.pn_watertight_edges ? 1 : 0);
+    u.v2("v2Resolution", glm::vec2(viewport));
+    if (scene.control && scene.control->model == ControlModel::pn)
+        u.i("flatEdgesAtLevel1", scene.control->pn.flat_edges_at_level_1 ? 1 : 0);
+}
+
+void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
+    switch (s.kind) {
+        case ShadingKind::flat: u.v4("colour", s.flat.colour); break;
+        case ShadingKind::depth:
+            u.i("windowMapping", s.depth.mapping == DepthMapping::window ? 1 : 0);
+            // glUniform1d is not loaded: double uniforms through their float values' exact widening.
+            u.gl.Uniform1f(u.at("nearPlane"), s.depth.near_plane);
+            u.gl.Uniform1f(u.at("farPlane"), s.depth.far_plane);
+            break;
+        case ShadingKind::thesis_single:
+        case ShadingKind::thesis_multi:
+            u.v3("lightPosition", s.thesis.lightPosition);
+            u.v3("diffuseMaterial", s.thesis.diffuseMaterial);
+            u.v3("ambientMaterial", s.thesis.ambientMaterial);
+            u.v3("specularMaterial", s.thesis.specularMaterial);
+            u.f("shininess", s.thesis.shininess);
+            u.m4("rotationMatrix", s.rotationMatrix);
+            break;
+        case ShadingKind::lab4:
+            u.v3("cameraPosition", s.lab4.cameraPosition);
+            u.v3("lightDirection", s.lab4.lightDirection);
+            u.v3("sandColour", s.lab4.sandColour);
+            u.v3("rockColour", s.lab4.rockColour);
+            u.f("sandHeight", s.lab4.sandHeight);
+            u.f("blendWidth", s.lab4.blendWidth);
+            break;
+        case ShadingKind::cosc422:
+            u.v3("lightDirection", s.cosc422.lightDirection);
+            u.f("ambient", s.cosc422.ambient);
+            break;
+        case ShadingKind::pn:
+            u.v3("v3CameraPosition", s.pn.v3CameraPosition);
+            u.v3("v3LightDirection", s.pn.v3LightDirection);
+            u.v3("v3DiffuseColour", s.pn.v3DiffuseColour);
+            u.f("fShininess", s.pn.fShininess);
+            break;
+    }
+}
+
+void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const RenderShading& shading,
+                  const Matrices& m, glm::ivec2 viewport) {
+    gl.UseProgram(program);
+    const Uniforms u{gl, program};
+    switch (scene.evaluation.model) {
+        case EvaluationModel::thesis: thesis_uniforms(u, scene, m); break;
+        case EvaluationModel::cosc422: cosc422_uniforms(u, scene, m); break;
+        case EvaluationModel::lab4: lab4_uniforms(u, scene, m); break;
+        case EvaluationModel::pn: pn_uniforms(u, scene, m, viewport); break;
+    }
+    if (scene.control) {
+        const ControlStage& c = *scene.control;
+        if (c.model == ControlModel::thesis) thesis_control_uniforms(u, scene, c.thesis, m);
+        if (c.model == ControlModel::lab4) lab4_control_uniforms(u, c.lab4, m);
+        if (c.model == ControlModel::constant) u.f("constantLevel", c.constant_level);
+    } else {
+        u.f("constantLevel", 1.0);  // GL's default patch levels
+    }
+    shading_uniforms(u, shading.model);
+}
+
+// ---- textures: the Texture objects the CPU samples, uploaded as they were loaded ---------
+
+GLuint upload(Context::Impl& c, const Texture& t, const std::string& what) {
+    auto& gl = c.gl;
+    static const GLenum base[4] = {GL_RED, GL_RG, GL_RGB, GL_RGBA};
+    static const GLenum i8[4] = {GL_R8, GL_RG8, GL_RGB8, GL_RGBA8};
+    static const GLenum i16[4] = {GL_R16, GL_RG16, GL_RGB16, GL_RGBA16};
+    static const GLenum f32[4] = {GL_R32F, GL_RG32F, GL_RGB32F, GL_RGBA32F};
+    if (t.empty()) throw Error("tessref gl: the texture " + what + " is empty");
+    const int k = t.channels() - 1;
+    const TextureLevel& level0 = t.level(0);
+    GLuint name = 0;
+    gl.GenTextures(1, &name);
+    gl.BindTexture(GL_TEXTURE_2D, name);
+    gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    switch (t.format()) {
+        case TexelFormat::unorm8:
+            gl.TexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(i8[k]), level0.width, level0.height, 0, base[k],
+                          GL_UNSIGNED_BYTE, level0.unorm8.data());
+            break;
+        case TexelFormat::unorm16: {
+            // Stored as code * (1/65535) in float: rounding recovers the code exactly.
+            std::vector<std::uint16_t> codes(level0.texels.size());
+            for (std::size_t i = 0; i < codes.size(); ++i)
+                codes[i] = static_cast<std::uint16_t>(std::lround(static_cast<double>(level0.texels[i]) * 65535.0));
+            gl.TexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(i16[k]), level0.width, level0.height, 0, base[k],
+                          GL_UNSIGNED_SHORT, codes.data());
+            break;
+        }
+        case TexelFormat::float32:
+            gl.TexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(f32[k]), level0.width, level0.height, 0, base[k],
+                          GL_FLOAT, level0.texels.data());
+            break;
+    }
+    gl.GenerateMipmap(GL_TEXTURE_2D);  // heightfield.h: llvmpipe_blit models exactly this
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER,
+                     t.min_filter() == MinFilter::linear ? GL_LINEAR : GL_LINEAR_MIPMAP_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    c.check_error(("uploading the texture " + what).c_str());
+    return name;
+}
+
+// Texture units as the twins' layout(binding = N): 0 heightMap, 1 tessellationMap,
+// 2 normalMap, 4..14 the thesis fragment shaders' samplers (shading.h), 0 cosc422's heightMap.
+struct BoundTextures {
+    Context::Impl& c;
+    std::vector<GLuint> names;
+    std::vector<const Texture*> at_unit = std::vector<const Texture*>(16, nullptr);
+    explicit BoundTextures(Context::Impl& context) : c(context) {}
+    BoundTextures(const BoundTextures&) = delete;
+    BoundTextures& operator=(const BoundTextures&) = delete;
+    ~BoundTextures() {
+        if (!names.empty()) c.gl.DeleteTextures(static_cast<GLsizei>(names.size()), names.data());
+    }
+    void bind(int unit, const Texture* t, const std::string& what) {
+        if (!t) return;
+        if (at_unit[static_cast<std::size_t>(unit)] == t) return;
+        if (at_unit[static_cast<std::size_t>(unit)])
+            throw Error("tessref gl: texture unit " + std::to_string(unit) + " is bound twice (" + what +
+                        " and another texture): the twins share layout(binding = " + std::to_string(unit) + ")");
+        c.gl.ActiveTexture(GL_TEXTURE0 + static_cast<GLenum>(unit));
+        names.push_back(upload(c, *t, what));
+        at_unit[static_cast<std::size_t>(unit)] = t;
+    }
+};
+
+void bind_textures(BoundTextures& b, const Scene& scene, const RenderShading& shading) {
+    if (scene.grid) {
+        b.bind(0, &scene.grid->heightmap->texture, "heightMap (" + scene.grid->heightmap_path + ")");
+        if (scene.grid->normal_map) b.bind(2, scene.grid->normal_map.get(), "normalMap");
+    }
+    if (scene.control && scene.control->model == ControlModel::thesis && scene.control->thesis.tessellation_map)
+        b.bind(1, scene.control->thesis.tessellation_map.get(), "tessellationMap");
+    const auto names = sampler_names(shading.model.kind);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        const auto* slot = sampler_slot(shading.model.textures, names[i]);
+        if (!slot || !*slot) continue;
+        const int unit = names[i] == "heightMap" ? 0 : 4 + static_cast<int>(i);
+        b.bind(unit, slot->get(), std::string(names[i]));
+    }
+}
+
+// ---- vertex data -----------------------------------------------------------------------
+
+// Terrain: four corners per patch (control.h layout), vec4(ground, 1), with the corner
+// coordinates rounded to float as the pipeline's vertex buffer holds them. PN: three
+// vertices per patch, position, normal, uv.
+struct VertexData {
+    std::vector<float> floats;
+    int patch_vertices = 4;
+};
+
+VertexData vertex_data(const Scene& scene) {
+    VertexData d;
+    if (scene.grid) {
+        const TerrainGrid& g = *scene.grid;
+        d.floats.reserve(g.patch_count() * 16);
+        for (std::size_t p = 0; p < g.patch_count(); ++p) {
+            const std::size_t i = p % static_cast<std::size_t>(g.patches_u);
+            const std::size_t j = p / static_cast<std::size_t>(g.patches_u);
+            const std::size_t a[4][2] = {{i, j}, {i, j + 1}, {i + 1, j + 1}, {i + 1, j}};
+            for (const auto& c : a) {
+                const float u = static_cast<float>(g.u_coords[c[0]]);
+                const float v = static_cast<float>(g.v_coords[c[1]]);
+                if (g.plane == GroundPlane::xy)
+                    d.floats.insert(d.floats.end(), {u, v, 0.0f, 1.0f});
+                else
+                    d.floats.insert(d.floats.end(), {u, 0.0f, v, 1.0f});
+            }
+        }
+    } else {
+        const TriangleMeshes& m = *scene.meshes;
+        d.patch_vertices = 3;
+        d.floats.reserve(m.triangles.size() * 24);
+        for (const auto& tri : m.triangles)
+            for (std::uint32_t v : tri) {
+                const glm::vec3 p(m.positions[v]), n(m.normals[v]);
+                const glm::vec2 uv = m.uvs.empty() ? glm::vec2(0.0f) : glm::vec2(m.uvs[v]);
+                d.floats.insert(d.floats.end(), {p.x, p.y, p.z, n.x, n.y, n.z, uv.x, uv.y});
+            }
+    }
+    return d;
+}
+
+struct GlObjects {
+    Context::Impl& c;
+    GLuint vao = 0, vbo = 0, feedback = 0, query = 0, query_written = 0;
+    std::vector<GLuint> programs;
+    explicit GlObjects(Context::Impl& context) : c(context) {}
+    GlObjects(const GlObjects&) = delete;
+    GlObjects& operator=(const GlObjects&) = delete;
+    ~GlObjects() {
+        auto& gl = c.gl;
+        for (GLuint p : programs) gl.DeleteProgram(p);
+        const GLuint buffers[] = {vbo, feedback};
+        gl.DeleteBuffers(2, buffers);
+        const GLuint queries[] = {query, query_written};
+        gl.DeleteQueries(2, queries);
+        if (vao) gl.DeleteVertexArrays(1, &vao);
+    }
+};
+
+// A draw: consecutive patches, their predicted primitive count.
+struct Batch {
+    std::size_t first = 0, count = 0;
+    std::uint64_t predicted = 0;
+};
+
+std::vector<Batch> make_batches(const std::vector<std::uint64_t>& per_patch, std::size_t budget) {
+    std::vector<Batch> batches;
+    Batch b;
+    for (std::size_t p = 0; p < per_patch.size(); ++p) {
+        if (b.count > 0 && b.predicted + per_patch[p] > budget) {
+            batches.push_back(b);
+            b = Batch{p, 0, 0};
+        }
+        b.predicted += per_patch[p];
+        ++b.count;
+    }
+    if (b.count > 0) batches.push_back(b);
+    return batches;
+}
+
+std::string batch_name(std::size_t index, const Batch& b) {
+    return "draw " + std::to_string(index) + " (patches " + std::to_string(b.first) + ".." +
+           std::to_string(b.first + b.count - 1) + ")";
+}
+
+struct FeedbackRecord {
+    float tess_coord[3];
+    std::int32_t patch_id;
+    float position[3];
+    float normal[3];
+    float outer[4];
+    float inner[2];
+};
+static_assert(sizeof(FeedbackRecord) == 64);
+
+}  // namespace
+
+SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRenderOptions& options) {
+    if (!scene_in.camera) throw Error("tessref gl needs a [camera] in the scene", scene_key(scene_in, "camera"));
+    Scene scene = scene_in;  // the pipeline sees the image's viewport, as render_scene does
+    if (options.size != glm::ivec2(0, 0)) scene.camera->viewport = options.size;
+    const glm::ivec2 size = scene.camera->viewport;
+    if (size.x < 1 || size.y < 1 || size.x > 16384 || size.y > 16384)
+        throw Error("image size " + std::to_string(size.x) + "x" + std::to_string(size.y) + " is outside 1..16384",
+                    scene_key(scene, "size"));
+
+    SceneRender result;
+    result.width = size.x;
+    result.height = size.y;
+    result.shading = shading_model(scene);
+
+    // The CPU pipeline: the prediction of every draw.
+    auto start = Clock::now();
+    result.pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene));
+    const PipelineResult& pipe = *result.pipeline;
+    std::vector<std::uint64_t> per_patch(scene.patch_count(), 0);
+    for (const auto& tri : pipe.mesh.triangles) ++per_patch[pipe.mesh.patch_ids[tri[0]]];
+    result.stats.seconds_pipeline = seconds_since(start);
+
+    Matrices m;
+    m.view = glm::mat4(scene.camera->view());
+    m.view_projection = glm::mat4(scene.camera->view_projection());
+    m.eye = glm::vec3(scene.camera->eye);
+
+    const Plan plan = plan_for(scene, result.shading);
+    const std::vector<Batch> batches = make_batches(per_patch, options.max_primitives_per_draw);
+
+    Context::Impl& c = context.impl();
+    c.make_current();
+    auto& gl = c.gl;
+    const std::size_t pixels = static_cast<std::size_t>(size.x) * static_cast<std::size_t>(size.y);
+    require_memory(saturating_bytes(pixels, 2 * sizeof(glm::vec4)), "a float colour buffer of " +
+                   std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels", scene_key(scene, "size"));
+    std::vector<float> buffer(pixels * 4, 0.0f);
+    c.bind_color_buffer(buffer.data(), size.x, size.y);
+    struct Release {
+        Context::Impl& c;
+        ~Release() {
+            try {
+                c.release_color_buffer();
+            } catch (...) {
+            }
+        }
+    } release{c};
+
+    GlObjects objects(c);
+    BoundTextures textures(c);
+    objects.programs.push_back(link(gl, plan.stages, {}));
+    const GLuint program = objects.programs.back();
+    bind_textures(textures, scene, result.shading);
+
+    const VertexData vertices = vertex_data(scene);
+    gl.GenVertexArrays(1, &objects.vao);
+    gl.BindVertexArray(objects.vao);
+    gl.GenBuffers(1, &objects.vbo);
+    gl.BindBuffer(GL_ARRAY_BUFFER, objects.vbo);
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.floats.size() * sizeof(float)),
+                  vertices.floats.data(), GL_STATIC_DRAW);
+    if (scene.grid) {
+        gl.VertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 4 * sizeof(float), nullptr);
+        gl.EnableVertexAttribArray(0);
+    } else {
+        const GLsizei stride = 8 * sizeof(float);
+        gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
+        gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(3 * sizeof(float)));
+        gl.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(6 * sizeof(float)));
+        for (GLuint i = 0; i < 3; ++i) gl.EnableVertexAttribArray(i);
+    }
+    gl.PatchParameteri(GL_PATCH_VERTICES, vertices.patch_vertices);
+    if (!plan.has_control_shader) {
+        const float level = scene.control ? static_cast<float>(scene.control->constant_level) : 1.0f;
+        const float outer[4] = {level, level, level, level};
+        const float inner[2] = {level, level};
+        gl.PatchParameterfv(GL_PATCH_DEFAULT_OUTER_LEVEL, outer);
+        gl.PatchParameterfv(GL_PATCH_DEFAULT_INNER_LEVEL, inner);
+    }
+    gl.GenQueries(1, &objects.query);
+    gl.GenQueries(1, &objects.query_written);
+    c.check_error("setting up the scene's draws");
+
+    auto predicted_of = [&](std::size_t index) {
+        return batches[index].predicted + (static_cast<long long>(index) == options.corrupt_prediction_of_batch ? 1 : 0);
+    };
+
+    // ---- the picture --------------------------------------------------------------------
+    start = Clock::now();
+    set_uniforms(gl, program, scene, result.shading, m, size);
+    gl.Viewport(0, 0, size.x, size.y);
+    const glm::vec4 bg = result.shading.background;
+    gl.ClearColor(bg.r, bg.g, bg.b, bg.a);
+    gl.ClearDepth(1.0);
+    gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    gl.Enable(GL_DEPTH_TEST);
+    gl.DepthFunc(GL_LESS);
+    gl.PolygonMode(GL_FRONT_AND_BACK, options.wireframe ? GL_LINE : GL_FILL);
+    c.check_error("setting the scene's uniforms and state");
+    for (std::size_t k = 0; k < batches.size(); ++k) {
+        const Batch& b = batches[k];
+        gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.query);
+        gl.DrawArrays(GL_PATCHES, static_cast<GLint>(b.first * static_cast<std::size_t>(vertices.patch_vertices)),
+                      static_cast<GLsizei>(b.count * static_cast<std::size_t>(vertices.patch_vertices)));
+        gl.EndQuery(GL_PRIMITIVES_GENERATED);
+        GLuint generated = 0;
+        gl.GetQueryObjectuiv(objects.query, GL_QUERY_RESULT, &generated);
+        c.check_error("a scene draw");
+        ++result.stats.draws;
+        result.stats.triangles += generated;
+        if (generated != predicted_of(k)) {
+            result.batch_failure = batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
+                                   " primitives, the CPU primitive generator predicts " +
+                                   std::to_string(predicted_of(k));
+            return result;
+        }
+    }
+    gl.Finish();
+    gl.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    c.check_error("drawing the scene");
+    result.colour.resize(pixels);
+    for (int y = 0; y < size.y; ++y) {  // OSMesa's row 0 is the bottom one
+        const float* row = &buffer[static_cast<std::size_t>(size.y - 1 - y) * static_cast<std::size_t>(size.x) * 4];
+        for (int x = 0; x < size.x; ++x)
+            result.colour[static_cast<std::size_t>(y) * static_cast<std::size_t>(size.x) + static_cast<std::size_t>(x)] =
+                glm::vec4(row[4 * x], row[4 * x + 1], row[4 * x + 2], row[4 * x + 3]);
+    }
+    result.stats.seconds_gl = seconds_since(start);
+
+    // ---- the capture ---------------------------------------------------------------------
+    if (!options.capture) return result;
+    start = Clock::now();
+    objects.programs.push_back(link(gl, capture_stages(plan),
+                                    {"tessref_cap_tess_coord", "tessref_cap_patch_id", "tessref_cap_position",
+                                     "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"}));
+    const GLuint capture_program = objects.programs.back();
+    set_uniforms(gl, capture_program, scene, result.shading, m, size);
+    if (plan.identity_mvp_for_capture) Uniforms{gl, capture_program}.m4("mvp", glm::mat4(1.0f));
+    std::uint64_t largest = 0;
+    for (std::size_t k = 0; k < batches.size(); ++k) largest = std::max<std::uint64_t>(largest, predicted_of(k));
+    const std::uint64_t total = pipe.mesh.triangles.size();
+    require_memory(saturating_bytes(saturating_bytes(total, 3), sizeof(CapturedVertex)),
+                   "the capture of " + std::to_string(total) + " triangles", scene_key(scene, "--capture"));
+    result.capture.reserve(static_cast<std::size_t>(total) * 3);
+    // One primitive of slack: an overflow still shows as written < generated.
+    const std::uint64_t capacity_primitives = largest + 1;
+    gl.GenBuffers(1, &objects.feedback);
+    gl.BindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, objects.feedback);
+    gl.BufferData(GL_TRANSFORM_FEEDBACK_BUFFER,
+                  static_cast<GLsizeiptr>(capacity_primitives * 3 * sizeof(FeedbackRecord)), nullptr, GL_STREAM_READ);
+    gl.BindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, objects.feedback);
+    gl.Enable(GL_RASTERIZER_DISCARD);
+    c.check_error("setting up the capture");
+    std::vector<FeedbackRecord> records;
+    for (std::size_t k = 0; k < batches.size(); ++k) {
+        const Batch& b = batches[k];
+        gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.query);
+        gl.BeginQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, objects.query_written);
+        gl.BeginTransformFeedback(GL_TRIANGLES);
+        gl.DrawArrays(GL_PATCHES, static_cast<GLint>(b.first * static_cast<std::size_t>(vertices.patch_vertices)),
+                      static_cast<GLsizei>(b.count * static_cast<std::size_t>(vertices.patch_vertices)));
+        gl.EndTransformFeedback();
+        gl.EndQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN);
+        gl.EndQuery(GL_PRIMITIVES_GENERATED);
+        GLuint generated = 0, written = 0;
+        gl.GetQueryObjectuiv(objects.query, GL_QUERY_RESULT, &generated);
+        gl.GetQueryObjectuiv(objects.query_written, GL_QUERY_RESULT, &written);
+        c.check_error("a capture draw");
+        if (generated != predicted_of(k) || written != generated) {
+            gl.Disable(GL_RASTERIZER_DISCARD);
+            result.capture.clear();
+            result.batch_failure = "capture " + batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
+                                   " primitives and transform feedback wrote " + std::to_string(written) +
+                                   ", the CPU primitive generator predicts " + std::to_string(predicted_of(k));
+            return result;
+        }
+        if (written == 0) continue;
+        records.resize(static_cast<std::size_t>(written) * 3);
+        const void* mapped = gl.MapBufferRange(GL_TRANSFORM_FEEDBACK_BUFFER, 0,
+                                               static_cast<GLsizeiptr>(records.size() * sizeof(FeedbackRecord)),
+                                               GL_MAP_READ_BIT);
+        if (!mapped) {
+            c.check_error("mapping the transform feedback buffer");
+            throw Error("cannot map the transform feedback buffer");
+        }
+        std::memcpy(records.data(), mapped, records.size() * sizeof(FeedbackRecord));
+        gl.UnmapBuffer(GL_TRANSFORM_FEEDBACK_BUFFER);
+        for (const FeedbackRecord& r : records) {
+            CapturedVertex v;
+            v.patch_id = static_cast<std::uint32_t>(b.first + static_cast<std::size_t>(r.patch_id));
+            v.tess_coord = glm::vec3(r.tess_coord[0], r.tess_coord[1], r.tess_coord[2]);
+            v.position = glm::vec3(r.position[0], r.position[1], r.position[2]);
+            v.normal = glm::vec3(r.normal[0], r.normal[1], r.normal[2]);
+            std::memcpy(v.levels.outer.data(), r.outer, sizeof r.outer);
+            std::memcpy(v.levels.inner.data(), r.inner, sizeof r.inner);
+            result.capture.push_back(v);
+        }
+    }
+    gl.Disable(GL_RASTERIZER_DISCARD);
+    c.check_error("reading the capture back");
+    result.stats.seconds_capture = seconds_since(start);
+    return result;
+}
+
+SurfaceMesh capture_mesh(const std::vector<CapturedVertex>& capture) {
+    SurfaceMesh mesh;
+    const std::size_t n = capture.size() / 3 * 3;
+    mesh.positions.reserve(n);
+    mesh.normals.reserve(n);
+    mesh.patch_ids.reserve(n);
+    mesh.tess_coords.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        mesh.positions.emplace_back(capture[i].position);
+        mesh.normals.emplace_back(capture[i].normal);
+        mesh.patch_ids.push_back(capture[i].patch_id);
+        mesh.tess_coords.push_back(capture[i].tess_coord);
+    }
+    for (std::size_t t = 0; t < n / 3; ++t)
+        mesh.triangles.push_back({static_cast<std::uint32_t>(3 * t), static_cast<std::uint32_t>(3 * t + 1),
+                                  static_cast<std::uint32_t>(3 * t + 2)});
+    return mesh;
+}
+
+std::string capture_text(const std::vector<CapturedVertex>& capture) {
+    std::string out =
+        "# tessref gl --capture: one line per vertex, three per triangle, in transform feedback order\n"
+        "# patch u v w x y z nx ny nz\n";
+    char line[320];
+    for (const CapturedVertex& v : capture) {
+        std::snprintf(line, sizeof line, "%u %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", v.patch_id,
+                      v.tess_coord.x, v.tess_coord.y, v.tess_coord.z, v.position.x, v.position.y, v.position.z,
+                      v.normal.x, v.normal.y, v.normal.z);
+        out += line;
+    }
+    return out;
+}
+
+}  // namespace tessref::gl
