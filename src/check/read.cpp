@@ -24,11 +24,15 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <optional>
 #include <string_view>
 #include <unordered_map>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <OpenMesh/Core/IO/importer/ImporterT.hh>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
@@ -161,7 +165,7 @@ public:
     Tokens(std::string_view text, std::size_t offset, std::size_t line) : text_(text), offset_(offset), line_(line) {}
     std::string_view next() {
         skip_space();
-        token_line_ = line_;
+        if (offset_ < text_.size()) token_line_ = line_;  // at the end: the last token's line
         const std::size_t start = offset_;
         while (offset_ < text_.size() && !is_blank(text_[offset_]) && text_[offset_] != '\n') ++offset_;
         return text_.substr(start, offset_ - start);  // empty at the end
@@ -230,13 +234,13 @@ struct Place {
 
 class Reading {
 public:
-    Reading(const std::string& path, const std::string& text, const MeshFileOptions& options)
+    Reading(const std::string& path, std::string_view text, const MeshFileOptions& options)
         : path(path), text(text), options(options) {
         mesh.source = path;
     }
 
     const std::string& path;
-    const std::string& text;
+    std::string_view text;
     const MeshFileOptions& options;
     IndexedMesh mesh;
     std::vector<glm::dvec3> exact;  // the file's coordinates, where rounding lost something
@@ -246,8 +250,8 @@ public:
         return Error(what, check_detail::where_in(path, static_cast<int>(std::min<std::size_t>(line, INT_MAX))));
     }
     Error bad_token(std::string_view token, std::size_t line, const std::string& expected) const {
-        return error((token.empty() ? std::string("unexpected end of file") : "bad token " + quoted(token)) +
-                         " at line " + str(line) + ": expected " + expected,
+        return error((token.empty() ? "unexpected end of file after line " : "bad token " + quoted(token) + " at line ") +
+                         str(line) + ": expected " + expected,
                      line);
     }
 
@@ -258,6 +262,9 @@ public:
         if (vertices > max_vertices)
             throw error(declared + ": more vertices than tessref can number (" + str(max_vertices) + ")");
         if (faces > max_faces) throw error(declared + ": more faces than tessref can number (" + str(max_faces) + ")");
+        if (faces > std::numeric_limits<std::uint32_t>::max() / 3)
+            throw error(declared + ": at three corners a face, more face corners than tessref can number (" +
+                        str(std::numeric_limits<std::uint32_t>::max()) + ")");
         const std::uint64_t left = text.size() - std::min(offset, text.size());
         if (min_bytes > left)
             throw error("truncated file: " + declared + ", which need at least " + str(min_bytes) +
@@ -330,7 +337,7 @@ public:
                 if (inserted || it->second == exact[v][k]) continue;
                 if (merged++ == 0)
                     example = "vertex " + str(v) + " " + "xyz"[k] + " = " + number_text(exact[v][k]) + " reads as " +
-                              number_text(f) + ", as does " + number_text(it->second);
+                              number_text(f) + ", the same float as " + number_text(it->second);
             }
         if (merged > 0)
             mesh.reader_notes.push_back("coordinates are read as float and lose precision: " + str(merged) +
@@ -347,7 +354,10 @@ public:
 
     static std::string number_text(double x) {
         char buffer[40];
-        const auto r = std::to_chars(buffer, buffer + sizeof buffer, x);
+        // Whole numbers in full (100000001, not 1.00000001e+08), others as short as exact.
+        const auto r = x == std::floor(x) && std::abs(x) < 1e17
+                           ? std::to_chars(buffer, buffer + sizeof buffer, x, std::chars_format::fixed, 0)
+                           : std::to_chars(buffer, buffer + sizeof buffer, x);
         return std::string(buffer, r.ptr);
     }
 
@@ -482,7 +492,7 @@ PlyHeader read_ply_header(Reading& r) {
         } else if (t[0] == "end_header") {
             if (!have_format) throw r.error("PLY header has no 'format' line", n);
             header.body_offset = lines.offset();
-            header.body_line = n;
+            header.body_line = n + 1;  // the line the data starts on
             return header;
         } else {
             throw r.error("PLY header: unknown keyword " + quoted(t[0]) + where, n);
@@ -768,8 +778,12 @@ void read_off(Reading& r) {
         kind.colours = take("C");
         kind.normals = take("N");
         if (take("4") || take("n"))
-            throw r.error("OFF variant " + quoted(first) + " (4D or n-dimensional vertices) is not supported", lines.number());
-        if (!prefix.empty()) throw r.error("not an OFF file: unknown keyword " + quoted(first), lines.number());
+            throw r.error("OFF variant " + quoted(first) + " at line " + str(lines.number()) +
+                              " (4D or n-dimensional vertices) is not supported",
+                          lines.number());
+        if (!prefix.empty())
+            throw r.error("not an OFF file: unknown keyword " + quoted(first) + " at line " + str(lines.number()),
+                          lines.number());
         const std::string_view glued = first.substr(off_at + 3);
         if (!glued.empty()) counts.push_back(glued);
         if (glued.empty() && t.size() >= 2 && t[1] == "BINARY") {
@@ -785,7 +799,8 @@ void read_off(Reading& r) {
     } else if (parse_integer(first)) {
         counts = t;
     } else {
-        throw r.error("not an OFF file: it starts with " + quoted(first), lines.number());
+        throw r.error("not an OFF file: it starts with " + quoted(first) + " at line " + str(lines.number()),
+                      lines.number());
     }
     const std::size_t count_line = lines.number();
     if (counts.size() < 2 || counts.size() > 3)
@@ -1083,7 +1098,7 @@ void read_stl(Reading& r) {
     }
     // Not binary by size: ASCII when it reads as text (a NUL or another control character
     // in the first 64 KiB says it is binary data).
-    const std::string_view head = std::string_view(r.text).substr(0, 65536);
+    const std::string_view head = r.text.substr(0, 65536);
     const bool text = std::all_of(head.begin(), head.end(), [](char ch) {
         const auto c = static_cast<unsigned char>(ch);
         return c >= 32 || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
@@ -1098,6 +1113,36 @@ void read_stl(Reading& r) {
 }
 
 // ---------------------------------------------------------------------------------------
+
+// The file's bytes, mapped rather than copied: a header is checked against the file's size
+// and the memory limit before the data behind it costs memory.
+class MappedFile {
+public:
+    explicit MappedFile(const std::string& path) {
+        const Where where = check_detail::where_in(path);
+        fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        struct stat st {};
+        if (fd_ < 0 || ::fstat(fd_, &st) != 0) throw Error(std::string("cannot open mesh file: ") + std::strerror(errno), where);
+        if (!S_ISREG(st.st_mode)) throw Error("not a regular file", where);
+        size_ = static_cast<std::size_t>(st.st_size);
+        if (size_ == 0) throw Error("empty mesh file", where);
+        data_ = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+        if (data_ == MAP_FAILED) throw Error(std::string("cannot read mesh file: ") + std::strerror(errno), where);
+        ::madvise(data_, size_, MADV_SEQUENTIAL);
+    }
+    ~MappedFile() {
+        if (data_ != MAP_FAILED) ::munmap(data_, size_);
+        if (fd_ >= 0) ::close(fd_);
+    }
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+    std::string_view text() const { return {static_cast<const char*>(data_), size_}; }
+
+private:
+    int fd_ = -1;
+    void* data_ = MAP_FAILED;
+    std::size_t size_ = 0;
+};
 
 std::string lowercase_extension(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
@@ -1141,18 +1186,8 @@ IndexedMesh read_mesh_file(const std::string& path, const MeshFileOptions& optio
     const std::string ext = lowercase_extension(path);
     if (ext != "ply" && ext != "obj" && ext != "off" && ext != "stl")
         throw Error("unsupported mesh format '" + ext + "' (expected .ply, .obj, .off or .stl)", where);
-    const auto size = std::filesystem::file_size(path, ec);
-    if (ec) throw Error("cannot open mesh file", where);
-    if (size == 0) throw Error("empty mesh file", where);
-    require_memory(size, "mesh file of " + format_bytes(size), where);
-    std::string text(size, '\0');
-    {
-        std::ifstream in(path, std::ios::binary);
-        if (!in || !in.read(text.data(), static_cast<std::streamsize>(size)))
-            throw Error("cannot read mesh file", where);
-    }
-
-    Reading r(path, text, options);
+    const MappedFile file(path);
+    Reading r(path, file.text(), options);
     r.mesh.format = ext;
     if (ext == "ply") read_ply(r);
     else if (ext == "off") read_off(r);
