@@ -25,6 +25,7 @@
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
+#include "tessref/scene.h"
 
 namespace fs = std::filesystem;
 using tessref::IndexedMesh;
@@ -304,6 +305,32 @@ TEST(MeshReaders, CountsBeyondTheMemoryLimitAreRefused) {
     tessref::set_memory_limit(0);
     EXPECT_TRUE(contains(e.what(), "mesh of 100000 vertices and 0 faces needs")) << e.what();
     EXPECT_TRUE(contains(e.what(), "--max-memory")) << e.what();
+}
+
+// A scene's [[mesh]] from an STL file (no normals in the format): OpenMesh's STL reader
+// left the requested normal option set, so the loader kept its zero normals; now the
+// normals are computed from the faces, as for any file without normals (unit length, and
+// at a cube corner the normalized sum of the faces' normals points outward).
+TEST(MeshReaders, SceneMeshFromStlGetsComputedNormals) {
+    const fs::path stl = scratch("scene_cube.stl", binary_stl_cube());
+    // The shipped PN scene with its first mesh (scale 0.25, at x = -0.7) replaced.
+    std::string text = read_file(fs::path(TESSREF_SOURCE_DIR) / "data/scenes/pn-triangles.toml");
+    const std::string first = "../meshes/icosahedron.off";
+    ASSERT_NE(text.find(first), std::string::npos);
+    text.replace(text.find(first), first.size(), stl.string());
+    const tessref::Scene scene = tessref::load_scene_from_string(
+        text, (fs::path(TESSREF_SOURCE_DIR) / "data/scenes/pn-triangles.toml").string());
+    ASSERT_TRUE(scene.meshes);
+    const tessref::TriangleMeshes& m = *scene.meshes;
+    ASSERT_EQ(m.paths.at(0), stl.string());
+    for (std::size_t t = 0; t < 12; ++t)  // the STL's 12 facets over its 8 corners come first
+        for (std::uint32_t v : m.triangles.at(t)) EXPECT_LT(v, 8u);
+    EXPECT_TRUE(m.uvs.empty());
+    const glm::dvec3 centre = glm::dvec3(-0.7, 0.0, 0.0) + 0.25 * glm::dvec3(0.5);
+    for (std::size_t v = 0; v < 8; ++v) {
+        EXPECT_NEAR(glm::length(m.normals[v]), 1.0, 1e-6) << v;
+        EXPECT_GT(glm::dot(m.normals[v], m.positions[v] - centre), 0.0) << v;
+    }
 }
 
 // ---------------------------------------------------------------------------------------
