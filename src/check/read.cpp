@@ -577,12 +577,10 @@ void read_ply(Reading& r) {
     Tokens tokens(r.text, h.body_offset, h.body_line);
     std::size_t offset = h.body_offset;  // binary
     const auto* bytes = reinterpret_cast<const unsigned char*>(r.text.data());
-    std::vector<double> values;          // of the record's scalar properties
-    std::vector<Real> reals;
+    std::vector<Real> reals;             // the record's scalar properties
     std::vector<std::uint32_t> ids;
     for (const PlyElement& e : h.elements) {
         const bool is_vertex = &e == vertex_element, is_face = &e == face_element;
-        values.assign(e.properties.size(), 0.0);
         reals.assign(e.properties.size(), Real{});
         for (std::uint64_t i = 0; i < e.count; ++i) {
             const std::size_t record_offset = offset;
