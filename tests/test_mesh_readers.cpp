@@ -19,6 +19,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <vector>
 
@@ -331,6 +332,19 @@ TEST(MeshReaders, SceneMeshFromStlGetsComputedNormals) {
         EXPECT_NEAR(glm::length(m.normals[v]), 1.0, 1e-6) << v;
         EXPECT_GT(glm::dot(m.normals[v], m.positions[v] - centre), 0.0) << v;
     }
+}
+
+// Not a file: a directory, a FIFO (opening it for reading would wait for a writer
+// forever), a device.
+TEST(MeshReaders, NonRegularFilesAreRefused) {
+    const fs::path fifo = scratch_dir() / "fifo.ply";
+    fs::remove(fifo);
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    expect_refused(fifo, "not a regular file");
+    fs::create_directories(scratch_dir() / "dir.off");
+    expect_refused(scratch_dir() / "dir.off", "is a directory");
+    const tessref::Error e = read_error("/dev/null");
+    EXPECT_TRUE(contains(e.what(), "unsupported mesh format")) << e.what();
 }
 
 // ---------------------------------------------------------------------------------------

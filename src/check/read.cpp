@@ -1118,7 +1118,7 @@ class MappedFile {
 public:
     explicit MappedFile(const std::string& path) {
         const Where where = check_detail::where_in(path);
-        fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);  // a FIFO must not block
         struct stat st {};
         if (fd_ < 0 || ::fstat(fd_, &st) != 0) throw Error(std::string("cannot open mesh file: ") + std::strerror(errno), where);
         if (!S_ISREG(st.st_mode)) throw Error("not a regular file", where);
