@@ -270,6 +270,8 @@ TEST(MeshReaders, MessagesSayWhatTheFileSaid) {
     // The index as written (999, not 998), and its line.
     expect_refused(data_dir / "index_999.obj", "face 1 at line 6 refers to vertex 999, but the file has 3 vertices", 6);
     expect_refused(scratch("negative.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\n"), "refers to vertex -3, but only 2", 3);
+    expect_refused(scratch("int64_min.obj", "v 0 0 0\nf 1 -9223372036854775808 1\n"),
+                   "refers to vertex -9223372036854775808, but only 1", 2);
     // A header claiming 2e9 vertices in a small file: truncated, at once.
     expect_refused(data_dir / "huge_vertex_count.ply", "truncated file: the header declares 2000000000 vertices");
     // An ASCII STL is an ASCII STL, also when it is broken.

@@ -957,7 +957,7 @@ void read_obj(Reading& r) {
                         if (!value || *value == 0)
                             throw r.bad_token(t[k], n, std::string("a face corner v, v/vt, v/vt/vn or v//vn with ") +
                                                            "indices counting from 1 (face " + str(face) + ")");
-                        if (*value < 0 && std::uint64_t(-*value) > so_far[part])
+                        if (*value < -static_cast<std::int64_t>(so_far[part]))
                             throw r.error("face " + str(face) + " at line " + str(n) + " refers to " + names[part] + " " +
                                               std::to_string(*value) + ", but only " + str(so_far[part]) + " come before it",
                                           n);
@@ -968,7 +968,10 @@ void read_obj(Reading& r) {
                     if (part == 2) throw r.bad_token(t[k], n, "a face corner v, v/vt, v/vt/vn or v//vn");
                     rest.remove_prefix(slash + 1);
                 }
-                if (index[0] >= std::int64_t(max_vertices)) throw r.error("vertex index beyond 32 bits at line " + str(n), n);
+                if (index[0] >= std::int64_t(max_vertices))
+                    throw r.error("face " + str(face) + " at line " + str(n) + " refers to vertex " +
+                                      std::to_string(index[0] + 1) + ", more than tessref can number",
+                                  n);
                 ids.push_back(static_cast<std::uint32_t>(index[0]));
                 if (r.options.vertex_attributes) corners.push_back({ids.back(), index[1], index[2]});
             }
