@@ -1,18 +1,19 @@
 // tessref/check.h — watertightness and crack checks for any mesh, tessref's own or a user's.
 //
-// A mesh is read exactly as its file lists it (read_mesh_for_check): OpenMesh's readers
-// parse the file, but every face they hand over is recorded before OpenMesh's kernel gets
-// a chance to refuse it, so non-manifold input is analysed as it is, not as a half-edge
-// structure would like it to be. check_mesh() then finds, each as a class with a count and
-// located instances (coordinates, face ids, vertex ids):
+// A mesh is read exactly as its file lists it (read_mesh_for_check): a strict scan of the
+// file (src/check/read.cpp) that refuses, naming the line or byte offset, anything it cannot
+// read exactly; OpenMesh's kernel is then asked which faces it would refuse, so non-manifold
+// input is analysed as it is, not as a half-edge structure would like it to be.
+// check_mesh() then finds, each as a class with a count and located instances
+// (coordinates, face ids, vertex ids):
 //
 //   boundary_loop              boundary edges, chained into loops (edge count, length);
 //                              the outer outline of an open (terrain) mesh is allowed,
 //                              everything else is a defect
 //   non_manifold_edge          an edge shared by more than two faces
 //   non_manifold_vertex        a vertex whose faces form more than one fan
-//   refused_face               a face OpenMesh's kernel refused (complex edge or vertex)
-//                              or its reader skipped (an STL facet with repeated corners)
+//   refused_face               a face OpenMesh's kernel would refuse (complex edge or
+//                              vertex, repeated vertex, fewer than three vertices)
 //   inconsistent_orientation   an edge its two faces traverse in the same direction
 //   inverted_volume            a closed component with a negative signed volume
 //   degenerate_face            a repeated vertex, or a height below the tolerance
@@ -57,14 +58,18 @@ struct IndexedMesh {
     std::vector<std::uint32_t> face_start{0};  // face_count() + 1 entries
     std::vector<std::uint32_t> face_vertices;
 
-    // Faces the file lists that OpenMesh's kernel refused to connect (it adds them as
-    // separate copies instead), and faces its reader skipped before its kernel saw them
-    // (STL facets whose corners coincide). Both are part of the face list above.
+    // Faces the file lists that OpenMesh's kernel refuses to connect (its importer adds them
+    // as separate copies instead, or drops them). Part of the face list above.
     std::vector<std::uint32_t> kernel_refused_faces;
-    std::vector<std::uint32_t> reader_skipped_faces;
 
-    // What the reading could not do exactly as described above (empty normally).
+    // What the reading could not do exactly as described above (empty normally), e.g.
+    // coordinates the file holds in double precision that become equal as float.
     std::vector<std::string> reader_notes;
+
+    // Per-vertex normals and texture coordinates, read only when MeshFileOptions asks for
+    // them, each empty when the file has none (the values as float, as OpenMesh holds them).
+    std::vector<glm::vec3> normals;
+    std::vector<glm::vec2> uvs;
 
     std::string source;  // the file it was read from ("" when built in memory)
     std::string format;  // "ply", "obj", "off", "stl" ("" when built in memory)
@@ -78,13 +83,24 @@ struct IndexedMesh {
     void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c);
 };
 
-// Reads a PLY, OBJ, OFF or STL file (chosen by extension) through OpenMesh's readers.
-// Throws tessref::Error naming the file when it cannot be read: missing or unreadable, an
-// unknown extension, a file the reader rejects, a truncated binary STL, a face referring
-// to a vertex the file does not have.
+struct MeshFileOptions {
+    bool vertex_attributes = false;              // also read normals and texture coordinates
+    std::function<void(double)> progress;        // fraction of the file read, now and then
+};
+
+// Reads a PLY (ascii, binary little or big endian), OBJ, OFF (ascii with [ST][C][N]
+// prefixes, or binary as `tessref mesh --binary` writes it) or STL (ascii or binary) file,
+// chosen by extension; coordinates are rounded to float as OpenMesh and admesh read them.
+// Every token, index and byte count is checked: a file that is not exactly what its format
+// says (a bad token, a non-finite coordinate, an index out of range, a header declaring
+// more than the file holds or than memory allows, trailing data) throws tessref::Error
+// naming the file and the line, or for binary data the byte offset. A file without faces
+// is an error too.
+IndexedMesh read_mesh_file(const std::string& path, const MeshFileOptions& options = {});
+
+// read_mesh_file() for the check: also fills kernel_refused_faces.
 IndexedMesh read_mesh_for_check(const std::string& path);
-// The same, calling progress(fraction read) now and then (from the calling thread) where the
-// file says how much it holds (PLY, OFF, binary STL).
+// The same, calling progress(fraction read) now and then (from the calling thread).
 IndexedMesh read_mesh_for_check(const std::string& path, const std::function<void(double)>& progress);
 
 // The mesh `tessref mesh` would export: positions welded where they are bitwise equal

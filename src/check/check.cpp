@@ -106,11 +106,7 @@ void classify_faces(CheckState& state) {
 
 void report_refused_faces(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
-    std::vector<std::pair<std::uint32_t, bool>> refused;  // (face, by the reader)
-    for (std::uint32_t f : mesh.kernel_refused_faces) refused.emplace_back(f, false);
-    for (std::uint32_t f : mesh.reader_skipped_faces) refused.emplace_back(f, true);
-    std::sort(refused.begin(), refused.end());
-    for (const auto& [f, by_reader] : refused) {
+    for (std::uint32_t f : mesh.kernel_refused_faces) {
         if (f >= mesh.face_count()) continue;
         Defect d;
         const auto face = mesh.face(f);
@@ -119,10 +115,10 @@ void report_refused_faces(CheckState& state) {
         d.position = face.empty() ? glm::dvec3(0.0) : centre / double(face.size());
         d.faces = {f};
         d.vertices.assign(face.begin(), face.end());
-        d.detail = by_reader ? "OpenMesh's " + mesh.format + " reader dropped or shortened face " + std::to_string(f) +
-                                   " (a repeated corner, or fewer than three)"
-                             : "OpenMesh's kernel refused face " + std::to_string(f) +
-                                   " (a complex edge or vertex) and added it on copies of its vertices";
+        const bool dropped = state.face_status[f] == face_too_few_vertices || state.face_status[f] == face_repeated_vertex;
+        d.detail = dropped ? "OpenMesh's importer drops face " + std::to_string(f) + " (a repeated vertex, or fewer than three)"
+                           : "OpenMesh's kernel refused face " + std::to_string(f) +
+                                 " (a complex edge or vertex) and added it on copies of its vertices";
         state.add_defect(DefectClass::refused_face, std::move(d));
     }
 }

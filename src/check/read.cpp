@@ -1,26 +1,39 @@
-// Reading a mesh for checking: OpenMesh parses the file; we keep every face it hands over.
+// Reading a mesh file: a strict scan of its bytes, one function per format.
 //
-// OpenMesh's ImporterT adds each face to a half-edge kernel, which refuses faces that would
-// make a complex edge or vertex (the importer then re-adds them on private vertex copies)
-// and rejects faces with a repeated vertex outright. Its STL reader also skips facets whose
-// corners coincide before the importer sees them. A checker must see all of these, so the
-// importer below records every vertex and face first and lets OpenMesh do its part after;
-// STL facets the reader skipped are recovered from the file.
+// Every mesh tessref takes from a user (`tessref check`, a scene's [[mesh]]) is read here.
+// OpenMesh's readers could not be made safe against hostile files: its PLY header parser
+// crashes on a `property` line before any `element`, its ASCII PLY reader reads
+// uninitialised memory after a bad token (and then allocates without limit), its binary OFF
+// and PLY readers trust the header's counts (gigabytes for a 4 kB file), its text readers
+// turn a bad token into a vertex index, and it drops or shortens faces a checker must see.
+// So each format is scanned here: the header grammar, every token, every index and the
+// exact byte length are checked; counts from a header are held against the file's size and
+// the memory limit before anything is allocated; every error names the file and the line
+// (text) or byte offset (binary). OpenMesh keeps the part where it is the reference: which
+// faces its kernel refuses (find_kernel_refused_faces), and the scene loader's half-edge
+// mesh, built from this scan through OpenMesh's importer.
+//
+// Coordinates are rounded to float, as OpenMesh and admesh read them (and as the check's
+// tolerances and its comparison with admesh assume); a reader note says so when the rounding
+// makes coordinates equal that the file keeps apart.
 #include <algorithm>
 #include <bit>
 #include <charconv>
 #include <climits>
-#include <iostream>
-#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <functional>
 #include <limits>
-#include <sstream>
+#include <optional>
+#include <string_view>
 #include <unordered_map>
 
-#include <OpenMesh/Core/IO/IOManager.hh>
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <OpenMesh/Core/IO/importer/ImporterT.hh>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
@@ -28,6 +41,7 @@
 #include "check/check_internal.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
+#include "tessref/limits.h"
 
 namespace tessref {
 
@@ -45,249 +59,152 @@ void IndexedMesh::add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c
 
 namespace {
 
-using OmMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
+// Vertex ids are 32-bit, and the check uses the largest as "none".
+constexpr std::uint64_t max_vertices = std::numeric_limits<std::uint32_t>::max() - 1;
+constexpr std::uint64_t max_faces = std::numeric_limits<std::uint32_t>::max() - 1;
 
-// Records positions and faces as the reader produces them, then forwards to ImporterT.
-class RecordingImporter : public OpenMesh::IO::ImporterT<OmMesh> {
+std::string str(std::uint64_t n) { return std::to_string(n); }
+std::string at_byte(std::uint64_t offset) { return " at byte offset " + str(offset); }
+
+// A token as it may appear in a message: printable, and not too long.
+std::string quoted(std::string_view token) {
+    std::string s = "'";
+    for (char c : token.substr(0, 40)) s += (static_cast<unsigned char>(c) < 32 || c == 127) ? '?' : c;
+    return s + (token.size() > 40 ? "...'" : "'");
+}
+
+// ---------------------------------------------------------------------------------------
+// Numbers
+
+// A coordinate as the file has it, and as it is read (rounded to float, directly from the
+// text where there is one, as OpenMesh's readers round it).
+struct Real {
+    double exact = 0.0;
+    float value = 0.0f;
+};
+
+std::string_view without_plus(std::string_view t) {
+    if (t.size() > 1 && t[0] == '+' && t[1] != '+' && t[1] != '-') t.remove_prefix(1);
+    return t;
+}
+
+// nullopt when the whole token is not a number. "nan", "inf" and values beyond double or
+// float range are numbers here; their non-finite results are for the caller to name.
+std::optional<Real> parse_real(std::string_view token) {
+    const std::string_view t = without_plus(token);
+    if (t.empty()) return std::nullopt;
+    const char* end = t.data() + t.size();
+    Real r;
+    const auto [p, ec] = std::from_chars(t.data(), end, r.exact);
+    if (p != end || ec == std::errc::invalid_argument) return std::nullopt;
+    if (ec == std::errc::result_out_of_range) r.exact = std::strtod(std::string(t).c_str(), nullptr);
+    if (std::from_chars(t.data(), end, r.value).ec == std::errc::result_out_of_range)
+        r.value = std::abs(r.exact) < 1.0 ? static_cast<float>(r.exact)
+                                          : std::copysign(std::numeric_limits<float>::infinity(), float(r.exact));
+    return r;
+}
+
+std::optional<std::int64_t> parse_integer(std::string_view token) {
+    const std::string_view t = without_plus(token);
+    std::int64_t v = 0;
+    const char* end = t.data() + t.size();
+    const auto [p, ec] = std::from_chars(t.data(), end, v);
+    if (t.empty() || p != end || ec != std::errc()) return std::nullopt;
+    return v;
+}
+
+Real real_from_binary(double value) { return {value, static_cast<float>(value)}; }
+
+// ---------------------------------------------------------------------------------------
+// Text: lines and tokens, numbered from 1.
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+class Lines {
 public:
-    using Base = OpenMesh::IO::ImporterT<OmMesh>;
-    RecordingImporter(OmMesh& om, IndexedMesh& out) : Base(om), om_(om), out_(out) {}
-
-    // Progress: elements (vertices + faces) expected, and whom to tell.
-    void set_progress(std::uint64_t expected, const std::function<void(double)>* progress) {
-        expected_ = expected;
-        progress_ = progress;
+    Lines(std::string_view text, std::size_t offset = 0, std::size_t line = 0)
+        : text_(text), offset_(offset), line_(line) {}
+    // The next line without its line end; false at the end of the text.
+    bool next(std::string_view& line) {
+        if (offset_ >= text_.size()) return false;
+        const std::size_t end = std::min(text_.find('\n', offset_), text_.size());
+        line = text_.substr(offset_, end - offset_);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        offset_ = end + 1;
+        ++line_;
+        return true;
     }
-
-    OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override {
-        record_vertex({p[0], p[1], p[2]});
-        return Base::add_vertex(p);
-    }
-    OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override {
-        record_vertex({p[0], p[1], p[2]});
-        return Base::add_vertex(p);
-    }
-    OpenMesh::VertexHandle add_vertex() override {
-        record_vertex(glm::dvec3(0.0));
-        return Base::add_vertex();
-    }
-    void set_point(OpenMesh::VertexHandle vh, const OpenMesh::Vec3f& p) override {
-        const int index = vertex_index_of(vh);
-        if (index >= 0) out_.positions[index] = glm::dvec3(p[0], p[1], p[2]);
-        Base::set_point(vh, p);
-    }
-
-    OpenMesh::FaceHandle add_face(const VHandles& handles) override {
-        const auto face_id = static_cast<std::uint32_t>(out_.face_count());
-        tick();
-        // A reader that misparsed a header can run on, adding empty faces, far beyond
-        // anything the file could hold: stop it.
-        if (face_id >= face_limit_) throw FaceLimit{};
-        ids_.clear();
-        bool valid = true;
-        for (const OpenMesh::VertexHandle& vh : handles) {
-            const int index = vertex_index_of(vh);
-            if (index < 0) {
-                valid = false;
-                if (!bad_face_) bad_face_ = BadFace{face_id, vh.idx()};
-                continue;
-            }
-            ids_.push_back(static_cast<std::uint32_t>(index));
-        }
-        if (!valid) return OpenMesh::FaceHandle();  // reported as an error after reading
-        out_.add_face(ids_);
-
-        // ImporterT re-adds a face the kernel refuses on copies of its vertices, and returns
-        // an invalid handle for a face with a repeated vertex: either way, refused.
-        const std::size_t vertices_before = om_.n_vertices();
-        const OpenMesh::FaceHandle fh = Base::add_face(handles);
-        if (!fh.is_valid() || om_.n_vertices() != vertices_before)
-            out_.kernel_refused_faces.push_back(face_id);
-        return fh;
-    }
-
-    struct BadFace {
-        std::uint32_t face_id;
-        int vertex;
-    };
-    struct FaceLimit {};
-    void set_face_limit(std::size_t limit) { face_limit_ = limit; }
-    const std::optional<BadFace>& bad_face() const { return bad_face_; }
-    std::size_t recorded_vertices() const { return recorded_; }
+    std::size_t number() const { return line_; }   // of the line last returned
+    std::size_t offset() const { return std::min(offset_, text_.size()); }  // where the next begins
 
 private:
-    void tick() {
-        if (progress_ && expected_ > 0 && ++elements_ % 65536 == 0)
-            (*progress_)(std::min(1.0, double(elements_) / double(expected_)));
-    }
-    void record_vertex(const glm::dvec3& p) {
-        tick();
-        // OpenMesh handles are the kernel's vertex indices; the kernel also grows when the
-        // importer copies vertices of a refused face, so keep our own mapping.
-        kernel_to_file_.resize(om_.n_vertices() + 1, -1);
-        kernel_to_file_[om_.n_vertices()] = static_cast<int>(out_.positions.size());
-        out_.positions.push_back(p);
-        ++recorded_;
-    }
-    int vertex_index_of(OpenMesh::VertexHandle vh) const {
-        const int k = vh.idx();
-        if (k < 0 || k >= static_cast<int>(kernel_to_file_.size())) return -1;
-        return kernel_to_file_[k];
-    }
-
-    OmMesh& om_;
-    IndexedMesh& out_;
-    std::vector<int> kernel_to_file_;
-    std::vector<std::uint32_t> ids_;
-    std::optional<BadFace> bad_face_;
-    std::size_t recorded_ = 0;
-    std::size_t face_limit_ = std::numeric_limits<std::size_t>::max();
-    std::uint64_t expected_ = 0, elements_ = 0;
-    const std::function<void(double)>* progress_ = nullptr;
+    std::string_view text_;
+    std::size_t offset_, line_;
 };
 
-// Sends OpenMesh's diagnostics (its omerr/omlog streams, and the readers that write to
-// std::cerr directly) to a string while a file is read, so the terminal stays clean and an
-// error message can quote the reader. Reading happens on one thread, before any parallel
-// work, so swapping the standard streams' buffers is safe here.
-class CapturedOpenMeshLog {
+void split(std::string_view line, std::vector<std::string_view>& tokens) {
+    tokens.clear();
+    std::size_t i = 0;
+    while (true) {
+        while (i < line.size() && is_blank(line[i])) ++i;
+        if (i >= line.size()) return;
+        const std::size_t start = i;
+        while (i < line.size() && !is_blank(line[i])) ++i;
+        tokens.push_back(line.substr(start, i - start));
+    }
+}
+
+std::string_view strip_comment(std::string_view line) {
+    const auto hash = line.find('#');
+    return hash == std::string_view::npos ? line : line.substr(0, hash);
+}
+
+// Whitespace-separated tokens across lines (ASCII PLY data, ASCII STL).
+class Tokens {
 public:
-    CapturedOpenMeshLog()
-        : old_cerr_(std::cerr.rdbuf(text_.rdbuf())), old_clog_(std::clog.rdbuf(text_.rdbuf())),
-          old_cout_(std::cout.rdbuf(text_.rdbuf())) {}
-    ~CapturedOpenMeshLog() {
-        ::omerr() << std::flush;
-        ::omlog() << std::flush;
-        std::cerr.rdbuf(old_cerr_);
-        std::clog.rdbuf(old_clog_);
-        std::cout.rdbuf(old_cout_);
+    Tokens(std::string_view text, std::size_t offset, std::size_t line) : text_(text), offset_(offset), line_(line) {}
+    std::string_view next() {
+        skip_space();
+        if (offset_ < text_.size()) token_line_ = line_;  // at the end: the last token's line
+        const std::size_t start = offset_;
+        while (offset_ < text_.size() && !is_blank(text_[offset_]) && text_[offset_] != '\n') ++offset_;
+        return text_.substr(start, offset_ - start);  // empty at the end
     }
-    std::string first_line() {
-        ::omerr() << std::flush;
-        std::string s = text_.str();
-        const auto end = s.find('\n');
-        if (end != std::string::npos) s.resize(end);
-        while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
-        if (s.size() > 200) s.resize(200);
-        return s;
+    void skip_rest_of_line() {
+        while (offset_ < text_.size() && text_[offset_] != '\n') ++offset_;
     }
+    bool at_end() {
+        skip_space();
+        return offset_ >= text_.size();
+    }
+    std::size_t line() const { return token_line_; }  // of the token last returned
+    std::size_t offset() const { return offset_; }
+    std::size_t bytes_left() const { return text_.size() - offset_; }
 
 private:
-    std::ostringstream text_;
-    std::streambuf* old_cerr_;
-    std::streambuf* old_clog_;
-    std::streambuf* old_cout_;
+    void skip_space() {
+        while (offset_ < text_.size() && (is_blank(text_[offset_]) || text_[offset_] == '\n')) {
+            if (text_[offset_] == '\n') ++line_;
+            ++offset_;
+        }
+    }
+    std::string_view text_;
+    std::size_t offset_, line_, token_line_ = 0;
 };
 
-std::string lowercase_extension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
+bool iequals(std::string_view a, std::string_view b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+               return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
+           });
 }
 
-std::uint32_t read_u32_le(const unsigned char* p) {
-    return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |
-           std::uint32_t(p[3]) << 24;
-}
+// ---------------------------------------------------------------------------------------
+// What all readers share: the mesh being built, errors naming the file, the memory budget,
+// progress, and the float rounding of coordinates.
 
-// What an STL file is, decided as OpenMesh decides it (binary when its size is exactly
-// 84 + 50 * the facet count in its header), plus the checks OpenMesh leaves out: a file
-// that is not binary must be text that starts with "solid" and ends with "endsolid" — a
-// truncated binary STL would otherwise be read as an empty ASCII one.
-struct StlKind {
-    bool binary = false;
-    std::uint64_t facets = 0;  // binary only
-};
-
-StlKind classify_stl(const std::string& path) {
-    const Where where = check_detail::where_in(path);
-    std::ifstream in(path, std::ios::binary);
-    const auto size = std::filesystem::file_size(path);
-    unsigned char header[84] = {};
-    in.read(reinterpret_cast<char*>(header), 84);
-    const auto got = static_cast<std::uint64_t>(in.gcount());
-    if (got == 84) {
-        const std::uint64_t facets = read_u32_le(header + 80);
-        if (84 + 50 * facets == size) return {true, facets};
-    }
-    // Not binary by size: it must be ASCII.
-    in.clear();
-    in.seekg(0);
-    std::string head(std::min<std::uint64_t>(size, 65536), '\0');
-    in.read(head.data(), static_cast<std::streamsize>(head.size()));
-    const bool text = std::all_of(head.begin(), head.end(), [](char ch) {
-        const auto c = static_cast<unsigned char>(ch);
-        return c >= 32 || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
-    });
-    std::size_t first = head.find_first_not_of(" \t\r\n");
-    const bool starts_solid =
-        first != std::string::npos && head.size() - first >= 5 &&
-        std::equal(head.begin() + static_cast<long>(first), head.begin() + static_cast<long>(first) + 5,
-                   "solid", [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) == b; });
-    if (!text || !starts_solid) {
-        if (got == 84) {
-            const std::uint64_t facets = read_u32_le(header + 80);
-            throw Error("truncated or corrupt binary STL: header announces " + std::to_string(facets) +
-                            " facets (" + std::to_string(84 + 50 * facets) + " bytes), the file has " +
-                            std::to_string(size) + " bytes",
-                        where);
-        }
-        throw Error("not an STL file: too short for binary STL (" + std::to_string(size) +
-                        " bytes) and not ASCII STL",
-                    where);
-    }
-    // ASCII: it must end with "endsolid" (possibly followed by a name).
-    const std::uint64_t tail_size = std::min<std::uint64_t>(size, 4096);
-    std::string tail(tail_size, '\0');
-    in.clear();
-    in.seekg(static_cast<std::streamoff>(size - tail_size));
-    in.read(tail.data(), static_cast<std::streamsize>(tail_size));
-    std::string lower = tail;
-    for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    const auto pos = lower.rfind("endsolid");
-    const bool ends_properly = pos != std::string::npos && lower.find("endfacet", pos) == std::string::npos;
-    if (!ends_properly) throw Error("truncated ASCII STL: no 'endsolid' at the end", where);
-    return {false, 0};
-}
-
-// The facets of an STL file as corner positions, in file order. Used only to recover the
-// facets OpenMesh's reader skipped (those whose corners coincide), which it never reports;
-// the reading itself is OpenMesh's. Mirrors its parser: binary records of 12 floats + 2
-// bytes; ASCII "outer" lines followed by three "vertex x y z" lines.
-std::vector<std::array<glm::vec3, 3>> stl_facet_corners(const std::string& path, const StlKind& kind) {
-    std::vector<std::array<glm::vec3, 3>> facets;
-    std::ifstream in(path, std::ios::binary);
-    if (kind.binary) {
-        facets.reserve(kind.facets);
-        in.seekg(84);
-        unsigned char record[50];
-        for (std::uint64_t i = 0; i < kind.facets && in.read(reinterpret_cast<char*>(record), 50); ++i) {
-            std::array<glm::vec3, 3> corners;
-            for (int c = 0; c < 3; ++c)
-                for (int k = 0; k < 3; ++k)
-                    corners[c][k] = std::bit_cast<float>(read_u32_le(record + 12 + 12 * c + 4 * k));
-            facets.push_back(corners);
-        }
-        return facets;
-    }
-    std::string line;
-    while (std::getline(in, line)) {
-        if (line.find("outer") == std::string::npos && line.find("OUTER") == std::string::npos) continue;
-        std::array<glm::vec3, 3> corners{};
-        for (int c = 0; c < 3 && std::getline(in, line); ++c) {
-            std::istringstream fields(line);
-            std::string keyword;
-            fields >> keyword >> corners[c].x >> corners[c].y >> corners[c].z;
-        }
-        facets.push_back(corners);
-    }
-    return facets;
-}
-
-// OpenMesh's STL reader merges corners that compare equal as floats (so -0 and +0 too).
 struct FloatPointKey {
     std::uint32_t x, y, z;
+    // Equal as floats: -0 and +0 are one key (as OpenMesh's STL reader merges them).
     static std::uint32_t bits(float f) { return f == 0.0f ? 0u : std::bit_cast<std::uint32_t>(f); }
     explicit FloatPointKey(const glm::vec3& p) : x(bits(p.x)), y(bits(p.y)), z(bits(p.z)) {}
     bool operator==(const FloatPointKey&) const = default;
@@ -301,284 +218,995 @@ struct FloatPointHash {
     }
 };
 
-// Puts the facets OpenMesh skipped back into the face list, at their place in the file.
-void recover_skipped_stl_facets(const std::string& path, const StlKind& kind, IndexedMesh& mesh) {
-    const auto facets = stl_facet_corners(path, kind);
-    if (facets.size() <= mesh.face_count()) return;
-
-    std::unordered_map<FloatPointKey, std::uint32_t, FloatPointHash> vertex_of;
-    vertex_of.reserve(mesh.positions.size());
-    for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
-        vertex_of.emplace(FloatPointKey(glm::vec3(mesh.positions[v])), v);
-
-    // Where our view of the file and OpenMesh's part, OpenMesh's reading stands, with a note.
-    const auto give_up = [&] {
-        mesh.reader_notes.push_back("the STL reader skipped " + std::to_string(facets.size() - mesh.face_count()) +
-                                    " facets that could not be recovered");
-    };
-    IndexedMesh rebuilt;
-    std::vector<std::uint32_t> refused_by_old_id(mesh.face_count(), 0);
-    for (std::uint32_t f : mesh.kernel_refused_faces) refused_by_old_id[f] = 1;
-    std::size_t next_read = 0;
-    for (const auto& corners : facets) {
-        const FloatPointKey a(corners[0]), b(corners[1]), c(corners[2]);
-        const bool skipped = a == b || b == c || a == c;
-        const auto new_id = static_cast<std::uint32_t>(rebuilt.face_count());
-        if (skipped) {
-            std::uint32_t ids[3];
-            for (int i = 0; i < 3; ++i) {
-                const auto it = vertex_of.find(FloatPointKey(corners[i]));
-                // Every corner is added as a vertex before the reader skips the facet.
-                if (it == vertex_of.end()) return give_up();
-                ids[i] = it->second;
-            }
-            rebuilt.add_face(ids);
-            rebuilt.reader_skipped_faces.push_back(new_id);
-        } else {
-            if (next_read >= mesh.face_count()) break;
-            rebuilt.add_face(mesh.face(next_read));
-            if (refused_by_old_id[next_read]) rebuilt.kernel_refused_faces.push_back(new_id);
-            ++next_read;
-        }
+// Where a vertex is in the file, for messages: a line, or a byte offset, and for STL the
+// facet and corner.
+struct Place {
+    std::size_t line = 0;
+    std::size_t byte = SIZE_MAX;
+    std::uint64_t facet = UINT64_MAX;
+    int corner = 0;
+    std::string text() const {
+        std::string s = line ? " at line " + str(line) : byte != SIZE_MAX ? at_byte(byte) : std::string();
+        if (facet != UINT64_MAX) s += " (facet " + str(facet) + ", corner " + str(std::uint64_t(corner)) + ")";
+        return s;
     }
-    if (next_read != mesh.face_count()) return give_up();
-    rebuilt.positions = std::move(mesh.positions);
-    rebuilt.source = mesh.source;
-    rebuilt.format = mesh.format;
-    rebuilt.reader_notes = std::move(mesh.reader_notes);
-    mesh = std::move(rebuilt);
-}
-
-// ---------------------------------------------------------------------------------------
-// What the file declares, checked against what the reader delivered. OpenMesh's ASCII PLY
-// and OFF readers stop quietly at the end of a truncated file, and its PLY header parser
-// never returns on a header without "end_header"; these checks turn both into errors.
-
-struct DeclaredCounts {
-    std::optional<std::uint64_t> vertices, faces;
 };
 
-std::string trim(std::string s) {
-    const auto b = s.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) return {};
-    const auto e = s.find_last_not_of(" \t\r\n");
-    return s.substr(b, e - b + 1);
-}
+class Reading {
+public:
+    Reading(const std::string& path, std::string_view text, const MeshFileOptions& options)
+        : path(path), text(text), options(options) {
+        mesh.source = path;
+    }
 
-DeclaredCounts ply_declared_counts(const std::string& path) {
-    const Where where = check_detail::where_in(path);
-    std::ifstream in(path, std::ios::binary);
-    std::string line;
-    if (!std::getline(in, line) || trim(line) != "ply") throw Error("not a PLY file: it does not start with 'ply'", where);
-    DeclaredCounts counts;
-    std::size_t header_bytes = line.size() + 1;
-    while (std::getline(in, line)) {
-        header_bytes += line.size() + 1;
-        if (header_bytes > (1u << 20)) break;
-        std::istringstream fields(trim(line));
-        std::string keyword;
-        fields >> keyword;
-        if (keyword == "end_header") return counts;
-        if (keyword == "element") {
-            std::string name;
-            std::uint64_t count = 0;
-            if (!(fields >> name >> count)) throw Error("PLY header: bad element line '" + trim(line) + "'", where);
-            if (name == "vertex") counts.vertices = count;
-            if (name == "face") counts.faces = count;
+    const std::string& path;
+    std::string_view text;
+    const MeshFileOptions& options;
+    IndexedMesh mesh;
+    std::vector<glm::dvec3> exact;  // the file's coordinates, where rounding lost something
+    bool rounded = false;           // some coordinate is not a float in the file
+
+    Error error(const std::string& what, std::size_t line = 0) const {
+        return Error(what, check_detail::where_in(path, static_cast<int>(std::min<std::size_t>(line, INT_MAX))));
+    }
+    Error bad_token(std::string_view token, std::size_t line, const std::string& expected) const {
+        return error((token.empty() ? "unexpected end of file after line " : "bad token " + quoted(token) + " at line ") +
+                         str(line) + ": expected " + expected,
+                     line);
+    }
+
+    // Refuses, before allocating, counts the file cannot hold or memory cannot take.
+    // min_bytes: the least the declared data needs in the file after offset.
+    void require(std::uint64_t vertices, std::uint64_t faces, std::uint64_t min_bytes, std::size_t offset,
+                 const std::string& declared) const {
+        if (vertices > max_vertices)
+            throw error(declared + ": more vertices than tessref can number (" + str(max_vertices) + ")");
+        if (faces > max_faces) throw error(declared + ": more faces than tessref can number (" + str(max_faces) + ")");
+        if (faces > std::numeric_limits<std::uint32_t>::max() / 3)
+            throw error(declared + ": at three corners a face, more face corners than tessref can number (" +
+                        str(std::numeric_limits<std::uint32_t>::max()) + ")");
+        const std::uint64_t left = text.size() - std::min(offset, text.size());
+        if (min_bytes > left)
+            throw error("truncated file: " + declared + ", which need at least " + str(min_bytes) +
+                        " bytes after the header; the file has " + str(left));
+        require_memory(memory_for(vertices, faces), "mesh of " + str(vertices) + " vertices and " + str(faces) + " faces",
+                       check_detail::where_in(path));
+    }
+    std::uint64_t memory_for(std::uint64_t vertices, std::uint64_t faces) const {
+        // Positions and the file's values, attributes, three corners a face, and OpenMesh's
+        // kernel for the refusal check (about 100 bytes a face).
+        const std::uint64_t per_vertex = 2 * sizeof(glm::dvec3) + (options.vertex_attributes ? 20 : 0);
+        const std::uint64_t a = saturating_bytes(vertices, per_vertex), b = saturating_bytes(faces, 16 + 100);
+        return a > UINT64_MAX - b ? UINT64_MAX : a + b;
+    }
+    void reserve(std::uint64_t vertices, std::uint64_t faces) {
+        mesh.positions.reserve(vertices);
+        exact.reserve(vertices);
+        mesh.face_start.reserve(faces + 1);
+        mesh.face_vertices.reserve(saturating_bytes(faces, 3));
+    }
+
+    std::uint32_t add_vertex(const Real (&xyz)[3], const Place& place) {
+        const std::size_t id = mesh.positions.size();
+        const std::size_t line = place.line;
+        if (id >= max_vertices) throw error("more vertices than tessref can number (" + str(max_vertices) + ")", line);
+        for (int k = 0; k < 3; ++k) {
+            if (!std::isfinite(xyz[k].exact))
+                throw error("vertex " + str(id) + place.text() + " has a non-finite coordinate (" + "xyz"[k] + " = " +
+                                number_text(xyz[k].exact) + ")",
+                            line);
+            if (!std::isfinite(xyz[k].value))
+                throw error("vertex " + str(id) + place.text() + " has a coordinate beyond float range (" + "xyz"[k] + " = " +
+                                number_text(xyz[k].exact) + ")",
+                            line);
+            rounded = rounded || double(xyz[k].value) != xyz[k].exact;
         }
+        mesh.positions.emplace_back(xyz[0].value, xyz[1].value, xyz[2].value);
+        exact.emplace_back(xyz[0].exact, xyz[1].exact, xyz[2].exact);
+        return static_cast<std::uint32_t>(id);
     }
-    throw Error("PLY header has no 'end_header'", where);
-}
 
-DeclaredCounts off_declared_counts(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::vector<std::string> tokens;
-    std::string line;
-    for (int lines = 0; tokens.size() < 4 && lines < 1000 && std::getline(in, line); ++lines) {
-        if (const auto hash = line.find('#'); hash != std::string::npos) {
-            if (!tokens.empty() && tokens.size() < 3 && trim(line.substr(0, hash)).empty())
-                throw Error("OFF header: comment lines before the counts are not supported (OpenMesh's reader misreads them)",
-                            check_detail::where_in(path, lines + 1));
-            line.resize(hash);
-        }
-        std::istringstream fields(line);
-        for (std::string token; tokens.size() < 4 && fields >> token;) tokens.push_back(token);
+    void add_face(const std::vector<std::uint32_t>& ids, std::size_t line = 0) {
+        if (mesh.face_count() >= max_faces) throw error("more faces than tessref can number (" + str(max_faces) + ")", line);
+        mesh.add_face(ids);
     }
-    DeclaredCounts counts;
-    if (tokens.size() < 3 || tokens[0].size() < 3 || tokens[0].substr(tokens[0].size() - 3) != "OFF") return counts;
-    if (tokens[1] == "BINARY") return counts;
-    std::uint64_t v = 0, f = 0;
-    if (std::from_chars(tokens[1].data(), tokens[1].data() + tokens[1].size(), v).ec == std::errc() &&
-        std::from_chars(tokens[2].data(), tokens[2].data() + tokens[2].size(), f).ec == std::errc()) {
-        counts.vertices = v;
-        counts.faces = f;
-    }
-    return counts;
-}
 
-void check_declared_counts(const DeclaredCounts& declared, const IndexedMesh& mesh, const std::string& what) {
-    const Where where = check_detail::where_in(mesh.source);
-    if (declared.vertices && *declared.vertices != mesh.positions.size())
-        throw Error("truncated or corrupt " + what + ": the header declares " + std::to_string(*declared.vertices) +
-                        " vertices, " + std::to_string(mesh.positions.size()) + " were read",
-                    where);
-    if (declared.faces && *declared.faces != mesh.face_count())
-        throw Error("truncated or corrupt " + what + ": the header declares " + std::to_string(*declared.faces) +
-                        " faces, " + std::to_string(mesh.face_count()) + " were read",
-                    where);
+    void progress(std::size_t offset) {
+        if (!options.progress || offset < next_progress_) return;
+        next_progress_ = offset + (std::size_t(1) << 20);
+        options.progress(text.empty() ? 1.0 : std::min(1.0, double(offset) / double(text.size())));
+    }
+
+    // An STL corner that rounding to float made equal to an earlier vertex.
+    void merged_corner(std::uint32_t vertex, const glm::dvec3& file_value) {
+        if (merged_corners_++ == 0)
+            corner_example_ = "a corner at " + point_text(file_value) + " reads as vertex " + str(vertex) + " at " +
+                              point_text(exact[vertex]);
+    }
+
+    // The reader note for coordinates that rounding to float made equal.
+    void note_rounding() {
+        if (!rounded && merged_corners_ == 0) return;
+        std::unordered_map<std::uint32_t, double> exact_of;  // float bits -> first value of the file
+        std::uint64_t merged = 0;
+        std::string example;
+        for (std::size_t v = 0; v < exact.size(); ++v)
+            for (int k = 0; k < 3; ++k) {
+                const float f = static_cast<float>(mesh.positions[v][k]);
+                const auto [it, inserted] = exact_of.try_emplace(FloatPointKey::bits(f), exact[v][k]);
+                if (inserted || it->second == exact[v][k]) continue;
+                if (merged++ == 0)
+                    example = "vertex " + str(v) + " " + "xyz"[k] + " = " + number_text(exact[v][k]) + " reads as " +
+                              number_text(f) + ", the same float as " + number_text(it->second);
+            }
+        if (merged > 0)
+            mesh.reader_notes.push_back("coordinates are read as float and lose precision: " + str(merged) +
+                                        " vertex coordinates become equal to a different value of the file (" +
+                                        example + "); faces may read as degenerate");
+        if (merged_corners_ > 0)
+            mesh.reader_notes.push_back("coordinates are read as float and lose precision: " + str(merged_corners_) +
+                                        " STL corners become one vertex with a corner the file places elsewhere (" +
+                                        corner_example_ + ")");
+    }
+    static std::string point_text(const glm::dvec3& p) {
+        return "(" + number_text(p.x) + ", " + number_text(p.y) + ", " + number_text(p.z) + ")";
+    }
+
+    static std::string number_text(double x) {
+        char buffer[40];
+        // Whole numbers in full (100000001, not 1.00000001e+08), others as short as exact.
+        const auto r = x == std::floor(x) && std::abs(x) < 1e17
+                           ? std::to_chars(buffer, buffer + sizeof buffer, x, std::chars_format::fixed, 0)
+                           : std::to_chars(buffer, buffer + sizeof buffer, x);
+        return std::string(buffer, r.ptr);
+    }
+
+private:
+    std::size_t next_progress_ = 0;
+    std::uint64_t merged_corners_ = 0;
+    std::string corner_example_;
+};
+
+// A vertex attribute (normal, texture coordinate): any finite number.
+float attribute(Reading& r, std::string_view token, std::size_t line, const char* what) {
+    const auto v = parse_real(token);
+    if (!v) throw r.bad_token(token, line, std::string("a number (") + what + ")");
+    if (!std::isfinite(v->value))
+        throw r.error("non-finite " + std::string(what) + " " + quoted(token) + " at line " + str(line), line);
+    return v->value;
 }
 
 // ---------------------------------------------------------------------------------------
-// OBJ: OpenMesh's reader removes repeated vertices from a face before handing it over, and
-// drops the face when fewer than three remain. To report such faces as the file lists
-// them, the face lines are scanned for their vertex ids (the first number of each
-// v/vt/vn group, negative ids counting back from the last vertex so far) and set beside
-// what OpenMesh delivered. Everything else about the file is OpenMesh's reading.
+// PLY
 
-void merge_obj_faces_as_listed(const std::string& path, IndexedMesh& mesh) {
-    const Where where = check_detail::where_in(path);
-    std::ifstream in(path, std::ios::binary);
-    IndexedMesh listed;
-    std::vector<std::uint32_t> ids;
-    std::int64_t vertices_so_far = 0;
-    std::size_t line_number = 0;
-    std::string line;
-    while (std::getline(in, line)) {
-        ++line_number;
-        std::size_t i = line.find_first_not_of(" \t");
-        if (i == std::string::npos || i + 1 >= line.size()) continue;
-        const bool blank_after = line[i + 1] == ' ' || line[i + 1] == '\t';
-        if (line[i] == 'v' && blank_after) {
-            ++vertices_so_far;
-            continue;
+enum class Scalar : std::uint8_t { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+std::optional<Scalar> scalar_named(std::string_view name) {
+    static const std::pair<std::string_view, Scalar> names[] = {
+        {"char", Scalar::i8},    {"int8", Scalar::i8},     {"uchar", Scalar::u8},  {"uint8", Scalar::u8},
+        {"short", Scalar::i16},  {"int16", Scalar::i16},   {"ushort", Scalar::u16}, {"uint16", Scalar::u16},
+        {"int", Scalar::i32},    {"int32", Scalar::i32},   {"uint", Scalar::u32},   {"uint32", Scalar::u32},
+        {"float", Scalar::f32},  {"float32", Scalar::f32}, {"double", Scalar::f64}, {"float64", Scalar::f64}};
+    for (const auto& [n, s] : names)
+        if (n == name) return s;
+    return std::nullopt;
+}
+std::size_t size_of(Scalar s) {
+    switch (s) {
+        case Scalar::i8: case Scalar::u8: return 1;
+        case Scalar::i16: case Scalar::u16: return 2;
+        case Scalar::i32: case Scalar::u32: case Scalar::f32: return 4;
+        case Scalar::f64: return 8;
+    }
+    return 0;
+}
+bool is_integer(Scalar s) { return s != Scalar::f32 && s != Scalar::f64; }
+
+template <class T>
+T load(const unsigned char* p, bool big_endian) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, p, sizeof(T));
+    if (big_endian) std::reverse(b, b + sizeof(T));
+    T v;
+    std::memcpy(&v, b, sizeof(T));
+    return v;
+}
+double load_scalar(const unsigned char* p, Scalar s, bool big_endian) {
+    switch (s) {
+        case Scalar::i8: return load<std::int8_t>(p, big_endian);
+        case Scalar::u8: return load<std::uint8_t>(p, big_endian);
+        case Scalar::i16: return load<std::int16_t>(p, big_endian);
+        case Scalar::u16: return load<std::uint16_t>(p, big_endian);
+        case Scalar::i32: return load<std::int32_t>(p, big_endian);
+        case Scalar::u32: return load<std::uint32_t>(p, big_endian);
+        case Scalar::f32: return load<float>(p, big_endian);
+        case Scalar::f64: return load<double>(p, big_endian);
+    }
+    return 0.0;
+}
+
+struct PlyProperty {
+    std::string name;
+    Scalar type = Scalar::f32;  // of the items, for a list
+    bool list = false;
+    Scalar count_type = Scalar::u8;
+};
+struct PlyElement {
+    std::string name;
+    std::uint64_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+enum class PlyFormat { ascii, binary_little_endian, binary_big_endian };
+
+struct PlyHeader {
+    PlyFormat format = PlyFormat::ascii;
+    std::vector<PlyElement> elements;
+    std::size_t body_offset = 0, body_line = 0;
+};
+
+PlyHeader read_ply_header(Reading& r) {
+    Lines lines(r.text);
+    std::string_view line;
+    std::vector<std::string_view> t;
+    if (!lines.next(line) || (split(line, t), t.size() != 1 || t[0] != "ply"))
+        throw r.error("not a PLY file: it does not start with a line 'ply'", 1);
+    PlyHeader header;
+    bool have_format = false;
+    while (true) {
+        if (lines.offset() > (std::size_t(1) << 20))
+            throw r.error("PLY header has no 'end_header' in its first MiB", lines.number());
+        if (!lines.next(line)) throw r.error("PLY header has no 'end_header'", lines.number());
+        const std::size_t n = lines.number();
+        split(line, t);
+        if (t.empty() || t[0] == "comment" || t[0] == "obj_info") continue;
+        const std::string where = " at line " + str(n);
+        if (t[0] == "format") {
+            if (have_format) throw r.error("PLY header: a second 'format' line" + where, n);
+            if (t.size() != 3) throw r.error("PLY header: bad format line" + where + " (expected 'format <type> 1.0')", n);
+            if (t[1] == "ascii") header.format = PlyFormat::ascii;
+            else if (t[1] == "binary_little_endian") header.format = PlyFormat::binary_little_endian;
+            else if (t[1] == "binary_big_endian") header.format = PlyFormat::binary_big_endian;
+            else throw r.error("PLY header: unknown format " + quoted(t[1]) + where, n);
+            have_format = true;
+        } else if (t[0] == "element") {
+            if (!have_format) throw r.error("PLY header: 'element' before 'format'" + where, n);
+            const auto count = t.size() == 3 ? parse_integer(t[2]) : std::nullopt;
+            if (!count || *count < 0) throw r.error("PLY header: bad element line" + where + " (expected 'element <name> <count>')", n);
+            header.elements.push_back({std::string(t[1]), static_cast<std::uint64_t>(*count), {}});
+        } else if (t[0] == "property") {
+            if (header.elements.empty()) throw r.error("PLY header: 'property' before any 'element'" + where, n);
+            PlyProperty p;
+            if (t.size() == 5 && t[1] == "list") {
+                const auto count_type = scalar_named(t[2]), type = scalar_named(t[3]);
+                if (!count_type || !is_integer(*count_type) || !type)
+                    throw r.error("PLY header: bad list property" + where + " (expected 'property list <integer type> <type> <name>')", n);
+                p = {std::string(t[4]), *type, true, *count_type};
+            } else if (t.size() == 3 && t[1] != "list") {
+                const auto type = scalar_named(t[1]);
+                if (!type) throw r.error("PLY header: unknown property type " + quoted(t[1]) + where, n);
+                p = {std::string(t[2]), *type, false, Scalar::u8};
+            } else {
+                throw r.error("PLY header: bad property line" + where, n);
+            }
+            header.elements.back().properties.push_back(std::move(p));
+        } else if (t[0] == "end_header") {
+            if (!have_format) throw r.error("PLY header has no 'format' line", n);
+            header.body_offset = lines.offset();
+            header.body_line = n + 1;  // the line the data starts on
+            return header;
+        } else {
+            throw r.error("PLY header: unknown keyword " + quoted(t[0]) + where, n);
         }
-        if (line[i] != 'f' || !blank_after) continue;
+    }
+}
+
+// What the reader takes from an element's properties: their indices, or -1.
+struct PlyRoles {
+    int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, u = -1, v = -1;
+    int indices = -1;
+};
+
+PlyRoles ply_roles(Reading& r, const PlyElement& e, bool vertex) {
+    PlyRoles roles;
+    const auto find = [&](std::initializer_list<std::string_view> names) {
+        for (std::size_t i = 0; i < e.properties.size(); ++i)
+            for (std::string_view name : names)
+                if (e.properties[i].name == name) {
+                    if (e.properties[i].list)
+                        throw r.error("PLY header: vertex property '" + e.properties[i].name + "' is a list");
+                    return static_cast<int>(i);
+                }
+        return -1;
+    };
+    if (vertex) {
+        roles.x = find({"x"});
+        roles.y = find({"y"});
+        roles.z = find({"z"});
+        for (const auto& [role, name] : {std::pair{roles.x, "x"}, std::pair{roles.y, "y"}, std::pair{roles.z, "z"}})
+            if (role < 0) throw r.error(std::string("PLY vertex element has no property '") + name + "'");
+        if (r.options.vertex_attributes) {
+            roles.nx = find({"nx"});
+            roles.ny = find({"ny"});
+            roles.nz = find({"nz"});
+            if (roles.nx < 0 || roles.ny < 0 || roles.nz < 0) roles.nx = roles.ny = roles.nz = -1;
+            roles.u = find({"u", "s", "texture_u", "texture_s"});
+            roles.v = find({"v", "t", "texture_v", "texture_t"});
+            if (roles.u < 0 || roles.v < 0) roles.u = roles.v = -1;
+        }
+    } else {
+        for (std::size_t i = 0; i < e.properties.size(); ++i)
+            if (e.properties[i].name == "vertex_indices" || e.properties[i].name == "vertex_index") {
+                if (!e.properties[i].list || !is_integer(e.properties[i].type))
+                    throw r.error("PLY face property '" + e.properties[i].name + "' is not a list of integers");
+                roles.indices = static_cast<int>(i);
+                break;
+            }
+        if (roles.indices < 0) throw r.error("PLY face element has no 'vertex_indices' list");
+    }
+    return roles;
+}
+
+void read_ply(Reading& r) {
+    const PlyHeader h = read_ply_header(r);
+    const bool ascii = h.format == PlyFormat::ascii, big = h.format == PlyFormat::binary_big_endian;
+    const PlyElement *vertex_element = nullptr, *face_element = nullptr;
+    std::uint64_t min_bytes = 0;
+    for (const PlyElement& e : h.elements) {
+        if (e.name == "vertex" || e.name == "face") {
+            const PlyElement*& slot = e.name == "vertex" ? vertex_element : face_element;
+            if (slot) throw r.error("PLY header declares two '" + e.name + "' elements");
+            slot = &e;
+        }
+        // The least a record takes: a token and a blank per property (ascii), or the
+        // scalars and list counts (binary).
+        std::uint64_t record = 0;
+        for (const PlyProperty& p : e.properties) record += ascii ? 2 : size_of(p.list ? p.count_type : p.type);
+        min_bytes = std::min<std::uint64_t>(UINT64_MAX / 2, min_bytes + saturating_bytes(e.count, record));
+    }
+    if (!vertex_element) throw r.error("PLY header declares no 'vertex' element");
+    const std::uint64_t vertex_count = vertex_element->count, face_count = face_element ? face_element->count : 0;
+    if (ascii && min_bytes > 0) --min_bytes;  // the last token needs no blank after it
+    r.require(vertex_count, face_count, min_bytes, h.body_offset,
+              "the header declares " + str(vertex_count) + " vertices and " + str(face_count) + " faces");
+    const PlyRoles vroles = ply_roles(r, *vertex_element, true);
+    const PlyRoles froles = face_element ? ply_roles(r, *face_element, false) : PlyRoles{};
+    r.reserve(vertex_count, face_count);
+    if (vroles.nx >= 0) r.mesh.normals.reserve(vertex_count);
+    if (vroles.u >= 0) r.mesh.uvs.reserve(vertex_count);
+
+    Tokens tokens(r.text, h.body_offset, h.body_line);
+    std::size_t offset = h.body_offset;  // binary
+    const auto* bytes = reinterpret_cast<const unsigned char*>(r.text.data());
+    std::vector<Real> reals;             // the record's scalar properties
+    std::vector<std::uint32_t> ids;
+    for (const PlyElement& e : h.elements) {
+        const bool is_vertex = &e == vertex_element, is_face = &e == face_element;
+        reals.assign(e.properties.size(), Real{});
+        for (std::uint64_t i = 0; i < e.count; ++i) {
+            const std::size_t record_offset = offset;
+            std::size_t first_line = 0;
+            const std::string what = e.name + " " + str(i);
+            for (std::size_t pi = 0; pi < e.properties.size(); ++pi) {
+                const PlyProperty& p = e.properties[pi];
+                const bool indices = is_face && static_cast<int>(pi) == froles.indices;
+                if (indices) ids.clear();
+                if (ascii) {
+                    const std::string_view token = tokens.next();
+                    if (pi == 0) first_line = tokens.line();
+                    if (!p.list) {
+                        const auto v = parse_real(token);
+                        if (!v) throw r.bad_token(token, tokens.line(), "a number (" + what + ", property " + p.name + ")");
+                        reals[pi] = *v;
+                        continue;
+                    }
+                    const auto count = parse_integer(token);
+                    if (!count || *count < 0)
+                        throw r.bad_token(token, tokens.line(), "a list length (" + what + ", property " + p.name + ")");
+                    if (static_cast<std::uint64_t>(*count) > tokens.bytes_left() / 2 + 1)
+                        throw r.error("truncated file: " + what + " at line " + str(tokens.line()) + " lists " +
+                                          str(*count) + " values, more than the rest of the file holds",
+                                      tokens.line());
+                    for (std::int64_t k = 0; k < *count; ++k) {
+                        const std::string_view item = tokens.next();
+                        if (!indices) {
+                            if (!parse_real(item))
+                                throw r.bad_token(item, tokens.line(), "a number (" + what + ", property " + p.name + ")");
+                            continue;
+                        }
+                        const auto index = parse_integer(item);
+                        if (!index) throw r.bad_token(item, tokens.line(), "a vertex index (" + what + ")");
+                        if (*index < 0 || static_cast<std::uint64_t>(*index) >= vertex_count)
+                            throw r.error("face " + str(i) + " at line " + str(tokens.line()) + " refers to vertex " +
+                                              std::to_string(*index) + ", but the file has " + str(vertex_count) +
+                                              " vertices",
+                                          tokens.line());
+                        ids.push_back(static_cast<std::uint32_t>(*index));
+                    }
+                } else {
+                    const std::size_t size = size_of(p.list ? p.count_type : p.type);
+                    if (offset + size > r.text.size())
+                        throw r.error("truncated file: " + what + at_byte(offset) + " is cut off (the header declares " +
+                                      str(e.count) + " " + e.name + " records)");
+                    const double v = load_scalar(bytes + offset, p.list ? p.count_type : p.type, big);
+                    if (!p.list) {
+                        reals[pi] = real_from_binary(v);
+                        offset += size;
+                        continue;
+                    }
+                    if (v < 0) throw r.error(what + at_byte(offset) + " has a negative list length (" + Reading::number_text(v) + ")");
+                    const std::size_t item = size_of(p.type);
+                    if (v * item > double(r.text.size() - offset - size))
+                        throw r.error("truncated file: " + what + at_byte(offset) + " lists " + Reading::number_text(v) +
+                                      " values, more than the rest of the file holds");
+                    const auto count = static_cast<std::uint64_t>(v);
+                    offset += size;
+                    if (indices)
+                        for (std::uint64_t k = 0; k < count; ++k) {
+                            const double index = load_scalar(bytes + offset + k * item, p.type, big);
+                            if (index < 0 || index >= double(vertex_count))
+                                throw r.error("face " + str(i) + at_byte(offset + k * item) + " refers to vertex " +
+                                              Reading::number_text(index) + ", but the file has " +
+                                              str(vertex_count) + " vertices");
+                            ids.push_back(static_cast<std::uint32_t>(index));
+                        }
+                    offset += count * item;
+                }
+            }
+            if (is_vertex) {
+                const Real xyz[3] = {reals[vroles.x], reals[vroles.y], reals[vroles.z]};
+                r.add_vertex(xyz, ascii ? Place{first_line} : Place{0, record_offset});
+                const auto finite = [&](int role, const char* name) {
+                    if (!std::isfinite(reals[role].value))
+                        throw r.error("vertex " + str(i) + (ascii ? " at line " + str(first_line) : at_byte(record_offset)) +
+                                          " has a non-finite " + name,
+                                      first_line);
+                    return reals[role].value;
+                };
+                if (vroles.nx >= 0)
+                    r.mesh.normals.emplace_back(finite(vroles.nx, "normal"), finite(vroles.ny, "normal"),
+                                                finite(vroles.nz, "normal"));
+                if (vroles.u >= 0) r.mesh.uvs.emplace_back(finite(vroles.u, "texture coordinate"), finite(vroles.v, "texture coordinate"));
+            } else if (is_face) {
+                r.add_face(ids, first_line);
+            }
+            r.progress(ascii ? tokens.offset() : offset);
+        }
+    }
+    if (ascii) {
+        if (!tokens.at_end()) {
+            const std::string_view extra = tokens.next();
+            throw r.error("unexpected data after the last element: " + quoted(extra) + " at line " + str(tokens.line()),
+                          tokens.line());
+        }
+    } else if (offset != r.text.size()) {
+        throw r.error(str(r.text.size() - offset) + " bytes after the last element" + at_byte(offset) +
+                      " (the header declares less than the file holds)");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// OFF: [ST][C][N]OFF, ascii (with # comments) or binary as OpenMesh writes it (little
+// endian 32-bit counts, floats and indices; a face is its vertex count and its indices).
+
+struct OffKind {
+    bool texcoords = false, colours = false, normals = false, binary = false;
+};
+
+void read_off_binary(Reading& r, const OffKind& kind, std::size_t offset) {
+    if (kind.colours) throw r.error("binary COFF (vertex colours) is not supported");
+    const auto* bytes = reinterpret_cast<const unsigned char*>(r.text.data());
+    const std::size_t size = r.text.size();
+    if (offset + 12 > size) throw r.error("truncated file: binary OFF ends" + at_byte(size) + ", before its counts");
+    const std::int32_t v = load<std::int32_t>(bytes + offset, false), f = load<std::int32_t>(bytes + offset + 4, false);
+    if (v < 0 || f < 0)
+        throw r.error("binary OFF declares " + std::to_string(v) + " vertices and " + std::to_string(f) + " faces" +
+                      at_byte(offset));
+    offset += 12;
+    const std::size_t floats = 3 + (kind.normals ? 3 : 0) + (kind.texcoords ? 2 : 0);
+    const std::uint64_t vertex_bytes = 4 * floats;
+    r.require(std::uint64_t(v), std::uint64_t(f), std::uint64_t(v) * vertex_bytes + std::uint64_t(f) * 4, offset,
+              "the header declares " + std::to_string(v) + " vertices and " + std::to_string(f) + " faces");
+    r.reserve(std::uint64_t(v), std::uint64_t(f));
+    for (std::int32_t i = 0; i < v; ++i, offset += vertex_bytes) {
+        float value[8];
+        for (std::size_t k = 0; k < floats; ++k) value[k] = load<float>(bytes + offset + 4 * k, false);
+        const Real xyz[3] = {real_from_binary(value[0]), real_from_binary(value[1]), real_from_binary(value[2])};
+        r.add_vertex(xyz, Place{0, offset});
+        for (std::size_t k = 3; k < floats; ++k)
+            if (!std::isfinite(value[k]))
+                throw r.error("vertex " + str(std::uint64_t(i)) + at_byte(offset) + " has a non-finite " +
+                              (kind.normals && k < 6 ? "normal" : "texture coordinate"));
+        r.progress(offset);
+        if (!r.options.vertex_attributes) continue;
+        if (kind.normals) r.mesh.normals.emplace_back(value[3], value[4], value[5]);
+        if (kind.texcoords) r.mesh.uvs.emplace_back(value[floats - 2], value[floats - 1]);
+    }
+    std::vector<std::uint32_t> ids;
+    for (std::int32_t i = 0; i < f; ++i) {
+        if (offset + 4 > size)
+            throw r.error("truncated file: face " + str(std::uint64_t(i)) + at_byte(offset) + " is cut off");
+        const std::int32_t n = load<std::int32_t>(bytes + offset, false);
+        if (n < 0 || std::uint64_t(n) * 4 > size - offset - 4)
+            throw r.error((n < 0 ? "" : "truncated file: ") + std::string("face ") + str(std::uint64_t(i)) + at_byte(offset) +
+                          " lists " + std::to_string(n) + " vertices, " +
+                          (n < 0 ? "a negative count" : "more than the rest of the file holds"));
+        offset += 4;
         ids.clear();
-        std::istringstream tokens(line.substr(i + 2));
-        for (std::string token; tokens >> token;) {
-            const std::string first = token.substr(0, token.find('/'));
-            std::int64_t value = 0;
-            if (first.empty() ||
-                std::from_chars(first.data(), first.data() + first.size(), value).ec != std::errc())
-                continue;  // OpenMesh skips what is not a number
-            const std::int64_t index = value < 0 ? vertices_so_far + value : value - 1;
-            if (index < 0 || index >= static_cast<std::int64_t>(mesh.positions.size()))
-                throw Error("face " + std::to_string(listed.face_count()) + " refers to vertex " +
-                                std::to_string(value) + ", but the file has " +
-                                std::to_string(mesh.positions.size()) + " vertices",
-                            check_detail::where_in(path, static_cast<int>(std::min<std::size_t>(line_number, INT32_MAX))));
+        for (std::int32_t k = 0; k < n; ++k, offset += 4) {
+            const std::int32_t index = load<std::int32_t>(bytes + offset, false);
+            if (index < 0 || index >= v)
+                throw r.error("face " + str(std::uint64_t(i)) + at_byte(offset) + " refers to vertex " +
+                              std::to_string(index) + ", but the file has " + std::to_string(v) + " vertices");
             ids.push_back(static_cast<std::uint32_t>(index));
         }
-        listed.add_face(ids);
+        r.add_face(ids);
+        r.progress(offset);
+    }
+    if (offset != size)
+        throw r.error(str(size - offset) + " bytes after the last face" + at_byte(offset) +
+                      " (the header declares less than the file holds)");
+}
+
+void read_off(Reading& r) {
+    Lines lines(r.text);
+    std::string_view line;
+    std::vector<std::string_view> t;
+    const auto next_content = [&]() {  // the next line with tokens (comments removed)
+        while (lines.next(line)) {
+            split(strip_comment(line), t);
+            if (!t.empty()) return true;
+        }
+        return false;
+    };
+    if (!next_content()) throw r.error("not an OFF file: no content");
+    // The keyword: [ST][C][N]OFF, optional (a file may start with its counts), sometimes
+    // glued to the vertex count ("OFF8 12 0").
+    OffKind kind;
+    std::vector<std::string_view> counts;
+    const std::string_view first = t[0];
+    const auto off_at = first.find("OFF");
+    if (off_at != std::string_view::npos) {
+        std::string_view prefix = first.substr(0, off_at);
+        const auto take = [&](std::string_view p) {
+            if (prefix.substr(0, p.size()) != p) return false;
+            prefix.remove_prefix(p.size());
+            return true;
+        };
+        kind.texcoords = take("ST");
+        kind.colours = take("C");
+        kind.normals = take("N");
+        if (take("4") || take("n"))
+            throw r.error("OFF variant " + quoted(first) + " at line " + str(lines.number()) +
+                              " (4D or n-dimensional vertices) is not supported",
+                          lines.number());
+        if (!prefix.empty())
+            throw r.error("not an OFF file: unknown keyword " + quoted(first) + " at line " + str(lines.number()),
+                          lines.number());
+        const std::string_view glued = first.substr(off_at + 3);
+        if (!glued.empty()) counts.push_back(glued);
+        if (glued.empty() && t.size() >= 2 && t[1] == "BINARY") {
+            if (t.size() > 2) throw r.error("OFF header: unexpected " + quoted(t[2]) + " after BINARY", lines.number());
+            kind.binary = true;
+            return read_off_binary(r, kind, lines.offset());
+        }
+        counts.insert(counts.end(), t.begin() + 1, t.end());
+        if (counts.empty()) {
+            if (!next_content()) throw r.error("truncated file: OFF header without counts", lines.number());
+            counts = t;
+        }
+    } else if (parse_integer(first)) {
+        counts = t;
+    } else {
+        throw r.error("not an OFF file: it starts with " + quoted(first) + " at line " + str(lines.number()),
+                      lines.number());
+    }
+    const std::size_t count_line = lines.number();
+    if (counts.size() < 2 || counts.size() > 3)
+        throw r.error("OFF header: expected '<vertices> <faces> <edges>' at line " + str(count_line), count_line);
+    std::int64_t declared[3] = {0, 0, 0};
+    for (std::size_t k = 0; k < counts.size(); ++k) {
+        const auto c = parse_integer(counts[k]);
+        if (!c || *c < 0) throw r.bad_token(counts[k], count_line, "a count (vertices, faces, edges)");
+        declared[k] = *c;
+    }
+    const auto vertex_count = static_cast<std::uint64_t>(declared[0]), face_count = static_cast<std::uint64_t>(declared[1]);
+    // At least "0 0 0" and a line end a vertex, "0" and a line end a face.
+    const std::uint64_t min_bytes = std::min<std::uint64_t>(UINT64_MAX / 2, saturating_bytes(vertex_count, 6)) +
+                                    saturating_bytes(face_count, 2);
+    r.require(vertex_count, face_count, min_bytes > 0 ? min_bytes - 1 : 0, lines.offset(),
+              "the header declares " + str(vertex_count) + " vertices and " + str(face_count) + " faces");
+    r.reserve(vertex_count, face_count);
+
+    const std::size_t base = 3 + (kind.normals ? 3 : 0) + (kind.texcoords ? 2 : 0);
+    const std::string layout = std::string("x y z") + (kind.normals ? " nx ny nz" : "") + (kind.colours ? " r g b [a]" : "") +
+                               (kind.texcoords ? " s t" : "");
+    for (std::uint64_t i = 0; i < vertex_count; ++i) {
+        if (!next_content())
+            throw r.error("truncated file: it ends after " + str(i) + " of the " + str(vertex_count) + " vertices",
+                          lines.number());
+        const std::size_t n = lines.number();
+        const std::size_t colours = t.size() - std::min(t.size(), base);
+        if (t.size() < base || (kind.colours ? colours != 3 && colours != 4 : colours != 0))
+            throw r.error("vertex " + str(i) + " at line " + str(n) + " has " + str(t.size()) + " values, expected " +
+                              layout,
+                          n);
+        Real xyz[3];
+        for (int k = 0; k < 3; ++k) {
+            const auto v = parse_real(t[k]);
+            if (!v) throw r.bad_token(t[k], n, "a number (vertex " + str(i) + ")");
+            xyz[k] = *v;
+        }
+        r.add_vertex(xyz, Place{n});
+        r.progress(lines.offset());
+        float a[12] = {};
+        for (std::size_t k = 3; k < t.size(); ++k) {
+            const bool normal = kind.normals && k < 6;
+            const bool uv = kind.texcoords && k + 2 >= t.size();
+            if (normal || uv) a[k - 3] = attribute(r, t[k], n, normal ? "normal" : "texture coordinate");
+            else if (!parse_real(t[k])) throw r.bad_token(t[k], n, "a number (vertex " + str(i) + " colour)");
+        }
+        if (!r.options.vertex_attributes) continue;
+        if (kind.normals) r.mesh.normals.emplace_back(a[0], a[1], a[2]);
+        if (kind.texcoords) r.mesh.uvs.emplace_back(a[t.size() - 5], a[t.size() - 4]);
+    }
+    std::vector<std::uint32_t> ids;
+    for (std::uint64_t i = 0; i < face_count; ++i) {
+        if (!next_content())
+            throw r.error("truncated file: it ends after " + str(i) + " of the " + str(face_count) + " faces",
+                          lines.number());
+        const std::size_t n = lines.number();
+        const auto count = parse_integer(t[0]);
+        if (!count || *count < 0) throw r.bad_token(t[0], n, "a vertex count (face " + str(i) + ")");
+        if (static_cast<std::uint64_t>(*count) > t.size() - 1)
+            throw r.error("face " + str(i) + " at line " + str(n) + " lists " + std::to_string(*count) +
+                              " vertices, but the line holds " + str(t.size() - 1) + " values",
+                          n);
+        ids.clear();
+        for (std::size_t k = 1; k <= static_cast<std::size_t>(*count); ++k) {
+            const auto index = parse_integer(t[k]);
+            if (!index) throw r.bad_token(t[k], n, "a vertex index (face " + str(i) + ")");
+            if (*index < 0 || static_cast<std::uint64_t>(*index) >= vertex_count)
+                throw r.error("face " + str(i) + " at line " + str(n) + " refers to vertex " + std::to_string(*index) +
+                                  ", but the file has " + str(vertex_count) + " vertices",
+                              n);
+            ids.push_back(static_cast<std::uint32_t>(*index));
+        }
+        // An optional face colour: a colour-map index or three or four components.
+        if (t.size() - 1 - ids.size() > 4)
+            throw r.error("face " + str(i) + " at line " + str(n) + " has " + str(t.size() - 1 - ids.size()) +
+                              " values after its " + str(ids.size()) + " vertex indices (at most a colour of 4)",
+                          n);
+        for (std::size_t k = ids.size() + 1; k < t.size(); ++k)
+            if (!parse_real(t[k])) throw r.bad_token(t[k], n, "a number (face " + str(i) + " colour)");
+        r.add_face(ids, n);
+        r.progress(lines.offset());
+    }
+    if (next_content())
+        throw r.error("unexpected data after the last face: " + quoted(t[0]) + " at line " + str(lines.number()),
+                      lines.number());
+}
+
+// ---------------------------------------------------------------------------------------
+// OBJ: v, vt, vn and f statements (f with v, v/vt, v/vt/vn and v//vn corners, negative
+// indices counting back from the last element so far); other statements are ignored.
+
+void read_obj(Reading& r) {
+    Lines lines(r.text);
+    std::string_view line;
+    std::vector<std::string_view> t;
+    std::vector<glm::vec3> normals;
+    std::vector<glm::vec2> uvs;
+    std::uint64_t normal_count = 0, uv_count = 0;
+    struct Corner {
+        std::uint32_t vertex;
+        std::int64_t uv, normal;  // -1: none
+    };
+    std::vector<Corner> corners;  // with vertex_attributes: every face corner, in order
+    // Positive indices may point forward; the largest of each kind is checked at the end.
+    struct Largest {
+        std::int64_t value = 0;
+        std::size_t line = 0, face = 0;
+    } largest[3];
+    std::vector<std::uint32_t> ids;
+    // Memory: the text is in memory; what it lists takes at most a few times its size.
+    require_memory(saturating_bytes(r.text.size(), 8), "OBJ file of " + format_bytes(r.text.size()),
+                   check_detail::where_in(r.path));
+    while (lines.next(line)) {
+        split(strip_comment(line), t);
+        if (t.empty()) continue;
+        const std::size_t n = lines.number();
+        if (t[0] == "v") {
+            if (t.size() < 4 || t.size() > 8)
+                throw r.error("vertex " + str(r.mesh.positions.size()) + " at line " + str(n) + " has " +
+                                  str(t.size() - 1) + " values, expected x y z (and w or r g b [a])",
+                              n);
+            Real xyz[3];
+            for (std::size_t k = 1; k < t.size(); ++k) {
+                const auto v = parse_real(t[k]);
+                if (!v) throw r.bad_token(t[k], n, "a number (vertex " + str(r.mesh.positions.size()) + ")");
+                if (k <= 3) xyz[k - 1] = *v;
+            }
+            r.add_vertex(xyz, Place{n});
+        } else if (t[0] == "vt" || t[0] == "vn") {
+            const bool normal = t[0] == "vn";
+            if (normal ? t.size() != 4 : (t.size() < 2 || t.size() > 4))
+                throw r.error(std::string(normal ? "normal" : "texture coordinate") + " at line " + str(n) + " has " +
+                                  str(t.size() - 1) + " values, expected " + (normal ? "3" : "1 to 3"),
+                              n);
+            float a[3] = {0, 0, 0};
+            for (std::size_t k = 1; k < t.size(); ++k)
+                a[k - 1] = attribute(r, t[k], n, normal ? "normal" : "texture coordinate");
+            ++(normal ? normal_count : uv_count);
+            if (r.options.vertex_attributes) {
+                if (normal) normals.emplace_back(a[0], a[1], a[2]);
+                else uvs.emplace_back(a[0], a[1]);
+            }
+        } else if (t[0] == "f") {
+            const std::size_t face = r.mesh.face_count();
+            ids.clear();
+            for (std::size_t k = 1; k < t.size(); ++k) {
+                std::int64_t index[3] = {-1, -1, -1};  // 0-based vertex, uv, normal
+                std::string_view rest = t[k];
+                for (int part = 0; part < 3; ++part) {
+                    const std::size_t slash = rest.find('/');
+                    const std::string_view field = rest.substr(0, slash);
+                    const char* names[3] = {"vertex", "texture coordinate", "normal"};
+                    const std::uint64_t so_far[3] = {r.mesh.positions.size(), uv_count, normal_count};
+                    if (!field.empty() || part == 0) {
+                        const auto value = parse_integer(field);
+                        if (!value || *value == 0)
+                            throw r.bad_token(t[k], n, std::string("a face corner v, v/vt, v/vt/vn or v//vn with ") +
+                                                           "indices counting from 1 (face " + str(face) + ")");
+                        if (*value < -static_cast<std::int64_t>(so_far[part]))
+                            throw r.error("face " + str(face) + " at line " + str(n) + " refers to " + names[part] + " " +
+                                              std::to_string(*value) + ", but only " + str(so_far[part]) + " come before it",
+                                          n);
+                        if (*value > largest[part].value) largest[part] = {*value, n, face};
+                        index[part] = *value < 0 ? std::int64_t(so_far[part]) + *value : *value - 1;
+                    }
+                    if (slash == std::string_view::npos) break;
+                    if (part == 2) throw r.bad_token(t[k], n, "a face corner v, v/vt, v/vt/vn or v//vn");
+                    rest.remove_prefix(slash + 1);
+                }
+                if (index[0] >= std::int64_t(max_vertices))
+                    throw r.error("face " + str(face) + " at line " + str(n) + " refers to vertex " +
+                                      std::to_string(index[0] + 1) + ", more than tessref can number",
+                                  n);
+                ids.push_back(static_cast<std::uint32_t>(index[0]));
+                if (r.options.vertex_attributes) corners.push_back({ids.back(), index[1], index[2]});
+            }
+            r.add_face(ids, n);
+        }
+        r.progress(lines.offset());
+    }
+    const char* names[3] = {"vertex", "texture coordinate", "normal"};
+    const std::uint64_t totals[3] = {r.mesh.positions.size(), uv_count, normal_count};
+    for (int part = 0; part < 3; ++part)
+        if (std::uint64_t(largest[part].value) > totals[part])
+            throw r.error("face " + str(largest[part].face) + " at line " + str(largest[part].line) + " refers to " +
+                              names[part] + " " + std::to_string(largest[part].value) + ", but the file has " +
+                              str(totals[part]) + (part == 0 ? " vertices" : part == 1 ? " texture coordinates" : " normals"),
+                          largest[part].line);
+    if (!r.options.vertex_attributes) return;
+    // As OpenMesh's OBJ reader: a vertex takes the attributes of its last corner.
+    if (!normals.empty()) r.mesh.normals.assign(r.mesh.positions.size(), glm::vec3(0.0f));
+    if (!uvs.empty()) r.mesh.uvs.assign(r.mesh.positions.size(), glm::vec2(0.0f));
+    for (const Corner& c : corners) {
+        if (c.normal >= 0 && !normals.empty()) r.mesh.normals[c.vertex] = normals[c.normal];
+        if (c.uv >= 0 && !uvs.empty()) r.mesh.uvs[c.vertex] = uvs[c.uv];
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// STL: binary when the size is exactly 84 + 50 * the facet count in its header (as
+// OpenMesh and admesh decide), else ASCII. Corners equal as floats are one vertex, numbered
+// in order of first appearance, as OpenMesh's STL reader numbers them.
+
+class StlVertices {
+public:
+    explicit StlVertices(Reading& r) : r_(r) {}
+    // Non-finite corners never become vertices (add_vertex refuses them), so never match.
+    std::uint32_t corner(const Real (&xyz)[3], const Place& place) {
+        const FloatPointKey key(glm::vec3(xyz[0].value, xyz[1].value, xyz[2].value));
+        if (const auto it = ids_.find(key); it != ids_.end()) {
+            const glm::dvec3 file_value(xyz[0].exact, xyz[1].exact, xyz[2].exact);
+            // -0 and +0 are one vertex in OpenMesh and admesh too: no precision lost there.
+            if (file_value != r_.exact[it->second]) r_.merged_corner(it->second, file_value);
+            return it->second;
+        }
+        const std::uint32_t id = r_.add_vertex(xyz, place);
+        ids_.emplace(key, id);
+        return id;
     }
 
-    // Set the listed faces beside the delivered ones: equal where the listed face has no
-    // repeated vertex, missing or shortened where it has.
-    IndexedMesh merged;
-    merged.source = mesh.source;
-    merged.format = mesh.format;
-    std::vector<char> refused(mesh.face_count(), 0);
-    for (std::uint32_t f : mesh.kernel_refused_faces) refused[f] = 1;
-    // Where our view of the file and OpenMesh's part (a construct the scan does not know),
-    // OpenMesh's reading stands, with a note.
-    const auto give_up = [&](std::size_t f) {
-        mesh.reader_notes.push_back("OBJ face " + std::to_string(f) +
-                                    ": the face lines could not be matched with OpenMesh's reading; faces its reader "
-                                    "dropped or shortened (repeated vertices) are not recovered");
-    };
-    std::size_t next = 0;
-    std::vector<std::uint32_t> sorted;
-    for (std::size_t f = 0; f < listed.face_count(); ++f) {
-        const auto face = listed.face(f);
-        sorted.assign(face.begin(), face.end());
-        std::sort(sorted.begin(), sorted.end());
-        const auto unique = static_cast<std::size_t>(std::unique(sorted.begin(), sorted.end()) - sorted.begin());
-        const auto id = static_cast<std::uint32_t>(merged.face_count());
-        if (unique == face.size() && face.size() >= 3) {
-            if (next >= mesh.face_count() || !std::ranges::equal(mesh.face(next), face)) return give_up(f);
-            if (refused[next]) merged.kernel_refused_faces.push_back(id);
-            ++next;
-        } else {
-            if (unique >= 3) ++next;  // OpenMesh delivered a shortened copy
-            merged.reader_skipped_faces.push_back(id);
+private:
+    Reading& r_;
+    std::unordered_map<FloatPointKey, std::uint32_t, FloatPointHash> ids_;
+};
+
+void read_stl_binary(Reading& r, std::uint64_t facets) {
+    r.require(facets / 2 + 3, facets, 0, 0, "the header declares " + str(facets) + " facets");
+    r.reserve(facets / 2 + 3, facets);  // a closed surface has about half as many vertices
+    StlVertices vertices(r);
+    const auto* bytes = reinterpret_cast<const unsigned char*>(r.text.data());
+    std::vector<std::uint32_t> ids(3);
+    for (std::uint64_t i = 0; i < facets; ++i) {
+        const std::size_t offset = 84 + 50 * i;
+        for (int c = 0; c < 3; ++c) {
+            const std::size_t at = offset + 12 + 12 * c;
+            const Real xyz[3] = {real_from_binary(load<float>(bytes + at, false)),
+                                 real_from_binary(load<float>(bytes + at + 4, false)),
+                                 real_from_binary(load<float>(bytes + at + 8, false))};
+            ids[c] = vertices.corner(xyz, Place{0, at, i, c});
         }
-        merged.add_face(face);
+        r.add_face(ids);
+        r.progress(offset);
     }
-    if (next != mesh.face_count()) return give_up(listed.face_count());
-    merged.positions = std::move(mesh.positions);
-    merged.reader_notes = std::move(mesh.reader_notes);
-    mesh = std::move(merged);
+}
+
+void read_stl_ascii(Reading& r) {
+    Tokens tokens(r.text, 0, 1);
+    StlVertices vertices(r);
+    std::vector<std::uint32_t> ids(3);
+    const auto expect = [&](std::string_view keyword) {
+        const std::string_view t = tokens.next();
+        if (!iequals(t, keyword)) throw r.bad_token(t, tokens.line(), "'" + std::string(keyword) + "' (ASCII STL)");
+    };
+    const auto number = [&](const std::string& what) {
+        const std::string_view t = tokens.next();
+        const auto v = parse_real(t);
+        if (!v) throw r.bad_token(t, tokens.line(), "a number (" + what + ")");
+        return *v;
+    };
+    // Some files hold several solids one after another.
+    do {
+        expect("solid");
+        tokens.skip_rest_of_line();  // the name
+        while (true) {
+            const std::string_view t = tokens.next();
+            if (iequals(t, "endsolid")) {
+                tokens.skip_rest_of_line();
+                break;
+            }
+            if (t.empty())
+                throw r.error("truncated ASCII STL: it ends at line " + str(tokens.line()) + " without 'endsolid'",
+                              tokens.line());
+            if (!iequals(t, "facet")) throw r.bad_token(t, tokens.line(), "'facet' or 'endsolid' (ASCII STL)");
+            const std::string facet = "facet " + str(r.mesh.face_count());
+            expect("normal");
+            for (int k = 0; k < 3; ++k) number(facet + " normal");  // not used; any number will do
+            expect("outer");
+            expect("loop");
+            for (int c = 0; c < 3; ++c) {
+                expect("vertex");
+                const std::size_t line = tokens.line();
+                const Real xyz[3] = {number(facet + " vertex"), number(facet + " vertex"), number(facet + " vertex")};
+                ids[c] = vertices.corner(xyz, Place{line, SIZE_MAX, r.mesh.face_count(), c});
+            }
+            expect("endloop");
+            expect("endfacet");
+            r.add_face(ids, tokens.line());
+            r.progress(tokens.offset());
+        }
+    } while (!tokens.at_end());
+}
+
+void read_stl(Reading& r) {
+    const std::uint64_t size = r.text.size();
+    if (size >= 84) {
+        const std::uint64_t facets = load<std::uint32_t>(reinterpret_cast<const unsigned char*>(r.text.data()) + 80, false);
+        if (84 + 50 * facets == size) return read_stl_binary(r, facets);
+    }
+    // Not binary by size: ASCII when it reads as text (a NUL or another control character
+    // in the first 64 KiB says it is binary data).
+    const std::string_view head = r.text.substr(0, 65536);
+    const bool text = std::all_of(head.begin(), head.end(), [](char ch) {
+        const auto c = static_cast<unsigned char>(ch);
+        return c >= 32 || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
+    });
+    if (text) return read_stl_ascii(r);
+    if (size >= 84) {
+        const std::uint64_t facets = load<std::uint32_t>(reinterpret_cast<const unsigned char*>(r.text.data()) + 80, false);
+        throw r.error("truncated or corrupt binary STL: the header declares " + str(facets) + " facets (" +
+                      str(84 + 50 * facets) + " bytes), the file has " + str(size) + " bytes");
+    }
+    throw r.error("not an STL file: too short for binary STL (" + str(size) + " bytes) and not text");
+}
+
+// ---------------------------------------------------------------------------------------
+
+// The file's bytes, mapped rather than copied: a header is checked against the file's size
+// and the memory limit before the data behind it costs memory.
+class MappedFile {
+public:
+    explicit MappedFile(const std::string& path) {
+        const Where where = check_detail::where_in(path);
+        fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);  // a FIFO must not block
+        struct stat st {};
+        if (fd_ < 0 || ::fstat(fd_, &st) != 0) throw Error(std::string("cannot open mesh file: ") + std::strerror(errno), where);
+        if (!S_ISREG(st.st_mode)) throw Error("not a regular file", where);
+        size_ = static_cast<std::size_t>(st.st_size);
+        if (size_ == 0) throw Error("empty mesh file", where);
+        data_ = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+        if (data_ == MAP_FAILED) throw Error(std::string("cannot read mesh file: ") + std::strerror(errno), where);
+        ::madvise(data_, size_, MADV_SEQUENTIAL);
+    }
+    ~MappedFile() {
+        if (data_ != MAP_FAILED) ::munmap(data_, size_);
+        if (fd_ >= 0) ::close(fd_);
+    }
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+    std::string_view text() const { return {static_cast<const char*>(data_), size_}; }
+
+private:
+    int fd_ = -1;
+    void* data_ = MAP_FAILED;
+    std::size_t size_ = 0;
+};
+
+std::string lowercase_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+// Which faces OpenMesh's importer (the one its readers and tessref's exporters go through)
+// would not add to its kernel as listed: a face with a repeated vertex or fewer than three
+// is dropped, one making a complex edge or vertex is added on copies of its vertices.
+void find_kernel_refused_faces(IndexedMesh& mesh) {
+    using OmMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
+    OmMesh om;
+    OpenMesh::IO::ImporterT<OmMesh> importer(om);
+    om.reserve(mesh.positions.size(), 0, mesh.face_count());
+    for (const glm::dvec3& p : mesh.positions)
+        importer.add_vertex(OpenMesh::Vec3f(float(p.x), float(p.y), float(p.z)));
+    // The importer explains each refusal on omerr(); the report does that.
+    const bool was_enabled = ::omerr().is_enabled();
+    ::omerr().disable();
+    OpenMesh::IO::BaseImporter::VHandles handles;
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+        handles.clear();
+        for (std::uint32_t v : mesh.face(f)) handles.emplace_back(static_cast<int>(v));
+        const std::size_t vertices_before = om.n_vertices();
+        const OpenMesh::FaceHandle fh = importer.add_face(handles);
+        if (!fh.is_valid() || om.n_vertices() != vertices_before)
+            mesh.kernel_refused_faces.push_back(static_cast<std::uint32_t>(f));
+    }
+    if (was_enabled) ::omerr().enable();
 }
 
 }  // namespace
 
-IndexedMesh read_mesh_for_check(const std::string& path) { return read_mesh_for_check(path, {}); }
-
-IndexedMesh read_mesh_for_check(const std::string& path, const std::function<void(double)>& progress) {
+IndexedMesh read_mesh_file(const std::string& path, const MeshFileOptions& options) {
     const Where where = check_detail::where_in(path);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw Error("no such mesh file", where);
     if (std::filesystem::is_directory(path, ec)) throw Error("is a directory, not a mesh file", where);
-    {
-        std::ifstream probe(path, std::ios::binary);
-        if (!probe) throw Error("cannot open mesh file", where);
-    }
     const std::string ext = lowercase_extension(path);
     if (ext != "ply" && ext != "obj" && ext != "off" && ext != "stl")
         throw Error("unsupported mesh format '" + ext + "' (expected .ply, .obj, .off or .stl)", where);
-    if (std::filesystem::file_size(path, ec) == 0) throw Error("empty mesh file", where);
+    const MappedFile file(path);
+    Reading r(path, file.text(), options);
+    r.mesh.format = ext;
+    if (ext == "ply") read_ply(r);
+    else if (ext == "off") read_off(r);
+    else if (ext == "obj") read_obj(r);
+    else read_stl(r);
+    if (r.mesh.face_count() == 0) throw Error("no faces: a point cloud, not a mesh", where);
+    r.note_rounding();
+    if (options.progress) options.progress(1.0);
+    return std::move(r.mesh);
+}
 
-    StlKind stl_kind;
-    if (ext == "stl") stl_kind = classify_stl(path);
-    DeclaredCounts ply_counts, off_counts;
-    if (ext == "ply") ply_counts = ply_declared_counts(path);
-    if (ext == "off") off_counts = off_declared_counts(path);
+IndexedMesh read_mesh_for_check(const std::string& path) { return read_mesh_for_check(path, {}); }
 
-    IndexedMesh mesh;
-    mesh.source = path;
-    mesh.format = ext;
-    OmMesh om;
-    RecordingImporter importer(om, mesh);
-    std::uint64_t expected = 0;
-    // Binary STL: its facets, and about half as many distinct corners (a closed surface).
-    if (ext == "stl" && stl_kind.binary) expected = stl_kind.facets + stl_kind.facets / 2;
-    for (const DeclaredCounts* counts : {&ply_counts, &off_counts})
-        if (counts->vertices && counts->faces) expected = *counts->vertices + *counts->faces;
-    if (progress) importer.set_progress(expected, &progress);
-    OpenMesh::IO::Options options;
-    bool ok = false;
-    std::string reader_message;
-    {
-        CapturedOpenMeshLog log;
-        importer.set_face_limit(std::filesystem::file_size(path) + 16);
-        try {
-            ok = OpenMesh::IO::IOManager().read(path, importer, options);
-        } catch (const RecordingImporter::FaceLimit&) {
-            throw Error("the " + ext + " reader ran past the end of the data (a corrupt or unsupported header?)", where);
-        }
-        reader_message = log.first_line();
-    }
-    if (!ok) {
-        std::string what = "cannot read mesh file as " + ext;
-        if (!reader_message.empty()) what += ": OpenMesh says '" + reader_message + "'";
-        throw Error(what, where);
-    }
-    if (importer.bad_face()) {
-        const auto& bad = *importer.bad_face();
-        throw Error("face " + std::to_string(bad.face_id) + " refers to vertex " +
-                        std::to_string(bad.vertex) + ", but the file has " +
-                        std::to_string(importer.recorded_vertices()) + " vertices",
-                    where);
-    }
-    if (mesh.face_count() == 0 && mesh.positions.empty())
-        throw Error("no vertices and no faces could be read" +
-                        (reader_message.empty() ? std::string() : " (OpenMesh says '" + reader_message + "')"),
-                    where);
-    if (ext == "ply") check_declared_counts(ply_counts, mesh, "PLY file");
-    if (ext == "off") check_declared_counts(off_counts, mesh, "OFF file");
-    if (ext == "stl") recover_skipped_stl_facets(path, stl_kind, mesh);
-    if (ext == "obj") merge_obj_faces_as_listed(path, mesh);
-    if (mesh.face_count() == 0) throw Error("no faces: a point cloud, not a mesh", where);
+IndexedMesh read_mesh_for_check(const std::string& path, const std::function<void(double)>& progress) {
+    MeshFileOptions options;
+    options.progress = progress;
+    IndexedMesh mesh = read_mesh_file(path, options);
+    find_kernel_refused_faces(mesh);
     return mesh;
 }
 

@@ -5,12 +5,13 @@
 #include <fstream>
 #include <sstream>
 
-#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/IO/importer/ImporterT.hh>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <glm/gtc/matrix_transform.hpp>
 #include <toml++/toml.h>
 
 #include "scene/toml_reader.h"
+#include "tessref/check.h"
 #include "tessref/scene.h"
 
 namespace tessref {
@@ -338,34 +339,58 @@ struct Loader {
 
     bool read_one_mesh(const TableReader& t, const std::string& path, const glm::dvec3& translate, double scale,
                        TriangleMeshes& out) {
+        std::error_code ec;
+        if (!fs::is_regular_file(path, ec))
+            throw Error("cannot read mesh " + path + ": no such file", t.where("path"));
+        // The reader `tessref check` uses (it refuses hostile files, naming line or byte).
+        IndexedMesh file;
+        try {
+            MeshFileOptions read_options;
+            read_options.vertex_attributes = true;
+            file = read_mesh_file(path, read_options);
+        } catch (const Error& e) {
+            throw Error("cannot read mesh: " + e.message(), t.where("path"));
+        }
+        for (std::size_t f = 0; f < file.face_count(); ++f) {
+            const auto face = file.face(f);
+            if (face.size() != 3)
+                throw Error("mesh " + path + " is not a triangle mesh: face " + std::to_string(f) + " has " +
+                                std::to_string(face.size()) + " vertices (PN triangles need triangles)",
+                            t.where("path"));
+            if (face[0] == face[1] || face[1] == face[2] || face[0] == face[2])
+                throw Error("mesh " + path + ": face " + std::to_string(f) + " repeats a vertex (PN triangles need three)",
+                            t.where("path"));
+        }
+        // OpenMesh's half-edge mesh, built through its importer as its readers build it: it
+        // computes the vertex normals a file lacks, from faces in its circulation order.
         using Mesh = OpenMesh::PolyMesh_ArrayKernelT<>;
         Mesh mesh;
         mesh.request_vertex_normals();
         mesh.request_vertex_texcoords2D();
-        OpenMesh::IO::Options options;
-        options += OpenMesh::IO::Options::VertexNormal;
-        options += OpenMesh::IO::Options::VertexTexCoord;
-        std::error_code ec;
-        if (!fs::is_regular_file(path, ec))
-            throw Error("cannot read mesh " + path + ": no such file", t.where("path"));
-        if (!OpenMesh::IO::read_mesh(mesh, path, options))
-            throw Error("cannot read mesh " + path + ": OpenMesh could not read it (format or contents)", t.where("path"));
-        if (mesh.n_faces() == 0) throw Error("mesh " + path + " has no faces", t.where("path"));
-        std::size_t face_index = 0;
-        for (auto fh : mesh.faces()) {
-            const std::size_t valence = mesh.valence(fh);
-            if (valence != 3)
-                throw Error("mesh " + path + " is not a triangle mesh: face " + std::to_string(face_index) + " has " +
-                                std::to_string(valence) + " vertices (PN triangles need triangles)",
-                            t.where("path"));
-            ++face_index;
+        {
+            OpenMesh::IO::ImporterT<Mesh> importer(mesh);
+            for (std::size_t v = 0; v < file.vertex_count(); ++v) {
+                const glm::dvec3& p = file.positions[v];
+                const auto vh = importer.add_vertex(OpenMesh::Vec3f(float(p.x), float(p.y), float(p.z)));
+                if (!file.normals.empty()) {
+                    const glm::vec3& n = file.normals[v];
+                    importer.set_normal(vh, OpenMesh::Vec3f(n.x, n.y, n.z));
+                }
+                if (!file.uvs.empty()) importer.set_texcoord(vh, OpenMesh::Vec2f(file.uvs[v].x, file.uvs[v].y));
+            }
+            OpenMesh::IO::BaseImporter::VHandles handles;
+            for (std::size_t f = 0; f < file.face_count(); ++f) {
+                handles.clear();
+                for (std::uint32_t v : file.face(f)) handles.emplace_back(static_cast<int>(v));
+                importer.add_face(handles);
+            }
         }
-        if (!options.check(OpenMesh::IO::Options::VertexNormal)) {
+        if (file.normals.empty()) {
             // No normals in the file: the normalized sum of the incident face normals.
             mesh.request_face_normals();
             mesh.update_normals();
         }
-        const bool has_uv = options.check(OpenMesh::IO::Options::VertexTexCoord);
+        const bool has_uv = !file.uvs.empty();
         const std::uint32_t base = static_cast<std::uint32_t>(out.positions.size());
         for (auto vh : mesh.vertices()) {
             const auto p = mesh.point(vh);
