@@ -1,5 +1,5 @@
 // fuzz/fuzz_mesh_check.h — the body of the four `check` mesh-reader harnesses (fuzz_ply,
-// fuzz_obj, fuzz_off, fuzz_stl): OpenMesh picks the reader by extension, so each format is
+// fuzz_obj, fuzz_off, fuzz_stl): the reader is picked by extension, so each format is
 // its own target with its own seeds and dictionary.
 #pragma once
 
