@@ -115,23 +115,6 @@ GLuint link(GlFunctions& gl, const std::vector<StageSource>& stages, const std::
     return program;
 }
 
-const char* domain_qualifier(Domain d) {
-    switch (d) {
-        case Domain::quads: return "quads";
-        case Domain::triangles: return "triangles";
-        case Domain::isolines: return "isolines";
-    }
-    return "quads";
-}
-const char* spacing_qualifier(Spacing s) {
-    switch (s) {
-        case Spacing::equal: return "equal_spacing";
-        case Spacing::fractional_odd: return "fractional_odd_spacing";
-        case Spacing::fractional_even: return "fractional_even_spacing";
-    }
-    return "equal_spacing";
-}
-
 // The scene's [generator] in place of the evaluation shader's own layout(...) in; line, so
 // that GL tessellates as the CPU pipeline does (the twins' lines are the scenes' defaults).
 std::string with_generator(const std::string& text, const TessSettings& g, const std::string& path) {

@@ -66,24 +66,6 @@ Where patch_where(std::size_t patch) {
 
 std::string data_dir() { return shader_data_dir(); }
 
-const char* domain_qualifier(Domain d) {
-    switch (d) {
-        case Domain::quads: return "quads";
-        case Domain::triangles: return "triangles";
-        case Domain::isolines: return "isolines";
-    }
-    return "quads";
-}
-
-const char* spacing_qualifier(Spacing s) {
-    switch (s) {
-        case Spacing::equal: return "equal_spacing";
-        case Spacing::fractional_odd: return "fractional_odd_spacing";
-        case Spacing::fractional_even: return "fractional_even_spacing";
-    }
-    return "equal_spacing";
-}
-
 int vertices_per_primitive(const TessSettings& s) {
     if (s.point_mode) return 1;
     return s.domain == Domain::isolines ? 2 : 3;
