@@ -77,9 +77,11 @@ private:
 // The third edge TBB provides: a task is spawned after it is built and runs after it is
 // taken, possibly by another worker than the one that split it off. TBB copies the body
 // into every task it splits off, so each copy releases its own address when built and
-// is acquired before it is read.
-inline void built(const void* object) { __tsan_release(const_cast<void*>(object)); }
-inline const void* reading(const void* object) {
+// is acquired before it is read. TBB also recycles a finished task's memory for a new
+// task on another worker: a copy releases its address when destroyed and a new one
+// acquires it before it is built there.
+inline void release(const void* object) { __tsan_release(const_cast<void*>(object)); }
+inline const void* acquire(const void* object) {
     __tsan_acquire(const_cast<void*>(object));
     return object;
 }
@@ -87,15 +89,16 @@ inline const void* reading(const void* object) {
 template <class Body>
 class ForBody {
 public:
-    ForBody(Edges& edges, const Body& body) : edges_(&edges), body_(&body) { built(this); }
+    ForBody(Edges& edges, const Body& body) : edges_((acquire(this), &edges)), body_(&body) { release(this); }
     ForBody(const ForBody& other)
-        : edges_((reading(&other), other.edges_)), body_(other.body_) {
-        built(this);
+        : edges_((acquire(this), acquire(&other), other.edges_)), body_(other.body_) {
+        release(this);
     }
+    ~ForBody() { release(this); }
     ForBody& operator=(const ForBody&) = delete;
     template <class Argument>
     void operator()(const Argument& argument) const {
-        reading(this);
+        acquire(this);
         Scope scope(*edges_);
         (*body_)(argument);
     }
