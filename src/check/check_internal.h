@@ -14,8 +14,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include "common/parallel.h"
 
 #include "tessref/check.h"
 #include "tessref/error.h"
@@ -107,7 +106,7 @@ template <class Result, class Fn>
 std::vector<Result> map_chunks(std::size_t n, std::size_t chunk, Fn&& fn) {
     const std::size_t chunks = (n + chunk - 1) / chunk;
     std::vector<Result> results(chunks);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t c = r.begin(); c != r.end(); ++c)
             fn(c * chunk, std::min(n, (c + 1) * chunk), results[c]);
     });

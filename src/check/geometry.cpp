@@ -9,7 +9,7 @@
 #include <string>
 #include <unordered_map>
 
-#include <tbb/parallel_sort.h>
+#include "common/parallel.h"
 
 #include "check/check_internal.h"
 
@@ -47,13 +47,13 @@ public:
               double cell)
         : origin_(origin), cell_(cell) {
         entries_.resize(ids.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ids.size(), 1 << 14), [&](const auto& r) {
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, ids.size(), 1 << 14), [&](const auto& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 const glm::i64vec3 c = cell_of(points[ids[i]]);
                 entries_[i] = {cell_key(c.x, c.y, c.z), ids[i]};
             }
         });
-        tbb::parallel_sort(entries_.begin(), entries_.end());
+        tessref::parallel_sort(entries_.begin(), entries_.end());
     }
 
     glm::i64vec3 cell_of(const glm::dvec3& p) const {
@@ -207,7 +207,7 @@ void analyse_face_geometry(CheckState& state) {
     // A terrain: open, and no face turned away from up (vertical walls allowed).
     if (!report.closed && magnitude[state.up_axis] > 0.0) {
         std::atomic<bool> facing_down{false};
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
             for (std::size_t f = r.begin(); f != r.end() && !facing_down.load(std::memory_order_relaxed); ++f) {
                 if (state.face_status[f] != face_kept) continue;
                 const glm::dvec3 a = face_vector_area(mesh, f) * (have_flips && state.face_flipped[f] ? -1.0 : 1.0);
@@ -287,7 +287,7 @@ void find_coincident_vertices(CheckState& state) {
                 }
             });
         pairs = concatenate(std::move(parts));
-        tbb::parallel_sort(pairs.begin(), pairs.end());
+        tessref::parallel_sort(pairs.begin(), pairs.end());
         pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     } else {
         std::vector<std::uint32_t> sorted = ids;
@@ -298,7 +298,7 @@ void find_coincident_vertices(CheckState& state) {
             if (p.z != q.z) return p.z < q.z;
             return a < b;
         };
-        tbb::parallel_sort(sorted.begin(), sorted.end(), less);
+        tessref::parallel_sort(sorted.begin(), sorted.end(), less);
         for (std::size_t i = 0; i < sorted.size();) {
             std::size_t j = i + 1;
             while (j < sorted.size() && equal_position(sorted[i], sorted[j])) ++j;

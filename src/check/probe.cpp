@@ -169,7 +169,7 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
     const int batch = 16;
     for (int j0 = 0; j0 < resolution; j0 += batch) {
         const int j1 = std::min(resolution, j0 + batch);
-        tbb::parallel_for(tbb::blocked_range<int>(j0, j1, 1), [&](const tbb::blocked_range<int>& r) {
+        tessref::parallel_for(tbb::blocked_range<int>(j0, j1, 1), [&](const tbb::blocked_range<int>& r) {
             std::vector<double> crossings;
             for (int j = r.begin(); j != r.end(); ++j) {
                 const double w = lo.y + (j + offset.y) * step.y;
@@ -299,7 +299,7 @@ void closed_probe(CheckState& state, const RayScene& scene) {
     const int batch = 16;
     for (int r0 = 0; r0 < 3 * resolution; r0 += batch) {
         const int r1 = std::min(3 * resolution, r0 + batch);
-        tbb::parallel_for(tbb::blocked_range<int>(r0, r1, 1), [&](const tbb::blocked_range<int>& range) {
+        tessref::parallel_for(tbb::blocked_range<int>(r0, r1, 1), [&](const tbb::blocked_range<int>& range) {
             for (int row = range.begin(); row != range.end(); ++row) {
                 const int axis = row / resolution, j = row % resolution;
                 glm::dvec3 across_u(0.0), across_w(0.0);
@@ -341,7 +341,7 @@ void closed_probe(CheckState& state, const RayScene& scene) {
     // Escape rays: from each inside point, one direction of a spiral over the sphere.
     const std::size_t directions = 4096;
     std::vector<std::uint8_t> escaped(inside.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, inside.size(), 256), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, inside.size(), 256), [&](const auto& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             const double index = double(n % directions) + 0.5;
             const double z = 1.0 - 2.0 * index / double(directions);

@@ -59,7 +59,7 @@ void build_half_edges(CheckState& state) {
         throw Error("mesh too large to check: more than 2^31 faces", check_detail::where_in(mesh.source));
 
     std::vector<std::uint32_t> counts(vertex_count + 1, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
             const auto face = mesh.face(f);
@@ -80,7 +80,7 @@ void build_half_edges(CheckState& state) {
     std::copy(state.half_edge_start.begin(), state.half_edge_start.end(), cursor.begin());
 
     state.half_edges.resize(total);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
             const auto face = mesh.face(f);
@@ -94,7 +94,7 @@ void build_half_edges(CheckState& state) {
         }
     });
     // Sorting each group fixes the order the atomic scatter left undetermined.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, vertex_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, vertex_chunk), [&](const auto& r) {
         for (std::size_t v = r.begin(); v != r.end(); ++v)
             std::sort(state.half_edges.begin() + state.half_edge_start[v],
                       state.half_edges.begin() + state.half_edge_start[v + 1],
@@ -109,7 +109,7 @@ void find_duplicate_faces(CheckState& state) {
     // Two faces over the same vertex set share every edge, so comparing the faces met on
     // each edge finds every duplicate; the earliest face of a set is the original.
     std::vector<std::uint32_t> duplicate_of(mesh.face_count(), none);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), vertex_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), vertex_chunk), [&](const auto& r) {
         for_each_edge_in(state, r.begin(), r.end(), [&](std::uint32_t, std::uint32_t, std::uint32_t b, std::uint32_t e) {
             for (std::uint32_t i = b; i < e; ++i)
                 for (std::uint32_t j = i + 1; j < e; ++j) {
@@ -295,7 +295,7 @@ void find_non_manifold_vertices(CheckState& state) {
 void find_components(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     ConcurrentDisjointSets sets(mesh.vertex_count());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
             const auto face = mesh.face(f);

@@ -6,8 +6,7 @@
 #include <limits>
 #include <string>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include "common/parallel.h"
 
 #include "tessref/error.h"
 
@@ -97,7 +96,7 @@ CompareResult compare_images(const FloatImage& reference, const FloatImage& test
     const int deviation = std::min(options.max_position_deviation, std::max(reference.width, reference.height));
     const Matcher matcher{reference, test, result.compared_channels, options.threshold, deviation};
 
-    tbb::parallel_for(tbb::blocked_range<int>(0, reference.height), [&](const tbb::blocked_range<int>& range) {
+    tessref::parallel_for(tbb::blocked_range<int>(0, reference.height), [&](const tbb::blocked_range<int>& range) {
         for (int y = range.begin(); y < range.end(); ++y) {
             const auto row = static_cast<std::size_t>(y);
             double squares = 0.0;

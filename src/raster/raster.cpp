@@ -14,9 +14,7 @@
 #include <string>
 #include <utility>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
+#include "common/parallel.h"
 
 #include "raster/raster_internal.h"
 #include "tessref/error.h"
@@ -426,7 +424,7 @@ void resolve(Context& ctx) {
     const RasterInput& in = ctx.input;
     const auto vc = static_cast<std::size_t>(fb.varying_count);
     const auto ivc = static_cast<std::size_t>(in.varying_count);
-    tbb::parallel_for(tbb::blocked_range<int>(0, fb.height), [&](const tbb::blocked_range<int>& rows) {
+    tessref::parallel_for(tbb::blocked_range<int>(0, fb.height), [&](const tbb::blocked_range<int>& rows) {
         for (int y = rows.begin(); y < rows.end(); ++y) {
             for (int x = 0; x < fb.width; ++x) {
                 const std::size_t idx = static_cast<std::size_t>(y) * static_cast<std::size_t>(fb.width) +
@@ -465,7 +463,7 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
 
     ctx.vertices.resize(input.positions.size());
     const bool fused = settings.window_transform == WindowTransform::vertex_shader && host_has_fma();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                           for (std::size_t i = r.begin(); i < r.end(); ++i) {
                               PreparedVertex& v = ctx.vertices[i];
@@ -486,7 +484,7 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
     std::vector<RasterStats> tile_stats(static_cast<std::size_t>(tile_count));
     auto flush = [&] {
         if (used == 0) return;
-        tbb::parallel_for(0, tile_count, [&](int tile) {
+        tessref::parallel_for(0, tile_count, [&](int tile) {
             raster_tile(ctx, tile, chunks, used, tile_stats[static_cast<std::size_t>(tile)]);
         });
         for (std::size_t c = 0; c < used; ++c) {
@@ -505,7 +503,7 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
         const std::size_t wave_last = std::min(tri_count, wave_first + kChunkTriangles * kChunksPerWave);
         const std::size_t wave = (wave_last - wave_first + kChunkTriangles - 1) / kChunkTriangles;
         if (chunks.size() < used + wave) chunks.resize(used + wave);
-        tbb::parallel_for(std::size_t{0}, wave, [&](std::size_t c) {
+        tessref::parallel_for(std::size_t{0}, wave, [&](std::size_t c) {
             const std::size_t first = wave_first + c * kChunkTriangles;
             setup_chunk(ctx, first, std::min(wave_last, first + kChunkTriangles), chunks[used + c]);
         });
@@ -530,7 +528,7 @@ RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSet
     if (settings.threads > 0) {
         tbb::task_arena arena(settings.threads);
         RasterStats stats;
-        arena.execute([&] { stats = run(fb, input, settings); });
+        tessref::execute(arena, [&] { stats = run(fb, input, settings); });
         return stats;
     }
     return run(fb, input, settings);

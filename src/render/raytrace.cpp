@@ -8,9 +8,7 @@
 #include <string>
 #include <vector>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
+#include "common/parallel.h"
 
 #include "render/render_internal.h"
 #include "tessref/error.h"
@@ -92,7 +90,7 @@ GroundTruthSurface build_surface(const Scene& scene, const GroundMap& map) {
     s.rows = static_cast<int>(vs.size());
     s.positions.resize(us.size() * vs.size());
     const bool xy = g.plane == GroundPlane::xy;
-    tbb::parallel_for(std::size_t{0}, vs.size(), [&](std::size_t j) {
+    tessref::parallel_for(std::size_t{0}, vs.size(), [&](std::size_t j) {
         for (std::size_t i = 0; i < us.size(); ++i) {
             // Mip level 0 in double: the texel values exactly, bilinear between them.
             const glm::dvec2 st(map.u.st(us[i]), map.v.st(vs[j]));
@@ -242,7 +240,7 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
     render_detail::allocate(result, width, height);
     result.domain = scene.generator.domain;
     const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
-    const auto covered = tbb::parallel_reduce(
+    const auto covered = tessref::parallel_reduce(
         tbb::blocked_range<int>(0, height), std::uint64_t{0},
         [&](const tbb::blocked_range<int>& rows, std::uint64_t count) {
             for (int row = rows.begin(); row < rows.end(); ++row) {

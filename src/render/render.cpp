@@ -8,9 +8,7 @@
 #include <string>
 #include <utility>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
+#include "common/parallel.h"
 
 #include "render/render_internal.h"
 #include "tessref/compare.h"
@@ -211,7 +209,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     progress("rasterizing", 0.0);
     std::vector<glm::vec4> clip(mesh.positions.size());
     const glm::mat4 mvp = result.mvp;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, clip.size(), 16384), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, clip.size(), 16384), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) clip[i] = mvp * glm::vec4(glm::vec3(mesh.positions[i]), 1.0f);
     });
 
@@ -244,7 +242,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     const bool derivatives = needs.texCoord && needs.texCoord_derivatives && !mesh.uvs.empty();
     // Quad by quad (2x2 pixels, as llvmpipe shades): the pixels of a quad that show the same
     // triangle share its derivatives (and its level).
-    const auto covered = tbb::parallel_reduce(
+    const auto covered = tessref::parallel_reduce(
         tbb::blocked_range<int>(0, (height + 1) / 2), std::uint64_t{0},
         [&](const tbb::blocked_range<int>& quad_rows, std::uint64_t count) {
             for (int quad_row = quad_rows.begin(); quad_row < quad_rows.end(); ++quad_row) {
@@ -292,7 +290,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
 
     if (options.mode == RenderMode::fill_with_wireframe) {
         // The lines over the filled image where they are not behind it (render.h).
-        tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+        tessref::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
             for (int row = rows.begin(); row < rows.end(); ++row) {
                 for (int x = 0; x < width; ++x) {
                     const std::size_t i = result.index(x, row);

@@ -20,8 +20,7 @@
 #include <span>
 #include <type_traits>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include "common/parallel.h"
 
 #include "tessref/evaluation.h"
 #include "tessref/geometry.h"
@@ -470,7 +469,7 @@ struct Run {
         if (scene.meshes) pnPatches.assign(n, {});
 
         // Pass 1: control.
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t p = r.begin(); p != r.end(); ++p) control_patch(p);
         });
 
@@ -506,7 +505,7 @@ struct Run {
             group[order[k]] = representatives.size() - 1;
         }
         std::vector<std::shared_ptr<const Pattern>> distinct(representatives.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, representatives.size(), 1),
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, representatives.size(), 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               for (std::size_t k = r.begin(); k != r.end(); ++k)
                                   distinct[k] = cache.get(scene.generator, levels[representatives[k]], precision);
@@ -540,7 +539,7 @@ struct Run {
 
         std::atomic<std::size_t> done{0};
         std::mutex progress_mutex;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4), [&](const tbb::blocked_range<std::size_t>& r) {
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t p = r.begin(); p != r.end(); ++p) {
                 evaluate_patch(p, *patterns[p], vertex_base[p], triangle_base[p], result, geometry_vertex_normals,
                                eval_normals);
