@@ -320,9 +320,10 @@ TEST(RenderMemoryEstimate, FollowsTheMeasuredPeaks) {
 
 TEST_F(CliOutputTest, RenderRefusesAnImageBeyondTheMemoryLimitBeforeRendering) {
     // Under an address-space limit, so that a regression fails with bad_alloc instead of
-    // taking the machine's memory. Not under ThreadSanitizer, which cannot start at all in
-    // 8 GB of address space (it maps its shadow and heap at fixed ranges beyond that).
-#if defined(__SANITIZE_THREAD__)
+    // taking the machine's memory. Not under ThreadSanitizer or AddressSanitizer, which
+    // cannot start at all in 8 GB of address space (they map their shadow memory at fixed
+    // ranges far beyond that).
+#if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
     const std::string limit = "";
 #else
     const std::string limit = "ulimit -v 8000000 && ";
