@@ -610,6 +610,15 @@ TEST(BadInput, DevicesAndFifosAreRefusedNotRead) {
     expect_error([&] { tessref::load_height_field(fifo); }, fifo, "not a regular file");
 }
 
+// A fuzzer's finding: a 529-byte PNG whose tEXt chunk declares 1785750887 bytes made
+// libpng (inside OpenImageIO) allocate 1.7 GB before failing. Chunk lengths are checked
+// against the file size before OpenImageIO opens it.
+TEST(BadInput, PngChunkLongerThanTheFileIsRefusedBeforeReading) {
+    const std::string path = std::string(TESSREF_SOURCE_DIR) + "/tests/data/fuzz/heightmap/png-text-chunk-claims-1.7GB";
+    expect_error([&] { tessref::load_height_field(path); }, path, "declares 1785750887 bytes");
+    expect_error([&] { tessref::load_texture(path); }, path, "more than the file holds (529 bytes)");
+}
+
 TEST(BadInput, NanTexelIsAnErrorByDefault) {
     TempDir dir;
     const float nan = std::numeric_limits<float>::quiet_NaN();

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -119,6 +120,39 @@ bool looks_like_pnm(const std::string& path) {
     return std::string_view("123456fF").find(tokens[0][1]) != std::string_view::npos;
 }
 
+// libpng allocates a chunk's declared length before reading it, so a 529-byte PNG whose
+// tEXt chunk claims 1.7 GB made OpenImageIO allocate that much before failing (a fuzzer's
+// finding). Every chunk of a PNG is therefore walked first (length, type, data, CRC; the
+// lengths alone, nothing decoded) and one that runs past the end of the file is refused.
+void check_png_chunks(const std::string& path, const std::string& what_kind) {
+    std::ifstream in(path, std::ios::binary);
+    unsigned char signature[8] = {};
+    if (!in.read(reinterpret_cast<char*>(signature), 8) ||
+        std::memcmp(signature, "\x89PNG\r\n\x1a\n", 8) != 0)
+        return;  // not a PNG: OpenImageIO's readers decide
+    std::error_code ec;
+    const std::uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) return;
+    std::uint64_t offset = 8;
+    while (offset < size) {
+        unsigned char head[8] = {};
+        in.seekg(static_cast<std::streamoff>(offset));
+        if (!in.read(reinterpret_cast<char*>(head), 8))
+            fail(path, what_kind + " is a truncated PNG: a chunk header is cut at byte " + std::to_string(offset));
+        const std::uint64_t length = (std::uint64_t{head[0]} << 24) | (std::uint64_t{head[1]} << 16) |
+                                     (std::uint64_t{head[2]} << 8) | std::uint64_t{head[3]};
+        std::string type(reinterpret_cast<const char*>(head + 4), 4);
+        for (char& c : type)
+            if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
+        if (length > size - offset - 8 || size - offset - 8 - length < 4)
+            fail(path, what_kind + " is a corrupt PNG: chunk '" + type + "' at byte " +
+                           std::to_string(offset) + " declares " + std::to_string(length) +
+                           " bytes, more than the file holds (" + std::to_string(size) + " bytes)");
+        offset += 12 + length;
+        if (type == "IEND") return;
+    }
+}
+
 // The file's bits per sample: OpenImageIO's PNM reader stores it as a float, its other
 // readers as an int; `fallback` where the reader says nothing.
 int bits_per_sample(const OIIO::ImageSpec& spec, int fallback) {
@@ -148,6 +182,7 @@ RawImage read_raw(const std::string& path, int max_dimension, int max_channels, 
     // otherwise premultiply them on read, which a GL upload of the file's bytes does not.
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);
+    check_png_chunks(path, what_kind);
     auto input = OIIO::ImageInput::open(path, &config);
     if (!input) {
         const std::string reason = trimmed(OIIO::geterror());
