@@ -8,6 +8,7 @@
 // float the library produced).
 #include <gtest/gtest.h>
 
+#include "command_dir_test.h"
 #include "run_program.h"
 
 #include <algorithm>
@@ -39,29 +40,8 @@ using tessref::test::RunResult;
 using tessref::test::shell_quote;
 using tessref::test::write_file;
 
-// A fresh, empty directory per test, removed afterwards.
-class CliTest : public ::testing::Test {
-protected:
-    void SetUp() override {
-        static int counter = 0;
-        dir_ = fs::temp_directory_path() /
-               ("tessref_test_cli_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_); }
-
-    // The names in the test directory (what a command left there).
-    std::set<std::string> files() const {
-        std::set<std::string> names;
-        for (const auto& entry : fs::directory_iterator(dir_)) names.insert(entry.path().filename().string());
-        return names;
-    }
-
-    fs::path dir_;
-};
+// A fresh, empty directory per test, removed afterwards (tests/command_dir_test.h).
+using CliTest = tessref::test::CommandDirTest;
 
 std::vector<std::string> tessellate_args(const std::string& domain, const std::string& spacing,
                                          const std::string& outer, const std::string& inner,

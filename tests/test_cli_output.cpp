@@ -9,6 +9,7 @@
 // test's own, not the machine's.
 #include <gtest/gtest.h>
 
+#include "command_dir_test.h"
 #include "run_program.h"
 
 #include <fcntl.h>
@@ -43,28 +44,8 @@ const fs::path kSource = TESSREF_SOURCE_DIR;
 
 std::string scene(const std::string& name) { return (kSource / "data/scenes" / (name + ".toml")).string(); }
 
-class CliOutputTest : public ::testing::Test {
-protected:
-    void SetUp() override {
-        static int counter = 0;
-        dir_ = fs::temp_directory_path() /
-               ("tessref_test_cli_output_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_); }
-
-    std::set<std::string> files() const {
-        std::set<std::string> names;
-        for (const auto& entry : fs::directory_iterator(dir_)) names.insert(entry.path().filename().string());
-        return names;
-    }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-    fs::path dir_;
-};
+// A fresh, empty directory per test, removed afterwards (tests/command_dir_test.h).
+using CliOutputTest = tessref::test::CommandDirTest;
 
 // A small pattern: a few lines of text, quick to make.
 std::vector<std::string> isolines(std::vector<std::string> extra = {}) {

@@ -4,6 +4,7 @@
 // derived by hand in the comment beside it. Images are a few pixels, made here with OIIO.
 #include <gtest/gtest.h>
 
+#include "command_dir_test.h"
 #include "run_program.h"
 
 #include <unistd.h>
@@ -280,29 +281,8 @@ void write_exr(const fs::path& path, const FloatImage& image) {
     write_image(path, image.width, image.height, image.channels, OIIO::TypeDesc::FLOAT, image.samples.data());
 }
 
-class CompareFiles : public ::testing::Test {
-protected:
-    void SetUp() override {
-        static int counter = 0;
-        dir_ = fs::temp_directory_path() /
-               ("tessref_test_compare_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_); }
-    // The files in the directory (to see that nothing was written).
-    std::vector<std::string> files() const {
-        std::vector<std::string> names;
-        for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-
-    fs::path dir_;
-};
+// A fresh, empty directory per test, removed afterwards (tests/command_dir_test.h).
+using CompareFiles = tessref::test::CommandDirTest;
 
 TEST_F(CompareFiles, EightBitSamplesAreCodeOver255AsStoredWithAlpha) {
     // Alpha 0 must not premultiply the colour away: the stored codes, code/255.
