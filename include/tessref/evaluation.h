@@ -12,10 +12,14 @@
 // The tess coord comes from the primitive generator: TessCoord (float) for the float path,
 // TessCoordExact (double) for the double path.
 //
-// mix() is GLSL's x * (1 - a) + y * a (glm's too), so mix(x, y, 0) == x and mix(x, y, 1) == y
-// exactly: a corner tess coord gives the corner bit for bit, and a vertex on a shared edge
-// depends only on that edge's two corners, so neighbouring patches compute the same bits
-// given the same tess coordinate along the edge.
+// mix() is computed as llvmpipe computes it, x + a * (y - x) with each operation rounded
+// (not glm's x * (1 - a) + y * a): float positions then equal `tessref gl --capture`'s bit for
+// bit. mix(x, y, 0) == x exactly, and mix(x, y, 1) == y whenever y - x is exact in float
+// (Sterbenz: y/2 <= x <= 2y, or both on a common grid as patch corners are), so a corner
+// tess coord gives the corner bit for bit and a vertex on a shared edge depends only on
+// that edge's two corners: neighbouring patches compute the same bits given the same tess
+// coordinate along the edge. Corners for which y - x rounds could crack on llvmpipe too;
+// `tessref check` would find such a crack in the exported mesh.
 //
 // Quad corner layout: see control.h (c0 = (0,0), c1 = (0,1), c2 = (1,1), c3 = (1,0)).
 #pragma once

@@ -7,15 +7,39 @@
 
 namespace tessref {
 
+namespace {
+
+// GLSL mix(x, y, a) as llvmpipe computes it: x + a * (y - x) (gallivm's lerp), each
+// operation rounded on its own. glm::mix is x * (1 - a) + y * a, which rounds differently:
+// up to 2 ulps in a position, and through the height map's slope up to ~300 ulps in a
+// height (measured on jacksboro against `tessref gl --capture`; with this form every
+// compared vertex is bit-identical). Fusing the multiply-add (std::fma) matches fewer
+// vertices, so llvmpipe does not fuse here. The steps are separate statements so that no
+// compiler contracts them into an fma (-ffp-contract=on contracts within one expression).
+// mix(x, y, 0) == x exactly; mix(x, y, 1) == x + (y - x), which is y whenever y - x is
+// exact (always for the grid corners of the shipped scenes: see evaluation.h).
+template <typename T, int N>
+glm::vec<N, T> mix_gpu(const glm::vec<N, T>& x, const glm::vec<N, T>& y, T a) {
+    glm::vec<N, T> out;
+    for (int c = 0; c < N; ++c) {
+        const T difference = y[c] - x[c];
+        const T scaled = a * difference;
+        out[c] = x[c] + scaled;
+    }
+    return out;
+}
+
+}  // namespace
+
 template <typename T>
 EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
                                    const DomainPoint<T>& glTessCoord,
                                    const ThesisEvaluation<T>& evaluation) {
     // GLSL: thesis_terrain.tese:24 adPosition
-    const vec4_t<T> adPosition = glm::mix(tcPosition[0], tcPosition[3], glTessCoord.u);
-    const vec4_t<T> bcPosition = glm::mix(tcPosition[1], tcPosition[2], glTessCoord.u);
+    const vec4_t<T> adPosition = mix_gpu(tcPosition[0], tcPosition[3], glTessCoord.u);
+    const vec4_t<T> bcPosition = mix_gpu(tcPosition[1], tcPosition[2], glTessCoord.u);
     // GLSL: thesis_terrain.tese:28 position
-    const vec4_t<T> position = glm::mix(adPosition, bcPosition, glTessCoord.v);
+    const vec4_t<T> position = mix_gpu(adPosition, bcPosition, glTessCoord.v);
 
     EvaluatedVertex<T> out;
     // GLSL: thesis_terrain.tese:31 textureCoordinate
@@ -37,8 +61,8 @@ EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>& glInPosition
     const T u = glTessCoord.u;
     const T v = glTessCoord.v;
     // GLSL: cosc422_terrain.tese:29 posn
-    vec4_t<T> posn = glm::mix(glm::mix(glInPosition[0], glInPosition[3], u),
-                              glm::mix(glInPosition[1], glInPosition[2], u), v);
+    vec4_t<T> posn = mix_gpu(mix_gpu(glInPosition[0], glInPosition[3], u),
+                              mix_gpu(glInPosition[1], glInPosition[2], u), v);
     // GLSL: cosc422_terrain.tese:32 s
     const T s = (posn.x - evaluation.xMin) / (evaluation.xMax - evaluation.xMin);
     const T t = (posn.z - evaluation.zMin) / (evaluation.zMax - evaluation.zMin);
@@ -79,8 +103,8 @@ EvaluatedVertex<T> lab4_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
     const T u = glTessCoord.u;
     const T v = glTessCoord.v;
     // GLSL: lab4_terrain.tese:75 position
-    vec4_t<T> position = glm::mix(glm::mix(tcPosition[0], tcPosition[3], u),
-                                  glm::mix(tcPosition[1], tcPosition[2], u), v);
+    vec4_t<T> position = mix_gpu(mix_gpu(tcPosition[0], tcPosition[3], u),
+                                  mix_gpu(tcPosition[1], tcPosition[2], u), v);
 
     const vec2_t<T> texCoord =
         vec2_t<T>(position.x, position.z) / evaluation.horizontalScale + evaluation.texCoordOffset;
@@ -205,7 +229,7 @@ EvaluatedVertex<T> pn_evaluate(const PnPatch<T>& patch, const DomainPoint<T>& gl
 
     EvaluatedVertex<T> out;
     // GLSL: pn_triangles.tese:137 v3PositionOut
-    out.position = glm::mix(v3BasePosition, v3PNPoint, evaluation.fInfluence);
+    out.position = mix_gpu(v3BasePosition, v3PNPoint, evaluation.fInfluence);
     // GLSL: pn_triangles.tese:138 v3NormalOut
     out.normal = evaluation.normal == PnNormal::linear ? v3Linear : glm::normalize(v3Quadratic);
     out.textureCoordinate = v2UV;
