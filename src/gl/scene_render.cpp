@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "gl/gl_api.h"
+#include "gl/program.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
 
@@ -26,95 +27,6 @@ double seconds_since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-Where file_line(const std::string& path, int line) {
-    Where where;
-    where.file = path;
-    where.line = line;
-    return where;
-}
-
-// The first "0:LINE(COLUMN)" of a Mesa info log: the line in the file (the sources are
-// given with "#line 2" after the #version line, so the numbers are the file's).
-int log_line(const std::string& log) {
-    std::smatch m;
-    if (std::regex_search(log, m, std::regex(R"(\d+:(\d+)\(\d+\))"))) return std::stoi(m[1].str());
-    return 0;
-}
-
-// One stage's source: a file of data/shaders/ (path set) or built-in text, with text
-// inserted after the #version line and appended at the end.
-struct StageSource {
-    GLenum stage = 0;
-    std::string file;  // data/shaders/<file>; empty for built-in text
-    std::string text;  // the source (read from the file when file is set)
-    std::string prefix;
-    std::string suffix;
-};
-
-std::string stage_path(const StageSource& s) {
-    return s.file.empty() ? std::string("(built-in shader)") : shader_data_dir() + "/shaders/" + s.file;
-}
-
-GLuint compile(GlFunctions& gl, const StageSource& s) {
-    std::size_t split = 0;
-    if (s.text.compare(0, 8, "#version") == 0) {
-        split = s.text.find('\n');
-        split = split == std::string::npos ? s.text.size() : split + 1;
-    }
-    const std::string head = s.text.substr(0, split);
-    const std::string inserted = s.prefix + "#line 2\n";
-    const std::string tail = s.text.substr(split) + "\n" + s.suffix;
-    const GLchar* parts[] = {head.c_str(), inserted.c_str(), tail.c_str()};
-    const GLuint shader = gl.CreateShader(s.stage);
-    gl.ShaderSource(shader, 3, parts, nullptr);
-    gl.CompileShader(shader);
-    GLint ok = GL_FALSE;
-    gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        GLint length = 0;
-        gl.GetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-        gl.GetShaderInfoLog(shader, length, nullptr, log.data());
-        gl.DeleteShader(shader);
-        log = log.c_str();
-        while (!log.empty() && (log.back() == '\n' || log.back() == ' ')) log.pop_back();
-        throw Error("GLSL compile error in " + stage_path(s) + ": " + log, file_line(stage_path(s), log_line(log)));
-    }
-    return shader;
-}
-
-GLuint link(GlFunctions& gl, const std::vector<StageSource>& stages, const std::vector<const char*>& varyings) {
-    std::vector<GLuint> shaders;
-    try {
-        for (const StageSource& s : stages) shaders.push_back(compile(gl, s));
-    } catch (...) {
-        for (GLuint shader : shaders) gl.DeleteShader(shader);
-        throw;
-    }
-    const GLuint program = gl.CreateProgram();
-    for (GLuint shader : shaders) gl.AttachShader(program, shader);
-    if (!varyings.empty())
-        gl.TransformFeedbackVaryings(program, static_cast<GLsizei>(varyings.size()), varyings.data(),
-                                     GL_INTERLEAVED_ATTRIBS);
-    gl.LinkProgram(program);
-    for (GLuint shader : shaders) gl.DeleteShader(shader);
-    GLint ok = GL_FALSE;
-    gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint length = 0;
-        gl.GetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-        gl.GetProgramInfoLog(program, length, nullptr, log.data());
-        gl.DeleteProgram(program);
-        std::string files;
-        for (const StageSource& s : stages) files += (files.empty() ? "" : ", ") + stage_path(s);
-        Where where;
-        where.file = files;
-        throw Error("GLSL link error: " + std::string(log.c_str()), where);
-    }
-    return program;
-}
-
 // The scene's [generator] in place of the evaluation shader's own layout(...) in; line, so
 // that GL tessellates as the CPU pipeline does (the twins' lines are the scenes' defaults).
 std::string with_generator(const std::string& text, const TessSettings& g, const std::string& path) {
@@ -124,7 +36,7 @@ std::string with_generator(const std::string& text, const TessSettings& g, const
                               (g.point_mode ? ", point_mode" : "") + ") in;";
     std::smatch m;
     if (!std::regex_search(text, m, layout))
-        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", file_line(path, 0));
+        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", Where{path, 0, 0, "", -1});
     return m.prefix().str() + replacement + m.suffix().str();
 }
 
@@ -182,7 +94,7 @@ struct Plan {
 StageSource file_stage(GLenum stage, const std::string& file) {
     StageSource s;
     s.stage = stage;
-    s.file = file;
+    s.path = shader_data_dir() + "/shaders/" + file;
     s.text = read_shader(file);
     return s;
 }
@@ -247,7 +159,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
     }
 
     StageSource tese = file_stage(GL_TESS_EVALUATION_SHADER, base + ".tese");
-    tese.text = with_generator(tese.text, scene.generator, stage_path(tese));
+    tese.text = with_generator(tese.text, scene.generator, tese.path);
     plan.stages.push_back(std::move(tese));
 
     if (scene.geometry) {
@@ -701,7 +613,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
 
     GlObjects objects(c);
     BoundTextures textures(c);
-    objects.programs.push_back(link(gl, plan.stages, {}));
+    objects.programs.push_back(link(gl, plan.stages, {}, "the scene's program"));
     const GLuint program = objects.programs.back();
     bind_textures(textures, scene, result.shading);
 
@@ -785,7 +697,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     start = Clock::now();
     objects.programs.push_back(link(gl, capture_stages(plan),
                                     {"tessref_cap_tess_coord", "tessref_cap_patch_id", "tessref_cap_position",
-                                     "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"}));
+                                     "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"},
+                                    "the --capture program"));
     const GLuint capture_program = objects.programs.back();
     set_uniforms(gl, capture_program, scene, result.shading, m, size);
     if (plan.identity_mvp_for_capture) Uniforms{gl, capture_program}.m4("mvp", glm::mat4(1.0f));
