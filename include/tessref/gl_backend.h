@@ -110,6 +110,18 @@ std::string dump(const CapturedPatch& patch);
 // draw's GL_PRIMITIVES_GENERATED must equal its prediction. A draw that disagrees ends the
 // render: batch_failure names it and no image is returned (llvmpipe corrupts large
 // tessellated draws silently; a level computed differently by the GLSL twin shows here too).
+//
+// User shaders (the scene's [shaders], `tessref gl --shader STAGE=FILE`): a user's GLSL file
+// takes the place of one stage's twin, or is added where the models have no such stage
+// (a geometry shader without [geometry], a control shader where the constant stage has
+// none). Everything else stays: the other stages, the uniforms, the textures and the CPU
+// reference's predicted counts (the CPU pipeline keeps the reference models). A user's
+// evaluation shader keeps its own layout(...) in; line (it is what is under test), so a
+// layout or a control shader that tessellates differently ends the render as above, the
+// message naming the user's files. The contract a user's shader is held to is the twins'
+// interface: the uniform names and types, the sampler bindings, the vertex attributes and
+// the blocks between the stages (README, "Debugging your own shader"); a uniform it leaves
+// out is not set, one it declares with another type is an error.
 struct SceneRenderOptions {
     glm::ivec2 size{0, 0};  // {0, 0}: the camera's viewport
     bool wireframe = false; // glPolygonMode(GL_FRONT_AND_BACK, GL_LINE)
@@ -118,6 +130,8 @@ struct SceneRenderOptions {
     // Test hook: the prediction of this draw (0-based) is made one too high, so that the
     // check must fail there. -1: none.
     long long corrupt_prediction_of_batch = -1;
+    // User shaders (--shader), each in place of the scene's [shaders] entry of its stage.
+    std::vector<StageShader> shaders;
 };
 
 // One vertex of one primitive as transform feedback recorded it (three per triangle, in
@@ -148,13 +162,15 @@ struct SceneRender {
     std::vector<CapturedVertex> capture;  // with SceneRenderOptions::capture
     std::string batch_failure;  // non-empty: a draw's primitive count was wrong (no image)
     std::shared_ptr<const PipelineResult> pipeline;  // the CPU pipeline the counts came from
+    std::vector<StageShader> user_shaders;  // the user's files in place of twins, vertex .. fragment
     SceneRenderStats stats{};
 };
 
 // Throws tessref::Error on a scene the GL backend cannot draw (no camera, a stage
-// combination without a GLSL twin), an unreadable shader file, a shader that does not
-// compile or link (the driver's log; Where: the file and, from the log, the line) or a GL
-// error.
+// combination without a GLSL twin), an unreadable shader file (a user's: Where is its
+// scene key or flag), a shader that does not compile or link (the driver's log and the
+// stage; Where: the file and, from the log, the line), a user's shader that declares a
+// twin's uniform with another type, or a GL error.
 SceneRender render_scene(Context& context, const Scene& scene, const SceneRenderOptions& options = {});
 
 // The capture as a SurfaceMesh (three vertices per triangle, not welded; write_mesh welds),

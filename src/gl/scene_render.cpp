@@ -8,7 +8,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -190,6 +193,95 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
     return plan;
 }
 
+// ---- user shaders: [shaders] and --shader ----------------------------------------------
+
+GLenum gl_stage(ShaderStage stage) {
+    switch (stage) {
+        case ShaderStage::vertex: return GL_VERTEX_SHADER;
+        case ShaderStage::tess_control: return GL_TESS_CONTROL_SHADER;
+        case ShaderStage::tess_evaluation: return GL_TESS_EVALUATION_SHADER;
+        case ShaderStage::geometry: return GL_GEOMETRY_SHADER;
+        case ShaderStage::fragment: return GL_FRAGMENT_SHADER;
+    }
+    return GL_VERTEX_SHADER;
+}
+
+// The scene's [shaders], each replaced by the option of the same stage where there is one.
+std::vector<StageShader> user_shaders(const Scene& scene, const SceneRenderOptions& options) {
+    std::vector<StageShader> shaders = options.shaders;
+    for (const StageShader& s : scene.shaders)
+        if (std::none_of(shaders.begin(), shaders.end(), [&](const StageShader& o) { return o.stage == s.stage; }))
+            shaders.push_back(s);
+    std::sort(shaders.begin(), shaders.end(),
+              [](const StageShader& a, const StageShader& b) { return a.stage < b.stage; });
+    return shaders;
+}
+
+StageSource user_stage(const StageShader& user) {
+    const std::string what = std::string("the ") + to_string(user.stage) + " shader " + user.path + " of " + user.origin;
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(user.path, ec);
+    std::ifstream in(user.path, std::ios::binary);
+    if (ec || !in || std::filesystem::is_directory(user.path, ec)) throw Error("cannot read " + what, user.where);
+    require_memory(size, what, user.where);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw Error("cannot read " + what, user.where);
+    StageSource s;
+    s.stage = gl_stage(user.stage);
+    s.path = user.path;
+    s.origin = user.origin;
+    s.text = text.str();
+    return s;
+}
+
+// Each user file in place of its stage's twin, or added where the models have no such stage
+// (GL links the stages by kind, the order only keeps the plan readable). A user's evaluation
+// shader keeps its own layout(...) in; line: it is what the user wants tested, and a layout
+// other than the scene's [generator] shows as draw counts other than the CPU reference's.
+void apply_user_shaders(Plan& plan, const std::vector<StageShader>& shaders) {
+    const auto order = [](GLenum stage) {
+        const GLenum pipeline[] = {GL_VERTEX_SHADER, GL_TESS_CONTROL_SHADER, GL_TESS_EVALUATION_SHADER,
+                                   GL_GEOMETRY_SHADER, GL_FRAGMENT_SHADER};
+        return std::find(std::begin(pipeline), std::end(pipeline), stage) - std::begin(pipeline);
+    };
+    for (const StageShader& user : shaders) {
+        StageSource s = user_stage(user);
+        auto it = std::find_if(plan.stages.begin(), plan.stages.end(),
+                               [&](const StageSource& p) { return p.stage == s.stage; });
+        if (it != plan.stages.end()) {
+            *it = std::move(s);
+            continue;
+        }
+        if (s.stage == GL_TESS_CONTROL_SHADER) plan.has_control_shader = true;
+        if (s.stage == GL_GEOMETRY_SHADER) {
+            plan.has_geometry_shader = true;
+            plan.normal_expression.clear();  // the evaluation shader's normal is not the geometry stage's
+        }
+        it = std::find_if(plan.stages.begin(), plan.stages.end(),
+                          [&](const StageSource& p) { return order(p.stage) > order(s.stage); });
+        plan.stages.insert(it, std::move(s));
+    }
+}
+
+// The user's files that can change how many primitives a draw makes (all but fragment),
+// for the message of a draw whose count is not the CPU reference's.
+std::string count_note(const Plan& plan) {
+    std::string files;
+    bool evaluation = false;
+    for (const StageSource& s : plan.stages) {
+        if (s.origin.empty() || s.stage == GL_FRAGMENT_SHADER) continue;
+        files += std::string(files.empty() ? "" : ", ") + stage_name(s.stage) + " " + s.path;
+        evaluation = evaluation || s.stage == GL_TESS_EVALUATION_SHADER;
+    }
+    if (files.empty()) return "";
+    return "; the user's shaders (" + files + ") generated a different number of primitives than the reference " +
+           "models predict" +
+           (evaluation ? " (a user's evaluation shader keeps its own layout(...) in; the reference tessellates "
+                         "as the scene's [generator])"
+                       : "");
+}
+
 // The capture program: the same stages, no fragment shader; the evaluation shader also hands
 // on gl_TessCoord, gl_PrimitiveID and the world position, and the geometry shader (if any)
 // passes them through with each EmitVertex (the twins' main and EmitVertex are renamed by the
@@ -234,19 +326,64 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
     return stages;
 }
 
+// What the capture program reads of the stages it wraps, for its errors when a user's
+// shader is among them.
+std::string capture_note(const Plan& plan) {
+    if (std::none_of(plan.stages.begin(), plan.stages.end(), [](const StageSource& s) {
+            return !s.origin.empty() && s.stage != GL_FRAGMENT_SHADER;
+        }))
+        return "";
+    return " (it wraps the stages before rasterization and reads " + plan.position_expression +
+           (plan.normal_expression.empty() ? "" : " and " + plan.normal_expression) +
+           ", as the twins have them: a user's shader must declare them too)";
+}
+
 // ---- uniforms: one function per model, from the scene's settings structs ------------------
 
+// A program may lack any of these uniforms (location -1: the call sets nothing), as a user's
+// shader may; one that declares a twin's uniform with another type makes GL refuse the call.
 struct Uniforms {
     GlFunctions& gl;
     GLuint program;
     GLint at(const char* name) const { return gl.GetUniformLocation(program, name); }
-    void i(const char* name, int v) const { gl.Uniform1i(at(name), v); }
-    void f(const char* name, double v) const { gl.Uniform1f(at(name), static_cast<float>(v)); }
-    void v2(const char* name, glm::vec2 v) const { gl.Uniform2f(at(name), v.x, v.y); }
-    void v3(const char* name, glm::vec3 v) const { gl.Uniform3f(at(name), v.x, v.y, v.z); }
-    void v4(const char* name, glm::vec4 v) const { gl.Uniform4f(at(name), v.x, v.y, v.z, v.w); }
-    void m3(const char* name, const glm::mat3& m) const { gl.UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]); }
-    void m4(const char* name, const glm::mat4& m) const { gl.UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]); }
+    void check(const char* name, const char* type) const {
+        if (gl.GetError() != GL_NO_ERROR)
+            throw Error(std::string("the uniform ") + name + " is declared with a type other than " + type +
+                        ", the GLSL twins' (the twins' uniform names and types are the contract of a user's "
+                        "shader: README, `gl`)");
+    }
+    void i(const char* name, int v) const {
+        gl.Uniform1i(at(name), v);
+        check(name, "int");
+    }
+    void f(const char* name, double v) const {
+        gl.Uniform1f(at(name), static_cast<float>(v));
+        check(name, "float");
+    }
+    void d(const char* name, double v) const {
+        gl.Uniform1d(at(name), v);
+        check(name, "double");
+    }
+    void v2(const char* name, glm::vec2 v) const {
+        gl.Uniform2f(at(name), v.x, v.y);
+        check(name, "vec2");
+    }
+    void v3(const char* name, glm::vec3 v) const {
+        gl.Uniform3f(at(name), v.x, v.y, v.z);
+        check(name, "vec3");
+    }
+    void v4(const char* name, glm::vec4 v) const {
+        gl.Uniform4f(at(name), v.x, v.y, v.z, v.w);
+        check(name, "vec4");
+    }
+    void m3(const char* name, const glm::mat3& m) const {
+        gl.UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]);
+        check(name, "mat3");
+    }
+    void m4(const char* name, const glm::mat4& m) const {
+        gl.UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]);
+        check(name, "mat4");
+    }
 };
 
 // The matrices as the CPU pipeline rounds them (pipeline.cpp: mat4_t<float>(camera.view_projection())).
@@ -326,9 +463,9 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
         case ShadingKind::flat: u.v4("colour", s.flat.colour); break;
         case ShadingKind::depth:
             u.i("windowMapping", s.depth.mapping == DepthMapping::window ? 1 : 0);
-            // glUniform1d is not loaded: double uniforms through their float values' exact widening.
-            u.gl.Uniform1f(u.at("nearPlane"), s.depth.near_plane);
-            u.gl.Uniform1f(u.at("farPlane"), s.depth.far_plane);
+            // The fragment shader's double uniforms hold the floats of shading.h exactly widened.
+            u.d("nearPlane", s.depth.near_plane);
+            u.d("farPlane", s.depth.far_plane);
             break;
         case ShadingKind::thesis_single:
         case ShadingKind::thesis_multi:
@@ -363,6 +500,7 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
 void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const RenderShading& shading,
                   const Matrices& m, glm::ivec2 viewport) {
     gl.UseProgram(program);
+    if (gl.GetError() != GL_NO_ERROR) throw Error("OpenGL refused to use the scene's program");
     const Uniforms u{gl, program};
     switch (scene.evaluation.model) {
         case EvaluationModel::thesis: thesis_uniforms(u, scene, m); break;
@@ -590,7 +728,10 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     m.view_projection = glm::mat4(scene.camera->view_projection());
     m.eye = glm::vec3(scene.camera->eye);
 
-    const Plan plan = plan_for(scene, result.shading);
+    Plan plan = plan_for(scene, result.shading);
+    result.user_shaders = user_shaders(scene, options);
+    apply_user_shaders(plan, result.user_shaders);
+    const std::string user_note = count_note(plan);
     const std::vector<Batch> batches = make_batches(per_patch, options.max_primitives_per_draw);
 
     Context::Impl& c = context.impl();
@@ -676,7 +817,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         if (generated != predicted_of(k)) {
             result.batch_failure = batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
                                    " primitives, the CPU primitive generator predicts " +
-                                   std::to_string(predicted_of(k));
+                                   std::to_string(predicted_of(k)) + user_note;
             return result;
         }
     }
@@ -698,7 +839,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     objects.programs.push_back(link(gl, capture_stages(plan),
                                     {"tessref_cap_tess_coord", "tessref_cap_patch_id", "tessref_cap_position",
                                      "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"},
-                                    "the --capture program"));
+                                    "the --capture program" + capture_note(plan)));
     const GLuint capture_program = objects.programs.back();
     set_uniforms(gl, capture_program, scene, result.shading, m, size);
     if (plan.identity_mvp_for_capture) Uniforms{gl, capture_program}.m4("mvp", glm::mat4(1.0f));
@@ -737,7 +878,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
             result.capture.clear();
             result.batch_failure = "capture " + batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
                                    " primitives and transform feedback wrote " + std::to_string(written) +
-                                   ", the CPU primitive generator predicts " + std::to_string(predicted_of(k));
+                                   ", the CPU primitive generator predicts " + std::to_string(predicted_of(k)) +
+                                   user_note;
             return result;
         }
         if (written == 0) continue;
