@@ -98,7 +98,7 @@ std::string dump(const CapturedPatch& patch);
 // evaluation shader reads gl_in directly, with GL_PATCH_DEFAULT_*_LEVEL set), the geometry
 // shader of [geometry] where the model has one (thesis normal_map, cosc422 face; lab 4's
 // height-field normals are computed in its evaluation shader), and the fragment shader of
-// [shading]. The evaluation shader's layout(...) in; line is replaced by the scene's
+// [shading]. The evaluation twin's layout(...) in; line is replaced by the scene's
 // [generator] settings, as the CPU pipeline uses them. Uniforms come from the scene's
 // settings structs (one function per model, scene_render.cpp), textures are uploaded from
 // the very Texture objects the CPU samples (same format and codes, glGenerateMipmap,
@@ -120,8 +120,45 @@ std::string dump(const CapturedPatch& patch);
 // layout or a control shader that tessellates differently ends the render as above, the
 // message naming the user's files. The contract a user's shader is held to is the twins'
 // interface: the uniform names and types, the sampler bindings, the vertex attributes and
-// the blocks between the stages (README, "Debugging your own shader"); a uniform it leaves
-// out is not set, one it declares with another type is an error.
+// the blocks between the stages (below; README, "Debugging your own shader"); a uniform it
+// leaves out is not set, one it declares with another type is an error.
+//
+// THE CONTRACT, per model (the twins in data/shaders/ are the reference text; the uniforms
+// are set by the functions *_uniforms in src/gl/scene_render.cpp). A stage talks to its
+// neighbours through these blocks (matched by block name and location 0) and attributes:
+//   thesis   attribute 0 vec4 position (the corner, z = 0);
+//            vert -> tesc VertexData { vec4 vPosition; }, tesc -> tese ControlData
+//            { vec4 tcPosition; } (4 vertices), tese -> geom EvaluationData { vec2
+//            textureCoordinate; }, geom -> frag GeometryData { vec3 gNormal; vec2
+//            gTextureCoordinate; }; uniforms float scaleXY, scaleZ; mat4 mvp; mat3
+//            normalMatrix; control: float tessellationLevel, distanceLimit, distanceDivisor,
+//            normalAngleThreshold, {normal,texture,distance,constant}TessellationWeight;
+//            vec3 cameraPosition; int thesisFactor; constant control: float constantLevel
+//   cosc422  attribute 0 vec4 position, handed on as gl_Position (tesc/tese read gl_in);
+//            tese -> geom EvaluationData { vec3 worldPosition; vec2 texCoord; }, geom ->
+//            frag GeometryData { vec3 faceNormal; vec2 texCoord; }; uniforms mat4 mvpMatrix,
+//            mvMatrix; float xMin, xMax, zMin, zMax, heightScale; int levelSpace
+//   lab4     attribute 0 vec4 position; VertexData and ControlData as thesis; patch outputs
+//            of the control stage at locations 1..4: float maxLogTessellationLevel; vec4
+//            logOuter; float logInner; vec4 logCorner; tese -> frag EvaluationData { vec3
+//            worldPosition; vec3 normal; vec2 texCoord; }; uniforms mat4 mvp; float
+//            horizontalScale, verticalScale, gridStep; vec2 texCoordOffset; control: vec3
+//            cameraPosition; float firstZoneEnd, zoneGrowth, maxLevel, minLevel; int edgeRule
+//   pn       attributes 0 vec3 v3VertexPos, 1 vec3 v3VertexNormal, 2 vec2 v2VertexUV;
+//            vert -> tesc VertexData { vec3 v3Position; vec3 v3Normal; vec2 v2UV; }, tesc ->
+//            tese PatchVertex { ... } (3 vertices) and patch vec3 v3P111 at location 6, tese
+//            -> frag EvaluationData { vec3 v3PositionOut; vec3 v3NormalOut; vec2 v2UVOut; };
+//            uniforms mat4 m4Transform, m4ViewProjection; vec2 v2Resolution; float
+//            fInfluence; int normalMode; bool watertightEdges, flatEdgesAtLevel1
+//   samplers heightMap 0, tessellationMap 1, normalMap 2, the fragment twins' textures
+//            4.. in the order of shading.h's sampler_names (the thesis's diffuse is 4)
+//   fragment uniforms as the [shading] model's twin declares them (shading.h), output at
+//            location 0; flat: vec4 colour; depth: int windowMapping, double nearPlane,
+//            farPlane.
+// --capture wraps the stages before rasterization and reads the twins' outputs (thesis:
+// gl_Position with mvp = identity; cosc422, lab4: evaluationOut.worldPosition; pn:
+// evaluationOut.v3PositionOut; normals: geometryOut.gNormal / .faceNormal,
+// evaluationOut.normal / .v3NormalOut), so a user's stage there must declare them too.
 struct SceneRenderOptions {
     glm::ivec2 size{0, 0};  // {0, 0}: the camera's viewport
     bool wireframe = false; // glPolygonMode(GL_FRONT_AND_BACK, GL_LINE)
