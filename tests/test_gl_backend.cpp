@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "run_program.h"
+#include "tessref/compare.h"
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 #include "tessref/scene.h"
@@ -350,6 +351,255 @@ TEST_F(GlBackend, WrongCaptureExtensionIsExit2) {
                              "--capture", (dir_ / "c.obj").string()});
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("--capture"), std::string::npos) << r.err;
+}
+
+// A GALLIUM_DRIVER that OSMesa cannot load made Mesa 22.3 crash (SIGSEGV in
+// OSMesaCreateContextAttribs): now a clear error naming the variable, exit 2, no image.
+TEST_F(GlBackend, UnknownGalliumDriverIsAClearErrorNotACrash) {
+    const fs::path out = dir_ / "x.png";
+    const RunResult r = run_program("env", {"GALLIUM_DRIVER=no_such_driver", kExe, "gl",
+                                            scene_path("thesis-constant-1").string(), "-o", out.string(), "--size",
+                                            "64x40"},
+                                    dir_);
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("GALLIUM_DRIVER=no_such_driver"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+// ---- user shaders: [shaders] and --shader -------------------------------------------------
+
+const fs::path kUserShaders = kSource / "tests" / "data" / "gl";
+
+// A shipped scene's text with its data paths made absolute, so that it can live in the
+// test's directory (and name user shaders relative to it); `shading` replaces its
+// [shading] table when given, `extra` is appended.
+std::string scene_text(const std::string& name, const std::string& extra, const std::string& shading = "") {
+    std::string text = read_file(scene_path(name));
+    const std::string data = (kSource / "data").string() + "/";
+    for (std::size_t at = text.find("\"../"); at != std::string::npos; at = text.find("\"../", at))
+        text.replace(at + 1, 3, data);
+    if (!shading.empty()) text = text.substr(0, text.find("\n[shading]")) + "\n" + shading + "\n";
+    return text + "\n" + extra + "\n";
+}
+
+tessref::FloatImage image(const fs::path& path) { return tessref::read_float_image(path.string()); }
+
+class GlUserShaders : public GlBackend {
+protected:
+    // `tessref gl SCENE -o OUT --size WxH [more...]`, asserting exit 0 and every count as predicted.
+    void draw(const fs::path& scene, const fs::path& out, const std::string& size,
+              const std::vector<std::string>& more = {}) {
+        std::vector<std::string> args = {"gl", scene.string(), "-o", out.string(), "--size", size};
+        args.insert(args.end(), more.begin(), more.end());
+        const RunResult r = run(args);
+        ASSERT_EQ(r.status, 0) << r.out << r.err;
+        EXPECT_NE(r.out.find("every count as predicted"), std::string::npos) << r.out;
+    }
+};
+
+// A user's evaluation shader that is a copy of the twin (its layout line is the scene's
+// [generator]): the very same picture, and the output says the user's file was used.
+TEST_F(GlUserShaders, CopyOfTheTwinsEvaluationShaderGivesTheTwinsImage) {
+    const fs::path copy = dir_ / "my.tese";
+    fs::copy_file(kSource / "data" / "shaders" / "thesis_terrain.tese", copy);
+    ASSERT_NO_FATAL_FAILURE(draw(scene_path("thesis-all-10"), dir_ / "twin.png", "160x100"));
+    const RunResult r = run({"gl", scene_path("thesis-all-10").string(), "-o", (dir_ / "user.png").string(), "--size",
+                             "160x100", "--shader", "tese=" + copy.string()});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("user tess_evaluation shader " + copy.string()), std::string::npos) << r.out;
+    const tessref::FloatImage twin = image(dir_ / "twin.png"), user = image(dir_ / "user.png");
+    EXPECT_EQ(twin.samples, user.samples);
+}
+
+// A user's fragment shader writing constant red: red exactly where the twins' picture is not
+// the background (the terrain's coverage does not depend on the fragment shader), the
+// background elsewhere.
+TEST_F(GlUserShaders, ConstantRedFragmentShaderIsRedWhereTheTerrainIs) {
+    ASSERT_NO_FATAL_FAILURE(draw(scene_path("cosc422"), dir_ / "twin.png", "160x100"));
+    ASSERT_NO_FATAL_FAILURE(draw(scene_path("cosc422"), dir_ / "red.png", "160x100",
+                                 {"--shader", "frag=" + (kUserShaders / "red.frag").string()}));
+    const tessref::FloatImage twin = image(dir_ / "twin.png"), red = image(dir_ / "red.png");
+    ASSERT_EQ(red.channels, 4);
+    // The background: the top-left pixel (COSC422's camera sees the whole terrain block).
+    const std::vector<float> sky(twin.samples.begin(), twin.samples.begin() + 4);
+    std::size_t terrain = 0, background = 0, wrong = 0;
+    for (int y = 0; y < twin.height; ++y)
+        for (int x = 0; x < twin.width; ++x) {
+            const std::vector<float> t(twin.samples.begin() + static_cast<long>(twin.index(x, y)),
+                                       twin.samples.begin() + static_cast<long>(twin.index(x, y)) + 4);
+            const std::vector<float> u(red.samples.begin() + static_cast<long>(red.index(x, y)),
+                                       red.samples.begin() + static_cast<long>(red.index(x, y)) + 4);
+            const bool is_terrain = t != sky;
+            terrain += is_terrain ? 1 : 0;
+            background += is_terrain ? 0 : 1;
+            if (u != (is_terrain ? std::vector<float>{1.0f, 0.0f, 0.0f, 1.0f} : sky)) ++wrong;
+        }
+    EXPECT_GT(terrain, 1000u);
+    EXPECT_GT(background, 1000u);
+    EXPECT_EQ(wrong, 0u);
+}
+
+// [shaders] names files relative to the scene file; --shader of the same stage wins.
+TEST_F(GlUserShaders, ShaderFlagOverridesTheScenesTable) {
+    fs::copy_file(kUserShaders / "red.frag", dir_ / "red.frag");
+    const fs::path scene = dir_ / "scene.toml";
+    write_file(scene, scene_text("thesis-constant-1", "[shaders]\nfragment = \"red.frag\""));
+    ASSERT_NO_FATAL_FAILURE(draw(scene_path("thesis-constant-1"), dir_ / "twin.png", "64x40"));
+    ASSERT_NO_FATAL_FAILURE(draw(scene, dir_ / "table.png", "64x40"));
+    // The flag: the twin's own fragment shader, by its short stage name.
+    ASSERT_NO_FATAL_FAILURE(draw(scene, dir_ / "flag.png", "64x40",
+                                 {"--shader", "frag=" + (kSource / "data" / "shaders" / "thesis_terrain_single.frag").string()}));
+    const tessref::FloatImage twin = image(dir_ / "twin.png"), table = image(dir_ / "table.png"),
+                              flag = image(dir_ / "flag.png");
+    EXPECT_NE(table.samples, twin.samples);  // red.frag from the table was used
+    EXPECT_EQ(flag.samples, twin.samples);   // and the flag replaced it
+    std::size_t red = 0;
+    for (int y = 0; y < table.height; ++y)
+        for (int x = 0; x < table.width; ++x)
+            red += table.at(x, y, 0) == 1.0f && table.at(x, y, 1) == 0.0f && table.at(x, y, 2) == 0.0f ? 1 : 0;
+    EXPECT_GT(red, 0u);
+}
+
+// A user's file that does not compile: exit 2, the driver's log with the user's file, its
+// line (14: the missing comma, and a comment before #version would not shift it) and the
+// stage; no image.
+TEST_F(GlUserShaders, SyntaxErrorGivesTheUsersFileLineAndStageAndExit2) {
+    const fs::path out = dir_ / "x.png";
+    const std::string tese = (kUserShaders / "syntax_error.tese").string();
+    const RunResult r = run({"gl", scene_path("thesis-constant-1").string(), "-o", out.string(), "--size", "64x40",
+                             "--shader", "tese=" + tese});
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("GLSL compile error in the tess_evaluation shader " + tese), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("syntax error"), std::string::npos) << r.err;  // the driver's log
+    EXPECT_NE(r.err.find("--shader tese=" + tese), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(tese + ":14)"), std::string::npos) << r.err;  // Where: file and line
+    EXPECT_FALSE(fs::exists(out));
+}
+
+// Names as typed: an unknown stage, a stage given twice, a flag without '=', a file that
+// is not there (flag and table), an unknown key of [shaders]: exit 2 each, no image.
+TEST_F(GlUserShaders, BadStagesAndFilesAreExit2NamingThemAsTyped) {
+    const fs::path out = dir_ / "x.png";
+    const std::string scene = scene_path("thesis-constant-1").string();
+    const std::string red = (kUserShaders / "red.frag").string();
+    auto gl = [&](const std::vector<std::string>& more, const std::string& s) {
+        std::vector<std::string> args = {"gl", s, "-o", out.string(), "--size", "64x40"};
+        args.insert(args.end(), more.begin(), more.end());
+        return run(args);
+    };
+    RunResult r = gl({"--shader", "fragmnet=" + red}, scene);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("unknown shader stage 'fragmnet' in --shader fragmnet=" + red), std::string::npos) << r.err;
+    r = gl({"--shader", "frag=" + red, "--shader", "fragment=" + red}, scene);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("--shader frag=" + red + ", --shader fragment=" + red), std::string::npos) << r.err;
+    r = gl({"--shader", red}, scene);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("--shader takes STAGE=FILE, not '" + red + "'"), std::string::npos) << r.err;
+    r = gl({"--shader", "geom=no-such.geom"}, scene);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("cannot read the geometry shader no-such.geom of --shader geom=no-such.geom"),
+              std::string::npos)
+        << r.err;
+
+    const fs::path missing = dir_ / "missing.toml";
+    write_file(missing, scene_text("thesis-constant-1", "[shaders]\ntess_control = \"no-such.tesc\""));
+    r = gl({}, missing.string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("of [shaders] tess_control = \"no-such.tesc\""), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("key shaders.tess_control"), std::string::npos) << r.err;
+    // The CPU commands do not open the file: they keep the reference models.
+    EXPECT_EQ(run({"render", missing.string(), "-o", (dir_ / "cpu.png").string(), "--size", "64x40"}).status, 0);
+    fs::remove(dir_ / "cpu.png");
+
+    const fs::path unknown = dir_ / "unknown.toml";
+    write_file(unknown, scene_text("thesis-constant-1", "[shaders]\ntess_eval = \"x.tese\""));
+    r = gl({}, unknown.string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("unknown key shaders.tess_eval in [shaders]"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+// The workflow the feature is for: a user's evaluation shader with a bug (every vertex one
+// unit too high) draws with every count as predicted, and `tessref compare` against
+// `tessref render`'s picture fails where the twin's passes (the tolerance of the shipped
+// scenes above).
+TEST_F(GlUserShaders, RaisedEvaluationShaderFailsCompareAgainstRender) {
+    const std::string scene = scene_path("thesis-all-10").string();
+    const fs::path cpu = dir_ / "cpu.png", twin = dir_ / "twin.png", user = dir_ / "user.png";
+    ASSERT_EQ(run({"render", scene, "-o", cpu.string(), "--size", "320x200"}).status, 0);
+    ASSERT_NO_FATAL_FAILURE(draw(scene, twin, "320x200"));
+    ASSERT_NO_FATAL_FAILURE(draw(scene, user, "320x200", {"--shader", "tese=" + (kUserShaders / "raised.tese").string()}));
+    const RunResult ok = run({"compare", cpu.string(), twin.string(), "--threshold", kOneCode});
+    EXPECT_EQ(ok.status, 0) << ok.out << ok.err;
+    const RunResult bad = run({"compare", cpu.string(), user.string(), "--threshold", kOneCode});
+    EXPECT_EQ(bad.status, 1) << bad.out << bad.err;
+}
+
+// A user's evaluation shader keeps its own layout line: equal spacing where the scene's
+// generator says fractional_odd tessellates thesis-all-10's fractional levels otherwise,
+// so the first draw's count is not the reference's: exit 1, the message says the user's
+// shader made it, no image.
+TEST_F(GlUserShaders, OwnLayoutWithOtherCountsIsExit1NamingTheUsersShader) {
+    std::string text = read_file(kSource / "data" / "shaders" / "thesis_terrain.tese");
+    const std::size_t at = text.find("fractional_odd_spacing");
+    ASSERT_NE(at, std::string::npos);
+    text.replace(at, std::string("fractional_odd_spacing").size(), "equal_spacing");
+    const fs::path tese = dir_ / "equal.tese", out = dir_ / "x.png";
+    write_file(tese, text);
+    const RunResult r = run({"gl", scene_path("thesis-all-10").string(), "-o", out.string(), "--size", "160x100",
+                             "--shader", "tese=" + tese.string()});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.err.find("draw 0 (patches "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("the user's shaders (tess_evaluation " + tese.string() +
+                         ") generated a different number of primitives than the reference"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+// A stage the models do not have is added: a pass-through geometry shader for PN triangles
+// draws the twins' picture, and --capture still records every triangle.
+TEST_F(GlUserShaders, AddedGeometryStageThatPassesThroughGivesTheTwinsImage) {
+    ASSERT_NO_FATAL_FAILURE(draw(scene_path("pn-triangles"), dir_ / "twin.png", "160x100"));
+    const fs::path capture = dir_ / "c.txt";
+    ASSERT_NO_FATAL_FAILURE(draw(scene_path("pn-triangles"), dir_ / "user.png", "160x100",
+                                 {"--shader", "geometry=" + (kUserShaders / "passthrough_pn.geom").string(),
+                                  "--capture", capture.string()}));
+    EXPECT_EQ(image(dir_ / "twin.png").samples, image(dir_ / "user.png").samples);
+    const std::string text = read_file(capture);
+    tessref::Scene scene = tessref::load_scene(scene_path("pn-triangles").string());
+    scene.camera->viewport = {160, 100};  // as --size: PN's levels follow the viewport
+    EXPECT_EQ(static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')),
+              2 + 3 * tessref::run_pipeline(scene).mesh.triangles.size());
+}
+
+// A uniform the user's shader leaves out is not an error (red.frag declares none of the
+// fragment twin's); one declared with another type than the twin's is, naming it.
+TEST_F(GlUserShaders, UniformOfAnotherTypeIsExit2NamingIt) {
+    const fs::path out = dir_ / "x.png";
+    const RunResult r = run({"gl", scene_path("thesis-constant-1").string(), "-o", out.string(), "--size", "64x40",
+                             "--shader", "frag=" + (kUserShaders / "wrong_uniform_type.frag").string()});
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("the uniform shininess is declared with a type other than float"), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+// Depth shading (the built-in fragment shader of [shading] model = "depth", with double
+// uniforms) failed with GL_INVALID_OPERATION: glUniform1f cannot set a double. Both
+// mappings now match `tessref render`.
+TEST_F(GlBackend, DepthShadingMatchesRender) {
+    for (const std::string mapping : {"linear", "window"}) {
+        const fs::path scene = dir_ / "depth.toml", cpu = dir_ / "cpu.png", gl = dir_ / "gl.png";
+        write_file(scene, scene_text("thesis-constant-1", "", "[shading]\nmodel = \"depth\"\nmapping = \"" + mapping + "\""));
+        const RunResult g = run({"gl", scene.string(), "-o", gl.string(), "--size", "160x100"});
+        ASSERT_EQ(g.status, 0) << mapping << ": " << g.err;
+        EXPECT_NE(g.out.find("depth shading"), std::string::npos) << g.out;
+        ASSERT_EQ(run({"render", scene.string(), "-o", cpu.string(), "--size", "160x100"}).status, 0);
+        const RunResult cmp = run({"compare", cpu.string(), gl.string(), "--threshold", kOneCode});
+        EXPECT_EQ(cmp.status, 0) << mapping << ": " << cmp.out << cmp.err;
+    }
 }
 
 }  // namespace

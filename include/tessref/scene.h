@@ -111,6 +111,16 @@
 // [shading]                     the fragment stage: kept here as text (Scene::shading_toml)
 //                               and parsed, with its own errors, by include/tessref/render.h
 //
+// [shaders]                     optional; `tessref gl` only (gl_backend.h): a user's GLSL
+//                               file in place of the GLSL twin of one stage. The CPU
+//                               commands ignore it (they keep the reference models) and the
+//                               loader does not open the files (`tessref gl` does)
+//   vertex = "path"             any of the five stages; a stage the models do not have
+//   tess_control = "path"       (e.g. geometry without [geometry]) is added
+//   tess_evaluation = "path"
+//   geometry = "path"
+//   fragment = "path"
+//
 // [limits]
 //   max_triangles = 50000000    the run is refused (before tessellating) when an upper
 //                               bound of the triangle count, estimated from the levels,
@@ -260,6 +270,18 @@ struct GeometryStage {
     GeometryNormals normals = GeometryNormals::smooth;
 };
 
+// [shaders]: one entry per stage named, in the order vertex .. fragment.
+enum class ShaderStage : std::uint8_t { vertex, tess_control, tess_evaluation, geometry, fragment };
+const char* to_string(ShaderStage stage);  // "vertex", "tess_control", ... ([shaders] keys)
+// The long names and the short ones (vert, tesc, tese, geom, frag); nullopt for others.
+std::optional<ShaderStage> shader_stage_from_string(const std::string& name);
+struct StageShader {
+    ShaderStage stage = ShaderStage::vertex;
+    std::string path;    // the file; [shaders]: resolved against the scene file's directory
+    std::string origin;  // how the user named it, as typed: [shaders] tess_evaluation = "x.tese"
+    Where where;         // for errors: the scene key's place, or the flag
+};
+
 struct Scene {
     std::string file;  // the scene file as given (used in error messages)
     std::string name;
@@ -274,6 +296,7 @@ struct Scene {
     EvaluationStage evaluation{};
     std::optional<GeometryStage> geometry; // absent: evaluation normals or none
     std::optional<std::string> shading_toml;  // [shading] table as TOML text (render.h parses it)
+    std::vector<StageShader> shaders;          // [shaders] (`tessref gl` only)
     std::uint64_t max_triangles = 50'000'000;
     Where max_triangles_where;  // where the budget was set (or the scene file): for errors
 

@@ -2,6 +2,7 @@
 // (Mesa llvmpipe): the picture a GPU driver makes of the scene, beside `tessref render`'s.
 //
 //   tessref gl SCENE -o OUT.{png,exr,tif} [--size WxH] [--wireframe] [--capture OUT.{txt,ply}]
+//              [--shader STAGE=FILE]...
 //
 // Exit 1, with no image written, when a draw's GL_PRIMITIVES_GENERATED differs from the CPU
 // primitive generator's count (gl_backend.h). TESSREF_GL_CORRUPT_BATCH=N (a test hook) makes
@@ -11,6 +12,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -33,7 +35,33 @@ struct GlCommandOptions {
     std::string size;
     bool wireframe = false;
     std::string capture;
+    std::vector<std::string> shaders;  // STAGE=FILE, as typed
 };
+
+// --shader STAGE=FILE: FILE relative to the working directory; one flag per stage.
+std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flags) {
+    std::vector<StageShader> shaders;
+    for (const std::string& flag : flags) {
+        const std::string typed = "--shader " + flag;
+        const std::size_t eq = flag.find('=');
+        if (eq == std::string::npos || eq + 1 == flag.size())
+            throw Error("--shader takes STAGE=FILE, not '" + flag + "'", where_file("--shader"));
+        const std::string name = flag.substr(0, eq);
+        const auto stage = shader_stage_from_string(name);
+        if (!stage)
+            throw Error("unknown shader stage '" + name + "' in " + typed +
+                            " (known: vertex|vert, tess_control|tesc, tess_evaluation|tese, geometry|geom, "
+                            "fragment|frag)",
+                        where_file("--shader"));
+        for (const StageShader& s : shaders)
+            if (s.stage == *stage)
+                throw Error(std::string("--shader names the ") + to_string(*stage) + " stage twice (" + s.origin +
+                                ", " + typed + ")",
+                            where_file("--shader"));
+        shaders.push_back(StageShader{*stage, flag.substr(eq + 1), typed, where_file("--shader")});
+    }
+    return shaders;
+}
 
 int run_gl(const GlCommandOptions& options) {
     const ImageFormat format = image_format_from_path(options.output);
@@ -48,6 +76,7 @@ int run_gl(const GlCommandOptions& options) {
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.wireframe = options.wireframe;
     render_options.capture = !options.capture.empty();
+    render_options.shaders = parse_shader_flags(options.shaders);
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)
         render_options.corrupt_prediction_of_batch = std::atoll(hook);
     AtomicOutput output(options.output);
@@ -94,6 +123,7 @@ int run_gl(const GlCommandOptions& options) {
               << " shading, " << context.renderer() << ", " << r.stats.triangles << " triangles in "
               << r.stats.draws << " draws (every count as predicted), " << r.stats.seconds_gl << " s GL";
     if (capture_output) std::cout << ", " << r.capture.size() / 3 << " triangles captured to " << options.capture;
+    for (const StageShader& s : r.user_shaders) std::cout << ", user " << to_string(s.stage) << " shader " << s.path;
     std::cout << "\n";
     return 0;
 }
@@ -120,7 +150,15 @@ Command add_gl_command(CLI::App& parent) {
                     "Also record every vertex of every primitive by transform feedback (patch id, tess coord, "
                     "position, normal): .ply (tessref mesh's layout) or .txt")
         ->type_name("FILE");
-    app->footer("Example: tessref gl data/scenes/thesis-all-10.toml -o gl.png --size 320x200");
+    app->add_option("--shader", options->shaders,
+                    "A GLSL file of your own in place of the GLSL twin of one stage (repeatable; over the scene's "
+                    "[shaders]): STAGE is vertex|vert, tess_control|tesc, tess_evaluation|tese, geometry|geom or "
+                    "fragment|frag. Uniforms, textures and the CPU reference's draw counts stay; the file keeps its "
+                    "own layout(...) in; (README: Debugging your own shader)")
+        ->type_name("STAGE=FILE")
+        ->allow_extra_args(false);  // one file per flag: the scene after it stays the scene
+    app->footer("Example: tessref gl data/scenes/thesis-all-10.toml -o gl.png --size 320x200\n"
+                "         tessref gl data/scenes/thesis-all-10.toml -o mine.png --shader tese=my.tese");
     return Command{app, [options] { return run_gl(*options); }};
 }
 

@@ -88,6 +88,7 @@ inline const char* spacing_qualifier(Spacing s) {
     X(GetUniformLocation, GLint, (GLuint, const GLchar*))                                       \
     X(Uniform1i, void, (GLint, GLint))                                                          \
     X(Uniform1f, void, (GLint, GLfloat))                                                        \
+    X(Uniform1d, void, (GLint, GLdouble))                                                       \
     X(Uniform2f, void, (GLint, GLfloat, GLfloat))                                               \
     X(Uniform3f, void, (GLint, GLfloat, GLfloat, GLfloat))                                      \
     X(Uniform4f, void, (GLint, GLfloat, GLfloat, GLfloat, GLfloat))                             \
@@ -105,11 +106,6 @@ inline const char* spacing_qualifier(Spacing s) {
     X(VertexAttribPointer, void, (GLuint, GLint, GLenum, GLboolean, GLsizei, const void*))      \
     X(DisableVertexAttribArray, void, (GLuint))                                                 \
     X(PatchParameterfv, void, (GLenum, const GLfloat*))
-
-// $TESSREF_DATA_DIR when set, else the source tree's data/ (shaders are read at run time).
-std::string shader_data_dir();
-// The text of data/shaders/<name>; throws tessref::Error naming the path when unreadable.
-std::string read_shader(const std::string& name);
 
 struct GlFunctions {
 #define TESSREF_GL_MEMBER(name, ret, params) ret(GLAPIENTRY* name) params = nullptr;

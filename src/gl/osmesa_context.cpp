@@ -1,5 +1,6 @@
 // The offscreen OSMesa OpenGL 4.5 core context (Mesa llvmpipe).
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <utility>
 
@@ -64,6 +65,16 @@ Context::Impl::~Impl() {
 }
 
 Context Context::create() {
+    // Mesa's OSMesa dereferences a null screen when GALLIUM_DRIVER names a driver it cannot
+    // load (Mesa 22.3: a segmentation fault in OSMesaCreateContextAttribs): refused first.
+    if (const char* driver = std::getenv("GALLIUM_DRIVER");
+        driver && *driver && std::string(driver) != "llvmpipe" && std::string(driver) != "softpipe") {
+        Where where;
+        where.file = "GALLIUM_DRIVER";
+        throw Error(std::string("OSMesa: GALLIUM_DRIVER=") + driver +
+                        " is not a software driver OSMesa can load (llvmpipe, softpipe); tessref gl needs llvmpipe",
+                    where);
+    }
     auto impl = std::make_unique<Impl>();
     const int attributes[] = {OSMESA_FORMAT,
                               OSMESA_RGBA,

@@ -8,12 +8,16 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "gl/gl_api.h"
+#include "gl/program.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
 
@@ -26,95 +30,6 @@ double seconds_since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-Where file_line(const std::string& path, int line) {
-    Where where;
-    where.file = path;
-    where.line = line;
-    return where;
-}
-
-// The first "0:LINE(COLUMN)" of a Mesa info log: the line in the file (the sources are
-// given with "#line 2" after the #version line, so the numbers are the file's).
-int log_line(const std::string& log) {
-    std::smatch m;
-    if (std::regex_search(log, m, std::regex(R"(\d+:(\d+)\(\d+\))"))) return std::stoi(m[1].str());
-    return 0;
-}
-
-// One stage's source: a file of data/shaders/ (path set) or built-in text, with text
-// inserted after the #version line and appended at the end.
-struct StageSource {
-    GLenum stage = 0;
-    std::string file;  // data/shaders/<file>; empty for built-in text
-    std::string text;  // the source (read from the file when file is set)
-    std::string prefix;
-    std::string suffix;
-};
-
-std::string stage_path(const StageSource& s) {
-    return s.file.empty() ? std::string("(built-in shader)") : shader_data_dir() + "/shaders/" + s.file;
-}
-
-GLuint compile(GlFunctions& gl, const StageSource& s) {
-    std::size_t split = 0;
-    if (s.text.compare(0, 8, "#version") == 0) {
-        split = s.text.find('\n');
-        split = split == std::string::npos ? s.text.size() : split + 1;
-    }
-    const std::string head = s.text.substr(0, split);
-    const std::string inserted = s.prefix + "#line 2\n";
-    const std::string tail = s.text.substr(split) + "\n" + s.suffix;
-    const GLchar* parts[] = {head.c_str(), inserted.c_str(), tail.c_str()};
-    const GLuint shader = gl.CreateShader(s.stage);
-    gl.ShaderSource(shader, 3, parts, nullptr);
-    gl.CompileShader(shader);
-    GLint ok = GL_FALSE;
-    gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        GLint length = 0;
-        gl.GetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-        gl.GetShaderInfoLog(shader, length, nullptr, log.data());
-        gl.DeleteShader(shader);
-        log = log.c_str();
-        while (!log.empty() && (log.back() == '\n' || log.back() == ' ')) log.pop_back();
-        throw Error("GLSL compile error in " + stage_path(s) + ": " + log, file_line(stage_path(s), log_line(log)));
-    }
-    return shader;
-}
-
-GLuint link(GlFunctions& gl, const std::vector<StageSource>& stages, const std::vector<const char*>& varyings) {
-    std::vector<GLuint> shaders;
-    try {
-        for (const StageSource& s : stages) shaders.push_back(compile(gl, s));
-    } catch (...) {
-        for (GLuint shader : shaders) gl.DeleteShader(shader);
-        throw;
-    }
-    const GLuint program = gl.CreateProgram();
-    for (GLuint shader : shaders) gl.AttachShader(program, shader);
-    if (!varyings.empty())
-        gl.TransformFeedbackVaryings(program, static_cast<GLsizei>(varyings.size()), varyings.data(),
-                                     GL_INTERLEAVED_ATTRIBS);
-    gl.LinkProgram(program);
-    for (GLuint shader : shaders) gl.DeleteShader(shader);
-    GLint ok = GL_FALSE;
-    gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint length = 0;
-        gl.GetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-        gl.GetProgramInfoLog(program, length, nullptr, log.data());
-        gl.DeleteProgram(program);
-        std::string files;
-        for (const StageSource& s : stages) files += (files.empty() ? "" : ", ") + stage_path(s);
-        Where where;
-        where.file = files;
-        throw Error("GLSL link error: " + std::string(log.c_str()), where);
-    }
-    return program;
-}
-
 // The scene's [generator] in place of the evaluation shader's own layout(...) in; line, so
 // that GL tessellates as the CPU pipeline does (the twins' lines are the scenes' defaults).
 std::string with_generator(const std::string& text, const TessSettings& g, const std::string& path) {
@@ -124,7 +39,7 @@ std::string with_generator(const std::string& text, const TessSettings& g, const
                               (g.point_mode ? ", point_mode" : "") + ") in;";
     std::smatch m;
     if (!std::regex_search(text, m, layout))
-        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", file_line(path, 0));
+        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", Where{path, 0, 0, "", -1});
     return m.prefix().str() + replacement + m.suffix().str();
 }
 
@@ -182,7 +97,7 @@ struct Plan {
 StageSource file_stage(GLenum stage, const std::string& file) {
     StageSource s;
     s.stage = stage;
-    s.file = file;
+    s.path = shader_data_dir() + "/shaders/" + file;
     s.text = read_shader(file);
     return s;
 }
@@ -247,7 +162,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
     }
 
     StageSource tese = file_stage(GL_TESS_EVALUATION_SHADER, base + ".tese");
-    tese.text = with_generator(tese.text, scene.generator, stage_path(tese));
+    tese.text = with_generator(tese.text, scene.generator, tese.path);
     plan.stages.push_back(std::move(tese));
 
     if (scene.geometry) {
@@ -276,6 +191,95 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         case ShadingKind::pn: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pn_triangles.frag")); break;
     }
     return plan;
+}
+
+// ---- user shaders: [shaders] and --shader ----------------------------------------------
+
+GLenum gl_stage(ShaderStage stage) {
+    switch (stage) {
+        case ShaderStage::vertex: return GL_VERTEX_SHADER;
+        case ShaderStage::tess_control: return GL_TESS_CONTROL_SHADER;
+        case ShaderStage::tess_evaluation: return GL_TESS_EVALUATION_SHADER;
+        case ShaderStage::geometry: return GL_GEOMETRY_SHADER;
+        case ShaderStage::fragment: return GL_FRAGMENT_SHADER;
+    }
+    return GL_VERTEX_SHADER;
+}
+
+// The scene's [shaders], each replaced by the option of the same stage where there is one.
+std::vector<StageShader> user_shaders(const Scene& scene, const SceneRenderOptions& options) {
+    std::vector<StageShader> shaders = options.shaders;
+    for (const StageShader& s : scene.shaders)
+        if (std::none_of(shaders.begin(), shaders.end(), [&](const StageShader& o) { return o.stage == s.stage; }))
+            shaders.push_back(s);
+    std::sort(shaders.begin(), shaders.end(),
+              [](const StageShader& a, const StageShader& b) { return a.stage < b.stage; });
+    return shaders;
+}
+
+StageSource user_stage(const StageShader& user) {
+    const std::string what = std::string("the ") + to_string(user.stage) + " shader " + user.path + " of " + user.origin;
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(user.path, ec);
+    std::ifstream in(user.path, std::ios::binary);
+    if (ec || !in || std::filesystem::is_directory(user.path, ec)) throw Error("cannot read " + what, user.where);
+    require_memory(size, what, user.where);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw Error("cannot read " + what, user.where);
+    StageSource s;
+    s.stage = gl_stage(user.stage);
+    s.path = user.path;
+    s.origin = user.origin;
+    s.text = text.str();
+    return s;
+}
+
+// Each user file in place of its stage's twin, or added where the models have no such stage
+// (GL links the stages by kind, the order only keeps the plan readable). A user's evaluation
+// shader keeps its own layout(...) in; line: it is what the user wants tested, and a layout
+// other than the scene's [generator] shows as draw counts other than the CPU reference's.
+void apply_user_shaders(Plan& plan, const std::vector<StageShader>& shaders) {
+    const auto order = [](GLenum stage) {
+        const GLenum pipeline[] = {GL_VERTEX_SHADER, GL_TESS_CONTROL_SHADER, GL_TESS_EVALUATION_SHADER,
+                                   GL_GEOMETRY_SHADER, GL_FRAGMENT_SHADER};
+        return std::find(std::begin(pipeline), std::end(pipeline), stage) - std::begin(pipeline);
+    };
+    for (const StageShader& user : shaders) {
+        StageSource s = user_stage(user);
+        auto it = std::find_if(plan.stages.begin(), plan.stages.end(),
+                               [&](const StageSource& p) { return p.stage == s.stage; });
+        if (it != plan.stages.end()) {
+            *it = std::move(s);
+            continue;
+        }
+        if (s.stage == GL_TESS_CONTROL_SHADER) plan.has_control_shader = true;
+        if (s.stage == GL_GEOMETRY_SHADER) {
+            plan.has_geometry_shader = true;
+            plan.normal_expression.clear();  // the evaluation shader's normal is not the geometry stage's
+        }
+        it = std::find_if(plan.stages.begin(), plan.stages.end(),
+                          [&](const StageSource& p) { return order(p.stage) > order(s.stage); });
+        plan.stages.insert(it, std::move(s));
+    }
+}
+
+// The user's files that can change how many primitives a draw makes (all but fragment),
+// for the message of a draw whose count is not the CPU reference's.
+std::string count_note(const Plan& plan) {
+    std::string files;
+    bool evaluation = false;
+    for (const StageSource& s : plan.stages) {
+        if (s.origin.empty() || s.stage == GL_FRAGMENT_SHADER) continue;
+        files += std::string(files.empty() ? "" : ", ") + stage_name(s.stage) + " " + s.path;
+        evaluation = evaluation || s.stage == GL_TESS_EVALUATION_SHADER;
+    }
+    if (files.empty()) return "";
+    return "; the user's shaders (" + files + ") generated a different number of primitives than the reference " +
+           "models predict" +
+           (evaluation ? " (a user's evaluation shader keeps its own layout(...) in; the reference tessellates "
+                         "as the scene's [generator])"
+                       : "");
 }
 
 // The capture program: the same stages, no fragment shader; the evaluation shader also hands
@@ -322,19 +326,64 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
     return stages;
 }
 
+// What the capture program reads of the stages it wraps, for its errors when a user's
+// shader is among them.
+std::string capture_note(const Plan& plan) {
+    if (std::none_of(plan.stages.begin(), plan.stages.end(), [](const StageSource& s) {
+            return !s.origin.empty() && s.stage != GL_FRAGMENT_SHADER;
+        }))
+        return "";
+    return " (it wraps the stages before rasterization and reads " + plan.position_expression +
+           (plan.normal_expression.empty() ? "" : " and " + plan.normal_expression) +
+           ", as the twins have them: a user's shader must declare them too)";
+}
+
 // ---- uniforms: one function per model, from the scene's settings structs ------------------
 
+// A program may lack any of these uniforms (location -1: the call sets nothing), as a user's
+// shader may; one that declares a twin's uniform with another type makes GL refuse the call.
 struct Uniforms {
     GlFunctions& gl;
     GLuint program;
     GLint at(const char* name) const { return gl.GetUniformLocation(program, name); }
-    void i(const char* name, int v) const { gl.Uniform1i(at(name), v); }
-    void f(const char* name, double v) const { gl.Uniform1f(at(name), static_cast<float>(v)); }
-    void v2(const char* name, glm::vec2 v) const { gl.Uniform2f(at(name), v.x, v.y); }
-    void v3(const char* name, glm::vec3 v) const { gl.Uniform3f(at(name), v.x, v.y, v.z); }
-    void v4(const char* name, glm::vec4 v) const { gl.Uniform4f(at(name), v.x, v.y, v.z, v.w); }
-    void m3(const char* name, const glm::mat3& m) const { gl.UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]); }
-    void m4(const char* name, const glm::mat4& m) const { gl.UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]); }
+    void check(const char* name, const char* type) const {
+        if (gl.GetError() != GL_NO_ERROR)
+            throw Error(std::string("the uniform ") + name + " is declared with a type other than " + type +
+                        ", the GLSL twins' (the twins' uniform names and types are the contract of a user's "
+                        "shader: README, `gl`)");
+    }
+    void i(const char* name, int v) const {
+        gl.Uniform1i(at(name), v);
+        check(name, "int");
+    }
+    void f(const char* name, double v) const {
+        gl.Uniform1f(at(name), static_cast<float>(v));
+        check(name, "float");
+    }
+    void d(const char* name, double v) const {
+        gl.Uniform1d(at(name), v);
+        check(name, "double");
+    }
+    void v2(const char* name, glm::vec2 v) const {
+        gl.Uniform2f(at(name), v.x, v.y);
+        check(name, "vec2");
+    }
+    void v3(const char* name, glm::vec3 v) const {
+        gl.Uniform3f(at(name), v.x, v.y, v.z);
+        check(name, "vec3");
+    }
+    void v4(const char* name, glm::vec4 v) const {
+        gl.Uniform4f(at(name), v.x, v.y, v.z, v.w);
+        check(name, "vec4");
+    }
+    void m3(const char* name, const glm::mat3& m) const {
+        gl.UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]);
+        check(name, "mat3");
+    }
+    void m4(const char* name, const glm::mat4& m) const {
+        gl.UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]);
+        check(name, "mat4");
+    }
 };
 
 // The matrices as the CPU pipeline rounds them (pipeline.cpp: mat4_t<float>(camera.view_projection())).
@@ -414,9 +463,9 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
         case ShadingKind::flat: u.v4("colour", s.flat.colour); break;
         case ShadingKind::depth:
             u.i("windowMapping", s.depth.mapping == DepthMapping::window ? 1 : 0);
-            // glUniform1d is not loaded: double uniforms through their float values' exact widening.
-            u.gl.Uniform1f(u.at("nearPlane"), s.depth.near_plane);
-            u.gl.Uniform1f(u.at("farPlane"), s.depth.far_plane);
+            // The fragment shader's double uniforms hold the floats of shading.h exactly widened.
+            u.d("nearPlane", s.depth.near_plane);
+            u.d("farPlane", s.depth.far_plane);
             break;
         case ShadingKind::thesis_single:
         case ShadingKind::thesis_multi:
@@ -451,6 +500,7 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
 void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const RenderShading& shading,
                   const Matrices& m, glm::ivec2 viewport) {
     gl.UseProgram(program);
+    if (gl.GetError() != GL_NO_ERROR) throw Error("OpenGL refused to use the scene's program");
     const Uniforms u{gl, program};
     switch (scene.evaluation.model) {
         case EvaluationModel::thesis: thesis_uniforms(u, scene, m); break;
@@ -678,7 +728,10 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     m.view_projection = glm::mat4(scene.camera->view_projection());
     m.eye = glm::vec3(scene.camera->eye);
 
-    const Plan plan = plan_for(scene, result.shading);
+    Plan plan = plan_for(scene, result.shading);
+    result.user_shaders = user_shaders(scene, options);
+    apply_user_shaders(plan, result.user_shaders);
+    const std::string user_note = count_note(plan);
     const std::vector<Batch> batches = make_batches(per_patch, options.max_primitives_per_draw);
 
     Context::Impl& c = context.impl();
@@ -701,7 +754,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
 
     GlObjects objects(c);
     BoundTextures textures(c);
-    objects.programs.push_back(link(gl, plan.stages, {}));
+    objects.programs.push_back(link(gl, plan.stages, {}, "the scene's program"));
     const GLuint program = objects.programs.back();
     bind_textures(textures, scene, result.shading);
 
@@ -764,7 +817,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         if (generated != predicted_of(k)) {
             result.batch_failure = batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
                                    " primitives, the CPU primitive generator predicts " +
-                                   std::to_string(predicted_of(k));
+                                   std::to_string(predicted_of(k)) + user_note;
             return result;
         }
     }
@@ -785,7 +838,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     start = Clock::now();
     objects.programs.push_back(link(gl, capture_stages(plan),
                                     {"tessref_cap_tess_coord", "tessref_cap_patch_id", "tessref_cap_position",
-                                     "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"}));
+                                     "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"},
+                                    "the --capture program" + capture_note(plan)));
     const GLuint capture_program = objects.programs.back();
     set_uniforms(gl, capture_program, scene, result.shading, m, size);
     if (plan.identity_mvp_for_capture) Uniforms{gl, capture_program}.m4("mvp", glm::mat4(1.0f));
@@ -824,7 +878,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
             result.capture.clear();
             result.batch_failure = "capture " + batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
                                    " primitives and transform feedback wrote " + std::to_string(written) +
-                                   ", the CPU primitive generator predicts " + std::to_string(predicted_of(k));
+                                   ", the CPU primitive generator predicts " + std::to_string(predicted_of(k)) +
+                                   user_note;
             return result;
         }
         if (written == 0) continue;

@@ -8,33 +8,13 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 
 #include "gl/gl_api.h"
+#include "gl/program.h"
 #include "tessref/error.h"
 
 namespace tessref::gl {
-
-std::string shader_data_dir() {
-    if (const char* env = std::getenv("TESSREF_DATA_DIR"); env && *env) return env;
-    return TESSREF_DATA_DIR;
-}
-
-std::string read_shader(const std::string& name) {
-    const std::string path = shader_data_dir() + "/shaders/" + name;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        Where where;
-        where.file = path;
-        throw Error("cannot read shader file", where);
-    }
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
 
 namespace {
 
@@ -52,19 +32,11 @@ struct FeedbackVertex {
 };
 static_assert(sizeof(FeedbackVertex) == 16);
 
-Where file_where(const std::string& path) {
-    Where where;
-    where.file = path;
-    return where;
-}
-
 Where patch_where(std::size_t patch) {
     Where where;
     where.patch_id = static_cast<long long>(patch);
     return where;
 }
-
-std::string data_dir() { return shader_data_dir(); }
 
 int vertices_per_primitive(const TessSettings& s) {
     if (s.point_mode) return 1;
@@ -76,34 +48,14 @@ GLenum feedback_mode(const TessSettings& s) {
     return s.domain == Domain::isolines ? GL_LINES : GL_TRIANGLES;
 }
 
-// Compiles one stage. `defines` go right after the #version line of the file.
-GLuint compile_shader(GlFunctions& gl, GLenum stage, const std::string& file,
-                      const std::string& defines) {
-    const std::string source = read_shader(file);
-    std::size_t split = 0;
-    if (source.compare(0, 8, "#version") == 0) {
-        split = source.find('\n');
-        split = split == std::string::npos ? source.size() : split + 1;
-    }
-    const std::string head = source.substr(0, split);
-    const std::string inserted = defines + "#line 2\n";
-    const std::string tail = source.substr(split);
-    const GLchar* parts[] = {head.c_str(), inserted.c_str(), tail.c_str()};
-    const GLuint shader = gl.CreateShader(stage);
-    gl.ShaderSource(shader, 3, parts, nullptr);
-    gl.CompileShader(shader);
-    GLint ok = GL_FALSE;
-    gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        GLint length = 0;
-        gl.GetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-        gl.GetShaderInfoLog(shader, length, nullptr, log.data());
-        gl.DeleteShader(shader);
-        throw Error("GLSL compile error: " + std::string(log.c_str()),
-                    file_where(data_dir() + "/shaders/" + file));
-    }
-    return shader;
+// One stage of the capture program; `defines` go right after the #version line.
+StageSource capture_stage(GLenum stage, const std::string& file, const std::string& defines = "") {
+    StageSource s;
+    s.stage = stage;
+    s.path = shader_data_dir() + "/shaders/" + file;
+    s.text = read_shader(file);
+    s.prefix = defines;
+    return s;
 }
 
 GLuint capture_program(Context::Impl& c, const TessSettings& s) {
@@ -117,27 +69,11 @@ GLuint capture_program(Context::Impl& c, const TessSettings& s) {
                                (s.winding == Winding::cw ? "cw" : "ccw") + "\n";
     if (s.point_mode) tese_defines += "#define TESSREF_POINT_MODE\n";
 
-    auto& gl = c.gl;
-    const GLuint shaders[] = {
-        compile_shader(gl, GL_VERTEX_SHADER, "capture_tess_coord.vert", ""),
-        compile_shader(gl, GL_TESS_CONTROL_SHADER, "capture_tess_coord.tesc", ""),
-        compile_shader(gl, GL_TESS_EVALUATION_SHADER, "capture_tess_coord.tese", tese_defines)};
-    const GLuint program = gl.CreateProgram();
-    for (GLuint shader : shaders) gl.AttachShader(program, shader);
-    const GLchar* varyings[] = {"tess_coord", "patch_id"};
-    gl.TransformFeedbackVaryings(program, 2, varyings, GL_INTERLEAVED_ATTRIBS);
-    gl.LinkProgram(program);
-    for (GLuint shader : shaders) gl.DeleteShader(shader);
-    GLint ok = GL_FALSE;
-    gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint length = 0;
-        gl.GetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-        std::string log(static_cast<std::size_t>(std::max(length, 1)), '\0');
-        gl.GetProgramInfoLog(program, length, nullptr, log.data());
-        gl.DeleteProgram(program);
-        throw Error("GLSL link error (capture_tess_coord): " + std::string(log.c_str()));
-    }
+    const GLuint program =
+        link(c.gl, {capture_stage(GL_VERTEX_SHADER, "capture_tess_coord.vert"),
+                    capture_stage(GL_TESS_CONTROL_SHADER, "capture_tess_coord.tesc"),
+                    capture_stage(GL_TESS_EVALUATION_SHADER, "capture_tess_coord.tese", tese_defines)},
+             {"tess_coord", "patch_id"}, "the tess-coord capture program");
     c.check_error("building the capture program");
     c.programs[key].program = program;
     return program;

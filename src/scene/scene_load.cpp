@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include <OpenMesh/Core/IO/importer/ImporterT.hh>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
@@ -48,6 +49,28 @@ const char* to_string(GeometryNormals normals) {
     return "?";
 }
 
+const char* to_string(ShaderStage stage) {
+    switch (stage) {
+        case ShaderStage::vertex: return "vertex";
+        case ShaderStage::tess_control: return "tess_control";
+        case ShaderStage::tess_evaluation: return "tess_evaluation";
+        case ShaderStage::geometry: return "geometry";
+        case ShaderStage::fragment: return "fragment";
+    }
+    return "?";
+}
+std::optional<ShaderStage> shader_stage_from_string(const std::string& name) {
+    static const std::pair<const char*, ShaderStage> names[] = {
+        {"vertex", ShaderStage::vertex},     {"vert", ShaderStage::vertex},
+        {"tess_control", ShaderStage::tess_control},     {"tesc", ShaderStage::tess_control},
+        {"tess_evaluation", ShaderStage::tess_evaluation}, {"tese", ShaderStage::tess_evaluation},
+        {"geometry", ShaderStage::geometry}, {"geom", ShaderStage::geometry},
+        {"fragment", ShaderStage::fragment}, {"frag", ShaderStage::fragment}};
+    for (const auto& [n, stage] : names)
+        if (name == n) return stage;
+    return std::nullopt;
+}
+
 glm::dmat4 SceneCamera::view() const { return glm::lookAt(eye, center, up); }
 glm::dmat4 SceneCamera::projection() const {
     return glm::perspective(glm::radians(fov_y_degrees),
@@ -77,8 +100,8 @@ namespace {
 namespace fs = std::filesystem;
 
 // The tables a scene may have. "shading" is reserved for the renderer.
-const std::vector<std::string> kTopLevel = {"scene", "domain", "mesh", "camera", "generator",
-                                            "control", "evaluation", "geometry", "shading", "limits"};
+const std::vector<std::string> kTopLevel = {"scene",      "domain",   "mesh",     "camera",  "generator", "control",
+                                            "evaluation", "geometry", "shading", "shaders", "limits"};
 
 struct Loader {
     std::string file;     // as given, for messages
@@ -555,6 +578,23 @@ struct Loader {
         scene.geometry = g;
     }
 
+    // ---- [shaders] ----------------------------------------------------------------
+    // Only names and paths: `tessref gl` reads the files, the CPU commands never need them.
+    void read_shaders(const toml::table& table) {
+        static const std::vector<std::string> keys = {"vertex", "tess_control", "tess_evaluation", "geometry",
+                                                      "fragment"};
+        TableReader t(file, table, "shaders", keys);
+        for (const std::string& k : keys) {
+            const auto path = t.string_opt(k);
+            if (!path) continue;
+            if (path->empty()) t.fail(k, "shaders." + k + " must name a GLSL file");
+            scene.shaders.push_back(
+                StageShader{*shader_stage_from_string(k), resolve(*path), "[shaders] " + k + " = \"" + *path + "\"",
+                            t.where(k)});
+        }
+        t.finish();
+    }
+
     // ---- [limits] -----------------------------------------------------------------
     void read_limits(const toml::table& table) {
         TableReader t(file, table, "limits", {"max_triangles"});
@@ -586,7 +626,7 @@ struct Loader {
                 const bool looks_like_stage = n.is_table() || n.is_array();
                 throw Error((looks_like_stage ? "unknown stage or table [" + ks + "]" : "unknown top-level key " + ks) +
                                 " (known: scene, domain, mesh, camera, generator, control, evaluation, geometry, "
-                                "shading, limits)",
+                                "shading, shaders, limits)",
                             where_at(file, k.source(), ks));
             }
             if (ks != "mesh" && !n.is_table())
@@ -595,6 +635,7 @@ struct Loader {
         }
         read_scene(root);
         if (const toml::node* l = root.get("limits")) read_limits(*l->as_table());
+        if (const toml::node* sh = root.get("shaders")) read_shaders(*sh->as_table());
 
         const toml::node* domain = root.get("domain");
         const toml::node* mesh = root.get("mesh");
