@@ -16,6 +16,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -371,6 +372,169 @@ TEST(CompareCaptures, RefusesACaptureOfPartTriangles) {
     c.vertices.pop_back();
     c.source = "x.txt";
     EXPECT_THROW(tessref::compare_captures(two_patches(), c), tessref::Error);
+}
+
+// ---- the CPU reference's capture ---------------------------------------------------------
+
+// COSC422's terrain (plane xz, z descending: ccw faces up) with face normals, drawn ccw and
+// cw: cw makes the pipeline re-orient every triangle to face up. The capture must still be
+// the generator's primitives in its order (tessellate() on the patch's levels), and each
+// triangle's normal what cosc422_terrain.geom computes from the corners as GL emits them:
+// normalize(cross(p1 - p0, p2 - p0)), its x, y, z each 0 ulps away.
+class CpuCapture : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CpuCapture, IsTheGeneratorsOrderWithTheGeometryShadersFaceNormal) {
+    std::string toml = read_file(scene_path("cosc422"));
+    const std::string ccw = "winding = \"ccw\"";
+    const std::size_t at = toml.find(ccw);
+    ASSERT_NE(at, std::string::npos);
+    toml.replace(at, ccw.size(), std::string("winding = \"") + GetParam() + "\"");
+    const tessref::Scene scene = tessref::load_scene_from_string(toml, scene_path("cosc422").string());
+    const tessref::PipelineResult result = tessref::run_pipeline(scene);
+    const std::vector<CapturedVertex> capture = tessref::capture_from_pipeline(scene, result);
+    ASSERT_EQ(capture.size(), result.mesh.triangles.size() * 3);
+
+    std::size_t next = 0, mismatched_tess_coords = 0, mismatched_normals = 0, mismatched_levels = 0;
+    for (std::uint32_t p = 0; p < result.levels.size(); ++p) {
+        const tessref::Pattern pattern = tessref::tessellate(scene.generator, result.levels[p]);
+        const auto points = pattern.points();
+        for (std::size_t t = 0; t < pattern.primitive_count(); ++t, next += 3) {
+            ASSERT_LE(next + 3, capture.size());
+            const auto prim = pattern.primitive(t);
+            for (std::size_t k = 0; k < 3; ++k) {
+                const CapturedVertex& v = capture[next + k];
+                ASSERT_EQ(v.patch_id, p);
+                const auto& q = points[prim[k]];
+                if (!same_bits(v.tess_coord, glm::vec3(q.u, q.v, q.w))) ++mismatched_tess_coords;
+                if (std::memcmp(&v.levels, &result.levels[p], sizeof(TessLevels)) != 0) ++mismatched_levels;
+            }
+            const glm::vec3 p0 = capture[next].position, p1 = capture[next + 1].position, p2 = capture[next + 2].position;
+            const glm::vec3 expected = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+            // Up to the sign of a zero component: the pipeline's normal of the re-oriented
+            // corners, negated, is exact but for that (ulp distance 0).
+            for (std::size_t k = 0; k < 3; ++k)
+                for (int c = 0; c < 3; ++c)
+                    if (ulp_distance(capture[next + k].normal[c], expected[c]) != 0) ++mismatched_normals;
+        }
+    }
+    EXPECT_EQ(next, capture.size());
+    EXPECT_EQ(mismatched_tess_coords, 0u);
+    EXPECT_EQ(mismatched_normals, 0u);
+    EXPECT_EQ(mismatched_levels, 0u);
+    // The face up (+y) whatever the winding asks: ccw's normals point up, cw's down.
+    std::size_t up = 0;
+    for (const CapturedVertex& v : capture) up += v.normal.y > 0.0f;
+    EXPECT_EQ(up, std::string(GetParam()) == "ccw" ? capture.size() : 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Windings, CpuCapture, ::testing::Values("ccw", "cw"));
+
+// ---- the command, end to end --------------------------------------------------------------
+
+class CaptureCommand : public tessref::test::CommandDirTest {};
+
+TEST_F(CaptureCommand, MeshCaptureAloneWritesOnlyTheCapture) {
+    const RunResult r = run({"mesh", scene_path("thesis-constant-1").string(), "--capture", path("cpu.txt")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(files(), (std::set<std::string>{"cpu.txt"}));
+    // 16 x 16 patches at level 1: two triangles each.
+    const Capture c = tessref::read_capture(path("cpu.txt"));
+    EXPECT_EQ(c.vertices.size(), 16u * 16u * 2u * 3u);
+}
+
+TEST_F(CaptureCommand, MeshWithMeshAndCaptureWritesBoth) {
+    const RunResult r = run({"mesh", scene_path("thesis-constant-1").string(), "-o", path("m.ply"), "--capture",
+                             path("cpu.ply")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(files(), (std::set<std::string>{"cpu.ply", "m.ply"}));
+    EXPECT_EQ(tessref::read_capture(path("cpu.ply")).vertices.size(), 16u * 16u * 2u * 3u);
+}
+
+TEST_F(CaptureCommand, MeshWithNothingToWriteOrABadCaptureNameIsExit2AndWritesNothing) {
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"mesh", scene_path("thesis-constant-1").string()},
+          std::vector<std::string>{"mesh", scene_path("thesis-constant-1").string(), "--capture", path("c.obj")},
+          std::vector<std::string>{"mesh", scene_path("thesis-constant-1").string(), "--capture", path("c.txt"),
+                                   "--solid"}}) {
+        const RunResult r = run(args);
+        EXPECT_EQ(r.status, 2) << args.back() << r.err;
+        EXPECT_NE(r.err.find("tessref: error:"), std::string::npos) << r.err;
+        EXPECT_TRUE(files().empty());
+    }
+}
+
+// The CPU reference against llvmpipe (OSMesa, a build dependency): wherever GL's control
+// shader wrote bitwise the CPU's levels, the generator must give bitwise the same tess
+// coords and triangles; every patch is on both sides.
+class CpuAgainstGl : public CaptureCommand, public ::testing::WithParamInterface<const char*> {};
+
+TEST_P(CpuAgainstGl, SameTessCoordsWhereverTheLevelsAreTheSame) {
+    const std::string scene = scene_path(GetParam()).string();
+    RunResult r = run({"mesh", scene, "--capture", path("cpu.txt")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = run({"gl", scene, "-o", path("gl.png"), "--size", "64x40", "--capture", path("gl.txt")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = run({"compare", path("cpu.txt"), path("gl.txt"), "--json"});
+    ASSERT_TRUE(r.status == 0 || r.status == 1) << r.out << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["missing_in_test"], 0) << r.out;
+    EXPECT_EQ(j["missing_in_reference"], 0) << r.out;
+    EXPECT_EQ(j["tess_coord_divergences_with_equal_levels"], 0) << r.out;
+    EXPECT_EQ(j["triangle_divergences"], 0) << r.out;
+    EXPECT_EQ(j["reference_patches"], 256) << r.out;
+    EXPECT_EQ(j["passed"], r.status == 0);
+    std::printf("[cpu vs gl] %s: %s tess-coord divergences, worst position %s ulps, worst normal %s ulps\n",
+                GetParam(), j["tess_coord_divergences"].dump().c_str(), j["worst_position"]["ulps"].dump().c_str(),
+                j["worst_normal"]["ulps"].dump().c_str());
+    // The text report of the same comparison ends in its verdict.
+    r = run({"compare", path("cpu.txt"), path("gl.txt")});
+    EXPECT_NE(r.out.find(r.status == 0 ? "PASS\n" : "FAIL\n"), std::string::npos) << r.out;
+    EXPECT_TRUE(files() == (std::set<std::string>{"cpu.txt", "gl.png", "gl.txt"}));
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, CpuAgainstGl, ::testing::Values("thesis-constant-1", "thesis-map-4"),
+                         [](const auto& info) {
+                             std::string name = info.param;
+                             for (char& c : name) c = c == '-' ? '_' : c;
+                             return name;
+                         });
+
+TEST_F(CaptureCommand, CompareFailsWithExit1NamingThePatchAndPassesWithTheTolerance) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    test.vertices[8].position.y = step_up(ref.vertices[8].position.y, 3);
+    write_file(path("ref.txt"), tessref::capture_text(ref.vertices));
+    write_file(path("test.txt"), tessref::capture_text(test.vertices));
+    RunResult r = run({"compare", path("ref.txt"), path("test.txt"), "--max-position-ulps", "2"});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("  patch 1  values: 1 of 6 vertices fail; first at tess coord (1, 1, 0)"), std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("(3 ulps)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\n  1:1\n"), std::string::npos) << r.out;
+    r = run({"compare", path("ref.txt"), path("test.txt"), "--max-position-ulps", "3", "--json"});
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["worst_position"]["ulps"], 3);
+}
+
+TEST_F(CaptureCommand, CompareBadInputIsExit2) {
+    write_file(path("ref.txt"), tessref::capture_text(two_patches().vertices));
+    write_file(path("bad.txt"), "tessref-capture 1\npatch 0 levels 1 1 1 1 1 1\n0 0 0 0 1 2 x 0 0 1\n");
+    RunResult r = run({"compare", path("ref.txt"), path("bad.txt")});
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("bad number 'x' (expected a position) at line 3"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(path("bad.txt") + ":3"), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    // A capture against an image, ulps for images, image flags for captures.
+    r = run({"compare", path("ref.txt"), path("x.png")});
+    EXPECT_EQ(r.status, 2) << r.err;
+    r = run({"compare", path("a.png"), path("b.png"), "--max-normal-ulps", "1"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--max-normal-ulps"), std::string::npos) << r.err;
+    r = run({"compare", path("ref.txt"), path("ref.txt"), "--threshold", "0.5"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    r = run({"compare", path("ref.txt"), path("ref.txt"), "--max-position-ulps", "-1"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(files(), (std::set<std::string>{"bad.txt", "ref.txt"}));
 }
 
 }  // namespace

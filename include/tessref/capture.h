@@ -75,7 +75,8 @@ struct Capture {
 // turned back where the pipeline re-oriented them to face up/out, scene.h). The normal is
 // what the GL twins hand to the rasterizer where the CPU has it: the face normal of
 // [geometry] normals = "face" (of the corners in generator order, as cosc422_terrain.geom
-// computes it), else the mesh's vertex normals (thesis normal_map, lab 4 height_field, PN's
+// computes it; for a re-oriented triangle the negation of the pipeline's, which may differ
+// from GL's in the sign of a zero component), else the mesh's vertex normals (thesis normal_map, lab 4 height_field, PN's
 // evaluation normal), else zero. Known gap: lab 4 without [geometry] has no CPU normal
 // (zero here) while its evaluation shader computes one. Throws tessref::Error when the
 // mesh's triangles are not the generator's pattern for the patch's levels.

@@ -86,8 +86,9 @@ std::vector<CapturedVertex> capture_from_pipeline(const Scene& scene, const Pipe
                 if (!result.face_normals.empty()) {
                     // The pipeline's face normal is of the re-oriented corners; the geometry
                     // shader sees them as generated: cross(b - a, c - a) with b and c
-                    // swapped is the exact negation.
-                    c.normal = glm::vec3(result.face_normals[t]) * (reoriented ? -1.0f : 1.0f);
+                    // swapped is the exact negation, but for the sign of a zero component
+                    // (x - y and y - x are both +0 when x == y).
+                    c.normal = reoriented ? -glm::vec3(result.face_normals[t]) : glm::vec3(result.face_normals[t]);
                 } else if (!mesh.normals.empty()) {
                     c.normal = glm::vec3(mesh.normals[v]);
                 }
