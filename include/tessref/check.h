@@ -71,7 +71,7 @@ struct IndexedMesh {
     std::vector<glm::vec3> normals;
     std::vector<glm::vec2> uvs;
     // The provenance `tessref mesh` writes to PLY (properties patch_id, tess_u, tess_v,
-    // tess_w), read with the attributes; each empty when the file has none.
+    // tess_w), read when MeshFileOptions asks for it; each empty when the file has none.
     std::vector<std::uint32_t> patch_ids;
     std::vector<glm::vec3> tess_coords;
 
@@ -88,8 +88,8 @@ struct IndexedMesh {
 };
 
 struct MeshFileOptions {
-    bool vertex_attributes = false;              // also read normals, texture coordinates (and
-                                                 // a PLY's patch ids and tess coords)
+    bool vertex_attributes = false;              // also read normals and texture coordinates
+    bool provenance = false;                     // also read a PLY's patch ids and tess coords
     std::function<void(double)> progress;        // fraction of the file read, now and then
 };
 

@@ -310,6 +310,7 @@ private:
 Capture read_ply_capture(const std::string& path) {
     MeshFileOptions options;
     options.vertex_attributes = true;
+    options.provenance = true;
     const IndexedMesh mesh = read_mesh_file(path, options);
     const Where where = where_line(path, 0);
     if (mesh.patch_ids.empty() || mesh.tess_coords.empty() || mesh.normals.empty())

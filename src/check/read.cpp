@@ -275,7 +275,7 @@ public:
     std::uint64_t memory_for(std::uint64_t vertices, std::uint64_t faces) const {
         // Positions and the file's values, attributes, three corners a face, and OpenMesh's
         // kernel for the refusal check (about 100 bytes a face).
-        const std::uint64_t per_vertex = 2 * sizeof(glm::dvec3) + (options.vertex_attributes ? 36 : 0);
+        const std::uint64_t per_vertex = 2 * sizeof(glm::dvec3) + (options.vertex_attributes ? 20 : 0) + (options.provenance ? 16 : 0);
         const std::uint64_t a = saturating_bytes(vertices, per_vertex), b = saturating_bytes(faces, 16 + 100);
         return a > UINT64_MAX - b ? UINT64_MAX : a + b;
     }
@@ -533,6 +533,8 @@ PlyRoles ply_roles(Reading& r, const PlyElement& e, bool vertex) {
             roles.u = find({"u", "s", "texture_u", "texture_s"});
             roles.v = find({"v", "t", "texture_v", "texture_t"});
             if (roles.u < 0 || roles.v < 0) roles.u = roles.v = -1;
+        }
+        if (r.options.provenance) {
             roles.patch_id = find({"patch_id"});
             roles.tess_u = find({"tess_u"});
             roles.tess_v = find({"tess_v"});
