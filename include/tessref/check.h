@@ -70,6 +70,10 @@ struct IndexedMesh {
     // them, each empty when the file has none (the values as float, as OpenMesh holds them).
     std::vector<glm::vec3> normals;
     std::vector<glm::vec2> uvs;
+    // The provenance `tessref mesh` writes to PLY (properties patch_id, tess_u, tess_v,
+    // tess_w), read when MeshFileOptions asks for it; each empty when the file has none.
+    std::vector<std::uint32_t> patch_ids;
+    std::vector<glm::vec3> tess_coords;
 
     std::string source;  // the file it was read from ("" when built in memory)
     std::string format;  // "ply", "obj", "off", "stl" ("" when built in memory)
@@ -85,6 +89,7 @@ struct IndexedMesh {
 
 struct MeshFileOptions {
     bool vertex_attributes = false;              // also read normals and texture coordinates
+    bool provenance = false;                     // also read a PLY's patch ids and tess coords
     std::function<void(double)> progress;        // fraction of the file read, now and then
 };
 

@@ -31,6 +31,7 @@
 
 #include <glm/glm.hpp>
 
+#include "tessref/capture.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"
@@ -171,17 +172,10 @@ struct SceneRenderOptions {
     std::vector<StageShader> shaders;
 };
 
-// One vertex of one primitive as transform feedback recorded it (three per triangle, in
-// the order the pipeline emitted them). position: world space as the evaluation shader
-// computed it; normal: what the last stage before rasterization hands on (the geometry
-// shader's gNormal / faceNormal, lab 4's and PN's evaluation normal; zero where none).
-struct CapturedVertex {
-    std::uint32_t patch_id = 0;  // gl_PrimitiveID of the evaluation shader + the draw's first patch
-    glm::vec3 tess_coord{0.0f};
-    glm::vec3 position{0.0f};
-    glm::vec3 normal{0.0f};
-    TessLevels levels{};  // the patch's gl_TessLevelOuter/Inner as the evaluation shader read them
-};
+// SceneRender::capture: one CapturedVertex (tessref/capture.h) per vertex of every
+// primitive, as transform feedback recorded it (three per triangle, in the order the
+// pipeline emitted them); patch_id is gl_PrimitiveID of the evaluation shader plus the
+// draw's first patch, levels are gl_TessLevelOuter/Inner as the evaluation shader read them.
 
 struct SceneRenderStats {
     std::uint64_t triangles = 0;  // GL_PRIMITIVES_GENERATED summed over the draws
@@ -209,12 +203,5 @@ struct SceneRender {
 // stage; Where: the file and, from the log, the line), a user's shader that declares a
 // twin's uniform with another type, or a GL error.
 SceneRender render_scene(Context& context, const Scene& scene, const SceneRenderOptions& options = {});
-
-// The capture as a SurfaceMesh (three vertices per triangle, not welded; write_mesh welds),
-// patch ids and tess coords included, for `tessref mesh`'s PLY layout.
-SurfaceMesh capture_mesh(const std::vector<CapturedVertex>& capture);
-// The capture as text: a header comment, then one line per vertex "patch u v w x y z nx ny
-// nz" (%.9g, floats round-trip), three lines per triangle.
-std::string capture_text(const std::vector<CapturedVertex>& capture);
 
 }  // namespace tessref::gl

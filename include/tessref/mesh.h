@@ -112,6 +112,10 @@ struct MeshWriteOptions {
     MeshFormat format = MeshFormat::ply;
     bool binary = false;       // ply, off, stl; an Error for obj
     int ascii_digits = 9;      // significant digits of every ASCII number
+    // false: every emitted vertex is written as it is, none merged and no triangle left out
+    // (a capture, include/tessref/capture.h, where each corner keeps its own patch id and
+    // tess coord; welding would give a shared corner the lower patch's).
+    bool weld = true;
     // Called from the calling thread with a stage ("welding", "collecting", "writing") and
     // the fraction of it done, a few hundred times at most; may be empty. OpenMesh's
     // writer reports nothing while it runs, so "writing" comes at 0 and 1 only.

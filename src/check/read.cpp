@@ -275,7 +275,7 @@ public:
     std::uint64_t memory_for(std::uint64_t vertices, std::uint64_t faces) const {
         // Positions and the file's values, attributes, three corners a face, and OpenMesh's
         // kernel for the refusal check (about 100 bytes a face).
-        const std::uint64_t per_vertex = 2 * sizeof(glm::dvec3) + (options.vertex_attributes ? 20 : 0);
+        const std::uint64_t per_vertex = 2 * sizeof(glm::dvec3) + (options.vertex_attributes ? 20 : 0) + (options.provenance ? 16 : 0);
         const std::uint64_t a = saturating_bytes(vertices, per_vertex), b = saturating_bytes(faces, 16 + 100);
         return a > UINT64_MAX - b ? UINT64_MAX : a + b;
     }
@@ -503,6 +503,7 @@ PlyHeader read_ply_header(Reading& r) {
 // What the reader takes from an element's properties: their indices, or -1.
 struct PlyRoles {
     int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, u = -1, v = -1;
+    int patch_id = -1, tess_u = -1, tess_v = -1, tess_w = -1;
     int indices = -1;
 };
 
@@ -532,6 +533,13 @@ PlyRoles ply_roles(Reading& r, const PlyElement& e, bool vertex) {
             roles.u = find({"u", "s", "texture_u", "texture_s"});
             roles.v = find({"v", "t", "texture_v", "texture_t"});
             if (roles.u < 0 || roles.v < 0) roles.u = roles.v = -1;
+        }
+        if (r.options.provenance) {
+            roles.patch_id = find({"patch_id"});
+            roles.tess_u = find({"tess_u"});
+            roles.tess_v = find({"tess_v"});
+            roles.tess_w = find({"tess_w"});
+            if (roles.tess_u < 0 || roles.tess_v < 0 || roles.tess_w < 0) roles.tess_u = roles.tess_v = roles.tess_w = -1;
         }
     } else {
         for (std::size_t i = 0; i < e.properties.size(); ++i)
@@ -573,6 +581,8 @@ void read_ply(Reading& r) {
     r.reserve(vertex_count, face_count);
     if (vroles.nx >= 0) r.mesh.normals.reserve(vertex_count);
     if (vroles.u >= 0) r.mesh.uvs.reserve(vertex_count);
+    if (vroles.patch_id >= 0) r.mesh.patch_ids.reserve(vertex_count);
+    if (vroles.tess_u >= 0) r.mesh.tess_coords.reserve(vertex_count);
 
     Tokens tokens(r.text, h.body_offset, h.body_line);
     std::size_t offset = h.body_offset;  // binary
@@ -666,6 +676,17 @@ void read_ply(Reading& r) {
                     r.mesh.normals.emplace_back(finite(vroles.nx, "normal"), finite(vroles.ny, "normal"),
                                                 finite(vroles.nz, "normal"));
                 if (vroles.u >= 0) r.mesh.uvs.emplace_back(finite(vroles.u, "texture coordinate"), finite(vroles.v, "texture coordinate"));
+                if (vroles.patch_id >= 0) {
+                    const double id = reals[vroles.patch_id].exact;
+                    if (!(id >= 0.0 && id <= double(std::numeric_limits<std::uint32_t>::max()) && id == std::floor(id)))
+                        throw r.error("vertex " + str(i) + (ascii ? " at line " + str(first_line) : at_byte(record_offset)) +
+                                          " has patch_id " + Reading::number_text(id) + ", not a whole number >= 0",
+                                      first_line);
+                    r.mesh.patch_ids.push_back(static_cast<std::uint32_t>(id));
+                }
+                if (vroles.tess_u >= 0)
+                    r.mesh.tess_coords.emplace_back(finite(vroles.tess_u, "tess coord"), finite(vroles.tess_v, "tess coord"),
+                                                    finite(vroles.tess_w, "tess coord"));
             } else if (is_face) {
                 r.add_face(ids, first_line);
             }

@@ -1,6 +1,7 @@
 // tessref compare — a picture against a reference picture, by the rule of the Khronos CTS
-// (tessref/compare.h). Exit status: 0 it passes, 1 it fails, 2 an image cannot be read,
-// the two differ in size or channel count, or a flag is wrong (then nothing is written).
+// (tessref/compare.h), or, for two captures (.txt, .ply: tessref/capture.h), every vertex
+// of every patch in ulps. Exit status: 0 it passes, 1 it fails, 2 an input cannot be read,
+// two images differ in size or channel count, or a flag is wrong (then nothing is written).
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -16,6 +17,7 @@
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "tessref/capture.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
 
@@ -30,6 +32,8 @@ struct CompareCommandOptions {
     std::string threshold = "0";
     std::string max_failing_pixels = "0";
     std::string diff;
+    std::string max_position_ulps;  // captures; empty: the default
+    std::string max_normal_ulps;
     bool json = false;
     bool ignore_alpha = false;
 };
@@ -119,7 +123,203 @@ std::string report_json(const CompareCommandOptions& options, const FloatImage& 
     return report.dump(2) + "\n";
 }
 
+// ---- captures --------------------------------------------------------------------------
+
+std::string ulps_text(std::uint64_t ulps) { return ulps == kInfiniteUlps ? "inf" : std::to_string(ulps); }
+nlohmann::json ulps_json(std::uint64_t ulps) { return ulps == kInfiniteUlps ? nlohmann::json(nullptr) : nlohmann::json(ulps); }
+
+std::string vec_text(const glm::vec3& v) {
+    return "(" + format_float(v.x) + ", " + format_float(v.y) + ", " + format_float(v.z) + ")";
+}
+nlohmann::json vec_json(const glm::vec3& v) {
+    return {number_json(v.x), number_json(v.y), number_json(v.z)};
+}
+std::string levels_text(const TessLevels& l) {
+    std::string s;
+    for (float x : l.outer) s += (s.empty() ? "" : " ") + format_float(x);
+    s += " |";
+    for (float x : l.inner) s += " " + format_float(x);
+    return s;
+}
+nlohmann::json levels_json(const TessLevels& l) {
+    return {{"outer", {number_json(l.outer[0]), number_json(l.outer[1]), number_json(l.outer[2]), number_json(l.outer[3])}},
+            {"inner", {number_json(l.inner[0]), number_json(l.inner[1])}}};
+}
+
+std::string worst_text(const WorstUlps& w) {
+    if (!w.found) return "none compared";
+    return ulps_text(w.ulps) + " ulps at patch " + std::to_string(w.patch_id) + ", tess coord " + vec_text(w.tess_coord) +
+           ", " + "xyz"[w.component] + ": reference " + format_float(w.reference[w.component]) + ", test " +
+           format_float(w.test[w.component]) + "  (reference " + vec_text(w.reference) + ", test " + vec_text(w.test) + ")";
+}
+nlohmann::json worst_json(const WorstUlps& w) {
+    if (!w.found) return nullptr;
+    return {{"ulps", ulps_json(w.ulps)},          {"patch", w.patch_id},
+            {"tess_coord", vec_json(w.tess_coord)}, {"component", std::string(1, "xyz"[w.component])},
+            {"reference", vec_json(w.reference)},   {"test", vec_json(w.test)}};
+}
+
+std::string diverging_text(const DivergingPatch& d, const Capture& reference, const Capture& test) {
+    std::string s = "  patch " + std::to_string(d.patch_id) + "  " + to_string(d.kind) + ": ";
+    const auto levels = [&] {
+        std::string l = "levels reference " + (reference.has_levels ? levels_text(d.reference_levels) : "unknown") +
+                        ", test " + (test.has_levels ? levels_text(d.test_levels) : "unknown");
+        if (d.levels_known) l += " (" + ulps_text(d.level_ulps) + " ulps apart)";
+        return l;
+    };
+    switch (d.kind) {
+        case PatchDivergence::missing_in_test:
+        case PatchDivergence::missing_in_reference:
+            s += std::to_string(d.kind == PatchDivergence::missing_in_test ? d.reference_vertices : d.test_vertices) +
+                 " vertices on one side only; " + levels();
+            break;
+        case PatchDivergence::tess_coords:
+            s += "tess coord " + vec_text(d.tess_coord) + " only in the " +
+                 (d.tess_coord_in_reference ? "reference" : "test") + " (" + std::to_string(d.reference_vertices) +
+                 " vs " + std::to_string(d.test_vertices) + " vertices); " + levels();
+            break;
+        case PatchDivergence::triangles:
+            s += "the same tess coords in other triangles, first at " + vec_text(d.tess_coord);
+            break;
+        case PatchDivergence::values:
+            s += std::to_string(d.failing_vertices) + " of " + std::to_string(d.reference_vertices) +
+                 " vertices fail; first at tess coord " + vec_text(d.tess_coord) + ": position reference " +
+                 vec_text(d.reference_position) + ", test " + vec_text(d.test_position) + " (" +
+                 ulps_text(d.position_ulps) + " ulps); normal reference " + vec_text(d.reference_normal) + ", test " +
+                 vec_text(d.test_normal) + " (" + ulps_text(d.normal_ulps) + " ulps)";
+            break;
+    }
+    return s + "\n";
+}
+
+nlohmann::json diverging_json(const DivergingPatch& d, const Capture& reference, const Capture& test) {
+    nlohmann::json j = {{"patch", d.patch_id},
+                        {"kind", to_string(d.kind)},
+                        {"reference_vertices", d.reference_vertices},
+                        {"test_vertices", d.test_vertices},
+                        {"reference_levels", reference.has_levels && d.kind != PatchDivergence::missing_in_reference
+                                                 ? levels_json(d.reference_levels) : nlohmann::json(nullptr)},
+                        {"test_levels", test.has_levels && d.kind != PatchDivergence::missing_in_test
+                                            ? levels_json(d.test_levels) : nlohmann::json(nullptr)},
+                        {"level_ulps", d.levels_known ? ulps_json(d.level_ulps) : nlohmann::json(nullptr)},
+                        {"tess_coord", vec_json(d.tess_coord)}};
+    if (d.kind == PatchDivergence::tess_coords) j["tess_coord_only_in"] = d.tess_coord_in_reference ? "reference" : "test";
+    if (d.kind == PatchDivergence::values) {
+        j["failing_vertices"] = d.failing_vertices;
+        j["reference_position"] = vec_json(d.reference_position);
+        j["test_position"] = vec_json(d.test_position);
+        j["position_ulps"] = ulps_json(d.position_ulps);
+        j["reference_normal"] = vec_json(d.reference_normal);
+        j["test_normal"] = vec_json(d.test_normal);
+        j["normal_ulps"] = ulps_json(d.normal_ulps);
+    }
+    return j;
+}
+
+std::string capture_report_text(const CompareCommandOptions& options, const Capture& reference, const Capture& test,
+                                const CaptureCompareOptions& compare, const CaptureCompareResult& r) {
+    std::string text;
+    text += "reference  " + options.reference + "  (" + std::to_string(r.reference_patches) + " patches, " +
+            std::to_string(reference.vertices.size()) + " vertices" + (reference.has_levels ? "" : ", no levels") + ")\n";
+    text += "test       " + options.test + "  (" + std::to_string(r.test_patches) + " patches, " +
+            std::to_string(test.vertices.size()) + " vertices" + (test.has_levels ? "" : ", no levels") + ")\n";
+    text += "tolerance  position " + std::to_string(compare.max_position_ulps) + " ulps, normal " +
+            std::to_string(compare.max_normal_ulps) + " ulps\n";
+    text += "patches    " + std::to_string(r.compared_patches) + " compared vertex by vertex; diverging: " +
+            std::to_string(r.missing_in_test) + " missing in test, " + std::to_string(r.missing_in_reference) +
+            " missing in reference, " + std::to_string(r.tess_coord_divergences) + " other tess coords (" +
+            std::to_string(r.tess_coord_divergences_with_equal_levels) + " of them with equal levels), " +
+            std::to_string(r.triangle_divergences) + " other triangles, " + std::to_string(r.value_divergences) +
+            " beyond the tolerance\n";
+    text += "vertices   " + std::to_string(r.vertices_compared) + " compared, " + std::to_string(r.failing_vertices) +
+            " beyond the tolerance\n";
+    text += "worst position  " + worst_text(r.worst_position) + "\n";
+    text += "worst normal    " + worst_text(r.worst_normal) + "\n";
+    if (!r.listed.empty()) {
+        text += "diverging patches (the first " + std::to_string(r.listed.size()) + " of " +
+                std::to_string(r.diverging_patches()) + "):\n";
+        for (const DivergingPatch& d : r.listed) text += diverging_text(d, reference, test);
+    }
+    if (!r.failing_vertices_per_patch.empty()) {
+        text += "failing vertices per patch (patch:count):";
+        for (std::size_t k = 0; k < r.failing_vertices_per_patch.size(); ++k)
+            text += std::string(k % 12 == 0 ? "\n  " : " ") + std::to_string(r.failing_vertices_per_patch[k].first) +
+                    ":" + std::to_string(r.failing_vertices_per_patch[k].second);
+        text += "\n";
+    }
+    text += r.passed ? "PASS\n" : "FAIL\n";
+    return text;
+}
+
+std::string capture_report_json(const CompareCommandOptions& options, const Capture& reference, const Capture& test,
+                                const CaptureCompareOptions& compare, const CaptureCompareResult& r) {
+    nlohmann::json per_patch = nlohmann::json::array(), listed = nlohmann::json::array();
+    for (const auto& [patch, count] : r.failing_vertices_per_patch)
+        per_patch.push_back({{"patch", patch}, {"failing_vertices", count}});
+    for (const DivergingPatch& d : r.listed) listed.push_back(diverging_json(d, reference, test));
+    nlohmann::json report = {
+        {"reference", options.reference},
+        {"test", options.test},
+        {"reference_has_levels", reference.has_levels},
+        {"test_has_levels", test.has_levels},
+        {"max_position_ulps", compare.max_position_ulps},
+        {"max_normal_ulps", compare.max_normal_ulps},
+        {"reference_patches", r.reference_patches},
+        {"test_patches", r.test_patches},
+        {"compared_patches", r.compared_patches},
+        {"vertices_compared", r.vertices_compared},
+        {"failing_vertices", r.failing_vertices},
+        {"missing_in_test", r.missing_in_test},
+        {"missing_in_reference", r.missing_in_reference},
+        {"tess_coord_divergences", r.tess_coord_divergences},
+        {"tess_coord_divergences_with_equal_levels", r.tess_coord_divergences_with_equal_levels},
+        {"triangle_divergences", r.triangle_divergences},
+        {"value_divergences", r.value_divergences},
+        {"worst_position", worst_json(r.worst_position)},
+        {"worst_normal", worst_json(r.worst_normal)},
+        {"failing_vertices_per_patch", per_patch},
+        {"diverging_patches", r.diverging_patches()},
+        {"listed", listed},
+        {"passed", r.passed},
+    };
+    return report.dump(2) + "\n";
+}
+
+std::uint64_t parse_ulps(const std::string& text, const std::string& flag, std::uint64_t default_value) {
+    return text.empty() ? default_value : static_cast<std::uint64_t>(parse_count(text, flag));
+}
+
+int run_compare_captures(const CompareCommandOptions& options) {
+    for (const std::string* input : {&options.reference, &options.test})
+        if (!is_capture_path(*input))
+            throw Error("'" + *input + "' is not a capture (.txt, .ply) and the other input is: compare two captures "
+                        "or two images",
+                        where_file(*input));
+    const bool image_flags = options.max_position_deviation != "0" || options.threshold != "0" ||
+                             options.max_failing_pixels != "0" || !options.diff.empty() || options.ignore_alpha;
+    if (image_flags)
+        throw Error("--max-position-deviation, --threshold, --max-failing-pixels, --diff and --ignore-alpha compare "
+                    "images; for captures give --max-position-ulps and --max-normal-ulps",
+                    where_file(options.test));
+    CaptureCompareOptions compare;
+    compare.max_position_ulps = parse_ulps(options.max_position_ulps, "--max-position-ulps", kDefaultMaxPositionUlps);
+    compare.max_normal_ulps = parse_ulps(options.max_normal_ulps, "--max-normal-ulps", kDefaultMaxNormalUlps);
+    const Capture reference = read_capture(options.reference);
+    const Capture test = read_capture(options.test);
+    const CaptureCompareResult result = compare_captures(reference, test, compare);
+    std::cout << (options.json ? capture_report_json(options, reference, test, compare, result)
+                               : capture_report_text(options, reference, test, compare, result))
+              << std::flush;
+    return result.passed ? 0 : 1;
+}
+
+// ---- images ----------------------------------------------------------------------------
+
 int run_compare(const CompareCommandOptions& options) {
+    if (is_capture_path(options.reference) || is_capture_path(options.test)) return run_compare_captures(options);
+    if (!options.max_position_ulps.empty() || !options.max_normal_ulps.empty())
+        throw Error("--max-position-ulps and --max-normal-ulps compare captures (.txt, .ply), not images",
+                    where_file(options.max_position_ulps.empty() ? "--max-normal-ulps" : "--max-position-ulps"));
     // Flags first: nothing is read for a command line that cannot succeed.
     CompareOptions compare;
     const long long deviation = parse_count(options.max_position_deviation, "--max-position-deviation");
@@ -182,9 +382,12 @@ Command add_compare_command(CLI::App& parent) {
         "a pixel passes when every channel is within the threshold of the reference pixel, or, both ways, of a "
         "pixel within the position deviation. Every channel counts, alpha included; 8-bit images compare as "
         "code/255. Prints the failing pixels, RMSE, PSNR and max error. "
-        "Exit status 0: it passes, 1: it fails, 2: an image cannot be read or the two differ in size or channels.");
-    app->add_option("reference", options->reference, "The reference image (PNG, TIFF, EXR, ...)")->required();
-    app->add_option("test", options->test, "The image to check against it")->required();
+        "Two captures (.txt, .ply of `tessref mesh --capture` / `tessref gl --capture`) are compared patch by "
+        "patch: the same tess coords (exact bits), then every vertex's position and normal within the ulps given. "
+        "Exit status 0: it passes, 1: it fails, 2: an input cannot be read or two images differ in size or channels.");
+    app->add_option("reference", options->reference, "The reference image (PNG, TIFF, EXR, ...) or capture (.txt, .ply)")
+        ->required();
+    app->add_option("test", options->test, "The image or capture to check against it")->required();
     app->add_option("--max-position-deviation", options->max_position_deviation,
                     "How far, in pixels (x and y), a matching pixel may lie: the neighbourhood is (2*PX+1)^2 pixels")
         ->type_name("PX")
@@ -201,6 +404,14 @@ Command add_compare_command(CLI::App& parent) {
                     "Write a picture of the failing pixels (red) over the reference dimmed to a quarter "
                     "(PNG, TIFF, EXR)");
     app->add_flag("--ignore-alpha", options->ignore_alpha, "Leave the alpha channel out of the comparison");
+    app->add_option("--max-position-ulps", options->max_position_ulps,
+                    "Captures: largest accepted difference of a position component, in ulps")
+        ->type_name("N")
+        ->default_str(std::to_string(kDefaultMaxPositionUlps));
+    app->add_option("--max-normal-ulps", options->max_normal_ulps,
+                    "Captures: largest accepted difference of a normal component, in ulps")
+        ->type_name("N")
+        ->default_str(std::to_string(kDefaultMaxNormalUlps));
     app->add_flag("--json", options->json,
                   "Print the result as JSON (a statistic that is not finite, such as the PSNR of identical images, is null)");
     return Command{app, [options] { return run_compare(*options); }};

@@ -18,6 +18,7 @@
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 #include "tessref/limits.h"
@@ -65,13 +66,8 @@ std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flag
 
 int run_gl(const GlCommandOptions& options) {
     const ImageFormat format = image_format_from_path(options.output);
-    bool capture_ply = false;
-    if (!options.capture.empty()) {
-        const std::string ext = lowercase_extension(options.capture);
-        if (ext != "txt" && ext != "ply")
-            throw Error("--capture writes .txt or .ply, not '" + options.capture + "'", where_file("--capture"));
-        capture_ply = ext == "ply";
-    }
+    CaptureFormat capture_format = CaptureFormat::text;
+    if (!options.capture.empty()) capture_format = capture_format_from_path(options.capture, "--capture");
     gl::SceneRenderOptions render_options;
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.wireframe = options.wireframe;
@@ -103,18 +99,12 @@ int run_gl(const GlCommandOptions& options) {
     image.colour = r.colour;
     write_image(image, output.temp_path().string(), format, {});
     if (capture_output) {
-        if (capture_ply) {
-            std::ofstream out(capture_output->temp_path(), std::ios::binary);
-            MeshWriteOptions mesh_options;
-            mesh_options.format = MeshFormat::ply;
-            write_mesh(gl::capture_mesh(r.capture), out, mesh_options);
-            out.close();
-            if (!out) throw Error("cannot write the capture", where_file(options.capture));
-        } else {
-            std::ofstream out(capture_output->temp_path(), std::ios::binary);
-            out << gl::capture_text(r.capture);
-            out.close();
-            if (!out) throw Error("cannot write the capture", where_file(options.capture));
+        std::ofstream out(capture_output->temp_path(), std::ios::binary);
+        try {
+            write_capture(r.capture, out, capture_format, "tessref gl " + options.scene + ": " + context.renderer() +
+                                                              ", transform feedback");
+        } catch (const Error& error) {
+            throw Error(error.what(), where_file(options.capture));  // the name given, not the temporary one
         }
         capture_output->commit();
     }

@@ -2,8 +2,11 @@
 // through OpenMesh (PLY, OBJ, OFF, STL; see include/tessref/mesh.h for what each carries
 // and how vertices are welded).
 //
-//   tessref mesh SCENE -o OUT.{ply,obj,off,stl} [--precision gpu|exact] [--binary] [--solid [--base B]]
-//                [--threads N]
+//   tessref mesh SCENE [-o OUT.{ply,obj,off,stl}] [--capture CAP.{txt,ply}] [--precision gpu|exact]
+//                [--binary] [--solid [--base B]] [--threads N]
+//
+// --capture writes the CPU reference's capture (tessref/capture.h), the layout `tessref gl
+// --capture` writes, for `tessref compare`. At least one of -o and --capture.
 //
 // Output goes to a temporary file next to OUT and is renamed over it only when complete;
 // the output name is checked (extension, writable directory) before the pipeline runs.
@@ -22,6 +25,7 @@
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/mesh.h"
 #include "tessref/scene.h"
@@ -35,6 +39,7 @@ namespace {
 struct MeshCommandOptions {
     std::string scene;
     std::string output;
+    std::string capture;
     std::string precision = "gpu";
     bool binary = false;
     int threads = 0;  // 0: every core
@@ -44,8 +49,13 @@ struct MeshCommandOptions {
 
 int run_mesh(const MeshCommandOptions& options) {
     // Everything about the output is checked before the (possibly long) pipeline runs.
+    if (options.output.empty() && options.capture.empty())
+        throw Error("nothing to write: give -o MESH, --capture FILE or both", where_file("-o"));
+    if (options.output.empty() && (options.solid || options.binary))
+        throw Error("shapes the mesh of -o, and there is none (--capture writes the pipeline's surface)",
+                    where_file(options.solid ? "--solid" : "--binary"));
     MeshWriteOptions write_options;
-    write_options.format = mesh_format_from_path(options.output);
+    if (!options.output.empty()) write_options.format = mesh_format_from_path(options.output);
     write_options.binary = options.binary;
     if (options.binary && !mesh_format_has_binary(write_options.format)) {
         throw Error("obj has no binary form; drop --binary or write .ply, .off or .stl",
@@ -59,7 +69,14 @@ int run_mesh(const MeshCommandOptions& options) {
         if (!given_base || !std::isfinite(*given_base))
             throw Error("'" + options.base + "' is not a height: give a finite number", where_file("--base"));
     }
-    AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
+    // Both fail now on a missing or unwritable directory.
+    std::optional<AtomicOutput> output, capture_output;
+    if (!options.output.empty()) output.emplace(options.output);
+    CaptureFormat capture_format = CaptureFormat::text;
+    if (!options.capture.empty()) {
+        capture_format = capture_format_from_path(options.capture, "--capture");
+        capture_output.emplace(options.capture);
+    }
 
     const Scene scene = load_scene(options.scene);
     if (options.solid && !scene.grid)
@@ -72,6 +89,27 @@ int run_mesh(const MeshCommandOptions& options) {
         pipeline_options.precision = precision;
         pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
         result = run_pipeline(scene, pipeline_options);
+    }
+
+    std::size_t captured = 0;
+    if (capture_output) {
+        // Of the surface the pipeline made, before --solid adds skirts and a base.
+        const std::vector<CapturedVertex> capture = capture_from_pipeline(scene, result);
+        captured = capture.size() / 3;
+        std::ofstream out(capture_output->temp_path(), std::ios::binary | std::ios::trunc);
+        try {
+            write_capture(capture, out, capture_format,
+                          "tessref mesh " + options.scene + ": the CPU reference, " + std::string(to_string(precision)) +
+                              " precision");
+        } catch (const Error& error) {
+            throw Error(error.what(), where_file(options.capture));  // the name given, not the temporary one
+        }
+    }
+    if (!output) {
+        capture_output->commit();
+        std::cout << options.capture << ": " << to_string(precision) << " precision, " << scene.patch_count()
+                  << " patches, " << captured << " triangles captured\n";
+        return 0;
     }
 
     if (options.solid) {
@@ -100,13 +138,14 @@ int run_mesh(const MeshCommandOptions& options) {
         write_options.progress = [&stage_progress](std::string_view stage, double fraction) {
             stage_progress(stage, fraction);
         };
-        std::ofstream file(output.temp_path(), std::ios::binary | std::ios::trunc);
+        std::ofstream file(output->temp_path(), std::ios::binary | std::ios::trunc);
         if (!file) throw Error("cannot write output file", where_file(options.output));
         report = write_mesh(result.mesh, file, write_options);
         file.close();
         if (!file) throw Error("cannot write output file", where_file(options.output));
     }
-    output.commit();
+    if (capture_output) capture_output->commit();
+    output->commit();
 
     if (report.degenerate_triangles > 0) {
         std::cerr << "tessref: warning: " << report.degenerate_triangles
@@ -118,7 +157,9 @@ int run_mesh(const MeshCommandOptions& options) {
               << (options.binary ? " binary" : " ascii") << ", " << to_string(precision)
               << " precision, " << scene.patch_count() << " patches, " << report.triangles
               << " triangles, " << report.vertices << " vertices (welded from "
-              << report.emitted_vertices << ")\n";
+              << report.emitted_vertices << ")";
+    if (capture_output) std::cout << ", " << captured << " triangles captured to " << options.capture;
+    std::cout << "\n";
     return 0;
 }
 
@@ -134,8 +175,12 @@ Command add_mesh_command(CLI::App& parent) {
         "tess coord (tess_u, tess_v, tess_w).");
     app->add_option("scene", options->scene, "Scene file (TOML)")->required();
     app->add_option("-o,--output", options->output,
-                    "Output mesh; the format follows the extension: .ply, .obj, .off, .stl")
-        ->required();
+                    "Output mesh; the format follows the extension: .ply, .obj, .off, .stl");
+    app->add_option("--capture", options->capture,
+                    "Also (or only) write the CPU reference's capture: every vertex of every triangle with its "
+                    "patch id, tess coord, position, normal and the patch's levels, in the layout of `tessref gl "
+                    "--capture` (.txt, or .ply without levels), for `tessref compare`")
+        ->type_name("FILE");
     app->add_option("--precision", options->precision,
                     "gpu: float stages, as the GPU computes them; exact: double stages. Files "
                     "store 32-bit floats either way (OpenMesh's writers)")

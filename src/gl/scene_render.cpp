@@ -910,37 +910,4 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     return result;
 }
 
-SurfaceMesh capture_mesh(const std::vector<CapturedVertex>& capture) {
-    SurfaceMesh mesh;
-    const std::size_t n = capture.size() / 3 * 3;
-    mesh.positions.reserve(n);
-    mesh.normals.reserve(n);
-    mesh.patch_ids.reserve(n);
-    mesh.tess_coords.reserve(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        mesh.positions.emplace_back(capture[i].position);
-        mesh.normals.emplace_back(capture[i].normal);
-        mesh.patch_ids.push_back(capture[i].patch_id);
-        mesh.tess_coords.push_back(capture[i].tess_coord);
-    }
-    for (std::size_t t = 0; t < n / 3; ++t)
-        mesh.triangles.push_back({static_cast<std::uint32_t>(3 * t), static_cast<std::uint32_t>(3 * t + 1),
-                                  static_cast<std::uint32_t>(3 * t + 2)});
-    return mesh;
-}
-
-std::string capture_text(const std::vector<CapturedVertex>& capture) {
-    std::string out =
-        "# tessref gl --capture: one line per vertex, three per triangle, in transform feedback order\n"
-        "# patch u v w x y z nx ny nz\n";
-    char line[320];
-    for (const CapturedVertex& v : capture) {
-        std::snprintf(line, sizeof line, "%u %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", v.patch_id,
-                      v.tess_coord.x, v.tess_coord.y, v.tess_coord.z, v.position.x, v.position.y, v.position.z,
-                      v.normal.x, v.normal.y, v.normal.z);
-        out += line;
-    }
-    return out;
-}
-
 }  // namespace tessref::gl

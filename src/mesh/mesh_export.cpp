@@ -375,7 +375,13 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     };
 
     progress("welding", 0.0);
-    const WeldedMesh welded = weld_bitwise(mesh);
+    WeldedMesh welded;
+    if (options.weld) {
+        welded = weld_bitwise(mesh);
+    } else {
+        validate(mesh);
+        welded.mesh = mesh;
+    }
     progress("welding", 1.0);
     const SurfaceMesh& w = welded.mesh;
     if (w.positions.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||

@@ -1,0 +1,367 @@
+// Captures (tessref/capture.h): the CPU reference's, and the two file forms, written and read.
+#include "tessref/capture.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <ostream>
+#include <string_view>
+#include <system_error>
+#include <unordered_map>
+
+#include "tessref/check.h"
+#include "tessref/error.h"
+#include "tessref/limits.h"
+#include "tessref/scene.h"
+
+namespace tessref {
+
+namespace {
+
+constexpr std::string_view kVersionLine = "tessref-capture 1";
+
+Where where_line(const std::string& path, std::size_t line) {
+    Where where;
+    where.file = path;
+    where.line = static_cast<int>(std::min<std::size_t>(line, 0x7fffffff));
+    return where;
+}
+
+std::string lowercase_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+}  // namespace
+
+// ---- the CPU reference -----------------------------------------------------------------
+
+std::vector<CapturedVertex> capture_from_pipeline(const Scene& scene, const PipelineResult& result) {
+    const SurfaceMesh& mesh = result.mesh;
+    const std::size_t triangles = mesh.triangles.size();
+    require_memory(saturating_bytes(saturating_bytes(triangles, 3), sizeof(CapturedVertex)),
+                   "the capture of " + std::to_string(triangles) + " triangles");
+    std::vector<CapturedVertex> capture;
+    capture.reserve(triangles * 3);
+
+    // The pipeline lays each patch's vertices out as the pattern's points, from the patch's
+    // first vertex on, and its triangles as the pattern's primitives, in order.
+    std::vector<std::size_t> first_vertex(result.levels.size(), SIZE_MAX);
+    for (std::size_t v = mesh.patch_ids.size(); v-- > 0;)
+        if (mesh.patch_ids[v] < first_vertex.size()) first_vertex[mesh.patch_ids[v]] = v;
+
+    PatternCache cache;
+    std::size_t t = 0;
+    while (t < triangles) {
+        const std::uint32_t p = mesh.patch_ids[mesh.triangles[t][0]];
+        Where where;
+        where.patch_id = p;
+        if (p >= result.levels.size()) throw Error("the pipeline's mesh names a patch it has no levels for", where);
+        const std::shared_ptr<const Pattern> pattern = cache.get(scene.generator, result.levels[p]);
+        const std::size_t base = first_vertex[p];
+        const std::size_t count = pattern->primitive_count();
+        if (pattern->vertices_per_primitive() != 3 || t + count > triangles)
+            throw Error("the pipeline's triangles are not the primitive generator's for the patch's levels", where);
+        for (std::size_t k = 0; k < count; ++k, ++t) {
+            const auto prim = pattern->primitive(k);
+            const std::array<std::size_t, 3> generated{base + prim[0], base + prim[1], base + prim[2]};
+            const auto& tri = mesh.triangles[t];
+            const bool as_generated = tri[0] == generated[0] && tri[1] == generated[1] && tri[2] == generated[2];
+            const bool reoriented = tri[0] == generated[0] && tri[1] == generated[2] && tri[2] == generated[1];
+            if (!as_generated && !reoriented)
+                throw Error("the pipeline's triangle " + std::to_string(t) +
+                                " is not the primitive generator's for the patch's levels",
+                            where);
+            for (const std::size_t v : generated) {
+                CapturedVertex c;
+                c.patch_id = p;
+                c.tess_coord = mesh.tess_coords[v];
+                c.position = glm::vec3(mesh.positions[v]);
+                if (!result.face_normals.empty()) {
+                    // The pipeline's face normal is of the re-oriented corners; the geometry
+                    // shader sees them as generated: cross(b - a, c - a) with b and c
+                    // swapped is the exact negation, but for the sign of a zero component
+                    // (x - y and y - x are both +0 when x == y).
+                    c.normal = reoriented ? -glm::vec3(result.face_normals[t]) : glm::vec3(result.face_normals[t]);
+                } else if (!mesh.normals.empty()) {
+                    c.normal = glm::vec3(mesh.normals[v]);
+                }
+                c.levels = result.levels[p];
+                capture.push_back(c);
+            }
+        }
+    }
+    return capture;
+}
+
+// ---- writing ---------------------------------------------------------------------------
+
+SurfaceMesh capture_mesh(std::span<const CapturedVertex> capture) {
+    SurfaceMesh mesh;
+    const std::size_t n = capture.size() / 3 * 3;
+    mesh.positions.reserve(n);
+    mesh.normals.reserve(n);
+    mesh.patch_ids.reserve(n);
+    mesh.tess_coords.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        mesh.positions.emplace_back(capture[i].position);
+        mesh.normals.emplace_back(capture[i].normal);
+        mesh.patch_ids.push_back(capture[i].patch_id);
+        mesh.tess_coords.push_back(capture[i].tess_coord);
+    }
+    mesh.triangles.reserve(n / 3);
+    for (std::size_t t = 0; t < n / 3; ++t)
+        mesh.triangles.push_back({static_cast<std::uint32_t>(3 * t), static_cast<std::uint32_t>(3 * t + 1),
+                                  static_cast<std::uint32_t>(3 * t + 2)});
+    return mesh;
+}
+
+std::string capture_text(std::span<const CapturedVertex> capture, const std::string& origin) {
+    std::string out(kVersionLine);
+    out += "\n";
+    if (!origin.empty()) out += "# " + origin + "\n";
+    out +=
+        "# patch ID levels o0 o1 o2 o3 i0 i1: the patch's gl_TessLevelOuter/Inner, then its vertices\n"
+        "# ID u v w x y z nx ny nz: one line per vertex, three per triangle, in the order emitted\n";
+    char line[400];
+    const CapturedVertex* previous = nullptr;
+    for (const CapturedVertex& v : capture) {
+        if (!previous || previous->patch_id != v.patch_id) {
+            const TessLevels& l = v.levels;
+            std::snprintf(line, sizeof line, "patch %u levels %.9g %.9g %.9g %.9g %.9g %.9g\n", v.patch_id,
+                          l.outer[0], l.outer[1], l.outer[2], l.outer[3], l.inner[0], l.inner[1]);
+            out += line;
+        }
+        previous = &v;
+        std::snprintf(line, sizeof line, "%u %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", v.patch_id,
+                      v.tess_coord.x, v.tess_coord.y, v.tess_coord.z, v.position.x, v.position.y, v.position.z,
+                      v.normal.x, v.normal.y, v.normal.z);
+        out += line;
+    }
+    return out;
+}
+
+void write_capture(std::span<const CapturedVertex> capture, std::ostream& out, CaptureFormat format,
+                   const std::string& origin) {
+    if (format == CaptureFormat::text) {
+        out << capture_text(capture, origin);
+    } else {
+        MeshWriteOptions options;
+        options.format = MeshFormat::ply;
+        options.weld = false;
+        write_mesh(capture_mesh(capture), out, options);
+    }
+    out.flush();
+    if (!out) throw Error("cannot write the capture: output stream failed");
+}
+
+CaptureFormat capture_format_from_path(const std::string& path, const std::string& flag) {
+    const std::string ext = lowercase_extension(path);
+    if (ext == "txt") return CaptureFormat::text;
+    if (ext == "ply") return CaptureFormat::ply;
+    Where where;
+    where.file = flag.empty() ? path : flag;
+    throw Error("a capture is .txt or .ply, not '" + path + "'", where);
+}
+
+bool is_capture_path(const std::string& path) {
+    const std::string ext = lowercase_extension(path);
+    return ext == "txt" || ext == "ply";
+}
+
+// ---- reading ---------------------------------------------------------------------------
+
+namespace {
+
+// The next blank-separated token of a line.
+std::string_view next_token(std::string_view& rest) {
+    std::size_t start = 0;
+    while (start < rest.size() && (rest[start] == ' ' || rest[start] == '\t' || rest[start] == '\r')) ++start;
+    std::size_t end = start;
+    while (end < rest.size() && rest[end] != ' ' && rest[end] != '\t' && rest[end] != '\r') ++end;
+    const std::string_view token = rest.substr(start, end - start);
+    rest.remove_prefix(end);
+    return token;
+}
+
+std::string quoted(std::string_view token) {
+    std::string s = "'";
+    for (char c : token.substr(0, 40)) s += (static_cast<unsigned char>(c) < 32 || c == 127) ? '?' : c;
+    return s + (token.size() > 40 ? "...'" : "'");
+}
+
+class TextReader {
+public:
+    TextReader(const std::string& path, std::string_view text) : path_(path), text_(text) {}
+
+    Capture read() {
+        Capture capture;
+        capture.source = path_;
+        // Every vertex is a line: the line count bounds the vertices before any is read.
+        const std::size_t lines = static_cast<std::size_t>(std::count(text_.begin(), text_.end(), '\n')) + 1;
+        require_memory(saturating_bytes(lines, sizeof(CapturedVertex)),
+                       "a capture of up to " + std::to_string(lines) + " vertices", where_line(path_, 0));
+        std::string_view line;
+        if (!next_line(line) || trimmed(line) != kVersionLine)
+            throw error("not a tessref capture: the first line is not '" + std::string(kVersionLine) + "'");
+        bool in_patch = false;
+        std::uint32_t patch = 0;
+        TessLevels levels{};
+        std::size_t run = 0;  // vertices since the last patch line
+        std::unordered_map<std::uint32_t, TessLevels> seen;  // levels of each patch met
+        while (next_line(line)) {
+            std::string_view rest = line;
+            const std::string_view first = next_token(rest);
+            if (first.empty() || first[0] == '#') continue;
+            if (first == "patch") {
+                if (in_patch && run % 3 != 0) throw run_error(patch, run, line_ - 1);
+                patch = read_id(next_token(rest), "a patch id");
+                if (next_token(rest) != "levels") throw error("bad patch line: expected 'patch ID levels o0 o1 o2 o3 i0 i1'");
+                for (float& l : levels.outer) l = read_float(next_token(rest), "a level");
+                for (float& l : levels.inner) l = read_float(next_token(rest), "a level");
+                end_of_line(rest);
+                // A patch seen before (in an earlier run) must have the same levels.
+                const auto [it, first_time] = seen.try_emplace(patch, levels);
+                if (!first_time && std::memcmp(&it->second, &levels, sizeof levels) != 0) {
+                    throw error("patch " + std::to_string(patch) + " comes back with other levels than before");
+                }
+                in_patch = true;
+                run = 0;
+                continue;
+            }
+            if (!in_patch) throw error("a vertex line before any 'patch ID levels ...' line");
+            CapturedVertex v;
+            v.patch_id = read_id(first, "a patch id");
+            if (v.patch_id != patch)
+                throw error("vertex of patch " + std::to_string(v.patch_id) + " under the line 'patch " +
+                            std::to_string(patch) + "'");
+            for (int k = 0; k < 3; ++k) v.tess_coord[k] = read_float(next_token(rest), "a tess coord");
+            for (int k = 0; k < 3; ++k) v.position[k] = read_float(next_token(rest), "a position");
+            for (int k = 0; k < 3; ++k) v.normal[k] = read_float(next_token(rest), "a normal");
+            end_of_line(rest);
+            v.levels = levels;
+            capture.vertices.push_back(v);
+            ++run;
+        }
+        if (in_patch && run % 3 != 0) throw run_error(patch, run, line_);
+        return capture;
+    }
+
+private:
+    bool next_line(std::string_view& line) {
+        if (offset_ >= text_.size()) return false;
+        const std::size_t end = std::min(text_.find('\n', offset_), text_.size());
+        line = text_.substr(offset_, end - offset_);
+        offset_ = end + 1;
+        ++line_;
+        return true;
+    }
+    static std::string_view trimmed(std::string_view s) {
+        while (!s.empty() && (s.back() == '\r' || s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+        return s;
+    }
+    Error error(const std::string& what) const { return error_at(what, line_); }
+    Error error_at(const std::string& what, std::size_t line) const {
+        return Error(what + " at line " + std::to_string(line), where_line(path_, line));
+    }
+    Error run_error(std::uint32_t patch, std::size_t run, std::size_t line) const {
+        return error_at("patch " + std::to_string(patch) + " has " + std::to_string(run) +
+                            " vertex lines before this point, not whole triangles (three lines each)",
+                        line);
+    }
+    void end_of_line(std::string_view rest) const {
+        const std::string_view extra = next_token(rest);
+        if (!extra.empty()) throw error("unexpected " + quoted(extra) + " after the last number");
+    }
+    std::uint32_t read_id(std::string_view token, const char* what) const {
+        std::uint32_t value = 0;
+        const auto r = std::from_chars(token.data(), token.data() + token.size(), value);
+        if (token.empty() || r.ec != std::errc() || r.ptr != token.data() + token.size())
+            throw error(bad(token, what));
+        return value;
+    }
+    float read_float(std::string_view token, const char* what) const {
+        float value = 0.0f;
+        // from_chars takes no '+'; printf writes none, a hand-made file may.
+        std::string_view t = token;
+        if (t.size() > 1 && t[0] == '+' && t[1] != '-' && t[1] != '+') t.remove_prefix(1);
+        const auto r = std::from_chars(t.data(), t.data() + t.size(), value);
+        // A magnitude beyond float's range is refused (result_out_of_range), not made inf.
+        if (t.empty() || r.ec != std::errc() || r.ptr != t.data() + t.size()) throw error(bad(token, what));
+        return value;
+    }
+    static std::string bad(std::string_view token, const char* what) {
+        return token.empty() ? std::string("the line ends where ") + what + " was expected"
+                             : "bad number " + quoted(token) + " (expected " + what + ")";
+    }
+
+    const std::string& path_;
+    std::string_view text_;
+    std::size_t offset_ = 0;
+    std::size_t line_ = 0;
+};
+
+Capture read_ply_capture(const std::string& path) {
+    MeshFileOptions options;
+    options.vertex_attributes = true;
+    options.provenance = true;
+    const IndexedMesh mesh = read_mesh_file(path, options);
+    const Where where = where_line(path, 0);
+    if (mesh.patch_ids.empty() || mesh.tess_coords.empty() || mesh.normals.empty())
+        throw Error("not a capture: the PLY's vertices lack patch_id, tess_u/tess_v/tess_w or nx/ny/nz", where);
+    Capture capture;
+    capture.source = path;
+    capture.has_levels = false;
+    require_memory(saturating_bytes(saturating_bytes(mesh.face_count(), 3), sizeof(CapturedVertex)),
+                   "a capture of " + std::to_string(mesh.face_count()) + " triangles", where);
+    capture.vertices.reserve(mesh.face_count() * 3);
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+        const auto face = mesh.face(f);
+        if (face.size() != 3)
+            throw Error("face " + std::to_string(f) + " has " + std::to_string(face.size()) +
+                            " corners: a capture holds triangles",
+                        where);
+        for (const std::uint32_t v : face) {
+            if (mesh.patch_ids[v] != mesh.patch_ids[face[0]])
+                throw Error("face " + std::to_string(f) + " has corners of patches " + std::to_string(mesh.patch_ids[face[0]]) +
+                                " and " + std::to_string(mesh.patch_ids[v]) +
+                                ": a welded mesh, not a capture (whose corners each keep their patch)",
+                            where);
+            CapturedVertex c;
+            c.patch_id = mesh.patch_ids[v];
+            c.tess_coord = mesh.tess_coords[v];
+            c.position = glm::vec3(mesh.positions[v]);
+            c.normal = mesh.normals[v];
+            capture.vertices.push_back(c);
+        }
+    }
+    return capture;
+}
+
+}  // namespace
+
+Capture read_capture(const std::string& path) {
+    const CaptureFormat format = capture_format_from_path(path);
+    if (format == CaptureFormat::ply) return read_ply_capture(path);
+    const Where where = where_line(path, 0);
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw Error("no such capture file", where);
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw Error("not a regular file (a directory, device, FIFO or socket), not a capture", where);
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (ec) throw Error("cannot read the capture: " + ec.message(), where);
+    require_memory(size, "a capture file of " + format_bytes(size), where);
+    std::string text(static_cast<std::size_t>(size), '\0');
+    std::ifstream in(path, std::ios::binary);
+    if (!in || !in.read(text.data(), static_cast<std::streamsize>(size)))
+        throw Error("cannot read the capture", where);
+    return TextReader(path, text).read();
+}
+
+}  // namespace tessref

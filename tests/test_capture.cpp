@@ -1,0 +1,540 @@
+// Tests of tessref/capture.h: ulp distances (expected values from std::nextafter steps), the
+// text and PLY forms written and read back bit for bit, the reader's errors (file and line),
+// compare_captures on hand-made captures, the CPU reference's capture against the primitive
+// generator and the geometry shader's face normal, and `tessref mesh --capture` / `tessref
+// gl --capture` / `tessref compare` end to end.
+#include <gtest/gtest.h>
+
+#include "command_dir_test.h"
+#include "run_program.h"
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include "tessref/capture.h"
+#include "tessref/error.h"
+#include "tessref/mesh.h"
+#include "tessref/scene.h"
+#include "tessref/tessellator.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using tessref::Capture;
+using tessref::CapturedVertex;
+using tessref::CaptureCompareOptions;
+using tessref::CaptureCompareResult;
+using tessref::PatchDivergence;
+using tessref::TessLevels;
+using tessref::ulp_distance;
+using tessref::test::read_file;
+using tessref::test::RunResult;
+using tessref::test::write_file;
+
+const fs::path kSource = TESSREF_SOURCE_DIR;
+fs::path scene_path(const std::string& name) { return kSource / "data" / "scenes" / (name + ".toml"); }
+
+float step_up(float x, int steps) {
+    for (int i = 0; i < steps; ++i) x = std::nextafter(x, std::numeric_limits<float>::infinity());
+    return x;
+}
+
+bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
+bool same_bits(const glm::vec3& a, const glm::vec3& b) {
+    return same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z);
+}
+
+// ---- ulp distance ------------------------------------------------------------------------
+
+TEST(UlpDistance, CountsNextafterStepsAcrossZeroAndToInfinity) {
+    EXPECT_EQ(ulp_distance(1.0f, 1.0f), 0u);
+    EXPECT_EQ(ulp_distance(1.0f, step_up(1.0f, 1)), 1u);
+    EXPECT_EQ(ulp_distance(step_up(1.0f, 3), 1.0f), 3u);
+    // Across a power of two the spacing halves, the count of representable steps does not.
+    const float below_two = std::nextafter(2.0f, 0.0f);
+    EXPECT_EQ(ulp_distance(below_two, step_up(2.0f, 2)), 3u);
+    // +0 and -0 are one point; the smallest subnormals of either sign are one step from it.
+    const float tiny = std::numeric_limits<float>::denorm_min();
+    EXPECT_EQ(ulp_distance(0.0f, -0.0f), 0u);
+    EXPECT_EQ(ulp_distance(-0.0f, tiny), 1u);
+    EXPECT_EQ(ulp_distance(-tiny, tiny), 2u);
+    EXPECT_EQ(ulp_distance(-1.0f, 1.0f), 2u * std::bit_cast<std::uint32_t>(1.0f));
+    // The largest float is one step below infinity.
+    EXPECT_EQ(ulp_distance(std::numeric_limits<float>::max(), std::numeric_limits<float>::infinity()), 1u);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_EQ(ulp_distance(nan, 1.0f), tessref::kInfiniteUlps);
+    EXPECT_EQ(ulp_distance(0.0f, nan), tessref::kInfiniteUlps);
+    EXPECT_EQ(ulp_distance(nan, -nan), 0u);
+}
+
+// ---- hand-made captures ------------------------------------------------------------------
+
+TessLevels levels_of(float outer, float inner) {
+    TessLevels l;
+    l.outer = {outer, outer, outer, outer};
+    l.inner = {inner, inner};
+    return l;
+}
+
+CapturedVertex vertex(std::uint32_t patch, glm::vec3 tc, glm::vec3 position, glm::vec3 normal, TessLevels levels) {
+    CapturedVertex v;
+    v.patch_id = patch;
+    v.tess_coord = tc;
+    v.position = position;
+    v.normal = normal;
+    v.levels = levels;
+    return v;
+}
+
+// Two quad patches at level 1 side by side (x 0..1 and 1..2), two triangles each, sharing
+// the edge x = 1 (bitwise-equal positions there, as a crack-free terrain has them).
+Capture two_patches() {
+    Capture c;
+    const TessLevels l = levels_of(1.0f, 1.0f);
+    for (std::uint32_t p = 0; p < 2; ++p) {
+        const float x0 = static_cast<float>(p);
+        const auto at = [&](float u, float v) {
+            return vertex(p, {u, v, 0.0f}, {x0 + u, v, 0.25f * (x0 + u) + 0.5f * v}, {0.0f, 0.0f, 1.0f}, l);
+        };
+        for (const CapturedVertex& v : {at(0, 0), at(1, 0), at(1, 1), at(0, 0), at(1, 1), at(0, 1)})
+            c.vertices.push_back(v);
+    }
+    return c;
+}
+
+void expect_same(const Capture& a, const Capture& b, bool levels) {
+    ASSERT_EQ(a.vertices.size(), b.vertices.size());
+    for (std::size_t i = 0; i < a.vertices.size(); ++i) {
+        const CapturedVertex &x = a.vertices[i], &y = b.vertices[i];
+        EXPECT_EQ(x.patch_id, y.patch_id) << i;
+        EXPECT_TRUE(same_bits(x.tess_coord, y.tess_coord)) << i;
+        EXPECT_TRUE(same_bits(x.position, y.position)) << i;
+        EXPECT_TRUE(same_bits(x.normal, y.normal) || (std::isnan(x.normal.x) && std::isnan(y.normal.x))) << i;
+        if (levels) {
+            EXPECT_EQ(std::memcmp(x.levels.outer.data(), y.levels.outer.data(), sizeof(float) * 4), 0) << i;
+            EXPECT_EQ(std::memcmp(x.levels.inner.data(), y.levels.inner.data(), sizeof(float) * 2), 0) << i;
+        }
+    }
+}
+
+class CaptureFiles : public tessref::test::CommandDirTest {};
+
+TEST_F(CaptureFiles, TextRoundTripsEveryFloatBitwise) {
+    Capture c = two_patches();
+    // Values %.6g would lose, signed zero, a subnormal, a huge number, odd levels.
+    c.vertices[0].position = {0.1f, -0.0f, std::numeric_limits<float>::denorm_min()};
+    c.vertices[1].position = {3.40282e38f, step_up(1.0f, 1), -123456.789f};
+    c.vertices[2].normal = {std::nextafter(0.5f, 0.0f), -0.0f, 1e-30f};
+    for (std::size_t i = 6; i < 12; ++i) c.vertices[i].levels = levels_of(3.3f, step_up(7.0f, 5));
+    // Patch 0 again after patch 1: a second run of the same patch.
+    for (std::size_t i = 0; i < 3; ++i) c.vertices.push_back(c.vertices[i]);
+    write_file(path("c.txt"), tessref::capture_text(c.vertices, "test"));
+    const Capture back = tessref::read_capture(path("c.txt"));
+    EXPECT_TRUE(back.has_levels);
+    EXPECT_EQ(back.source, path("c.txt"));
+    expect_same(c, back, true);
+    // The layout: version line first, then a patch line before each run of a patch.
+    const std::string text = read_file(path("c.txt"));
+    EXPECT_EQ(text.rfind("tessref-capture 1\n", 0), 0u) << text;
+    EXPECT_NE(text.find("\npatch 1 levels 3.29999995 3.29999995 3.29999995 3.29999995 7.00000238 7.00000238\n"),
+              std::string::npos)
+        << text;
+}
+
+TEST_F(CaptureFiles, PlyRoundTripsUnweldedWithoutLevels) {
+    const Capture c = two_patches();
+    {
+        std::ofstream out(path("c.ply"), std::ios::binary);
+        tessref::write_capture(c.vertices, out, tessref::CaptureFormat::ply);
+    }
+    const Capture back = tessref::read_capture(path("c.ply"));
+    EXPECT_FALSE(back.has_levels);
+    // Patch 1's corners on x = 1 keep patch 1 and u = 0 although patch 0 has the same points.
+    expect_same(c, back, false);
+    EXPECT_NE(read_file(path("c.ply")).find("element vertex 12\n"), std::string::npos);
+}
+
+TEST_F(CaptureFiles, WeldedPlyIsRefusedAsNotACapture) {
+    // What `tessref gl --capture x.ply` wrote before: write_mesh's default weld gives the
+    // shared corners patch 0's provenance, so patch 1's triangles mix two patches.
+    {
+        std::ofstream out(path("w.ply"), std::ios::binary);
+        tessref::MeshWriteOptions options;
+        tessref::write_mesh(tessref::capture_mesh(two_patches().vertices), out, options);
+    }
+    try {
+        tessref::read_capture(path("w.ply"));
+        FAIL() << "a welded PLY was read as a capture";
+    } catch (const tessref::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("welded"), std::string::npos) << e.what();
+        EXPECT_EQ(e.where().file, path("w.ply"));
+    }
+}
+
+// A capture text with one line replaced: the error names the file and that line.
+struct BadText {
+    const char* name;
+    int line;                 // 1-based line replaced (-1: the last line removed instead)
+    const char* replacement;  // the new line
+    const char* message;      // part of the message
+    int error_line;           // the line the error names
+};
+
+class CaptureReadErrors : public CaptureFiles, public ::testing::WithParamInterface<BadText> {};
+
+TEST_P(CaptureReadErrors, NameFileAndLine) {
+    const BadText b = GetParam();
+    std::string text = tessref::capture_text(two_patches().vertices);
+    // Lines: 1 version, 2-3 comments, 4 "patch 0 ...", 5-10 patch 0's vertices,
+    // 11 "patch 1 ...", 12-17 patch 1's vertices. A vertex line without a patch line fails
+    // at the vertex (5); a file ending inside a triangle at its last line (16).
+    std::vector<std::string> lines;
+    for (std::size_t start = 0; start < text.size();) {
+        const std::size_t end = text.find('\n', start);
+        lines.push_back(text.substr(start, end - start));
+        start = end + 1;
+    }
+    ASSERT_EQ(lines.size(), 17u);
+    ASSERT_EQ(lines[10].rfind("patch 1 levels", 0), 0u);
+    if (b.line == -1) {
+        lines.pop_back();  // the file ends in the middle of a triangle
+    } else {
+        lines[static_cast<std::size_t>(b.line - 1)] = b.replacement;
+    }
+    text.clear();
+    for (const std::string& l : lines) text += l + "\n";
+    write_file(path("bad.txt"), text);
+    try {
+        tessref::read_capture(path("bad.txt"));
+        FAIL() << b.name << " was read";
+    } catch (const tessref::Error& e) {
+        const int line = b.error_line;
+        EXPECT_EQ(e.where().file, path("bad.txt")) << e.what();
+        EXPECT_EQ(e.where().line, line) << e.what();
+        EXPECT_NE(std::string(e.what()).find(b.message), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("line " + std::to_string(line)), std::string::npos) << e.what();
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Text, CaptureReadErrors,
+    ::testing::Values(BadText{"version", 1, "tessref-capture 2", "not a tessref capture", 1},
+                      BadText{"truncated", 6, "0 1 0 0 1 0 0.25 0 0", "the line ends where a normal was expected", 6},
+                      BadText{"number", 7, "0 1 1 0 1 1 0.75 0 0 1x", "bad number '1x'", 7},
+                      BadText{"number out of float range", 7, "0 1 1 0 1 1 0.75 0 0 1e39", "bad number '1e39'", 7},
+                      BadText{"extra", 8, "0 0 0 0 0 0 0 0 0 1 5", "unexpected '5'", 8},
+                      BadText{"patch header", 11, "patch 1 levels 1 1 1 1 1", "the line ends where a level was expected", 11},
+                      BadText{"patch keyword", 11, "patch 1 lvls 1 1 1 1 1 1", "bad patch line", 11},
+                      BadText{"patch id", 11, "patch -1 levels 1 1 1 1 1 1", "bad number '-1' (expected a patch id)", 11},
+                      BadText{"wrong patch", 12, "0 0 0 0 1 0 0 0 0 1", "vertex of patch 0 under the line 'patch 1'", 12},
+                      BadText{"no patch line", 4, "# no patch line", "before any 'patch", 5},
+                      BadText{"levels again", 11, "patch 0 levels 2 2 2 2 2 2", "other levels", 11},
+                      BadText{"not whole triangles", -1, "", "not whole triangles", 16}),
+    [](const auto& info) {
+        std::string name = info.param.name;
+        for (char& c : name) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+        return name;
+    });
+
+// ---- compare_captures --------------------------------------------------------------------
+
+TEST(CompareCaptures, IdenticalPassesWhateverTheTriangleAndCornerOrder) {
+    const Capture ref = two_patches();
+    Capture test;
+    // Triangles reversed, each triangle's corners rotated and re-oriented.
+    for (std::size_t t = ref.vertices.size() / 3; t-- > 0;)
+        for (const int k : {1, 0, 2}) test.vertices.push_back(ref.vertices[3 * t + static_cast<std::size_t>(k)]);
+    const CaptureCompareResult r = tessref::compare_captures(ref, test);
+    EXPECT_TRUE(r.passed);
+    EXPECT_EQ(r.reference_patches, 2u);
+    EXPECT_EQ(r.compared_patches, 2u);
+    EXPECT_EQ(r.vertices_compared, 12u);
+    EXPECT_EQ(r.worst_position.ulps, 0u);
+    EXPECT_TRUE(r.worst_position.found);
+    EXPECT_TRUE(r.listed.empty());
+}
+
+TEST(CompareCaptures, PositionThreeUlpsOffFailsAtTwoNamingPatchAndTessCoord) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    // Patch 1, corner (1, 1) of its first triangle: y three ulps up. The corner (1, 1) is in
+    // both of patch 1's triangles; only this copy moves.
+    test.vertices[8].position.y = step_up(ref.vertices[8].position.y, 3);
+    CaptureCompareOptions options;
+    options.max_position_ulps = 2;
+    const CaptureCompareResult r = tessref::compare_captures(ref, test, options);
+    EXPECT_FALSE(r.passed);
+    EXPECT_EQ(r.value_divergences, 1u);
+    EXPECT_EQ(r.failing_vertices, 1u);
+    ASSERT_EQ(r.failing_vertices_per_patch.size(), 1u);
+    EXPECT_EQ(r.failing_vertices_per_patch[0], (std::pair<std::uint32_t, std::size_t>{1, 1}));
+    ASSERT_EQ(r.listed.size(), 1u);
+    EXPECT_EQ(r.listed[0].patch_id, 1u);
+    EXPECT_EQ(r.listed[0].kind, PatchDivergence::values);
+    EXPECT_TRUE(same_bits(r.listed[0].tess_coord, glm::vec3(1.0f, 1.0f, 0.0f)));
+    EXPECT_EQ(r.listed[0].position_ulps, 3u);
+    EXPECT_TRUE(same_bits(r.listed[0].test_position, test.vertices[8].position));
+    EXPECT_EQ(r.worst_position.ulps, 3u);
+    EXPECT_EQ(r.worst_position.patch_id, 1u);
+    EXPECT_EQ(r.worst_position.component, 1);
+    options.max_position_ulps = 3;
+    EXPECT_TRUE(tessref::compare_captures(ref, test, options).passed);
+}
+
+TEST(CompareCaptures, NormalBeyondItsOwnTolerance) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    test.vertices[0].normal.z = std::nextafter(1.0f, 0.0f);
+    CaptureCompareOptions options;
+    options.max_position_ulps = 100;
+    EXPECT_FALSE(tessref::compare_captures(ref, test, options).passed);
+    options.max_normal_ulps = 1;
+    const CaptureCompareResult r = tessref::compare_captures(ref, test, options);
+    EXPECT_TRUE(r.passed);
+    EXPECT_EQ(r.worst_normal.ulps, 1u);
+    EXPECT_EQ(r.worst_normal.component, 2);
+}
+
+TEST(CompareCaptures, MissingPatchOnEitherSide) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    test.vertices.resize(6);  // patch 1 gone
+    CaptureCompareResult r = tessref::compare_captures(ref, test);
+    EXPECT_FALSE(r.passed);
+    EXPECT_EQ(r.missing_in_test, 1u);
+    EXPECT_EQ(r.missing_in_reference, 0u);
+    ASSERT_EQ(r.listed.size(), 1u);
+    EXPECT_EQ(r.listed[0].patch_id, 1u);
+    EXPECT_EQ(r.listed[0].kind, PatchDivergence::missing_in_test);
+    EXPECT_EQ(r.listed[0].reference_vertices, 6u);
+    r = tessref::compare_captures(test, ref);
+    EXPECT_EQ(r.missing_in_reference, 1u);
+    EXPECT_EQ(r.listed[0].kind, PatchDivergence::missing_in_reference);
+}
+
+TEST(CompareCaptures, TessCoordOneBitOffIsATessCoordDivergenceWithLevels) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    // Patch 0's corner (0, 1) (its last vertex) moves to the next float of v below 1;
+    // its levels differ by one ulp of the inner level too.
+    const float v = std::bit_cast<float>(std::bit_cast<std::uint32_t>(1.0f) - 1);
+    test.vertices[5].tess_coord.y = v;
+    for (std::size_t i = 0; i < 6; ++i) test.vertices[i].levels.inner[1] = step_up(1.0f, 1);
+    const CaptureCompareResult r = tessref::compare_captures(ref, test);
+    EXPECT_FALSE(r.passed);
+    EXPECT_EQ(r.tess_coord_divergences, 1u);
+    EXPECT_EQ(r.tess_coord_divergences_with_equal_levels, 0u);
+    EXPECT_EQ(r.compared_patches, 1u);  // patch 1
+    ASSERT_EQ(r.listed.size(), 1u);
+    const tessref::DivergingPatch& d = r.listed[0];
+    EXPECT_EQ(d.patch_id, 0u);
+    EXPECT_EQ(d.kind, PatchDivergence::tess_coords);
+    EXPECT_TRUE(d.levels_known);
+    EXPECT_EQ(d.level_ulps, 1u);
+    // (0, v) sorts before (0, 1): the smallest tess coord that only one side has is the test's.
+    EXPECT_FALSE(d.tess_coord_in_reference);
+    EXPECT_TRUE(same_bits(d.tess_coord, glm::vec3(0.0f, v, 0.0f)));
+}
+
+TEST(CompareCaptures, SameTessCoordsOtherTrianglesIsATriangleDivergence) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    // Patch 0 is {00, 10, 11} {00, 11, 01}: 00 and 11 twice, 10 and 01 once. The test's
+    // {00, 10, 01} {00, 11, 11} holds the same multiset in other sets (the second is
+    // degenerate, which the comparison does not care about).
+    const CapturedVertex c00 = ref.vertices[0], c10 = ref.vertices[1], c11 = ref.vertices[2], c01 = ref.vertices[5];
+    const CapturedVertex other_sets[6] = {c00, c10, c01, c00, c11, c11};
+    for (std::size_t i = 0; i < 6; ++i) test.vertices[i] = other_sets[i];
+    const CaptureCompareResult r = tessref::compare_captures(ref, test);
+    EXPECT_FALSE(r.passed);
+    EXPECT_EQ(r.tess_coord_divergences, 0u);
+    EXPECT_EQ(r.triangle_divergences, 1u);
+    ASSERT_EQ(r.listed.size(), 1u);
+    EXPECT_EQ(r.listed[0].patch_id, 0u);
+    EXPECT_EQ(r.listed[0].kind, PatchDivergence::triangles);
+}
+
+TEST(CompareCaptures, RefusesACaptureOfPartTriangles) {
+    Capture c = two_patches();
+    c.vertices.pop_back();
+    c.source = "x.txt";
+    EXPECT_THROW(tessref::compare_captures(two_patches(), c), tessref::Error);
+}
+
+// ---- the CPU reference's capture ---------------------------------------------------------
+
+// COSC422's terrain (plane xz, z descending: ccw faces up) with face normals, drawn ccw and
+// cw: cw makes the pipeline re-orient every triangle to face up. The capture must still be
+// the generator's primitives in its order (tessellate() on the patch's levels), and each
+// triangle's normal what cosc422_terrain.geom computes from the corners as GL emits them:
+// normalize(cross(p1 - p0, p2 - p0)), its x, y, z each 0 ulps away.
+class CpuCapture : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CpuCapture, IsTheGeneratorsOrderWithTheGeometryShadersFaceNormal) {
+    std::string toml = read_file(scene_path("cosc422"));
+    const std::string ccw = "winding = \"ccw\"";
+    const std::size_t at = toml.find(ccw);
+    ASSERT_NE(at, std::string::npos);
+    toml.replace(at, ccw.size(), std::string("winding = \"") + GetParam() + "\"");
+    const tessref::Scene scene = tessref::load_scene_from_string(toml, scene_path("cosc422").string());
+    const tessref::PipelineResult result = tessref::run_pipeline(scene);
+    const std::vector<CapturedVertex> capture = tessref::capture_from_pipeline(scene, result);
+    ASSERT_EQ(capture.size(), result.mesh.triangles.size() * 3);
+
+    std::size_t next = 0, mismatched_tess_coords = 0, mismatched_normals = 0, mismatched_levels = 0;
+    for (std::uint32_t p = 0; p < result.levels.size(); ++p) {
+        const tessref::Pattern pattern = tessref::tessellate(scene.generator, result.levels[p]);
+        const auto points = pattern.points();
+        for (std::size_t t = 0; t < pattern.primitive_count(); ++t, next += 3) {
+            ASSERT_LE(next + 3, capture.size());
+            const auto prim = pattern.primitive(t);
+            for (std::size_t k = 0; k < 3; ++k) {
+                const CapturedVertex& v = capture[next + k];
+                ASSERT_EQ(v.patch_id, p);
+                const auto& q = points[prim[k]];
+                if (!same_bits(v.tess_coord, glm::vec3(q.u, q.v, q.w))) ++mismatched_tess_coords;
+                if (std::memcmp(&v.levels, &result.levels[p], sizeof(TessLevels)) != 0) ++mismatched_levels;
+            }
+            const glm::vec3 p0 = capture[next].position, p1 = capture[next + 1].position, p2 = capture[next + 2].position;
+            const glm::vec3 expected = glm::normalize(glm::cross(p1 - p0, p2 - p0));
+            // Up to the sign of a zero component: the pipeline's normal of the re-oriented
+            // corners, negated, is exact but for that (ulp distance 0).
+            for (std::size_t k = 0; k < 3; ++k)
+                for (int c = 0; c < 3; ++c)
+                    if (ulp_distance(capture[next + k].normal[c], expected[c]) != 0) ++mismatched_normals;
+        }
+    }
+    EXPECT_EQ(next, capture.size());
+    EXPECT_EQ(mismatched_tess_coords, 0u);
+    EXPECT_EQ(mismatched_normals, 0u);
+    EXPECT_EQ(mismatched_levels, 0u);
+    // The face up (+y) whatever the winding asks: ccw's normals point up, cw's down.
+    std::size_t up = 0;
+    for (const CapturedVertex& v : capture) up += v.normal.y > 0.0f;
+    EXPECT_EQ(up, std::string(GetParam()) == "ccw" ? capture.size() : 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Windings, CpuCapture, ::testing::Values("ccw", "cw"));
+
+// ---- the command, end to end --------------------------------------------------------------
+
+class CaptureCommand : public tessref::test::CommandDirTest {};
+
+TEST_F(CaptureCommand, MeshCaptureAloneWritesOnlyTheCapture) {
+    const RunResult r = run({"mesh", scene_path("thesis-constant-1").string(), "--capture", path("cpu.txt")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(files(), (std::set<std::string>{"cpu.txt"}));
+    // 16 x 16 patches at level 1: two triangles each.
+    const Capture c = tessref::read_capture(path("cpu.txt"));
+    EXPECT_EQ(c.vertices.size(), 16u * 16u * 2u * 3u);
+}
+
+TEST_F(CaptureCommand, MeshWithMeshAndCaptureWritesBoth) {
+    const RunResult r = run({"mesh", scene_path("thesis-constant-1").string(), "-o", path("m.ply"), "--capture",
+                             path("cpu.ply")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(files(), (std::set<std::string>{"cpu.ply", "m.ply"}));
+    EXPECT_EQ(tessref::read_capture(path("cpu.ply")).vertices.size(), 16u * 16u * 2u * 3u);
+}
+
+TEST_F(CaptureCommand, MeshWithNothingToWriteOrABadCaptureNameIsExit2AndWritesNothing) {
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"mesh", scene_path("thesis-constant-1").string()},
+          std::vector<std::string>{"mesh", scene_path("thesis-constant-1").string(), "--capture", path("c.obj")},
+          std::vector<std::string>{"mesh", scene_path("thesis-constant-1").string(), "--capture", path("c.txt"),
+                                   "--solid"}}) {
+        const RunResult r = run(args);
+        EXPECT_EQ(r.status, 2) << args.back() << r.err;
+        EXPECT_NE(r.err.find("tessref: error:"), std::string::npos) << r.err;
+        EXPECT_TRUE(files().empty());
+    }
+}
+
+// The CPU reference against llvmpipe (OSMesa, a build dependency): wherever GL's control
+// shader wrote bitwise the CPU's levels, the generator must give bitwise the same tess
+// coords and triangles; every patch is on both sides.
+class CpuAgainstGl : public CaptureCommand, public ::testing::WithParamInterface<const char*> {};
+
+TEST_P(CpuAgainstGl, SameTessCoordsWhereverTheLevelsAreTheSame) {
+    const std::string scene = scene_path(GetParam()).string();
+    RunResult r = run({"mesh", scene, "--capture", path("cpu.txt")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = run({"gl", scene, "-o", path("gl.png"), "--size", "64x40", "--capture", path("gl.txt")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = run({"compare", path("cpu.txt"), path("gl.txt"), "--json"});
+    ASSERT_TRUE(r.status == 0 || r.status == 1) << r.out << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["missing_in_test"], 0) << r.out;
+    EXPECT_EQ(j["missing_in_reference"], 0) << r.out;
+    EXPECT_EQ(j["tess_coord_divergences_with_equal_levels"], 0) << r.out;
+    EXPECT_EQ(j["triangle_divergences"], 0) << r.out;
+    EXPECT_EQ(j["reference_patches"], 256) << r.out;
+    EXPECT_EQ(j["passed"], r.status == 0);
+    std::printf("[cpu vs gl] %s: %s tess-coord divergences, worst position %s ulps, worst normal %s ulps\n",
+                GetParam(), j["tess_coord_divergences"].dump().c_str(), j["worst_position"]["ulps"].dump().c_str(),
+                j["worst_normal"]["ulps"].dump().c_str());
+    // The text report of the same comparison ends in its verdict.
+    r = run({"compare", path("cpu.txt"), path("gl.txt")});
+    EXPECT_NE(r.out.find(r.status == 0 ? "PASS\n" : "FAIL\n"), std::string::npos) << r.out;
+    EXPECT_TRUE(files() == (std::set<std::string>{"cpu.txt", "gl.png", "gl.txt"}));
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, CpuAgainstGl, ::testing::Values("thesis-constant-1", "thesis-map-4"),
+                         [](const auto& info) {
+                             std::string name = info.param;
+                             for (char& c : name) c = c == '-' ? '_' : c;
+                             return name;
+                         });
+
+TEST_F(CaptureCommand, CompareFailsWithExit1NamingThePatchAndPassesWithTheTolerance) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    test.vertices[8].position.y = step_up(ref.vertices[8].position.y, 3);
+    write_file(path("ref.txt"), tessref::capture_text(ref.vertices));
+    write_file(path("test.txt"), tessref::capture_text(test.vertices));
+    RunResult r = run({"compare", path("ref.txt"), path("test.txt"), "--max-position-ulps", "2"});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("  patch 1  values: 1 of 6 vertices fail; first at tess coord (1, 1, 0)"), std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("(3 ulps)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\n  1:1\n"), std::string::npos) << r.out;
+    r = run({"compare", path("ref.txt"), path("test.txt"), "--max-position-ulps", "3", "--json"});
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["worst_position"]["ulps"], 3);
+}
+
+TEST_F(CaptureCommand, CompareBadInputIsExit2) {
+    write_file(path("ref.txt"), tessref::capture_text(two_patches().vertices));
+    write_file(path("bad.txt"), "tessref-capture 1\npatch 0 levels 1 1 1 1 1 1\n0 0 0 0 1 2 x 0 0 1\n");
+    RunResult r = run({"compare", path("ref.txt"), path("bad.txt")});
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("bad number 'x' (expected a position) at line 3"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(path("bad.txt") + ":3"), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    // A capture against an image, ulps for images, image flags for captures.
+    r = run({"compare", path("ref.txt"), path("x.png")});
+    EXPECT_EQ(r.status, 2) << r.err;
+    r = run({"compare", path("a.png"), path("b.png"), "--max-normal-ulps", "1"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--max-normal-ulps"), std::string::npos) << r.err;
+    r = run({"compare", path("ref.txt"), path("ref.txt"), "--threshold", "0.5"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    r = run({"compare", path("ref.txt"), path("ref.txt"), "--max-position-ulps", "-1"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(files(), (std::set<std::string>{"bad.txt", "ref.txt"}));
+}
+
+}  // namespace
