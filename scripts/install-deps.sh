@@ -10,6 +10,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   fonts-dejavu-core admesh
   glslang-tools
+  # SHA-256 of the golden digests (tessref golden)
+  libssl-dev
   # OpenImageIO's CMake package lists /usr/include/opencv4 among its include
   # directories; without the OpenCV headers CMake refuses the imported target.
   libopencv-core-dev

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Regenerates the golden images of `tessref render` (golden/render/*.png) from
-# golden/render/cases.txt: one line per image, its file name then the arguments of
-# `tessref render`, run from the repository root. The images are regression baselines made
+# Regenerates every golden file: golden/<scene>/ of every shipped scene (`tessref golden
+# update`: image.png, capture.txt, mesh.txt) and the extra images of `tessref render`
+# (golden/render/*.png) from golden/render/cases.txt: one line per image, its file name then
+# the arguments of `tessref render`, run from the repository root. The images are regression baselines made
 # by tessref itself: run this only after reviewing an intended change of the rendered
 # output, and commit the images with that change.
 #
@@ -13,6 +14,8 @@ if [[ ! -x "$TESSREF" ]]; then
     echo "regenerate-golden: no tessref binary at $TESSREF (build first: scripts/build.sh, or pass its path)" >&2
     exit 2
 fi
+# Every scene's golden/<scene>/ (image.png, capture.txt, mesh.txt).
+"$TESSREF" golden update
 count=0
 while read -r image args; do
     [[ -z "$image" || "$image" == \#* ]] && continue
@@ -21,4 +24,4 @@ while read -r image args; do
     echo "golden/render/$image: tessref render $args"
     count=$((count + 1))
 done < golden/render/cases.txt
-echo "regenerated $count images"
+echo "regenerated golden/<scene>/ of every scene and $count images of golden/render/"

@@ -621,7 +621,7 @@ std::vector<GoldenCase> golden_cases() {
 
 TEST(RenderGolden, CasesAreListedInTheReadme) {
     const std::vector<GoldenCase> cases = golden_cases();
-    ASSERT_GE(cases.size(), 14u);
+    ASSERT_GE(cases.size(), 6u);  // the plain renders are golden/<scene>/image.png (golden verify)
     const std::string readme = read_file(kSource / "golden" / "README.md");
     for (const GoldenCase& c : cases) {
         std::string command = "tessref render";

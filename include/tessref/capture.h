@@ -125,6 +125,11 @@ inline constexpr std::uint64_t kDefaultMaxNormalUlps = 0;
 struct CaptureCompareOptions {
     std::uint64_t max_position_ulps = kDefaultMaxPositionUlps;
     std::uint64_t max_normal_ulps = kDefaultMaxNormalUlps;
+    // A component also passes when it is within this absolute distance of the other (0: not
+    // used). Near zero a float's ulp is tiny (1e-7 has ulps of 7e-15), so an ulp bound alone
+    // fails values that differ by far less than anything visible.
+    double max_position_abs = 0.0;
+    double max_normal_abs = 0.0;
     std::size_t max_listed = 10;  // diverging patches listed in detail, in patch order
 };
 

@@ -34,6 +34,8 @@ struct CompareCommandOptions {
     std::string diff;
     std::string max_position_ulps;  // captures; empty: the default
     std::string max_normal_ulps;
+    std::string max_position_abs;  // captures; empty: not used
+    std::string max_normal_abs;
     bool json = false;
     bool ignore_alpha = false;
 };
@@ -223,8 +225,10 @@ std::string capture_report_text(const CompareCommandOptions& options, const Capt
             std::to_string(reference.vertices.size()) + " vertices" + (reference.has_levels ? "" : ", no levels") + ")\n";
     text += "test       " + options.test + "  (" + std::to_string(r.test_patches) + " patches, " +
             std::to_string(test.vertices.size()) + " vertices" + (test.has_levels ? "" : ", no levels") + ")\n";
-    text += "tolerance  position " + std::to_string(compare.max_position_ulps) + " ulps, normal " +
-            std::to_string(compare.max_normal_ulps) + " ulps\n";
+    text += "tolerance  position " + std::to_string(compare.max_position_ulps) + " ulps" +
+            (compare.max_position_abs > 0 ? " or " + number_text(compare.max_position_abs) : std::string()) +
+            ", normal " + std::to_string(compare.max_normal_ulps) + " ulps" +
+            (compare.max_normal_abs > 0 ? " or " + number_text(compare.max_normal_abs) : std::string()) + "\n";
     text += "patches    " + std::to_string(r.compared_patches) + " compared vertex by vertex; diverging: " +
             std::to_string(r.missing_in_test) + " missing in test, " + std::to_string(r.missing_in_reference) +
             " missing in reference, " + std::to_string(r.tess_coord_divergences) + " other tess coords (" +
@@ -264,6 +268,8 @@ std::string capture_report_json(const CompareCommandOptions& options, const Capt
         {"test_has_levels", test.has_levels},
         {"max_position_ulps", compare.max_position_ulps},
         {"max_normal_ulps", compare.max_normal_ulps},
+        {"max_position_abs", compare.max_position_abs},
+        {"max_normal_abs", compare.max_normal_abs},
         {"reference_patches", r.reference_patches},
         {"test_patches", r.test_patches},
         {"compared_patches", r.compared_patches},
@@ -285,6 +291,13 @@ std::string capture_report_json(const CompareCommandOptions& options, const Capt
     return report.dump(2) + "\n";
 }
 
+double parse_threshold_flag(const std::string& text, const std::string& flag) {
+    const std::optional<double> value = parse_double(text);
+    if (!value || !std::isfinite(*value) || *value < 0.0)
+        throw Error("'" + text + "' is not a distance (a finite number >= 0)", where_file(flag));
+    return *value;
+}
+
 std::uint64_t parse_ulps(const std::string& text, const std::string& flag, std::uint64_t default_value) {
     return text.empty() ? default_value : static_cast<std::uint64_t>(parse_count(text, flag));
 }
@@ -304,6 +317,8 @@ int run_compare_captures(const CompareCommandOptions& options) {
     CaptureCompareOptions compare;
     compare.max_position_ulps = parse_ulps(options.max_position_ulps, "--max-position-ulps", kDefaultMaxPositionUlps);
     compare.max_normal_ulps = parse_ulps(options.max_normal_ulps, "--max-normal-ulps", kDefaultMaxNormalUlps);
+    if (!options.max_position_abs.empty()) compare.max_position_abs = parse_threshold_flag(options.max_position_abs, "--max-position-abs");
+    if (!options.max_normal_abs.empty()) compare.max_normal_abs = parse_threshold_flag(options.max_normal_abs, "--max-normal-abs");
     const Capture reference = read_capture(options.reference);
     const Capture test = read_capture(options.test);
     const CaptureCompareResult result = compare_captures(reference, test, compare);
@@ -317,9 +332,14 @@ int run_compare_captures(const CompareCommandOptions& options) {
 
 int run_compare(const CompareCommandOptions& options) {
     if (is_capture_path(options.reference) || is_capture_path(options.test)) return run_compare_captures(options);
-    if (!options.max_position_ulps.empty() || !options.max_normal_ulps.empty())
-        throw Error("--max-position-ulps and --max-normal-ulps compare captures (.txt, .ply), not images",
-                    where_file(options.max_position_ulps.empty() ? "--max-normal-ulps" : "--max-position-ulps"));
+    if (!options.max_position_ulps.empty() || !options.max_normal_ulps.empty() || !options.max_position_abs.empty() ||
+        !options.max_normal_abs.empty())
+        throw Error("--max-position-ulps, --max-normal-ulps, --max-position-abs and --max-normal-abs compare captures "
+                    "(.txt, .ply), not images",
+                    where_file(!options.max_position_ulps.empty() ? "--max-position-ulps"
+                               : !options.max_normal_ulps.empty() ? "--max-normal-ulps"
+                               : !options.max_position_abs.empty() ? "--max-position-abs"
+                                                                   : "--max-normal-abs"));
     // Flags first: nothing is read for a command line that cannot succeed.
     CompareOptions compare;
     const long long deviation = parse_count(options.max_position_deviation, "--max-position-deviation");
@@ -412,6 +432,13 @@ Command add_compare_command(CLI::App& parent) {
                     "Captures: largest accepted difference of a normal component, in ulps")
         ->type_name("N")
         ->default_str(std::to_string(kDefaultMaxNormalUlps));
+    app->add_option("--max-position-abs", options->max_position_abs,
+                    "Captures: a position component also passes within this distance (world units), for values "
+                    "near zero where ulps are tiny")
+        ->type_name("D");
+    app->add_option("--max-normal-abs", options->max_normal_abs,
+                    "Captures: a normal component also passes within this distance")
+        ->type_name("D");
     app->add_flag("--json", options->json,
                   "Print the result as JSON (a statistic that is not finite, such as the PSNR of identical images, is null)");
     return Command{app, [options] { return run_compare(*options); }};

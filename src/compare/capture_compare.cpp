@@ -127,6 +127,17 @@ std::uint64_t worst_component(const glm::vec3& a, const glm::vec3& b, int& compo
     return worst;
 }
 
+// Every component within max_ulps, or (when max_abs > 0) within max_abs of the other:
+// near zero a float's ulp is tiny, so a few ulps say nothing there.
+bool within(const glm::vec3& a, const glm::vec3& b, std::uint64_t max_ulps, double max_abs) {
+    for (int k = 0; k < 3; ++k) {
+        if (ulp_distance(a[k], b[k]) <= max_ulps) continue;
+        if (max_abs > 0.0 && std::abs(static_cast<double>(a[k]) - static_cast<double>(b[k])) <= max_abs) continue;
+        return false;
+    }
+    return true;
+}
+
 class Comparison {
 public:
     Comparison(const Capture& reference, const Capture& test, const CaptureCompareOptions& options)
@@ -240,7 +251,9 @@ private:
                 ++result_.vertices_compared;
                 track(result_.worst_position, pu, position_component, rv.position, tv.position, rv);
                 track(result_.worst_normal, nu, normal_component, rv.normal, tv.normal, rv);
-                if (pu <= options_.max_position_ulps && nu <= options_.max_normal_ulps) continue;
+                if (within(rv.position, tv.position, options_.max_position_ulps, options_.max_position_abs) &&
+                    within(rv.normal, tv.normal, options_.max_normal_ulps, options_.max_normal_abs))
+                    continue;
                 if (d.failing_vertices++ == 0) {
                     d.tess_coord = rv.tess_coord;
                     d.reference_position = rv.position;

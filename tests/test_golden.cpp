@@ -1,0 +1,110 @@
+// tessref golden: update writes golden/<scene>/ from the CPU reference; verify fails when the
+// CPU side no longer makes those files (STALE) or when llvmpipe departs from them (FAIL).
+// Every test works on a golden directory of its own, made from one small scene.
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "command_dir_test.h"
+
+namespace fs = std::filesystem;
+using tessref::test::read_file;
+using tessref::test::write_file;
+
+namespace {
+
+const std::string kScenes = std::string(TESSREF_SOURCE_DIR) + "/data/scenes";
+
+class GoldenCommand : public tessref::test::CommandDirTest {
+protected:
+    tessref::test::RunResult golden(const std::string& action, const std::string& scene) {
+        return run({"golden", action, scene, "--golden", path("golden"), "--scenes", kScenes});
+    }
+    void update(const std::string& scene) {
+        const auto r = golden("update", scene);
+        ASSERT_EQ(r.status, 0) << r.err;
+    }
+};
+
+TEST_F(GoldenCommand, UpdateWritesTheThreeFilesAndVerifyPasses) {
+    update("thesis-map-4");
+    for (const char* f : {"image.png", "capture.txt", "mesh.txt"})
+        EXPECT_TRUE(fs::is_regular_file(dir_ / "golden" / "thesis-map-4" / f)) << f;
+    const auto r = golden("verify", "thesis-map-4");
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("PASS"), std::string::npos) << r.out;
+}
+
+// The mesh digest is the SHA-256 of what `tessref mesh --binary` writes, checked with the
+// system's sha256sum (an implementation of SHA-256 that is not ours).
+TEST_F(GoldenCommand, MeshDigestIsTheSha256OfTheBinaryPly) {
+    update("thesis-map-4");
+    const auto m = run({"mesh", kScenes + "/thesis-map-4.toml", "--binary", "-o", path("m.ply")});
+    ASSERT_EQ(m.status, 0) << m.err;
+    const std::string sum_file = path("sum.txt");
+    ASSERT_EQ(std::system(("sha256sum " + path("m.ply") + " > " + sum_file).c_str()), 0);
+    const std::string sum = read_file(sum_file).substr(0, 64);
+    const std::string digest = read_file(dir_ / "golden" / "thesis-map-4" / "mesh.txt");
+    EXPECT_NE(digest.find("sha256 " + sum), std::string::npos) << digest << "\nsha256sum: " << sum;
+}
+
+TEST_F(GoldenCommand, AChangedPatchDigestMakesTheSceneStaleNamingThePatch) {
+    update("thesis-map-4");
+    const fs::path file = dir_ / "golden" / "thesis-map-4" / "capture.txt";
+    std::string text = read_file(file);
+    // Patch 17's digest: flip its last hex digit.
+    const std::regex line("(\npatch 17 [^\n]* sha256 [0-9a-f]{15})([0-9a-f])");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(text, m, line));
+    const char last = m[2].str()[0];
+    text.replace(static_cast<std::size_t>(m.position(2)), 1, 1, last == '0' ? '1' : '0');
+    // ... and the whole capture's digest, as a file edited by hand or by another version.
+    const std::size_t at = text.find("capture patches");
+    const std::size_t sha = text.find("sha256 ", at) + 7;
+    text[sha] = text[sha] == '0' ? '1' : '0';
+    write_file(file, text);
+    const auto r = golden("verify", "thesis-map-4");
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("STALE"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("1 of 256 patches differ"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("first: patch 17"), std::string::npos) << r.out;
+}
+
+TEST_F(GoldenCommand, AnotherSceneImageMakesTheSceneStale) {
+    update("thesis-map-4");
+    update("thesis-map-18");
+    fs::copy_file(dir_ / "golden" / "thesis-map-18" / "image.png", dir_ / "golden" / "thesis-map-4" / "image.png",
+                  fs::copy_options::overwrite_existing);
+    const auto r = golden("verify", "thesis-map-4");
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("stale: image"), std::string::npos) << r.out;
+}
+
+// A GL draw whose primitive count disagrees with the reference's prediction (the test hook
+// of `tessref gl`) fails the scene.
+TEST_F(GoldenCommand, AWrongGlDrawFailsTheScene) {
+    update("thesis-map-4");
+    ::setenv("TESSREF_GL_CORRUPT_BATCH", "0", 1);
+    const auto r = golden("verify", "thesis-map-4");
+    ::unsetenv("TESSREF_GL_CORRUPT_BATCH");
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("FAIL"), std::string::npos) << r.out;
+}
+
+TEST_F(GoldenCommand, BadInputIsExitTwo) {
+    auto r = golden("verify", "no-such-scene");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("no-such-scene"), std::string::npos) << r.err;
+    r = golden("verify", "thesis-map-4");  // no golden files yet
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("golden update"), std::string::npos) << r.err;
+    r = golden("update", "../thesis-map-4");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_FALSE(fs::exists(dir_ / "golden"));
+}
+
+}  // namespace
