@@ -111,7 +111,8 @@ int run_gl(const GlCommandOptions& options) {
     output.commit();
     std::cout << options.output << ": " << r.width << "x" << r.height << ", " << to_string(r.shading.model.kind)
               << " shading, " << context.renderer() << ", " << r.stats.triangles << " triangles in "
-              << r.stats.draws << " draws (every count as predicted), " << r.stats.seconds_gl << " s GL";
+              << r.stats.draws << " draws (every count as predicted), " << r.stats.seconds_gl
+              << " s GL (CPU pipeline for the predictions " << r.stats.seconds_pipeline << " s)";
     if (capture_output) std::cout << ", " << r.capture.size() / 3 << " triangles captured to " << options.capture;
     for (const StageShader& s : r.user_shaders) std::cout << ", user " << to_string(s.stage) << " shader " << s.path;
     std::cout << "\n";

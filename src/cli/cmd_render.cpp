@@ -8,6 +8,7 @@
 //
 // Every flag and the output name are checked before the scene is loaded; the image goes to a
 // temporary file next to OUT and is renamed over it only when complete.
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -94,7 +95,14 @@ int run_render(const RenderCommandOptions& options) {
     } else {
         std::cout << to_string(precision) << " precision, " << result.stats.triangles << " triangles, ";
     }
-    std::cout << result.stats.covered_pixels << " covered pixels\n";
+    std::cout << result.stats.covered_pixels << " covered pixels";
+    if (!options.raytrace) {
+        char times[160];
+        std::snprintf(times, sizeof times, " (pipeline %.3f s, raster %.3f s, shading %.3f s)",
+                      result.stats.seconds_pipeline, result.stats.seconds_raster, result.stats.seconds_shade);
+        std::cout << times;
+    }
+    std::cout << "\n";
     return 0;
 }
 
