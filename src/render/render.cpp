@@ -219,6 +219,12 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     RasterSettings settings;
     settings.depth_func = DepthFunc::less;
     settings.polygon_mode = options.mode == RenderMode::wireframe ? PolygonMode::line : PolygonMode::fill;
+    const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
+    const bool derivatives = needs.texCoord && needs.texCoord_derivatives && !mesh.uvs.empty();
+    // A line's quad differences come from the line's interpolation, which only the rasterizer
+    // knows (the winning edge, its direction and clipping); a filled triangle's from its plane.
+    const bool line_derivatives = derivatives && settings.polygon_mode == PolygonMode::line;
+    settings.quad_derivatives = line_derivatives;
     Framebuffer fb = Framebuffer::create(width, height, 0);
     result.stats.raster = rasterize(fb, input, settings);
 
@@ -236,10 +242,8 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     progress("shading", 0.0);
     render_detail::allocate(result, width, height);
     const SurfaceView view{mesh, pipe, clip, face_normals};
-    const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
     const Domain domain = scene.generator.domain;
     result.domain = domain;
-    const bool derivatives = needs.texCoord && needs.texCoord_derivatives && !mesh.uvs.empty();
     // Quad by quad (2x2 pixels, as llvmpipe shades): the pixels of a quad that show the same
     // triangle share its derivatives (and its level).
     const auto covered = tessref::parallel_reduce(
@@ -271,13 +275,21 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
                             if (k == cached_count) {
                                 cached_triangle[k] = tri;
                                 cached_level[k] = triangle_level(pipe, domain, tri);
-                                if (derivatives) cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
+                                if (derivatives && !line_derivatives)
+                                    cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
                                 ++cached_count;
                             }
                             result.level[i] = cached_level[k];
                             FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
-                            f.texCoord_dx = cached[k].dx;
-                            f.texCoord_dy = cached[k].dy;
+                            if (line_derivatives) {
+                                // Per pixel: two edges of one triangle in a quad are two lines.
+                                // uv_at is linear: the weights' differences give the uv's.
+                                f.texCoord_dx = view.uv_at(tri, fb.barycentric_dx[i]);
+                                f.texCoord_dy = view.uv_at(tri, fb.barycentric_dy[i]);
+                            } else {
+                                f.texCoord_dx = cached[k].dx;
+                                f.texCoord_dy = cached[k].dy;
+                            }
                             result.colour[i] = shade(result.shading.model, f);
                         }
                     }
