@@ -337,10 +337,13 @@ std::uint64_t estimate_render_memory(glm::ivec2 size, RenderMode mode, bool rayt
     // bytes/pixel above a base of about 145 MiB; .exr with every AOV 627 and 2036 MiB at
     // 2048 and 4096 (117.4 bytes/pixel: the write phase, RenderResult + 14 float channels,
     // stays under the render phase); --overlay-wireframe 842 MiB at 2048x2048 (+57
-    // bytes/pixel, the lines' Framebuffer). The slack keeps the estimate above those.
-    constexpr std::uint64_t framebuffer = 57, result = 56, slack = 8;
+    // bytes/pixel, the lines' Framebuffer); --wireframe of a textured scene +24 bytes/pixel,
+    // the lines' quad derivatives (2048x2048: 757 MiB against 660 MiB filled, same machine).
+    // The slack keeps the estimate above those.
+    constexpr std::uint64_t framebuffer = 57, result = 56, slack = 8, line_derivatives = 24;
     const std::uint64_t render_phase =
-        (raytrace ? 0 : framebuffer) * (mode == RenderMode::fill_with_wireframe ? 2 : 1) + result + slack;
+        (raytrace ? 0 : framebuffer) * (mode == RenderMode::fill_with_wireframe ? 2 : 1) +
+        (mode == RenderMode::wireframe && !raytrace ? line_derivatives : 0) + result + slack;
     std::uint64_t channels = 4;
     if (format == ImageFormat::exr) {
         channels += aovs.depth + aovs.patch + aovs.triangle + 3 * aovs.tesscoord + 4 * aovs.level;
