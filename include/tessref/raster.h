@@ -100,6 +100,8 @@ struct RasterSettings {
     bool depth_write = true;
     WindowTransform window_transform = WindowTransform::tessellation;
     glm::vec4 color{1.0f};  // written to Framebuffer::color by every fragment that passes
+    // Also record Framebuffer::barycentric_dx/dy (sized by rasterize() when asked).
+    bool quad_derivatives = false;
     int threads = 0;        // 0: the calling oneTBB arena; N > 0: an arena of N threads
 };
 
@@ -113,6 +115,15 @@ struct Framebuffer {
     std::vector<std::uint32_t> triangle_id;     // visible triangle's id, kNoTriangle if none
     std::vector<std::uint32_t> patch_id;        // its patch, kNoTriangle if none/unknown
     std::vector<glm::vec3> barycentric;         // perspective-correct weights of its vertices
+    // With RasterSettings::quad_derivatives, the visible primitive's weights differenced over
+    // the pixel's 2x2 quad as llvmpipe derives dFdx/dFdy: for the quad whose top-left pixel is
+    // column qx, row qr (row 0 on top, as above), the weights at (qx + 1, qr) minus (qx, qr),
+    // and at (qx, qr) minus (qx, qr + 1) (window y grows upwards), from the primitive's own
+    // planes, evaluated outside it where the quad leaves it. For a line that is the line's
+    // interpolation (constant across it), not its triangle's: what the fragment shader of
+    // glPolygonMode(GL_LINE) sees. Empty unless asked for.
+    std::vector<glm::vec3> barycentric_dx;
+    std::vector<glm::vec3> barycentric_dy;
     std::vector<glm::vec3> tess_coord;          // interpolated gl_TessCoord
     std::vector<float> varyings;                // varying_count floats per pixel, interpolated
     std::vector<std::uint8_t> front_facing;     // 1 if the visible primitive is front-facing

@@ -60,7 +60,9 @@
 // computes them: for a pixel in the quad whose top-left pixel is (qx, qy), the visible
 // triangle's interpolation evaluated at the centres of (qx + 1, qy) minus (qx, qy), and of
 // (qx, qy) minus (qx, qy + 1) (window y grows upwards), evaluating the triangle's plane
-// outside the triangle where the quad leaves it (helper pixels).
+// outside the triangle where the quad leaves it (helper pixels). In wireframe mode the
+// visible primitive is a line, and its interpolation is the line's (along its major axis
+// only, constant across it; raster.h Framebuffer::barycentric_dx/dy), as llvmpipe's.
 //
 // LEVEL. The "level" of a pixel is the tessellation level, as the control stage wrote it
 // (gl_TessLevelOuter/Inner before any rounding), that governed its triangle: a triangle

@@ -67,6 +67,8 @@ void Framebuffer::clear() {
     std::fill(triangle_id.begin(), triangle_id.end(), kNoTriangle);
     std::fill(patch_id.begin(), patch_id.end(), kNoTriangle);
     std::fill(barycentric.begin(), barycentric.end(), glm::vec3(0.0f));
+    std::fill(barycentric_dx.begin(), barycentric_dx.end(), glm::vec3(0.0f));
+    std::fill(barycentric_dy.begin(), barycentric_dy.end(), glm::vec3(0.0f));
     std::fill(tess_coord.begin(), tess_coord.end(), glm::vec3(0.0f));
     std::fill(varyings.begin(), varyings.end(), 0.0f);
     std::fill(front_facing.begin(), front_facing.end(), std::uint8_t{0});
@@ -315,10 +317,20 @@ inline void fragment(Context& ctx, const Primitive& p, int px, int py, RasterSta
     if (!pass) return;
     ++stats.fragments_passed;
     if (s.depth_write) fb.depth[idx] = z;
-    const float oow = eval(p.oow, fx, fy);
-    glm::vec3 b;
-    for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], fx, fy) / oow;
-    fb.barycentric[idx] = b;
+    auto weights = [&p](float wx, float wy) {
+        const float oow = eval(p.oow, wx, wy);
+        glm::vec3 b;
+        for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], wx, wy) / oow;
+        return b;
+    };
+    fb.barycentric[idx] = weights(fx, fy);
+    if (s.quad_derivatives) {
+        const float qx = static_cast<float>(px & ~1) - p.ox;
+        const float qy = static_cast<float>(py & ~1) - p.oy;
+        const glm::vec3 top_left = weights(qx, qy);
+        fb.barycentric_dx[idx] = weights(qx + 1.0f, qy) - top_left;
+        fb.barycentric_dy[idx] = top_left - weights(qx, qy + 1.0f);
+    }
     fb.color[idx] = s.color;
     fb.front_facing[idx] = p.front ? 1 : 0;
     ctx.source[idx] = p.source;
@@ -474,6 +486,10 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
                           }
                       });
     ctx.source.assign(fb.depth.size(), kNoTriangle);
+    if (settings.quad_derivatives) {
+        fb.barycentric_dx.resize(fb.depth.size(), glm::vec3(0.0f));
+        fb.barycentric_dy.resize(fb.depth.size(), glm::vec3(0.0f));
+    }
 
     // Set up chunks in parallel waves and rasterize the tiles once enough primitives have
     // piled up. Batches must be large: a batch of consecutive triangles of a tessellated

@@ -219,6 +219,12 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     RasterSettings settings;
     settings.depth_func = DepthFunc::less;
     settings.polygon_mode = options.mode == RenderMode::wireframe ? PolygonMode::line : PolygonMode::fill;
+    const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
+    const bool derivatives = needs.texCoord && needs.texCoord_derivatives && !mesh.uvs.empty();
+    // A line's quad differences come from the line's interpolation, which only the rasterizer
+    // knows (the winning edge, its direction and clipping); a filled triangle's from its plane.
+    const bool line_derivatives = derivatives && settings.polygon_mode == PolygonMode::line;
+    settings.quad_derivatives = line_derivatives;
     Framebuffer fb = Framebuffer::create(width, height, 0);
     result.stats.raster = rasterize(fb, input, settings);
 
@@ -236,10 +242,8 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     progress("shading", 0.0);
     render_detail::allocate(result, width, height);
     const SurfaceView view{mesh, pipe, clip, face_normals};
-    const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
     const Domain domain = scene.generator.domain;
     result.domain = domain;
-    const bool derivatives = needs.texCoord && needs.texCoord_derivatives && !mesh.uvs.empty();
     // Quad by quad (2x2 pixels, as llvmpipe shades): the pixels of a quad that show the same
     // triangle share its derivatives (and its level).
     const auto covered = tessref::parallel_reduce(
@@ -271,13 +275,21 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
                             if (k == cached_count) {
                                 cached_triangle[k] = tri;
                                 cached_level[k] = triangle_level(pipe, domain, tri);
-                                if (derivatives) cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
+                                if (derivatives && !line_derivatives)
+                                    cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
                                 ++cached_count;
                             }
                             result.level[i] = cached_level[k];
                             FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
-                            f.texCoord_dx = cached[k].dx;
-                            f.texCoord_dy = cached[k].dy;
+                            if (line_derivatives) {
+                                // Per pixel: two edges of one triangle in a quad are two lines.
+                                // uv_at is linear: the weights' differences give the uv's.
+                                f.texCoord_dx = view.uv_at(tri, fb.barycentric_dx[i]);
+                                f.texCoord_dy = view.uv_at(tri, fb.barycentric_dy[i]);
+                            } else {
+                                f.texCoord_dx = cached[k].dx;
+                                f.texCoord_dy = cached[k].dy;
+                            }
                             result.colour[i] = shade(result.shading.model, f);
                         }
                     }
@@ -325,10 +337,13 @@ std::uint64_t estimate_render_memory(glm::ivec2 size, RenderMode mode, bool rayt
     // bytes/pixel above a base of about 145 MiB; .exr with every AOV 627 and 2036 MiB at
     // 2048 and 4096 (117.4 bytes/pixel: the write phase, RenderResult + 14 float channels,
     // stays under the render phase); --overlay-wireframe 842 MiB at 2048x2048 (+57
-    // bytes/pixel, the lines' Framebuffer). The slack keeps the estimate above those.
-    constexpr std::uint64_t framebuffer = 57, result = 56, slack = 8;
+    // bytes/pixel, the lines' Framebuffer); --wireframe of a textured scene +24 bytes/pixel,
+    // the lines' quad derivatives (2048x2048: 757 MiB against 660 MiB filled, same machine).
+    // The slack keeps the estimate above those.
+    constexpr std::uint64_t framebuffer = 57, result = 56, slack = 8, line_derivatives = 24;
     const std::uint64_t render_phase =
-        (raytrace ? 0 : framebuffer) * (mode == RenderMode::fill_with_wireframe ? 2 : 1) + result + slack;
+        (raytrace ? 0 : framebuffer) * (mode == RenderMode::fill_with_wireframe ? 2 : 1) +
+        (mode == RenderMode::wireframe && !raytrace ? line_derivatives : 0) + result + slack;
     std::uint64_t channels = 4;
     if (format == ImageFormat::exr) {
         channels += aovs.depth + aovs.patch + aovs.triangle + 3 * aovs.tesscoord + 4 * aovs.level;
