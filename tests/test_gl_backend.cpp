@@ -337,10 +337,8 @@ TEST_F(GlBackend, ContextBelow45IsAClearErrorAndExit2) {
     EXPECT_FALSE(fs::exists(out));
 }
 
-// --wireframe: every draw count as predicted. (Its picture is not held against `tessref
-// render --wireframe`: at 320x200 thesis-all-10 differs in 2230 pixels, in the far field
-// where many lines meet in a pixel and depth LESS among lines picks the winner; not
-// explained yet, see the README.)
+// --wireframe: every draw count as predicted. (Its picture is held against `tessref render
+// --wireframe` in tests/test_wireframe.cpp.)
 TEST_F(GlBackend, WireframeDrawsWithEveryCountAsPredicted) {
     const RunResult r = run({"gl", scene_path("thesis-all-10").string(), "-o", (dir_ / "w.png").string(), "--size",
                              "160x100", "--wireframe"});
