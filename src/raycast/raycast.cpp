@@ -54,6 +54,22 @@ struct RayScene::Impl {
 
 namespace {
 
+// Under ThreadSanitizer, Embree builds its BVH on the calling thread: its build tasks run on
+// oneTBB workers inside the uninstrumented libembree, whose hand-offs TSan cannot see, so
+// it reported the caller's stack reused after a build as a race (RenderDeterminism,
+// RenderGolden raytrace cases). Hits do not depend on the build's thread count.
+#if defined(__SANITIZE_THREAD__)
+constexpr const char* kDeviceConfig = "verbose=0,threads=1";
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+constexpr const char* kDeviceConfig = "verbose=0,threads=1";
+#else
+constexpr const char* kDeviceConfig = "verbose=0";
+#endif
+#else
+constexpr const char* kDeviceConfig = "verbose=0";
+#endif
+
 [[noreturn]] void embree_failure(RTCDevice device, const std::string& what) {
     const RTCError code = device ? rtcGetDeviceError(device) : RTC_ERROR_UNKNOWN;
     throw Error("Embree: " + what + " (error " + std::to_string(static_cast<int>(code)) + ")");
@@ -65,7 +81,7 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
                    std::span<const std::array<std::uint32_t, 3>> triangles)
     : impl_(std::make_unique<Impl>()) {
     impl_->triangles = triangles.size();
-    impl_->device = rtcNewDevice("verbose=0");
+    impl_->device = rtcNewDevice(kDeviceConfig);
     if (!impl_->device) embree_failure(nullptr, "cannot create a device");
 
     glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
