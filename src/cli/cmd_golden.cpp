@@ -116,17 +116,6 @@ std::string read_text(const fs::path& path) {
     return s.str();
 }
 
-void write_atomically(const fs::path& path, const std::string& bytes) {
-    AtomicOutput output(path.string());
-    {
-        std::ofstream out(output.temp_path(), std::ios::binary | std::ios::trunc);
-        out << bytes;
-        out.close();
-        if (!out) throw Error("cannot write", where_file(path.string()));
-    }
-    output.commit();
-}
-
 // ---- the CPU reference of one scene ----------------------------------------------------
 
 struct PatchDigest {
@@ -149,53 +138,60 @@ struct CpuReference {
     std::size_t mesh_triangles = 0;
 };
 
-std::string levels_text(const TessLevels& l) {
-    char text[160];
-    std::snprintf(text, sizeof text, "%.9g %.9g %.9g %.9g %.9g %.9g", l.outer[0], l.outer[1], l.outer[2], l.outer[3],
-                  l.inner[0], l.inner[1]);
-    return text;
-}
-
-// Per patch, the SHA-256 of that patch's lines of the capture text (capture_text of its
-// vertices alone, without the file's header lines): what a reader of `tessref mesh
-// --capture` output can recompute with grep and sha256sum.
-std::vector<PatchDigest> patch_digests(const std::vector<CapturedVertex>& capture) {
+// Per patch, from the capture text (capture.h): its six levels as the text writes them, its
+// triangles, and the SHA-256 of its lines (its `patch` line and its vertices): what a reader
+// of `tessref mesh --capture` output can recompute with grep and sha256sum. A patch whose
+// vertices come back in a later run of lines gets one entry per run.
+std::vector<PatchDigest> patch_digests(const std::string& capture_text) {
     std::vector<PatchDigest> out;
-    std::size_t begin = 0;
-    while (begin < capture.size()) {
-        std::size_t end = begin;
-        while (end < capture.size() && capture[end].patch_id == capture[begin].patch_id) ++end;
-        const std::span<const CapturedVertex> run(capture.data() + begin, end - begin);
-        std::string text = capture_text(run);
-        // Only the patch's own lines: drop the version and comment lines.
-        std::string body;
-        std::istringstream lines(text);
-        for (std::string line; std::getline(lines, line);)
-            if (!line.empty() && line[0] != '#' && line.rfind("tessref-capture", 0) != 0) body += line + "\n";
-        out.push_back({capture[begin].patch_id, levels_text(capture[begin].levels), run.size() / 3,
-                       sha256_hex(body).substr(0, kPatchDigits)});
-        begin = end;
+    std::string body;
+    std::size_t vertex_lines = 0;
+    const auto finish = [&] {
+        if (out.empty()) return;
+        out.back().triangles = vertex_lines / 3;
+        out.back().sha256 = sha256_hex(body).substr(0, kPatchDigits);
+    };
+    std::istringstream lines(capture_text);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("patch ", 0) == 0) {
+            finish();
+            PatchDigest p;
+            std::istringstream words(line.substr(6));
+            words >> p.patch_id;
+            const std::size_t levels = line.find(" levels ");
+            p.levels = levels == std::string::npos ? std::string() : line.substr(levels + 8);
+            out.push_back(p);
+            body.clear();
+            vertex_lines = 0;
+        } else if (out.empty() || line.empty() || line[0] == '#') {
+            continue;  // the version and comment lines
+        } else {
+            ++vertex_lines;
+        }
+        body += line + "\n";
     }
+    finish();
     return out;
 }
 
-CpuReference cpu_reference(const fs::path& scene_path, glm::ivec2 size) {
+// `scene` as loaded, with its own viewport.
+CpuReference cpu_reference(const Scene& scene, const fs::path& scene_path, glm::ivec2 size) {
     CpuReference ref;
-    ref.scene = load_scene(scene_path.string());
-    if (!ref.scene.camera) throw Error("the scene has no [camera]: golden images need one", where_file(scene_path.string()));
+    if (!scene.camera) throw Error("the scene has no [camera]: golden images need one", where_file(scene_path.string()));
     RenderOptions render_options;
     render_options.size = size;
-    ref.image = render_scene(ref.scene, render_options);
+    ref.image = render_scene(scene, render_options);
+    ref.scene = scene;
     ref.scene.camera->viewport = size;  // the viewport the pipeline saw (render.h)
     ref.capture = capture_from_pipeline(ref.scene, *ref.image.pipeline);
-    ref.patches = patch_digests(ref.capture);
-    ref.capture_sha256 = sha256_hex(capture_text(ref.capture));
+    const std::string text = capture_text(ref.capture);
+    ref.patches = patch_digests(text);
+    ref.capture_sha256 = sha256_hex(text);
     ref.triangles = ref.capture.size() / 3;
 
     // The mesh exactly as `tessref mesh SCENE --binary -o mesh.ply` writes it (the scene's
-    // own viewport: mesh has no --size).
-    const Scene mesh_scene = load_scene(scene_path.string());
-    const PipelineResult pipeline = run_pipeline(mesh_scene);
+    // own viewport: mesh has no --size, and PN's levels follow the viewport).
+    const PipelineResult pipeline = run_pipeline(scene);
     std::ostringstream mesh_bytes;
     MeshWriteOptions mesh_options;
     mesh_options.format = MeshFormat::ply;
@@ -265,15 +261,15 @@ int run_update(const GoldenOptions& options) {
     const glm::ivec2 size = parse_image_size(options.size);
     for (const std::string& name : scene_names(options)) {
         const fs::path scene_path = fs::path(options.scenes_dir) / (name + ".toml");
-        const CpuReference ref = cpu_reference(scene_path, size);
+        const CpuReference ref = cpu_reference(load_scene(scene_path.string()), scene_path, size);
         const fs::path dir = fs::path(options.golden_dir) / name;
         std::error_code ec;
         fs::create_directories(dir, ec);
         if (ec) throw Error("cannot create the directory: " + ec.message(), where_file(dir.string()));
         AtomicOutput image((dir / "image.png").string());
         write_image(ref.image, image.temp_path().string(), ImageFormat::png, {});
-        write_atomically(dir / "capture.txt", capture_file_text(name, size, ref));
-        write_atomically(dir / "mesh.txt", mesh_file_text(name, ref));
+        write_output((dir / "capture.txt").string(), capture_file_text(name, size, ref));
+        write_output((dir / "mesh.txt").string(), mesh_file_text(name, ref));
         image.commit();
         std::cout << dir.string() << ": image.png " << size.x << "x" << size.y << ", capture.txt "
                   << ref.patches.size() << " patches " << ref.triangles << " triangles, mesh.txt "
@@ -360,8 +356,6 @@ struct SceneVerdict {
     std::string verdict() const { return !stale.empty() ? "STALE" : failures.empty() ? "PASS" : "FAIL"; }
 };
 
-FloatImage read_png_as_compare_reads_it(const fs::path& path) { return read_float_image(path.string()); }
-
 SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name, gl::Context& context,
                           const fs::path& keep) {
     SceneVerdict v;
@@ -370,10 +364,12 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     const GoldenCapture golden_capture = read_golden_capture(dir / "capture.txt");
     const glm::ivec2 size = parse_image_size(golden_capture.size, (dir / "capture.txt").string());
     const std::string golden_mesh = read_golden_mesh_sha(dir / "mesh.txt");
-    const FloatImage golden_image = read_png_as_compare_reads_it(dir / "image.png");
+    const FloatImage golden_image = read_float_image((dir / "image.png").string());
 
     // (1) The CPU reference against its golden files.
-    const CpuReference ref = cpu_reference(fs::path(options.scenes_dir) / (name + ".toml"), size);
+    const fs::path scene_path = fs::path(options.scenes_dir) / (name + ".toml");
+    const Scene scene = load_scene(scene_path.string());
+    const CpuReference ref = cpu_reference(scene, scene_path, size);
     v.triangles = ref.triangles;
     if (ref.capture_sha256 != golden_capture.capture_sha256) {
         std::size_t differing = 0;
@@ -392,6 +388,16 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     const fs::path work = keep.empty() ? fs::temp_directory_path() / ("tessref-golden-" + std::to_string(::getpid()))
                                        : keep / name;
     fs::create_directories(work);
+    // The pictures go through PNG files, as `compare` reads them; without --keep they are
+    // removed however this function leaves (an early return, an exception).
+    struct RemoveUnlessKept {
+        const fs::path& dir;
+        bool keep;
+        ~RemoveUnlessKept() {
+            std::error_code ec;
+            if (!keep) fs::remove_all(dir, ec);
+        }
+    } remove_unless_kept{work, !keep.empty()};
     write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
     const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
     if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
@@ -402,8 +408,7 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     gl_options.capture = true;
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)  // as `tessref gl`
         gl_options.corrupt_prediction_of_batch = std::atoll(hook);
-    const gl::SceneRender r = gl::render_scene(context, load_scene((fs::path(options.scenes_dir) / (name + ".toml")).string()),
-                                               gl_options);
+    const gl::SceneRender r = gl::render_scene(context, scene, gl_options);
     v.seconds_gl = r.stats.seconds_gl + r.stats.seconds_capture;
     if (!r.batch_failure.empty()) {
         v.failures.push_back(r.batch_failure);
@@ -490,7 +495,6 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
         std::ofstream((work / "cpu-capture.txt").string()) << capture_text(ref.capture, "tessref golden (CPU)");
         std::ofstream((work / "gl-capture.txt").string()) << capture_text(r.capture, "tessref golden (GL)");
     }
-    if (keep.empty()) fs::remove_all(work);
     return v;
 }
 
