@@ -22,7 +22,7 @@
 
 #include "tessref/check.h"
 #include "tessref/mesh.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace {
 

@@ -19,7 +19,7 @@
 #include <string>
 
 #include "tessref/mesh.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace {
 
@@ -50,7 +50,7 @@ const tessref::Scene& jacksboro_level_64() {
         tessref::Scene s = tessref::load_scene(std::string(TESSREF_DATA_DIR) + "/scenes/jacksboro.toml");
         tessref::ControlStage control;
         control.model = tessref::ControlModel::constant;
-        control.constant_level = 64.0;
+        control.constant.level = 64.0;
         s.control = control;
         return s;
     }();

@@ -27,7 +27,7 @@
 
 #include "tessref/mesh.h"
 #include "tessref/raster.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace {
 
@@ -83,7 +83,7 @@ const RasterScene& scene_input(const std::string& name) {
     if (name == "jacksboro-64") {  // every level 64, as the mesh benchmark
         tessref::ControlStage control;
         control.model = tessref::ControlModel::constant;
-        control.constant_level = 64.0;
+        control.constant.level = 64.0;
         scene.control = control;
     }
     const tessref::PipelineResult result = tessref::run_pipeline(scene);

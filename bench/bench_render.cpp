@@ -25,7 +25,7 @@
 #include <tbb/global_control.h>
 
 #include "tessref/render.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace {
 
@@ -36,7 +36,7 @@ const tessref::Scene& bench_scene(int which) {
         tessref::Scene s = tessref::load_scene(std::string(TESSREF_DATA_DIR) + "/scenes/jacksboro.toml");
         tessref::ControlStage control;
         control.model = tessref::ControlModel::constant;
-        control.constant_level = 64.0;
+        control.constant.level = 64.0;
         s.control = control;
         return s;
     }();

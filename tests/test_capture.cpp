@@ -26,7 +26,7 @@
 #include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/mesh.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 #include "tessref/tessellator.h"
 
 namespace fs = std::filesystem;

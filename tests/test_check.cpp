@@ -43,7 +43,7 @@
 
 #include "tessref/check.h"
 #include "tessref/error.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 #include "tessref/solid.h"
 
 namespace fs = std::filesystem;

@@ -30,7 +30,7 @@
 #include "tessref/error.h"
 #include "tessref/capture.h"
 #include "tessref/gl_backend.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace {
 

@@ -35,7 +35,7 @@
 
 #include "tessref/error.h"
 #include "tessref/mesh.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace fs = std::filesystem;
 using tessref::MeshFormat;

@@ -36,7 +36,7 @@
 #include <vector>
 
 #include "tessref/raster.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace {
 

@@ -35,7 +35,7 @@
 
 #include "tessref/error.h"
 #include "tessref/render.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 #include "tessref/shading.h"
 
 namespace fs = std::filesystem;

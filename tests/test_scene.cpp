@@ -36,7 +36,7 @@
 #include <tbb/global_control.h>
 
 #include "tessref/error.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace fs = std::filesystem;
 using namespace tessref;
@@ -199,7 +199,7 @@ void expect_crack_free(const std::string& path, const Scene& scene, const Pipeli
     std::vector<std::vector<std::array<std::uint64_t, 3>>> on_edge(scene.patch_count() * edges_per_patch);
     for (std::size_t v = 0; v < m.positions.size(); ++v)
         for (int e = 0; e < edges_per_patch; ++e)
-            if (on_outer_edge(domain, m.tess_coords[v], e))
+            if (on_outer_edge(domain, tessref::TessCoord{m.tess_coords[v].x, m.tess_coords[v].y, m.tess_coords[v].z}, e))
                 on_edge[m.patch_ids[v] * edges_per_patch + e].push_back(bits(m.positions[v]));
     for (auto& list : on_edge) std::sort(list.begin(), list.end());
     std::size_t bad_levels = 0, bad_vertices = 0, checked = 0;

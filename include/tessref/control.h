@@ -38,7 +38,14 @@
 // (acos, sqrt, log2) come from the C library; a GPU's approximations may differ by a few
 // ulp, which cannot open a crack because both patches of an edge use the same function.
 // The compiler must not contract a*b+c into fma (the project builds with ISO C++, where
-// GCC's default is -ffp-contract=off; x86-64 without -mfma has no fma anyway).
+// GCC's default is -ffp-contract=off; x86-64 without -mfma has no fma anyway; the build
+// also says -ffp-contract=off explicitly).
+//
+// STAGE PARAMETERS. A model's uniforms come in two parts. Its *Params struct (or, for
+// constant, ConstantControl) holds what a scene file sets, one field per [control] key,
+// spelled as the shader spells the uniform; the Scene keeps it in double. The model's full
+// struct derives from it and adds what the pipeline binds from elsewhere (camera, viewport,
+// samplers). as<float>() converts the scene's values once for the gpu path.
 //
 // QUIRKS KEPT (each because the shader that ran does it; see docs in each section):
 //   thesis: DistanceFactor returns (50 - d)/10, i.e. 0..5, not 0..1 as the text says;
@@ -133,6 +140,10 @@ Edge<T> canonical_edge(const vec3_t<T>& p, const vec3_t<T>& q);
 // Constant model: every level = level (the thesis's "constant 1" and "constant 64").
 // ---------------------------------------------------------------------------------------
 template <typename T>
+struct ConstantControl {  // [control] model = "constant"
+    T level = T(1);
+};
+template <typename T>
 PatchLevels<T> constant_levels(T level);
 
 // ---------------------------------------------------------------------------------------
@@ -174,20 +185,35 @@ struct ThesisWeights {
 // (level = tessellationLevel * factor + 1), or all by formula (2).
 enum class ThesisFactor : std::uint8_t { distance, tessellation_map, normal, all };
 
-// The control shader's uniforms. A sampler may be empty when the chosen factor does not
-// read it (distance alone reads neither map; tessellation_map reads tessellationMap;
-// normal reads normalMap; all reads both).
+// The control shader's uniforms that a scene sets ([control] model = "thesis"; STAGE
+// PARAMETERS below).
 template <typename T>
-struct ThesisControl {
+struct ThesisControlParams {
     ThesisFactor factor = ThesisFactor::all;
     T tessellationLevel = T(1);  // uniform tessellationLevel (the text's userDecidedLevel)
+    ThesisDistance<T> distance{};
+    ThesisWeights<T> weights{};
+    T normalAngleThreshold = T(0.90);  // radians, the shader's `> 0.90`
+
+    template <typename U>
+    ThesisControlParams<U> as() const {
+        const auto u = [](T x) { return static_cast<U>(x); };
+        return {factor, u(tessellationLevel), {u(distance.limit), u(distance.divisor)},
+                {u(weights.constant), u(weights.normal), u(weights.texture), u(weights.distance)},
+                u(normalAngleThreshold)};
+    }
+};
+
+// All the control shader's uniforms: the scene's, plus what the pipeline binds from the
+// domain, the camera and the textures. A sampler may be empty when the chosen factor does
+// not read it (distance alone reads neither map; tessellation_map reads tessellationMap;
+// normal reads normalMap; all reads both).
+template <typename T>
+struct ThesisControl : ThesisControlParams<T> {
     T scaleXY = T(1);
     vec3_t<T> cameraPosition{T(0)};
     Sampler2D<T> tessellationMap;
     Sampler2D<T> normalMap;
-    ThesisDistance<T> distance{};
-    ThesisWeights<T> weights{};
-    T normalAngleThreshold = T(0.90);  // radians, the shader's `> 0.90`
 };
 
 // The three factors of one edge, each computed from that edge alone.
@@ -267,13 +293,22 @@ PatchLevels<T> cosc422_levels(const QuadCorners<T>& corners, Cosc422Space space,
 // belongs to the farther zone. maxLevel and minLevel must be powers of two.
 enum class Lab4EdgeRule : std::uint8_t { lower, higher };
 template <typename T>
-struct Lab4Control {
-    vec3_t<T> cameraPosition{T(0)};
+struct Lab4ControlParams {  // [control] model = "lab4"
     T firstZoneEnd = T(50);  // the lab's example zones: 0-50, 50-500, 500-5000 (growth 10)
     T zoneGrowth = T(2);
     T maxLevel = T(64);
     T minLevel = T(1);
     Lab4EdgeRule edgeRule = Lab4EdgeRule::lower;  // "chose the lower or higher one consistently"
+
+    template <typename U>
+    Lab4ControlParams<U> as() const {
+        return {static_cast<U>(firstZoneEnd), static_cast<U>(zoneGrowth), static_cast<U>(maxLevel),
+                static_cast<U>(minLevel), edgeRule};
+    }
+};
+template <typename T>
+struct Lab4Control : Lab4ControlParams<T> {
+    vec3_t<T> cameraPosition{T(0)};
 };
 
 template <typename T>
@@ -316,12 +351,21 @@ Lab4ControlOutput<T> lab4_control(const QuadCorners<T>& corners, const Lab4Contr
 //   fLength = length((v2P1 - v2P2) * v2Resolution * 0.5); clamp(fLength / 4, 1, 32).
 // Symmetric in p1, p2 bit for bit (sum, midpoint and distance are).
 template <typename T>
-struct PnControl {
-    vec2_t<T> v2Resolution{T(1280), T(800)};
+struct PnControlParams {  // [control] model = "pn"
     T fPixelsPerEdge = T(4);
     T minLevel = T(1);
     T maxLevel = T(32);
     bool flatEdgesAtLevel1 = true;  // the tutorial's extra 36, per edge (see DEVIATIONS)
+
+    template <typename U>
+    PnControlParams<U> as() const {
+        return {static_cast<U>(fPixelsPerEdge), static_cast<U>(minLevel), static_cast<U>(maxLevel),
+                flatEdgesAtLevel1};
+    }
+};
+template <typename T>
+struct PnControl : PnControlParams<T> {
+    vec2_t<T> v2Resolution{T(1280), T(800)};  // the camera's viewport
 };
 template <typename T>
 T pn_tess_level(const vec3_t<T>& v3Point1, const vec3_t<T>& v3Point2,

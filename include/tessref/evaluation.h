@@ -128,11 +128,19 @@ EvaluatedVertex<T> lab4_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
 // ---------------------------------------------------------------------------------------
 enum class PnNormal : std::uint8_t { linear, quadratic };
 template <typename T>
-struct PnEvaluation {
-    mat4_t<T> m4ViewProjection{T(1)};
+struct PnEvaluationParams {  // [evaluation] model = "pn" (control.h: STAGE PARAMETERS)
     T fInfluence = T(0.75);
     PnNormal normal = PnNormal::quadratic;
     bool watertightEdges = true;
+
+    template <typename U>
+    PnEvaluationParams<U> as() const {
+        return {static_cast<U>(fInfluence), normal, watertightEdges};
+    }
+};
+template <typename T>
+struct PnEvaluation : PnEvaluationParams<T> {
+    mat4_t<T> m4ViewProjection{T(1)};
 };
 template <typename T>
 EvaluatedVertex<T> pn_evaluate(const PnPatch<T>& patch, const DomainPoint<T>& glTessCoord,

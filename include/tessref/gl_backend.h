@@ -33,7 +33,7 @@
 
 #include "tessref/capture.h"
 #include "tessref/render.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 #include "tessref/tessellator.h"
 
 namespace tessref::gl {

@@ -88,7 +88,7 @@
 #include <glm/glm.hpp>
 
 #include "tessref/raster.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 #include "tessref/shading.h"
 #include "tessref/tessellator.h"
 

@@ -1,147 +1,19 @@
-// tessref/scene.h — scenes (TOML) and the pipeline that runs them into a SurfaceMesh.
+// tessref/scene.h — scenes: the TOML file that names the stages of one pipeline run.
 //
-// A scene is a TOML file that names only the stages it uses; a stage it does not name is
-// not run and costs nothing. load_scene() parses and validates it, loads every image and
-// mesh it names, and throws tessref::Error naming the file, line, column and key of the
-// first problem. run_pipeline() runs control -> primitive generator -> evaluation ->
-// geometry over every patch and returns the tessellated surface.
+// A scene names only the stages it uses; a stage it does not name is not run and costs
+// nothing. load_scene() parses and validates it, loads every image and mesh it names, and
+// throws tessref::Error naming the file, line, column and key of the first problem.
+// pipeline.h runs it.
 //
-// ======================================================================================
-// SCHEMA (data/scenes/README.md has the same with examples). Paths are relative to the
-// scene file. Numbers may be written as integers where a real is expected. Unknown keys,
-// unknown tables and wrong types are errors; so is a key that the chosen models do not use.
-//
-// [scene]                       required
-//   name = "thesis-all-10"      required string
-//   description = "..."         optional string
-//
-// ---- the domain: exactly one of [domain] (a terrain grid of quad patches) or [mesh] /
-// ---- [[mesh]] (triangle meshes, one patch per triangle, for PN triangles)
-// [domain]
-//   plane = "xy" | "xz"         "xy": ground plane z = 0, z up (thesis); "xz": y = 0, y up
-//                               (COSC422, lab 4)
-//   patches = [nu, nv]          patch count along the plane's first axis (x) and second
-//                               axis (y or z); each >= 1, at most 2^26 patches in all
-//   x = [x0, x1]                extent: the grid's corner columns run from x0 to x1 and its
-//   y = [y0, y1]  (plane xy)    rows from y0 (or z0) to y1 (z1), equally spaced. Patch
-//   z = [z0, z1]  (plane xz)    (i, j) has corners c0 = (x_i, y_j), c1 = (x_i, y_j+1),
-//                               c2 = (x_i+1, y_j+1), c3 = (x_i+1, y_j) (control.h layout)
-//   follow_camera = true        instead of x/y/z: lab 4's sliding window, nu x nv patches
-//   patch_size = s              of side s centred on the camera, the centre snapped to a
-//                               multiple of s (x ascending; z descending on plane xz, y
-//                               ascending on plane xy, so ccw faces up)
-//   heightmap = "path"          required: the height map (8/16-bit PGM/PNG, float TIFF,
-//                               PFM, EXR; see heightfield.h)
-//   nodata = -32768             optional raw value meaning "no data"; with
-//   nodata_policy = "error"     "error" (default) | "fill_neighbour_mean" | "fill_constant"
-//   fill_value = 0.0            for fill_constant
-//   scale_xy = s                thesis: textureCoordinate = position.xy / scaleXY;
-//                               lab 4: horizontalScale (texCoord = xz / s + offset).
-//                               Not used by COSC422 (its texture coordinates come from the
-//                               extent: s = (x - x0)/(x1 - x0), t = (z - z0)/(z1 - z0)).
-//   scale_z = s                 height = sample * s (thesis scaleZ, COSC422's 10, lab 4's
-//                               verticalScale); required
-//   texcoord_offset = [s, t]    lab 4 only (default [0, 0])
-//   normal_map = "path"         optional RGB normal map (thesis encoding); when absent and
-//                               a stage needs one (thesis normal factor, geometry
-//                               normal_map) it is generated from the height map by
-//                               thesis_normal_map() with
-//   normal_map_spacing = d      world distance between texels (default scale_xy / width)
-//   normal_map_height_scale = h (default scale_z), i.e. the normals of the world surface
-//
-// [mesh] or [[mesh]]            one table or an array of tables, one per mesh file
-//   path = "path"               OBJ, OFF, PLY, STL read through OpenMesh; every face must be
-//                               a triangle; vertex normals from the file, or when it has
-//                               none the normalized sum of the incident face normals
-//   translate = [x, y, z]       optional, default [0, 0, 0]
-//   scale = s                   optional uniform scale (> 0), default 1
-//
-// [camera]                      optional; required by the models that read it (thesis
-//                               distance/all, COSC422 eye space, lab 4, PN)
-//   either the thesis's listing 2 (z up):
-//     position = [x, y, z]      cameraPosition
-//     theta = deg, phi = deg    targetVector = normalize(sin(theta*3.14/180),
-//                               cos(theta*3.14/180), tan(phi*3.14/180)) — the thesis's
-//                               3.14, kept; center = position + targetVector; up = (0,0,1)
-//   or a plain look-at:
-//     eye = [x, y, z]
-//     center = [x, y, z]
-//     up = [x, y, z]            default: the plane's up axis ((0,0,1) for xy, (0,1,0) else)
-//   fov_y = 30.0                vertical field of view in degrees (OSG's default 30)
-//   viewport = [1280, 800]      pixels (the thesis's screen)
-//   near = 1.0, far = 10000.0   clip planes
-//
-// [generator]                   optional; defaults are the evaluation model's layout
-//   domain = "quads" | "triangles"        (quads for [domain], triangles for meshes)
-//   spacing = "equal" | "fractional_odd" | "fractional_even"
-//   winding = "ccw" | "cw"
-//
-// [control]                     optional; without it every level is 1 (GL's default patch
-//                               levels, GL_PATCH_DEFAULT_OUTER/INNER_LEVEL)
-//   model = "constant"          level = L (all six levels)
-//   model = "thesis"            factor = "distance" | "tessellation_map" | "normal" | "all"
-//                               level = L (tessellationLevel, the text's userDecidedLevel)
-//                               tessellation_map = "path"  (factors tessellation_map, all;
-//                                   for all it may be left out when weights.texture = 0)
-//                               weights = { constant = 1, normal = 5, texture = 5,
-//                                           distance = 5 }      (formula (2), all only)
-//                               distance_limit = 50, distance_divisor = 10
-//                               normal_threshold = 0.9 (radians)
-//   model = "cosc422"           space = "world" | "eye"
-//   model = "lab4"              first_zone_end = 50, zone_growth = 2, max_level = 64,
-//                               min_level = 1 (powers of two), edge_rule = "lower"|"higher"
-//   model = "pn"                pixels_per_edge = 4, min_level = 1, max_level = 32,
-//                               flat_edges_at_level_1 = true; resolution = camera viewport
-//
-// [evaluation]                  required (without an evaluation shader GL does not
-//                               tessellate)
-//   model = "thesis" | "cosc422" | "lab4" | "pn"
-//   pn only: influence = 0.75, normal = "quadratic" | "linear", watertight_edges = true
-//   (terrain models take their parameters from [domain]; lab4 needs control model lab4,
-//   whose mip levels it reads)
-//
-// [geometry]                    optional; without it the mesh has the evaluation's normals
-//                               (PN) or none (terrain)
-//   normals = "face"            one normal per triangle (PipelineResult::face_normals)
-//           | "normal_map"      thesis GS: per vertex from the normal map (plane xy)
-//           | "height_field"    lab 4 appendix A, per vertex from the height map (lab 4:
-//                               at the vertex's mip level; other terrain: level 0)
-//           | "smooth"          area-weighted vertex normals of the tessellated surface
-//
-// [shading]                     the fragment stage: kept here as text (Scene::shading_toml)
-//                               and parsed, with its own errors, by include/tessref/render.h
-//
-// [shaders]                     optional; `tessref gl` only (gl_backend.h): a user's GLSL
-//                               file in place of the GLSL twin of one stage. The CPU
-//                               commands ignore it (they keep the reference models) and the
-//                               loader does not open the files (`tessref gl` does)
-//   vertex = "path"             any of the five stages; a stage the models do not have
-//   tess_control = "path"       (e.g. geometry without [geometry]) is added
-//   tess_evaluation = "path"
-//   geometry = "path"
-//   fragment = "path"
-//
-// [limits]
-//   max_triangles = 50000000    the run is refused (before tessellating) when an upper
-//                               bound of the triangle count, estimated from the levels,
-//                               exceeds it
-// ======================================================================================
-//
-// OUTPUT. The SurfaceMesh holds, patch after patch in patch order, every domain point of
-// the patch's pattern (generator order) evaluated, and the pattern's triangles re-indexed.
-// Triangles are counter-clockwise seen from above (terrain: +z for plane xy, +y for plane
-// xz) or from outside (meshes, whose faces are counter-clockwise seen from outside, as OBJ
-// and OFF files have them): the generator's winding is applied, and the index order is
-// reversed when the winding and the grid's orientation together would give the other side.
-// Patch ids: terrain patch (i, j) is j * nu + i; mesh patches are the faces, mesh after
-// mesh, in file order. The output is byte-identical whatever the thread count: each patch
-// fills a pre-sized slot.
+// The file format (every table and key, defaults and ranges, with examples) is documented
+// in one place: data/scenes/README.md. The structs below are what the loader makes of it.
+// Each stage's parameters are the stage's own structs (control.h, evaluation.h), held in
+// double; a stage of the pipeline converts them to its precision once.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -153,7 +25,6 @@
 #include "tessref/error.h"
 #include "tessref/evaluation.h"
 #include "tessref/heightfield.h"
-#include "tessref/mesh.h"
 #include "tessref/tessellator.h"
 
 namespace tessref {
@@ -225,45 +96,23 @@ struct TriangleMeshes {
     std::size_t patch_count() const { return triangles.size(); }
 };
 
-struct ThesisControlSettings {
-    ThesisFactor factor = ThesisFactor::all;
-    double level = 1.0;
-    ThesisWeights<double> weights{};
-    ThesisDistance<double> distance{};
-    double normal_threshold = 0.90;
-    std::string tessellation_map_path;  // empty: none (texture factor reads 0)
-    std::shared_ptr<const Texture> tessellation_map;
-};
-
-struct Lab4ControlSettings {
-    double first_zone_end = 50.0;
-    double zone_growth = 2.0;
-    double max_level = 64.0;
-    double min_level = 1.0;
-    Lab4EdgeRule edge_rule = Lab4EdgeRule::lower;
-};
-
-struct PnControlSettings {
-    double pixels_per_edge = 4.0;
-    double min_level = 1.0;
-    double max_level = 32.0;
-    bool flat_edges_at_level_1 = true;
-};
-
+// [control]: the model, and that model's own parameters (control.h); only the chosen
+// model's member is meaningful.
 struct ControlStage {
     ControlModel model = ControlModel::constant;
-    double constant_level = 1.0;
-    ThesisControlSettings thesis{};
-    Cosc422Space cosc422_space = Cosc422Space::world;
-    Lab4ControlSettings lab4{};
-    PnControlSettings pn{};
+    ConstantControl<double> constant{};
+    ThesisControlParams<double> thesis{};
+    std::string tessellation_map_path;  // thesis: empty when none (the texture factor reads 0)
+    std::shared_ptr<const Texture> tessellation_map;
+    Cosc422Space cosc422 = Cosc422Space::world;
+    Lab4ControlParams<double> lab4{};
+    PnControlParams<double> pn{};
 };
 
+// [evaluation]: the model; the terrain models take their parameters from [domain].
 struct EvaluationStage {
     EvaluationModel model = EvaluationModel::thesis;
-    double pn_influence = 0.75;
-    PnNormal pn_normal = PnNormal::quadratic;
-    bool pn_watertight_edges = true;
+    PnEvaluationParams<double> pn{};
 };
 
 struct GeometryStage {
@@ -325,45 +174,5 @@ struct SharedEdge {
     int edge_b = 0;
 };
 std::vector<SharedEdge> shared_edges(const Scene& scene);
-
-// Whether a tess coord lies on outer edge `edge` of its patch (quads: u == 0, v == 0,
-// u == 1, v == 1; triangles: u == 0, v == 0, w == 0).
-bool on_outer_edge(Domain domain, const glm::vec3& tess_coord, int edge);
-
-// An upper bound on the triangles the primitive generator emits for these levels (0 for a
-// culled patch), without tessellating: used to refuse a run beyond the budget.
-std::uint64_t estimate_triangles(const TessSettings& settings, const TessLevels& levels);
-
-// ---------------------------------------------------------------------------------------
-// The pipeline
-// ---------------------------------------------------------------------------------------
-
-struct PipelineOptions {
-    Precision precision = Precision::gpu;  // gpu: float stages, exact: double stages
-    // Called with (patches done, patch count) as patches finish, from worker threads
-    // (serialized by the pipeline); may be empty.
-    std::function<void(std::size_t done, std::size_t total)> progress;
-    PatternCache* cache = nullptr;         // shared cache; a private one when null
-};
-
-// Which stages ran (a stage the scene does not name does not run).
-struct StagesRun {
-    bool control = false;
-    bool evaluation = false;
-    bool geometry = false;
-};
-
-struct PipelineResult {
-    SurfaceMesh mesh;
-    std::vector<glm::dvec3> face_normals;  // one per triangle with [geometry] normals = "face"
-    std::vector<TessLevels> levels;        // per patch: what the control stage wrote
-    std::uint64_t estimated_triangles = 0;
-    std::size_t distinct_patterns = 0;     // distinct level sets (patterns) of this run
-    StagesRun stages{};
-};
-
-// Runs the scene's pipeline. Throws tessref::Error (key "limits.max_triangles") when the
-// estimate exceeds the scene's budget, before any tessellation.
-PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options = {});
 
 }  // namespace tessref

@@ -132,6 +132,26 @@ Pattern tessellate(const TessSettings& settings, const TessLevels& levels,
 // the same inputs (same topology); used to report how far gpu is from exact.
 double max_point_difference(const Pattern& a, const Pattern& b);
 
+// ---------------------------------------------------------------------------------------
+// Queries on levels and tess coords, answered without tessellating
+// ---------------------------------------------------------------------------------------
+
+// The exact bits of the six levels, outer then inner: two level sets give the same pattern
+// (for the same settings and precision) exactly when their keys are equal. -0 and +0, or
+// two NaNs with different payloads, get different keys; they tessellate alike, so the only
+// cost is a pattern made twice.
+using LevelBits = std::array<std::uint32_t, 6>;
+LevelBits level_bits(const TessLevels& levels);
+
+// Whether a tess coord lies on outer edge `edge` of its patch (gl_TessLevelOuter index;
+// quads: u == 0, v == 0, u == 1, v == 1; triangles: u == 0, v == 0, w == 0).
+bool on_outer_edge(Domain domain, const TessCoord& tess_coord, int edge);
+
+// An upper bound on the triangles the primitive generator emits for these levels (0 for a
+// culled patch, and for isolines), without tessellating: used to refuse a run beyond its
+// budget before any memory is spent on it.
+std::uint64_t estimate_triangles(const TessSettings& settings, const TessLevels& levels);
+
 // A thread-safe cache of patterns keyed by the exact bits of their inputs: a terrain of
 // thousands of patches that share a few level sets tessellates each set once.
 class PatternCache {
@@ -144,7 +164,7 @@ public:
 
 private:
     struct Key {
-        std::array<std::uint32_t, 6> level_bits;
+        LevelBits level_bits;
         std::uint32_t mode;
         bool operator==(const Key&) const = default;
     };

@@ -16,7 +16,7 @@
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace tessref {
 

@@ -50,7 +50,7 @@
 #include "tessref/gl_backend.h"
 #include "tessref/mesh.h"
 #include "tessref/render.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 
 namespace tessref::cli {
 

@@ -28,7 +28,7 @@
 #include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/mesh.h"
-#include "tessref/scene.h"
+#include "tessref/pipeline.h"
 #include "tessref/solid.h"
 #include "tessref/tessellator.h"
 

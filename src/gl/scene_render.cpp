@@ -401,15 +401,15 @@ void thesis_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
     u.m3("normalMatrix", glm::mat3(1.0f));  // the model matrix is the identity
 }
 
-void thesis_control_uniforms(const Uniforms& u, const Scene& scene, const ThesisControlSettings& c,
+void thesis_control_uniforms(const Uniforms& u, const Scene& scene, const ThesisControlParams<double>& c,
                              const Matrices& m) {
-    u.f("tessellationLevel", c.level);
+    u.f("tessellationLevel", c.tessellationLevel);
     u.f("scaleXY", scene.grid->scale_xy);
     u.v3("cameraPosition", m.eye);
     u.i("thesisFactor", static_cast<int>(c.factor));  // distance 0, map 1, normal 2, all 3
     u.f("distanceLimit", c.distance.limit);
     u.f("distanceDivisor", c.distance.divisor);
-    u.f("normalAngleThreshold", c.normal_threshold);
+    u.f("normalAngleThreshold", c.normalAngleThreshold);
     u.f("normalTessellationWeight", c.weights.normal);
     u.f("textureTessellationWeight", c.weights.texture);
     u.f("distanceTessellationWeight", c.weights.distance);
@@ -426,7 +426,7 @@ void cosc422_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) 
     u.f("zMax", g.extent_v.y);
     u.f("heightScale", g.scale_z);
     if (scene.control && scene.control->model == ControlModel::cosc422)
-        u.i("levelSpace", scene.control->cosc422_space == Cosc422Space::eye ? 1 : 0);
+        u.i("levelSpace", scene.control->cosc422 == Cosc422Space::eye ? 1 : 0);
 }
 
 void lab4_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
@@ -435,27 +435,27 @@ void lab4_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
     u.f("horizontalScale", g.scale_xy);
     u.f("verticalScale", g.scale_z);
     u.v2("texCoordOffset", glm::vec2(g.texcoord_offset));
-    u.f("gridStep", g.scale_xy / g.heightmap->texture.width());  // pipeline.cpp: one texel
+    u.f("gridStep", g.scale_xy / g.heightmap->texture.width());  // as the CPU program: one texel
 }
 
-void lab4_control_uniforms(const Uniforms& u, const Lab4ControlSettings& c, const Matrices& m) {
+void lab4_control_uniforms(const Uniforms& u, const Lab4ControlParams<double>& c, const Matrices& m) {
     u.v3("cameraPosition", m.eye);
-    u.f("firstZoneEnd", c.first_zone_end);
-    u.f("zoneGrowth", c.zone_growth);
-    u.f("maxLevel", c.max_level);
-    u.f("minLevel", c.min_level);
-    u.i("edgeRule", c.edge_rule == Lab4EdgeRule::lower ? 0 : 1);
+    u.f("firstZoneEnd", c.firstZoneEnd);
+    u.f("zoneGrowth", c.zoneGrowth);
+    u.f("maxLevel", c.maxLevel);
+    u.f("minLevel", c.minLevel);
+    u.i("edgeRule", c.edgeRule == Lab4EdgeRule::lower ? 0 : 1);
 }
 
 void pn_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m, glm::ivec2 viewport) {
     u.m4("m4Transform", glm::mat4(1.0f));  // the meshes are translated and scaled at load
     u.m4("m4ViewProjection", m.view_projection);
-    u.f("fInfluence", scene.evaluation.pn_influence);
-    u.i("normalMode", scene.evaluation.pn_normal == PnNormal::linear ? 0 : 1);
-    u.i("watertightEdges", scene.evaluation.pn_watertight_edges ? 1 : 0);
+    u.f("fInfluence", scene.evaluation.pn.fInfluence);
+    u.i("normalMode", scene.evaluation.pn.normal == PnNormal::linear ? 0 : 1);
+    u.i("watertightEdges", scene.evaluation.pn.watertightEdges ? 1 : 0);
     u.v2("v2Resolution", glm::vec2(viewport));
     if (scene.control && scene.control->model == ControlModel::pn)
-        u.i("flatEdgesAtLevel1", scene.control->pn.flat_edges_at_level_1 ? 1 : 0);
+        u.i("flatEdgesAtLevel1", scene.control->pn.flatEdgesAtLevel1 ? 1 : 0);
 }
 
 void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
@@ -512,7 +512,7 @@ void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const Ren
         const ControlStage& c = *scene.control;
         if (c.model == ControlModel::thesis) thesis_control_uniforms(u, scene, c.thesis, m);
         if (c.model == ControlModel::lab4) lab4_control_uniforms(u, c.lab4, m);
-        if (c.model == ControlModel::constant) u.f("constantLevel", c.constant_level);
+        if (c.model == ControlModel::constant) u.f("constantLevel", c.constant.level);
     } else {
         u.f("constantLevel", 1.0);  // GL's default patch levels
     }
@@ -592,8 +592,8 @@ void bind_textures(BoundTextures& b, const Scene& scene, const RenderShading& sh
         b.bind(0, &scene.grid->heightmap->texture, "heightMap (" + scene.grid->heightmap_path + ")");
         if (scene.grid->normal_map) b.bind(2, scene.grid->normal_map.get(), "normalMap");
     }
-    if (scene.control && scene.control->model == ControlModel::thesis && scene.control->thesis.tessellation_map)
-        b.bind(1, scene.control->thesis.tessellation_map.get(), "tessellationMap");
+    if (scene.control && scene.control->model == ControlModel::thesis && scene.control->tessellation_map)
+        b.bind(1, scene.control->tessellation_map.get(), "tessellationMap");
     const auto names = sampler_names(shading.model.kind);
     for (std::size_t i = 0; i < names.size(); ++i) {
         const auto* slot = sampler_slot(shading.model.textures, names[i]);
@@ -777,7 +777,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     }
     gl.PatchParameteri(GL_PATCH_VERTICES, vertices.patch_vertices);
     if (!plan.has_control_shader) {
-        const float level = scene.control ? static_cast<float>(scene.control->constant_level) : 1.0f;
+        const float level = scene.control ? static_cast<float>(scene.control->constant.level) : 1.0f;
         const float outer[4] = {level, level, level, level};
         const float inner[2] = {level, level};
         gl.PatchParameterfv(GL_PATCH_DEFAULT_OUTER_LEVEL, outer);

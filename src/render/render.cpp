@@ -136,7 +136,10 @@ float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_
     int best_edge = -1, best_count = 0;
     for (int e = 0; e < edges; ++e) {
         int count = 0;
-        for (const std::uint32_t v : t) count += on_outer_edge(domain, mesh.tess_coords[v], e) ? 1 : 0;
+        for (const std::uint32_t v : t) {
+            const glm::vec3& c = mesh.tess_coords[v];
+            count += on_outer_edge(domain, TessCoord{c.x, c.y, c.z}, e) ? 1 : 0;
+        }
         if (count > best_count) {
             best_count = count;
             best_edge = e;

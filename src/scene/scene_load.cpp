@@ -474,7 +474,7 @@ struct Loader {
         const std::string model = t.choice("model", {"constant", "thesis", "cosc422", "lab4", "pn"}, "the control model");
         if (model == "constant") {
             c.model = ControlModel::constant;
-            c.constant_level = t.real("level", -1e6, 1e6, false, false, "the constant level");
+            c.constant.level = t.real("level", -1e6, 1e6, false, false, "the constant level");
         } else if (model == "thesis") {
             c.model = ControlModel::thesis;
             const std::string factor = t.choice("factor", {"distance", "tessellation_map", "normal", "all"},
@@ -483,10 +483,10 @@ struct Loader {
                               : factor == "tessellation_map" ? ThesisFactor::tessellation_map
                               : factor == "normal"           ? ThesisFactor::normal
                                                              : ThesisFactor::all;
-            c.thesis.level = t.real("level", -1e6, 1e6, false, false, "tessellationLevel, the thesis's userDecidedLevel");
+            c.thesis.tessellationLevel = t.real("level", -1e6, 1e6, false, false, "tessellationLevel, the thesis's userDecidedLevel");
             c.thesis.distance.limit = t.real_or("distance_limit", 50.0, 0.0, HUGE_VAL, true);
             c.thesis.distance.divisor = t.real_or("distance_divisor", 10.0, 0.0, HUGE_VAL, true);
-            c.thesis.normal_threshold = t.real_or("normal_threshold", 0.90, 0.0, 4.0 * M_PI);
+            c.thesis.normalAngleThreshold = t.real_or("normal_threshold", 0.90, 0.0, 4.0 * M_PI);
             if (c.thesis.factor == ThesisFactor::all) {
                 if (const toml::table* w = t.table_opt("weights")) {
                     TableReader wt(file, *w, "control.weights", {"constant", "normal", "texture", "distance"});
@@ -504,9 +504,9 @@ struct Loader {
                                     (c.thesis.factor == ThesisFactor::all && c.thesis.weights.texture != 0.0);
             const bool map_allowed = c.thesis.factor == ThesisFactor::tessellation_map || c.thesis.factor == ThesisFactor::all;
             if (map_allowed && t.has("tessellation_map")) {
-                c.thesis.tessellation_map_path = resolve(t.string("tessellation_map"));
-                const std::string path = c.thesis.tessellation_map_path;
-                c.thesis.tessellation_map = load_file(t, "tessellation_map", "cannot load tessellation map", [&] {
+                c.tessellation_map_path = resolve(t.string("tessellation_map"));
+                const std::string path = c.tessellation_map_path;
+                c.tessellation_map = load_file(t, "tessellation_map", "cannot load tessellation map", [&] {
                     return std::make_shared<const Texture>(load_texture(path));
                 });
             } else if (map_needed) {
@@ -517,7 +517,7 @@ struct Loader {
             t.finish(std::string("by thesis factor ") + factor);
         } else if (model == "cosc422") {
             c.model = ControlModel::cosc422;
-            c.cosc422_space = t.choice("space", {"world", "eye"}, "world or eye space z") == "world" ? Cosc422Space::world
+            c.cosc422 = t.choice("space", {"world", "eye"}, "world or eye space z") == "world" ? Cosc422Space::world
                                                                                                       : Cosc422Space::eye;
         } else if (model == "lab4") {
             c.model = ControlModel::lab4;
@@ -527,20 +527,20 @@ struct Loader {
                 if (std::frexp(v, &e) != 0.5) t.fail(k, std::string("control.") + k + " must be a power of two in [1, 64]");
                 return v;
             };
-            c.lab4.first_zone_end = t.real_or("first_zone_end", 50.0, 0.0, HUGE_VAL, true);
-            c.lab4.zone_growth = t.real_or("zone_growth", 2.0, 1.0, HUGE_VAL, true);
-            c.lab4.max_level = power_of_two("max_level", 64.0);
-            c.lab4.min_level = power_of_two("min_level", 1.0);
-            if (c.lab4.min_level > c.lab4.max_level) t.fail("min_level", "control.min_level must not exceed control.max_level");
+            c.lab4.firstZoneEnd = t.real_or("first_zone_end", 50.0, 0.0, HUGE_VAL, true);
+            c.lab4.zoneGrowth = t.real_or("zone_growth", 2.0, 1.0, HUGE_VAL, true);
+            c.lab4.maxLevel = power_of_two("max_level", 64.0);
+            c.lab4.minLevel = power_of_two("min_level", 1.0);
+            if (c.lab4.minLevel > c.lab4.maxLevel) t.fail("min_level", "control.min_level must not exceed control.max_level");
             if (auto rule = t.choice_opt("edge_rule", {"lower", "higher"}))
-                c.lab4.edge_rule = *rule == "lower" ? Lab4EdgeRule::lower : Lab4EdgeRule::higher;
+                c.lab4.edgeRule = *rule == "lower" ? Lab4EdgeRule::lower : Lab4EdgeRule::higher;
         } else {
             c.model = ControlModel::pn;
-            c.pn.pixels_per_edge = t.real_or("pixels_per_edge", 4.0, 0.0, HUGE_VAL, true);
-            c.pn.min_level = t.real_or("min_level", 1.0, 0.0, 64.0);
-            c.pn.max_level = t.real_or("max_level", 32.0, 0.0, 64.0);
-            if (c.pn.min_level > c.pn.max_level) t.fail("min_level", "control.min_level must not exceed control.max_level");
-            c.pn.flat_edges_at_level_1 = t.boolean_opt("flat_edges_at_level_1").value_or(true);
+            c.pn.fPixelsPerEdge = t.real_or("pixels_per_edge", 4.0, 0.0, HUGE_VAL, true);
+            c.pn.minLevel = t.real_or("min_level", 1.0, 0.0, 64.0);
+            c.pn.maxLevel = t.real_or("max_level", 32.0, 0.0, 64.0);
+            if (c.pn.minLevel > c.pn.maxLevel) t.fail("min_level", "control.min_level must not exceed control.max_level");
+            c.pn.flatEdgesAtLevel1 = t.boolean_opt("flat_edges_at_level_1").value_or(true);
         }
         t.finish("by control model " + model);
         scene.control = c;
@@ -556,10 +556,10 @@ struct Loader {
                   : model == "lab4"    ? EvaluationModel::lab4
                                        : EvaluationModel::pn;
         if (e.model == EvaluationModel::pn) {
-            e.pn_influence = t.real_or("influence", 0.75, -1e6, 1e6);
+            e.pn.fInfluence = t.real_or("influence", 0.75, -1e6, 1e6);
             if (auto n = t.choice_opt("normal", {"quadratic", "linear"}))
-                e.pn_normal = *n == "quadratic" ? PnNormal::quadratic : PnNormal::linear;
-            e.pn_watertight_edges = t.boolean_opt("watertight_edges").value_or(true);
+                e.pn.normal = *n == "quadratic" ? PnNormal::quadratic : PnNormal::linear;
+            e.pn.watertightEdges = t.boolean_opt("watertight_edges").value_or(true);
         }
         t.finish("by evaluation model " + model);
         scene.evaluation = e;
@@ -727,7 +727,7 @@ struct Loader {
             }
             const bool needs_camera = (c.model == ControlModel::thesis && (c.thesis.factor == ThesisFactor::distance ||
                                                                           c.thesis.factor == ThesisFactor::all)) ||
-                                      (c.model == ControlModel::cosc422 && c.cosc422_space == Cosc422Space::eye) ||
+                                      (c.model == ControlModel::cosc422 && c.cosc422 == Cosc422Space::eye) ||
                                       c.model == ControlModel::lab4 || c.model == ControlModel::pn;
             if (needs_camera && !scene.camera)
                 throw Error(std::string("control model ") + to_string(c.model) + " reads the camera: add a [camera]",

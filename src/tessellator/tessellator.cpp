@@ -655,6 +655,73 @@ double max_point_difference(const Pattern& a, const Pattern& b) {
 }
 
 // ---------------------------------------------------------------------------------
+// Queries
+
+LevelBits level_bits(const TessLevels& levels) {
+    LevelBits bits{};
+    std::memcpy(bits.data(), levels.outer.data(), sizeof(float) * 4);
+    std::memcpy(bits.data() + 4, levels.inner.data(), sizeof(float) * 2);
+    return bits;
+}
+
+bool on_outer_edge(Domain domain, const TessCoord& c, int edge) {
+    if (domain == Domain::quads) {
+        switch (edge) {
+            case 0: return c.u == 0.0f;
+            case 1: return c.v == 0.0f;
+            case 2: return c.u == 1.0f;
+            case 3: return c.v == 1.0f;
+        }
+        return false;
+    }
+    switch (edge) {
+        case 0: return c.u == 0.0f;
+        case 1: return c.v == 0.0f;
+        case 2: return c.w == 0.0f;
+    }
+    return false;
+}
+
+namespace {
+
+// Segments an edge of level f is cut into (after the generator's clamping and rounding to
+// its spacing's parity); an upper bound for fractional levels (their two short segments
+// are counted).
+std::uint64_t segments(float f, Spacing spacing) {
+    float lo = 1.0f, hi = 64.0f;
+    if (spacing == Spacing::fractional_odd) hi = 63.0f;
+    if (spacing == Spacing::fractional_even) lo = 2.0f;
+    const float clamped = std::isnan(f) ? lo : std::min(hi, std::max(lo, f));
+    std::uint64_t n = static_cast<std::uint64_t>(std::ceil(clamped));
+    if (spacing == Spacing::fractional_odd && n % 2 == 0) ++n;
+    if (spacing == Spacing::fractional_even && n % 2 == 1) ++n;
+    return n;
+}
+
+}  // namespace
+
+std::uint64_t estimate_triangles(const TessSettings& settings, const TessLevels& levels) {
+    const int used_outer = settings.domain == Domain::quads ? 4 : settings.domain == Domain::triangles ? 3 : 2;
+    for (int i = 0; i < used_outer; ++i)
+        if (!(levels.outer[i] > 0.0f)) return 0;  // culled
+    std::uint64_t outer_sum = 0;
+    for (int i = 0; i < used_outer; ++i) outer_sum += segments(levels.outer[i], settings.spacing);
+    if (settings.domain == Domain::quads) {
+        // Inner rings (at least 3 segments per axis once any ring exists) plus the stitching
+        // of each outer edge to the first ring.
+        const std::uint64_t a = std::max<std::uint64_t>(3, segments(levels.inner[0], settings.spacing));
+        const std::uint64_t b = std::max<std::uint64_t>(3, segments(levels.inner[1], settings.spacing));
+        return 2 * a * b + 2 * outer_sum;
+    }
+    if (settings.domain == Domain::triangles) {
+        // About 1.5 n^2 for the rings; 2 n^2 bounds it with the stitching.
+        const std::uint64_t n = std::max<std::uint64_t>(3, segments(levels.inner[0], settings.spacing));
+        return 2 * n * n + 2 * outer_sum;
+    }
+    return 0;  // isolines make no triangles
+}
+
+// ---------------------------------------------------------------------------------
 // Cache
 
 std::size_t PatternCache::KeyHash::operator()(const Key& k) const noexcept {
@@ -673,8 +740,7 @@ std::size_t PatternCache::KeyHash::operator()(const Key& k) const noexcept {
 std::shared_ptr<const Pattern> PatternCache::get(const TessSettings& settings, const TessLevels& levels,
                                                  Precision precision) {
     Key key{};
-    std::memcpy(key.level_bits.data(), levels.outer.data(), sizeof(float) * 4);
-    std::memcpy(key.level_bits.data() + 4, levels.inner.data(), sizeof(float) * 2);
+    key.level_bits = level_bits(levels);
     key.mode = static_cast<std::uint32_t>(settings.domain) | static_cast<std::uint32_t>(settings.spacing) << 4 |
                static_cast<std::uint32_t>(settings.winding) << 8 | static_cast<std::uint32_t>(settings.point_mode) << 12 |
                static_cast<std::uint32_t>(precision) << 16;

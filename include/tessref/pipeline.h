@@ -1,0 +1,67 @@
+// tessref/pipeline.h — runs a scene through the stages, as GL runs a draw of patches:
+//
+//   vertex + tessellation control   control.h      per patch: corners and six levels
+//   (budget)                        tessellator.h  estimate_triangles, before tessellating
+//   primitive generator             tessellator.h  one Pattern per distinct level set
+//   tessellation evaluation         evaluation.h   per domain point: position, uv, normal
+//   geometry                        geometry.h     per-vertex, per-face or smooth normals
+//
+// and returns the tessellated surface. The stages themselves are pure functions of plain
+// data; src/pipeline/ binds a scene's parameters to them (one binding per evaluation
+// model, chosen once per run) and drives the passes over the patches.
+//
+// OUTPUT. The SurfaceMesh holds, patch after patch in patch order, every domain point of
+// the patch's pattern (generator order) evaluated, and the pattern's triangles re-indexed.
+// Triangles are counter-clockwise seen from above (terrain: +z for plane xy, +y for plane
+// xz) or from outside (meshes, whose faces are counter-clockwise seen from outside, as OBJ
+// and OFF files have them): the generator's winding is applied, and the index order is
+// reversed when the winding and the grid's orientation together would give the other side.
+// Patch ids: terrain patch (i, j) is j * nu + i; mesh patches are the faces, mesh after
+// mesh, in file order. The output is byte-identical whatever the thread count: each patch
+// fills a pre-sized slot.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "tessref/mesh.h"
+#include "tessref/scene.h"
+#include "tessref/tessellator.h"
+
+namespace tessref {
+
+struct PipelineOptions {
+    Precision precision = Precision::gpu;  // gpu: float stages, exact: double stages
+    // Called with (patches done, patch count) as patches finish, from worker threads
+    // (serialized by the pipeline); may be empty.
+    std::function<void(std::size_t done, std::size_t total)> progress;
+    PatternCache* cache = nullptr;         // shared cache; a private one when null
+};
+
+// Which stages ran (a stage the scene does not name does not run).
+struct StagesRun {
+    bool control = false;
+    bool evaluation = false;
+    bool geometry = false;
+};
+
+struct PipelineResult {
+    SurfaceMesh mesh;
+    std::vector<glm::dvec3> face_normals;  // one per triangle with [geometry] normals = "face"
+    std::vector<TessLevels> levels;        // per patch: what the control stage wrote
+    std::uint64_t estimated_triangles = 0;
+    std::size_t distinct_patterns = 0;     // distinct level sets (patterns) of this run
+    StagesRun stages{};
+};
+
+// Runs the scene's pipeline. Throws tessref::Error (key "limits.max_triangles") when the
+// estimate exceeds the scene's budget, before any tessellation; and when a vertex
+// evaluates to infinity or NaN (naming the patch, the tess coord and, for a terrain, the
+// height texel).
+PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options = {});
+
+}  // namespace tessref

@@ -1,0 +1,56 @@
+// lab4.cpp — lab 4's program (data/shaders/lab4_terrain.*): a camera-centred grid, the
+// height sampled from the mip level that matches each vertex's tessellation level, and
+// appendix A's normal at that same level.
+#include "pipeline/terrain.h"
+
+#include "tessref/geometry.h"
+
+namespace tessref::pipeline {
+namespace {
+
+template <typename T>
+class Lab4Program final : public TerrainProgram<T> {
+public:
+    explicit Lab4Program(const Scene& s) : TerrainProgram<T>(s) {
+        const TerrainGrid& g = this->grid;
+        evaluation.heightMap = this->heightMapLod;
+        evaluation.mvp = this->camera.viewProjection;
+        evaluation.horizontalScale = static_cast<T>(g.scale_xy);
+        evaluation.verticalScale = static_cast<T>(g.scale_z);
+        evaluation.texCoordOffset = vec2_t<T>(g.texcoord_offset);
+    }
+
+private:
+    EvaluatedVertex<T> evaluate_point(std::size_t p, const DomainPoint<T>& tc) const override {
+        return lab4_evaluate<T>(this->tcPosition[p], tc, this->lab4Lod[p], evaluation);
+    }
+    T vertex_lod(std::size_t p, const DomainPoint<T>& tc) const override {
+        return this->lab4Lod[p].maxLogTessellationLevel - lab4_vertex_log_level<T>(tc, this->lab4Lod[p]);
+    }
+    vec3_t<T> vertex_normal(const EvaluatedVertex<T>& ev, T lod) const override {
+        if (this->scene.geometry->normals != GeometryNormals::height_field)
+            return TerrainProgram<T>::vertex_normal(ev, lod);
+        // lab4_terrain.tese: lab4_vertex_normal(position.x, position.z, lod), one texel apart
+        Lab4NormalSampling<T> sampling;
+        sampling.heightMap = evaluation.heightMap;
+        sampling.horizontalScale = evaluation.horizontalScale;
+        sampling.verticalScale = evaluation.verticalScale;
+        sampling.texCoordOffset = evaluation.texCoordOffset;
+        sampling.h = static_cast<T>(this->grid.scale_xy / this->height_texture->width());
+        sampling.lod = lod;
+        return lab4_vertex_normal<T>(ev.position.x, ev.position.z, sampling);
+    }
+
+    Lab4Evaluation<T> evaluation{};
+};
+
+}  // namespace
+
+template <typename T>
+std::unique_ptr<PatchProgram<T>> make_lab4_program(const Scene& scene) {
+    return std::make_unique<Lab4Program<T>>(scene);
+}
+template std::unique_ptr<PatchProgram<float>> make_lab4_program(const Scene&);
+template std::unique_ptr<PatchProgram<double>> make_lab4_program(const Scene&);
+
+}  // namespace tessref::pipeline

@@ -1,0 +1,228 @@
+// pipeline.cpp — run_pipeline(): the passes over the patches, in the order GL runs them.
+//
+// Four passes, each parallel over patches with oneTBB and each writing only its own
+// patch's pre-sized slot, so the result does not depend on the thread count:
+//  1. control: the vertex and control shaders of every patch (its levels);
+//  2. budget: an upper bound of the triangle count from the levels, before tessellating;
+//  3. generator: one pattern per distinct level set (PatternCache), and every patch's
+//     vertex and triangle ranges in the output by prefix sums;
+//  4. evaluation and per-vertex / per-face geometry into those ranges.
+// Smooth normals, which need the whole surface, follow serially (geometry.h sums in
+// triangle order, deterministic). Everything model-specific is the program's
+// (program.h); this file reads the same for every model.
+#include "tessref/pipeline.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <span>
+#include <string>
+#include <type_traits>
+
+#include "common/parallel.h"
+#include "pipeline/program.h"
+#include "tessref/geometry.h"
+
+namespace tessref {
+namespace {
+
+// Tess coords in the run's precision.
+template <typename T>
+std::span<const DomainPoint<T>> domain_points(const Pattern& pattern) {
+    if constexpr (std::is_same_v<T, float>)
+        return pattern.points();
+    else
+        return pattern.points_exact();
+}
+
+// A vertex at infinity or NaN (a height texel that scale_z carries past the float range,
+// say) would reach the mesh file or the rasterizer silently; the run stops instead,
+// naming the first such vertex (lowest index, so the same whatever the thread count),
+// its patch and tess coord, and for a terrain the largest texel its height was read from.
+// (A post-evaluation check rather than one at load: whether a texel overflows depends
+// on the model, the precision and the interpolation, which only evaluation knows.)
+void require_finite_positions(const Scene& scene, const SurfaceMesh& mesh, Precision precision) {
+    const auto finite = [](const glm::dvec3& p) {
+        return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    };
+    const auto bad = std::find_if_not(mesh.positions.begin(), mesh.positions.end(), finite);
+    if (bad == mesh.positions.end()) return;
+    const std::size_t v = static_cast<std::size_t>(bad - mesh.positions.begin());
+    const auto number = [](double x) {
+        char buffer[32];
+        std::snprintf(buffer, sizeof buffer, "%.9g", x);
+        return std::string(buffer);
+    };
+    const glm::vec3 tc = mesh.tess_coords[v];
+    std::string what = "patch " + std::to_string(mesh.patch_ids[v]) + " evaluates to a non-finite vertex (" +
+                       number(bad->x) + ", " + number(bad->y) + ", " + number(bad->z) + ") at tess coord (" +
+                       number(tc.x) + ", " + number(tc.y) + ", " + number(tc.z) + ") in " +
+                       (precision == Precision::gpu ? "gpu (float)" : "exact (double)") + " precision";
+    Where where{scene.file, 0, 0, "", static_cast<long long>(mesh.patch_ids[v])};
+    if (scene.grid && !mesh.uvs.empty()) {
+        // The level-0 texels of the bilinear footprint at the vertex's texture coordinate
+        // (clamped to the edge); the one of largest magnitude is the likely culprit.
+        const Texture& t = scene.grid->heightmap->texture;
+        const glm::dvec2 st = mesh.uvs[v];
+        const auto footprint = [](double s, int size) {
+            const double u = std::isfinite(s) ? std::clamp(s * size - 0.5, -1.0, double(size)) : 0.0;
+            const int i = static_cast<int>(std::floor(u));
+            return std::array<int, 2>{std::clamp(i, 0, size - 1), std::clamp(i + 1, 0, size - 1)};
+        };
+        const auto xs = footprint(st.x, t.width());
+        const auto ys = footprint(st.y, t.height());
+        int tx = xs[0], ty = ys[0];
+        for (int x : xs)
+            for (int y : ys)
+                if (std::abs(t.texel_exact(0, x, y)) > std::abs(t.texel_exact(0, tx, ty))) tx = x, ty = y;
+        what += ": its height is read at texture coordinate (" + number(st.x) + ", " + number(st.y) +
+                ") from texels up to (" + std::to_string(tx) + ", " + std::to_string(ty) + ") = " +
+                number(t.texel_exact(0, tx, ty)) + " of " + scene.grid->heightmap_path +
+                ", times domain.scale_z = " + number(scene.grid->scale_z);
+        where.key = "domain.heightmap";
+    }
+    throw Error(what, where);
+}
+
+
+// The patches grouped by their level sets: each distinct set is tessellated once, even
+// when many threads would ask the cache for it at the same moment.
+std::vector<std::shared_ptr<const Pattern>> patterns_of(const Scene& scene, const std::vector<TessLevels>& levels,
+                                                       Precision precision, PatternCache& cache,
+                                                       std::size_t& distinct_count) {
+    const std::size_t n = levels.size();
+    std::vector<LevelBits> keys(n);
+    for (std::size_t p = 0; p < n; ++p) keys[p] = level_bits(levels[p]);
+    std::vector<std::size_t> order(n);
+    for (std::size_t p = 0; p < n; ++p) order[p] = p;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+    std::vector<std::size_t> representatives;  // first patch of each distinct level set
+    std::vector<std::size_t> group(n);          // patch -> index into representatives
+    for (std::size_t k = 0; k < n; ++k) {
+        if (k == 0 || keys[order[k]] != keys[order[k - 1]]) representatives.push_back(order[k]);
+        group[order[k]] = representatives.size() - 1;
+    }
+    std::vector<std::shared_ptr<const Pattern>> distinct(representatives.size());
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, representatives.size(), 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t k = r.begin(); k != r.end(); ++k)
+                                  distinct[k] = cache.get(scene.generator, levels[representatives[k]], precision);
+                          });
+    distinct_count = distinct.size();
+    std::vector<std::shared_ptr<const Pattern>> patterns(n);
+    for (std::size_t p = 0; p < n; ++p) patterns[p] = distinct[group[p]];
+    return patterns;
+}
+
+template <typename T>
+PipelineResult run(const Scene& scene, const PipelineOptions& options) {
+    const Precision precision = options.precision;
+    const std::size_t n = scene.patch_count();
+    const std::unique_ptr<pipeline::PatchProgram<T>> program = pipeline::make_program<T>(scene);
+    PipelineResult result;
+
+    // Pass 1: the vertex and control shaders.
+    std::vector<TessLevels> levels(n);
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) levels[p] = to_tess_levels(program->control(p));
+    });
+
+    // Pass 2: the budget, from the levels, before any tessellation.
+    std::uint64_t estimate = 0;
+    for (std::size_t p = 0; p < n; ++p) estimate += estimate_triangles(scene.generator, levels[p]);
+    result.estimated_triangles = estimate;
+    if (estimate > scene.max_triangles)
+        throw Error("the scene asks for up to " + std::to_string(estimate) +
+                        " triangles (estimated from its tessellation levels), more than limits.max_triangles = " +
+                        std::to_string(scene.max_triangles),
+                    scene.max_triangles_where);
+
+    // Pass 3: the primitive generator, and every patch's place in the output.
+    PatternCache local_cache;
+    const auto patterns = patterns_of(scene, levels, precision, options.cache ? *options.cache : local_cache,
+                                      result.distinct_patterns);
+    std::vector<std::size_t> vertex_base(n + 1, 0), triangle_base(n + 1, 0);
+    for (std::size_t p = 0; p < n; ++p) {
+        vertex_base[p + 1] = vertex_base[p] + patterns[p]->points().size();
+        triangle_base[p + 1] = triangle_base[p] + patterns[p]->primitive_count();
+    }
+    const std::size_t vertices = vertex_base[n], triangles = triangle_base[n];
+    if (vertices > 0xffffffffu)
+        throw Error("the scene emits " + std::to_string(vertices) + " vertices, more than 32-bit indices address",
+                    scene.max_triangles_where);
+
+    // Pass 4: evaluation and geometry.
+    SurfaceMesh& mesh = result.mesh;
+    const bool face_normals = scene.geometry && scene.geometry->normals == GeometryNormals::face;
+    mesh.positions.resize(vertices);
+    mesh.patch_ids.resize(vertices);
+    mesh.tess_coords.resize(vertices);
+    if (program->has_uvs) mesh.uvs.resize(vertices);
+    if (program->has_normals) mesh.normals.resize(vertices);
+    mesh.triangles.resize(triangles);
+    if (face_normals) result.face_normals.resize(triangles);
+
+    std::atomic<std::size_t> done{0};
+    std::mutex progress_mutex;
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+            const Pattern& pattern = *patterns[p];
+            const std::size_t first_vertex = vertex_base[p];
+            program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex);
+            const auto tess_coords = pattern.points();
+            for (std::size_t k = 0; k < tess_coords.size(); ++k) {
+                mesh.patch_ids[first_vertex + k] = static_cast<std::uint32_t>(p);
+                mesh.tess_coords[first_vertex + k] = glm::vec3(tess_coords[k].u, tess_coords[k].v, tess_coords[k].w);
+            }
+            for (std::size_t t = 0; t < pattern.primitive_count(); ++t) {
+                const auto prim = pattern.primitive(t);
+                std::array<std::uint32_t, 3> tri{static_cast<std::uint32_t>(first_vertex + prim[0]),
+                                                 static_cast<std::uint32_t>(first_vertex + prim[1]),
+                                                 static_cast<std::uint32_t>(first_vertex + prim[2])};
+                if (program->flip) std::swap(tri[1], tri[2]);
+                mesh.triangles[triangle_base[p] + t] = tri;
+                if (face_normals) {
+                    // The geometry shader's face normal, from the vertices as the pipeline holds them.
+                    const vec3_t<T> p0(mesh.positions[tri[0]]), p1(mesh.positions[tri[1]]), p2(mesh.positions[tri[2]]);
+                    result.face_normals[triangle_base[p] + t] = glm::dvec3(face_normal<T>(p0, p1, p2));
+                }
+            }
+            const std::size_t d = ++done;
+            if (options.progress) {
+                std::lock_guard<std::mutex> lock(progress_mutex);
+                options.progress(std::max(d, done.load()), n);
+            }
+        }
+    });
+
+    require_finite_positions(scene, mesh, precision);
+
+    if (scene.geometry && scene.geometry->normals == GeometryNormals::smooth) {
+        std::vector<vec3_t<T>> positions(vertices);
+        for (std::size_t v = 0; v < vertices; ++v) positions[v] = vec3_t<T>(mesh.positions[v]);
+        const auto normals = smooth_vertex_normals<T>(std::span<const vec3_t<T>>(positions),
+                                                      std::span<const std::array<std::uint32_t, 3>>(mesh.triangles),
+                                                      Weld::by_position);
+        mesh.normals.resize(vertices);
+        for (std::size_t v = 0; v < vertices; ++v) mesh.normals[v] = glm::dvec3(normals[v]);
+    }
+
+    result.levels = std::move(levels);
+    result.stages.control = scene.control.has_value();
+    result.stages.evaluation = true;
+    result.stages.geometry = scene.geometry.has_value();
+    return result;
+}
+
+}  // namespace
+
+PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options) {
+    if (scene.patch_count() == 0) throw Error("the scene has no patches", Where{scene.file, 0, 0, "", -1});
+    if (options.precision == Precision::gpu) return run<float>(scene, options);
+    return run<double>(scene, options);
+}
+
+}  // namespace tessref

@@ -1,0 +1,76 @@
+// pn.cpp — the PN-triangles program (data/shaders/pn_triangles.*): one patch per mesh
+// triangle; the control stage writes the PN control points, the evaluation the curved
+// surface and its normal.
+#include "pipeline/program.h"
+
+#include <vector>
+
+#include "tessref/evaluation.h"
+
+namespace tessref::pipeline {
+namespace {
+
+template <typename T>
+class PnProgram final : public PatchProgram<T> {
+public:
+    explicit PnProgram(const Scene& s) : scene(s), meshes(*s.meshes), camera(s) {
+        this->flip = scene.generator.winding == Winding::cw;
+        this->has_uvs = !meshes.uvs.empty();
+        this->has_normals = !scene.geometry;  // the evaluation's normal, unless [geometry] replaces it
+        if (scene.control && scene.control->model == ControlModel::pn) {
+            static_cast<PnControlParams<T>&>(control_uniforms) = scene.control->pn.as<T>();
+            const glm::ivec2 vp = scene.camera ? scene.camera->viewport : glm::ivec2(1280, 800);
+            control_uniforms.v2Resolution = vec2_t<T>(static_cast<T>(vp.x), static_cast<T>(vp.y));
+        }
+        static_cast<PnEvaluationParams<T>&>(evaluation) = scene.evaluation.pn.as<T>();
+        evaluation.m4ViewProjection = camera.viewProjection;
+        patches.assign(meshes.patch_count(), {});
+    }
+
+    PatchLevels<T> control(std::size_t p) override {
+        const auto& tri = meshes.triangles[p];
+        TriangleCorners<T> pos, nrm;
+        std::array<vec2_t<T>, 3> uv{};
+        std::array<vec4_t<T>, 3> glPosition{};
+        for (int k = 0; k < 3; ++k) {
+            pos[k] = vec3_t<T>(meshes.positions[tri[k]]);
+            nrm[k] = vec3_t<T>(meshes.normals[tri[k]]);
+            if (!meshes.uvs.empty()) uv[k] = vec2_t<T>(meshes.uvs[tri[k]]);
+            glPosition[k] = camera.viewProjection * vec4_t<T>(pos[k], T(1));  // the tutorial's vertex shader
+        }
+        patches[p] = pn_patch<T>(pos, nrm, uv);
+        if (!scene.control) return {};  // GL's default patch levels: 1
+        if (scene.control->model == ControlModel::pn) return pn_levels<T>(glPosition, nrm, control_uniforms);
+        return scene_constant_levels<T>(*scene.control);
+    }
+
+    void evaluate(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                  std::size_t first_vertex) const override {
+        for (std::size_t k = 0; k < points.size(); ++k) {
+            const EvaluatedVertex<T> ev = pn_evaluate<T>(patches[p], points[k], evaluation);
+            const std::size_t v = first_vertex + k;
+            mesh.positions[v] = glm::dvec3(ev.position);
+            if (this->has_uvs) mesh.uvs[v] = glm::dvec2(ev.textureCoordinate);
+            if (this->has_normals) mesh.normals[v] = glm::dvec3(ev.normal);
+        }
+    }
+
+private:
+    const Scene& scene;
+    const TriangleMeshes& meshes;
+    CameraUniforms<T> camera;
+    PnControl<T> control_uniforms{};
+    PnEvaluation<T> evaluation{};
+    std::vector<PnPatch<T>> patches;  // per patch: the control stage's output
+};
+
+}  // namespace
+
+template <typename T>
+std::unique_ptr<PatchProgram<T>> make_pn_program(const Scene& scene) {
+    return std::make_unique<PnProgram<T>>(scene);
+}
+template std::unique_ptr<PatchProgram<float>> make_pn_program(const Scene&);
+template std::unique_ptr<PatchProgram<double>> make_pn_program(const Scene&);
+
+}  // namespace tessref::pipeline

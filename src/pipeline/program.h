@@ -1,0 +1,85 @@
+// program.h — a scene's shaders bound to its uniforms, in one precision: the CPU
+// counterpart of a linked GL program.
+//
+// run_pipeline() (pipeline.cpp) drives the passes over the patches and knows no model;
+// everything model-specific sits behind PatchProgram, one implementation per evaluation
+// model and one file each:
+//   terrain.{h,cpp}  the grid's vertex buffer, the terrain control models (constant,
+//                    thesis, cosc422, lab4) and the per-vertex geometry normals
+//   thesis.cpp       thesis_terrain.{vert,tesc,tese,geom}
+//   cosc422.cpp      cosc422_terrain.{tesc,tese,geom}
+//   lab4.cpp         lab4_terrain.{tesc,tese}
+//   pn.cpp           pn_triangles.{vert,tesc,tese}
+// make_program() is the one place that looks at the scene's model names.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <span>
+
+#include "tessref/control.h"
+#include "tessref/mesh.h"
+#include "tessref/scene.h"
+#include "tessref/tessellator.h"
+
+namespace tessref::pipeline {
+
+template <typename T>
+class PatchProgram {
+public:
+    virtual ~PatchProgram() = default;
+
+    // The vertex and tessellation control shaders of one patch: its levels. The program
+    // keeps what its evaluation shader reads from the control stage (output corners, PN
+    // control points, lab 4 mip levels) in a slot of its own for that patch. Called once
+    // per patch, concurrently for different patches.
+    virtual PatchLevels<T> control(std::size_t patch) = 0;
+
+    // The evaluation shader at each of the patch's domain points, then the geometry
+    // stage's per-vertex normal if the scene asks for one: writes positions (and uvs and
+    // normals where has_uvs / has_normals) at mesh indices first_vertex + k. Called after
+    // control() of the same patch, concurrently for different patches.
+    virtual void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                          std::size_t first_vertex) const = 0;
+
+    bool has_uvs = false;     // the evaluation writes texture coordinates
+    bool has_normals = false; // the evaluation or the geometry stage writes vertex normals
+    bool flip = false;        // reverse each triangle so that it faces up / out
+};
+
+// The scene's program in precision T (float: Precision::gpu, double: Precision::exact).
+template <typename T>
+std::unique_ptr<PatchProgram<T>> make_program(const Scene& scene);
+
+// The uniforms every model reads from the camera, in precision T (identity without one).
+template <typename T>
+struct CameraUniforms {
+    mat4_t<T> view{T(1)};
+    mat4_t<T> viewProjection{T(1)};
+    vec3_t<T> cameraPosition{T(0)};
+    explicit CameraUniforms(const Scene& scene) {
+        if (!scene.camera) return;
+        view = mat4_t<T>(scene.camera->view());
+        viewProjection = mat4_t<T>(scene.camera->view_projection());
+        cameraPosition = vec3_t<T>(scene.camera->eye);
+    }
+};
+
+// A texture as a GLSL sampler2D; an unbound sampler (null texture) reads 0.
+template <typename T>
+Sampler2D<T> sampler(const std::shared_ptr<const Texture>& texture) {
+    if (!texture) return [](vec2_t<T>) { return vec4_t<T>(T(0)); };
+    return [texture](vec2_t<T> st) { return texture->texture(st); };
+}
+template <typename T>
+Sampler2DLod<T> sampler_lod(const std::shared_ptr<const Texture>& texture) {
+    return [texture](vec2_t<T> st, T lod) { return texture->textureLod(st, lod); };
+}
+
+// The constant control model, the only one every domain accepts.
+template <typename T>
+PatchLevels<T> scene_constant_levels(const ControlStage& control) {
+    return constant_levels<T>(static_cast<T>(control.constant.level));
+}
+
+}  // namespace tessref::pipeline

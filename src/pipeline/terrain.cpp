@@ -1,0 +1,119 @@
+// terrain.cpp — the grid's vertex buffer, the terrain control models and the per-vertex
+// geometry normals, shared by the thesis, cosc422 and lab4 programs.
+#include "pipeline/terrain.h"
+
+#include <cmath>
+
+#include "tessref/geometry.h"
+
+namespace tessref::pipeline {
+
+template <typename T>
+TerrainProgram<T>::TerrainProgram(const Scene& s) : scene(s), grid(*s.grid), camera(s) {
+    const TerrainGrid& g = grid;
+    height_texture = std::shared_ptr<const Texture>(g.heightmap, &g.heightmap->texture);
+    heightMap = sampler<T>(height_texture);
+    heightMapLod = sampler_lod<T>(height_texture);
+    if (g.normal_map) normalMap = sampler<T>(g.normal_map);
+    for (double u : g.u_coords) u_coords.push_back(static_cast<T>(u));
+    for (double v : g.v_coords) v_coords.push_back(static_cast<T>(v));
+
+    // The grid's facing: cross(c3 - c0, c1 - c0) against the plane's up axis.
+    const auto c = g.corners(0);
+    const glm::dvec3 up = g.plane == GroundPlane::xy ? glm::dvec3(0, 0, 1) : glm::dvec3(0, 1, 0);
+    const bool ccw_faces_up = glm::dot(glm::cross(c[3] - c[0], c[1] - c[0]), up) > 0.0;
+    this->flip = ccw_faces_up != (scene.generator.winding == Winding::ccw);
+    this->has_uvs = true;
+    geometry_vertex_normals = scene.geometry && (scene.geometry->normals == GeometryNormals::normal_map ||
+                                                 scene.geometry->normals == GeometryNormals::height_field);
+    this->has_normals = geometry_vertex_normals;
+
+    const std::size_t n = g.patch_count();
+    tcPosition.assign(n, {});
+    if (!scene.control) return;
+    const ControlStage& c0 = *scene.control;
+    if (c0.model == ControlModel::thesis) {
+        static_cast<ThesisControlParams<T>&>(thesisControl) = c0.thesis.as<T>();
+        thesisControl.scaleXY = static_cast<T>(g.scale_xy);
+        thesisControl.cameraPosition = camera.cameraPosition;
+        thesisControl.tessellationMap = sampler<T>(c0.tessellation_map);
+        thesisControl.normalMap = normalMap;
+    } else if (c0.model == ControlModel::lab4) {
+        static_cast<Lab4ControlParams<T>&>(lab4Control) = c0.lab4.as<T>();
+        lab4Control.cameraPosition = camera.cameraPosition;
+        lab4Lod.assign(n, {});
+    }
+}
+
+// The vertex shader on the patch's four grid corners, then the control shader.
+template <typename T>
+PatchLevels<T> TerrainProgram<T>::control(std::size_t p) {
+    const std::size_t i = p % static_cast<std::size_t>(grid.patches_u);
+    const std::size_t j = p / static_cast<std::size_t>(grid.patches_u);
+    auto ground = [&](std::size_t a, std::size_t b) {
+        return grid.plane == GroundPlane::xy ? vec3_t<T>(u_coords[a], v_coords[b], T(0))
+                                             : vec3_t<T>(u_coords[a], T(0), v_coords[b]);
+    };
+    // control.h layout: c0 = (u,v) (0,0), c1 = (0,1), c2 = (1,1), c3 = (1,0).
+    const std::array<vec3_t<T>, 4> flat{ground(i, j), ground(i, j + 1), ground(i + 1, j + 1), ground(i + 1, j)};
+    std::array<vec4_t<T>, 4>& corners = tcPosition[p];
+    for (int k = 0; k < 4; ++k) corners[k] = vertex(flat[k]);
+    const QuadCorners<T> vPosition{vec3_t<T>(corners[0]), vec3_t<T>(corners[1]), vec3_t<T>(corners[2]),
+                                   vec3_t<T>(corners[3])};
+    if (!scene.control) return {};  // GL's default patch levels: 1
+    const ControlStage& c = *scene.control;
+    switch (c.model) {
+        case ControlModel::constant: return scene_constant_levels<T>(c);
+        case ControlModel::thesis: return thesis_levels<T>(vPosition, thesisControl);
+        case ControlModel::cosc422: return cosc422_levels<T>(vPosition, c.cosc422, camera.view);
+        case ControlModel::lab4: {
+            const Lab4ControlOutput<T> out = lab4_control<T>(vPosition, lab4Control);
+            lab4Lod[p] = out.lod;
+            return out.levels;
+        }
+        case ControlModel::pn: break;  // rejected at load for a terrain
+    }
+    return {};
+}
+
+template <typename T>
+void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                                 std::size_t first_vertex) const {
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const EvaluatedVertex<T> ev = evaluate_point(p, points[k]);
+        const std::size_t v = first_vertex + k;
+        mesh.positions[v] = glm::dvec3(ev.position);
+        mesh.uvs[v] = glm::dvec2(ev.textureCoordinate);
+        if (geometry_vertex_normals) mesh.normals[v] = glm::dvec3(vertex_normal(ev, vertex_lod(p, points[k])));
+    }
+}
+
+template <typename T>
+vec3_t<T> TerrainProgram<T>::vertex_normal(const EvaluatedVertex<T>& ev, T /*lod*/) const {
+    const TerrainGrid& g = grid;
+    if (scene.geometry->normals == GeometryNormals::normal_map) {
+        // thesis_terrain.geom: gNormal = NormalFromTexture(texture(normalMap, textureCoordinate).rgb)
+        return thesis_normal_from_texture<T>(vec3_t<T>(normalMap(ev.textureCoordinate)), normalMatrix);
+    }
+    // height_field: appendix A at level 0, from the vertex's texture coordinate.
+    if (g.plane == GroundPlane::xy) {
+        // Thesis mapping st = xy / scaleXY; appendix A's frame (x, up, z') with z' = world y:
+        // the returned (nx, n_up, nz') is the world normal (nx, nz', n_up).
+        const T h = static_cast<T>(g.scale_xy / height_texture->width());
+        const T step = static_cast<T>(1.0 / height_texture->width());
+        const auto n = lab4_height_normal(*height_texture, ev.textureCoordinate, vec2_t<T>(step, step), h,
+                                          static_cast<T>(g.scale_z), T(0));
+        return vec3_t<T>(n.x, n.z, n.y);
+    }
+    // COSC422 mapping s = (x - x0)/(x1 - x0), t = (z - z0)/(z1 - z0), y up.
+    const double h = std::abs(g.extent_u.y - g.extent_u.x) / height_texture->width();
+    const vec2_t<T> st_step(static_cast<T>(h / (g.extent_u.y - g.extent_u.x)),
+                            static_cast<T>(h / (g.extent_v.y - g.extent_v.x)));
+    return vec3_t<T>(lab4_height_normal(*height_texture, ev.textureCoordinate, st_step, static_cast<T>(h),
+                                        static_cast<T>(g.scale_z), T(0)));
+}
+
+template class TerrainProgram<float>;
+template class TerrainProgram<double>;
+
+}  // namespace tessref::pipeline

@@ -1,0 +1,56 @@
+// terrain.h — what the three terrain programs (thesis, cosc422, lab4) share: the grid as
+// the application's vertex buffer, the height and normal maps as samplers, the terrain
+// control models, and the geometry stage's per-vertex normals.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "pipeline/program.h"
+#include "tessref/evaluation.h"
+
+namespace tessref::pipeline {
+
+template <typename T>
+class TerrainProgram : public PatchProgram<T> {
+public:
+    PatchLevels<T> control(std::size_t patch) override;
+    void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                  std::size_t first_vertex) const override;
+
+protected:
+    explicit TerrainProgram(const Scene& scene);
+
+    // The model's vertex shader on one corner of the grid (ground plane, height 0).
+    virtual vec4_t<T> vertex(const vec3_t<T>& ground) const { return vec4_t<T>(ground, T(1)); }
+    // The model's evaluation shader at one domain point of a patch whose control stage ran.
+    virtual EvaluatedVertex<T> evaluate_point(std::size_t patch, const DomainPoint<T>& tc) const = 0;
+    // The mip level the evaluation sampled the height at (lab 4), for height-field normals.
+    virtual T vertex_lod(std::size_t /*patch*/, const DomainPoint<T>& /*tc*/) const { return T(0); }
+    // The geometry stage's per-vertex normal ([geometry] normals = "normal_map" or
+    // "height_field"); lab 4 overrides the height-field one with its own shader's.
+    virtual vec3_t<T> vertex_normal(const EvaluatedVertex<T>& vertex, T lod) const;
+
+    const Scene& scene;
+    const TerrainGrid& grid;
+    CameraUniforms<T> camera;
+    std::shared_ptr<const Texture> height_texture;
+    Sampler2D<T> heightMap;
+    Sampler2DLod<T> heightMapLod;
+    Sampler2D<T> normalMap;                      // unbound unless the scene has a normal map
+    mat3_t<T> normalMatrix{T(1)};                // the thesis's normalMatrix: model is the identity
+    std::vector<std::array<vec4_t<T>, 4>> tcPosition;  // per patch: the control stage's output corners
+
+    // Control models, bound once (only the scene's is read).
+    ThesisControl<T> thesisControl{};
+    Lab4Control<T> lab4Control{};
+    std::vector<Lab4Lod<T>> lab4Lod;             // per patch, with control model lab4
+
+private:
+    std::vector<T> u_coords, v_coords;  // grid corner coordinates as the vertex buffer holds them
+    bool geometry_vertex_normals = false;
+};
+
+}  // namespace tessref::pipeline
