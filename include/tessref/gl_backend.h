@@ -15,7 +15,8 @@
 // checked with GL_PRIMITIVES_GENERATED / GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN queries.
 //
 // The shader files are read at run time from $TESSREF_DATA_DIR/shaders when that
-// environment variable is set, else from the source tree's data/shaders.
+// environment variable is set, else from ../share/tessref/shaders beside the running
+// executable (an installed tessref), else, in a build tree, from the source data/shaders.
 //
 // llvmpipe runs its draws with denormals flushed to zero: a denormal outer level culls
 // the patch there (tessellate() models this); the calling thread's FP mode is left as is.

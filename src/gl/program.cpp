@@ -2,19 +2,17 @@
 #include "gl/program.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <fstream>
 #include <regex>
 #include <sstream>
 #include <string_view>
 #include <utility>
 
+#include "common/data_dir.h"
+
 namespace tessref::gl {
 
-std::string shader_data_dir() {
-    if (const char* env = std::getenv("TESSREF_DATA_DIR"); env && *env) return env;
-    return TESSREF_DATA_DIR;
-}
+std::string shader_data_dir() { return data_dir(); }
 
 std::string read_shader(const std::string& name) {
     const std::string path = shader_data_dir() + "/shaders/" + name;

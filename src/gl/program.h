@@ -12,7 +12,7 @@
 
 namespace tessref::gl {
 
-// $TESSREF_DATA_DIR when set, else the source tree's data/ (shaders are read at run time).
+// tessref::data_dir() (common/data_dir.h): shaders are read at run time from its shaders/.
 std::string shader_data_dir();
 // The text of data/shaders/<name>; throws tessref::Error naming the path when unreadable.
 std::string read_shader(const std::string& name);

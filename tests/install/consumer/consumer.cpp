@@ -1,0 +1,62 @@
+// Uses an installed tessref through its public headers only: the primitive generator, a
+// shipped scene loaded from the installed share/tessref/, and the GL backend (llvmpipe).
+// Exit 0 and "consumer: ok" when every count matches; the expected counts come from the
+// tessellation rules and the scene files, not from a run of tessref.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include <tessref/error.h>
+#include <tessref/gl_backend.h>
+#include <tessref/scene.h>
+#include <tessref/tessellator.h>
+
+namespace {
+
+int failures = 0;
+
+void expect(const char* what, std::size_t got, std::size_t want) {
+    std::printf("%s: %zu (expected %zu)\n", what, got, want);
+    if (got != want) ++failures;
+}
+
+}  // namespace
+
+int main() {
+    try {
+        // Equal spacing, every level 4 on quads: a 4 x 4 grid of quads, two triangles each.
+        tessref::TessSettings quads;
+        quads.domain = tessref::Domain::quads;
+        quads.spacing = tessref::Spacing::equal;
+        tessref::TessLevels four;
+        four.outer = {4.0f, 4.0f, 4.0f, 4.0f};
+        four.inner = {4.0f, 4.0f};
+        expect("quads 4/4 triangles", tessref::tessellate(quads, four).primitive_count(), 32);
+
+        // thesis-constant-1: [domain] patches = [16, 16], [control] level 1 on quads (the
+        // minimal patch: two triangles each) -> 256 patches, 512 triangles.
+        const std::string data = CONSUMER_DATA_DIR;
+        const tessref::Scene terrain = tessref::load_scene(data + "/scenes/thesis-constant-1.toml");
+        expect("thesis-constant-1 patches", terrain.patch_count(), 256);
+        std::size_t triangles = 0;
+        for (std::size_t p = 0; p < terrain.patch_count(); ++p)
+            triangles += tessref::tessellate(terrain.generator, tessref::TessLevels{}).primitive_count();
+        expect("thesis-constant-1 triangles at level 1", triangles, 512);
+
+        // pn-triangles: one patch per mesh triangle, read through OpenMesh; the OFF headers
+        // say 20 (icosahedron) + 12 (cube) + 72 (bump) faces.
+        const tessref::Scene pn = tessref::load_scene(data + "/scenes/pn-triangles.toml");
+        expect("pn-triangles patches", pn.patch_count(), 20 + 12 + 72);
+
+        // The real generator (OSMesa, llvmpipe) agrees with the count; its shaders come from
+        // $TESSREF_DATA_DIR, since this program does not live in the installed bin/.
+        tessref::gl::Context context = tessref::gl::Context::create();
+        expect("llvmpipe quads 4/4 triangles", tessref::gl::capture_pattern(context, quads, four).primitive_count(), 32);
+    } catch (const tessref::Error& e) {
+        std::fprintf(stderr, "consumer: error: %s\n", e.message().c_str());
+        return 2;
+    }
+    if (failures != 0) return 1;
+    std::printf("consumer: ok\n");
+    return 0;
+}
