@@ -23,6 +23,7 @@
 
 #include "tessref/control.h"
 #include "tessref/evaluation.h"
+#include "tessref/heightfield.h"
 #include "tessref/tessellator.h"
 
 namespace {
@@ -495,6 +496,94 @@ TEST(Pn, FloatAndDoubleAgree) {
     // generator's 16.16 quantization of gpu tess coords (~1.5e-5 on a unit patch).
     EXPECT_LT(worst_position, 1e-4);
     EXPECT_LT(worst_normal, 1e-4);
+}
+
+// ---- lab 4's appendix-A normal (lab4_vertex_normal) ------------------------------------
+
+// A height map with a known gradient: height(x, z) = 2 + 0.5 x - 0.25 z in world units
+// (horizontalScale 100, verticalScale 10: r = (height / 10)). With forward differences on a
+// plane the normal is exact in exact arithmetic: normalize(-0.5, 1, 0.25).
+template <typename T>
+Lab4NormalSampling<T> plane_sampling() {
+    Lab4NormalSampling<T> sampling;
+    sampling.horizontalScale = T(100);
+    sampling.verticalScale = T(10);
+    sampling.h = T(0.5);
+    sampling.heightMap = [](vec2_t<T> st, T) {
+        const T x = st.x * T(100), z = st.y * T(100);
+        return vec4_t<T>((T(2) + T(0.5) * x - T(0.25) * z) / T(10), T(0), T(0), T(1));
+    };
+    return sampling;
+}
+
+TEST(Lab4Normal, PlaneWithAKnownGradient) {
+    const glm::dvec3 expected = glm::normalize(glm::dvec3(-0.5, 1, 0.25));
+    const glm::dvec3 n = lab4_vertex_normal(3.0, 7.0, plane_sampling<double>());
+    EXPECT_NEAR(glm::distance(n, expected), 0.0, 1e-12);
+    const glm::vec3 nf = lab4_vertex_normal(3.0f, 7.0f, plane_sampling<float>());
+    EXPECT_NEAR(glm::distance(glm::dvec3(nf), expected), 0.0, 1e-5);
+    EXPECT_GT(n.y, 0.0);  // upward: the appendix's operand order negated (see geometry.h)
+}
+
+TEST(Lab4Normal, FlatHeightFieldGivesUpExactly) {
+    Lab4NormalSampling<float> sampling;
+    sampling.heightMap = [](glm::vec2, float) { return glm::vec4(0.3f, 0, 0, 1); };
+    sampling.h = 2;
+    EXPECT_EQ(lab4_vertex_normal(11.0f, -4.0f, sampling), glm::vec3(0, 1, 0));
+}
+
+TEST(Lab4Normal, SamplesAtTheGridStepAndTheGivenLod) {
+    std::vector<std::pair<glm::dvec2, double>> seen;
+    Lab4NormalSampling<double> sampling;
+    sampling.heightMap = [&](glm::dvec2 st, double lod) {
+        seen.emplace_back(st, lod);
+        return glm::dvec4(0, 0, 0, 1);
+    };
+    sampling.horizontalScale = 4;
+    sampling.texCoordOffset = glm::dvec2(0.5, 0.25);
+    sampling.h = 2;
+    sampling.lod = 3;
+    lab4_vertex_normal(8.0, 4.0, sampling);
+    ASSERT_EQ(seen.size(), 3u);
+    EXPECT_EQ(seen[0].first, glm::dvec2(2.5, 1.25));   // H(x, z)
+    EXPECT_EQ(seen[1].first, glm::dvec2(3.0, 1.25));   // H(x + h, z)
+    EXPECT_EQ(seen[2].first, glm::dvec2(2.5, 1.75));   // H(x, z + h)
+    for (const auto& s : seen) EXPECT_EQ(s.second, 3.0);
+}
+
+TEST(Lab4Normal, OfATexturedPlaneIsTheAnalyticNormal) {
+    // height(s, t) = (2x + 3y) / 256 at texel (x, y): linear in s and t, exact in float, and
+    // reproduced exactly by bilinear filtering away from the edges.
+    const int w = 32, h = 32;
+    std::vector<float> v(w * h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) v[y * w + x] = static_cast<float>(2 * x + 3 * y) / 256.0f;
+    const Texture tex = Texture::from_float(w, h, 1, v);
+    // World: x = s * S, z = t * S, y = height * V. d height / ds = 2 w / 256, / dt = 3 h / 256.
+    const double S = 100.0, V = 40.0;
+    const double dydx = (2.0 * w / 256.0) * V / S;
+    const double dydz = (3.0 * h / 256.0) * V / S;
+    const glm::dvec3 analytic = glm::normalize(glm::dvec3(-dydx, 1.0, -dydz));
+    const double grid = S / w;  // one texel
+    // evaluation.h's lab4_vertex_normal (the one appendix-A normal) at world (x, z) = st * S.
+    const glm::dvec2 st(0.4, 0.55);
+    Lab4NormalSampling<double> sd;
+    sd.heightMap = [&tex](glm::dvec2 uv, double lod) { return tex.textureLod(uv, lod); };
+    sd.horizontalScale = S;
+    sd.verticalScale = V;
+    sd.h = grid;
+    Lab4NormalSampling<float> sf;
+    sf.heightMap = [&tex](glm::vec2 uv, float lod) { return tex.textureLod(uv, lod); };
+    sf.horizontalScale = static_cast<float>(S);
+    sf.verticalScale = static_cast<float>(V);
+    sf.h = static_cast<float>(grid);
+    const glm::dvec3 nd = lab4_vertex_normal(st.x * S, st.y * S, sd);
+    const glm::vec3 nf = lab4_vertex_normal(static_cast<float>(st.x * S), static_cast<float>(st.y * S), sf);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(nd[c], analytic[c], 1e-12);
+        EXPECT_NEAR(nf[c], analytic[c], 1e-5);
+    }
+    EXPECT_GT(nd.y, 0.0);  // upward
 }
 
 }  // namespace

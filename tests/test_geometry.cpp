@@ -62,57 +62,6 @@ TEST(ThesisGeometry, OneNormalPerVertexFromTheMap) {
     EXPECT_EQ(normals[2], glm::vec3(0, 0, 1));
 }
 
-// A height map with a known gradient: height(x, z) = 2 + 0.5 x - 0.25 z in world units
-// (horizontalScale 100, verticalScale 10: r = (height / 10)). With forward differences on a
-// plane the normal is exact in exact arithmetic: normalize(-0.5, 1, 0.25).
-template <typename T>
-Lab4NormalSampling<T> plane_sampling() {
-    Lab4NormalSampling<T> sampling;
-    sampling.horizontalScale = T(100);
-    sampling.verticalScale = T(10);
-    sampling.h = T(0.5);
-    sampling.heightMap = [](vec2_t<T> st, T) {
-        const T x = st.x * T(100), z = st.y * T(100);
-        return vec4_t<T>((T(2) + T(0.5) * x - T(0.25) * z) / T(10), T(0), T(0), T(1));
-    };
-    return sampling;
-}
-
-TEST(Lab4Normal, PlaneWithAKnownGradient) {
-    const glm::dvec3 expected = glm::normalize(glm::dvec3(-0.5, 1, 0.25));
-    const glm::dvec3 n = lab4_vertex_normal(3.0, 7.0, plane_sampling<double>());
-    EXPECT_NEAR(glm::distance(n, expected), 0.0, 1e-12);
-    const glm::vec3 nf = lab4_vertex_normal(3.0f, 7.0f, plane_sampling<float>());
-    EXPECT_NEAR(glm::distance(glm::dvec3(nf), expected), 0.0, 1e-5);
-    EXPECT_GT(n.y, 0.0);  // upward: the appendix's operand order negated (see geometry.h)
-}
-
-TEST(Lab4Normal, FlatHeightFieldGivesUpExactly) {
-    Lab4NormalSampling<float> sampling;
-    sampling.heightMap = [](glm::vec2, float) { return glm::vec4(0.3f, 0, 0, 1); };
-    sampling.h = 2;
-    EXPECT_EQ(lab4_vertex_normal(11.0f, -4.0f, sampling), glm::vec3(0, 1, 0));
-}
-
-TEST(Lab4Normal, SamplesAtTheGridStepAndTheGivenLod) {
-    std::vector<std::pair<glm::dvec2, double>> seen;
-    Lab4NormalSampling<double> sampling;
-    sampling.heightMap = [&](glm::dvec2 st, double lod) {
-        seen.emplace_back(st, lod);
-        return glm::dvec4(0, 0, 0, 1);
-    };
-    sampling.horizontalScale = 4;
-    sampling.texCoordOffset = glm::dvec2(0.5, 0.25);
-    sampling.h = 2;
-    sampling.lod = 3;
-    lab4_vertex_normal(8.0, 4.0, sampling);
-    ASSERT_EQ(seen.size(), 3u);
-    EXPECT_EQ(seen[0].first, glm::dvec2(2.5, 1.25));   // H(x, z)
-    EXPECT_EQ(seen[1].first, glm::dvec2(3.0, 1.25));   // H(x + h, z)
-    EXPECT_EQ(seen[2].first, glm::dvec2(2.5, 1.75));   // H(x, z + h)
-    for (const auto& s : seen) EXPECT_EQ(s.second, 3.0);
-}
-
 TEST(SmoothNormals, AreaWeightingOnAHandExample) {
     // Vertex 0 (the origin) is in two triangles:
     //  T1 (0,0,0) (1,0,0) (0,1,0): cross = (0,0,1), area 0.5, normal +z;

@@ -35,7 +35,6 @@
 #include "tessref/limits.h"
 
 namespace fs = std::filesystem;
-using tessref::HeightDifference;
 using tessref::HeightFieldOptions;
 using tessref::MinFilter;
 using tessref::MipmapRule;
@@ -948,34 +947,6 @@ TEST(Normals, ThesisNormalMapOfAPlaneIsTheAnalyticNormal) {
     EXPECT_EQ(codes[12], 127);
     EXPECT_EQ(codes[13], 127);
     EXPECT_EQ(codes[14], 255);
-}
-
-TEST(Normals, Lab4AppendixANormalOfAPlaneIsTheAnalyticNormal) {
-    // height(s, t) = (2x + 3y) / 256 at texel (x, y): linear in s and t, exact in float, and
-    // reproduced exactly by bilinear filtering away from the edges.
-    const int w = 32, h = 32;
-    std::vector<float> v(w * h);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) v[y * w + x] = static_cast<float>(2 * x + 3 * y) / 256.0f;
-    const Texture tex = Texture::from_float(w, h, 1, v);
-    // World: x = s * S, z = t * S, y = height * V. d height / ds = 2 w / 256, / dt = 3 h / 256.
-    const double S = 100.0, V = 40.0;
-    const double dydx = (2.0 * w / 256.0) * V / S;
-    const double dydz = (3.0 * h / 256.0) * V / S;
-    const glm::dvec3 analytic = glm::normalize(glm::dvec3(-dydx, 1.0, -dydz));
-    const double grid = S / w;  // one texel
-    for (const HeightDifference difference : {HeightDifference::forward, HeightDifference::central}) {
-        const glm::dvec2 st(0.4, 0.55);
-        const glm::dvec2 step(1.0 / w, 1.0 / h);
-        const glm::dvec3 nd = tessref::lab4_height_normal(tex, st, step, grid, V, 0.0, difference);
-        const glm::vec3 nf = tessref::lab4_height_normal(tex, glm::vec2(st), glm::vec2(step), static_cast<float>(grid),
-                                                         static_cast<float>(V), 0.0f, difference);
-        for (int c = 0; c < 3; ++c) {
-            EXPECT_NEAR(nd[c], analytic[c], 1e-12);
-            EXPECT_NEAR(nf[c], analytic[c], 1e-5);
-        }
-        EXPECT_GT(nd.y, 0.0);  // upward
-    }
 }
 
 // ---- the independent peer: Mesa llvmpipe through OSMesa -----------------------------------

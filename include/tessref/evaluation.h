@@ -6,6 +6,7 @@
 //   cosc422_evaluate   cosc422_terrain.tese   bilinear mix, height = texture(...).r * 10 in y
 //   lab4_evaluate      lab4_terrain.tese      bilinear mix, height from the mip level that
 //                                             matches the tessellation level (textureLod)
+//   lab4_vertex_normal lab4_terrain.tese      appendix A's normal from the height field
 //   pn_evaluate        pn_triangles.tese      PN triangle, influence 0.75
 // Each is a template over the scalar: float (GPU-faithful, the shader's operations in its
 // order) or double (accuracy), chosen per call; both are instantiated in src/evaluation/.
@@ -98,10 +99,30 @@ struct Lab4Evaluation {
     T horizontalScale = T(1);  // world units per texture-coordinate unit
     T verticalScale = T(1);
     vec2_t<T> texCoordOffset{T(0)};
-    // > 0: also the appendix-A normal (lab4_vertex_normal in geometry.h) with this grid step
+    // > 0: also the appendix-A normal (lab4_vertex_normal below) with this grid step
     // h, sampled at the vertex's own lod, as the lab computes normals in this shader.
     T gridStep = T(0);
 };
+// Lab 4 appendix A, y up: with H(x, z) = (x, height(x, z), z),
+//   N = normalize((H(x+h, z) - H(x, z)) x (H(x, z+h) - H(x, z)))
+// where height(x, z) = textureLod(heightMap, (x, z) / horizontalScale + texCoordOffset,
+// lod).r * verticalScale and h is the height-map grid step in world units.
+// Not kept: in a right-handed y-up frame the appendix's operand order gives the normal
+// pointing down (cross(x, z) = -y); this returns the upward one, which is exactly the
+// negation of the appendix's expression (the operands swapped), because lab 4 uses the
+// normal for Phong lighting and for its slope rule (y near 1 = flat).
+template <typename T>
+struct Lab4NormalSampling {
+    Sampler2DLod<T> heightMap;
+    T horizontalScale = T(1);
+    T verticalScale = T(1);
+    vec2_t<T> texCoordOffset{T(0)};
+    T h = T(1);  // grid step in world units
+    T lod = T(0);
+};
+template <typename T>
+vec3_t<T> lab4_vertex_normal(T x, T z, const Lab4NormalSampling<T>& sampling);
+
 // logTessellationLevel for a tess coord: u == 0 -> edge 0, v == 0 -> edge 1, u == 1 ->
 // edge 2, v == 1 -> edge 3; two of them at once -> that corner; otherwise logInner.
 template <typename T>

@@ -1,10 +1,10 @@
 // tessref/geometry.h — the geometry stage: normals of the tessellated surface.
 //
-// Pure functions mirroring the geometry shaders in data/shaders/ (and lab 4's appendix A):
+// Pure functions mirroring the geometry shaders in data/shaders/ (lab 4's appendix-A normal,
+// which the lab computes in its evaluation shader, is evaluation.h's lab4_vertex_normal):
 //   face_normal                 cosc422_terrain.geom   one normal per triangle
 //   thesis_normal_from_texture  thesis_terrain.geom    per-vertex normal from the normal map
 //   thesis_geometry             thesis_terrain.geom    the whole shader for one triangle
-//   lab4_vertex_normal          lab4_terrain.tese      appendix A, from the height field
 //   smooth_vertex_normals       (no shader)            area-weighted vertex normals
 // Templates over the scalar (float: GPU-faithful; double: accuracy), instantiated in
 // src/geometry/.
@@ -40,26 +40,6 @@ template <typename T>
 std::array<vec3_t<T>, 3> thesis_geometry(const std::array<vec2_t<T>, 3>& textureCoordinate,
                                          const Sampler2D<T>& normalMap,
                                          const mat3_t<T>& normalMatrix);
-
-// Lab 4 appendix A, y up: with H(x, z) = (x, height(x, z), z),
-//   N = normalize((H(x+h, z) - H(x, z)) x (H(x, z+h) - H(x, z)))
-// where height(x, z) = textureLod(heightMap, (x, z) / horizontalScale + texCoordOffset,
-// lod).r * verticalScale and h is the height-map grid step in world units.
-// Not kept: in a right-handed y-up frame the appendix's operand order gives the normal
-// pointing down (cross(x, z) = -y); this returns the upward one, which is exactly the
-// negation of the appendix's expression (the operands swapped), because lab 4 uses the
-// normal for Phong lighting and for its slope rule (y near 1 = flat).
-template <typename T>
-struct Lab4NormalSampling {
-    Sampler2DLod<T> heightMap;
-    T horizontalScale = T(1);
-    T verticalScale = T(1);
-    vec2_t<T> texCoordOffset{T(0)};
-    T h = T(1);  // grid step in world units
-    T lod = T(0);
-};
-template <typename T>
-vec3_t<T> lab4_vertex_normal(T x, T z, const Lab4NormalSampling<T>& sampling);
 
 // Smooth vertex normals over a triangle list: each vertex gets the normalized sum of
 // cross(p1 - p0, p2 - p0) of its triangles (twice their area times their unit normal, hence

@@ -276,26 +276,4 @@ std::vector<std::uint8_t> thesis_normal_map_codes(const Texture& height_map,
 glm::vec3 decode_unorm_normal(glm::vec3 rgb);
 glm::dvec3 decode_unorm_normal(glm::dvec3 rgb);
 
-// Lab 4, appendix A ("Computing the normal"), y up, with H(x, z) = (x, height(x, z), z):
-//   N = normalize((H(x+h, z) - H(x, z)) x (H(x, z+h) - H(x, z)))
-// where height = textureLod(heightMap, st, lod).r * vertical_scale. The appendix calls it a
-// product of "three adjacent cells": a one-sided (forward) difference, not a central one.
-// st is the texture coordinate of (x, z); st_step is the texture-coordinate offset that
-// corresponds to +h in world x (.x, applied to s) and +h in world z (.y, applied to t; negate
-// it when world z runs against t); h is the grid step in world units.
-// Not kept: in a right-handed y-up frame the appendix's operand order points the normal down
-// (cross of +x and +z is -y); this returns the upward normal, i.e. exactly the appendix's
-// expression negated (the operands swapped), the same choice as geometry.h's
-// lab4_vertex_normal. HeightDifference::central uses H(x+h) - H(x-h) and H(z+h) - H(z-h)
-// instead (still upward). The float version mirrors the GLSL in float (glm::cross,
-// glm::normalize); a GPU's normalize uses an approximate inverse square root, so it is not
-// bit-exact with one.
-enum class HeightDifference : std::uint8_t { forward, central };
-glm::vec3 lab4_height_normal(const Texture& height_map, glm::vec2 st, glm::vec2 st_step,
-                             float h, float vertical_scale, float lod = 0.0f,
-                             HeightDifference difference = HeightDifference::forward);
-glm::dvec3 lab4_height_normal(const Texture& height_map, glm::dvec2 st, glm::dvec2 st_step,
-                              double h, double vertical_scale, double lod = 0.0,
-                              HeightDifference difference = HeightDifference::forward);
-
 }  // namespace tessref

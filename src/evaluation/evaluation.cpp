@@ -3,8 +3,6 @@
 // names are the shaders', so the two read side by side.
 #include "tessref/evaluation.h"
 
-#include "tessref/geometry.h"
-
 namespace tessref {
 
 namespace {
@@ -94,6 +92,22 @@ T lab4_vertex_log_level(const DomainPoint<T>& glTessCoord, const Lab4Lod<T>& lod
     if (u1) return lod.logOuter[2];
     if (v1) return lod.logOuter[3];
     return lod.logInner;
+}
+
+template <typename T>
+vec3_t<T> lab4_vertex_normal(T x, T z, const Lab4NormalSampling<T>& sampling) {
+    // GLSL: lab4_terrain.tese:55 lab4_height
+    auto lab4_height = [&](T px, T pz) {
+        const vec2_t<T> texCoord = vec2_t<T>(px, pz) / sampling.horizontalScale + sampling.texCoordOffset;
+        return sampling.heightMap(texCoord, sampling.lod).r * sampling.verticalScale;
+    };
+    // GLSL: lab4_terrain.tese:61 lab4_vertex_normal
+    const T h = sampling.h;
+    const vec3_t<T> H(x, lab4_height(x, z), z);
+    const vec3_t<T> Hx(x + h, lab4_height(x + h, z), z);
+    const vec3_t<T> Hz(x, lab4_height(x, z + h), z + h);
+    // GLSL: lab4_terrain.tese:67 normalize(cross
+    return glm::normalize(glm::cross(Hz - H, Hx - H));
 }
 
 template <typename T>
@@ -239,6 +253,7 @@ EvaluatedVertex<T> pn_evaluate(const PnPatch<T>& patch, const DomainPoint<T>& gl
 }
 
 #define TESSREF_INSTANTIATE(T)                                                                    \
+    template vec3_t<T> lab4_vertex_normal(T, T, const Lab4NormalSampling<T>&);                   \
     template EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>&,                  \
                                                 const DomainPoint<T>&, const ThesisEvaluation<T>&); \
     template EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>&,                 \

@@ -1,6 +1,5 @@
 // The geometry stage: face normals (cosc422_terrain.geom), normal-map normals
-// (thesis_terrain.geom), height-field normals (lab 4 appendix A, lab4_terrain.tese) and
-// area-weighted smooth vertex normals.
+// (thesis_terrain.geom) and area-weighted smooth vertex normals.
 #include "tessref/geometry.h"
 
 #include <bit>
@@ -39,22 +38,6 @@ std::array<vec3_t<T>, 3> thesis_geometry(const std::array<vec2_t<T>, 3>& texture
         gNormal[i] = thesis_normal_from_texture(vec3_t<T>(texel), normalMatrix);
     }
     return gNormal;
-}
-
-template <typename T>
-vec3_t<T> lab4_vertex_normal(T x, T z, const Lab4NormalSampling<T>& sampling) {
-    // GLSL: lab4_terrain.tese:55 lab4_height
-    auto lab4_height = [&](T px, T pz) {
-        const vec2_t<T> texCoord = vec2_t<T>(px, pz) / sampling.horizontalScale + sampling.texCoordOffset;
-        return sampling.heightMap(texCoord, sampling.lod).r * sampling.verticalScale;
-    };
-    // GLSL: lab4_terrain.tese:61 lab4_vertex_normal
-    const T h = sampling.h;
-    const vec3_t<T> H(x, lab4_height(x, z), z);
-    const vec3_t<T> Hx(x + h, lab4_height(x + h, z), z);
-    const vec3_t<T> Hz(x, lab4_height(x, z + h), z + h);
-    // GLSL: lab4_terrain.tese:67 normalize(cross
-    return glm::normalize(glm::cross(Hz - H, Hx - H));
 }
 
 namespace {
@@ -108,7 +91,6 @@ std::vector<vec3_t<T>> smooth_vertex_normals(std::span<const vec3_t<T>> position
     template vec3_t<T> thesis_normal_from_texture(const vec3_t<T>&, const mat3_t<T>&);           \
     template std::array<vec3_t<T>, 3> thesis_geometry(const std::array<vec2_t<T>, 3>&,           \
                                                       const Sampler2D<T>&, const mat3_t<T>&);    \
-    template vec3_t<T> lab4_vertex_normal(T, T, const Lab4NormalSampling<T>&);                   \
     template std::vector<vec3_t<T>> smooth_vertex_normals(                                       \
         std::span<const vec3_t<T>>, std::span<const std::array<std::uint32_t, 3>>, Weld);
 TESSREF_INSTANTIATE(float)

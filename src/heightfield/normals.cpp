@@ -65,46 +65,4 @@ Texture thesis_normal_map(const Texture& height_map, double texel_spacing, doubl
 glm::vec3 decode_unorm_normal(glm::vec3 rgb) { return rgb * 2.0f - 1.0f; }
 glm::dvec3 decode_unorm_normal(glm::dvec3 rgb) { return rgb * 2.0 - 1.0; }
 
-namespace {
-
-template <typename T>
-glm::vec<3, T, glm::defaultp> lab4_normal(const Texture& heightMap, glm::vec<2, T, glm::defaultp> st,
-                                          glm::vec<2, T, glm::defaultp> stStep, T h, T verticalScale,
-                                          T lod, HeightDifference difference) {
-    using vec2 = glm::vec<2, T, glm::defaultp>;
-    using vec3 = glm::vec<3, T, glm::defaultp>;
-    auto height = [&](vec2 uv) { return heightMap.textureLod(uv, lod).r * verticalScale; };
-    vec3 dX;  // H(x+h, z) - H(x, z)      (central: H(x+h, z) - H(x-h, z))
-    vec3 dZ;  // H(x, z+h) - H(x, z)      (central: H(x, z+h) - H(x, z-h))
-    if (difference == HeightDifference::forward) {
-        const T hC = height(st);
-        const T hX = height(st + vec2(stStep.x, T(0)));
-        const T hZ = height(st + vec2(T(0), stStep.y));
-        dX = vec3(h, hX - hC, T(0));
-        dZ = vec3(T(0), hZ - hC, h);
-    } else {
-        const T hXp = height(st + vec2(stStep.x, T(0)));
-        const T hXm = height(st - vec2(stStep.x, T(0)));
-        const T hZp = height(st + vec2(T(0), stStep.y));
-        const T hZm = height(st - vec2(T(0), stStep.y));
-        dX = vec3(T(2) * h, hXp - hXm, T(0));
-        dZ = vec3(T(0), hZp - hZm, T(2) * h);
-    }
-    // Appendix A: normalize(dX x dZ) points down (-y); the operands swapped give the upward
-    // normal, its exact negation.
-    return glm::normalize(glm::cross(dZ, dX));
-}
-
-}  // namespace
-
-glm::vec3 lab4_height_normal(const Texture& height_map, glm::vec2 st, glm::vec2 st_step, float h,
-                             float vertical_scale, float lod, HeightDifference difference) {
-    return lab4_normal<float>(height_map, st, st_step, h, vertical_scale, lod, difference);
-}
-
-glm::dvec3 lab4_height_normal(const Texture& height_map, glm::dvec2 st, glm::dvec2 st_step, double h,
-                              double vertical_scale, double lod, HeightDifference difference) {
-    return lab4_normal<double>(height_map, st, st_step, h, vertical_scale, lod, difference);
-}
-
 }  // namespace tessref

@@ -3,8 +3,6 @@
 // appendix A's normal at that same level.
 #include "pipeline/terrain.h"
 
-#include "tessref/geometry.h"
-
 namespace tessref::pipeline {
 namespace {
 
@@ -26,19 +24,6 @@ private:
     }
     T vertex_lod(std::size_t p, const DomainPoint<T>& tc) const override {
         return this->lab4Lod[p].maxLogTessellationLevel - lab4_vertex_log_level<T>(tc, this->lab4Lod[p]);
-    }
-    vec3_t<T> vertex_normal(const EvaluatedVertex<T>& ev, T lod) const override {
-        if (this->scene.geometry->normals != GeometryNormals::height_field)
-            return TerrainProgram<T>::vertex_normal(ev, lod);
-        // lab4_terrain.tese: lab4_vertex_normal(position.x, position.z, lod), one texel apart
-        Lab4NormalSampling<T> sampling;
-        sampling.heightMap = evaluation.heightMap;
-        sampling.horizontalScale = evaluation.horizontalScale;
-        sampling.verticalScale = evaluation.verticalScale;
-        sampling.texCoordOffset = evaluation.texCoordOffset;
-        sampling.h = static_cast<T>(this->grid.scale_xy / this->height_texture->width());
-        sampling.lod = lod;
-        return lab4_vertex_normal<T>(ev.position.x, ev.position.z, sampling);
     }
 
     Lab4Evaluation<T> evaluation{};

@@ -89,29 +89,53 @@ void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> 
 }
 
 template <typename T>
-vec3_t<T> TerrainProgram<T>::vertex_normal(const EvaluatedVertex<T>& ev, T /*lod*/) const {
-    const TerrainGrid& g = grid;
+vec3_t<T> TerrainProgram<T>::vertex_normal(const EvaluatedVertex<T>& ev, T lod) const {
     if (scene.geometry->normals == GeometryNormals::normal_map) {
         // thesis_terrain.geom: gNormal = NormalFromTexture(texture(normalMap, textureCoordinate).rgb)
         return thesis_normal_from_texture<T>(vec3_t<T>(normalMap(ev.textureCoordinate)), normalMatrix);
     }
-    // height_field: appendix A at level 0, from the vertex's texture coordinate.
-    if (g.plane == GroundPlane::xy) {
-        // Thesis mapping st = xy / scaleXY; appendix A's frame (x, up, z') with z' = world y:
-        // the returned (nx, n_up, nz') is the world normal (nx, nz', n_up).
-        const T h = static_cast<T>(g.scale_xy / height_texture->width());
-        const T step = static_cast<T>(1.0 / height_texture->width());
-        const auto n = lab4_height_normal(*height_texture, ev.textureCoordinate, vec2_t<T>(step, step), h,
-                                          static_cast<T>(g.scale_z), T(0));
-        return vec3_t<T>(n.x, n.z, n.y);
-    }
-    // COSC422 mapping s = (x - x0)/(x1 - x0), t = (z - z0)/(z1 - z0), y up.
-    const double h = std::abs(g.extent_u.y - g.extent_u.x) / height_texture->width();
-    const vec2_t<T> st_step(static_cast<T>(h / (g.extent_u.y - g.extent_u.x)),
-                            static_cast<T>(h / (g.extent_v.y - g.extent_v.x)));
-    return vec3_t<T>(lab4_height_normal(*height_texture, ev.textureCoordinate, st_step, static_cast<T>(h),
-                                        static_cast<T>(g.scale_z), T(0)));
+    return height_field_normal<T>(scene, ev.position, lod);
 }
+
+template <typename T>
+vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T lod) {
+    const TerrainGrid& g = *scene.grid;
+    const Texture& texture = g.heightmap->texture;
+    Lab4NormalSampling<T> sampling;
+    sampling.verticalScale = static_cast<T>(g.scale_z);
+    sampling.lod = lod;
+    switch (scene.evaluation.model) {
+        case EvaluationModel::lab4:  // lab4_terrain.tese: lab4_vertex_normal(position.x, position.z, lod)
+        case EvaluationModel::thesis:
+            // texCoord = (x, z) / horizontalScale + texCoordOffset; the thesis's xy / scaleXY
+            // is the same with its y as appendix A's z and no offset.
+            sampling.heightMap = [&texture](vec2_t<T> st, T level) { return texture.textureLod(st, level); };
+            sampling.horizontalScale = static_cast<T>(g.scale_xy);
+            if (scene.evaluation.model == EvaluationModel::lab4) sampling.texCoordOffset = vec2_t<T>(g.texcoord_offset);
+            sampling.h = static_cast<T>(g.scale_xy / texture.width());
+            break;
+        case EvaluationModel::cosc422: {
+            // s = (x - xMin) / (xMax - xMin), t = (z - zMin) / (zMax - zMin), as the
+            // evaluation shader maps it; horizontalScale 1 and no offset pass (x, z) through.
+            const vec2_t<T> lo(static_cast<T>(g.extent_u.x), static_cast<T>(g.extent_v.x));
+            const vec2_t<T> size(static_cast<T>(g.extent_u.y - g.extent_u.x), static_cast<T>(g.extent_v.y - g.extent_v.x));
+            sampling.heightMap = [&texture, lo, size](vec2_t<T> p, T level) {
+                return texture.textureLod((p - lo) / size, level);
+            };
+            sampling.h = static_cast<T>(std::abs(g.extent_u.y - g.extent_u.x) / texture.width());
+            break;
+        }
+        case EvaluationModel::pn: break;  // no height field
+    }
+    if (g.plane == GroundPlane::xz) return lab4_vertex_normal<T>(position.x, position.z, sampling);
+    // Plane xy: appendix A's frame (x, up, z') has z' = world y, so its (nx, n_up, nz') is
+    // the world normal (nx, nz', n_up).
+    const vec3_t<T> n = lab4_vertex_normal<T>(position.x, position.y, sampling);
+    return vec3_t<T>(n.x, n.z, n.y);
+}
+
+template vec3_t<float> height_field_normal(const Scene&, const vec3_t<float>&, float);
+template vec3_t<double> height_field_normal(const Scene&, const vec3_t<double>&, double);
 
 template class TerrainProgram<float>;
 template class TerrainProgram<double>;

@@ -13,6 +13,14 @@
 
 namespace tessref::pipeline {
 
+// [geometry] normals = "height_field" at a world position of the scene's terrain: lab 4's
+// appendix-A normal (evaluation.h's lab4_vertex_normal, the one implementation), one
+// height-map texel apart, from mip `lod`, through the evaluation model's own world ->
+// texture mapping (lab 4: xz / scale_xy + offset; thesis: xy / scale_xy; COSC422: the
+// extent). Returned in world axes, pointing up the plane's up axis.
+template <typename T>
+vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T lod);
+
 template <typename T>
 class TerrainProgram : public PatchProgram<T> {
 public:
@@ -30,8 +38,8 @@ protected:
     // The mip level the evaluation sampled the height at (lab 4), for height-field normals.
     virtual T vertex_lod(std::size_t /*patch*/, const DomainPoint<T>& /*tc*/) const { return T(0); }
     // The geometry stage's per-vertex normal ([geometry] normals = "normal_map" or
-    // "height_field"); lab 4 overrides the height-field one with its own shader's.
-    virtual vec3_t<T> vertex_normal(const EvaluatedVertex<T>& vertex, T lod) const;
+    // "height_field").
+    vec3_t<T> vertex_normal(const EvaluatedVertex<T>& vertex, T lod) const;
 
     const Scene& scene;
     const TerrainGrid& grid;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/parallel.h"
+#include "pipeline/terrain.h"
 
 #include "render/render_internal.h"
 #include "tessref/error.h"
@@ -184,8 +185,7 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
         scene.geometry ? std::optional<GeometryNormals>(scene.geometry->normals)
                        : (scene.evaluation.model == EvaluationModel::lab4 ? std::optional<GeometryNormals>(GeometryNormals::height_field)
                                                                           : std::nullopt);
-    const Texture& height_texture = grid.heightmap->texture;
-    const glm::mat3 normalMatrix(1.0f);  // the model matrix is the identity (pipeline.cpp)
+    const glm::mat3 normalMatrix(1.0f);  // the model matrix is the identity (as in the pipeline)
 
     auto tex_coord = [&](const glm::dvec3& p) {
         return glm::dvec2(map.u.st(p.x), map.v.st(xy ? p.y : p.z));
@@ -210,29 +210,8 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
             }
             case GeometryNormals::height_field: break;
         }
-        // height_field at mip 0, as pipeline.cpp's vertex_normal computes it at a vertex.
-        if (scene.evaluation.model == EvaluationModel::lab4) {
-            Lab4NormalSampling<float> sampling;
-            sampling.heightMap = [&](glm::vec2 uv, float lod) { return height_texture.textureLod(uv, lod); };
-            sampling.horizontalScale = static_cast<float>(grid.scale_xy);
-            sampling.verticalScale = static_cast<float>(grid.scale_z);
-            sampling.texCoordOffset = glm::vec2(grid.texcoord_offset);
-            sampling.h = static_cast<float>(grid.scale_xy / height_texture.width());
-            sampling.lod = 0.0f;
-            return lab4_vertex_normal<float>(static_cast<float>(p.x), static_cast<float>(p.z), sampling);
-        }
-        if (xy) {
-            const auto h = static_cast<float>(grid.scale_xy / height_texture.width());
-            const auto step = static_cast<float>(1.0 / height_texture.width());
-            const glm::vec3 n = lab4_height_normal(height_texture, st, glm::vec2(step, step), h,
-                                                   static_cast<float>(grid.scale_z), 0.0f);
-            return glm::vec3(n.x, n.z, n.y);
-        }
-        const double h = std::abs(grid.extent_u.y - grid.extent_u.x) / height_texture.width();
-        const glm::vec2 st_step(static_cast<float>(h / (grid.extent_u.y - grid.extent_u.x)),
-                                static_cast<float>(h / (grid.extent_v.y - grid.extent_v.x)));
-        return lab4_height_normal(height_texture, st, st_step, static_cast<float>(h), static_cast<float>(grid.scale_z),
-                                  0.0f);
+        // height_field at mip 0, as the pipeline computes it at a vertex.
+        return pipeline::height_field_normal<float>(scene, glm::vec3(p), 0.0f);
     };
 
     const auto shade_start = std::chrono::steady_clock::now();
