@@ -161,40 +161,53 @@ inline std::map<std::uint32_t, std::size_t> triangles_per_patch(const tessref::C
     return n;
 }
 
-// The analytic view of the plane z = h (plane xy) through the window point (wx, wy) (GL
-// window coordinates, y up): the segment between the point's places on the near and on the
-// far plane (glm::unProject in double, not the renderer's code) meets the plane, or not.
+// The analytic view of the plane z = h (plane xy) through a camera: the segment between a
+// window point's places on the near and on the far plane (the inverse of the camera's
+// projection * view in double, as glm::unProject, not the renderer's code) meets the plane,
+// or not. Window coordinates are GL's (y up).
 struct PlaneHit {
     bool hit = false;  // between the near and the far plane
     glm::dvec3 point{0.0};
     double t = 0.0;    // 0 on the near plane, 1 on the far plane
 };
-inline PlaneHit analytic_plane(const tessref::SceneCamera& camera, double h, double wx, double wy) {
-    const glm::dvec4 viewport(0, 0, camera.viewport.x, camera.viewport.y);
-    const glm::dvec3 a = glm::unProject(glm::dvec3(wx, wy, 0.0), camera.view(), camera.projection(), viewport);
-    const glm::dvec3 b = glm::unProject(glm::dvec3(wx, wy, 1.0), camera.view(), camera.projection(), viewport);
-    PlaneHit r;
-    r.t = (h - a.z) / (b.z - a.z);
-    r.hit = r.t >= 0.0 && r.t <= 1.0;
-    r.point = a + r.t * (b - a);
-    return r;
-}
+class PlaneView {
+public:
+    PlaneView(const tessref::SceneCamera& camera, double h)
+        : camera_(camera), h_(h), inverse_(glm::inverse(camera.projection() * camera.view())) {}
 
-// Whether GL draws pixel (x, row) (row 0 on top) of the square terrain [lo, hi]^2 flat at
-// height h: its centre sees the plane between the near and far planes inside the square.
-// std::nullopt when points 1/16 pixel away from the centre disagree: the pixel lies on an
-// edge of the picture's visible region, where snapping and float rounding decide.
-inline std::optional<bool> analytic_coverage(const tessref::SceneCamera& camera, double h, double lo, double hi,
-                                             int x, int row) {
-    const double wx = x + 0.5, wy = camera.viewport.y - 1 - row + 0.5;
-    std::optional<bool> answer;
-    for (const glm::dvec2 d : {glm::dvec2(0.0, 0.0), glm::dvec2(-1, 0), glm::dvec2(1, 0), glm::dvec2(0, -1), glm::dvec2(0, 1)}) {
-        const PlaneHit p = analytic_plane(camera, h, wx + d.x / 16.0, wy + d.y / 16.0);
-        const bool in = p.hit && p.point.x > lo && p.point.x < hi && p.point.y > lo && p.point.y < hi;
-        if (answer && *answer != in) return std::nullopt;
-        answer = in;
+    PlaneHit hit(double wx, double wy) const {
+        const glm::dvec3 a = unproject(wx, wy, -1.0), b = unproject(wx, wy, 1.0);
+        PlaneHit r;
+        r.t = (h_ - a.z) / (b.z - a.z);
+        r.hit = r.t >= 0.0 && r.t <= 1.0;
+        r.point = a + r.t * (b - a);
+        return r;
     }
-    return answer;
-}
+    // Whether GL draws pixel (x, row) (row 0 on top) of the square terrain [lo, hi]^2 flat at
+    // height h: its centre sees the plane between the near and far planes inside the square.
+    // std::nullopt when points 1/16 pixel away from the centre disagree: the pixel lies on an
+    // edge of the visible region, where snapping and float rounding decide.
+    std::optional<bool> coverage(double lo, double hi, int x, int row) const {
+        const double wx = x + 0.5, wy = camera_.viewport.y - 1 - row + 0.5;
+        std::optional<bool> answer;
+        for (const glm::dvec2 d : {glm::dvec2(0, 0), glm::dvec2(-1, 0), glm::dvec2(1, 0), glm::dvec2(0, -1), glm::dvec2(0, 1)}) {
+            const PlaneHit p = hit(wx + d.x / 16.0, wy + d.y / 16.0);
+            const bool in = p.hit && p.point.x > lo && p.point.x < hi && p.point.y > lo && p.point.y < hi;
+            if (answer && *answer != in) return std::nullopt;
+            answer = in;
+        }
+        return answer;
+    }
+
+private:
+    glm::dvec3 unproject(double wx, double wy, double ndc_z) const {
+        const glm::dvec4 p = inverse_ * glm::dvec4(2.0 * wx / camera_.viewport.x - 1.0, 2.0 * wy / camera_.viewport.y - 1.0,
+                                                   ndc_z, 1.0);
+        return glm::dvec3(p) / p.w;
+    }
+    tessref::SceneCamera camera_;
+    double h_;
+    glm::dmat4 inverse_;
+};
 
 }  // namespace tessref::test::extremes

@@ -4,10 +4,10 @@
 //
 // Where the expected answers come from:
 //  - a flat terrain is the plane z = h: each pixel's view ray meets it (or not) at a point
-//    computed analytically in double with glm::unProject, not with the renderer's code; GL
-//    draws what lies between the near and the far plane (GL 4.6, 13.7 primitive clipping),
-//    so a pixel is covered exactly when that point lies inside the terrain's extent and
-//    between the two planes;
+//    computed in double from the inverse of projection * view (as glm::unProject), not with
+//    the renderer's code; GL draws what lies between the near and the far plane (GL 4.6,
+//    13.7 primitive clipping), so a pixel is covered exactly when that point lies inside the
+//    terrain's extent and between the two planes;
 //  - the ray-traced ground truth (render --raytrace, Embree) and llvmpipe (tessref gl) for
 //    the same scenes;
 //  - translation: the same terrain and camera moved by (1e6, 0, 1e6) show the same picture in
@@ -88,9 +88,10 @@ TEST_F(ExtremeCamera, NearPlaneAndBehindTheCameraAreClipped) {
         std::size_t inside = 0, outside = 0, wrong = 0, wrong_truth = 0, compared_depth = 0;
         double worst_depth = 0.0;
         const glm::dvec4 viewport(0, 0, image.width, image.height);
+        const PlaneView plane(image.camera, h);
         for (int row = 0; row < image.height; ++row) {
             for (int x = 0; x < image.width; ++x) {
-                const std::optional<bool> should = analytic_coverage(image.camera, h, 0.0, 64.0, x, row);
+                const std::optional<bool> should = plane.coverage(0.0, 64.0, x, row);
                 if (!should) continue;
                 const std::size_t i = image.index(x, row);
                 const bool is = image.triangle_id[i] != tessref::kNoPixelId;
@@ -98,7 +99,7 @@ TEST_F(ExtremeCamera, NearPlaneAndBehindTheCameraAreClipped) {
                 wrong += is != *should;
                 wrong_truth += (truth.triangle_id[i] != tessref::kNoPixelId) != *should;
                 if (is && *should) {
-                    const PlaneHit hit = analytic_plane(image.camera, h, x + 0.5, image.height - 1 - row + 0.5);
+                    const PlaneHit hit = plane.hit(x + 0.5, image.height - 1 - row + 0.5);
                     const glm::dvec3 w = glm::project(hit.point, image.camera.view(), image.camera.projection(), viewport);
                     worst_depth = std::max(worst_depth, std::abs(image.depth[i] - w.z));
                     ++compared_depth;
@@ -107,7 +108,7 @@ TEST_F(ExtremeCamera, NearPlaneAndBehindTheCameraAreClipped) {
         }
         EXPECT_GT(inside, 3000u);  // the test saw the ground ...
         EXPECT_GT(outside, 5000u);  // ... and the sky or the clipped ground
-        EXPECT_EQ(wrong, 0u) << "pixels covered where the analytic plane is not visible, or the reverse";
+        EXPECT_EQ(wrong, 0u) << "pixels covered where the plane is not visible, or the reverse";
         // Window depth from float plane equations: a few float ulps of z near 1.
         EXPECT_LT(worst_depth, 1e-5) << compared_depth << " depths compared";
         EXPECT_EQ(wrong_truth, 0u) << "the ray-traced picture disagrees with the analytic plane";
