@@ -210,4 +210,14 @@ private:
     glm::dmat4 inverse_;
 };
 
+// The fixture of the suite: a fresh directory per test (CommandDirTest) holding the scene
+// (scene.toml) and its files, tessref run inside it so scenes name their files relatively.
+class ExtremesTest : public CommandDirTest {
+protected:
+    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_, dir_); }
+    void write_scene(const Terrain& t) { write_file(dir_ / "scene.toml", t.toml()); }
+    // The same scene parsed in this process (the file need not exist: paths resolve from it).
+    tessref::Scene load(const Terrain& t) { return tessref::load_scene_from_string(t.toml(), path("scene.toml")); }
+};
+
 }  // namespace tessref::test::extremes

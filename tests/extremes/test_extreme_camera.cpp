@@ -27,21 +27,16 @@
 
 namespace {
 
-using tessref::test::CommandDirTest;
-using tessref::test::run_program;
 using tessref::test::RunResult;
 using tessref::test::write_file;
 using namespace tessref::test::extremes;
 
-class ExtremeCamera : public CommandDirTest {
+class ExtremeCamera : public ExtremesTest {
 protected:
-    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_, dir_); }
-    tessref::Scene load(const Terrain& t) { return tessref::load_scene_from_string(t.toml(), path("camera.toml")); }
-
     // llvmpipe's picture of the scene, byte for byte the CPU reference's.
     void expect_llvmpipe_picture(const Terrain& t, const tessref::RenderResult& image) {
-        write_file(dir_ / "camera.toml", t.toml());
-        const RunResult r = run({"gl", "camera.toml", "-o", "gl.png"});
+        write_scene(t);
+        const RunResult r = run({"gl", "scene.toml", "-o", "gl.png"});
         ASSERT_EQ(r.status, 0) << r.err;
         EXPECT_EQ(pixels_differing(read_picture(path("gl.png")), image), 0) << "pixels differ from llvmpipe's picture";
     }
@@ -115,7 +110,7 @@ TEST_F(ExtremeCamera, NearPlaneAndBehindTheCameraAreClipped) {
         expect_llvmpipe_picture(t, image);
         // Clipped lines too: the wireframe is llvmpipe's.
         if (v.near_plane == 1.0 && v.eye.z == 1.5) {
-            const RunResult r = run({"gl", "camera.toml", "--wireframe", "-o", "wire.png"});
+            const RunResult r = run({"gl", "scene.toml", "--wireframe", "-o", "wire.png"});
             ASSERT_EQ(r.status, 0) << r.err;
             tessref::RenderOptions wire;
             wire.mode = tessref::RenderMode::wireframe;
@@ -253,8 +248,8 @@ TEST_F(ExtremeCamera, TerrainFarFromTheOriginMatchesLlvmpipe) {
     for (const double offset : {0.0, 1e6}) {
         SCOPED_TRACE("offset " + num(offset));
         const Terrain t = hills(offset);
-        write_file(dir_ / "camera.toml", t.toml());
-        const RunResult r = run({"gl", "camera.toml", "-o", "gl.png"});
+        write_scene(t);
+        const RunResult r = run({"gl", "scene.toml", "-o", "gl.png"});
         ASSERT_EQ(r.status, 0) << r.err;
         const Picture gl = read_picture(path("gl.png"));
         const tessref::RenderResult image = tessref::render_scene(load(t));

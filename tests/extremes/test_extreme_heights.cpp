@@ -32,8 +32,6 @@
 namespace {
 
 namespace fs = std::filesystem;
-using tessref::test::CommandDirTest;
-using tessref::test::run_program;
 using tessref::test::RunResult;
 using tessref::test::write_file;
 using namespace tessref::test::extremes;
@@ -58,12 +56,7 @@ void write_oiio(const fs::path& path, int width, int height, OIIO::TypeDesc type
     out->close();
 }
 
-class ExtremeHeights : public CommandDirTest {
-protected:
-    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_, dir_); }
-    tessref::Scene load(const Terrain& t) { return tessref::load_scene_from_string(t.toml(), path("heights.toml")); }
-    void write_scene(const Terrain& t) { write_file(dir_ / "heights.toml", t.toml()); }
-};
+using ExtremeHeights = ExtremesTest;
 
 // ---- 16-bit maps: a step of one code ---------------------------------------------------
 
@@ -118,7 +111,7 @@ TEST_F(ExtremeHeights, SixteenBitStepOfOneCode) {
     // stands at z = 1000, where the rounding of the float mvp product decides the last bit
     // of a few depths: see ExtremeCamera.TerrainFarFromTheOriginMatchesLlvmpipe).
     write_scene(step_scene("step.pgm"));
-    const RunResult r = run({"gl", "heights.toml", "-o", "gl.png"});
+    const RunResult r = run({"gl", "scene.toml", "-o", "gl.png"});
     ASSERT_EQ(r.status, 0) << r.err;
     const tessref::RenderResult image = tessref::render_scene(load(step_scene("step.pgm")));
     EXPECT_GT(image.stats.covered_pixels, 1000u);
@@ -169,7 +162,7 @@ TEST_F(ExtremeHeights, TwoByTwoMapIsBilinear) {
     EXPECT_NEAR(centre, 90.0, 1e-4);
     // Rendered, llvmpipe's picture.
     write_scene(t);
-    const RunResult r = run({"gl", "heights.toml", "-o", "gl.png"});
+    const RunResult r = run({"gl", "scene.toml", "-o", "gl.png"});
     ASSERT_EQ(r.status, 0) << r.err;
     const tessref::RenderResult image = tessref::render_scene(load(t));
     EXPECT_GT(image.stats.covered_pixels, 1000u);
@@ -187,8 +180,8 @@ TEST_F(ExtremeHeights, TooSmallAndTooThinMapsAreRefused) {
         t.heightmap = file;
         write_scene(t);
         const std::set<std::string> before = files();
-        for (const std::vector<std::string>& args : {std::vector<std::string>{"mesh", "heights.toml", "-o", "out.ply"},
-                                                     std::vector<std::string>{"render", "heights.toml", "-o", "out.png"}}) {
+        for (const std::vector<std::string>& args : {std::vector<std::string>{"mesh", "scene.toml", "-o", "out.ply"},
+                                                     std::vector<std::string>{"render", "scene.toml", "-o", "out.png"}}) {
             const RunResult r = run(args);
             EXPECT_EQ(r.status, 2) << r.err;
             EXPECT_NE(r.err.find("(" + file + ")"), std::string::npos) << r.err;
@@ -216,7 +209,7 @@ TEST_F(ExtremeHeights, NanHeightsAreAnErrorNamingFileAndTexel) {
         t.heightmap = file;
         write_scene(t);
         const std::set<std::string> before = files();
-        const RunResult r = run({"render", "heights.toml", "-o", "out.png"});
+        const RunResult r = run({"render", "scene.toml", "-o", "out.png"});
         EXPECT_EQ(r.status, 2) << r.err;
         EXPECT_NE(r.err.find(file), std::string::npos) << r.err;
         EXPECT_NE(r.err.find("texel (" + std::string(file == "nan.pfm" ? "1, 1" : "0, 1") + ") is NaN"), std::string::npos)
@@ -269,7 +262,7 @@ TEST_F(ExtremeHeights, ZeroAndNegativeScale) {
     for (const double scale : {0.0, -2.0}) {
         SCOPED_TRACE("scale_z " + num(scale));
         write_scene(scene_with(scale));
-        const RunResult r = run({"gl", "heights.toml", "-o", "gl.png"});
+        const RunResult r = run({"gl", "scene.toml", "-o", "gl.png"});
         ASSERT_EQ(r.status, 0) << r.err;
         const tessref::RenderResult image = tessref::render_scene(load(scene_with(scale)));
         EXPECT_GT(image.stats.covered_pixels, 1000u);
@@ -301,8 +294,8 @@ TEST_F(ExtremeHeights, LevelSixtyFourEverywhereBeyondTheBudgetIsRefusedFast) {
         t.tables = c.limits;
         write_scene(t);
         const std::set<std::string> before = files();
-        for (const std::vector<std::string>& args : {std::vector<std::string>{"mesh", "heights.toml", "-o", "out.ply"},
-                                                     std::vector<std::string>{"render", "heights.toml", "-o", "out.png"}}) {
+        for (const std::vector<std::string>& args : {std::vector<std::string>{"mesh", "scene.toml", "-o", "out.ply"},
+                                                     std::vector<std::string>{"render", "scene.toml", "-o", "out.png"}}) {
             const auto start = std::chrono::steady_clock::now();
             const RunResult r = run(args);
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

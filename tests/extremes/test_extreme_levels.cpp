@@ -29,15 +29,12 @@
 #include <vector>
 
 #include "extremes.h"
-#include "tessref/error.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"
 
 namespace {
 
-using tessref::test::CommandDirTest;
-using tessref::test::run_program;
 using tessref::test::RunResult;
 using tessref::test::write_file;
 using namespace tessref::test::extremes;
@@ -95,22 +92,20 @@ std::vector<std::size_t> per_patch(const tessref::PipelineResult& p, std::size_t
     return n;
 }
 
-class ExtremeLevels : public CommandDirTest {
+class ExtremeLevels : public ExtremesTest {
 protected:
     void SetUp() override {
-        CommandDirTest::SetUp();
+        ExtremesTest::SetUp();
         write_flat_pgm(dir_ / "flat.pgm");
     }
-    RunResult run(const std::vector<std::string>& args) { return run_program(TESSREF_EXE, args, dir_, dir_); }
-    tessref::Scene load(const Terrain& t) { return tessref::load_scene_from_string(t.toml(), path("levels.toml")); }
 
     // Runs the scene through `tessref gl` (llvmpipe) and holds the CPU reference to it: the
     // capture bit for bit (same triangles, same tess coords, positions 0 ulps apart) and the
     // picture byte for byte. The CPU side runs in this process (the same functions `mesh
     // --capture` and `render` call): one program start per case keeps the suite fast.
     void expect_llvmpipe_agrees(const Terrain& t, std::size_t expected_triangles) {
-        write_file(dir_ / "levels.toml", t.toml());
-        const RunResult r = run({"gl", "levels.toml", "-o", "gl.png", "--capture", "gl.txt"});
+        write_scene(t);
+        const RunResult r = run({"gl", "scene.toml", "-o", "gl.png", "--capture", "gl.txt"});
         ASSERT_EQ(r.status, 0) << r.err;
         const tessref::Scene scene = load(t);
         const tessref::RenderResult image = tessref::render_scene(scene);
@@ -203,15 +198,15 @@ TEST_F(ExtremeLevels, NonFiniteLevelsFromTheControlStage) {
 TEST_F(ExtremeLevels, NonFiniteLevelInSceneIsRefused) {
     for (const char* level : {"nan", "inf", "-inf"}) {
         SCOPED_TRACE(level);
-        write_file(dir_ / "levels.toml", level_scene(level, "equal").toml());
-        std::vector<std::vector<std::string>> commands{{"mesh", "levels.toml", "-o", "out.ply"}};
-        if (std::string(level) == "nan") commands.push_back({"render", "levels.toml", "-o", "out.png"});
+        write_scene(level_scene(level, "equal"));
+        std::vector<std::vector<std::string>> commands{{"mesh", "scene.toml", "-o", "out.ply"}};
+        if (std::string(level) == "nan") commands.push_back({"render", "scene.toml", "-o", "out.png"});
         for (const std::vector<std::string>& args : commands) {
             const RunResult r = run(args);
             EXPECT_EQ(r.status, 2) << r.err;
             EXPECT_NE(r.err.find("control.level must be finite"), std::string::npos) << r.err;
-            EXPECT_NE(r.err.find("levels.toml:"), std::string::npos) << r.err;  // file:line:column
-            EXPECT_EQ(files(), (std::set<std::string>{"flat.pgm", "levels.toml"}));
+            EXPECT_NE(r.err.find("scene.toml:"), std::string::npos) << r.err;  // file:line:column
+            EXPECT_EQ(files(), (std::set<std::string>{"flat.pgm", "scene.toml"}));
         }
     }
 }
@@ -219,12 +214,12 @@ TEST_F(ExtremeLevels, NonFiniteLevelInSceneIsRefused) {
 // A discarded terrain is not an error: the mesh is written with no faces, the picture is
 // the background (GL's default clear colour, transparent black) everywhere.
 TEST_F(ExtremeLevels, CulledTerrainGivesEmptyMeshAndBackground) {
-    write_file(dir_ / "levels.toml", level_scene("0.0", "equal").toml());
-    RunResult r = run({"mesh", "levels.toml", "-o", "culled.ply"});
+    write_scene(level_scene("0.0", "equal"));
+    RunResult r = run({"mesh", "scene.toml", "-o", "culled.ply"});
     ASSERT_EQ(r.status, 0) << r.err;
     const std::string ply = tessref::test::read_file(path("culled.ply"));
     EXPECT_NE(ply.find("element face 0\n"), std::string::npos) << ply.substr(0, 400);
-    r = run({"render", "levels.toml", "-o", "culled.png"});
+    r = run({"render", "scene.toml", "-o", "culled.png"});
     ASSERT_EQ(r.status, 0) << r.err;
     const Picture p = read_picture(path("culled.png"));
     ASSERT_EQ(p.width, 160);
@@ -240,15 +235,15 @@ TEST_F(ExtremeLevels, CulledTerrainGivesEmptyMeshAndBackground) {
 // below the terrain's lowest vertex, at z = inf". With --base -5 the answer is already right:
 // "cannot close a terrain without triangles into a solid".
 TEST_F(ExtremeLevels, CulledTerrainHasNoSolidToClose) {
-    write_file(dir_ / "levels.toml", level_scene("0.0", "equal").toml());
+    write_scene(level_scene("0.0", "equal"));
     for (const std::vector<std::string>& args :
-         {std::vector<std::string>{"mesh", "levels.toml", "--solid", "-o", "solid.ply"},
-          std::vector<std::string>{"mesh", "levels.toml", "--solid", "--base", "-5", "-o", "solid.ply"}}) {
+         {std::vector<std::string>{"mesh", "scene.toml", "--solid", "-o", "solid.ply"},
+          std::vector<std::string>{"mesh", "scene.toml", "--solid", "--base", "-5", "-o", "solid.ply"}}) {
         const RunResult r = run(args);
         EXPECT_EQ(r.status, 2) << r.err;
         EXPECT_EQ(r.err.find("inf"), std::string::npos) << r.err;
         EXPECT_NE(r.err.find("without triangles"), std::string::npos) << r.err;
-        EXPECT_EQ(files(), (std::set<std::string>{"flat.pgm", "levels.toml"}));
+        EXPECT_EQ(files(), (std::set<std::string>{"flat.pgm", "scene.toml"}));
     }
 }
 
@@ -257,8 +252,8 @@ TEST_F(ExtremeLevels, CulledTerrainHasNoSolidToClose) {
 // coincident corners. The exported mesh leaves them out (mesh.h) and says so, and what
 // remains is crack-free: one boundary loop, no T-junction, no ray through it.
 TEST_F(ExtremeLevels, ZeroLengthSegmentsLeaveACrackFreeMesh) {
-    write_file(dir_ / "levels.toml", level_scene("3.0000152587890625", "fractional_odd").toml());
-    RunResult r = run({"mesh", "levels.toml", "-o", "slivers.ply"});
+    write_scene(level_scene("3.0000152587890625", "fractional_odd"));
+    RunResult r = run({"mesh", "scene.toml", "-o", "slivers.ply"});
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.err.find("128 triangles whose corners weld together"), std::string::npos) << r.err;
     r = run({"check", "slivers.ply", "--expect", "open"});
