@@ -127,6 +127,25 @@ double plane_depth(const std::array<glm::dvec4, 3>& c, int x, int row, int width
 
 }  // namespace
 
+// mvp * vec4(p, 1.0) as llvmpipe sums it: column by column in order, each step rounded,
+// ((m0 x + m1 y) + m2 z) + m3. glm adds the two halves pairwise, (m0 x + m1 y) + (m2 z + m3),
+// which for a terrain far from the origin moves clip coordinates by an ulp often enough to
+// change thousands of pixels' coverage against llvmpipe (tests/extremes: the terrain 1e6
+// units out). Separate statements, so that no compiler fuses a multiply and an add.
+namespace {
+
+glm::vec4 gl_position(const glm::mat4& m, const glm::vec3& p) {
+    glm::vec4 sum = m[0] * p.x;
+    const glm::vec4 y = m[1] * p.y;
+    sum += y;
+    const glm::vec4 z = m[2] * p.z;
+    sum += z;
+    sum += m[3];
+    return sum;
+}
+
+}  // namespace
+
 float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_t triangle, std::string* source) {
     const SurfaceMesh& mesh = pipeline.mesh;
     const auto& t = mesh.triangles.at(triangle);
@@ -213,7 +232,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     std::vector<glm::vec4> clip(mesh.positions.size());
     const glm::mat4 mvp = result.mvp;
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, clip.size(), 16384), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) clip[i] = mvp * glm::vec4(glm::vec3(mesh.positions[i]), 1.0f);
+        for (std::size_t i = r.begin(); i < r.end(); ++i) clip[i] = gl_position(mvp, glm::vec3(mesh.positions[i]));
     });
 
     RasterInput input;
