@@ -207,7 +207,7 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
         std::string reason = image.geterror();
         if (reason.empty()) reason = OIIO::geterror();
         if (reason.empty()) reason = "OpenImageIO gave no reason";
-        throw Error("cannot write the defect image: " + reason, check_detail::where_in(path));
+        throw Error("cannot write the defect image: " + reason, Where::in_file(path));
     }
 }
 

@@ -19,7 +19,6 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
-#include <climits>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -47,7 +46,7 @@ namespace tessref {
 
 void IndexedMesh::add_face(std::span<const std::uint32_t> vertex_ids) {
     if (face_vertices.size() + vertex_ids.size() > std::numeric_limits<std::uint32_t>::max())
-        throw Error("mesh too large: more than 4294967295 face corners", check_detail::where_in(source));
+        throw Error("mesh too large: more than 4294967295 face corners", Where::in_file(source));
     face_vertices.insert(face_vertices.end(), vertex_ids.begin(), vertex_ids.end());
     face_start.push_back(static_cast<std::uint32_t>(face_vertices.size()));
 }
@@ -247,7 +246,7 @@ public:
     bool rounded = false;           // some coordinate is not a float in the file
 
     Error error(const std::string& what, std::size_t line = 0) const {
-        return Error(what, check_detail::where_in(path, static_cast<int>(std::min<std::size_t>(line, INT_MAX))));
+        return Error(what, Where::in_file(path, line));
     }
     Error bad_token(std::string_view token, std::size_t line, const std::string& expected) const {
         return error((token.empty() ? "unexpected end of file after line " : "bad token " + quoted(token) + " at line ") +
@@ -270,7 +269,7 @@ public:
             throw error("truncated file: " + declared + ", which need at least " + str(min_bytes) +
                         " bytes after the header; the file has " + str(left));
         require_memory(memory_for(vertices, faces), "mesh of " + str(vertices) + " vertices and " + str(faces) + " faces",
-                       check_detail::where_in(path));
+                       Where::in_file(path));
     }
     std::uint64_t memory_for(std::uint64_t vertices, std::uint64_t faces) const {
         // Positions and the file's values, attributes, three corners a face, and OpenMesh's
@@ -931,7 +930,7 @@ void read_obj(Reading& r) {
     std::vector<std::uint32_t> ids;
     // Memory: the text is in memory; what it lists takes at most a few times its size.
     require_memory(saturating_bytes(r.text.size(), 8), "OBJ file of " + format_bytes(r.text.size()),
-                   check_detail::where_in(r.path));
+                   Where::in_file(r.path));
     while (lines.next(line)) {
         split(strip_comment(line), t);
         if (t.empty()) continue;
@@ -1141,7 +1140,7 @@ void read_stl(Reading& r) {
 class MappedFile {
 public:
     explicit MappedFile(const std::string& path) {
-        const Where where = check_detail::where_in(path);
+        const Where where = Where::in_file(path);
         fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);  // a FIFO must not block
         struct stat st {};
         if (fd_ < 0 || ::fstat(fd_, &st) != 0) throw Error(std::string("cannot open mesh file: ") + std::strerror(errno), where);
@@ -1201,7 +1200,7 @@ void find_kernel_refused_faces(IndexedMesh& mesh) {
 }  // namespace
 
 IndexedMesh read_mesh_file(const std::string& path, const MeshFileOptions& options) {
-    const Where where = check_detail::where_in(path);
+    const Where where = Where::in_file(path);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw Error("no such mesh file", where);
     if (std::filesystem::is_directory(path, ec)) throw Error("is a directory, not a mesh file", where);

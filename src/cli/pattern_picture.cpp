@@ -655,7 +655,7 @@ std::vector<std::string> write_picture_image(const Picture& picture, const std::
         std::string reason = canvas.image().geterror();
         if (reason.empty()) reason = OIIO::geterror();
         throw Error("cannot write image: " + (reason.empty() ? std::string("unknown error") : reason),
-                    where_file(error_name));
+                    Where::in_file(error_name));
     }
     return warnings;
 }

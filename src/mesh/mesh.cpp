@@ -23,20 +23,6 @@ namespace tessref {
 
 namespace {
 
-// (Where's fields are filled one by one: designated initializers that skip fields warn
-// under -Wextra.)
-Where where_file(std::string file) {
-    Where where;
-    where.file = std::move(file);
-    return where;
-}
-
-Where where_key(std::string key) {
-    Where where;
-    where.key = std::move(key);
-    return where;
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -70,7 +56,7 @@ MeshFormat mesh_format_from_path(const std::string& path) {
         extension.empty() ? "output file has no extension; expected .ply, .obj, .off or .stl"
                           : "unknown mesh format '." + extension +
                                 "'; expected .ply, .obj, .off or .stl";
-    throw Error(what, where_file(path));
+    throw Error(what, Where::in_file(path));
 }
 
 bool mesh_format_has_binary(MeshFormat format) { return format != MeshFormat::obj; }
@@ -84,7 +70,7 @@ void validate(const SurfaceMesh& mesh) {
         if (size != 0 && size != n) {
             throw Error("surface mesh has " + std::to_string(size) + " " + name + " for " +
                             std::to_string(n) + " vertices",
-                        where_key(name));
+                        Where::at_key(name));
         }
     };
     check_size(mesh.normals.size(), "normals");
@@ -97,7 +83,7 @@ void validate(const SurfaceMesh& mesh) {
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
         for (const std::uint32_t index : mesh.triangles[t]) {
             if (index >= n) {
-                Where where = where_key("triangles[" + std::to_string(t) + "]");
+                Where where = Where::at_key("triangles[" + std::to_string(t) + "]");
                 const std::uint32_t first = mesh.triangles[t][0];
                 if (first < mesh.patch_ids.size()) where.patch_id = mesh.patch_ids[first];
                 throw Error("triangle names vertex " + std::to_string(index) + " of " +
@@ -301,9 +287,7 @@ void require_finite_floats(const SurfaceMesh& w) {
         what += finite ? " is beyond the 32-bit float range (largest " +
                              number(std::numeric_limits<float>::max()) + ") that mesh files store"
                        : " is not finite";
-        Where where;
-        if (!w.patch_ids.empty()) where.patch_id = w.patch_ids[v];
-        throw Error(what, where);
+        throw Error(what, w.patch_ids.empty() ? Where{} : Where::at_patch(w.patch_ids[v]));
     }
 }
 
@@ -365,7 +349,7 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     if (options.binary && !mesh_format_has_binary(format)) {
         throw Error(std::string(to_string(format)) + " has no binary form; drop --binary or "
                                                      "write .ply, .off or .stl",
-                    where_file("--binary"));
+                    Where::in_file("--binary"));
     }
     if (options.ascii_digits < 1 || options.ascii_digits > 17) {
         throw Error("ASCII digits must be within [1, 17], got " + std::to_string(options.ascii_digits));
