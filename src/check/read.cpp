@@ -10,8 +10,8 @@
 // exact byte length are checked; counts from a header are held against the file's size and
 // the memory limit before anything is allocated; every error names the file and the line
 // (text) or byte offset (binary). OpenMesh keeps the part where it is the reference: which
-// faces its kernel refuses (find_kernel_refused_faces), and the scene loader's half-edge
-// mesh, built from this scan through OpenMesh's importer.
+// faces its kernel refuses, and the vertex normals of a scene's mesh, both from this scan
+// through OpenMesh's importer (src/mesh/openmesh.h).
 //
 // Coordinates are rounded to float, as OpenMesh and admesh read them (and as the check's
 // tolerances and its comparison with admesh assume); a reader note says so when the rounding
@@ -33,11 +33,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <OpenMesh/Core/IO/importer/ImporterT.hh>
-#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
-#include <OpenMesh/Core/System/omstream.hh>
-
 #include "check/check_internal.h"
+#include "mesh/openmesh.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -1172,31 +1169,6 @@ std::string lowercase_extension(const std::string& path) {
     return ext;
 }
 
-// Which faces OpenMesh's importer (the one its readers and tessref's exporters go through)
-// would not add to its kernel as listed: a face with a repeated vertex or fewer than three
-// is dropped, one making a complex edge or vertex is added on copies of its vertices.
-void find_kernel_refused_faces(IndexedMesh& mesh) {
-    using OmMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
-    OmMesh om;
-    OpenMesh::IO::ImporterT<OmMesh> importer(om);
-    om.reserve(mesh.positions.size(), 0, mesh.face_count());
-    for (const glm::dvec3& p : mesh.positions)
-        importer.add_vertex(OpenMesh::Vec3f(float(p.x), float(p.y), float(p.z)));
-    // The importer explains each refusal on omerr(); the report does that.
-    const bool was_enabled = ::omerr().is_enabled();
-    ::omerr().disable();
-    OpenMesh::IO::BaseImporter::VHandles handles;
-    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-        handles.clear();
-        for (std::uint32_t v : mesh.face(f)) handles.emplace_back(static_cast<int>(v));
-        const std::size_t vertices_before = om.n_vertices();
-        const OpenMesh::FaceHandle fh = importer.add_face(handles);
-        if (!fh.is_valid() || om.n_vertices() != vertices_before)
-            mesh.kernel_refused_faces.push_back(static_cast<std::uint32_t>(f));
-    }
-    if (was_enabled) ::omerr().enable();
-}
-
 }  // namespace
 
 IndexedMesh read_mesh_file(const std::string& path, const MeshFileOptions& options) {
@@ -1226,7 +1198,9 @@ IndexedMesh read_mesh_for_check(const std::string& path, const std::function<voi
     MeshFileOptions options;
     options.progress = progress;
     IndexedMesh mesh = read_mesh_file(path, options);
-    find_kernel_refused_faces(mesh);
+    // The importer explains each refusal on omerr(); the check's report does that.
+    const mesh_detail::QuietStream quiet(::omerr());
+    mesh.kernel_refused_faces = mesh_detail::import_half_edge_mesh(mesh, false).refused_faces;
     return mesh;
 }
 

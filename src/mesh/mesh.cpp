@@ -17,6 +17,7 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
+#include "mesh/openmesh.h"
 #include "tessref/error.h"
 
 namespace tessref {
@@ -243,24 +244,6 @@ private:
     const std::vector<std::array<std::uint32_t, 3>>& triangles_;
 };
 
-// Silences one of OpenMesh's log streams for a scope (its writers chat about every file
-// they write), restoring its previous state afterwards.
-class QuietStream {
-public:
-    explicit QuietStream(OpenMesh::mostream& stream) : stream_(stream), was_enabled_(stream.is_enabled()) {
-        stream_.disable();
-    }
-    ~QuietStream() {
-        if (was_enabled_) stream_.enable();
-    }
-    QuietStream(const QuietStream&) = delete;
-    QuietStream& operator=(const QuietStream&) = delete;
-
-private:
-    OpenMesh::mostream& stream_;
-    bool was_enabled_;
-};
-
 OpenMesh::Vec3f to_float(const glm::dvec3& v) {
     return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
 }
@@ -444,8 +427,9 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     bool written = false;
     progress("writing", 0.0);
     {
-        const QuietStream quiet_log(::omlog());
-        const QuietStream quiet_out(::omout());
+        // OpenMesh's writers chat about every file they write.
+        const mesh_detail::QuietStream quiet_log(::omlog());
+        const mesh_detail::QuietStream quiet_out(::omout());
         TriangleListExporter exporter(om, w.triangles);
         written = OpenMesh::IO::IOManager().write(out, "." + std::string(to_string(format)), exporter,
                                                   io_options, options.ascii_digits);
