@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include "run_program.h"
+#include "scratch_dir.h"
 
 #include <algorithm>
 #include <array>
@@ -212,21 +213,7 @@ using tessref::test::run_program;
 using tessref::test::RunResult;
 using tessref::test::shell_quote;
 
-fs::path scratch_dir() {
-    const fs::path dir = fs::temp_directory_path() / ("tessref_test_check_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    return dir;
-}
-
-// Removes the scratch directory when the suite ends.
-class ScratchCleanup : public ::testing::Environment {
-public:
-    void TearDown() override {
-        std::error_code ec;
-        fs::remove_all(fs::temp_directory_path() / ("tessref_test_check_" + std::to_string(::getpid())), ec);
-    }
-};
-[[maybe_unused]] const auto* const scratch_cleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+const tessref::test::ScratchDir& scratch_dir = tessref::test::ScratchDir::add("check");
 
 RunResult run(const std::string& program, const std::vector<std::string>& args) {
     return run_program(program, args, scratch_dir());

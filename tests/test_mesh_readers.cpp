@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "run_program.h"
+#include "scratch_dir.h"
 
 #include <chrono>
 #include <cmath>
@@ -39,20 +40,7 @@ namespace {
 const fs::path data_dir = fs::path(TESSREF_SOURCE_DIR) / "tests" / "data" / "readers";
 const fs::path corpus_dir = fs::path(TESSREF_SOURCE_DIR) / "tests" / "data" / "check";
 
-fs::path scratch_dir() {
-    const fs::path dir = fs::temp_directory_path() / ("tessref_test_mesh_readers_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    return dir;
-}
-
-class ScratchCleanup : public ::testing::Environment {
-public:
-    void TearDown() override {
-        std::error_code ec;
-        fs::remove_all(scratch_dir(), ec);
-    }
-};
-const auto* const cleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
+const tessref::test::ScratchDir& scratch_dir = tessref::test::ScratchDir::add("mesh_readers");
 
 fs::path scratch(const std::string& name, const std::string& bytes) {
     const fs::path path = scratch_dir() / name;

@@ -31,8 +31,8 @@
 #include <thread>
 #include <vector>
 
-#include "tessref/heightfield.h"
 #include "tessref/shading.h"
+#include "tessref/texture.h"
 
 namespace {
 

@@ -15,7 +15,7 @@
 // The result is the shader's output as written (no clamping): the thesis's light can exceed
 // 1; a unorm8 framebuffer clamps when it stores the value (raster.h, to_rgba8).
 //
-// TEXTURES. Texture lookups go through tessref::Texture (heightfield.h), i.e. clamp-to-edge,
+// TEXTURES. Texture lookups go through tessref::Texture (texture.h), i.e. clamp-to-edge,
 // GL_LINEAR magnification and GL_LINEAR_MIPMAP_LINEAR minification on a glGenerateMipmap
 // pyramid. A fragment shader's texture(sampler, P) takes its level of detail from the
 // screen-space derivatives of P, so texture() here is GLSL's textureGrad(sampler, P,
@@ -72,7 +72,7 @@
 
 #include <glm/glm.hpp>
 
-#include "tessref/heightfield.h"
+#include "tessref/texture.h"
 
 namespace tessref {
 

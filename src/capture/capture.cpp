@@ -24,13 +24,6 @@ namespace {
 
 constexpr std::string_view kVersionLine = "tessref-capture 1";
 
-Where where_line(const std::string& path, std::size_t line) {
-    Where where;
-    where.file = path;
-    where.line = static_cast<int>(std::min<std::size_t>(line, 0x7fffffff));
-    return where;
-}
-
 std::string lowercase_extension(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
@@ -60,8 +53,7 @@ std::vector<CapturedVertex> capture_from_pipeline(const Scene& scene, const Pipe
     std::size_t t = 0;
     while (t < triangles) {
         const std::uint32_t p = mesh.patch_ids[mesh.triangles[t][0]];
-        Where where;
-        where.patch_id = p;
+        const Where where = Where::at_patch(p);
         if (p >= result.levels.size()) throw Error("the pipeline's mesh names a patch it has no levels for", where);
         const std::shared_ptr<const Pattern> pattern = cache.get(scene.generator, result.levels[p]);
         const std::size_t base = first_vertex[p];
@@ -165,9 +157,7 @@ CaptureFormat capture_format_from_path(const std::string& path, const std::strin
     const std::string ext = lowercase_extension(path);
     if (ext == "txt") return CaptureFormat::text;
     if (ext == "ply") return CaptureFormat::ply;
-    Where where;
-    where.file = flag.empty() ? path : flag;
-    throw Error("a capture is .txt or .ply, not '" + path + "'", where);
+    throw Error("a capture is .txt or .ply, not '" + path + "'", Where::in_file(flag.empty() ? path : flag));
 }
 
 bool is_capture_path(const std::string& path) {
@@ -206,7 +196,7 @@ public:
         // Every vertex is a line: the line count bounds the vertices before any is read.
         const std::size_t lines = static_cast<std::size_t>(std::count(text_.begin(), text_.end(), '\n')) + 1;
         require_memory(saturating_bytes(lines, sizeof(CapturedVertex)),
-                       "a capture of up to " + std::to_string(lines) + " vertices", where_line(path_, 0));
+                       "a capture of up to " + std::to_string(lines) + " vertices", Where::in_file(path_));
         std::string_view line;
         if (!next_line(line) || trimmed(line) != kVersionLine)
             throw error("not a tessref capture: the first line is not '" + std::string(kVersionLine) + "'");
@@ -268,7 +258,7 @@ private:
     }
     Error error(const std::string& what) const { return error_at(what, line_); }
     Error error_at(const std::string& what, std::size_t line) const {
-        return Error(what + " at line " + std::to_string(line), where_line(path_, line));
+        return Error(what + " at line " + std::to_string(line), Where::in_file(path_, line));
     }
     Error run_error(std::uint32_t patch, std::size_t run, std::size_t line) const {
         return error_at("patch " + std::to_string(patch) + " has " + std::to_string(run) +
@@ -312,7 +302,7 @@ Capture read_ply_capture(const std::string& path) {
     options.vertex_attributes = true;
     options.provenance = true;
     const IndexedMesh mesh = read_mesh_file(path, options);
-    const Where where = where_line(path, 0);
+    const Where where = Where::in_file(path);
     if (mesh.patch_ids.empty() || mesh.tess_coords.empty() || mesh.normals.empty())
         throw Error("not a capture: the PLY's vertices lack patch_id, tess_u/tess_v/tess_w or nx/ny/nz", where);
     Capture capture;
@@ -349,7 +339,7 @@ Capture read_ply_capture(const std::string& path) {
 Capture read_capture(const std::string& path) {
     const CaptureFormat format = capture_format_from_path(path);
     if (format == CaptureFormat::ply) return read_ply_capture(path);
-    const Where where = where_line(path, 0);
+    const Where where = Where::in_file(path);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw Error("no such capture file", where);
     if (!std::filesystem::is_regular_file(path, ec))

@@ -66,7 +66,7 @@ void classify_faces(CheckState& state) {
             if (v >= mesh.vertex_count())
                 throw Error("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) + ", but the mesh has " +
                                 std::to_string(mesh.vertex_count()) + " vertices",
-                            check_detail::where_in(mesh.source));
+                            Where::in_file(mesh.source));
             state.vertex_referenced[v] = 1;
             const glm::dvec3& p = mesh.positions[v];
             finite = finite && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
@@ -157,7 +157,7 @@ CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
     report.expect = options.expect;
     for (int k = 0; k < defect_class_count; ++k) report.defects.push_back({static_cast<DefectClass>(k), 0, {}});
     if (options.tolerance && !(*options.tolerance >= 0.0 && std::isfinite(*options.tolerance)))
-        throw Error("the tolerance must be a finite number >= 0", check_detail::where_in("--tolerance"));
+        throw Error("the tolerance must be a finite number >= 0", Where::in_file("--tolerance"));
 
     CheckState state{mesh, options, report};
     state.progress("topology", 0.0);

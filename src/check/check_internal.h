@@ -45,14 +45,6 @@ struct BoundaryHalfEdge {
     auto operator<=>(const BoundaryHalfEdge&) const = default;
 };
 
-// Where an error was found, for a file (and a line).
-inline Where where_in(const std::string& file, int line = 0) {
-    Where where;
-    where.file = file;
-    where.line = line;
-    return where;
-}
-
 struct CheckState {
     CheckState(const IndexedMesh& m, const CheckOptions& o, CheckReport& r) : mesh(m), options(o), report(r) {}
     const IndexedMesh& mesh;

@@ -11,6 +11,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include "check/check_internal.h"
+#include "common/fill.h"
 #include "tessref/error.h"
 
 namespace tessref {
@@ -74,31 +75,24 @@ private:
     double scale_ = 1.0;
 };
 
+// Darkens the pixels of a triangle to `value` (the darkest paint wins).
 void fill_triangle(std::vector<float>& grey, int width, int height, glm::dvec2 a, glm::dvec2 b, glm::dvec2 c, float value) {
-    const double area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x, b.x, c.x}))));
-    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({a.x, b.x, c.x}))));
-    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y, b.y, c.y}))));
-    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({a.y, b.y, c.y}))));
-    if (x0 > x1 || y0 > y1) return;
-    if (std::abs(area) < 1.0) {
+    const auto darken = [&](int x, int y) {
+        float& g = grey[std::size_t(y) * width + x];
+        g = std::min(g, value);
+    };
+    const glm::dvec2 corners[3] = {a, b, c};
+    if (pixel_box(corners, width, height).empty()) return;
+    if (std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)) < 1.0) {
         // Smaller than a pixel: a dot is what it looks like.
-        const int x = std::clamp(static_cast<int>((a.x + b.x + c.x) / 3.0), 0, width - 1);
-        const int y = std::clamp(static_cast<int>((a.y + b.y + c.y) / 3.0), 0, height - 1);
-        grey[std::size_t(y) * width + x] = std::min(grey[std::size_t(y) * width + x], value);
+        darken(std::clamp(static_cast<int>((a.x + b.x + c.x) / 3.0), 0, width - 1),
+               std::clamp(static_cast<int>((a.y + b.y + c.y) / 3.0), 0, height - 1));
         return;
     }
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-            const glm::dvec2 p(x + 0.5, y + 0.5);
-            const double e0 = ((b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)) / area;
-            const double e1 = ((c.x - b.x) * (p.y - b.y) - (c.y - b.y) * (p.x - b.x)) / area;
-            const double e2 = ((a.x - c.x) * (p.y - c.y) - (a.y - c.y) * (p.x - c.x)) / area;
-            if (e0 >= 0 && e1 >= 0 && e2 >= 0) {
-                float& g = grey[std::size_t(y) * width + x];
-                g = std::min(g, value);
-            }
-        }
+    // The exact test (no margin), as defect pictures have always been drawn: a terrain's rows
+    // of vertices can fall on pixel centres, and a margin there changes which triangle's
+    // shade (the darkest wins) such a pixel gets.
+    fill_convex_polygon(corners, width, height, 0.0, darken);
 }
 
 }  // namespace
@@ -207,7 +201,7 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
         std::string reason = image.geterror();
         if (reason.empty()) reason = OIIO::geterror();
         if (reason.empty()) reason = "OpenImageIO gave no reason";
-        throw Error("cannot write the defect image: " + reason, check_detail::where_in(path));
+        throw Error("cannot write the defect image: " + reason, Where::in_file(path));
     }
 }
 

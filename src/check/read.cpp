@@ -10,8 +10,8 @@
 // exact byte length are checked; counts from a header are held against the file's size and
 // the memory limit before anything is allocated; every error names the file and the line
 // (text) or byte offset (binary). OpenMesh keeps the part where it is the reference: which
-// faces its kernel refuses (find_kernel_refused_faces), and the scene loader's half-edge
-// mesh, built from this scan through OpenMesh's importer.
+// faces its kernel refuses, and the vertex normals of a scene's mesh, both from this scan
+// through OpenMesh's importer (src/mesh/openmesh.h).
 //
 // Coordinates are rounded to float, as OpenMesh and admesh read them (and as the check's
 // tolerances and its comparison with admesh assume); a reader note says so when the rounding
@@ -19,7 +19,6 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
-#include <climits>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -34,11 +33,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <OpenMesh/Core/IO/importer/ImporterT.hh>
-#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
-#include <OpenMesh/Core/System/omstream.hh>
-
 #include "check/check_internal.h"
+#include "mesh/openmesh.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -47,7 +43,7 @@ namespace tessref {
 
 void IndexedMesh::add_face(std::span<const std::uint32_t> vertex_ids) {
     if (face_vertices.size() + vertex_ids.size() > std::numeric_limits<std::uint32_t>::max())
-        throw Error("mesh too large: more than 4294967295 face corners", check_detail::where_in(source));
+        throw Error("mesh too large: more than 4294967295 face corners", Where::in_file(source));
     face_vertices.insert(face_vertices.end(), vertex_ids.begin(), vertex_ids.end());
     face_start.push_back(static_cast<std::uint32_t>(face_vertices.size()));
 }
@@ -247,7 +243,7 @@ public:
     bool rounded = false;           // some coordinate is not a float in the file
 
     Error error(const std::string& what, std::size_t line = 0) const {
-        return Error(what, check_detail::where_in(path, static_cast<int>(std::min<std::size_t>(line, INT_MAX))));
+        return Error(what, Where::in_file(path, line));
     }
     Error bad_token(std::string_view token, std::size_t line, const std::string& expected) const {
         return error((token.empty() ? "unexpected end of file after line " : "bad token " + quoted(token) + " at line ") +
@@ -270,7 +266,7 @@ public:
             throw error("truncated file: " + declared + ", which need at least " + str(min_bytes) +
                         " bytes after the header; the file has " + str(left));
         require_memory(memory_for(vertices, faces), "mesh of " + str(vertices) + " vertices and " + str(faces) + " faces",
-                       check_detail::where_in(path));
+                       Where::in_file(path));
     }
     std::uint64_t memory_for(std::uint64_t vertices, std::uint64_t faces) const {
         // Positions and the file's values, attributes, three corners a face, and OpenMesh's
@@ -931,7 +927,7 @@ void read_obj(Reading& r) {
     std::vector<std::uint32_t> ids;
     // Memory: the text is in memory; what it lists takes at most a few times its size.
     require_memory(saturating_bytes(r.text.size(), 8), "OBJ file of " + format_bytes(r.text.size()),
-                   check_detail::where_in(r.path));
+                   Where::in_file(r.path));
     while (lines.next(line)) {
         split(strip_comment(line), t);
         if (t.empty()) continue;
@@ -1141,7 +1137,7 @@ void read_stl(Reading& r) {
 class MappedFile {
 public:
     explicit MappedFile(const std::string& path) {
-        const Where where = check_detail::where_in(path);
+        const Where where = Where::in_file(path);
         fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);  // a FIFO must not block
         struct stat st {};
         if (fd_ < 0 || ::fstat(fd_, &st) != 0) throw Error(std::string("cannot open mesh file: ") + std::strerror(errno), where);
@@ -1173,35 +1169,10 @@ std::string lowercase_extension(const std::string& path) {
     return ext;
 }
 
-// Which faces OpenMesh's importer (the one its readers and tessref's exporters go through)
-// would not add to its kernel as listed: a face with a repeated vertex or fewer than three
-// is dropped, one making a complex edge or vertex is added on copies of its vertices.
-void find_kernel_refused_faces(IndexedMesh& mesh) {
-    using OmMesh = OpenMesh::PolyMesh_ArrayKernelT<>;
-    OmMesh om;
-    OpenMesh::IO::ImporterT<OmMesh> importer(om);
-    om.reserve(mesh.positions.size(), 0, mesh.face_count());
-    for (const glm::dvec3& p : mesh.positions)
-        importer.add_vertex(OpenMesh::Vec3f(float(p.x), float(p.y), float(p.z)));
-    // The importer explains each refusal on omerr(); the report does that.
-    const bool was_enabled = ::omerr().is_enabled();
-    ::omerr().disable();
-    OpenMesh::IO::BaseImporter::VHandles handles;
-    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-        handles.clear();
-        for (std::uint32_t v : mesh.face(f)) handles.emplace_back(static_cast<int>(v));
-        const std::size_t vertices_before = om.n_vertices();
-        const OpenMesh::FaceHandle fh = importer.add_face(handles);
-        if (!fh.is_valid() || om.n_vertices() != vertices_before)
-            mesh.kernel_refused_faces.push_back(static_cast<std::uint32_t>(f));
-    }
-    if (was_enabled) ::omerr().enable();
-}
-
 }  // namespace
 
 IndexedMesh read_mesh_file(const std::string& path, const MeshFileOptions& options) {
-    const Where where = check_detail::where_in(path);
+    const Where where = Where::in_file(path);
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw Error("no such mesh file", where);
     if (std::filesystem::is_directory(path, ec)) throw Error("is a directory, not a mesh file", where);
@@ -1227,7 +1198,9 @@ IndexedMesh read_mesh_for_check(const std::string& path, const std::function<voi
     MeshFileOptions options;
     options.progress = progress;
     IndexedMesh mesh = read_mesh_file(path, options);
-    find_kernel_refused_faces(mesh);
+    // The importer explains each refusal on omerr(); the check's report does that.
+    const mesh_detail::QuietStream quiet(::omerr());
+    mesh.kernel_refused_faces = mesh_detail::import_half_edge_mesh(mesh, false).refused_faces;
     return mesh;
 }
 

@@ -56,7 +56,7 @@ void build_half_edges(CheckState& state) {
     const std::size_t vertex_count = mesh.vertex_count();
     const std::size_t face_count = mesh.face_count();
     if (face_count >= (std::size_t(1) << 31))
-        throw Error("mesh too large to check: more than 2^31 faces", check_detail::where_in(mesh.source));
+        throw Error("mesh too large to check: more than 2^31 faces", Where::in_file(mesh.source));
 
     std::vector<std::uint32_t> counts(vertex_count + 1, 0);
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {

@@ -93,14 +93,14 @@ std::vector<float> parse_float_list(std::string_view text, std::size_t count,
                     ? "item " + std::to_string(i + 1) + " is empty"
                     : "item " + std::to_string(i + 1) + ": '" + std::string(items[i]) +
                           "' is not a number";
-            throw Error(what, where_file(flag));
+            throw Error(what, Where::in_file(flag));
         }
         values.push_back(*value);
     }
     if (values.size() != count) {
         throw Error("expected " + std::to_string(count) + " comma-separated numbers, got " +
                         std::to_string(values.size()) + " in '" + std::string(text) + "'",
-                    where_file(flag));
+                    Where::in_file(flag));
     }
     return values;
 }
@@ -196,10 +196,10 @@ std::filesystem::path follow_links(std::filesystem::path path, const std::string
         std::error_code error;
         if (!std::filesystem::is_symlink(std::filesystem::symlink_status(path, error))) return path;
         const std::filesystem::path link = std::filesystem::read_symlink(path, error);
-        if (error) throw Error("cannot follow the symlink: " + error.message(), where_file(given));
+        if (error) throw Error("cannot follow the symlink: " + error.message(), Where::in_file(given));
         path = link.is_absolute() ? link : path.parent_path() / link;
     }
-    throw Error("cannot write output file: " + errno_text(ELOOP), where_file(given));
+    throw Error("cannot write output file: " + errno_text(ELOOP), Where::in_file(given));
 }
 
 // Writes all of `bytes` to `fd`, retrying short writes; returns 0 or the errno.
@@ -234,7 +234,7 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
     : target_(std::move(target)) {
     if (target_.empty()) throw Error("empty output file name");
     if (target_.has_filename() == false || target_.filename() == "." || target_.filename() == "..")
-        throw Error("not a file name", where_file(target_.string()));
+        throw Error("not a file name", Where::in_file(target_.string()));
     const std::string given = target_.string();
 
     // What the name is now decides between a rename and a write-through (see the header).
@@ -244,15 +244,15 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
     }
     struct stat info {};
     if (::stat(target_.c_str(), &info) == 0) {
-        if (S_ISDIR(info.st_mode)) throw Error("cannot write output file: it is a directory", where_file(given));
+        if (S_ISDIR(info.st_mode)) throw Error("cannot write output file: it is a directory", Where::in_file(given));
         if (!S_ISREG(info.st_mode)) write_through_ = true;
         if (!write_through_) replaced_ = follow_links(target_, given);
         if (write_through_ && write_through_fd_ < 0 && ::access(target_.c_str(), W_OK) != 0)
-            throw Error("cannot write output file: " + errno_text(errno), where_file(given));
+            throw Error("cannot write output file: " + errno_text(errno), Where::in_file(given));
     } else if (errno == ENOENT && !write_through_) {
         replaced_ = follow_links(target_, given);
     } else if (!write_through_) {
-        throw Error("cannot write output file: " + errno_text(errno), where_file(given));
+        throw Error("cannot write output file: " + errno_text(errno), Where::in_file(given));
     }
 
     // The temporary file: beside the file a rename replaces (same file system), or in the
@@ -286,9 +286,9 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
         }
         const int error = errno;
         unregister_temp(slot);
-        if (error != EEXIST) throw Error("cannot create output file: " + errno_text(error), where_file(given));
+        if (error != EEXIST) throw Error("cannot create output file: " + errno_text(error), Where::in_file(given));
     }
-    throw Error("cannot create a temporary file next to the output", where_file(given));
+    throw Error("cannot create a temporary file next to the output", Where::in_file(given));
 }
 
 AtomicOutput::~AtomicOutput() {
@@ -304,14 +304,14 @@ void AtomicOutput::discard() {
 
 void AtomicOutput::write(std::string_view bytes) {
     const int fd = ::open(temp_.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
-    if (fd < 0) throw Error("cannot write output file: " + errno_text(errno), where_file(target_.string()));
+    if (fd < 0) throw Error("cannot write output file: " + errno_text(errno), Where::in_file(target_.string()));
     const int error = write_all(fd, bytes.data(), bytes.size());
     if (error != 0) {
         ::close(fd);
-        throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
+        throw Error("cannot write output file: " + errno_text(error), Where::in_file(target_.string()));
     }
     if (::close(fd) != 0)
-        throw Error("cannot write output file: " + errno_text(errno), where_file(target_.string()));
+        throw Error("cannot write output file: " + errno_text(errno), Where::in_file(target_.string()));
 }
 
 void AtomicOutput::commit() {
@@ -320,7 +320,7 @@ void AtomicOutput::commit() {
         if (::rename(temp_.c_str(), replaced_.c_str()) != 0) {
             const int error = errno;
             discard();
-            throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
+            throw Error("cannot write output file: " + errno_text(error), Where::in_file(target_.string()));
         }
         unregister_temp(temp_slot_);
         temp_slot_ = -1;
@@ -351,7 +351,7 @@ void AtomicOutput::commit() {
     if (in >= 0) ::close(in);
     if (out >= 0 && write_through_fd_ < 0 && ::close(out) != 0 && error == 0) error = errno;
     discard();
-    if (error != 0) throw Error("cannot write output file: " + errno_text(error), where_file(target_.string()));
+    if (error != 0) throw Error("cannot write output file: " + errno_text(error), Where::in_file(target_.string()));
 }
 
 bool is_stdout(const std::string& target) { return target.empty() || target == "-"; }
@@ -416,9 +416,9 @@ glm::ivec2 parse_image_size(const std::string& text, const std::string& flag) {
     const std::size_t x = text.find_first_of("xX");
     const std::optional<long long> w = x == std::string::npos ? std::nullopt : parse_integer(text.substr(0, x));
     const std::optional<long long> h = x == std::string::npos ? std::nullopt : parse_integer(text.substr(x + 1));
-    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", where_file(flag));
+    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", Where::in_file(flag));
     if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384)
-        throw Error("image size " + text + " is outside 1..16384 in width or height", where_file(flag));
+        throw Error("image size " + text + " is outside 1..16384 in width or height", Where::in_file(flag));
     return {static_cast<int>(*w), static_cast<int>(*h)};
 }
 
@@ -433,13 +433,13 @@ void StageProgress::operator()(std::string_view stage, double fraction) {
 
 Precision parse_precision_flag(const std::string& text) {
     const std::optional<Precision> precision = parse_precision(text);
-    if (!precision) throw Error("unknown precision '" + text + "'; expected gpu or exact", where_file("--precision"));
+    if (!precision) throw Error("unknown precision '" + text + "'; expected gpu or exact", Where::in_file("--precision"));
     return *precision;
 }
 
 ThreadLimit::ThreadLimit(int threads) {
     if (threads < 0)
-        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(threads), where_file("--threads"));
+        throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(threads), Where::in_file("--threads"));
     if (threads > 0) control_.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
 }
 

@@ -24,13 +24,6 @@
 
 namespace tessref::cli {
 
-// A Where naming only a file, or a flag for command-line input ("--outer").
-inline Where where_file(std::string file) {
-    Where where;
-    where.file = std::move(file);
-    return where;
-}
-
 // ---------------------------------------------------------------------------------------
 // Numbers
 

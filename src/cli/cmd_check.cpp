@@ -33,9 +33,9 @@ struct CheckCommandOptions {
 // range check words its message with DBL_MAX written out (309 digits) and lets NaN by.
 double parse_tolerance(const std::string& text) {
     const std::optional<double> value = parse_double(text);
-    if (!value) throw Error("'" + text + "' is not a number", where_file("--tolerance"));
+    if (!value) throw Error("'" + text + "' is not a number", Where::in_file("--tolerance"));
     if (!std::isfinite(*value) || *value < 0.0)
-        throw Error("'" + text + "' is not a distance: give a finite number >= 0", where_file("--tolerance"));
+        throw Error("'" + text + "' is not a distance: give a finite number >= 0", Where::in_file("--tolerance"));
     return *value;
 }
 
@@ -46,7 +46,7 @@ int run_check(const CheckCommandOptions& options) {
     if (!options.image.empty() && !OIIO::ImageOutput::create(options.image)) {
         throw Error("no image format for '" + options.image +
                         "': give the name an extension OpenImageIO writes, such as .png, .tif or .exr",
-                    where_file("--image"));
+                    Where::in_file("--image"));
     }
     StageProgress progress;
     const IndexedMesh mesh =
@@ -69,7 +69,7 @@ int run_check(const CheckCommandOptions& options) {
         try {
             write_defect_image(mesh, report, output.temp_path().string());
         } catch (const Error& error) {
-            throw Error(error.what(), where_file(options.image));  // the name given, not the temporary one
+            throw Error(error.what(), Where::in_file(options.image));  // the name given, not the temporary one
         }
         output.commit();
     }

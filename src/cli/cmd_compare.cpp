@@ -43,15 +43,15 @@ struct CompareCommandOptions {
 // A count flag as typed: a whole number >= 0.
 long long parse_count(const std::string& text, const std::string& flag) {
     const std::optional<long long> value = parse_integer(text);
-    if (!value || *value < 0) throw Error("'" + text + "' is not a whole number >= 0", where_file(flag));
+    if (!value || *value < 0) throw Error("'" + text + "' is not a whole number >= 0", Where::in_file(flag));
     return *value;
 }
 
 double parse_threshold(const std::string& text) {
     const std::optional<double> value = parse_double(text);
-    if (!value) throw Error("'" + text + "' is not a number", where_file("--threshold"));
+    if (!value) throw Error("'" + text + "' is not a number", Where::in_file("--threshold"));
     if (!std::isfinite(*value) || *value < 0.0)
-        throw Error("'" + text + "' is not a threshold: give a finite number >= 0", where_file("--threshold"));
+        throw Error("'" + text + "' is not a threshold: give a finite number >= 0", Where::in_file("--threshold"));
     return *value;
 }
 
@@ -294,7 +294,7 @@ std::string capture_report_json(const CompareCommandOptions& options, const Capt
 double parse_threshold_flag(const std::string& text, const std::string& flag) {
     const std::optional<double> value = parse_double(text);
     if (!value || !std::isfinite(*value) || *value < 0.0)
-        throw Error("'" + text + "' is not a distance (a finite number >= 0)", where_file(flag));
+        throw Error("'" + text + "' is not a distance (a finite number >= 0)", Where::in_file(flag));
     return *value;
 }
 
@@ -307,13 +307,13 @@ int run_compare_captures(const CompareCommandOptions& options) {
         if (!is_capture_path(*input))
             throw Error("'" + *input + "' is not a capture (.txt, .ply) and the other input is: compare two captures "
                         "or two images",
-                        where_file(*input));
+                        Where::in_file(*input));
     const bool image_flags = options.max_position_deviation != "0" || options.threshold != "0" ||
                              options.max_failing_pixels != "0" || !options.diff.empty() || options.ignore_alpha;
     if (image_flags)
         throw Error("--max-position-deviation, --threshold, --max-failing-pixels, --diff and --ignore-alpha compare "
                     "images; for captures give --max-position-ulps and --max-normal-ulps",
-                    where_file(options.test));
+                    Where::in_file(options.test));
     CaptureCompareOptions compare;
     compare.max_position_ulps = parse_ulps(options.max_position_ulps, "--max-position-ulps", kDefaultMaxPositionUlps);
     compare.max_normal_ulps = parse_ulps(options.max_normal_ulps, "--max-normal-ulps", kDefaultMaxNormalUlps);
@@ -336,7 +336,7 @@ int run_compare(const CompareCommandOptions& options) {
         !options.max_normal_abs.empty())
         throw Error("--max-position-ulps, --max-normal-ulps, --max-position-abs and --max-normal-abs compare captures "
                     "(.txt, .ply), not images",
-                    where_file(!options.max_position_ulps.empty() ? "--max-position-ulps"
+                    Where::in_file(!options.max_position_ulps.empty() ? "--max-position-ulps"
                                : !options.max_normal_ulps.empty() ? "--max-normal-ulps"
                                : !options.max_position_abs.empty() ? "--max-position-abs"
                                                                    : "--max-normal-abs"));
@@ -344,7 +344,7 @@ int run_compare(const CompareCommandOptions& options) {
     CompareOptions compare;
     const long long deviation = parse_count(options.max_position_deviation, "--max-position-deviation");
     if (deviation > 1'000'000'000)
-        throw Error("'" + options.max_position_deviation + "' is too large", where_file("--max-position-deviation"));
+        throw Error("'" + options.max_position_deviation + "' is too large", Where::in_file("--max-position-deviation"));
     compare.max_position_deviation = static_cast<int>(deviation);
     compare.threshold = parse_threshold(options.threshold);
     compare.max_failing_pixels = static_cast<std::uint64_t>(parse_count(options.max_failing_pixels, "--max-failing-pixels"));
@@ -352,7 +352,7 @@ int run_compare(const CompareCommandOptions& options) {
     if (!options.diff.empty() && !OIIO::ImageOutput::create(options.diff)) {
         throw Error("no image format for '" + options.diff +
                         "': give the name an extension OpenImageIO writes, such as .png, .tif or .exr",
-                    where_file("--diff"));
+                    Where::in_file("--diff"));
     }
 
     // A diff written over an input would destroy the golden image it was compared with.
@@ -360,7 +360,7 @@ int run_compare(const CompareCommandOptions& options) {
         std::error_code ec;
         if (!options.diff.empty() && std::filesystem::equivalent(options.diff, *input, ec))
             throw Error("'" + options.diff + "' is the image " + *input + ": the diff would overwrite it",
-                        where_file("--diff"));
+                        Where::in_file("--diff"));
     }
 
     const FloatImage reference = read_float_image(options.reference);
@@ -369,12 +369,12 @@ int run_compare(const CompareCommandOptions& options) {
         throw Error("the images differ in size: " + options.reference + " is " + std::to_string(reference.width) +
                         "x" + std::to_string(reference.height) + ", " + options.test + " is " +
                         std::to_string(test.width) + "x" + std::to_string(test.height),
-                    where_file(options.test));
+                    Where::in_file(options.test));
     if (reference.channels != test.channels)
         throw Error("the images differ in channel count: " + options.reference + " has " +
                         std::to_string(reference.channels) + ", " + options.test + " has " +
                         std::to_string(test.channels),
-                    where_file(options.test));
+                    Where::in_file(options.test));
     const CompareResult result = compare_images(reference, test, compare);
 
     if (!options.diff.empty()) {
@@ -382,7 +382,7 @@ int run_compare(const CompareCommandOptions& options) {
         try {
             write_float_image(difference_picture(reference, result), output.temp_path().string());
         } catch (const Error& error) {
-            throw Error(error.what(), where_file(options.diff));  // the name given, not the temporary one
+            throw Error(error.what(), Where::in_file(options.diff));  // the name given, not the temporary one
         }
         output.commit();
     }

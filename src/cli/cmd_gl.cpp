@@ -46,20 +46,20 @@ std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flag
         const std::string typed = "--shader " + flag;
         const std::size_t eq = flag.find('=');
         if (eq == std::string::npos || eq + 1 == flag.size())
-            throw Error("--shader takes STAGE=FILE, not '" + flag + "'", where_file("--shader"));
+            throw Error("--shader takes STAGE=FILE, not '" + flag + "'", Where::in_file("--shader"));
         const std::string name = flag.substr(0, eq);
         const auto stage = shader_stage_from_string(name);
         if (!stage)
             throw Error("unknown shader stage '" + name + "' in " + typed +
                             " (known: vertex|vert, tess_control|tesc, tess_evaluation|tese, geometry|geom, "
                             "fragment|frag)",
-                        where_file("--shader"));
+                        Where::in_file("--shader"));
         for (const StageShader& s : shaders)
             if (s.stage == *stage)
                 throw Error(std::string("--shader names the ") + to_string(*stage) + " stage twice (" + s.origin +
                                 ", " + typed + ")",
-                            where_file("--shader"));
-        shaders.push_back(StageShader{*stage, flag.substr(eq + 1), typed, where_file("--shader")});
+                            Where::in_file("--shader"));
+        shaders.push_back(StageShader{*stage, flag.substr(eq + 1), typed, Where::in_file("--shader")});
     }
     return shaders;
 }
@@ -84,7 +84,7 @@ int run_gl(const GlCommandOptions& options) {
         const glm::ivec2 size = options.size.empty() ? scene.camera->viewport : render_options.size;
         require_memory(estimate_render_memory(size, RenderMode::fill, false, format, {}),
                        "an image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
-                       where_file(options.size.empty() ? options.scene : "--size " + options.size));
+                       Where::in_file(options.size.empty() ? options.scene : "--size " + options.size));
     }
     gl::Context context = gl::Context::create();
     const gl::SceneRender r = gl::render_scene(context, scene, render_options);
@@ -104,7 +104,7 @@ int run_gl(const GlCommandOptions& options) {
             write_capture(r.capture, out, capture_format, "tessref gl " + options.scene + ": " + context.renderer() +
                                                               ", transform feedback");
         } catch (const Error& error) {
-            throw Error(error.what(), where_file(options.capture));  // the name given, not the temporary one
+            throw Error(error.what(), Where::in_file(options.capture));  // the name given, not the temporary one
         }
         capture_output->commit();
     }

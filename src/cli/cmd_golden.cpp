@@ -110,7 +110,7 @@ std::string sha256_hex(std::string_view bytes) {
 
 std::string read_text(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot read the golden file (run `tessref golden update` to make it)", where_file(path.string()));
+    if (!in) throw Error("cannot read the golden file (run `tessref golden update` to make it)", Where::in_file(path.string()));
     std::ostringstream s;
     s << in.rdbuf();
     return s.str();
@@ -177,7 +177,7 @@ std::vector<PatchDigest> patch_digests(const std::string& capture_text) {
 // `scene` as loaded, with its own viewport.
 CpuReference cpu_reference(const Scene& scene, const fs::path& scene_path, glm::ivec2 size) {
     CpuReference ref;
-    if (!scene.camera) throw Error("the scene has no [camera]: golden images need one", where_file(scene_path.string()));
+    if (!scene.camera) throw Error("the scene has no [camera]: golden images need one", Where::in_file(scene_path.string()));
     RenderOptions render_options;
     render_options.size = size;
     ref.image = render_scene(scene, render_options);
@@ -240,17 +240,17 @@ std::vector<std::string> scene_names(const GoldenOptions& options) {
         std::error_code ec;
         for (const fs::directory_entry& e : fs::directory_iterator(options.scenes_dir, ec))
             if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
-        if (ec) throw Error("cannot list the scenes: " + ec.message(), where_file(options.scenes_dir));
+        if (ec) throw Error("cannot list the scenes: " + ec.message(), Where::in_file(options.scenes_dir));
         std::sort(names.begin(), names.end());
-        if (names.empty()) throw Error("no *.toml scene", where_file(options.scenes_dir));
+        if (names.empty()) throw Error("no *.toml scene", Where::in_file(options.scenes_dir));
     }
     for (const std::string& n : names) {
         if (n.empty() || n.find('/') != std::string::npos || n.find("..") != std::string::npos)
             throw Error("a scene is named by its file stem in --scenes (e.g. thesis-all-10), not '" + n + "'",
-                        where_file(n));
+                        Where::in_file(n));
         if (!fs::is_regular_file(fs::path(options.scenes_dir) / (n + ".toml")))
             throw Error("no scene '" + n + "' (" + (fs::path(options.scenes_dir) / (n + ".toml")).string() + ")",
-                        where_file(n));
+                        Where::in_file(n));
     }
     return names;
 }
@@ -265,7 +265,7 @@ int run_update(const GoldenOptions& options) {
         const fs::path dir = fs::path(options.golden_dir) / name;
         std::error_code ec;
         fs::create_directories(dir, ec);
-        if (ec) throw Error("cannot create the directory: " + ec.message(), where_file(dir.string()));
+        if (ec) throw Error("cannot create the directory: " + ec.message(), Where::in_file(dir.string()));
         AtomicOutput image((dir / "image.png").string());
         write_image(ref.image, image.temp_path().string(), ImageFormat::png, {});
         write_output((dir / "capture.txt").string(), capture_file_text(name, size, ref));
@@ -300,7 +300,7 @@ GoldenCapture read_golden_capture(const fs::path& path) {
         std::string key;
         words >> key;
         if (!header) {
-            if (line != kCaptureHeader) throw Error("not a golden capture digest (first line '" + line + "')", where_file(path.string()));
+            if (line != kCaptureHeader) throw Error("not a golden capture digest (first line '" + line + "')", Where::in_file(path.string()));
             header = true;
         } else if (key == "size") {
             words >> g.size;
@@ -314,19 +314,13 @@ GoldenCapture read_golden_capture(const fs::path& path) {
             std::string w, sha;
             while (words >> w)
                 if (w == "sha256") words >> sha;
-            if (sha.size() != kPatchDigits) {
-                Where where = where_file(path.string());
-                where.line = n;
-                throw Error("a patch line without its sha256", where);
-            }
+            if (sha.size() != kPatchDigits) throw Error("a patch line without its sha256", Where::in_file(path.string(), n));
             g.patch_sha256[id] = sha;
         } else {
-            Where where = where_file(path.string());
-            where.line = n;
-            throw Error("unknown line '" + line + "'", where);
+            throw Error("unknown line '" + line + "'", Where::in_file(path.string(), n));
         }
     }
-    if (!header || g.capture_sha256.empty()) throw Error("not a golden capture digest", where_file(path.string()));
+    if (!header || g.capture_sha256.empty()) throw Error("not a golden capture digest", Where::in_file(path.string()));
     return g;
 }
 
@@ -334,7 +328,7 @@ std::string read_golden_mesh_sha(const fs::path& path) {
     const std::string text = read_text(path);
     const std::size_t at = text.find(" sha256 ");
     if (text.rfind(kMeshHeader, 0) != 0 || at == std::string::npos)
-        throw Error("not a golden mesh digest", where_file(path.string()));
+        throw Error("not a golden mesh digest", Where::in_file(path.string()));
     return text.substr(at + 8, 64);
 }
 

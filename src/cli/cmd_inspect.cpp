@@ -44,9 +44,9 @@ glm::ivec2 parse_pixel(const std::string& text) {
     const std::size_t comma = text.find(',');
     const std::optional<long long> x = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(0, comma));
     const std::optional<long long> y = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(comma + 1));
-    if (!x || !y) throw Error("pixel '" + text + "' is not X,Y (e.g. 640,400)", where_file("--pixel"));
+    if (!x || !y) throw Error("pixel '" + text + "' is not X,Y (e.g. 640,400)", Where::in_file("--pixel"));
     if (*x < 0 || *y < 0 || *x > 16383 || *y > 16383)
-        throw Error("pixel " + text + " is outside the image (coordinates start at 0,0 top left)", where_file("--pixel"));
+        throw Error("pixel " + text + " is outside the image (coordinates start at 0,0 top left)", Where::in_file("--pixel"));
     return {static_cast<int>(*x), static_cast<int>(*y)};
 }
 
@@ -96,7 +96,7 @@ int run_inspect(const InspectOptions& options) {
     if (pixel.x >= result.width || pixel.y >= result.height)
         throw Error("pixel " + options.pixel + " is outside the " + std::to_string(result.width) + "x" +
                         std::to_string(result.height) + " image",
-                    where_file("--pixel"));
+                    Where::in_file("--pixel"));
     const PixelProvenance p = pixel_provenance(result, pixel.x, pixel.y);
 
     if (options.json) {

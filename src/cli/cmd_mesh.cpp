@@ -50,16 +50,16 @@ struct MeshCommandOptions {
 int run_mesh(const MeshCommandOptions& options) {
     // Everything about the output is checked before the (possibly long) pipeline runs.
     if (options.output.empty() && options.capture.empty())
-        throw Error("nothing to write: give -o MESH, --capture FILE or both", where_file("-o"));
+        throw Error("nothing to write: give -o MESH, --capture FILE or both", Where::in_file("-o"));
     if (options.output.empty() && (options.solid || options.binary))
         throw Error("shapes the mesh of -o, and there is none (--capture writes the pipeline's surface)",
-                    where_file(options.solid ? "--solid" : "--binary"));
+                    Where::in_file(options.solid ? "--solid" : "--binary"));
     MeshWriteOptions write_options;
     if (!options.output.empty()) write_options.format = mesh_format_from_path(options.output);
     write_options.binary = options.binary;
     if (options.binary && !mesh_format_has_binary(write_options.format)) {
         throw Error("obj has no binary form; drop --binary or write .ply, .off or .stl",
-                    where_file("--binary"));
+                    Where::in_file("--binary"));
     }
     const Precision precision = parse_precision_flag(options.precision);
     const ThreadLimit thread_limit(options.threads);
@@ -67,7 +67,7 @@ int run_mesh(const MeshCommandOptions& options) {
     if (!options.base.empty()) {
         given_base = parse_double(options.base);
         if (!given_base || !std::isfinite(*given_base))
-            throw Error("'" + options.base + "' is not a height: give a finite number", where_file("--base"));
+            throw Error("'" + options.base + "' is not a height: give a finite number", Where::in_file("--base"));
     }
     // Both fail now on a missing or unwritable directory.
     std::optional<AtomicOutput> output, capture_output;
@@ -80,7 +80,7 @@ int run_mesh(const MeshCommandOptions& options) {
 
     const Scene scene = load_scene(options.scene);
     if (options.solid && !scene.grid)
-        throw Error("--solid closes a terrain; this scene has no [domain] grid", where_file(options.scene));
+        throw Error("--solid closes a terrain; this scene has no [domain] grid", Where::in_file(options.scene));
 
     PipelineResult result;
     {
@@ -102,7 +102,7 @@ int run_mesh(const MeshCommandOptions& options) {
                           "tessref mesh " + options.scene + ": the CPU reference, " + std::string(to_string(precision)) +
                               " precision");
         } catch (const Error& error) {
-            throw Error(error.what(), where_file(options.capture));  // the name given, not the temporary one
+            throw Error(error.what(), Where::in_file(options.capture));  // the name given, not the temporary one
         }
     }
     if (!output) {
@@ -130,7 +130,7 @@ int run_mesh(const MeshCommandOptions& options) {
             std::ostringstream what;
             what << "the base " << (given_base ? "'" + options.base + "'" : std::to_string(base))
                  << " must lie below the terrain's lowest vertex, at " << "xyz"[up_axis] << " = " << low;
-            throw Error(what.str(), where_file(given_base ? "--base" : options.scene));
+            throw Error(what.str(), Where::in_file(given_base ? "--base" : options.scene));
         }
         result.mesh = close_terrain_into_solid(result.mesh, base, up_axis);
     }
@@ -142,10 +142,10 @@ int run_mesh(const MeshCommandOptions& options) {
             stage_progress(stage, fraction);
         };
         std::ofstream file(output->temp_path(), std::ios::binary | std::ios::trunc);
-        if (!file) throw Error("cannot write output file", where_file(options.output));
+        if (!file) throw Error("cannot write output file", Where::in_file(options.output));
         report = write_mesh(result.mesh, file, write_options);
         file.close();
-        if (!file) throw Error("cannot write output file", where_file(options.output));
+        if (!file) throw Error("cannot write output file", Where::in_file(options.output));
     }
     if (capture_output) capture_output->commit();
     output->commit();

@@ -45,16 +45,16 @@ int run_render(const RenderCommandOptions& options) {
     const ImageFormat format = image_format_from_path(options.output);
     const AovSelection aovs = options.aov.empty() ? AovSelection{} : parse_aovs(options.aov);
     if (aovs.any() && format != ImageFormat::exr)
-        throw Error("--aov writes float channels: the output must be an .exr file", where_file("--aov"));
+        throw Error("--aov writes float channels: the output must be an .exr file", Where::in_file("--aov"));
     if (aovs.any() && options.raytrace && (aovs.patch || aovs.tesscoord || aovs.level))
         throw Error("a ray-traced image has no patches, tess coords or levels: with --raytrace, --aov takes depth "
                     "and triangle only",
-                    where_file("--aov"));
+                    Where::in_file("--aov"));
     if (options.wireframe && options.overlay_wireframe)
-        throw Error("--wireframe and --overlay-wireframe exclude each other", where_file("--overlay-wireframe"));
+        throw Error("--wireframe and --overlay-wireframe exclude each other", Where::in_file("--overlay-wireframe"));
     if (options.raytrace && (options.wireframe || options.overlay_wireframe))
         throw Error("--raytrace renders the height field itself: it has no tessellation to draw as lines",
-                    where_file("--raytrace"));
+                    Where::in_file("--raytrace"));
     const Precision precision = parse_precision_flag(options.precision);
     const ThreadLimit thread_limit(options.threads);
     RenderOptions render_options;
@@ -71,7 +71,7 @@ int run_render(const RenderCommandOptions& options) {
         const glm::ivec2 size = options.size.empty() ? scene.camera->viewport : render_options.size;
         require_memory(estimate_render_memory(size, render_options.mode, options.raytrace, format, aovs),
                        "an image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
-                       where_file(options.size.empty() ? options.scene : "--size " + options.size));
+                       Where::in_file(options.size.empty() ? options.scene : "--size " + options.size));
     }
     render_options.shading = std::make_shared<const RenderShading>(shading_model(scene));
     StageProgress stage_progress;

@@ -70,15 +70,15 @@ TessellateRequest resolve(const TessellateOptions& options, bool inner_given) {
     const auto domain = parse_domain(options.domain);
     if (!domain)
         throw Error("unknown domain '" + options.domain + "'; expected quads, triangles or isolines",
-                    where_file("--domain"));
+                    Where::in_file("--domain"));
     const auto spacing = parse_spacing(options.spacing);
     if (!spacing)
         throw Error("unknown spacing '" + options.spacing +
                         "'; expected equal, fractional_odd or fractional_even",
-                    where_file("--spacing"));
+                    Where::in_file("--spacing"));
     const auto winding = parse_winding(options.winding);
     if (!winding)
-        throw Error("unknown winding '" + options.winding + "'; expected ccw or cw", where_file("--winding"));
+        throw Error("unknown winding '" + options.winding + "'; expected ccw or cw", Where::in_file("--winding"));
     const Precision precision = parse_precision_flag(options.precision);
 
     request.settings = {*domain, *spacing, *winding, options.point_mode};
@@ -92,21 +92,21 @@ TessellateRequest resolve(const TessellateOptions& options, bool inner_given) {
         std::copy(inner.begin(), inner.end(), request.levels.inner.begin());
     } else if (*domain != Domain::isolines) {
         throw Error("--inner is required for the " + std::string(to_string(*domain)) + " domain",
-                    where_file("--inner"));
+                    Where::in_file("--inner"));
     }
 
     if (!options.format.empty()) {
         const auto format = parse_format(options.format);
         if (!format)
             throw Error("unknown format '" + options.format + "'; expected text, json, obj, svg or png",
-                        where_file("--format"));
+                        Where::in_file("--format"));
         request.format = *format;
     } else if (!is_stdout(options.output)) {
         request.format = parse_format(lowercase_extension(options.output)).value_or(Format::text);
     }
     request.output = options.output;
     if (request.format == Format::png && is_stdout(request.output))
-        throw Error("the png format writes a file: give one with -o FILE", where_file("--format"));
+        throw Error("the png format writes a file: give one with -o FILE", Where::in_file("--format"));
 
     std::string& cmd = request.command_line;
     cmd = "tessref tessellate --domain " + std::string(to_string(request.settings.domain)) + " --spacing " +

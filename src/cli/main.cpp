@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
             for (const tessref::cli::Command& command : commands)
                 known += (known.empty() ? "" : ", ") + command.app->get_name();
             throw tessref::Error("unknown command '" + std::string(argv[1]) + "'; the commands are " + known,
-                                 tessref::cli::where_file("command line"));
+                                 tessref::Where::in_file("command line"));
         }
         try {
             app.parse(argc, argv);
@@ -82,7 +82,7 @@ int main(int argc, char** argv) {
             // --help, --help-all, --version: printed on stdout, exit 0.
             return app.exit(success);
         } catch (const CLI::ParseError& parse_error) {
-            const tessref::Error error(parse_error.what(), tessref::cli::where_file("command line"));
+            const tessref::Error error(parse_error.what(), tessref::Where::in_file("command line"));
             print_error(error.message());
             std::cerr << "Run 'tessref --help' or 'tessref <command> --help' for usage." << std::endl;
             return exit_bad_input;
@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
             const auto bytes = tessref::parse_byte_size(max_memory);
             if (!bytes)
                 throw tessref::Error("'" + max_memory + "' is not a memory size (e.g. 4G, 512M, 1000000)",
-                                     tessref::cli::where_file("--max-memory"));
+                                     tessref::Where::in_file("--max-memory"));
             tessref::set_memory_limit(*bytes);
         }
         for (const tessref::cli::Command& command : commands) {

@@ -11,6 +11,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include "cli/cli_util.h"
+#include "common/fill.h"
 #include "tessref/error.h"
 
 namespace tessref::cli {
@@ -516,41 +517,9 @@ public:
         p[2] = v[2];
     }
 
-    // A convex polygon, pixel centres inside or on the edge (either orientation).
+    // Adjacent triangles of a pattern share edges: both paint the pixels on them.
     void fill_polygon(const std::vector<glm::dvec2>& points, Color color) {
-        if (points.size() < 3) return;
-        double min_x = points[0].x, max_x = min_x, min_y = points[0].y, max_y = min_y;
-        for (const glm::dvec2& p : points) {
-            min_x = std::min(min_x, p.x);
-            max_x = std::max(max_x, p.x);
-            min_y = std::min(min_y, p.y);
-            max_y = std::max(max_y, p.y);
-        }
-        double area = 0;
-        for (std::size_t i = 0; i < points.size(); ++i) {
-            const glm::dvec2& a = points[i];
-            const glm::dvec2& b = points[(i + 1) % points.size()];
-            area += a.x * b.y - b.x * a.y;
-        }
-        if (area == 0) return;
-        const double sign = area > 0 ? 1.0 : -1.0;
-        const int x0 = std::max(0, static_cast<int>(std::floor(min_x)));
-        const int x1 = std::min(width_ - 1, static_cast<int>(std::ceil(max_x)));
-        const int y0 = std::max(0, static_cast<int>(std::floor(min_y)));
-        const int y1 = std::min(height_ - 1, static_cast<int>(std::ceil(max_y)));
-        for (int y = y0; y <= y1; ++y) {
-            for (int x = x0; x <= x1; ++x) {
-                const glm::dvec2 c{x + 0.5, y + 0.5};
-                bool inside = true;
-                for (std::size_t i = 0; i < points.size() && inside; ++i) {
-                    const glm::dvec2& a = points[i];
-                    const glm::dvec2& b = points[(i + 1) % points.size()];
-                    const double edge = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-                    inside = edge * sign >= -1e-9;
-                }
-                if (inside) put(x, y, color);
-            }
-        }
+        fill_convex_polygon(points, width_, height_, 1e-9, [&](int x, int y) { put(x, y, color); });
     }
 
     void fill_disc(glm::dvec2 centre, double radius, Color color) {
@@ -655,7 +624,7 @@ std::vector<std::string> write_picture_image(const Picture& picture, const std::
         std::string reason = canvas.image().geterror();
         if (reason.empty()) reason = OIIO::geterror();
         throw Error("cannot write image: " + (reason.empty() ? std::string("unknown error") : reason),
-                    where_file(error_name));
+                    Where::in_file(error_name));
     }
     return warnings;
 }

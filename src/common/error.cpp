@@ -1,6 +1,54 @@
 #include "tessref/error.h"
 
+#include <algorithm>
+#include <climits>
+#include <utility>
+
 namespace tessref {
+
+namespace {
+
+int clamped(std::size_t n) { return static_cast<int>(std::min<std::size_t>(n, INT_MAX)); }
+
+}  // namespace
+
+Where Where::in_file(std::string file, std::size_t line, std::size_t column) {
+    Where where;
+    where.file = std::move(file);
+    where.line = clamped(line);
+    where.column = clamped(column);
+    return where;
+}
+
+Where Where::at_key(std::string key) {
+    Where where;
+    where.key = std::move(key);
+    return where;
+}
+
+Where Where::at_key(std::string file, std::string key) {
+    Where where = in_file(std::move(file));
+    where.key = std::move(key);
+    return where;
+}
+
+Where Where::at(std::string file, std::size_t line, std::size_t column, std::string key) {
+    Where where = in_file(std::move(file), line, column);
+    where.key = std::move(key);
+    return where;
+}
+
+Where Where::at_patch(long long patch_id) {
+    Where where;
+    where.patch_id = patch_id;
+    return where;
+}
+
+Where Where::at_patch(std::string file, long long patch_id) {
+    Where where = in_file(std::move(file));
+    where.patch_id = patch_id;
+    return where;
+}
 
 std::string Where::str() const {
     std::string out;

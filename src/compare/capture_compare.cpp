@@ -67,8 +67,7 @@ struct Triangle {
 
 std::vector<Triangle> sorted_triangles(const Capture& capture, const char* side) {
     const std::vector<CapturedVertex>& v = capture.vertices;
-    Where where;
-    where.file = capture.source;
+    const Where where = Where::in_file(capture.source);
     const std::string name = capture.source.empty() ? std::string(side) : capture.source;
     if (v.size() % 3 != 0)
         throw Error("the " + std::string(side) + " capture has " + std::to_string(v.size()) +
@@ -83,11 +82,9 @@ std::vector<Triangle> sorted_triangles(const Capture& capture, const char* side)
         Triangle& tri = triangles[t];
         tri.patch = v[3 * t].patch_id;
         tri.index = static_cast<std::uint32_t>(t);
-        if (v[3 * t + 1].patch_id != tri.patch || v[3 * t + 2].patch_id != tri.patch) {
-            where.patch_id = tri.patch;
+        if (v[3 * t + 1].patch_id != tri.patch || v[3 * t + 2].patch_id != tri.patch)
             throw Error("triangle " + std::to_string(t) + " of the " + side + " capture has corners of two patches",
-                        where);
-        }
+                        Where::at_patch(capture.source, tri.patch));
         std::array<std::uint8_t, 3> order{0, 1, 2};
         std::array<Bits, 3> keys{bits_of(v[3 * t].tess_coord), bits_of(v[3 * t + 1].tess_coord),
                                  bits_of(v[3 * t + 2].tess_coord)};

@@ -14,12 +14,6 @@ namespace tessref {
 
 namespace {
 
-Where where_key(std::string key) {
-    Where where;
-    where.key = std::move(key);
-    return where;
-}
-
 // |a - b| in double, with equal samples (two NaNs, one infinity twice) 0 and a NaN against
 // anything else +inf: a NaN where the reference has a number is a difference, not "no
 // information".
@@ -66,15 +60,15 @@ CompareResult compare_images(const FloatImage& reference, const FloatImage& test
         throw Error("the images differ in size: " + std::to_string(reference.width) + "x" +
                         std::to_string(reference.height) + " and " + std::to_string(test.width) + "x" +
                         std::to_string(test.height),
-                    where_key("size"));
+                    Where::at_key("size"));
     if (reference.channels != test.channels)
         throw Error("the images differ in channel count: " + std::to_string(reference.channels) + " and " +
                         std::to_string(test.channels),
-                    where_key("channels"));
+                    Where::at_key("channels"));
     if (!(options.threshold >= 0.0))
-        throw Error("the threshold must be a number >= 0", where_key("--threshold"));
+        throw Error("the threshold must be a number >= 0", Where::at_key("--threshold"));
     if (options.max_position_deviation < 0)
-        throw Error("the position deviation must be >= 0", where_key("--max-position-deviation"));
+        throw Error("the position deviation must be >= 0", Where::at_key("--max-position-deviation"));
 
     CompareResult result;
     result.width = reference.width;
@@ -137,7 +131,7 @@ CompareResult compare_images(const FloatImage& reference, const FloatImage& test
 
 FloatImage difference_picture(const FloatImage& reference, const CompareResult& result) {
     if (reference.width != result.width || reference.height != result.height || reference.channels <= 0)
-        throw Error("the reference is not the image the comparison was of", where_key("size"));
+        throw Error("the reference is not the image the comparison was of", Where::at_key("size"));
     FloatImage picture;
     picture.width = reference.width;
     picture.height = reference.height;

@@ -17,11 +17,7 @@ namespace tessref {
 
 namespace {
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-    Where where;
-    where.file = path;
-    throw Error(what, where);
-}
+[[noreturn]] void fail(const std::string& path, const std::string& what) { throw Error(what, Where::in_file(path)); }
 
 std::string trimmed(std::string text) {
     while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
@@ -77,7 +73,7 @@ FloatImage read_float_image(const std::string& path) {
     require_memory(saturating_bytes(count, integer_file ? 4 + spec.format.size() : 4),
                    "image of " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " pixels, " +
                        std::to_string(spec.nchannels) + " channels",
-                   Where{path, 0, 0, {}, -1});
+                   Where::in_file(path));
 
     bool ok = false;
     if (integer_file && spec.format == OIIO::TypeDesc::UINT8) {

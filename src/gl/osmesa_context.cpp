@@ -69,11 +69,9 @@ Context Context::create() {
     // load (Mesa 22.3: a segmentation fault in OSMesaCreateContextAttribs): refused first.
     if (const char* driver = std::getenv("GALLIUM_DRIVER");
         driver && *driver && std::string(driver) != "llvmpipe" && std::string(driver) != "softpipe") {
-        Where where;
-        where.file = "GALLIUM_DRIVER";
         throw Error(std::string("OSMesa: GALLIUM_DRIVER=") + driver +
                         " is not a software driver OSMesa can load (llvmpipe, softpipe); tessref gl needs llvmpipe",
-                    where);
+                    Where::in_file("GALLIUM_DRIVER"));
     }
     auto impl = std::make_unique<Impl>();
     const int attributes[] = {OSMESA_FORMAT,

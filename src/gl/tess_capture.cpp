@@ -32,12 +32,6 @@ struct FeedbackVertex {
 };
 static_assert(sizeof(FeedbackVertex) == 16);
 
-Where patch_where(std::size_t patch) {
-    Where where;
-    where.patch_id = static_cast<long long>(patch);
-    return where;
-}
-
 int vertices_per_primitive(const TessSettings& s) {
     if (s.point_mode) return 1;
     return s.domain == Domain::isolines ? 2 : 3;
@@ -190,7 +184,7 @@ std::vector<CapturedPatch> capture_patterns(Context& context, const TessSettings
             return Error(what + " (draw of patches " + std::to_string(first) + ".." +
                              std::to_string(first + count - 1) + ", " + std::to_string(generated) +
                              " primitives generated, " + std::to_string(written) + " written)",
-                         patch_where(first));
+                         Where::at_patch(static_cast<long long>(first)));
         };
         if (generated != written || written > buffer_primitives)
             throw batch_error("transform feedback overflowed");

@@ -40,13 +40,7 @@ struct RawImage {
     std::vector<float> f32;
 };
 
-Where file_where(const std::string& path) {
-    Where where;
-    where.file = path;
-    return where;
-}
-
-[[noreturn]] void fail(const std::string& path, const std::string& what) { throw Error(what, file_where(path)); }
+[[noreturn]] void fail(const std::string& path, const std::string& what) { throw Error(what, Where::in_file(path)); }
 
 // OpenImageIO's error text on one line: trailing newlines dropped, inner ones joined by "; ".
 std::string trimmed(std::string text) {
@@ -226,7 +220,7 @@ RawImage read_raw(const std::string& path, int max_dimension, int max_channels, 
     require_memory(needed,
                    what_kind + " of " + std::to_string(raw.width) + " x " + std::to_string(raw.height) +
                        (what_kind == "texture" ? " texels" : " samples"),
-                   file_where(path));
+                   Where::in_file(path));
     if (spec.width > max_dimension || spec.height > max_dimension)
         fail(path, what_kind + " is " + std::to_string(spec.width) + "x" +
                        std::to_string(spec.height) + ", larger than the limit of " +
@@ -329,12 +323,9 @@ HeightField load_height_field(const std::string& path, const HeightFieldOptions&
             const std::string why = std::isnan(v)   ? std::string("is NaN")
                                     : !std::isfinite(v) ? std::string("is infinite")
                                                         : "equals the nodata value " + format_number(v);
-            Where where;
-            where.file = path;
-            where.key = "texel(" + std::to_string(x) + "," + std::to_string(y) + ")";
             throw Error("height map texel (" + std::to_string(x) + ", " + std::to_string(y) + ") " +
                             why + " (nodata policy: error)",
-                        where);
+                        Where::at_key(path, "texel(" + std::to_string(x) + "," + std::to_string(y) + ")"));
         }
         missing[i] = 1;
         ++missing_count;

@@ -25,23 +25,16 @@ using raster::ClipVertex;
 using raster::Primitive;
 using raster::Viewport;
 
-namespace {
-Where key_where(std::string key) {
-    Where where;
-    where.key = std::move(key);
-    return where;
-}
-}  // namespace
 
 Framebuffer Framebuffer::create(int width, int height, int varying_count) {
     if (width < 1 || height < 1 || width > 16384 || height > 16384) {
         throw Error("framebuffer size " + std::to_string(width) + "x" + std::to_string(height) +
                         " is outside 1..16384",
-                    key_where("framebuffer"));
+                    Where::at_key("framebuffer"));
     }
     if (varying_count < 0 || varying_count > kMaxVaryings) {
         throw Error("varying count " + std::to_string(varying_count) + " is outside 0..16",
-                    key_where("varying_count"));
+                    Where::at_key("varying_count"));
     }
     Framebuffer fb;
     fb.width = width;
@@ -394,38 +387,38 @@ void raster_tile(Context& ctx, int tile, const std::vector<Chunk>& chunks, std::
 void validate(const Framebuffer& fb, const RasterInput& in) {
     if (fb.width < 1 || fb.height < 1 ||
         fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height)) {
-        throw Error("framebuffer is not allocated (use Framebuffer::create)", key_where("framebuffer"));
+        throw Error("framebuffer is not allocated (use Framebuffer::create)", Where::at_key("framebuffer"));
     }
     if (in.varying_count < 0 || in.varying_count > kMaxVaryings) {
         throw Error("varying count " + std::to_string(in.varying_count) + " is outside 0..16",
-                    key_where("varying_count"));
+                    Where::at_key("varying_count"));
     }
     if (in.varying_count > fb.varying_count) {
         throw Error("input has " + std::to_string(in.varying_count) + " varyings, framebuffer " +
                         std::to_string(fb.varying_count),
-                    key_where("varying_count"));
+                    Where::at_key("varying_count"));
     }
     const std::size_t nv = in.positions.size();
     if (in.varyings.size() != nv * static_cast<std::size_t>(in.varying_count)) {
         throw Error("varyings hold " + std::to_string(in.varyings.size()) + " floats, expected " +
                         std::to_string(nv * static_cast<std::size_t>(in.varying_count)),
-                    key_where("varyings"));
+                    Where::at_key("varyings"));
     }
     if (!in.tess_coords.empty() && in.tess_coords.size() != nv) {
-        throw Error("tess_coords must have one entry per vertex", key_where("tess_coords"));
+        throw Error("tess_coords must have one entry per vertex", Where::at_key("tess_coords"));
     }
     if (!in.triangle_ids.empty() && in.triangle_ids.size() != in.triangles.size()) {
-        throw Error("triangle_ids must have one entry per triangle", key_where("triangle_ids"));
+        throw Error("triangle_ids must have one entry per triangle", Where::at_key("triangle_ids"));
     }
     if (!in.patch_ids.empty() && in.patch_ids.size() != in.triangles.size()) {
-        throw Error("patch_ids must have one entry per triangle", key_where("patch_ids"));
+        throw Error("patch_ids must have one entry per triangle", Where::at_key("patch_ids"));
     }
     for (std::size_t t = 0; t < in.triangles.size(); ++t) {
         for (std::uint32_t v : in.triangles[t]) {
             if (v >= nv) {
                 throw Error("vertex index " + std::to_string(v) + " out of range (" + std::to_string(nv) +
                                 " vertices)",
-                            key_where("triangles[" + std::to_string(t) + "]"));
+                            Where::at_key("triangles[" + std::to_string(t) + "]"));
             }
         }
     }

@@ -19,12 +19,6 @@ namespace tessref {
 
 namespace {
 
-Where file_where(const std::string& path) {
-    Where w;
-    w.file = path;
-    return w;
-}
-
 std::string lower(std::string s) {
     std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return s;
@@ -38,7 +32,7 @@ ImageFormat image_format_from_path(const std::string& path) {
     if (extension == ".tif" || extension == ".tiff") return ImageFormat::tiff;
     if (extension == ".exr") return ImageFormat::exr;
     throw Error("cannot tell the image format of '" + path + "': the name must end in .png, .exr, .tif or .tiff",
-                file_where(path));
+                Where::in_file(path));
 }
 
 AovSelection parse_aovs(std::string_view list) {
@@ -57,7 +51,7 @@ AovSelection parse_aovs(std::string_view list) {
         else
             throw Error("unknown AOV '" + item + "'; expected a comma-separated list of depth, patch, triangle, "
                         "tesscoord, level",
-                        render_detail::where_key("--aov"));
+                        Where::at_key("--aov"));
         start = comma + 1;
     }
     return aovs;
@@ -65,11 +59,11 @@ AovSelection parse_aovs(std::string_view list) {
 
 void write_image(const RenderResult& result, const std::string& path, ImageFormat format, const AovSelection& aovs) {
     if (aovs.any() && format != ImageFormat::exr)
-        throw Error("AOV channels need an EXR file (float channels): name the output *.exr", file_where(path));
+        throw Error("AOV channels need an EXR file (float channels): name the output *.exr", Where::in_file(path));
     const int width = result.width, height = result.height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
-    if (!out) throw Error("cannot write an image here: " + OIIO::geterror(), file_where(path));
+    if (!out) throw Error("cannot write an image here: " + OIIO::geterror(), Where::in_file(path));
 
     if (format != ImageFormat::exr) {
         const std::vector<std::uint8_t> pixels = to_rgba8(result);
@@ -78,7 +72,7 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
         spec.attribute("DateTime", "");  // no time stamp: the same render gives the same bytes
         if (format == ImageFormat::tiff) spec.attribute("compression", "zip");
         if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close())
-            throw Error("cannot write the image: " + out->geterror(), file_where(path));
+            throw Error("cannot write the image: " + out->geterror(), Where::in_file(path));
         return;
     }
 
@@ -114,7 +108,7 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
     spec.attribute("Software", "tessref " TESSREF_VERSION);
     spec.attribute("DateTime", "");  // OpenImageIO stamps TIFF and EXR files with the time unless told
     if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close())
-        throw Error("cannot write the image: " + out->geterror(), file_where(path));
+        throw Error("cannot write the image: " + out->geterror(), Where::in_file(path));
 }
 
 }  // namespace tessref

@@ -147,12 +147,9 @@ std::optional<glm::dvec3> plane_hit(const Ray& ray, const glm::dvec3& p0, const 
 
 RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, RaytraceStats* stats_out) {
     if (!scene.grid) {
-        Where w;
-        w.file = scene.file;
-        w.key = "mesh";
         throw Error("--raytrace needs a terrain scene ([domain] with a height map): the ground truth is the "
                     "full-resolution height field",
-                    w);
+                    Where::at_key(scene.file, "mesh"));
     }
     RenderResult result;
     result.camera = render_detail::camera_for(scene, options);

@@ -19,7 +19,6 @@ namespace tessref {
 
 using render_detail::perspective_weights;
 using render_detail::pixel_ndc;
-using render_detail::where_key;
 using render_detail::window_depth;
 
 namespace render_detail {
@@ -39,17 +38,14 @@ void allocate(RenderResult& r, int width, int height) {
 
 SceneCamera camera_for(const Scene& scene, const RenderOptions& options) {
     if (!scene.camera) {
-        Where w;
-        w.file = scene.file;
-        w.key = "camera";
-        throw Error("rendering needs a [camera] in the scene", w);
+        throw Error("rendering needs a [camera] in the scene", Where::at_key(scene.file, "camera"));
     }
     SceneCamera camera = *scene.camera;
     if (options.size != glm::ivec2(0, 0)) camera.viewport = options.size;
     const glm::ivec2 s = camera.viewport;
     if (s.x < 1 || s.y < 1 || s.x > 16384 || s.y > 16384)
         throw Error("image size " + std::to_string(s.x) + "x" + std::to_string(s.y) + " is outside 1..16384",
-                    where_key("size"));
+                    Where::at_key("size"));
     return camera;
 }
 
@@ -202,7 +198,7 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
 
 RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineResult> pipeline,
                             const RenderOptions& options) {
-    if (!pipeline) throw Error("render_surface needs a pipeline result", where_key("pipeline"));
+    if (!pipeline) throw Error("render_surface needs a pipeline result", Where::at_key("pipeline"));
     RenderResult result;
     result.camera = render_detail::camera_for(scene, options);
     result.shading = options.shading ? *options.shading : shading_model(scene);
@@ -219,10 +215,10 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
         (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size()) ||
         pipe.levels.size() != scene.patch_count())
         throw Error("the pipeline result does not fit the scene (vertex attributes or patch count)",
-                    where_key("pipeline"));
+                    Where::at_key("pipeline"));
     const bool face_normals = scene.geometry && scene.geometry->normals == GeometryNormals::face;
     if (face_normals && pipe.face_normals.size() != mesh.triangles.size())
-        throw Error("the pipeline result has no face normals", where_key("pipeline"));
+        throw Error("the pipeline result has no face normals", Where::at_key("pipeline"));
     result.stats.triangles = mesh.triangles.size();
     result.stats.vertices = mesh.positions.size();
 
@@ -380,7 +376,7 @@ PixelProvenance pixel_provenance(const RenderResult& result, int x, int y) {
     if (x < 0 || y < 0 || x >= result.width || y >= result.height)
         throw Error("pixel " + std::to_string(x) + "," + std::to_string(y) + " is outside the " +
                         std::to_string(result.width) + "x" + std::to_string(result.height) + " image",
-                    where_key("pixel"));
+                    Where::at_key("pixel"));
     PixelProvenance p;
     p.x = x;
     p.y = y;

@@ -54,10 +54,4 @@ void allocate(RenderResult& result, int width, int height);
 // The camera with the image size applied (RenderOptions::size), and the size checked.
 SceneCamera camera_for(const Scene& scene, const RenderOptions& options);
 
-inline Where where_key(std::string key) {
-    Where w;
-    w.key = std::move(key);
-    return w;
-}
-
 }  // namespace tessref::render_detail

@@ -6,11 +6,10 @@
 #include <sstream>
 #include <utility>
 
-#include <OpenMesh/Core/IO/importer/ImporterT.hh>
-#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <glm/gtc/matrix_transform.hpp>
 #include <toml++/toml.h>
 
+#include "mesh/openmesh.h"
 #include "scene/toml_reader.h"
 #include "tessref/check.h"
 #include "tessref/scene.h"
@@ -384,35 +383,9 @@ struct Loader {
                 throw Error("mesh " + path + ": face " + std::to_string(f) + " repeats a vertex (PN triangles need three)",
                             t.where("path"));
         }
-        // OpenMesh's half-edge mesh, built through its importer as its readers build it: it
-        // computes the vertex normals a file lacks, from faces in its circulation order.
-        using Mesh = OpenMesh::PolyMesh_ArrayKernelT<>;
-        Mesh mesh;
-        mesh.request_vertex_normals();
-        mesh.request_vertex_texcoords2D();
-        {
-            OpenMesh::IO::ImporterT<Mesh> importer(mesh);
-            for (std::size_t v = 0; v < file.vertex_count(); ++v) {
-                const glm::dvec3& p = file.positions[v];
-                const auto vh = importer.add_vertex(OpenMesh::Vec3f(float(p.x), float(p.y), float(p.z)));
-                if (!file.normals.empty()) {
-                    const glm::vec3& n = file.normals[v];
-                    importer.set_normal(vh, OpenMesh::Vec3f(n.x, n.y, n.z));
-                }
-                if (!file.uvs.empty()) importer.set_texcoord(vh, OpenMesh::Vec2f(file.uvs[v].x, file.uvs[v].y));
-            }
-            OpenMesh::IO::BaseImporter::VHandles handles;
-            for (std::size_t f = 0; f < file.face_count(); ++f) {
-                handles.clear();
-                for (std::uint32_t v : file.face(f)) handles.emplace_back(static_cast<int>(v));
-                importer.add_face(handles);
-            }
-        }
-        if (file.normals.empty()) {
-            // No normals in the file: the normalized sum of the incident face normals.
-            mesh.request_face_normals();
-            mesh.update_normals();
-        }
+        // OpenMesh's half-edge mesh: it computes the vertex normals a file lacks.
+        const mesh_detail::HalfEdgeImport imported = mesh_detail::import_half_edge_mesh(file, true);
+        const mesh_detail::HalfEdgeMesh& mesh = imported.mesh;
         const bool has_uv = !file.uvs.empty();
         const std::uint32_t base = static_cast<std::uint32_t>(out.positions.size());
         for (auto vh : mesh.vertices()) {

@@ -17,25 +17,12 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
+#include "mesh/openmesh.h"
 #include "tessref/error.h"
 
 namespace tessref {
 
 namespace {
-
-// (Where's fields are filled one by one: designated initializers that skip fields warn
-// under -Wextra.)
-Where where_file(std::string file) {
-    Where where;
-    where.file = std::move(file);
-    return where;
-}
-
-Where where_key(std::string key) {
-    Where where;
-    where.key = std::move(key);
-    return where;
-}
 
 }  // namespace
 
@@ -70,7 +57,7 @@ MeshFormat mesh_format_from_path(const std::string& path) {
         extension.empty() ? "output file has no extension; expected .ply, .obj, .off or .stl"
                           : "unknown mesh format '." + extension +
                                 "'; expected .ply, .obj, .off or .stl";
-    throw Error(what, where_file(path));
+    throw Error(what, Where::in_file(path));
 }
 
 bool mesh_format_has_binary(MeshFormat format) { return format != MeshFormat::obj; }
@@ -84,7 +71,7 @@ void validate(const SurfaceMesh& mesh) {
         if (size != 0 && size != n) {
             throw Error("surface mesh has " + std::to_string(size) + " " + name + " for " +
                             std::to_string(n) + " vertices",
-                        where_key(name));
+                        Where::at_key(name));
         }
     };
     check_size(mesh.normals.size(), "normals");
@@ -97,7 +84,7 @@ void validate(const SurfaceMesh& mesh) {
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
         for (const std::uint32_t index : mesh.triangles[t]) {
             if (index >= n) {
-                Where where = where_key("triangles[" + std::to_string(t) + "]");
+                Where where = Where::at_key("triangles[" + std::to_string(t) + "]");
                 const std::uint32_t first = mesh.triangles[t][0];
                 if (first < mesh.patch_ids.size()) where.patch_id = mesh.patch_ids[first];
                 throw Error("triangle names vertex " + std::to_string(index) + " of " +
@@ -257,24 +244,6 @@ private:
     const std::vector<std::array<std::uint32_t, 3>>& triangles_;
 };
 
-// Silences one of OpenMesh's log streams for a scope (its writers chat about every file
-// they write), restoring its previous state afterwards.
-class QuietStream {
-public:
-    explicit QuietStream(OpenMesh::mostream& stream) : stream_(stream), was_enabled_(stream.is_enabled()) {
-        stream_.disable();
-    }
-    ~QuietStream() {
-        if (was_enabled_) stream_.enable();
-    }
-    QuietStream(const QuietStream&) = delete;
-    QuietStream& operator=(const QuietStream&) = delete;
-
-private:
-    OpenMesh::mostream& stream_;
-    bool was_enabled_;
-};
-
 OpenMesh::Vec3f to_float(const glm::dvec3& v) {
     return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
 }
@@ -301,9 +270,7 @@ void require_finite_floats(const SurfaceMesh& w) {
         what += finite ? " is beyond the 32-bit float range (largest " +
                              number(std::numeric_limits<float>::max()) + ") that mesh files store"
                        : " is not finite";
-        Where where;
-        if (!w.patch_ids.empty()) where.patch_id = w.patch_ids[v];
-        throw Error(what, where);
+        throw Error(what, w.patch_ids.empty() ? Where{} : Where::at_patch(w.patch_ids[v]));
     }
 }
 
@@ -365,7 +332,7 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     if (options.binary && !mesh_format_has_binary(format)) {
         throw Error(std::string(to_string(format)) + " has no binary form; drop --binary or "
                                                      "write .ply, .off or .stl",
-                    where_file("--binary"));
+                    Where::in_file("--binary"));
     }
     if (options.ascii_digits < 1 || options.ascii_digits > 17) {
         throw Error("ASCII digits must be within [1, 17], got " + std::to_string(options.ascii_digits));
@@ -460,8 +427,9 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     bool written = false;
     progress("writing", 0.0);
     {
-        const QuietStream quiet_log(::omlog());
-        const QuietStream quiet_out(::omout());
+        // OpenMesh's writers chat about every file they write.
+        const mesh_detail::QuietStream quiet_log(::omlog());
+        const mesh_detail::QuietStream quiet_out(::omout());
         TriangleListExporter exporter(om, w.triangles);
         written = OpenMesh::IO::IOManager().write(out, "." + std::string(to_string(format)), exporter,
                                                   io_options, options.ascii_digits);

@@ -15,12 +15,6 @@ namespace tessref {
 
 namespace {
 
-Where base_z_where() {
-    Where where;
-    where.key = "base_z";
-    return where;
-}
-
 double cross_z(glm::dvec2 o, glm::dvec2 a, glm::dvec2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
 
 // Ear clipping of a counter-clockwise polygon; returns triangles (as polygon indices) in
@@ -62,8 +56,8 @@ std::vector<std::array<std::size_t, 3>> clip_ears(const std::vector<glm::dvec2>&
 
 SurfaceMesh close_terrain_into_solid(const SurfaceMesh& terrain, double base_z, int up_axis) {
     if (terrain.triangles.empty()) throw Error("cannot close a terrain without triangles into a solid");
-    if (!std::isfinite(base_z)) throw Error("the base of the solid must be a finite height", base_z_where());
-    if (up_axis < 0 || up_axis > 2) throw Error("the up axis must be 0, 1 or 2 (x, y or z)", base_z_where());
+    if (!std::isfinite(base_z)) throw Error("the base of the solid must be a finite height", Where::at_key("base_z"));
+    if (up_axis < 0 || up_axis > 2) throw Error("the up axis must be 0, 1 or 2 (x, y or z)", Where::at_key("base_z"));
     // Seen from above: (u, w, up) is a right-handed frame.
     const int up = up_axis, iu = (up + 1) % 3, iw = (up + 2) % 3;
     const auto flat = [&](const glm::dvec3& p) { return glm::dvec2(p[iu], p[iw]); };
@@ -104,7 +98,7 @@ SurfaceMesh close_terrain_into_solid(const SurfaceMesh& terrain, double base_z, 
     if (!(base_z < lowest))
         throw Error("the base of the solid (" + std::string(1, "xyz"[up]) + " = " + std::to_string(base_z) +
                         ") must lie below the terrain's lowest point (" + std::to_string(lowest) + ")",
-                    base_z_where());
+                    Where::at_key("base_z"));
 
     // Boundary half-edges: directed edges whose edge no other triangle uses, filed by
     // their smaller vertex.

@@ -1,5 +1,5 @@
 // Texture: the mip pyramid as glGenerateMipmap builds it and texture()/textureLod() as a
-// GL 4.5 sampler with clamp-to-edge evaluates them (see tessref/heightfield.h for the
+// GL 4.5 sampler with clamp-to-edge evaluates them (see tessref/texture.h for the
 // conventions and for what was measured against llvmpipe).
 //
 // The GPU path must not let the compiler fuse a multiply and an add that llvmpipe rounds
@@ -18,8 +18,8 @@
 #include <utility>
 
 #include "tessref/error.h"
-#include "tessref/heightfield.h"
 #include "tessref/limits.h"
+#include "tessref/texture.h"
 
 namespace tessref {
 

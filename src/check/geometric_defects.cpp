@@ -1,6 +1,7 @@
-// Geometry of the faces and vertices: areas, the signed volume, degenerate faces, the up
-// axis of a terrain, unwelded coincident vertices and T-junctions. Neighbour searches use
-// hashed uniform grids (cells a few tolerances wide), so they stay linear in the mesh size.
+// The geometric steps of check_mesh() (topology.cpp has the ones on the face list alone):
+// areas, the signed volume, degenerate faces, the up axis of a terrain, unwelded coincident
+// vertices and T-junctions. Neighbour searches use hashed uniform grids (cells a few
+// tolerances wide), so they stay linear in the mesh size.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
