@@ -45,14 +45,9 @@ const tessref::Scene& bench_scene(int which) {
 
 const char* scene_label(int which) { return which == 0 ? "thesis-all-10" : "jacksboro-level-64"; }
 
-// 1280x800 and the scene's fragment stage, its textures loaded once.
-tessref::RenderOptions options_1280x800(int which) {
-    static std::shared_ptr<const tessref::RenderShading> shading[2];
-    if (!shading[which])
-        shading[which] = std::make_shared<const tessref::RenderShading>(tessref::shading_model(bench_scene(which)));
+tessref::RenderOptions options_1280x800() {
     tessref::RenderOptions options;
     options.size = {1280, 800};
-    options.shading = shading[which];
     return options;
 }
 
@@ -85,7 +80,7 @@ void BM_RenderSurface(benchmark::State& state) {
     std::uint64_t pixels = 0;
     for (auto _ : state) {
         const auto start = Clock::now();
-        tessref::RenderResult image = tessref::render_surface(scene, surface, options_1280x800(which));
+        tessref::RenderResult image = tessref::render_surface(scene, surface, options_1280x800());
         wall += std::chrono::duration<double>(Clock::now() - start).count();
         pixels = image.colour.size();
         benchmark::DoNotOptimize(image.colour.data());
@@ -103,7 +98,7 @@ void time_scene_renders(benchmark::State& state, Render render) {
     std::uint64_t pixels = 0, triangles = 0;
     for (auto _ : state) {
         const auto start = Clock::now();
-        tessref::RenderResult image = render(scene, options_1280x800(which));
+        tessref::RenderResult image = render(scene, options_1280x800());
         wall += std::chrono::duration<double>(Clock::now() - start).count();
         pixels = image.colour.size();
         triangles = image.stats.triangles;

@@ -140,9 +140,10 @@ void expect_identical(const tessref::RenderResult& a, const tessref::RenderResul
 // ---- the [shading] table, the level rule, the heat map ---------------------------------
 
 TEST(RenderShading, WithoutTableIsLinearDepthWithTheCameraPlanes) {
-    tessref::Scene scene = tessref::load_scene(scene_path("thesis-map-4").string());
-    scene.shading_toml.reset();
-    const tessref::RenderShading s = tessref::shading_model(scene);
+    const std::string text = read_file(scene_path("thesis-map-4"));
+    const tessref::Scene scene =
+        tessref::load_scene_from_string(text.substr(0, text.find("[shading]")), scene_path("thesis-map-4").string());
+    const tessref::RenderShading& s = scene.shading;
     EXPECT_EQ(s.model.kind, tessref::ShadingKind::depth);
     EXPECT_EQ(s.model.depth.mapping, tessref::DepthMapping::linear);
     EXPECT_EQ(s.model.depth.near_plane, static_cast<float>(scene.camera->near_plane));
@@ -157,21 +158,21 @@ TEST(RenderShading, ShippedScenesNameTheirShaders) {
         {"olinda", tessref::ShadingKind::thesis_single}};
     for (const auto& [name, kind] : expected) {
         const tessref::Scene scene = tessref::load_scene(scene_path(name).string());
-        const tessref::RenderShading s = tessref::shading_model(scene);
+        const tessref::RenderShading& s = scene.shading;
         EXPECT_EQ(s.model.kind, kind) << name;
         EXPECT_TRUE(tessref::missing_textures(s.model).empty()) << name;
     }
     // The luminance texture reads (r, r, r, 1) and the camera feeds lab 4's cameraPosition.
     // (jacksboro textures itself with its own height map, grey.)
     const tessref::Scene terrain = tessref::load_scene(scene_path("jacksboro").string());
-    const auto diffuse = tessref::shading_model(terrain).model.textures.diffuse;
+    const auto diffuse = terrain.shading.model.textures.diffuse;
     ASSERT_TRUE(diffuse);
     EXPECT_EQ(diffuse->channels(), 3);
     const glm::vec4 texel = diffuse->textureLod(glm::vec2(0.37f, 0.61f), 0.0f);
     const glm::vec4 grey = terrain.grid->heightmap->texture.textureLod(glm::vec2(0.37f, 0.61f), 0.0f);
     EXPECT_EQ(texel, glm::vec4(grey.r, grey.r, grey.r, 1.0f));
     const tessref::Scene lab4 = tessref::load_scene(scene_path("lab4-canyon").string());
-    EXPECT_EQ(tessref::shading_model(lab4).model.lab4.cameraPosition, glm::vec3(lab4.camera->eye));
+    EXPECT_EQ(lab4.shading.model.lab4.cameraPosition, glm::vec3(lab4.camera->eye));
 }
 
 TEST(RenderShading, BadTablesNameFileLineAndKey) {
@@ -207,8 +208,7 @@ TEST(RenderShading, BadTablesNameFileLineAndKey) {
         const fs::path file = dir.path() / "scene.toml";
         write_file(file, text);
         try {
-            const tessref::Scene scene = tessref::load_scene(file.string());
-            tessref::shading_model(scene);
+            tessref::load_scene(file.string());
             ADD_FAILURE() << "no error for\n" << c.table;
         } catch (const tessref::Error& e) {
             EXPECT_NE(std::string(e.what()).find(c.message), std::string::npos) << e.what();

@@ -16,7 +16,8 @@
 //    are equal, the budget estimate never below the real count;
 //  - bad input throws tessref::Error whose where() names the scene file and the line,
 //    column and key (malformed TOML, unknown key, unknown stage, wrong type, missing and
-//    1x1 height maps, a quad mesh, a request beyond the triangle budget).
+//    1x1 height maps, a quad mesh, a request beyond the triangle budget, a wrong [shading]
+//    table or texture, found when the scene loads).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -103,6 +104,16 @@ void write_gray_image(const std::string& path, int width, int height) {
     ASSERT_TRUE(out);
     OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::UINT8);
     std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * height, 128);
+    ASSERT_TRUE(out->open(path, spec));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
+    ASSERT_TRUE(out->close());
+}
+
+void write_rgb_image(const std::string& path, int width, int height) {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * height * 3, 64);
     ASSERT_TRUE(out->open(path, spec));
     ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, pixels.data()));
     ASSERT_TRUE(out->close());
@@ -565,11 +576,98 @@ TEST_F(BadScene, UnknownStage) {
     EXPECT_NE(std::string(e.what()).find("unknown stage"), std::string::npos) << e.what();
 }
 
-TEST_F(BadScene, ReservedShadingStageIsAccepted) {
-    const std::string path = dir_->write("ok.toml", terrain_scene("h.pgm", "\n[shading]\nmodel = \"thesis\"\n"));
+// ---- [shading]: read with the rest of the scene, its textures loaded -------------------
+
+TEST_F(BadScene, ShadingTableIsReadWithTheScene) {
+    write_gray_image(dir_->path("grey.png"), 4, 4);
+    const std::string path = dir_->write(
+        "ok.toml", terrain_scene("h.pgm", "\n[shading]\nmodel = \"thesis_single\"\nbackground = [0.25, 0.5, 0.75]\n"
+                                          "shininess = 8\ntextures = { diffuse = { path = \"grey.png\", luminance = true } }\n"));
     const Scene scene = load_scene(path);
-    ASSERT_TRUE(scene.shading_toml.has_value());
-    EXPECT_NE(scene.shading_toml->find("thesis"), std::string::npos);
+    EXPECT_EQ(scene.shading.model.kind, ShadingKind::thesis_single);
+    EXPECT_EQ(scene.shading.background, glm::vec4(0.25f, 0.5f, 0.75f, 1.0f));  // alpha 1 when left out
+    EXPECT_EQ(scene.shading.model.thesis.shininess, 8.0f);
+    EXPECT_EQ(scene.shading.model.thesis.lightPosition, ThesisLight{}.lightPosition);  // not given: the default
+    ASSERT_TRUE(scene.shading.model.textures.diffuse);
+    EXPECT_EQ(scene.shading.model.textures.diffuse->channels(), 3);  // luminance: (r, r, r, 1)
+
+    // Without [shading]: depth, linear mapping (no camera here: its default planes).
+    const Scene plain = load_scene(dir_->write("plain.toml", terrain_scene("h.pgm")));
+    EXPECT_EQ(plain.shading.model.kind, ShadingKind::depth);
+    EXPECT_EQ(plain.shading.model.depth.mapping, DepthMapping::linear);
+    EXPECT_EQ(plain.shading.model.depth.far_plane, static_cast<float>(SceneCamera{}.far_plane));
+}
+
+TEST_F(BadScene, ShadingTableErrorsAtLoadNameLineAndKey) {
+    write_rgb_image(dir_->path("rgb.png"), 4, 4);
+    const std::string head = terrain_scene("h.pgm") + "\n[shading]\n";
+    const int header_line = static_cast<int>(std::count(head.begin(), head.end(), '\n'));
+    struct Case {
+        std::string table;
+        std::vector<std::string> message;  // substrings of what()
+        std::string key;
+        int line_offset;  // line of the key after the [shading] header
+    };
+    const std::vector<Case> cases{
+        {"model = \"phong\"\n", {"unknown shading model 'phong'"}, "shading.model", 1},
+        {"model = 3\n", {"shading.model must be a string"}, "shading.model", 1},
+        {"modle = \"flat\"\n", {"unknown key shading.modle"}, "shading.modle", 1},
+        {"model = \"depth\"\nshininess = 3\n", {"not used by shading model depth"}, "shading.shininess", 2},
+        {"model = \"depth\"\nmapping = \"log\"\n", {"\"log\"", "linear"}, "shading.mapping", 2},
+        {"model = \"flat\"\ncolour = [1, 2]\n", {"array of 3 or 4 numbers"}, "shading.colour", 2},
+        {"model = \"flat\"\ncolour = [1, 2, \"a\"]\n", {"must be a number"}, "shading.colour[2]", 2},
+        {"background = 1\n", {"array of 3 or 4 numbers"}, "shading.background", 1},
+        // GLSL leaves pow(0, y <= 0), smoothstep(e0, e1, x) with e0 >= e1 and normalize(0)
+        // undefined: such uniforms have no reference image.
+        {"model = \"pn\"\nshininess = 0\n", {"out of range (0, "}, "shading.shininess", 2},
+        {"model = \"lab4\"\nblend_width = -1\n", {"out of range (0, "}, "shading.blend_width", 2},
+        {"model = \"lab4\"\nsand_height = 1e9\nblend_width = 1\n", {"smoothstep"}, "shading.blend_width", 3},
+        {"model = \"cosc422\"\nlight_direction = [0, 0, 0]\n", {"cannot be normalized"},
+         "shading.light_direction", 2},
+        {"model = \"thesis_single\"\nlight_position = [0, 0, -1]\ntextures = { diffuse = [1, 1, 1] }\n",
+         {"light_position + (0, 0, 1)"}, "shading.light_position", 2},
+        // Textures.
+        {"model = \"thesis_single\"\n", {"samples diffuse", "shading.textures"}, "shading.textures", 1},
+        {"model = \"thesis_single\"\ntextures = 3\n", {"must be a table"}, "shading.textures", 2},
+        {"model = \"pn\"\ntextures = { diffuse = [1, 1, 1, 1] }\n", {"has no sampler 'diffuse'"},
+         "shading.textures.diffuse", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = 3 }\n", {"must be a path"}, "shading.textures.diffuse", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = [1, 1] }\n", {"array of 3 or 4 numbers"},
+         "shading.textures.diffuse", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = \"nowhere.png\" }\n",
+         {"cannot load texture", dir_->path("nowhere.png")}, "shading.textures.diffuse", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = \"\" }\n", {"must name an image"},
+         "shading.textures.diffuse", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = { luminance = true } }\n",
+         {"missing key shading.textures.diffuse.path"}, "shading.textures.diffuse.path", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = { path = \"h.pgm\", luminance = 1 } }\n",
+         {"must be a boolean"}, "shading.textures.diffuse.luminance", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = { path = \"h.pgm\", swizzle = 1 } }\n",
+         {"unknown key shading.textures.diffuse.swizzle"}, "shading.textures.diffuse.swizzle", 2},
+        {"model = \"thesis_single\"\ntextures = { diffuse = { path = \"rgb.png\", luminance = true } }\n",
+         {"one-channel", "has 3"}, "shading.textures.diffuse.luminance", 2},
+    };
+    for (const Case& c : cases) {
+        const Error e = load_error(head + c.table);
+        for (const std::string& part : c.message)
+            EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << c.table << e.message();
+        EXPECT_EQ(e.where().key, c.key) << c.table << e.message();
+        EXPECT_EQ(e.where().file, path_);
+        EXPECT_EQ(e.where().line, header_line + c.line_offset) << c.table << e.message();
+        EXPECT_GT(e.where().column, 0) << c.table << e.message();
+    }
+}
+
+TEST_F(BadScene, ShadingErrorsOfATextNotOnDiskHaveTheirPlace) {
+    // The table is read from the text given: its place is known though no file holds it.
+    const std::string text =
+        terrain_scene(dir_->path("h.pgm"), "\n[shading]\nmodel = \"flat\"\ncolour = [1, 0, 0, 1, 0]\n");
+    const std::string path = dir_->path("not-on-disk.toml");
+    const Error e = expect_error([&] { load_scene_from_string(text, path); });
+    EXPECT_EQ(e.where().file, path);
+    EXPECT_EQ(e.where().key, "shading.colour");
+    EXPECT_EQ(e.where().line, static_cast<int>(std::count(text.begin(), text.end(), '\n')));
+    EXPECT_EQ(e.where().column, 10);
 }
 
 TEST_F(BadScene, WrongType) {

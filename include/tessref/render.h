@@ -4,49 +4,14 @@
 //         ─► rasterize (raster.h: llvmpipe's coverage, depth LESS) ─► shade (shading.h)
 //
 // render_scene() runs the scene's pipeline, projects the tessellated surface with the scene's
-// camera, rasterizes it and runs the fragment stage named by the scene's [shading] table on
-// every visible pixel. Besides the colour it keeps, per pixel, where the pixel came from
+// camera, rasterizes it and runs the scene's fragment stage (Scene::shading, its [shading]
+// table: data/scenes/README.md) on every visible pixel. Besides the colour it keeps, per pixel, where the pixel came from
 // (RenderResult): the patch, the triangle, the interpolated gl_TessCoord, the tessellation
 // level that governed the triangle, the depth. pixel_provenance() gathers them for one pixel.
 //
 // raytrace_scene() is the ground truth for the speed/accuracy study: the same camera and the
 // same fragment stage, but the surface is the full-resolution height field itself, not a
 // tessellation, intersected with Embree (raycast.h).
-//
-// ======================================================================================
-// THE [shading] TABLE (scene.h keeps it as text; parsed here by shading_model()). Keys are
-// snake_case forms of the shaders' uniforms; a key the chosen model does not read is an
-// error, as elsewhere in the scene schema. Colours are [r, g, b] or [r, g, b, a].
-//
-// [shading]
-//   model = "depth"               flat | depth | thesis_single | thesis_multi | lab4 |
-//                                 cosc422 | pn (shading.h). Without a [shading] table the
-//                                 model is "depth" with the "linear" mapping.
-//   background = [0, 0, 0, 0]     glClearColor (GL's default: transparent black)
-//   wireframe_colour = [0,0,0,1]  the lines of --overlay-wireframe
-//   flat:          colour = [1, 1, 1, 1]
-//   depth:         mapping = "linear" | "window"   (near/far from the camera)
-//   thesis_single, thesis_multi:
-//                  light_position = [x, y, z], diffuse_material = [r, g, b],
-//                  ambient_material = [...] (thesis_single), specular_material = [...],
-//                  shininess = s                   (shading.h ThesisLight; its defaults)
-//   lab4:          light_direction, sand_colour, rock_colour, sand_height, blend_width
-//                  (cameraPosition is the camera's eye)
-//   cosc422:       light_direction, ambient
-//   pn:            light_direction, diffuse_colour, shininess (v3CameraPosition = eye)
-//   textures = { <sampler> = <texture>, ... }   the samplers of the model's shader, by their
-//                  GLSL names (shading.h sampler_names: "diffuse", ..., "heightMap"); each
-//                  texture is one of
-//                    "path"                          an image (heightfield.h load_texture),
-//                                                    relative to the scene file;
-//                    { path = "...", luminance = true }   a one-channel image read as
-//                                                    (r, r, r, 1): GL_TEXTURE_SWIZZLE_RGBA =
-//                                                    (RED, RED, RED, ONE) on the GPU;
-//                    [r, g, b, a]                    a 1x1 texture of that colour.
-//                  cosc422's heightMap defaults to the scene's height map (the texture its
-//                  evaluation stage samples). A sampler the model reads and nobody bound is
-//                  an error (GL would read (0, 0, 0, 1) from it).
-// ======================================================================================
 //
 // IMAGES. Every per-pixel vector has width * height entries, row-major, row 0 the TOP row of
 // the picture (raster.h's order, the order image files are written in). Pixel (x, y) in
@@ -94,21 +59,6 @@
 
 namespace tessref {
 
-// ---- the [shading] table -------------------------------------------------------------
-
-struct RenderShading {
-    ShadingModel model{};                      // model.kind = depth unless the table says
-    glm::vec4 background{0.0f};                // glClearColor
-    glm::vec4 wireframe_colour{0.0f, 0.0f, 0.0f, 1.0f};
-};
-
-// The scene's [shading] table parsed and its textures loaded (default: depth shading when
-// the scene has none). Camera-dependent uniforms (lab 4 cameraPosition, PN v3CameraPosition,
-// depth near/far) come from scene.camera. Throws tessref::Error with the scene file, line,
-// column and key ("shading.light_position") of the first problem; line and column are known
-// when the scene was loaded from a file that still exists.
-RenderShading shading_model(const Scene& scene);
-
 // ---- rendering -------------------------------------------------------------------------
 
 enum class RenderMode : std::uint8_t {
@@ -129,9 +79,6 @@ struct RenderOptions {
     // Called from the calling thread with a stage name and the fraction of it done; may be
     // empty.
     std::function<void(std::string_view stage, double fraction)> progress;
-    // The fragment stage to use; null: shading_model(scene) (the scene's [shading] table,
-    // its textures loaded for this call). Set it to render a scene repeatedly.
-    std::shared_ptr<const RenderShading> shading;
 };
 
 struct RenderStats {
@@ -149,7 +96,7 @@ constexpr std::uint32_t kNoPixelId = kNoTriangle;  // patch/triangle id of an em
 struct RenderResult {
     int width = 0;
     int height = 0;
-    RenderShading shading{};
+    RenderShading shading{};           // the scene's, as used
     SceneCamera camera{};              // the camera as used (viewport = image size)
     Domain domain = Domain::quads;     // the generator's domain (for the level rule)
     glm::mat4 mvp{1.0f};               // float(camera.view_projection()), the shaders' mvp
@@ -173,7 +120,7 @@ struct RenderResult {
 };
 
 // Renders the scene. Throws tessref::Error when the scene has no [camera], the size is
-// outside 1..16384, the [shading] table is wrong, or the pipeline refuses the scene.
+// outside 1..16384, or the pipeline refuses the scene.
 //
 // fill_with_wireframe: the lines are rasterized into a buffer of their own (depth LESS among
 // lines); a line pixel is drawn over the filled image when nothing is filled there or its

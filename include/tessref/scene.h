@@ -25,6 +25,7 @@
 #include "tessref/error.h"
 #include "tessref/evaluation.h"
 #include "tessref/heightfield.h"
+#include "tessref/shading.h"
 #include "tessref/tessellator.h"
 
 namespace tessref {
@@ -144,7 +145,7 @@ struct Scene {
     std::optional<ControlStage> control;   // absent: every level 1
     EvaluationStage evaluation{};
     std::optional<GeometryStage> geometry; // absent: evaluation normals or none
-    std::optional<std::string> shading_toml;  // [shading] table as TOML text (render.h parses it)
+    RenderShading shading{};                   // [shading] (default: depth), textures loaded
     std::vector<StageShader> shaders;          // [shaders] (`tessref gl` only)
     std::uint64_t max_triangles = 50'000'000;
     Where max_triangles_where;  // where the budget was set (or the scene file): for errors

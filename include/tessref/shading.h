@@ -58,7 +58,7 @@
 // differential test leaves those uniforms unset in GL and checks the result). The thesis's
 // uniforms have no initializers and the thesis does not publish its values; the defaults
 // below are tessref's, chosen so that a flat terrain reads about 0.9 of its texture.
-// ShadingModel gathers the kind, every model's parameters and the textures, so that a scene
+// ShadingModel gathers the kind, every model's parameters and the textures, so that the scene
 // loader ([shading] table) can fill it without knowing the shader code.
 #pragma once
 
@@ -206,6 +206,15 @@ struct ShadingModel {
     Cosc422Shading cosc422{};
     PnShading pn{};
     ShadingTextures textures{};
+};
+
+// A scene's fragment stage: its [shading] table (data/scenes/README.md), read with the scene
+// (Scene::shading). The default is what a scene without [shading] gets: depth shading with
+// the linear mapping.
+struct RenderShading {
+    ShadingModel model{.kind = ShadingKind::depth};
+    glm::vec4 background{0.0f};                          // glClearColor
+    glm::vec4 wireframe_colour{0.0f, 0.0f, 0.0f, 1.0f};  // the lines of --overlay-wireframe
 };
 
 // The samplers of model.kind that have no texture (they would read (0, 0, 0, 1)); a scene

@@ -73,7 +73,6 @@ int run_render(const RenderCommandOptions& options) {
                        "an image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
                        Where::in_file(options.size.empty() ? options.scene : "--size " + options.size));
     }
-    render_options.shading = std::make_shared<const RenderShading>(shading_model(scene));
     StageProgress stage_progress;
     render_options.progress = [&stage_progress](std::string_view stage, double fraction) {
         stage_progress(stage, fraction);

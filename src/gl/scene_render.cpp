@@ -713,7 +713,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     SceneRender result;
     result.width = size.x;
     result.height = size.y;
-    result.shading = shading_model(scene);
+    result.shading = scene.shading;
 
     // The CPU pipeline: the prediction of every draw.
     auto start = Clock::now();

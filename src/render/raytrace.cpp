@@ -153,7 +153,7 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
     }
     RenderResult result;
     result.camera = render_detail::camera_for(scene, options);
-    result.shading = options.shading ? *options.shading : shading_model(scene);
+    result.shading = scene.shading;
     const int width = result.camera.viewport.x, height = result.camera.viewport.y;
     const glm::dmat4 vp = result.camera.view_projection();
     result.mvp = glm::mat4(vp);

@@ -170,9 +170,6 @@ float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_
 
 RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
     const SceneCamera camera = render_detail::camera_for(scene, options);
-    RenderOptions surface_options = options;
-    if (!surface_options.shading)  // a wrong [shading] table fails before the pipeline runs
-        surface_options.shading = std::make_shared<const RenderShading>(shading_model(scene));
     const auto start = Clock::now();
     PipelineOptions pipeline_options;
     pipeline_options.precision = options.precision;
@@ -191,7 +188,7 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
         pipeline = std::make_shared<const PipelineResult>(run_pipeline(resized, pipeline_options));
     }
     const double seconds_pipeline = seconds_since(start);
-    RenderResult result = render_surface(scene, std::move(pipeline), surface_options);
+    RenderResult result = render_surface(scene, std::move(pipeline), options);
     result.stats.seconds_pipeline = seconds_pipeline;
     return result;
 }
@@ -201,7 +198,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     if (!pipeline) throw Error("render_surface needs a pipeline result", Where::at_key("pipeline"));
     RenderResult result;
     result.camera = render_detail::camera_for(scene, options);
-    result.shading = options.shading ? *options.shading : shading_model(scene);
+    result.shading = scene.shading;
     const int width = result.camera.viewport.x, height = result.camera.viewport.y;
     result.mvp = glm::mat4(result.camera.view_projection());
     auto progress = [&](std::string_view stage, double fraction) {

@@ -10,6 +10,7 @@
 #include <toml++/toml.h>
 
 #include "mesh/openmesh.h"
+#include "scene/shading_load.h"
 #include "scene/toml_reader.h"
 #include "tessref/check.h"
 #include "tessref/scene.h"
@@ -98,7 +99,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The tables a scene may have. "shading" is reserved for the renderer.
+// The tables a scene may have.
 const std::vector<std::string> kTopLevel = {"scene",      "domain",   "mesh",     "camera",  "generator", "control",
                                             "evaluation", "geometry", "shading", "shaders", "limits"};
 
@@ -636,11 +637,6 @@ struct Loader {
                                                                                           : glm::dvec3(0, 1, 0);
         if (const toml::node* c = root.get("camera")) read_camera(*c->as_table(), default_up);
         read_generator(root.get("generator") ? root.get("generator")->as_table() : nullptr);
-        if (const toml::node* s = root.get("shading")) {
-            std::ostringstream os;
-            os << *s->as_table();
-            scene.shading_toml = os.str();
-        }
         check_combination(root);
         if (domain) {
             place_grid(*domain_reader);
@@ -658,6 +654,11 @@ struct Loader {
                             std::to_string(scene.max_triangles),
                         w);
         }
+        // Last: the scene's other errors come first, its textures are the slowest to load,
+        // and COSC422's default heightMap is the grid's.
+        const toml::node* shading = root.get("shading");
+        scene.shading = scene_detail::read_shading(file, shading ? shading->as_table() : nullptr, scene,
+                                                   [this](const std::string& p) { return resolve(p); });
     }
 
     // Models, domain and camera must fit together.

@@ -206,6 +206,18 @@ public:
         if (!v) return std::nullopt;
         return glm::dvec2((*v)[0], (*v)[1]);
     }
+    // A colour: [r, g, b] or [r, g, b, a], each finite; alpha 1 when left out.
+    std::optional<glm::dvec4> colour_opt(const std::string& k) {
+        const toml::node* n = node(k);
+        if (!n) return std::nullopt;
+        const char* expected = "an array of 3 or 4 numbers ([r, g, b] or [r, g, b, a])";
+        const toml::array* a = n->as_array();
+        if (!a) wrong_type(k, *n, expected);
+        if (a->size() != 3 && a->size() != 4)
+            fail(k, key(k) + " must be " + expected + ", not an array of " + std::to_string(a->size()));
+        const std::vector<double> v = *reals_opt(k, a->size());
+        return glm::dvec4(v[0], v[1], v[2], v.size() == 4 ? v[3] : 1.0);
+    }
     // An array of exactly `count` integers in [lo, hi].
     std::optional<std::vector<std::int64_t>> integers_opt(const std::string& k, std::size_t count,
                                                           std::int64_t lo, std::int64_t hi) {
