@@ -1,5 +1,5 @@
 // fuzz/fuzz_pn_mesh.cpp — the mesh reader of PN-triangle scenes ([[mesh]] in
-// src/scene/scene_load.cpp): a fixed small PN scene whose [[mesh]] path is the fuzzed file.
+// src/scene/scene.cpp): a fixed small PN scene whose [[mesh]] path is the fuzzed file.
 // The extension follows the file's content (the reader is picked by extension), so the
 // seeds are ordinary mesh files.
 #include <cstring>

@@ -1,4 +1,4 @@
-// fuzz/fuzz_scene.cpp — the scene loader (TOML, src/scene/scene_load.cpp), [shading]
+// fuzz/fuzz_scene.cpp — the scene loader (TOML, src/scene/scene.cpp), [shading]
 // (src/scene/shading_load.cpp) included.
 //
 // The text is loaded as if it were fuzz/scene_env/scenes/fuzz.toml, so the relative paths

@@ -117,7 +117,7 @@ int run_mesh(const MeshCommandOptions& options) {
         // that `tessref check --expect closed` passes unless the terrain itself cracks.
         if (result.mesh.triangles.empty())  // every patch culled: no lowest vertex to put a base under
             throw Error("cannot close a terrain without triangles into a solid (every patch is culled)",
-                        where_file(options.scene));
+                        Where::in_file(options.scene));
         const int up_axis = scene.grid->plane == GroundPlane::xy ? 2 : 1;
         double low = std::numeric_limits<double>::infinity(), high = -low;
         for (const glm::dvec3& p : result.mesh.positions) {

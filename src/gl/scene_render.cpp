@@ -39,7 +39,7 @@ std::string with_generator(const std::string& text, const TessSettings& g, const
                               (g.point_mode ? ", point_mode" : "") + ") in;";
     std::smatch m;
     if (!std::regex_search(text, m, layout))
-        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", Where{path, 0, 0, "", -1});
+        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", Where::in_file(path));
     return m.prefix().str() + replacement + m.suffix().str();
 }
 
@@ -108,12 +108,6 @@ StageSource text_stage(GLenum stage, const char* text) {
     return s;
 }
 
-Where scene_key(const Scene& scene, const std::string& key) {
-    Where where;
-    where.file = scene.file;
-    where.key = key;
-    return where;
-}
 
 Plan plan_for(const Scene& scene, const RenderShading& shading) {
     Plan plan;
@@ -158,7 +152,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
     } else if (em != EvaluationModel::cosc422) {
         throw Error(std::string("tessref gl: a constant control stage with evaluation model '") + to_string(em) +
                         "' has no GLSL twin (its evaluation shader reads the outputs of its own control shader)",
-                    scene_key(scene, "control.model"));
+                    Where::at_key(scene.file, "control.model"));
     }
 
     StageSource tese = file_stage(GL_TESS_EVALUATION_SHADER, base + ".tese");
@@ -176,7 +170,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         } else if (!(em == EvaluationModel::lab4 && n == GeometryNormals::height_field)) {
             throw Error(std::string("tessref gl: [geometry] normals = \"") + to_string(n) + "\" with evaluation model '" +
                             to_string(em) + "' has no GLSL twin",
-                        scene_key(scene, "geometry.normals"));
+                        Where::at_key(scene.file, "geometry.normals"));
         }
         plan.has_geometry_shader = plan.stages.back().stage == GL_GEOMETRY_SHADER;
     }
@@ -386,7 +380,7 @@ struct Uniforms {
     }
 };
 
-// The matrices as the CPU pipeline rounds them (pipeline.cpp: mat4_t<float>(camera.view_projection())).
+// The matrices as the CPU pipeline rounds them (src/pipeline/program.h: mat4_t<float>(camera.view_projection())).
 struct Matrices {
     glm::mat4 view{1.0f};
     glm::mat4 view_projection{1.0f};
@@ -702,13 +696,13 @@ static_assert(sizeof(FeedbackRecord) == 64);
 }  // namespace
 
 SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRenderOptions& options) {
-    if (!scene_in.camera) throw Error("tessref gl needs a [camera] in the scene", scene_key(scene_in, "camera"));
+    if (!scene_in.camera) throw Error("tessref gl needs a [camera] in the scene", Where::at_key(scene_in.file, "camera"));
     Scene scene = scene_in;  // the pipeline sees the image's viewport, as render_scene does
     if (options.size != glm::ivec2(0, 0)) scene.camera->viewport = options.size;
     const glm::ivec2 size = scene.camera->viewport;
     if (size.x < 1 || size.y < 1 || size.x > 16384 || size.y > 16384)
         throw Error("image size " + std::to_string(size.x) + "x" + std::to_string(size.y) + " is outside 1..16384",
-                    scene_key(scene, "size"));
+                    Where::at_key(scene.file, "size"));
 
     SceneRender result;
     result.width = size.x;
@@ -739,7 +733,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     auto& gl = c.gl;
     const std::size_t pixels = static_cast<std::size_t>(size.x) * static_cast<std::size_t>(size.y);
     require_memory(saturating_bytes(pixels, 2 * sizeof(glm::vec4)), "a float colour buffer of " +
-                   std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels", scene_key(scene, "size"));
+                   std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels", Where::at_key(scene.file, "size"));
     std::vector<float> buffer(pixels * 4, 0.0f);
     c.bind_color_buffer(buffer.data(), size.x, size.y);
     struct Release {
@@ -847,7 +841,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     for (std::size_t k = 0; k < batches.size(); ++k) largest = std::max<std::uint64_t>(largest, predicted_of(k));
     const std::uint64_t total = pipe.mesh.triangles.size();
     require_memory(saturating_bytes(saturating_bytes(total, 3), sizeof(CapturedVertex)),
-                   "the capture of " + std::to_string(total) + " triangles", scene_key(scene, "--capture"));
+                   "the capture of " + std::to_string(total) + " triangles", Where::at_key(scene.file, "--capture"));
     result.capture.reserve(static_cast<std::size_t>(total) * 3);
     // One primitive of slack: an overflow still shows as written < generated.
     const std::uint64_t capacity_primitives = largest + 1;

@@ -61,7 +61,7 @@ void require_finite_positions(const Scene& scene, const SurfaceMesh& mesh, Preci
                        number(bad->x) + ", " + number(bad->y) + ", " + number(bad->z) + ") at tess coord (" +
                        number(tc.x) + ", " + number(tc.y) + ", " + number(tc.z) + ") in " +
                        (precision == Precision::gpu ? "gpu (float)" : "exact (double)") + " precision";
-    Where where{scene.file, 0, 0, "", static_cast<long long>(mesh.patch_ids[v])};
+    Where where = Where::at_patch(scene.file, mesh.patch_ids[v]);
     if (scene.grid && !mesh.uvs.empty()) {
         // The level-0 texels of the bilinear footprint at the vertex's texture coordinate
         // (clamped to the edge); the one of largest magnitude is the likely culprit.
@@ -220,7 +220,7 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
 }  // namespace
 
 PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options) {
-    if (scene.patch_count() == 0) throw Error("the scene has no patches", Where{scene.file, 0, 0, "", -1});
+    if (scene.patch_count() == 0) throw Error("the scene has no patches", Where::in_file(scene.file));
     if (options.precision == Precision::gpu) return run<float>(scene, options);
     return run<double>(scene, options);
 }

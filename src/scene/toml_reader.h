@@ -23,14 +23,10 @@
 
 namespace tessref::scene_detail {
 
+// The place of a TOML node: error.h's Where::at with the node's line and column.
 inline Where where_at(const std::string& file, const toml::source_region& region,
                       const std::string& key) {
-    Where w;
-    w.file = file;
-    w.line = static_cast<int>(region.begin.line);
-    w.column = static_cast<int>(region.begin.column);
-    w.key = key;
-    return w;
+    return Where::at(file, region.begin.line, region.begin.column, key);
 }
 
 inline const char* type_name(const toml::node& node) {

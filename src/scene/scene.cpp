@@ -1,4 +1,4 @@
-// scene_load.cpp — parsing, validating and loading a scene file (schema: tessref/scene.h).
+// scene.cpp — parsing, validating and loading a scene file (the format: data/scenes/README.md).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -129,7 +129,7 @@ struct Loader {
     // ---- [scene] ------------------------------------------------------------------
     void read_scene(const toml::table& root) {
         const toml::node* n = root.get("scene");
-        if (!n) throw Error("missing table [scene]", Where{file, 0, 0, "scene", -1});
+        if (!n) throw Error("missing table [scene]", Where::at_key(file, "scene"));
         if (!n->is_table()) throw Error("scene must be a table", where_at(file, n->source(), "scene"));
         TableReader t(file, *n->as_table(), "scene", {"name", "description"});
         scene.name = t.string("name");
@@ -592,7 +592,7 @@ struct Loader {
             throw Error("malformed TOML: " + std::string(e.description()), w);
         }
         scene.file = file;
-        scene.max_triangles_where = Where{file, 0, 0, "limits.max_triangles", -1};
+        scene.max_triangles_where = Where::at_key(file, "limits.max_triangles");
 
         for (auto&& [k, n] : root) {
             const std::string ks(k.str());
@@ -616,12 +616,12 @@ struct Loader {
         if (domain && mesh)
             throw Error("a scene has either [domain] (terrain) or [mesh] (triangle meshes), not both",
                         where_at(file, mesh->source(), "mesh"));
-        if (!domain && !mesh) throw Error("missing [domain] (a terrain grid) or [mesh] (triangle meshes)", Where{file, 0, 0, "domain", -1});
+        if (!domain && !mesh) throw Error("missing [domain] (a terrain grid) or [mesh] (triangle meshes)", Where::at_key(file, "domain"));
 
         const toml::node* eval = root.get("evaluation");
         if (!eval)
             throw Error("missing [evaluation]: without an evaluation stage GL does not tessellate",
-                        Where{file, 0, 0, "evaluation", -1});
+                        Where::at_key(file, "evaluation"));
         read_evaluation(*eval->as_table());
         if (const toml::node* c = root.get("control")) read_control(*c->as_table());
         if (const toml::node* g = root.get("geometry")) read_geometry(*g->as_table());
@@ -667,7 +667,7 @@ struct Loader {
             const toml::node* t = root.get(table);
             if (t && t->is_table())
                 if (const toml::node* n = t->as_table()->get(key)) return where_at(file, n->source(), std::string(table) + "." + key);
-            return Where{file, 0, 0, std::string(table) + "." + key, -1};
+            return Where::at_key(file, std::string(table) + "." + key);
         };
         const EvaluationModel em = scene.evaluation.model;
         const bool terrain = scene.grid.has_value();
@@ -725,13 +725,13 @@ struct Loader {
 
 std::string read_text_file(const std::string& path) {
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw Error("scene file not found", Where{path, 0, 0, "", -1});
-    if (fs::is_directory(path, ec)) throw Error("scene path is a directory", Where{path, 0, 0, "", -1});
+    if (!fs::exists(path, ec)) throw Error("scene file not found", Where::in_file(path));
+    if (fs::is_directory(path, ec)) throw Error("scene path is a directory", Where::in_file(path));
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot open scene file", Where{path, 0, 0, "", -1});
+    if (!in) throw Error("cannot open scene file", Where::in_file(path));
     std::ostringstream os;
     os << in.rdbuf();
-    if (in.bad()) throw Error("cannot read scene file", Where{path, 0, 0, "", -1});
+    if (in.bad()) throw Error("cannot read scene file", Where::in_file(path));
     return os.str();
 }
 
