@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -106,6 +107,47 @@ void check_pnm_header(const std::string& path, const std::string& what_kind) {
     if (!whole || maxval < 1 || maxval > 65535)
         fail(path, what_kind + " is a " + (magic == "P2" || magic == "P5" ? "PGM" : "PPM") +
                        " with maxval " + shown(text) + "; the format allows 1 to 65535");
+}
+
+// OpenImageIO 2.4.7 scales a PNM's 16-bit samples as int(v) * 65535 / maxval in int
+// arithmetic, which overflows for v > 32768 (Debian's build then returns 32768 for both
+// 32768 and 32769: a one-code step of a 16-bit height map silently lost). For maxval above
+// 32768 the samples are therefore read again here: binary P5/P6 only (big-endian 16-bit
+// words after the header and one whitespace byte), scaled as OpenImageIO means to, in
+// 64-bit arithmetic. The plain-text P2/P3 forms with such a maxval are refused instead.
+void reread_pnm16(const std::string& path, const std::string& what_kind, std::vector<std::uint16_t>& samples) {
+    const std::vector<std::string> tokens = pnm_header_tokens(path, 4);
+    if (tokens.size() < 4) return;
+    const std::string& magic = tokens[0];
+    if (magic != "P2" && magic != "P3" && magic != "P5" && magic != "P6") return;
+    const unsigned long maxval = std::strtoul(tokens[3].c_str(), nullptr, 10);  // checked by check_pnm_header
+    if (maxval <= 32768) return;
+    if (magic == "P2" || magic == "P3")
+        fail(path, what_kind + " is a plain-text " + (magic == "P2" ? "PGM" : "PPM") + " with maxval " + tokens[3] +
+                       ", which OpenImageIO reads wrongly above 32768; write it as binary (P5/P6)");
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // Walk the header again to its end: four tokens, comments skipped, then one whitespace byte.
+    std::size_t i = 0;
+    for (int token = 0; token < 4; ++token) {
+        while (i < bytes.size()) {
+            if (bytes[i] == '#')
+                while (i < bytes.size() && bytes[i] != '\n' && bytes[i] != '\r') ++i;
+            else if (std::isspace(static_cast<unsigned char>(bytes[i])))
+                ++i;
+            else
+                break;
+        }
+        while (i < bytes.size() && !std::isspace(static_cast<unsigned char>(bytes[i]))) ++i;
+    }
+    ++i;
+    if (i > bytes.size() || (bytes.size() - i) / 2 < samples.size())
+        fail(path, what_kind + " is truncated: its 16-bit samples end early");
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+        const std::uint64_t v = (static_cast<std::uint64_t>(static_cast<unsigned char>(bytes[i + 2 * k])) << 8) |
+                                static_cast<unsigned char>(bytes[i + 2 * k + 1]);
+        samples[k] = static_cast<std::uint16_t>(std::min<std::uint64_t>(v, maxval) * 65535 / maxval);
+    }
 }
 
 bool looks_like_pnm(const std::string& path) {
@@ -237,6 +279,8 @@ RawImage read_raw(const std::string& path, int max_dimension, int max_channels, 
         case TexelFormat::unorm16:
             raw.u16.resize(count);
             ok = input->read_image(0, 0, 0, raw.channels, OIIO::TypeDesc::UINT16, raw.u16.data());
+            if (ok && std::string_view(input->format_name()) == "pnm" && raw.channels == raw.file_channels)
+                reread_pnm16(path, what_kind, raw.u16);
             break;
         case TexelFormat::float32:
             raw.f32.resize(count);

@@ -236,13 +236,12 @@ TEST_F(ExtremeCamera, TerrainFarFromTheOriginHasBoundedFloatError) {
 // the origin: the world positions are bit-identical there (tessref compare on the two
 // captures passes, 0 ulps), so the pictures may differ only by the few one-code pixels they
 // differ by at the origin (6 of 64000 at 320 x 200).
-// FAILS on the shipped code: at 1e6 12440 pixels differ, 636 of them by more than one code
-// and 26 by more than five (coverage). src/render/render.cpp computes gl_Position with glm's mat4 * vec4, which sums
-// the columns pairwise, (c0 x + c1 y) + (c2 z + c3); the shader's product as llvmpipe runs
-// it sums them in order, ((c0 x + c1 y) + c2 z) + c3. At the origin the order hardly
-// matters; at 1e6 the terms cancel from 1e6 to about 50 and it decides the low bits. (Summing
-// in order in render.cpp, tried locally and not committed: 3 pixels differ by one code at
-// 1e6, 2 at the origin.)
+// This failed while src/render/render.cpp computed gl_Position with glm's mat4 * vec4, which
+// sums the columns pairwise, (c0 x + c1 y) + (c2 z + c3): at 1e6 12440 pixels differed, 636
+// of them by more than one code and 26 by more than five (coverage). The shader's product as
+// llvmpipe runs it sums them in order, ((c0 x + c1 y) + c2 z) + c3; at the origin the order
+// hardly matters, at 1e6 the terms cancel from 1e6 to about 50 and it decides the low bits.
+// Summed in order: 3 pixels differ by one code at 1e6, 2 at the origin.
 TEST_F(ExtremeCamera, TerrainFarFromTheOriginMatchesLlvmpipe) {
     write_hills(dir_ / "hills.pgm");
     for (const double offset : {0.0, 1e6}) {

@@ -118,13 +118,11 @@ TEST_F(ExtremeHeights, SixteenBitStepOfOneCode) {
     EXPECT_EQ(pixels_differing(read_picture(path("gl.png")), image, 1), 0);
 }
 
-// The same step in a 16-bit PGM at codes 32768 and 32769.
-// FAILS on the shipped code: OpenImageIO 2.4.7's PNM reader computes v * 65535 / maxval in
-// int, which overflows above 32768 and reads 32769 as 32768 (README "Known limits of the
-// dependencies"; tests/test_heightfield.cpp Loading.Pgm16Above32768 pins the reader's
-// behaviour). The step of one code vanishes without a word: the terrain comes out flat.
-// A right answer is the step (tessref reading 16-bit PNM samples itself, or refusing such
-// a file); a silently flattened terrain is not.
+// The same step in a 16-bit PGM at codes 32768 and 32769. OpenImageIO 2.4.7's PNM reader
+// computes v * 65535 / maxval in int, which overflows above 32768 and reads 32769 as 32768:
+// the step would vanish without a word and the terrain come out flat. tessref reads such
+// samples itself (src/heightfield/load.cpp, reread_pnm16), so the step must survive
+// (this test failed before that reader existed).
 TEST_F(ExtremeHeights, SixteenBitPgmStepAbove32768) {
     write_pgm16(dir_ / "step.pgm", 4, 2, {32768, 32768, 32769, 32769, 32768, 32768, 32769, 32769});
     expect_one_code_step(load(step_scene("step.pgm")), 32768);

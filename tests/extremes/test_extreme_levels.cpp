@@ -230,10 +230,9 @@ TEST_F(ExtremeLevels, CulledTerrainGivesEmptyMeshAndBackground) {
 
 // A discarded terrain has nothing to close into a solid: `mesh --solid` must say so (exit 2,
 // nothing written), in words about the terrain, not about a base the user never gave.
-// FAILS on the shipped code without --base: src/cli/cmd_mesh.cpp takes the lowest vertex of
-// no vertices as +inf, derives the default base from it and prints "the base inf must lie
-// below the terrain's lowest vertex, at z = inf". With --base -5 the answer is already right:
-// "cannot close a terrain without triangles into a solid".
+// (This failed without --base until cmd_mesh.cpp refused an empty terrain first: it took the
+// lowest vertex of no vertices as +inf and printed "the base inf must lie below the
+// terrain's lowest vertex, at z = inf".)
 TEST_F(ExtremeLevels, CulledTerrainHasNoSolidToClose) {
     write_scene(level_scene("0.0", "equal"));
     for (const std::vector<std::string>& args :
