@@ -1,0 +1,26 @@
+// src/sweep/report.h — the speed/accuracy report of a sweep directory.
+//
+// `tessref sweep` (src/cli/cmd_sweep.cpp, src/sweep/sweep.cpp) writes DIR/sweep.csv (one
+// header line, one row per run; the columns are documented in docs/SWEEP.md) and the
+// pictures its rows name under DIR/images/. write_sweep_report() reads only those, so the
+// report of a merged set of shards is made exactly as the report of one unsharded run:
+//
+//   DIR/plots/error-vs-time.{svg,png}       image error against time, Pareto front marked
+//   DIR/plots/error-vs-triangles.{svg,png}  image error against triangle count, likewise
+//   DIR/index.html                          the plots, chosen levels side by side with their
+//                                           difference pictures and wireframes, and one
+//                                           sentence per scene naming the level at which the
+//                                           image error stops improving
+//
+// The HTML refers only to files under DIR by relative paths (no network, works opened from
+// disk). Columns are found by their header names; unknown columns are ignored. Throws
+// tessref::Error naming the file (and line) when sweep.csv is missing or malformed.
+#pragma once
+
+#include <string>
+
+namespace tessref::sweep {
+
+void write_sweep_report(const std::string& dir);
+
+}  // namespace tessref::sweep
