@@ -246,11 +246,11 @@ TEST_F(SweepReport, WritesPlotsAndAPageThatNeedsNoNetwork) {
         EXPECT_TRUE(fs::is_regular_file(dir() / link)) << link;
     }
     // The rules' answers, as the table comment derives them.
-    EXPECT_NE(html.find("and at <b>level 8</b> with fractional_odd spacing, gpu precision"),
+    EXPECT_NE(html.find("In <b>alpha</b> the image error stops improving at <b>level 4</b> (fractional_odd exact) "
+                        "and at <b>level 8</b> (fractional_odd gpu)."),
               std::string::npos);
-    EXPECT_NE(html.find("In <b>alpha</b> the image error stops improving at <b>level 4</b> with fractional_odd spacing, exact precision"),
+    EXPECT_NE(html.find("In <b>beta</b> the image error stops improving at <b>level 4</b> (fractional_odd gpu)."),
               std::string::npos);
-    EXPECT_NE(html.find("In <b>beta</b> the image error stops improving at <b>level 4</b>"), std::string::npos);
     EXPECT_NE(html.find("median 2 (from 1.5 to 2.381) over the 5 levels both ran"), std::string::npos);
     EXPECT_NE(html.find("0.5/255"), std::string::npos);  // the rule is stated
     // The truth once per scene; no timing anywhere.
@@ -288,6 +288,20 @@ TEST_F(SweepReport, WritesPlotsAndAPageThatNeedsNoNetwork) {
             painted = pixels[i] == c.r && pixels[i + 1] == c.g && pixels[i + 2] == c.b;
         EXPECT_TRUE(painted) << png;
     }
+    // The fronts through the whole pipeline, one ring per front point plus the legend's.
+    //  triangles: alpha's exact runs (32, 0.1) ... (8192, 0.02) each beat the gpu run of the
+    //  same level, and its own levels (3000, 0.04) lose to exact level 8 (2048, 0.0201): 5;
+    //  beta: both points: 2. Total 7.
+    //  time (level + 0.5 ms, own 3.25 ms): alpha's 5 exact runs and its own levels, which no
+    //  faster run matches (exact level 2 at 2.5 ms has 0.05 > 0.04): 6; beta: 2. Total 8.
+    auto rings = [&](const char* name) {
+        const std::string svg = read_text(dir() / "plots" / name);
+        std::size_t n = 0;
+        for (std::size_t at = 0; (at = svg.find("fill=\"none\"", at)) != std::string::npos; ++at) ++n;
+        return n;
+    };
+    EXPECT_EQ(rings("error-vs-triangles.svg"), 7u + 1u);
+    EXPECT_EQ(rings("error-vs-time.svg"), 8u + 1u);
     // No temporary files left behind.
     for (const auto& entry : fs::recursive_directory_iterator(dir()))
         EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
@@ -323,6 +337,15 @@ TEST_F(SweepReport, MalformedTablesNameFileAndLine) {
     const std::string header = join(kHeader) + "\n";
     const std::string good = uniform("alpha", "gpu", 1, "0.2") + "\n";
 
+    // A failing report leaves the previous one as it was.
+    make_sweep(sample_rows());
+    tessref::sweep::write_sweep_report(dir().string());
+    const std::string previous = read_text(dir() / "index.html");
+    write_text(csv(), header + good + "alpha,uniform,2\n");
+    EXPECT_THROW(tessref::sweep::write_sweep_report(dir().string()), Error);
+    EXPECT_EQ(read_text(dir() / "index.html"), previous);
+    fs::remove(dir() / "index.html");
+
     expect_at(error_for(""), 1, "empty");
     expect_at(error_for(header + good + "alpha,uniform,2\n"), 3, "fields");
     expect_at(error_for(header + good + good.substr(0, good.size() - 1) + ",extra\n"), 3, "fields");
@@ -353,6 +376,34 @@ TEST_F(SweepReport, MalformedTablesNameFileAndLine) {
 
     fs::remove(csv());
     EXPECT_THROW(tessref::sweep::write_sweep_report(dir().string()), Error);
+}
+
+TEST_F(SweepReport, CameraRelativeColumnSplitsSeries) {
+    // Two series that differ only in camera_relative; both reach their floor at level 2
+    // (0.0505 <= 0.05 + 0.00196 and 0.0201 <= 0.02 + 0.00196; level 1 is far above).
+    std::string text = join(kHeader) + ",camera_relative\n";
+    text += uniform("alpha", "gpu", 1, "0.2") + ",0\n";
+    text += uniform("alpha", "gpu", 2, "0.0505") + ",0\n";
+    text += uniform("alpha", "gpu", 3, "0.05") + ",0\n";
+    text += uniform("alpha", "gpu", 1, "0.1") + ",1\n";
+    text += uniform("alpha", "gpu", 2, "0.0201") + ",1\n";
+    text += uniform("alpha", "gpu", 3, "0.02") + ",1\n";
+    write_text(csv(), text);
+    tessref::sweep::write_sweep_report(dir().string());
+    const std::string html = read_text(dir() / "index.html");
+    EXPECT_NE(html.find("stops improving at <b>level 2</b> with every spacing and precision it ran."),
+              std::string::npos);
+    EXPECT_NE(html.find("<td class=t>camera-relative</td>"), std::string::npos);
+    EXPECT_NE(read_text(dir() / "plots/error-vs-triangles.svg").find("alpha fractional_odd gpu camera-relative"),
+              std::string::npos);
+    // A camera_relative cell other than 0 or 1 is an error on its line.
+    write_text(csv(), join(kHeader) + ",camera_relative\n" + uniform("alpha", "gpu", 1, "0.2") + ",yes\n");
+    try {
+        tessref::sweep::write_sweep_report(dir().string());
+        ADD_FAILURE() << "camera_relative 'yes' accepted";
+    } catch (const Error& e) {
+        EXPECT_EQ(e.where().line, 2);
+    }
 }
 
 TEST_F(SweepReport, EmptyTableStillMakesAPage) {

@@ -67,16 +67,13 @@ std::string tick_label(double value) {
 }  // namespace
 
 Rgb series_color(std::size_t i) {
-    static constexpr std::array<Rgb, 10> palette{{{31, 119, 180},
-                                                  {255, 127, 14},
-                                                  {44, 160, 44},
-                                                  {214, 39, 40},
-                                                  {148, 103, 189},
-                                                  {140, 86, 75},
-                                                  {227, 119, 194},
-                                                  {127, 127, 127},
-                                                  {188, 189, 34},
-                                                  {23, 190, 207}}};
+    // Ten strong colours, then their light tints (the 20-colour "tab20" set), so that up to 20
+    // series stay apart; beyond that the colours repeat.
+    static constexpr std::array<Rgb, 20> palette{{{31, 119, 180},  {255, 127, 14},  {44, 160, 44},   {214, 39, 40},
+                                                  {148, 103, 189}, {140, 86, 75},   {227, 119, 194}, {127, 127, 127},
+                                                  {188, 189, 34},  {23, 190, 207},  {174, 199, 232}, {255, 187, 120},
+                                                  {152, 223, 138}, {255, 152, 150}, {197, 176, 213}, {196, 156, 148},
+                                                  {247, 182, 210}, {199, 199, 199}, {219, 219, 141}, {158, 218, 229}}};
     return palette[i % palette.size()];
 }
 
@@ -168,16 +165,18 @@ PlotShapes layout_plot(const PlotSpec& spec) {
             line(x1, y0, x1, y1, kFront, 1.0, true);
         }
     }
+    // Dots, then the few diamonds over them (a scene's own levels sit among its uniform ones),
+    // then the rings.
+    for (const PlotPoint& p : spec.points)
+        if (!p.own)
+            shapes.markers.push_back({px(p.x), py(p.y), 3.5, PlotShapes::MarkerKind::dot, spec.series[p.series].color});
     for (const PlotPoint& p : spec.points) {
-        const Rgb color = spec.series[p.series].color;
-        if (p.own) {
-            shapes.markers.push_back({px(p.x), py(p.y), 7.0, PlotShapes::MarkerKind::diamond, kInk});
-            shapes.markers.push_back({px(p.x), py(p.y), 5.0, PlotShapes::MarkerKind::diamond, color});
-        } else {
-            shapes.markers.push_back({px(p.x), py(p.y), 3.5, PlotShapes::MarkerKind::dot, color});
-        }
-        if (p.pareto) shapes.markers.push_back({px(p.x), py(p.y), 8.0, PlotShapes::MarkerKind::ring, kFront});
+        if (!p.own) continue;
+        shapes.markers.push_back({px(p.x), py(p.y), 7.0, PlotShapes::MarkerKind::diamond, kInk});
+        shapes.markers.push_back({px(p.x), py(p.y), 5.0, PlotShapes::MarkerKind::diamond, spec.series[p.series].color});
     }
+    for (const PlotPoint& p : spec.points)
+        if (p.pareto) shapes.markers.push_back({px(p.x), py(p.y), 8.0, PlotShapes::MarkerKind::ring, kFront});
 
     // Legend: one row per series, then the two marks that are not colours.
     double y = kPlotTop;

@@ -225,26 +225,39 @@ std::string series_words(const Series& s, bool has_camera_relative) {
     return words;
 }
 
-// One sentence per scene: where each of its series stops improving.
+// One sentence per scene: where its series stop improving, series that stop at the same
+// level named together ("at level 8 (equal gpu, fractional_odd gpu) and at level 12 (...)"),
+// or "every spacing and precision" when they all agree. The numbers behind it are in the
+// summary table.
 std::string verdict(const std::vector<const Series*>& series, bool has_camera_relative) {
-    std::string text = "In <b>" + html(series.front()->scene) + "</b> the image error stops improving ";
-    for (std::size_t i = 0; i < series.size(); ++i) {
-        const Series& s = *series[i];
-        if (i) text += i + 1 == series.size() ? " and " : "; ";
-        const std::vector<LevelError> curve = s.curve();
-        const std::optional<int> stop = stop_improving_level(curve);
-        if (!stop) {
-            text += "at no known level with " + html(series_words(s, has_camera_relative)) +
-                    " (no uniform level has an image error)";
-            continue;
-        }
-        const LevelError* best = &curve.front();
-        for (const LevelError& p : curve)
-            if (p.error < best->error) best = &p;
-        text += "at <b>level " + std::to_string(*stop) + "</b> with " + html(series_words(s, has_camera_relative)) +
-                " (img_rmse " + num(*s.at_level(*stop)->img_rmse) + "; the minimum, " + num(best->error) +
-                ", is at level " + std::to_string(best->level) + ")";
+    std::map<int, std::vector<std::string>> by_level;
+    std::vector<std::string> unknown;
+    for (const Series* s : series) {
+        std::string name = s->spacing + " " + s->precision;
+        if (has_camera_relative) name += s->camera_relative ? " camera-relative" : " world";
+        if (const std::optional<int> stop = stop_improving_level(s->curve()))
+            by_level[*stop].push_back(name);
+        else
+            unknown.push_back(name);
     }
+    auto list = [](const std::vector<std::string>& names) {
+        std::string text;
+        for (std::size_t i = 0; i < names.size(); ++i) text += (i ? ", " : "") + html(names[i]);
+        return text;
+    };
+    std::string text = "In <b>" + html(series.front()->scene) + "</b> the image error ";
+    if (by_level.empty()) return text + "cannot be placed: no uniform level has an image error.";
+    text += "stops improving";
+    std::size_t i = 0;
+    for (const auto& [level, names] : by_level) {
+        if (i++) text += i == by_level.size() ? " and" : ",";
+        text += " at <b>level " + std::to_string(level) + "</b>";
+        if (by_level.size() == 1 && unknown.empty())
+            text += series.size() == 1 ? " (" + list(names) + ")" : " with every spacing and precision it ran";
+        else
+            text += " (" + list(names) + ")";
+    }
+    if (!unknown.empty()) text += "; no uniform level has an image error with " + list(unknown);
     return text + ".";
 }
 
