@@ -350,9 +350,11 @@ TEST_F(SweepReport, MalformedTablesNameFileAndLine) {
     expect_at(error_for(header + good + "alpha,uniform,2\n"), 3, "fields");
     expect_at(error_for(header + good + good.substr(0, good.size() - 1) + ",extra\n"), 3, "fields");
     expect_at(error_for(header + uniform("alpha", "gpu", 1, "0.2x") + "\n"), 2, "not a number");
-    expect_at(error_for(header + uniform("alpha", "gpu", 1, "nan") + "\n"), 2, "not a number");
+    expect_at(error_for(header + uniform("alpha", "gpu", 1, "nan") + "\n"), 2, "not a finite number");
+    expect_at(error_for(header + uniform("alpha", "gpu", 1, "inf") + "\n"), 2, "not a finite number");
     expect_at(error_for(header + uniform("alpha", "gpu", 1, "-1") + "\n"), 2, "finite number");
-    expect_at(error_for(header + uniform("alpha", "gpu", 0, "0.2") + "\n"), 2, "1..64");
+    expect_at(error_for(header + uniform("alpha", "gpu", 0, "0.2") + "\n"), 2, "[1, 64]");
+    expect_at(error_for(header + uniform("alpha", "gpu", 65, "0.2") + "\n"), 2, "[1, 64]");
     expect_at(error_for(header + good + good), 3, "same run as line 2");
     expect_at(error_for(header + good + "\n" + uniform("alpha", "gpu", 2, "0.1") + "\n"), 3, "blank line");
     {
@@ -404,6 +406,24 @@ TEST_F(SweepReport, CameraRelativeColumnSplitsSeries) {
     } catch (const Error& e) {
         EXPECT_EQ(e.where().line, 2);
     }
+}
+
+TEST_F(SweepReport, FractionalLevelsAndNonFiniteMeasurements) {
+    // The sweep writes levels with "%.9g" (2.5 is a level) and nan / inf where a measurement
+    // has no finite value. Floor 0.03 + 0.00196: level 1 (0.2) above, level 2.5 (0.0301) below.
+    std::string text = join(kHeader) + "\n";
+    text += row({{"scene", "alpha"}, {"model", "uniform"}, {"level", "1"}, {"spacing", "equal"}, {"precision", "gpu"},
+                 {"triangles", "10"}, {"total_ms", "1"}, {"img_rmse", "0.2"}, {"geo_max", "nan"}}) + "\n";
+    text += row({{"scene", "alpha"}, {"model", "uniform"}, {"level", "2.5"}, {"spacing", "equal"}, {"precision", "gpu"},
+                 {"triangles", "40"}, {"total_ms", "2"}, {"img_rmse", "0.0301"}, {"img_psnr", "inf"}}) + "\n";
+    text += row({{"scene", "alpha"}, {"model", "uniform"}, {"level", "4"}, {"spacing", "equal"}, {"precision", "gpu"},
+                 {"triangles", "90"}, {"total_ms", "3"}, {"img_rmse", "0.03"}}) + "\n";
+    write_text(csv(), text);
+    tessref::sweep::write_sweep_report(dir().string());
+    const std::string html = read_text(dir() / "index.html");
+    EXPECT_NE(html.find("stops improving at <b>level 2.5</b> (equal gpu)."), std::string::npos);
+    EXPECT_NE(html.find("<td>nan</td>"), std::string::npos);
+    EXPECT_NE(html.find("<td>inf</td>"), std::string::npos);
 }
 
 TEST_F(SweepReport, EmptyTableStillMakesAPage) {

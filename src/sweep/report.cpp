@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -116,11 +117,14 @@ std::string anchor_id(const std::string& scene) {
 }
 
 std::string num(double x, int digits = 4) {
+    if (std::isnan(x)) return "nan";  // whatever its sign bit (printf may say "-nan")
     char buffer[64];
     std::snprintf(buffer, sizeof buffer, "%.*g", digits, x);
     return buffer;
 }
 std::string num(const std::optional<double>& x, int digits = 4) { return x ? num(*x, digits) : "–"; }
+// Levels as the sweep wrote them ("%.9g": "8", "2.5").
+std::string level_str(double level) { return num(level, 9); }
 std::string count(const std::optional<double>& x) { return x ? num(*x, 15) : "–"; }
 
 // ---------------------------------------------------------------------------------------
@@ -138,7 +142,7 @@ struct Series {
             if (row->uniform() && row->img_rmse) points.push_back({*row->level, *row->img_rmse});
         return points;
     }
-    const SweepRow* at_level(int level) const {
+    const SweepRow* at_level(double level) const {
         for (const SweepRow* row : rows)
             if (row->uniform() && row->level == level) return row;
         return nullptr;
@@ -216,7 +220,7 @@ figure{margin:6px 10px 6px 0;display:inline-block;vertical-align:top}figure img{
 figcaption{font-size:12px;color:#444}.strip{margin:10px 0;border-top:1px dotted #ccc;padding-top:6px}code{font-size:13px})";
 
 std::string level_text(const SweepRow& row) {
-    return row.uniform() ? "level " + std::to_string(*row.level) : "the scene's own levels (" + row.model + ")";
+    return row.uniform() ? "level " + level_str(*row.level) : "the scene's own levels (" + row.model + ")";
 }
 
 std::string series_words(const Series& s, bool has_camera_relative) {
@@ -230,12 +234,12 @@ std::string series_words(const Series& s, bool has_camera_relative) {
 // or "every spacing and precision" when they all agree. The numbers behind it are in the
 // summary table.
 std::string verdict(const std::vector<const Series*>& series, bool has_camera_relative) {
-    std::map<int, std::vector<std::string>> by_level;
+    std::map<double, std::vector<std::string>> by_level;
     std::vector<std::string> unknown;
     for (const Series* s : series) {
         std::string name = s->spacing + " " + s->precision;
         if (has_camera_relative) name += s->camera_relative ? " camera-relative" : " world";
-        if (const std::optional<int> stop = stop_improving_level(s->curve()))
+        if (const std::optional<double> stop = stop_improving_level(s->curve()))
             by_level[*stop].push_back(name);
         else
             unknown.push_back(name);
@@ -251,7 +255,7 @@ std::string verdict(const std::vector<const Series*>& series, bool has_camera_re
     std::size_t i = 0;
     for (const auto& [level, names] : by_level) {
         if (i++) text += i == by_level.size() ? " and" : ",";
-        text += " at <b>level " + std::to_string(level) + "</b>";
+        text += " at <b>level " + level_str(level) + "</b>";
         if (by_level.size() == 1 && unknown.empty())
             text += series.size() == 1 ? " (" + list(names) + ")" : " with every spacing and precision it ran";
         else
@@ -269,23 +273,23 @@ void summary_table(std::string& out, const std::vector<const Series*>& series, b
            "<th>scene's own levels: img_rmse</th><th>triangles</th><th>smallest uniform level as accurate</th></tr>\n";
     for (const Series* s : series) {
         const std::vector<LevelError> curve = s->curve();
-        std::set<int> levels;
+        std::set<double> levels;
         for (const SweepRow* row : s->rows)
             if (row->uniform()) levels.insert(*row->level);
         out += "<tr><td class=t>" + html(s->spacing) + "</td><td class=t>" + html(s->precision) + "</td>";
         if (has_camera_relative) out += std::string("<td class=t>") + (s->camera_relative ? "camera-relative" : "world") + "</td>";
         out += "<td>" + (levels.empty() ? std::string("none")
-                                         : std::to_string(levels.size()) + " (" + std::to_string(*levels.begin()) +
-                                               "–" + std::to_string(*levels.rbegin()) + ")") +
+                                         : std::to_string(levels.size()) + " (" + level_str(*levels.begin()) +
+                                               "–" + level_str(*levels.rbegin()) + ")") +
                "</td>";
-        const std::optional<int> stop = stop_improving_level(curve);
+        const std::optional<double> stop = stop_improving_level(curve);
         if (stop) {
             const LevelError* best = &curve.front();
             for (const LevelError& p : curve)
                 if (p.error < best->error) best = &p;
             const SweepRow* at = s->at_level(*stop);
-            out += "<td>" + num(best->error) + " (" + std::to_string(best->level) + ")</td><td>" +
-                   std::to_string(*stop) + "</td><td>" + num(at->img_rmse) + "</td><td>" + count(at->triangles) +
+            out += "<td>" + num(best->error) + " (" + level_str(best->level) + ")</td><td>" +
+                   level_str(*stop) + "</td><td>" + num(at->img_rmse) + "</td><td>" + count(at->triangles) +
                    "</td><td>" + num(at->geo_max) + "</td>";
         } else {
             out += "<td>–</td><td>–</td><td>–</td><td>–</td><td>–</td>";
@@ -299,7 +303,7 @@ void summary_table(std::string& out, const std::vector<const Series*>& series, b
             if (own->img_rmse)
                 for (const LevelError& p : curve)  // in level order
                     if (p.error <= *own->img_rmse) {
-                        matched = std::to_string(p.level);
+                        matched = level_str(p.level);
                         break;
                     }
             out += "<td>" + num(own->img_rmse) + "</td><td>" + count(own->triangles) + "</td><td>" + matched + "</td>";
@@ -324,7 +328,7 @@ void runs_table(std::string& out, const std::vector<const Series*>& series, bool
         for (const SweepRow* row : s->rows) {
             out += "<tr><td class=t>" + html(row->spacing) + "</td><td class=t>" + html(row->precision) + "</td>";
             if (has_camera_relative) out += std::string("<td class=t>") + (row->camera_relative ? "camera-relative" : "world") + "</td>";
-            out += "<td class=t>" + html(row->uniform() ? std::to_string(*row->level) : row->model) + "</td><td>" +
+            out += "<td class=t>" + html(row->uniform() ? level_str(*row->level) : row->model) + "</td><td>" +
                    count(row->patches) + "</td><td>" + count(row->triangles) + "</td><td>" + count(row->points) +
                    "</td><td>" + num(row->geo_max) + "</td><td>" + num(row->geo_rms) + "</td><td>" +
                    num(row->geo_max_px) + "</td><td>" + num(row->img_rmse) + "</td><td>" + num(row->img_psnr) +

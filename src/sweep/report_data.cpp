@@ -106,15 +106,18 @@ SweepTable read_sweep_csv(const std::string& path) {
         };
         // The key is the column's name: "sweep.csv:7, key img_rmse".
         auto where = [&](const char* name) { return Where::at(path, line_number, 0, name); };
-        // A count, time or error: empty, or a finite number >= 0 (img_psnr may be inf).
-        auto number = [&](const char* name, bool infinity_allowed = false) -> std::optional<double> {
+        // Empty, or a number >= 0. What the report plots or counts with (counts, times,
+        // img_rmse) must be finite; a measurement it only shows may be nan or inf as the
+        // writer spells them (img_psnr of identical pictures is inf).
+        auto number = [&](const char* name, bool finite = true) -> std::optional<double> {
             const std::string t = text(name);
             if (t.empty()) return std::nullopt;
             const std::optional<double> value = parse_number(t);
-            if (!value || std::isnan(*value))
-                throw Error(std::string("column ") + name + ": '" + t + "' is not a number", where(name));
-            if (*value < 0 || (!infinity_allowed && std::isinf(*value)))
-                throw Error(std::string("column ") + name + ": '" + t + "' is not a finite number >= 0", where(name));
+            if (!value) throw Error(std::string("column ") + name + ": '" + t + "' is not a number", where(name));
+            if (*value < 0 || (finite && !std::isfinite(*value)))
+                throw Error(std::string("column ") + name + ": '" + t + "' is not a " + (finite ? "finite " : "") +
+                                "number >= 0",
+                            where(name));
             return value;
         };
 
@@ -128,9 +131,9 @@ SweepTable read_sweep_csv(const std::string& path) {
             if (text(name).empty()) throw Error(std::string("column ") + name + " is empty", where(name));
         if (const std::string t = text("level"); !t.empty()) {
             const std::optional<double> level = parse_number(t);
-            if (!level || *level != std::floor(*level) || *level < 1 || *level > 64)
-                throw Error("column level: '" + t + "' is not an integer level 1..64", where("level"));
-            row.level = static_cast<int>(*level);
+            if (!level || !(*level >= 1 && *level <= 64))  // NaN fails too
+                throw Error("column level: '" + t + "' is not a level in [1, 64]", where("level"));
+            row.level = *level;
         }
         if (row.uniform() && !row.level)
             throw Error("a uniform row needs a level", where("level"));
@@ -145,13 +148,13 @@ SweepTable read_sweep_csv(const std::string& path) {
         for (const char* name : {"control_ms", "generator_ms", "evaluation_ms", "geometry_ms", "raster_shading_ms"})
             (void)number(name);  // not shown, but a malformed cell is still a malformed file
         row.total_ms = number("total_ms");
-        row.geo_max = number("geo_max");
-        row.geo_rms = number("geo_rms");
-        row.geo_max_px = number("geo_max_px");
+        row.geo_max = number("geo_max", false);
+        row.geo_rms = number("geo_rms", false);
+        row.geo_max_px = number("geo_max_px", false);
         row.img_rmse = number("img_rmse");
-        row.img_psnr = number("img_psnr", true);
+        row.img_psnr = number("img_psnr", false);
         row.img_fail_px = number("img_fail_px");
-        row.gpu_exact_max_pos = number("gpu_exact_max_pos");
+        row.gpu_exact_max_pos = number("gpu_exact_max_pos", false);
         row.gpu_exact_image_differs = number("gpu_exact_image_differs");
         row.image = text("image");
         row.diff_image = text("diff_image");
@@ -192,12 +195,12 @@ std::vector<bool> pareto_front(std::span<const CostError> points) {
 
 double stop_tolerance(double minimum_error) { return std::max(0.01 * minimum_error, 0.5 / 255.0); }
 
-std::optional<int> stop_improving_level(std::span<const LevelError> curve) {
+std::optional<double> stop_improving_level(std::span<const LevelError> curve) {
     if (curve.empty()) return std::nullopt;
     double minimum = curve[0].error;
     for (const LevelError& p : curve) minimum = std::min(minimum, p.error);
     const double bound = minimum + stop_tolerance(minimum);
-    std::optional<int> level;
+    std::optional<double> level;
     for (const LevelError& p : curve)
         if (p.error <= bound && (!level || p.level < *level)) level = p.level;
     return level;

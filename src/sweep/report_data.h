@@ -23,7 +23,7 @@ struct SweepRow {
     std::size_t line = 0;        // 1-based line in sweep.csv (the header is line 1)
     std::string scene;
     std::string model;           // "uniform", or the scene's own control model
-    std::optional<int> level;    // uniform rows: 1..64; the scene's own rows: none
+    std::optional<double> level;  // uniform rows: in [1, 64], not always whole; the scene's own rows: none
     std::string spacing;
     std::string precision;       // "gpu" or "exact" (others are shown as given)
     bool camera_relative = false;  // the optional camera_relative column (0/1)
@@ -46,8 +46,9 @@ struct SweepTable {
 // Required: scene, model, level, spacing, precision, triangles, total_ms, img_rmse. Throws
 // tessref::Error naming path:line for: a missing or unreadable file, an empty file, a header
 // without a required column or with a column twice, a row with another number of fields than
-// the header, a non-number (or, for level, a non-integer outside 1..64) in a numeric column,
-// a negative or non-finite error, count or time, a uniform row without a level, a picture
+// the header, a non-number in a numeric column (the writer's "nan" and "inf" are numbers),
+// a negative number, a level outside [1, 64], a count, a time or img_rmse that is not
+// finite (the rest may be nan or inf, e.g. img_psnr), a uniform row without a level, a picture
 // path that is absolute or climbs out of DIR (".."), and two rows of the same run (same
 // scene, model, level, spacing, precision, camera_relative). Rows come back sorted by
 // scene, spacing, precision, camera_relative, then the scene's own rows before uniform ones
@@ -71,7 +72,7 @@ std::vector<bool> pareto_front(std::span<const CostError> points);
 
 // One point of an error curve: a uniform level and its image error.
 struct LevelError {
-    int level = 0;
+    double level = 0.0;
     double error = 0.0;
 };
 
@@ -84,7 +85,7 @@ double stop_tolerance(double minimum_error);
 // within stop_tolerance(m) of m, the minimum error over all levels of the curve. Raising the
 // level beyond it buys at most that tolerance. nullopt for an empty curve. (The points need
 // not be sorted.)
-std::optional<int> stop_improving_level(std::span<const LevelError> curve);
+std::optional<double> stop_improving_level(std::span<const LevelError> curve);
 
 // gpu-vs-exact: the ratio gpu img_rmse / exact img_rmse at each level both precisions ran
 // (levels where the exact error is 0 count only when the gpu error is 0 too, as ratio 1).
