@@ -197,6 +197,21 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     return shapes;
 }
 
+std::string xml_escape(const std::string& text) {
+    std::string out;
+    for (char c : text) {
+        switch (c) {
+            case '&': out += "&amp;"; break;
+            case '<': out += "&lt;"; break;
+            case '>': out += "&gt;"; break;
+            case '"': out += "&quot;"; break;
+            case '\'': out += "&#39;"; break;
+            default: out += c;
+        }
+    }
+    return out;
+}
+
 // ---------------------------------------------------------------------------------------
 // SVG
 
@@ -206,20 +221,6 @@ std::string hex(Rgb c) {
     char buffer[8];
     std::snprintf(buffer, sizeof buffer, "#%02x%02x%02x", c.r, c.g, c.b);
     return buffer;
-}
-
-std::string xml_escape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            default: out += c;
-        }
-    }
-    return out;
 }
 
 std::vector<glm::dvec2> diamond(double x, double y, double r) { return {{x, y - r}, {x + r, y}, {x, y + r}, {x - r, y}}; }

@@ -43,6 +43,9 @@ struct PlotSpec {
     std::vector<std::vector<PlotPoint>> fronts;
 };
 
+// Text for XML or HTML, element content or a quoted attribute value: & < > " ' escaped.
+std::string xml_escape(const std::string& text);
+
 // The i-th colour of the report's palette (cycles).
 Rgb series_color(std::size_t i);
 

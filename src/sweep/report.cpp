@@ -80,20 +80,7 @@ void write_png_atomically(const fs::path& target, const PlotShapes& shapes) {
 // ---------------------------------------------------------------------------------------
 // Text
 
-std::string html(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            case '\'': out += "&#39;"; break;
-            default: out += c;
-        }
-    }
-    return out;
-}
+std::string html(const std::string& s) { return xml_escape(s); }
 
 // A relative path as a URL: bytes outside the unreserved set and '/' percent-encoded.
 std::string url(const std::string& path) {
