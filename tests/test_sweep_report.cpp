@@ -418,12 +418,18 @@ TEST_F(SweepReport, FractionalLevelsAndNonFiniteMeasurements) {
                  {"triangles", "40"}, {"total_ms", "2"}, {"img_rmse", "0.0301"}, {"img_psnr", "inf"}}) + "\n";
     text += row({{"scene", "alpha"}, {"model", "uniform"}, {"level", "4"}, {"spacing", "equal"}, {"precision", "gpu"},
                  {"triangles", "90"}, {"total_ms", "3"}, {"img_rmse", "0.03"}}) + "\n";
+    // No triangles: on the curve, but with no place on the triangles' log axis.
+    text += row({{"scene", "alpha"}, {"model", "uniform"}, {"level", "8"}, {"spacing", "equal"}, {"precision", "gpu"},
+                 {"triangles", "0"}, {"total_ms", "4"}, {"img_rmse", "0.03"}}) + "\n";
     write_text(csv(), text);
     tessref::sweep::write_sweep_report(dir().string());
     const std::string html = read_text(dir() / "index.html");
     EXPECT_NE(html.find("stops improving at <b>level 2.5</b> (equal gpu)."), std::string::npos);
     EXPECT_NE(html.find("<td>nan</td>"), std::string::npos);
     EXPECT_NE(html.find("<td>inf</td>"), std::string::npos);
+    EXPECT_NE(read_text(dir() / "plots/error-vs-triangles.svg").find("1 run without img_rmse or with triangles 0 left out"),
+              std::string::npos);
+    EXPECT_EQ(read_text(dir() / "plots/error-vs-time.svg").find("left out"), std::string::npos);
 }
 
 TEST_F(SweepReport, EmptyTableStillMakesAPage) {

@@ -27,7 +27,7 @@ constexpr double kPlotLeft = 84.0;
 constexpr double kPlotTop = 60.0;
 constexpr double kPlotWidth = 640.0;
 constexpr double kPlotHeight = 420.0;
-constexpr double kBottomMargin = 64.0;
+constexpr double kBottomMargin = 76.0;
 constexpr double kLegendGap = 28.0;
 constexpr double kLegendRow = 18.0;
 constexpr double kCharWidth = 8.0;  // the PNG font's advance; the SVG's 12 px sans is narrower
@@ -142,6 +142,7 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     line(kPlotLeft, kPlotTop, kPlotLeft, bottom, kInk, 1.0);
     line(kPlotLeft, bottom, kPlotLeft + kPlotWidth, bottom, kInk, 1.0);
     text(kPlotLeft + kPlotWidth / 2.0, bottom + 48.0, spec.x_label, Anchor::middle, kMuted);
+    if (!spec.note.empty()) text(kPlotLeft, bottom + 68.0, spec.note, Anchor::start, kMuted);
     if (spec.points.empty())
         text(kPlotLeft + kPlotWidth / 2.0, kPlotTop + kPlotHeight / 2.0, "no runs with both values", Anchor::middle,
              kMuted);

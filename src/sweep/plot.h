@@ -37,6 +37,7 @@ struct PlotSpec {
     std::string title;
     std::string x_label;  // e.g. "total time (ms), log scale"
     std::string y_label;
+    std::string note;     // under the x axis, e.g. how many runs could not be placed
     std::vector<PlotSeries> series;
     std::vector<PlotPoint> points;  // a series' uniform points in level order (they are joined)
     // Each scene's Pareto front, points sorted by x: drawn as a dashed staircase.

@@ -136,9 +136,8 @@ struct Series {
     }
 };
 
-std::string series_label(const Series& s, bool with_scene, bool has_camera_relative) {
-    std::string label = with_scene ? s.scene + " " : "";
-    label += s.spacing + " " + s.precision;
+std::string series_label(const Series& s, bool has_camera_relative) {
+    std::string label = s.scene + " " + s.spacing + " " + s.precision;
     if (has_camera_relative) label += s.camera_relative ? " camera-relative" : " world";
     return label;
 }
@@ -158,21 +157,29 @@ std::vector<Series> group_series(const SweepTable& table) {
 // Plots
 
 PlotSpec make_plot(const SweepTable& table, const std::vector<Series>& series, const std::string& title,
-                   const std::string& x_label, const std::function<std::optional<double>(const SweepRow&)>& cost) {
+                   const std::string& x_label, const std::string& x_name,
+                   const std::function<std::optional<double>(const SweepRow&)>& cost) {
     PlotSpec spec;
     spec.title = title;
     spec.x_label = x_label;
     spec.y_label = "image error (img_rmse, 0..1)";
     std::vector<std::string> point_scene;
+    std::size_t left_out = 0;
     for (std::size_t s = 0; s < series.size(); ++s) {
-        spec.series.push_back({series_label(series[s], true, table.has_camera_relative), series_color(s)});
+        spec.series.push_back({series_label(series[s], table.has_camera_relative), series_color(s)});
         for (const SweepRow* row : series[s].rows) {
             const std::optional<double> x = cost(*row);
-            if (!x || !(*x > 0) || !row->img_rmse) continue;  // a log axis has no place for 0
+            if (!x || !(*x > 0) || !row->img_rmse) {  // a log axis has no place for 0
+                ++left_out;
+                continue;
+            }
             spec.points.push_back({*x, *row->img_rmse, s, !row->uniform(), false});
             point_scene.push_back(row->scene);
         }
     }
+    if (left_out)
+        spec.note = std::to_string(left_out) + " run" + (left_out == 1 ? "" : "s") + " without img_rmse or with " +
+                    x_name + " 0 left out";
     // The front of each scene, over all its series.
     for (std::size_t begin = 0; begin < spec.points.size();) {
         std::size_t end = begin;
@@ -454,10 +461,10 @@ void write_sweep_report(const std::string& dir) {
     fs::create_directories(plots, ec);
     if (ec) throw Error("cannot make the plots folder: " + ec.message(), Where::in_file(plots.string()));
     const PlotSpec time_plot =
-        make_plot(table, series, "Image error against time", "total time per run (ms), log scale",
+        make_plot(table, series, "Image error against time", "total time per run (ms), log scale", "total_ms",
                   [](const SweepRow& row) { return row.total_ms; });
     const PlotSpec triangle_plot =
-        make_plot(table, series, "Image error against triangles", "triangles, log scale",
+        make_plot(table, series, "Image error against triangles", "triangles, log scale", "triangles",
                   [](const SweepRow& row) { return row.triangles; });
     for (const auto& [name, spec] : {std::pair<const char*, const PlotSpec*>{"error-vs-time", &time_plot},
                                      std::pair<const char*, const PlotSpec*>{"error-vs-triangles", &triangle_plot}}) {
