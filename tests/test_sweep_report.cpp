@@ -427,7 +427,8 @@ TEST_F(SweepReport, FractionalLevelsAndNonFiniteMeasurements) {
     EXPECT_NE(html.find("stops improving at <b>level 2.5</b> (equal gpu)."), std::string::npos);
     EXPECT_NE(html.find("<td>nan</td>"), std::string::npos);
     EXPECT_NE(html.find("<td>inf</td>"), std::string::npos);
-    EXPECT_NE(read_text(dir() / "plots/error-vs-triangles.svg").find("1 run without img_rmse or with triangles 0 left out"),
+    EXPECT_NE(read_text(dir() / "plots/error-vs-triangles.svg")
+                  .find("1 run without img_rmse or with triangles 0 left out"),
               std::string::npos);
     EXPECT_EQ(read_text(dir() / "plots/error-vs-time.svg").find("left out"), std::string::npos);
 }

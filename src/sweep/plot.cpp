@@ -224,7 +224,9 @@ std::string hex(Rgb c) {
     return buffer;
 }
 
-std::vector<glm::dvec2> diamond(double x, double y, double r) { return {{x, y - r}, {x + r, y}, {x, y + r}, {x - r, y}}; }
+std::vector<glm::dvec2> diamond(double x, double y, double r) {
+    return {{x, y - r}, {x + r, y}, {x, y + r}, {x - r, y}};
+}
 
 }  // namespace
 

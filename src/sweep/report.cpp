@@ -204,14 +204,24 @@ PlotSpec make_plot(const SweepTable& table, const std::vector<Series>& series, c
 // ---------------------------------------------------------------------------------------
 // index.html
 
-constexpr const char* kStyle = R"(body{font:14px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:24px auto;max-width:1200px;padding:0 16px;color:#222}
-h1{font-size:24px}h2{font-size:19px;margin-top:36px;border-bottom:1px solid #ddd}h3{font-size:15px}
-table{border-collapse:collapse;margin:8px 0}th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}
-th{background:#f3f3f3}td.t,th.t{text-align:left}
+// Inline: the page must work opened from disk with no network, so no file or font is fetched.
+constexpr const char* kStyle = R"(body{font:14px/1.45 system-ui,sans-serif;margin:24px auto;max-width:1200px}
+body{padding:0 16px;color:#222}
+h1{font-size:24px}
+h2{font-size:19px;margin-top:36px;border-bottom:1px solid #ddd}
+h3{font-size:15px}
+table{border-collapse:collapse;margin:8px 0}
+th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}
+th{background:#f3f3f3}
+td.t,th.t{text-align:left}
 .verdict{background:#eef5ff;border-left:4px solid #1f77b4;padding:6px 10px}
-figure{margin:6px 10px 6px 0;display:inline-block;vertical-align:top}figure img{max-width:360px;border:1px solid #ccc}
-.plots img{max-width:100%}.missing{display:inline-block;width:200px;padding:40px 0;text-align:center;color:#888;border:1px dashed #ccc}
-figcaption{font-size:12px;color:#444}.strip{margin:10px 0;border-top:1px dotted #ccc;padding-top:6px}code{font-size:13px})";
+figure{margin:6px 10px 6px 0;display:inline-block;vertical-align:top}
+figure img{max-width:360px;border:1px solid #ccc}
+.plots img{max-width:100%}
+.missing{display:inline-block;width:200px;padding:40px 0;text-align:center;color:#888;border:1px dashed #ccc}
+figcaption{font-size:12px;color:#444}
+.strip{margin:10px 0;border-top:1px dotted #ccc;padding-top:6px}
+code{font-size:13px})";
 
 std::string level_text(const SweepRow& row) {
     return row.uniform() ? "level " + level_str(*row.level) : "the scene's own levels (" + row.model + ")";
@@ -259,6 +269,10 @@ std::string verdict(const std::vector<const Series*>& series, bool has_camera_re
     return text + ".";
 }
 
+std::string coordinates_cell(bool camera_relative) {
+    return std::string("<td class=t>") + (camera_relative ? "camera-relative" : "world") + "</td>";
+}
+
 void summary_table(std::string& out, const std::vector<const Series*>& series, bool has_camera_relative) {
     out += "<table>\n<tr><th class=t>spacing</th><th class=t>precision</th>";
     if (has_camera_relative) out += "<th class=t>coordinates</th>";
@@ -271,7 +285,7 @@ void summary_table(std::string& out, const std::vector<const Series*>& series, b
         for (const SweepRow* row : s->rows)
             if (row->uniform()) levels.insert(*row->level);
         out += "<tr><td class=t>" + html(s->spacing) + "</td><td class=t>" + html(s->precision) + "</td>";
-        if (has_camera_relative) out += std::string("<td class=t>") + (s->camera_relative ? "camera-relative" : "world") + "</td>";
+        if (has_camera_relative) out += coordinates_cell(s->camera_relative);
         out += "<td>" + (levels.empty() ? std::string("none")
                                          : std::to_string(levels.size()) + " (" + level_str(*levels.begin()) +
                                                "–" + level_str(*levels.rbegin()) + ")") +
@@ -321,7 +335,7 @@ void runs_table(std::string& out, const std::vector<const Series*>& series, bool
     for (const Series* s : series) {
         for (const SweepRow* row : s->rows) {
             out += "<tr><td class=t>" + html(row->spacing) + "</td><td class=t>" + html(row->precision) + "</td>";
-            if (has_camera_relative) out += std::string("<td class=t>") + (row->camera_relative ? "camera-relative" : "world") + "</td>";
+            if (has_camera_relative) out += coordinates_cell(row->camera_relative);
             out += "<td class=t>" + html(row->uniform() ? level_str(*row->level) : row->model) + "</td><td>" +
                    count(row->patches) + "</td><td>" + count(row->triangles) + "</td><td>" + count(row->points) +
                    "</td><td>" + num(row->geo_max) + "</td><td>" + num(row->geo_rms) + "</td><td>" +
@@ -429,7 +443,8 @@ std::string make_index(const SweepTable& table, const std::vector<Series>& serie
                 const std::vector<LevelError> g = gpu->curve(), e = exact->curve();
                 const ErrorRatio r = gpu_exact_ratio(g, e);
                 std::string where = gpu->spacing + " spacing";
-                if (table.has_camera_relative) where += gpu->camera_relative ? ", camera-relative" : ", world coordinates";
+                if (table.has_camera_relative)
+                    where += gpu->camera_relative ? ", camera-relative" : ", world coordinates";
                 out += "<p>gpu/exact image error ratio with " + html(where) + ": ";
                 if (r.levels == 0)
                     out += "no uniform level ran with both precisions.</p>\n";

@@ -69,7 +69,8 @@ SweepTable read_sweep_csv(const std::string& path) {
     if (!in) throw Error("cannot read the sweep table", Where::in_file(path));
 
     std::string line;
-    if (!std::getline(in, line)) throw Error("the sweep table is empty: expected a header line", Where::in_file(path, 1));
+    if (!std::getline(in, line))
+        throw Error("the sweep table is empty: expected a header line", Where::in_file(path, 1));
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const std::vector<std::string> header = split_fields(line);
     std::map<std::string, std::size_t> column;
@@ -78,7 +79,8 @@ SweepTable read_sweep_csv(const std::string& path) {
         if (!column.emplace(header[i], i).second)
             throw Error("column '" + header[i] + "' appears twice in the header", Where::at(path, 1, 0, header[i]));
     }
-    for (const char* required : {"scene", "model", "level", "spacing", "precision", "triangles", "total_ms", "img_rmse"})
+    for (const char* required :
+         {"scene", "model", "level", "spacing", "precision", "triangles", "total_ms", "img_rmse"})
         if (!column.count(required))
             throw Error(std::string("the header has no '") + required + "' column", Where::in_file(path, 1));
 
