@@ -350,6 +350,7 @@ TEST_F(SweepReport, MalformedTablesNameFileAndLine) {
     expect_at(error_for(header + good + "alpha,uniform,2\n"), 3, "fields");
     expect_at(error_for(header + good + good.substr(0, good.size() - 1) + ",extra\n"), 3, "fields");
     expect_at(error_for(header + uniform("alpha", "gpu", 1, "0.2x") + "\n"), 2, "not a number");
+    expect_at(error_for(header + good + uniform("\"alpha\"", "gpu", 2, "0.2") + "\n"), 3, "quote");
     expect_at(error_for(header + uniform("alpha", "gpu", 1, "nan") + "\n"), 2, "not a finite number");
     expect_at(error_for(header + uniform("alpha", "gpu", 1, "inf") + "\n"), 2, "not a finite number");
     expect_at(error_for(header + uniform("alpha", "gpu", 1, "-1") + "\n"), 2, "finite number");

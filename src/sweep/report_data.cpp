@@ -21,8 +21,8 @@ std::vector<std::string> split_fields(const std::string& line) {
     while (true) {
         const std::size_t comma = line.find(',', start);
         std::string field = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-        // Surrounding blanks are layout, not content (a hand-edited file); a quote would be
-        // CSV quoting, which sweep.csv never needs and this reader does not undo.
+        // Surrounding blanks are layout, not content (a hand-edited file). Quotes (CSV quoting,
+        // which sweep.csv never needs) are refused by the caller.
         field.erase(0, field.find_first_not_of(" \t"));
         field.erase(field.find_last_not_of(" \t") + 1);
         fields.push_back(std::move(field));
@@ -96,6 +96,9 @@ SweepTable read_sweep_csv(const std::string& path) {
             continue;
         }
         if (first_blank) throw Error("a blank line inside the sweep table", Where::in_file(path, first_blank));
+        if (line.find('"') != std::string::npos)
+            throw Error("a quote: sweep.csv fields are never quoted (they hold no commas)",
+                        Where::in_file(path, line_number));
         const std::vector<std::string> fields = split_fields(line);
         if (fields.size() != header.size())
             throw Error("expected " + std::to_string(header.size()) + " fields (as the header), got " +

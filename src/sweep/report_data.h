@@ -44,15 +44,16 @@ struct SweepTable {
 
 // Reads `path` (sweep.csv). Columns are found by header name; unknown ones are ignored.
 // Required: scene, model, level, spacing, precision, triangles, total_ms, img_rmse. Throws
-// tessref::Error naming path:line for: a missing or unreadable file, an empty file, a header
-// without a required column or with a column twice, a row with another number of fields than
-// the header, a non-number in a numeric column (the writer's "nan" and "inf" are numbers),
-// a negative number, a level outside [1, 64], a count, a time or img_rmse that is not
-// finite (the rest may be nan or inf, e.g. img_psnr), a uniform row without a level, a picture
-// path that is absolute or climbs out of DIR (".."), and two rows of the same run (same
-// scene, model, level, spacing, precision, camera_relative). Rows come back sorted by
-// scene, spacing, precision, camera_relative, then the scene's own rows before uniform ones
-// by level: a merged set of shards reads as one unsharded file.
+// tessref::Error naming path:line (and the column, as the key) for: a missing or unreadable
+// file; an empty file; a header without a required column or with a column twice; a row with
+// another number of fields than the header; a quote (fields are never quoted); a non-number
+// in a numeric column (the writer's "nan" and "inf" are numbers); a negative number; a level
+// outside [1, 64]; a count, a time or img_rmse that is not finite (the measurements only
+// shown may be nan or inf, e.g. img_psnr); a uniform row without a level; a picture path that
+// is absolute or climbs out of DIR (".."); two rows of the same run (same scene, model,
+// level, spacing, precision, camera_relative). Rows come back sorted by scene, spacing,
+// precision, camera_relative, then the scene's own rows before the uniform ones by level: a
+// merged set of shards reads as one unsharded file.
 SweepTable read_sweep_csv(const std::string& path);
 
 // ---------------------------------------------------------------------------------------
