@@ -14,7 +14,13 @@
 //
 // The HTML refers only to files under DIR by relative paths (no network, works opened from
 // disk). Columns are found by their header names; unknown columns are ignored. Throws
-// tessref::Error naming the file (and line) when sweep.csv is missing or malformed.
+// tessref::Error naming the file (and line) when sweep.csv is missing or malformed; then
+// nothing is written. Each file is written under a temporary name and renamed into place,
+// index.html last, so a failure never leaves a half-written page.
+//
+// The rules the page states (the Pareto front, the level at which the image error stops
+// improving, the gpu/exact ratio) and the strict reading of sweep.csv are in
+// report_data.h; the plots' drawing (SVG and PNG from one list of shapes) in plot.h.
 #pragma once
 
 #include <string>

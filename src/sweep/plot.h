@@ -1,0 +1,95 @@
+// src/sweep/plot.h — the scatter plots of the sweep report: image error (y, linear from 0)
+// against a cost (x, log10: time or triangles), one colour per series, a series' uniform
+// levels joined in level order, the scene's own levels as diamonds, the Pareto front ringed
+// and joined by a dashed staircase per scene.
+//
+// layout_plot() lays the plot out once as plain shapes in pixels (y down); plot_to_svg() and
+// plot_to_rgba() are two back-ends of that one list, so the SVG and the PNG show the same
+// marks. The SVG carries every label as <text>; the PNG writes the same labels with a
+// built-in 3x5 bitmap font drawn at twice its size (digits, letters shown in capitals, a few
+// signs), so it needs no font file and its bytes do not depend on the machine.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace tessref::sweep {
+
+struct Rgb {
+    std::uint8_t r = 0, g = 0, b = 0;
+};
+
+struct PlotSeries {
+    std::string label;
+    Rgb color{};
+};
+
+struct PlotPoint {
+    double x = 0.0;      // > 0 (log scale)
+    double y = 0.0;      // >= 0
+    std::size_t series = 0;
+    bool own = false;    // the scene's own levels (a diamond), not a uniform level (a dot)
+    bool pareto = false; // on its scene's Pareto front (ringed)
+};
+
+struct PlotSpec {
+    std::string title;
+    std::string x_label;  // e.g. "total time (ms), log scale"
+    std::string y_label;
+    std::string note;     // under the x axis, e.g. how many runs could not be placed
+    std::vector<PlotSeries> series;
+    std::vector<PlotPoint> points;  // a series' uniform points in level order (they are joined)
+    // Each scene's Pareto front, points sorted by x: drawn as a dashed staircase.
+    std::vector<std::vector<PlotPoint>> fronts;
+};
+
+// Text for XML or HTML, element content or a quoted attribute value: & < > " ' escaped.
+std::string xml_escape(const std::string& text);
+
+// The i-th colour of the report's palette (cycles).
+Rgb series_color(std::size_t i);
+
+enum class Anchor : std::uint8_t { start, middle, end };
+
+// The plot as shapes (pixels, y down), painted in this order: lines, markers, texts.
+struct PlotShapes {
+    struct Line {
+        double x0, y0, x1, y1;
+        Rgb color;
+        double width;
+        bool dashed;
+    };
+    enum class MarkerKind : std::uint8_t { dot, diamond, ring };
+    struct Marker {
+        double x, y, radius;
+        MarkerKind kind;
+        Rgb color;  // fill (dot, diamond) or stroke (ring)
+    };
+    struct Text {
+        double x, y;  // baseline anchor point
+        std::string text;
+        Anchor anchor;
+        Rgb color;
+        bool bold;
+    };
+    int width = 0, height = 0;
+    std::string title;
+    std::vector<Line> lines;
+    std::vector<Marker> markers;
+    std::vector<Text> texts;
+};
+
+PlotShapes layout_plot(const PlotSpec& spec);
+
+// A standalone SVG 1.1 document: starts with "<svg", ends with "</svg>\n"; numbers printed
+// with fixed formats, so the same spec gives the same bytes.
+std::string plot_to_svg(const PlotShapes& shapes);
+
+// The same shapes painted into an RGBA8 buffer (row 0 on top, opaque, no antialiasing).
+std::vector<std::uint8_t> plot_to_rgba(const PlotShapes& shapes);
+
+// Writes an RGBA8 buffer as a PNG through OpenImageIO (no time stamp). Throws tessref::Error.
+void write_rgba_png(const std::vector<std::uint8_t>& rgba, int width, int height, const std::string& path);
+
+}  // namespace tessref::sweep
