@@ -40,6 +40,26 @@ struct PipelineOptions {
     // (serialized by the pipeline); may be empty.
     std::function<void(std::size_t done, std::size_t total)> progress;
     PatternCache* cache = nullptr;         // shared cache; a private one when null
+
+    // Camera-relative evaluation (gpu precision only; ignored in exact precision, whose
+    // output it would change by nothing but double rounding). Off: every output as before.
+    // On, with a [camera]: the evaluation stage works in float coordinates relative to
+    // PipelineResult::origin, the eye (for a terrain, the eye's ground position: the eye
+    // with its component along the plane's up axis set to 0, because the evaluation writes
+    // the height itself, absolute, from the height map). The grid corners / mesh positions
+    // are shifted by -origin in double and then rounded to float, and the model's world ->
+    // texture mapping is shifted with them, also in double (thesis and lab 4: a texture-
+    // coordinate offset origin / scale_xy added to position / scale_xy; COSC422: the extent
+    // minus origin), so texture coordinates, heights and positions carry float's error at
+    // the terrain's size around the eye instead of at its distance from the world origin.
+    // The control stage runs as without the option, on the world corners: its levels are
+    // bit-identical. SurfaceMesh::positions stay WORLD positions (the eye-relative float
+    // position plus origin, in double); the eye-relative floats themselves are kept in
+    // PipelineResult::relative_positions for the renderer, which projects them with the
+    // view-projection of the camera moved by -origin (render.h). Texture coordinates are
+    // the shifted mapping's: they differ from the option's off values by float rounding
+    // (PN meshes: bit-identical, they are the mesh's attributes).
+    bool camera_relative = false;
 };
 
 // Which stages ran (a stage the scene does not name does not run).
@@ -56,6 +76,12 @@ struct PipelineResult {
     std::uint64_t estimated_triangles = 0;
     std::size_t distinct_patterns = 0;     // distinct level sets (patterns) of this run
     StagesRun stages{};
+
+    // camera_relative (PipelineOptions): the point the evaluation worked relative to, and its
+    // float output positions (mesh.positions[v] == origin + relative_positions[v] in double).
+    // origin (0, 0, 0) and no relative positions without the option.
+    glm::dvec3 origin{0.0};
+    std::vector<glm::vec3> relative_positions;
 };
 
 // Runs the scene's pipeline. Throws tessref::Error (key "limits.max_triangles") when the
@@ -63,5 +89,14 @@ struct PipelineResult {
 // evaluates to infinity or NaN (naming the patch, the tess coord and, for a terrain, the
 // height texel).
 PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options = {});
+
+// camera_relative: the origin the evaluation works relative to (see PipelineOptions): the
+// camera's eye, for a terrain with its up-axis component 0; (0, 0, 0) without a camera.
+glm::dvec3 camera_relative_origin(const Scene& scene);
+// The camera moved by -origin (eye and center; up unchanged), whose view-projection, built
+// in double, projects origin-relative positions as camera.view_projection() projects world
+// ones: lookAt(eye - origin, center - origin, up) has at most the eye's up-axis height left
+// in its translation.
+SceneCamera camera_moved_by(SceneCamera camera, const glm::dvec3& origin);
 
 }  // namespace tessref

@@ -1,6 +1,7 @@
 // tessref/render.h — a scene to a picture: the golden image and the provenance of every pixel.
 //
-//   scene ─► run_pipeline ─► gl_Position = mvp * vec4(position, 1) (float, as the shaders)
+//   scene ─► run_pipeline ─► gl_Position = mvp * vec4(position, 1) (float, as the shaders;
+//                            camera_relative: the eye-relative position, RenderOptions)
 //         ─► rasterize (raster.h: llvmpipe's coverage, depth LESS) ─► shade (shading.h)
 //
 // render_scene() runs the scene's pipeline, projects the tessellated surface with the scene's
@@ -76,6 +77,12 @@ struct RenderOptions {
     glm::ivec2 size{0, 0};
     RenderMode mode = RenderMode::fill;
     Precision precision = Precision::gpu;   // of the pipeline (the rasterizer is float)
+    // Camera-relative evaluation (PipelineOptions::camera_relative, gpu precision only): the
+    // pipeline evaluates relative to the eye, and gl_Position = mvp * the eye-relative float
+    // position with mvp the view-projection of the camera moved by -origin (built in double,
+    // rounded to float; RenderResult::mvp). render_surface() does so whenever the pipeline
+    // result carries relative positions.
+    bool camera_relative = false;
     // Called from the calling thread with a stage name and the fraction of it done; may be
     // empty.
     std::function<void(std::string_view stage, double fraction)> progress;
@@ -99,7 +106,8 @@ struct RenderResult {
     RenderShading shading{};           // the scene's, as used
     SceneCamera camera{};              // the camera as used (viewport = image size)
     Domain domain = Domain::quads;     // the generator's domain (for the level rule)
-    glm::mat4 mvp{1.0f};               // float(camera.view_projection()), the shaders' mvp
+    glm::mat4 mvp{1.0f};               // float(camera.view_projection()), the shaders' mvp; camera-
+                                       // relative: of the camera moved by -pipeline->origin
     // Per pixel (row 0 on top):
     std::vector<glm::vec4> colour;     // the fragment stage's output, unclamped; background
                                        // where nothing is visible

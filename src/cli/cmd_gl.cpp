@@ -37,6 +37,7 @@ struct GlCommandOptions {
     bool wireframe = false;
     std::string capture;
     std::vector<std::string> shaders;  // STAGE=FILE, as typed
+    bool camera_relative = false;      // refused (see run_gl)
 };
 
 // --shader STAGE=FILE: FILE relative to the working directory; one flag per stage.
@@ -65,6 +66,15 @@ std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flag
 }
 
 int run_gl(const GlCommandOptions& options) {
+    // Camera-relative evaluation is the CPU pipeline's only (render, mesh): the GLSL twins
+    // compute texture coordinates from the world position (thesis xy / scaleXY, COSC422 the
+    // extent, lab 4 xz / scale + offset), so the GL side would need shader uniforms the twins
+    // do not have, not only a shifted vertex buffer and a translation-free view matrix.
+    if (options.camera_relative)
+        throw Error("--camera-relative is not implemented for the GL backend: its GLSL twins map world positions "
+                    "to texture coordinates, and shifting the vertex buffer alone would move the texture; use "
+                    "`tessref render --camera-relative` (the CPU reference)",
+                    Where::in_file("--camera-relative"));
     const ImageFormat format = image_format_from_path(options.output);
     CaptureFormat capture_format = CaptureFormat::text;
     if (!options.capture.empty()) capture_format = capture_format_from_path(options.capture, "--capture");
@@ -148,6 +158,8 @@ Command add_gl_command(CLI::App& parent) {
                     "own layout(...) in; (README: Debugging your own shader)")
         ->type_name("STAGE=FILE")
         ->allow_extra_args(false);  // one file per flag: the scene after it stays the scene
+    app->add_flag("--camera-relative", options->camera_relative,
+                  "Refused (exit 2): camera-relative evaluation is `tessref render` and `tessref mesh`'s only");
     app->footer("Example: tessref gl data/scenes/thesis-all-10.toml -o gl.png --size 320x200\n"
                 "         tessref gl data/scenes/thesis-all-10.toml -o mine.png --shader tese=my.tese");
     return Command{app, [options] { return run_gl(*options); }};

@@ -3,7 +3,7 @@
 // and how vertices are welded).
 //
 //   tessref mesh SCENE [-o OUT.{ply,obj,off,stl}] [--capture CAP.{txt,ply}] [--precision gpu|exact]
-//                [--binary] [--solid [--base B]] [--threads N]
+//                [--binary] [--solid [--base B]] [--threads N] [--camera-relative]
 //
 // --capture writes the CPU reference's capture (tessref/capture.h), the layout `tessref gl
 // --capture` writes, for `tessref compare`. At least one of -o and --capture.
@@ -45,6 +45,7 @@ struct MeshCommandOptions {
     int threads = 0;  // 0: every core
     bool solid = false;
     std::string base;  // --base as typed: the solid's bottom; empty: below the lowest vertex
+    bool camera_relative = false;
 };
 
 int run_mesh(const MeshCommandOptions& options) {
@@ -87,6 +88,7 @@ int run_mesh(const MeshCommandOptions& options) {
         Progress progress("tessellating patches", scene.patch_count());
         PipelineOptions pipeline_options;
         pipeline_options.precision = precision;
+        pipeline_options.camera_relative = options.camera_relative;
         pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
         result = run_pipeline(scene, pipeline_options);
     }
@@ -198,6 +200,10 @@ Command add_mesh_command(CLI::App& parent) {
                     "Height of the solid's base plane (default: below the lowest vertex by 5 % of "
                     "the relief, at least 1)")
         ->needs("--solid");
+    app->add_flag("--camera-relative", options->camera_relative,
+                  "Evaluate relative to the eye (gpu precision): grid corners and texture mapping shifted by "
+                  "-eye in double, then float; the file holds world positions (eye added back in double, "
+                  "then the writer's 32-bit floats). No effect in exact precision");
     return Command{app, [options] { return run_mesh(*options); }};
 }
 

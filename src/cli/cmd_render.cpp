@@ -4,7 +4,7 @@
 //
 //   tessref render SCENE -o OUT.{png,exr,tif} [--wireframe | --overlay-wireframe]
 //                  [--aov depth,patch,triangle,tesscoord,level] [--threads N]
-//                  [--precision gpu|exact] [--size WxH] [--raytrace]
+//                  [--precision gpu|exact] [--size WxH] [--raytrace] [--camera-relative]
 //
 // Every flag and the output name are checked before the scene is loaded; the image goes to a
 // temporary file next to OUT and is renamed over it only when complete.
@@ -38,6 +38,7 @@ struct RenderCommandOptions {
     std::string precision = "gpu";
     std::string size;  // empty: the camera's viewport
     bool raytrace = false;
+    bool camera_relative = false;
 };
 
 int run_render(const RenderCommandOptions& options) {
@@ -56,8 +57,13 @@ int run_render(const RenderCommandOptions& options) {
         throw Error("--raytrace renders the height field itself: it has no tessellation to draw as lines",
                     Where::in_file("--raytrace"));
     const Precision precision = parse_precision_flag(options.precision);
+    if (options.camera_relative && options.raytrace)
+        throw Error("--raytrace intersects the height field in double: it has no float evaluation to make "
+                    "camera-relative",
+                    Where::in_file("--camera-relative"));
     const ThreadLimit thread_limit(options.threads);
     RenderOptions render_options;
+    render_options.camera_relative = options.camera_relative;
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.precision = precision;
     render_options.mode = options.wireframe           ? RenderMode::wireframe
@@ -142,6 +148,10 @@ Command add_render_command(CLI::App& parent) {
     app->add_flag("--raytrace", options->raytrace,
                   "Ground truth: ray-trace the full-resolution height field (two triangles per texel quad, Embree) "
                   "with the same camera and shading, no tessellation (terrain scenes)");
+    app->add_flag("--camera-relative", options->camera_relative,
+                  "Evaluate relative to the eye (gpu precision): grid corners and texture mapping shifted by "
+                  "-eye in double, then float; gl_Position from the eye-relative position and a view matrix "
+                  "without its translation. For terrains far from the origin; no effect in exact precision");
     app->footer("Example: tessref render data/scenes/thesis-all-10.toml -o thesis.exr --size 640x400 --aov "
                 "depth,patch,level");
     return Command{app, [options] { return run_render(*options); }};

@@ -9,13 +9,18 @@ namespace {
 template <typename T>
 class Lab4Program final : public TerrainProgram<T> {
 public:
-    explicit Lab4Program(const Scene& s) : TerrainProgram<T>(s) {
+    Lab4Program(const Scene& s, const glm::dvec3& origin) : TerrainProgram<T>(s, origin) {
         const TerrainGrid& g = this->grid;
         evaluation.heightMap = this->heightMapLod;
         evaluation.mvp = this->camera.viewProjection;
         evaluation.horizontalScale = static_cast<T>(g.scale_xy);
         evaluation.verticalScale = static_cast<T>(g.scale_z);
         evaluation.texCoordOffset = vec2_t<T>(g.texcoord_offset);
+        if (this->relative) {
+            // Camera-relative: (x - o) / scale + (offset + o / scale), the offset in double.
+            evaluation.mvp = this->camera.relativeViewProjection;
+            evaluation.texCoordOffset = vec2_t<T>(g.texcoord_offset + this->ground_origin() / g.scale_xy);
+        }
     }
 
 private:
@@ -32,10 +37,10 @@ private:
 }  // namespace
 
 template <typename T>
-std::unique_ptr<PatchProgram<T>> make_lab4_program(const Scene& scene) {
-    return std::make_unique<Lab4Program<T>>(scene);
+std::unique_ptr<PatchProgram<T>> make_lab4_program(const Scene& scene, const glm::dvec3& origin) {
+    return std::make_unique<Lab4Program<T>>(scene, origin);
 }
-template std::unique_ptr<PatchProgram<float>> make_lab4_program(const Scene&);
-template std::unique_ptr<PatchProgram<double>> make_lab4_program(const Scene&);
+template std::unique_ptr<PatchProgram<float>> make_lab4_program(const Scene&, const glm::dvec3&);
+template std::unique_ptr<PatchProgram<double>> make_lab4_program(const Scene&, const glm::dvec3&);
 
 }  // namespace tessref::pipeline

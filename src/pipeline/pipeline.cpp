@@ -121,8 +121,11 @@ template <typename T>
 PipelineResult run(const Scene& scene, const PipelineOptions& options) {
     const Precision precision = options.precision;
     const std::size_t n = scene.patch_count();
-    const std::unique_ptr<pipeline::PatchProgram<T>> program = pipeline::make_program<T>(scene);
     PipelineResult result;
+    // Camera-relative evaluation: gpu precision only (exact precision would gain nothing).
+    if (options.camera_relative && std::is_same_v<T, float>) result.origin = camera_relative_origin(scene);
+    const bool relative = result.origin != glm::dvec3(0.0);
+    const std::unique_ptr<pipeline::PatchProgram<T>> program = pipeline::make_program<T>(scene, result.origin);
 
     // Pass 1: the vertex and control shaders.
     std::vector<TessLevels> levels(n);
@@ -198,11 +201,23 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
         }
     });
 
+    // Camera-relative: the evaluation wrote origin-relative floats; the mesh holds world
+    // positions (origin added in double), the renderer the floats themselves.
+    if (relative) {
+        result.relative_positions.resize(vertices);
+        for (std::size_t v = 0; v < vertices; ++v) {
+            result.relative_positions[v] = glm::vec3(mesh.positions[v]);
+            mesh.positions[v] += result.origin;
+        }
+    }
+
     require_finite_positions(scene, mesh, precision);
 
     if (scene.geometry && scene.geometry->normals == GeometryNormals::smooth) {
+        // From the positions as the evaluation wrote them (origin-relative when camera-relative).
         std::vector<vec3_t<T>> positions(vertices);
-        for (std::size_t v = 0; v < vertices; ++v) positions[v] = vec3_t<T>(mesh.positions[v]);
+        for (std::size_t v = 0; v < vertices; ++v)
+            positions[v] = relative ? vec3_t<T>(result.relative_positions[v]) : vec3_t<T>(mesh.positions[v]);
         const auto normals = smooth_vertex_normals<T>(std::span<const vec3_t<T>>(positions),
                                                       std::span<const std::array<std::uint32_t, 3>>(mesh.triangles),
                                                       Weld::by_position);
@@ -218,6 +233,21 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
 }
 
 }  // namespace
+
+glm::dvec3 camera_relative_origin(const Scene& scene) {
+    if (!scene.camera) return glm::dvec3(0.0);
+    glm::dvec3 origin = scene.camera->eye;
+    // A terrain's evaluation writes the height itself (from the height map, absolute): only
+    // the ground axes can be shifted.
+    if (scene.grid) (scene.grid->plane == GroundPlane::xy ? origin.z : origin.y) = 0.0;
+    return origin;
+}
+
+SceneCamera camera_moved_by(SceneCamera camera, const glm::dvec3& origin) {
+    camera.eye -= origin;
+    camera.center -= origin;
+    return camera;
+}
 
 PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options) {
     if (scene.patch_count() == 0) throw Error("the scene has no patches", Where::in_file(scene.file));

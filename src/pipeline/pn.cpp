@@ -13,7 +13,8 @@ namespace {
 template <typename T>
 class PnProgram final : public PatchProgram<T> {
 public:
-    explicit PnProgram(const Scene& s) : scene(s), meshes(*s.meshes), camera(s) {
+    PnProgram(const Scene& s, const glm::dvec3& o)
+        : scene(s), meshes(*s.meshes), camera(s, o), origin(o), relative(o != glm::dvec3(0.0)) {
         this->flip = scene.generator.winding == Winding::cw;
         this->has_uvs = !meshes.uvs.empty();
         this->has_normals = !scene.geometry;  // the evaluation's normal, unless [geometry] replaces it
@@ -23,7 +24,7 @@ public:
             control_uniforms.v2Resolution = vec2_t<T>(static_cast<T>(vp.x), static_cast<T>(vp.y));
         }
         static_cast<PnEvaluationParams<T>&>(evaluation) = scene.evaluation.pn.as<T>();
-        evaluation.m4ViewProjection = camera.viewProjection;
+        evaluation.m4ViewProjection = relative ? camera.relativeViewProjection : camera.viewProjection;
         patches.assign(meshes.patch_count(), {});
     }
 
@@ -38,7 +39,16 @@ public:
             if (!meshes.uvs.empty()) uv[k] = vec2_t<T>(meshes.uvs[tri[k]]);
             glPosition[k] = camera.viewProjection * vec4_t<T>(pos[k], T(1));  // the tutorial's vertex shader
         }
-        patches[p] = pn_patch<T>(pos, nrm, uv);
+        if (relative) {
+            // Camera-relative: the evaluation's control points from the positions minus the
+            // origin (shifted in double, rounded once); the control stage above keeps the
+            // world positions, so its levels do not change.
+            TriangleCorners<T> shifted;
+            for (int k = 0; k < 3; ++k) shifted[k] = vec3_t<T>(meshes.positions[tri[k]] - origin);
+            patches[p] = pn_patch<T>(shifted, nrm, uv);
+        } else {
+            patches[p] = pn_patch<T>(pos, nrm, uv);
+        }
         if (!scene.control) return {};  // GL's default patch levels: 1
         if (scene.control->model == ControlModel::pn) return pn_levels<T>(glPosition, nrm, control_uniforms);
         return scene_constant_levels<T>(*scene.control);
@@ -59,6 +69,8 @@ private:
     const Scene& scene;
     const TriangleMeshes& meshes;
     CameraUniforms<T> camera;
+    const glm::dvec3 origin;  // camera-relative evaluation: non-zero (pipeline.h)
+    const bool relative;
     PnControl<T> control_uniforms{};
     PnEvaluation<T> evaluation{};
     std::vector<PnPatch<T>> patches;  // per patch: the control stage's output
@@ -67,10 +79,10 @@ private:
 }  // namespace
 
 template <typename T>
-std::unique_ptr<PatchProgram<T>> make_pn_program(const Scene& scene) {
-    return std::make_unique<PnProgram<T>>(scene);
+std::unique_ptr<PatchProgram<T>> make_pn_program(const Scene& scene, const glm::dvec3& origin) {
+    return std::make_unique<PnProgram<T>>(scene, origin);
 }
-template std::unique_ptr<PatchProgram<float>> make_pn_program(const Scene&);
-template std::unique_ptr<PatchProgram<double>> make_pn_program(const Scene&);
+template std::unique_ptr<PatchProgram<float>> make_pn_program(const Scene&, const glm::dvec3&);
+template std::unique_ptr<PatchProgram<double>> make_pn_program(const Scene&, const glm::dvec3&);
 
 }  // namespace tessref::pipeline

@@ -18,6 +18,7 @@
 #include <span>
 
 #include "tessref/control.h"
+#include "tessref/pipeline.h"
 #include "tessref/mesh.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"
@@ -48,8 +49,12 @@ public:
 };
 
 // The scene's program in precision T (float: Precision::gpu, double: Precision::exact).
+// origin: camera-relative evaluation (pipeline.h PipelineOptions::camera_relative) when
+// non-zero: control() reads the world corners as always, evaluate() works on the corners
+// minus origin (shifted in double) with the texture mapping shifted alike, and writes
+// positions relative to origin.
 template <typename T>
-std::unique_ptr<PatchProgram<T>> make_program(const Scene& scene);
+std::unique_ptr<PatchProgram<T>> make_program(const Scene& scene, const glm::dvec3& origin);
 
 // The uniforms every model reads from the camera, in precision T (identity without one).
 template <typename T>
@@ -57,11 +62,14 @@ struct CameraUniforms {
     mat4_t<T> view{T(1)};
     mat4_t<T> viewProjection{T(1)};
     vec3_t<T> cameraPosition{T(0)};
-    explicit CameraUniforms(const Scene& scene) {
+    // The evaluation's gl_Position of origin-relative positions (camera-relative evaluation).
+    mat4_t<T> relativeViewProjection{T(1)};
+    CameraUniforms(const Scene& scene, const glm::dvec3& origin) {
         if (!scene.camera) return;
         view = mat4_t<T>(scene.camera->view());
         viewProjection = mat4_t<T>(scene.camera->view_projection());
         cameraPosition = vec3_t<T>(scene.camera->eye);
+        relativeViewProjection = mat4_t<T>(camera_moved_by(*scene.camera, origin).view_projection());
     }
 };
 

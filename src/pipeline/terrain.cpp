@@ -9,7 +9,13 @@
 namespace tessref::pipeline {
 
 template <typename T>
-TerrainProgram<T>::TerrainProgram(const Scene& s) : scene(s), grid(*s.grid), camera(s) {
+glm::dvec2 TerrainProgram<T>::ground_origin() const {
+    return grid.plane == GroundPlane::xy ? glm::dvec2(origin.x, origin.y) : glm::dvec2(origin.x, origin.z);
+}
+
+template <typename T>
+TerrainProgram<T>::TerrainProgram(const Scene& s, const glm::dvec3& o)
+    : scene(s), grid(*s.grid), origin(o), relative(o != glm::dvec3(0.0)), camera(s, o) {
     const TerrainGrid& g = grid;
     height_texture = std::shared_ptr<const Texture>(g.heightmap, &g.heightmap->texture);
     heightMap = sampler<T>(height_texture);
@@ -17,6 +23,13 @@ TerrainProgram<T>::TerrainProgram(const Scene& s) : scene(s), grid(*s.grid), cam
     if (g.normal_map) normalMap = sampler<T>(g.normal_map);
     for (double u : g.u_coords) u_coords.push_back(static_cast<T>(u));
     for (double v : g.v_coords) v_coords.push_back(static_cast<T>(v));
+    if (relative) {
+        // Shifted in double, then rounded once: the vertex buffer a camera-relative
+        // application would upload.
+        const glm::dvec2 o2 = ground_origin();
+        for (double u : g.u_coords) u_relative.push_back(static_cast<T>(u - o2.x));
+        for (double v : g.v_coords) v_relative.push_back(static_cast<T>(v - o2.y));
+    }
 
     // The grid's facing: cross(c3 - c0, c1 - c0) against the plane's up axis.
     const auto c = g.corners(0);
@@ -50,14 +63,25 @@ template <typename T>
 PatchLevels<T> TerrainProgram<T>::control(std::size_t p) {
     const std::size_t i = p % static_cast<std::size_t>(grid.patches_u);
     const std::size_t j = p / static_cast<std::size_t>(grid.patches_u);
-    auto ground = [&](std::size_t a, std::size_t b) {
-        return grid.plane == GroundPlane::xy ? vec3_t<T>(u_coords[a], v_coords[b], T(0))
-                                             : vec3_t<T>(u_coords[a], T(0), v_coords[b]);
+    auto ground = [&](const std::vector<T>& us, const std::vector<T>& vs, std::size_t a, std::size_t b) {
+        return grid.plane == GroundPlane::xy ? vec3_t<T>(us[a], vs[b], T(0)) : vec3_t<T>(us[a], T(0), vs[b]);
     };
     // control.h layout: c0 = (u,v) (0,0), c1 = (0,1), c2 = (1,1), c3 = (1,0).
-    const std::array<vec3_t<T>, 4> flat{ground(i, j), ground(i, j + 1), ground(i + 1, j + 1), ground(i + 1, j)};
-    std::array<vec4_t<T>, 4>& corners = tcPosition[p];
-    for (int k = 0; k < 4; ++k) corners[k] = vertex(flat[k]);
+    auto flat = [&](const std::vector<T>& us, const std::vector<T>& vs) {
+        return std::array<vec3_t<T>, 4>{ground(us, vs, i, j), ground(us, vs, i, j + 1), ground(us, vs, i + 1, j + 1),
+                                        ground(us, vs, i + 1, j)};
+    };
+    // The control stage always sees the world corners (its levels do not depend on the
+    // option); the evaluation reads the origin-relative ones when camera-relative.
+    std::array<vec4_t<T>, 4> corners;
+    const auto world = flat(u_coords, v_coords);
+    for (int k = 0; k < 4; ++k) corners[k] = vertex(world[k], false);
+    if (relative) {
+        const auto shifted = flat(u_relative, v_relative);
+        for (int k = 0; k < 4; ++k) tcPosition[p][k] = vertex(shifted[k], true);
+    } else {
+        tcPosition[p] = corners;
+    }
     const QuadCorners<T> vPosition{vec3_t<T>(corners[0]), vec3_t<T>(corners[1]), vec3_t<T>(corners[2]),
                                    vec3_t<T>(corners[3])};
     if (!scene.control) return {};  // GL's default patch levels: 1
@@ -94,12 +118,15 @@ vec3_t<T> TerrainProgram<T>::vertex_normal(const EvaluatedVertex<T>& ev, T lod) 
         // thesis_terrain.geom: gNormal = NormalFromTexture(texture(normalMap, textureCoordinate).rgb)
         return thesis_normal_from_texture<T>(vec3_t<T>(normalMap(ev.textureCoordinate)), normalMatrix);
     }
-    return height_field_normal<T>(scene, ev.position, lod);
+    return height_field_normal<T>(scene, ev.position, lod, origin);
 }
 
 template <typename T>
-vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T lod) {
+vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T lod, const glm::dvec3& origin) {
     const TerrainGrid& g = *scene.grid;
+    // The origin along the grid's axes (0 without camera-relative evaluation, where the
+    // mapping below is the one it always was: adding 0 changes no double).
+    const glm::dvec2 o = g.plane == GroundPlane::xy ? glm::dvec2(origin.x, origin.y) : glm::dvec2(origin.x, origin.z);
     const Texture& texture = g.heightmap->texture;
     Lab4NormalSampling<T> sampling;
     sampling.verticalScale = static_cast<T>(g.scale_z);
@@ -111,13 +138,18 @@ vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T l
             // is the same with its y as appendix A's z and no offset.
             sampling.heightMap = [&texture](vec2_t<T> st, T level) { return texture.textureLod(st, level); };
             sampling.horizontalScale = static_cast<T>(g.scale_xy);
-            if (scene.evaluation.model == EvaluationModel::lab4) sampling.texCoordOffset = vec2_t<T>(g.texcoord_offset);
+            // Relative to origin: (x - o) / scale + (offset + o / scale), the sum in double.
+            if (scene.evaluation.model == EvaluationModel::lab4)
+                sampling.texCoordOffset =
+                    vec2_t<T>(o == glm::dvec2(0.0) ? g.texcoord_offset : g.texcoord_offset + o / g.scale_xy);
+            else if (o != glm::dvec2(0.0))
+                sampling.texCoordOffset = vec2_t<T>(o / g.scale_xy);
             sampling.h = static_cast<T>(g.scale_xy / texture.width());
             break;
         case EvaluationModel::cosc422: {
             // s = (x - xMin) / (xMax - xMin), t = (z - zMin) / (zMax - zMin), as the
             // evaluation shader maps it; horizontalScale 1 and no offset pass (x, z) through.
-            const vec2_t<T> lo(static_cast<T>(g.extent_u.x), static_cast<T>(g.extent_v.x));
+            const vec2_t<T> lo(static_cast<T>(g.extent_u.x - o.x), static_cast<T>(g.extent_v.x - o.y));
             const vec2_t<T> size(static_cast<T>(g.extent_u.y - g.extent_u.x), static_cast<T>(g.extent_v.y - g.extent_v.x));
             sampling.heightMap = [&texture, lo, size](vec2_t<T> p, T level) {
                 return texture.textureLod((p - lo) / size, level);
@@ -134,8 +166,8 @@ vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T l
     return vec3_t<T>(n.x, n.z, n.y);
 }
 
-template vec3_t<float> height_field_normal(const Scene&, const vec3_t<float>&, float);
-template vec3_t<double> height_field_normal(const Scene&, const vec3_t<double>&, double);
+template vec3_t<float> height_field_normal(const Scene&, const vec3_t<float>&, float, const glm::dvec3&);
+template vec3_t<double> height_field_normal(const Scene&, const vec3_t<double>&, double, const glm::dvec3&);
 
 template class TerrainProgram<float>;
 template class TerrainProgram<double>;

@@ -17,9 +17,11 @@ namespace tessref::pipeline {
 // appendix-A normal (evaluation.h's lab4_vertex_normal, the one implementation), one
 // height-map texel apart, from mip `lod`, through the evaluation model's own world ->
 // texture mapping (lab 4: xz / scale_xy + offset; thesis: xy / scale_xy; COSC422: the
-// extent). Returned in world axes, pointing up the plane's up axis.
+// extent). Returned in world axes, pointing up the plane's up axis. `origin`: the position is
+// relative to it (camera-relative evaluation), and the mapping is shifted by it in double.
 template <typename T>
-vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T lod);
+vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T lod,
+                              const glm::dvec3& origin = glm::dvec3(0.0));
 
 template <typename T>
 class TerrainProgram : public PatchProgram<T> {
@@ -29,10 +31,12 @@ public:
                   std::size_t first_vertex) const override;
 
 protected:
-    explicit TerrainProgram(const Scene& scene);
+    TerrainProgram(const Scene& scene, const glm::dvec3& origin);
 
-    // The model's vertex shader on one corner of the grid (ground plane, height 0).
-    virtual vec4_t<T> vertex(const vec3_t<T>& ground) const { return vec4_t<T>(ground, T(1)); }
+    // The model's vertex shader on one corner of the grid (ground plane, height 0); `relative`:
+    // the corner is relative to origin (the evaluation's corners), else in world coordinates
+    // (the control stage's).
+    virtual vec4_t<T> vertex(const vec3_t<T>& ground, bool /*relative*/) const { return vec4_t<T>(ground, T(1)); }
     // The model's evaluation shader at one domain point of a patch whose control stage ran.
     virtual EvaluatedVertex<T> evaluate_point(std::size_t patch, const DomainPoint<T>& tc) const = 0;
     // The mip level the evaluation sampled the height at (lab 4), for height-field normals.
@@ -43,6 +47,10 @@ protected:
 
     const Scene& scene;
     const TerrainGrid& grid;
+    const glm::dvec3 origin;     // camera-relative evaluation: non-zero (pipeline.h)
+    const bool relative;         // origin is non-zero
+    // The origin along the grid's two axes (x and y for plane xy, x and z for plane xz).
+    glm::dvec2 ground_origin() const;
     CameraUniforms<T> camera;
     std::shared_ptr<const Texture> height_texture;
     Sampler2D<T> heightMap;
@@ -58,6 +66,7 @@ protected:
 
 private:
     std::vector<T> u_coords, v_coords;  // grid corner coordinates as the vertex buffer holds them
+    std::vector<T> u_relative, v_relative;  // the same minus origin (rounded once), when relative
     bool geometry_vertex_normals = false;
 };
 

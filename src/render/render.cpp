@@ -173,6 +173,7 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
     const auto start = Clock::now();
     PipelineOptions pipeline_options;
     pipeline_options.precision = options.precision;
+    pipeline_options.camera_relative = options.camera_relative;
     if (options.progress) {
         pipeline_options.progress = [&](std::size_t done, std::size_t total) {
             options.progress("tessellating", total ? static_cast<double>(done) / static_cast<double>(total) : 1.0);
@@ -200,7 +201,11 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     result.camera = render_detail::camera_for(scene, options);
     result.shading = scene.shading;
     const int width = result.camera.viewport.x, height = result.camera.viewport.y;
-    result.mvp = glm::mat4(result.camera.view_projection());
+    // Camera-relative (the pipeline kept origin-relative positions): the camera moved by
+    // -origin, its view-projection built in double and rounded once (pipeline.h).
+    const bool relative = !pipeline->relative_positions.empty();
+    result.mvp = glm::mat4(relative ? camera_moved_by(result.camera, pipeline->origin).view_projection()
+                                    : result.camera.view_projection());
     auto progress = [&](std::string_view stage, double fraction) {
         if (options.progress) options.progress(stage, fraction);
     };
@@ -210,6 +215,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     if (mesh.patch_ids.size() != mesh.positions.size() || mesh.tess_coords.size() != mesh.positions.size() ||
         (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size()) ||
         (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size()) ||
+        (relative && pipe.relative_positions.size() != mesh.positions.size()) ||
         pipe.levels.size() != scene.patch_count())
         throw Error("the pipeline result does not fit the scene (vertex attributes or patch count)",
                     Where::at_key("pipeline"));
@@ -225,7 +231,8 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     std::vector<glm::vec4> clip(mesh.positions.size());
     const glm::mat4 mvp = result.mvp;
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, clip.size(), 16384), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) clip[i] = gl_position(mvp, glm::vec3(mesh.positions[i]));
+        for (std::size_t i = r.begin(); i < r.end(); ++i)
+            clip[i] = gl_position(mvp, relative ? pipe.relative_positions[i] : glm::vec3(mesh.positions[i]));
     });
 
     RasterInput input;

@@ -18,12 +18,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include "extremes.h"
+#include "tessref/pipeline.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
+#include "tessref/tessellator.h"
 
 namespace {
 
@@ -164,7 +167,8 @@ int write_hills(const std::filesystem::path& file) {
 
 // What float does to a terrain 1e6 units from the origin, measured (the test prints the
 // numbers) and held to bounds from float's arithmetic, so the error cannot grow unnoticed.
-// Camera-relative evaluation would shrink most of it; until then this is the current error.
+// This is the error without camera-relative evaluation (PipelineOptions::camera_relative),
+// which removes it: CameraRelativeEvaluationRemovesTheFarTerrainsFloatError below.
 // Measured on this code: x, z of gpu positions 0.0269 from the same terrain at the origin
 // moved by 1e6 (bound: half of float's spacing 0.0625 at 1e6); heights 0.0627 (two 8-bit
 // codes: the texture coordinate moves by 0.0269 / 64 and llvmpipe's 8-bit filter rounds each
@@ -255,6 +259,182 @@ TEST_F(ExtremeCamera, TerrainFarFromTheOriginMatchesLlvmpipe) {
         EXPECT_EQ(pixels_differing(gl, image, 1), 0);
         EXPECT_LE(pixels_differing(gl, image, 0), 16);
     }
+}
+
+// ---- camera-relative evaluation (PipelineOptions::camera_relative) --------------------------
+
+// The largest |difference| per axis of corresponding vertices (same topology), b moved by `shift`.
+glm::dvec3 largest_position_difference(const tessref::PipelineResult& a, const tessref::PipelineResult& b,
+                                       double shift) {
+    glm::dvec3 e(0.0);
+    EXPECT_EQ(a.mesh.positions.size(), b.mesh.positions.size());
+    for (std::size_t i = 0; i < std::min(a.mesh.positions.size(), b.mesh.positions.size()); ++i)
+        e = glm::max(e, glm::abs(a.mesh.positions[i] - (b.mesh.positions[i] + glm::dvec3(shift, 0.0, shift))));
+    return e;
+}
+
+// Float ulps between two floats of the same sign (texture coordinates are in [0, 1]).
+std::int64_t ulps_apart(float a, float b) {
+    std::int32_t ia, ib;
+    std::memcpy(&ia, &a, sizeof ia);
+    std::memcpy(&ib, &b, sizeof ib);
+    return std::abs(static_cast<std::int64_t>(ia) - static_cast<std::int64_t>(ib));
+}
+
+// With the evaluation relative to the eye, the terrain at 1e6 is the terrain at the origin:
+// the eye stands at the same place relative to both, every shift by -eye is exact in double
+// (1e6 and the corners, extent and eye are dyadic numbers of fewer than 53 bits), so the
+// eye-relative corners, extent and view-projection are the same floats and the evaluation
+// computes the same floats, bit for bit; the world positions (eye + eye-relative, in double)
+// differ only by double's rounding at 1e6 (2^-33 per addition: 0 here, the sums are exact),
+// and the pictures are identical.
+// Against the origin's gpu terrain WITHOUT the option: float's error is now that of
+// coordinates of the terrain's size around the eye (|x - eye| < 64, spacing at most 2^-18),
+// not of 1e6 (2^-4). Here it is even 0: tess coords are 16.16 fixed point, the corners
+// multiples of 8 below 64, so corner + t * 8 needs at most 6 + 13 bits and every mix is
+// exact in float on both sides; the texture coordinate (x - eye - (x0 - eye)) / 64 is then
+// the origin's (x - x0) / 64 exactly, and so is the height. The bounds below are the general
+// ones (a few roundings at 64; the height through the slope, plus one 8-bit code on either
+// side of the filter's rounding). The pictures: the origin's multiplies world positions by
+// the full mvp, the camera-relative one eye-relative positions by the translation-free mvp,
+// both rounded in float at clip coordinates of about 50, so an edge moves by about 1e-5
+// pixels and only a pixel centre that close to an edge could change: at most a handful.
+// Measured: positions and heights 0 (without the option 0.0269, 0.0627), 0 pixels change
+// coverage (without: 141 of 26918); the test prints them.
+TEST_F(ExtremeCamera, CameraRelativeEvaluationRemovesTheFarTerrainsFloatError) {
+    const int steepest = write_hills(dir_ / "hills.pgm");
+    const double slope = steepest / 255.0 * 8.0;
+    const double code = 8.0 / 255.0;
+    const double offset = 1e6;
+    const double ulp64 = std::ldexp(1.0, -18);  // float's spacing in [32, 64)
+    const tessref::Scene near_scene = load(hills(0.0)), far_scene = load(hills(offset));
+    tessref::PipelineOptions relative_options;
+    relative_options.camera_relative = true;
+    const tessref::PipelineResult near_gpu = tessref::run_pipeline(near_scene);
+    const tessref::PipelineResult far_gpu = tessref::run_pipeline(far_scene);
+    const tessref::PipelineResult near_rel = tessref::run_pipeline(near_scene, relative_options);
+    const tessref::PipelineResult far_rel = tessref::run_pipeline(far_scene, relative_options);
+
+    // The origin: the eye's ground position (y, the up axis, stays absolute).
+    EXPECT_EQ(far_rel.origin, glm::dvec3(offset + 32.0, 0.0, offset + 20.0));
+    EXPECT_EQ(near_rel.origin, glm::dvec3(32.0, 0.0, 20.0));
+    EXPECT_TRUE(far_gpu.relative_positions.empty());
+    EXPECT_EQ(far_gpu.origin, glm::dvec3(0.0));
+    // The eye-relative floats are the same, bit for bit; and so are the texture coordinates.
+    ASSERT_EQ(far_rel.relative_positions.size(), near_rel.relative_positions.size());
+    EXPECT_TRUE(far_rel.relative_positions == near_rel.relative_positions);
+    EXPECT_TRUE(far_rel.mesh.uvs == near_rel.mesh.uvs);
+    // World positions: eye + eye-relative in double.
+    for (std::size_t v = 0; v < far_rel.mesh.positions.size(); v += 97)
+        EXPECT_EQ(far_rel.mesh.positions[v], far_rel.origin + glm::dvec3(far_rel.relative_positions[v]));
+    const glm::dvec3 rel_vs_rel = largest_position_difference(far_rel, near_rel, offset);
+    const glm::dvec3 without = largest_position_difference(far_gpu, near_gpu, offset);
+    const glm::dvec3 with = largest_position_difference(far_rel, near_gpu, offset);
+
+    const tessref::RenderResult near_image = tessref::render_scene(near_scene);
+    const tessref::RenderResult far_image = tessref::render_scene(far_scene);
+    tessref::RenderOptions relative_render;
+    relative_render.camera_relative = true;
+    const tessref::RenderResult near_rel_image = tessref::render_scene(near_scene, relative_render);
+    const tessref::RenderResult far_rel_image = tessref::render_scene(far_scene, relative_render);
+    const std::size_t moved_without = count_different(covered(near_image), covered(far_image));
+    const std::size_t moved_with = count_different(covered(near_image), covered(far_rel_image));
+    std::size_t colour_differs = 0;
+    for (std::size_t i = 0; i < far_rel_image.colour.size(); ++i) colour_differs += far_rel_image.colour[i] != near_rel_image.colour[i];
+    std::printf("terrain at 1e6, gpu positions against the origin's (gpu, no option) moved by 1e6: without "
+                "camera_relative x %.6g y %.6g z %.6g, with x %.6g y %.6g z %.6g; camera-relative at 1e6 against "
+                "camera-relative at the origin x %.3g y %.3g z %.3g; pixels changing coverage against the origin's "
+                "picture: without %zu, with %zu (of %zu); camera-relative pictures at 1e6 and at the origin: %zu "
+                "pixels differ\n",
+                without.x, without.y, without.z, with.x, with.y, with.z, rel_vs_rel.x, rel_vs_rel.y, rel_vs_rel.z,
+                moved_without, moved_with, count(covered(near_image)), colour_differs);
+
+    const double double_rounding = std::ldexp(1.0, -33);  // double's spacing at 1e6, one rounding each side
+    EXPECT_LE(rel_vs_rel.x, double_rounding);
+    EXPECT_LE(rel_vs_rel.y, 0.0);
+    EXPECT_LE(rel_vs_rel.z, double_rounding);
+    EXPECT_GT(without.x, 0.01);  // the option is what makes the difference
+    EXPECT_LE(with.x, 4.0 * ulp64);
+    EXPECT_LE(with.z, 4.0 * ulp64);
+    EXPECT_LE(with.y, 4.0 * ulp64 * slope + 2.0 * code);
+    EXPECT_EQ(colour_differs, 0u);
+    EXPECT_TRUE(far_rel_image.depth == near_rel_image.depth);
+    EXPECT_GT(moved_without, 50u);
+    EXPECT_LE(moved_with, 8u) << "of " << count(covered(near_image)) << " covered pixels";
+}
+
+// The option moves the evaluation, not the control stage: levels are bit-identical with and
+// without it (the control stage reads the world corners either way), for every model's
+// distance-based control; texture coordinates are the mesh's own for PN (bit-identical) and
+// the shifted mapping's for a terrain: NOT bit-identical in general, because every terrain
+// model computes them from the evaluated position (thesis xy / scale_xy, COSC422 the extent,
+// lab 4 xz / scale + offset) and that position is now eye-relative; near the origin, where
+// these scenes lie, they agree to float rounding (far from it they get better: the first test
+// above). Exact precision ignores the option.
+TEST_F(ExtremeCamera, CameraRelativeEvaluationKeepsLevelsAndTextureCoordinates) {
+    const std::filesystem::path scenes = std::filesystem::path(TESSREF_SOURCE_DIR) / "data" / "scenes";
+    tessref::PipelineOptions relative_options;
+    relative_options.camera_relative = true;
+    for (const char* name : {"cosc422-eye.toml", "thesis-distance-4.toml", "lab4-canyon.toml", "pn-triangles.toml",
+                             "thesis-normal-2.toml"}) {
+        SCOPED_TRACE(name);
+        const tessref::Scene scene = tessref::load_scene((scenes / name).string());
+        const tessref::PipelineResult off = tessref::run_pipeline(scene);
+        const tessref::PipelineResult on = tessref::run_pipeline(scene, relative_options);
+        EXPECT_NE(on.origin, glm::dvec3(0.0));
+        ASSERT_EQ(off.levels.size(), on.levels.size());
+        for (std::size_t p = 0; p < off.levels.size(); ++p) {
+            EXPECT_EQ(tessref::level_bits(off.levels[p]), tessref::level_bits(on.levels[p])) << "patch " << p;
+            if (HasFailure()) break;
+        }
+        ASSERT_EQ(off.mesh.uvs.size(), on.mesh.uvs.size());
+        std::int64_t worst_ulps = 0;
+        double worst_uv = 0.0;
+        for (std::size_t v = 0; v < off.mesh.uvs.size(); ++v)
+            for (int c = 0; c < 2; ++c) {
+                worst_ulps = std::max(worst_ulps, ulps_apart(static_cast<float>(off.mesh.uvs[v][c]),
+                                                             static_cast<float>(on.mesh.uvs[v][c])));
+                worst_uv = std::max(worst_uv, std::abs(off.mesh.uvs[v][c] - on.mesh.uvs[v][c]));
+            }
+        const glm::dvec3 moved = largest_position_difference(on, off, 0.0);
+        std::printf("%s: camera_relative moves texture coordinates by up to %lld float ulps (%.3g), positions by "
+                    "x %.3g y %.3g z %.3g\n",
+                    name, static_cast<long long>(worst_ulps), worst_uv, moved.x, moved.y, moved.z);
+        // PN: the mesh's attributes. A terrain: its coordinate moves by a rounding at the
+        // terrain's size (cosc422-eye: z 7.6e-6 = 2^-17, |z| < 128), over the extent (100) below
+        // 2^-23, plus the texture coordinate's own rounding (2^-24 below 1). Measured: 0
+        // for the thesis and lab 4 scenes (power-of-two scales, eyes on float-exact
+        // positions), 1.19e-7 = 2^-23 for cosc422-eye.
+        if (!scene.grid) EXPECT_EQ(worst_ulps, 0);
+        else EXPECT_LE(worst_uv, std::ldexp(1.0, -22));
+        // Exact precision: the option does nothing.
+        tessref::PipelineOptions exact_off, exact_on = relative_options;
+        exact_off.precision = exact_on.precision = tessref::Precision::exact;
+        const tessref::PipelineResult e_off = tessref::run_pipeline(scene, exact_off);
+        const tessref::PipelineResult e_on = tessref::run_pipeline(scene, exact_on);
+        EXPECT_EQ(e_on.origin, glm::dvec3(0.0));
+        EXPECT_TRUE(e_on.mesh.positions == e_off.mesh.positions);
+        EXPECT_TRUE(e_on.mesh.uvs == e_off.mesh.uvs);
+    }
+}
+
+// `tessref gl` refuses the option (its GLSL twins map world positions to texture
+// coordinates); render and mesh take it.
+TEST_F(ExtremeCamera, CameraRelativeFlagIsTheCpuReferencesOnly) {
+    write_hills(dir_ / "hills.pgm");
+    write_scene(hills(1e6));
+    const RunResult gl = run({"gl", "scene.toml", "-o", "gl.png", "--camera-relative"});
+    EXPECT_EQ(gl.status, 2);
+    EXPECT_NE(gl.err.find("--camera-relative"), std::string::npos) << gl.err;
+    EXPECT_FALSE(std::filesystem::exists(path("gl.png")));
+    const RunResult render = run({"render", "scene.toml", "-o", "cpu.png", "--camera-relative"});
+    EXPECT_EQ(render.status, 0) << render.err;
+    tessref::RenderOptions relative_render;
+    relative_render.camera_relative = true;
+    EXPECT_EQ(pixels_differing(read_picture(path("cpu.png")), tessref::render_scene(load(hills(1e6)), relative_render)),
+              0);
+    const RunResult mesh = run({"mesh", "scene.toml", "-o", "m.ply", "--camera-relative"});
+    EXPECT_EQ(mesh.status, 0) << mesh.err;
 }
 
 // ---- triangles far smaller than a pixel ----------------------------------------------------
