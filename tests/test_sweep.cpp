@@ -82,13 +82,13 @@ tessref::sweep::GeometricError error_of(const tessref::Scene& scene, tessref::Pr
     return e;
 }
 
-class GeometricErrorTest : public CommandDirTest {};
+class SweepGeometricError : public CommandDirTest {};
 
 // A flat height map: every tessellated vertex and every truth vertex has the same height,
 // and both surfaces interpolate linearly between them, so the error is 0 everywhere, at any
 // level and spacing. Code 255 reads 1.0 and scale_z 2 gives 2.0, exact in float too, so the
 // gpu precision must also give exactly 0; any code in exact precision.
-TEST_F(GeometricErrorTest, FlatHeightMapIsZeroAtEveryLevel) {
+TEST_F(SweepGeometricError, FlatHeightMapIsZeroAtEveryLevel) {
     for (const int code : {255, 100}) {
         for (const std::string spacing : {"equal", "fractional_odd", "fractional_even"}) {
             for (const double level : {1.0, 2.0, 3.0, 5.5, 8.0, 17.0}) {
@@ -125,7 +125,7 @@ TEST_F(GeometricErrorTest, FlatHeightMapIsZeroAtEveryLevel) {
 //   (a linear function with corner values a, b, c on a triangle of area A integrates its
 //   square to A (a^2 + b^2 + c^2 + ab + bc + ca) / 6), over the area 64:
 //   rms = sqrt(8 / 64) = sqrt(1/8).
-TEST_F(GeometricErrorTest, OneRaisedTexelAtLevelOne) {
+TEST_F(SweepGeometricError, OneRaisedTexelAtLevelOne) {
     OnePatch p{dir_};
     p.codes[1 * 4 + 1] = 255;
     const tessref::Scene scene = p.scene();
@@ -138,7 +138,14 @@ TEST_F(GeometricErrorTest, OneRaisedTexelAtLevelOne) {
         EXPECT_NEAR(e.area, 64.0, 1e-12);
         EXPECT_NEAR(e.max_at.x, 3.0, 1e-12);
         EXPECT_TRUE(std::abs(e.max_at.y - 3.0) < 1e-12 || std::abs(e.max_at.y - 5.0) < 1e-12) << e.max_at.y;
-        EXPECT_GT(e.max_px, 0.0);
+        // The screen size: the segment from the hat's top down to the plane, both ends in
+        // view, projected by glm::project with the scene's camera (not the sweep's code).
+        const tessref::SceneCamera& c = *scene.camera;
+        const glm::dvec4 viewport(0.0, 0.0, c.viewport.x, c.viewport.y);
+        const glm::dvec3 top = glm::project(glm::dvec3(3.0, e.max_at.y, 2.0), c.view(), c.projection(), viewport);
+        const glm::dvec3 foot = glm::project(glm::dvec3(3.0, e.max_at.y, 0.0), c.view(), c.projection(), viewport);
+        EXPECT_NEAR(e.max_px, glm::length(glm::dvec2(top) - glm::dvec2(foot)), 1e-9);
+        EXPECT_GT(e.max_px, 1.0);
     }
 }
 
@@ -156,7 +163,7 @@ TEST_F(GeometricErrorTest, OneRaisedTexelAtLevelOne) {
 // tessellation's vertices the truth equals the tessellation (clamped corner texels), and at
 // the texel-centre vertices nearest the diagonal, (3, 4) and (5, 4) (|d| = 1), the error is
 // H (1 - 1/8) = 7H/8; the others are farther from the ridge or on a raised texel.
-TEST_F(GeometricErrorTest, MaximumAtATessellationEdgeCrossingAGridLine) {
+TEST_F(SweepGeometricError, MaximumAtATessellationEdgeCrossingAGridLine) {
     const double H = 2.0;
     for (const bool mirrored : {false, true}) {
         OnePatch p{dir_};
@@ -191,7 +198,7 @@ TEST_F(GeometricErrorTest, MaximumAtATessellationEdgeCrossingAGridLine) {
 
 // ---- the pipeline's timings change nothing ---------------------------------------------------
 
-TEST(PipelineTimings, FilledWithoutChangingTheOutput) {
+TEST(SweepPipelineTimings, FilledWithoutChangingTheOutput) {
     const tessref::Scene scene = tessref::load_scene((kSource / "data/scenes/thesis-distance-4.toml").string());
     for (const auto precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
         tessref::PipelineOptions plain;

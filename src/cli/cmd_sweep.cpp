@@ -113,8 +113,8 @@ public:
             std::fprintf(stderr, "\rsweep [%s%s] %zu/%zu %s\033[K", std::string(static_cast<std::size_t>(filled), '#').c_str(),
                          std::string(static_cast<std::size_t>(kWidth - filled), '.').c_str(), done, total, row.c_str());
             drawn_ = true;
-        } else {
-            std::fprintf(stderr, "tessref sweep: row %zu/%zu done: %s\n", done, total, row.c_str());
+        } else if (!row.empty()) {
+            std::fprintf(stderr, "tessref sweep: row %zu/%zu: %s\n", done + 1, total, row.c_str());
         }
         std::fflush(stderr);
     }

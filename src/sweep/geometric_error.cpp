@@ -166,14 +166,30 @@ GeometricError geometric_error(const TruthSurface& truth, const SurfaceMesh& mes
         }
     });
 
+    // The visible part of the segment from (u, v, g) to (u, v, t): clipped to the view
+    // volume (-w <= x, y, z <= w) in clip space, where it stays a segment, then projected.
     const glm::dmat4 vp = camera ? camera->view_projection() : glm::dmat4(1.0);
-    const auto window = [&](double u, double v, double h, glm::dvec2& out) {
-        const glm::dvec3 world = xy ? glm::dvec3(u, v, h) : glm::dvec3(u, h, v);
-        const glm::dvec4 clip = vp * glm::dvec4(world, 1.0);
-        if (!(clip.w > 0.0)) return false;
-        const glm::dvec2 ndc = glm::dvec2(clip) / clip.w;
-        out = (ndc * 0.5 + 0.5) * glm::dvec2(camera->viewport);
-        return true;
+    const auto visible_pixels = [&](double u, double v, double g, double t) {
+        const auto clip_of = [&](double h) {
+            return vp * glm::dvec4(xy ? glm::dvec3(u, v, h) : glm::dvec3(u, h, v), 1.0);
+        };
+        const glm::dvec4 a = clip_of(g), b = clip_of(t);
+        double t0 = 0.0, t1 = 1.0;
+        for (int axis = 0; axis < 3; ++axis) {
+            for (const double sign : {1.0, -1.0}) {
+                // f(s) = w + sign * coordinate >= 0, linear along the segment.
+                const double fa = a.w + sign * a[axis], fb = b.w + sign * b[axis];
+                if (fa < 0.0 && fb < 0.0) return 0.0;
+                if (fa < 0.0) t0 = std::max(t0, fa / (fa - fb));
+                if (fb < 0.0) t1 = std::min(t1, fa / (fa - fb));
+            }
+        }
+        if (!(t1 > t0)) return 0.0;
+        const auto window = [&](double s) {
+            const glm::dvec4 c = a + s * (b - a);
+            return (glm::dvec2(c) / c.w * 0.5 + 0.5) * glm::dvec2(camera->viewport);
+        };
+        return glm::length(window(t1) - window(t0));
     };
     double sum_sq = 0.0, area = 0.0;
     result.max = 0.0;
@@ -185,9 +201,7 @@ GeometricError geometric_error(const TruthSurface& truth, const SurfaceMesh& mes
             result.max = s.max;
             result.max_at = {s.at.u, s.at.v};
         }
-        glm::dvec2 a, b;
-        if (camera && window(s.at.u, s.at.v, s.at.h, a) && window(s.at.u, s.at.v, s.truth_at, b))
-            result.max_px = std::max(result.max_px, glm::length(a - b));
+        if (camera) result.max_px = std::max(result.max_px, visible_pixels(s.at.u, s.at.v, s.truth_at, s.at.h));
     }
     result.area = area;
     result.rms = area > 0.0 ? std::sqrt(std::max(0.0, sum_sq) / area) : 0.0;

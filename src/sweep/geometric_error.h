@@ -25,9 +25,10 @@
 //          triangle of area A with corner values a, b, c has integral of e^2 =
 //          A (a^2 + b^2 + c^2 + ab + bc + ca) / 6);
 //   max_px = the screen size of the error: for each patch, the point of its largest |e|,
-//          the vertical segment from G to T there projected with the camera into window
-//          coordinates, its length in pixels; the maximum over patches (segments with an
-//          end behind the eye, clip w <= 0, are not counted).
+//          the vertical segment from G to T there, clipped to the camera's view volume
+//          (-w <= x, y, z <= w in clip space: what lies off screen, behind the eye or
+//          beyond the far plane is not seen), projected into window coordinates; its length
+//          in pixels (0 when none of it is in view); the maximum over patches.
 // Ground outside the truth's extent (a float vertex a rounding step outside) and patches
 // culled by a level <= 0 (no triangles) cover no area and count nowhere. Triangles whose
 // ground projection has zero area count only through their neighbours.

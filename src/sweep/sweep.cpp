@@ -426,14 +426,14 @@ public:
         : p_(p), scenes_(scenes), dir_(dir), largest_level_(p.levels.empty() ? 0.0 : p.levels.back()) {}
 
     // Runs one group's rows (one per precision), returns their fields in row order.
-    std::vector<Fields> run_group(const std::vector<const Row*>& rows, const std::function<void(const Row&)>& done) {
+    std::vector<Fields> run_group(const std::vector<const Row*>& rows, const std::function<void(const Row&)>& starting) {
         std::vector<Fields> out;
         std::vector<PairData> pair;
         for (const Row* row : rows) {
+            starting(*row);
             PairData data;
             out.push_back(run_row(*row, data));
             pair.push_back(std::move(data));
-            done(*row);
         }
         if (rows.size() == 2 && rows[0]->precision != rows[1]->precision) {
             std::string max_pos;
@@ -674,11 +674,11 @@ std::size_t run_sweep(const SweepParameters& p, const Shard& shard, const std::s
     std::size_t done = 0;
     for (const auto& [group, group_rows] : mine) {
         const std::vector<Fields> fields = runner.run_group(group_rows, [&](const Row& row) {
-            ++done;
-            if (progress) progress(done, mine_rows, row_description(row, scenes));
+            if (progress) progress(done++, mine_rows, row_description(row, scenes));
         });
         for (std::size_t k = 0; k < group_rows.size(); ++k) lines[group_rows[k]->index] = csv_line(fields[k]);
     }
+    if (progress) progress(done, mine_rows, "");
     std::string csv = csv_header();
     std::vector<std::size_t> indices;
     for (const auto& [index, line] : lines) {

@@ -51,8 +51,8 @@ struct Shard {
 // The CSV's columns, in order (report.h finds them by these names).
 const std::vector<std::string>& csv_columns();
 
-// Called as each row finishes: (rows done in this shard, rows in this shard, the row's
-// description).
+// Called as each row starts: (rows done in this shard, rows in this shard, the starting
+// row's description); and once at the end with done == total and an empty description.
 using SweepProgress = std::function<void(std::size_t done, std::size_t total, const std::string& row)>;
 
 // Parses --levels: comma-separated items, each a number or an integer range A..B (both
