@@ -185,12 +185,33 @@ TEST_F(SweepGeometricError, MaximumAtATessellationEdgeCrossingAGridLine) {
         ASSERT_EQ(shared.size(), 2u);
         if (shared[0].z != H || shared[1].z != H) continue;  // this map's high corners are off the diagonal
         EXPECT_NEAR(e.max, H, 1e-12);
-        EXPECT_GT(e.max, 7.0 * H / 8.0 + 0.2);  // more than any vertex sample shows
-        // The hand-derived vertex-only value: T at the texel-centre vertex (3, 4), whose
-        // truth height is 0.
-        const bool along_x_equals_y = std::abs(shared[0].x - shared[0].y) < 1e-9;
-        const double d = along_x_equals_y ? std::abs(3.0 - 4.0) : std::abs(3.0 + 4.0 - 8.0);
-        EXPECT_NEAR(H * (1.0 - d / 8.0), 7.0 * H / 8.0, 1e-12);
+        // Vertex-only sampling, done here: |T - G| at the tessellation's vertices and at the
+        // truth's vertices (T from the plane of the tessellated triangle holding the point).
+        // Its maximum is the hand-derived 7H/8, at (3, 4) and (5, 4), short of H.
+        const tessref::sweep::TruthSurface truth = tessref::sweep::truth_surface(scene);
+        const auto tessellation_at = [&](double x, double y) {
+            for (const auto& tri : mesh.triangles) {
+                const glm::dvec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+                const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+                const double s1 = ((x - a.x) * (c.y - a.y) - (c.x - a.x) * (y - a.y)) / det;
+                const double s2 = ((b.x - a.x) * (y - a.y) - (x - a.x) * (b.y - a.y)) / det;
+                if (s1 >= -1e-12 && s2 >= -1e-12 && s1 + s2 <= 1.0 + 1e-12) return a.z + s1 * (b.z - a.z) + s2 * (c.z - a.z);
+            }
+            ADD_FAILURE() << "no triangle holds (" << x << ", " << y << ")";
+            return 0.0;
+        };
+        double vertex_only = 0.0;
+        for (std::size_t j = 0; j < truth.vs.size(); ++j)
+            for (std::size_t i = 0; i < truth.us.size(); ++i)
+                vertex_only = std::max(vertex_only,
+                                       std::abs(tessellation_at(truth.us[i], truth.vs[j]) - truth.height(i, j)));
+        for (const glm::dvec3& v : mesh.positions) {
+            const std::size_t i = static_cast<std::size_t>(std::find(truth.us.begin(), truth.us.end(), v.x) - truth.us.begin());
+            const std::size_t j = static_cast<std::size_t>(std::find(truth.vs.begin(), truth.vs.end(), v.y) - truth.vs.begin());
+            ASSERT_TRUE(i < truth.us.size() && j < truth.vs.size());  // the patch's corners are truth vertices
+            vertex_only = std::max(vertex_only, std::abs(v.z - truth.height(i, j)));
+        }
+        EXPECT_NEAR(vertex_only, 7.0 * H / 8.0, 1e-12);
         return;
     }
     FAIL() << "neither map put the raised corners on the tessellation's diagonal";
@@ -442,6 +463,8 @@ TEST_F(SweepCommand, BadInputExitsTwoAndWritesNothing) {
         {{a, "--shard", "x", "-o", "out"}, "--shard"},
         {{a, "--repeat", "0", "-o", "out"}, "--repeat"},
         {{a, "-o", "file"}, "file"},
+        {{a, "-o", "no/such/dir"}, "no/such/dir"},
+        {{a, "-o", "."}, "."},  // not empty, and not an earlier sweep
         {{a}, "-o"},
     };
     for (const auto& [args, named] : cases) {

@@ -146,20 +146,21 @@ void write_text(const fs::path& path, const std::string& bytes) {
 
 // Whether DIR may receive a sweep: a new name in an existing directory, an empty directory,
 // or an earlier sweep's directory (it holds sweep.json), which is replaced.
-void check_output_dir(const fs::path& dir) {
-    if (dir.empty()) throw Error("no output directory given", Where::in_file("-o"));
+void check_output_dir(const fs::path& given) {
+    if (given.empty()) throw Error("no output directory given", Where::in_file("-o"));
+    fs::path dir = fs::absolute(given).lexically_normal();
+    if (dir.filename().empty()) dir = dir.parent_path();  // "out/"
     std::error_code ec;
     const fs::file_status status = fs::symlink_status(dir, ec);
     if (fs::exists(status)) {
         if (!fs::is_directory(status))
-            throw Error("the output exists and is not a directory", Where::in_file(dir.string()));
+            throw Error("the output exists and is not a directory", Where::in_file(given.string()));
         if (!fs::is_empty(dir, ec) && !fs::exists(dir / "sweep.json"))
             throw Error("the output directory is not empty and holds no sweep (sweep.json); refusing to replace it",
-                        Where::in_file(dir.string()));
+                        Where::in_file(given.string()));
     }
-    const fs::path parent = fs::absolute(dir).parent_path();
-    if (!fs::is_directory(parent))
-        throw Error("the output's parent directory does not exist", Where::in_file(dir.string()));
+    if (!fs::is_directory(dir.parent_path()))
+        throw Error("the output's parent directory does not exist", Where::in_file(given.string()));
 }
 
 // A fresh directory beside the target; removed unless commit() put it in place.
