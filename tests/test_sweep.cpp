@@ -480,7 +480,7 @@ TEST_F(SweepCommand, SlurmArrayPicksTheShard) {
     ASSERT_EQ(sweep({a, "--levels", "1..3", "-o", "by-flag", "--shard", "1/3"}).status, 0);
     // An array 4..6: task 5 is the second of three.
     const RunResult r = tessref::test::run_program(
-        "/usr/bin/env",
+        "env",
         {"SLURM_ARRAY_TASK_ID=5", "SLURM_ARRAY_TASK_MIN=4", "SLURM_ARRAY_TASK_COUNT=3", TESSREF_EXE, "sweep", a,
          "--levels", "1..3", "--size", "64x40", "-o", "by-env"},
         dir_, dir_);
@@ -491,7 +491,7 @@ TEST_F(SweepCommand, SlurmArrayPicksTheShard) {
     EXPECT_EQ(without_timings(dir_ / "by-env/sweep.csv"), without_timings(dir_ / "by-flag/sweep.csv"));
     // --shard wins over the environment; a task outside the array is bad input.
     const RunResult bad = tessref::test::run_program(
-        "/usr/bin/env",
+        "env",
         {"SLURM_ARRAY_TASK_ID=9", "SLURM_ARRAY_TASK_COUNT=3", TESSREF_EXE, "sweep", a, "--size", "64x40", "-o", "bad"},
         dir_, dir_);
     EXPECT_EQ(bad.status, 2);
