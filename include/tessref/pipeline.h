@@ -34,6 +34,18 @@
 
 namespace tessref {
 
+// Wall-clock seconds of the passes of one run_pipeline() call (steady_clock), for `tessref
+// sweep`. Informative only: nothing else depends on them, and asking for them changes no
+// output. Per-vertex geometry normals (normal map, height field) and face normals are
+// computed in the evaluation pass, vertex by vertex, so they count as evaluation; geometry
+// is the pass that runs on its own after it (smooth normals; 0 for other scenes).
+struct PipelineTimings {
+    double control = 0.0;     // pass 1, vertex + control shaders, and pass 2, the budget
+    double generator = 0.0;   // pass 3, patterns and output ranges
+    double evaluation = 0.0;  // pass 4, evaluation (and per-vertex / per-face geometry)
+    double geometry = 0.0;    // smooth normals over the whole surface
+};
+
 struct PipelineOptions {
     Precision precision = Precision::gpu;  // gpu: float stages, exact: double stages
     // Called with (patches done, patch count) as patches finish, from worker threads
@@ -60,6 +72,7 @@ struct PipelineOptions {
     // the shifted mapping's: they differ from the option's off values by float rounding
     // (PN meshes: bit-identical, they are the mesh's attributes).
     bool camera_relative = false;
+    PipelineTimings* timings = nullptr;    // filled when not null (see PipelineTimings)
 };
 
 // Which stages ran (a stage the scene does not name does not run).

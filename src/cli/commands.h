@@ -37,8 +37,8 @@ Command add_inspect_command(CLI::App& parent);  // tessref inspect: src/cli/cmd_
 Command add_compare_command(CLI::App& parent);  // tessref compare: src/cli/cmd_compare.cpp
 Command add_gl_command(CLI::App& parent);  // tessref gl: src/cli/cmd_gl.cpp
 Command add_golden_command(CLI::App& parent);  // tessref golden: src/cli/cmd_golden.cpp
+Command add_sweep_command(CLI::App& parent);  // tessref sweep: src/cli/cmd_sweep.cpp
 
-// Later subcommands, one file each (declare here, list in main.cpp):
-//   Command add_sweep_command(CLI::App& parent);    // src/cli/cmd_sweep.cpp
+// Later subcommands, one file each (declare here, list in main.cpp).
 
 }  // namespace tessref::cli

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -126,6 +127,16 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
     if (options.camera_relative && std::is_same_v<T, float>) result.origin = camera_relative_origin(scene);
     const bool relative = result.origin != glm::dvec3(0.0);
     const std::unique_ptr<pipeline::PatchProgram<T>> program = pipeline::make_program<T>(scene, result.origin);
+    // Pass timings (PipelineTimings), only when asked for; they change nothing else.
+    using Clock = std::chrono::steady_clock;
+    Clock::time_point lap = Clock::now();
+    const auto time_pass = [&](double PipelineTimings::*field) {
+        if (!options.timings) return;
+        const Clock::time_point now = Clock::now();
+        options.timings->*field = std::chrono::duration<double>(now - lap).count();
+        lap = now;
+    };
+    if (options.timings) *options.timings = PipelineTimings{};
 
     // Pass 1: the vertex and control shaders.
     std::vector<TessLevels> levels(n);
@@ -142,6 +153,7 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
                         " triangles (estimated from its tessellation levels), more than limits.max_triangles = " +
                         std::to_string(scene.max_triangles),
                     scene.max_triangles_where);
+    time_pass(&PipelineTimings::control);
 
     // Pass 3: the primitive generator, and every patch's place in the output.
     PatternCache local_cache;
@@ -156,6 +168,7 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
     if (vertices > 0xffffffffu)
         throw Error("the scene emits " + std::to_string(vertices) + " vertices, more than 32-bit indices address",
                     scene.max_triangles_where);
+    time_pass(&PipelineTimings::generator);
 
     // Pass 4: evaluation and geometry.
     SurfaceMesh& mesh = result.mesh;
@@ -212,6 +225,7 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
     }
 
     require_finite_positions(scene, mesh, precision);
+    time_pass(&PipelineTimings::evaluation);
 
     if (scene.geometry && scene.geometry->normals == GeometryNormals::smooth) {
         // From the positions as the evaluation wrote them (origin-relative when camera-relative).
@@ -223,6 +237,7 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
                                                       Weld::by_position);
         mesh.normals.resize(vertices);
         for (std::size_t v = 0; v < vertices; ++v) mesh.normals[v] = glm::dvec3(normals[v]);
+        time_pass(&PipelineTimings::geometry);
     }
 
     result.levels = std::move(levels);

@@ -10,6 +10,7 @@
 
 #include "common/parallel.h"
 #include "pipeline/terrain.h"
+#include "render/ground_truth.h"
 
 #include "render/render_internal.h"
 #include "tessref/error.h"
@@ -25,52 +26,9 @@ using render_detail::quad_of;
 
 namespace {
 
-// Texture coordinate along one ground axis: st = a * world + b (the evaluation model's map).
-struct AxisMap {
-    double a = 1.0;
-    double b = 0.0;
-    double st(double world) const { return a * world + b; }
-    double world(double st) const { return (st - b) / a; }
-};
-
-struct GroundMap {
-    AxisMap u, v;  // world x -> s; world y (plane xy) or z (plane xz) -> t
-};
-
-GroundMap ground_map(const Scene& scene) {
-    const TerrainGrid& g = *scene.grid;
-    GroundMap m;
-    switch (scene.evaluation.model) {
-        case EvaluationModel::thesis:  // thesis_terrain.tese:31 position.xy / scaleXY
-            m.u = {1.0 / g.scale_xy, 0.0};
-            m.v = {1.0 / g.scale_xy, 0.0};
-            break;
-        case EvaluationModel::cosc422: {  // cosc422_terrain.tese:32 (x - xMin) / (xMax - xMin)
-            const double au = 1.0 / (g.extent_u.y - g.extent_u.x), av = 1.0 / (g.extent_v.y - g.extent_v.x);
-            m.u = {au, -g.extent_u.x * au};
-            m.v = {av, -g.extent_v.x * av};
-            break;
-        }
-        case EvaluationModel::lab4:  // lab4_terrain.tese: xz / horizontalScale + texCoordOffset
-            m.u = {1.0 / g.scale_xy, g.texcoord_offset.x};
-            m.v = {1.0 / g.scale_xy, g.texcoord_offset.y};
-            break;
-        case EvaluationModel::pn: break;  // not a terrain
-    }
-    return m;
-}
-
-// The vertex lines along one axis: the extent's borders and every texel centre inside.
-std::vector<double> vertex_lines(double lo, double hi, const AxisMap& map, int texels) {
-    std::vector<double> lines{lo, hi};
-    for (int k = 0; k < texels; ++k) {
-        const double w = map.world((k + 0.5) / texels);
-        if (w > lo && w < hi) lines.push_back(w);
-    }
-    std::sort(lines.begin(), lines.end());
-    lines.erase(std::unique(lines.begin(), lines.end()), lines.end());
-    return lines;
-}
+using ground_truth::GroundMap;
+using ground_truth::ground_map;
+using ground_truth::vertex_lines;
 
 struct GroundTruthSurface {
     std::vector<glm::dvec3> positions;
@@ -93,9 +51,7 @@ GroundTruthSurface build_surface(const Scene& scene, const GroundMap& map) {
     const bool xy = g.plane == GroundPlane::xy;
     tessref::parallel_for(std::size_t{0}, vs.size(), [&](std::size_t j) {
         for (std::size_t i = 0; i < us.size(); ++i) {
-            // Mip level 0 in double: the texel values exactly, bilinear between them.
-            const glm::dvec2 st(map.u.st(us[i]), map.v.st(vs[j]));
-            const double h = height.textureLod(st, 0.0).r * g.scale_z;
+            const double h = ground_truth::vertex_height(g, map, us[i], vs[j]);
             s.positions[j * us.size() + i] = xy ? glm::dvec3(us[i], vs[j], h) : glm::dvec3(us[i], h, vs[j]);
         }
     });

@@ -1,0 +1,211 @@
+// The geometric error of a tessellated terrain against the full-resolution height field:
+// see geometric_error.h for what is measured and why it is exact.
+#include "sweep/geometric_error.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "common/parallel.h"
+#include "render/ground_truth.h"
+#include "tessref/error.h"
+
+namespace tessref::sweep {
+
+TruthSurface truth_surface(const Scene& scene) {
+    if (!scene.grid)
+        throw Error("the geometric error needs a terrain scene (a height map): a mesh scene has no full-resolution "
+                    "height field",
+                    Where::at_key(scene.file, "mesh"));
+    const TerrainGrid& g = *scene.grid;
+    const ground_truth::GroundMap map = ground_truth::ground_map(scene);
+    const Texture& height = g.heightmap->texture;
+    // As raytrace.cpp's build_surface: the same lines, the same heights.
+    const auto [u_lo, u_hi] = std::minmax(g.u_coords.front(), g.u_coords.back());
+    const auto [v_lo, v_hi] = std::minmax(g.v_coords.front(), g.v_coords.back());
+    TruthSurface s;
+    s.plane_xy = g.plane == GroundPlane::xy;
+    s.us = ground_truth::vertex_lines(u_lo, u_hi, map.u, height.width());
+    s.vs = ground_truth::vertex_lines(v_lo, v_hi, map.v, height.height());
+    s.heights.resize(s.us.size() * s.vs.size());
+    tessref::parallel_for(std::size_t{0}, s.vs.size(), [&](std::size_t j) {
+        for (std::size_t i = 0; i < s.us.size(); ++i)
+            s.heights[j * s.us.size() + i] = ground_truth::vertex_height(g, map, s.us[i], s.vs[j]);
+    });
+    return s;
+}
+
+namespace {
+
+// A corner of a clipped piece: ground point and the tessellation's height there.
+struct Corner {
+    double u, v, h;
+};
+// A convex polygon: a triangle clipped by six half-planes has at most nine corners (more only if rounding made it non-convex; add() drops those beyond the room).
+struct Polygon {
+    std::array<Corner, 32> c{};  // room for rounding-made extra corners
+    int n = 0;
+};
+
+// Keeps the part where a * u + b * v + k >= 0 (Sutherland-Hodgman, one edge). Heights are
+// interpolated linearly along the cut edge: T is linear on the triangle, so they are exact.
+Polygon clip(const Polygon& in, double a, double b, double k) {
+    Polygon out;
+    for (int i = 0; i < in.n; ++i) {
+        const Corner& p = in.c[static_cast<std::size_t>(i)];
+        const Corner& q = in.c[static_cast<std::size_t>((i + 1) % in.n)];
+        const double fp = a * p.u + b * p.v + k, fq = a * q.u + b * q.v + k;
+        const auto add = [&out](const Corner& c) {
+            if (out.n < static_cast<int>(out.c.size())) out.c[static_cast<std::size_t>(out.n++)] = c;
+        };
+        if (fp >= 0.0) add(p);
+        if ((fp >= 0.0) != (fq >= 0.0)) {
+            const double t = fp / (fp - fq);
+            add({p.u + t * (q.u - p.u), p.v + t * (q.v - p.v), p.h + t * (q.h - p.h)});
+        }
+    }
+    return out;
+}
+
+// What one patch contributes.
+struct PatchError {
+    double max = -1.0;     // -1: no area measured
+    double sum_sq = 0.0;   // integral of e^2
+    double area = 0.0;
+    Corner at{};           // where |e| is largest (h = T)
+    double truth_at = 0.0; // G there
+};
+
+// One piece: the polygon (T heights) inside one truth triangle, whose height is
+// g(u, v) = h0 + su * (u - u0) + sv * (v - v0).
+void measure_piece(const Polygon& piece, double u0, double v0, double h0, double su, double sv, PatchError& out) {
+    if (piece.n < 3) return;
+    std::array<double, 32> e{};
+    for (int i = 0; i < piece.n; ++i) {
+        const Corner& p = piece.c[static_cast<std::size_t>(i)];
+        const double g = h0 + (p.u - u0) * su + (p.v - v0) * sv;
+        e[static_cast<std::size_t>(i)] = p.h - g;
+        if (std::abs(e[static_cast<std::size_t>(i)]) > out.max) {
+            out.max = std::abs(e[static_cast<std::size_t>(i)]);
+            out.at = p;
+            out.truth_at = g;
+        }
+    }
+    const Corner& p0 = piece.c[0];
+    for (int i = 1; i + 1 < piece.n; ++i) {
+        const Corner& p1 = piece.c[static_cast<std::size_t>(i)];
+        const Corner& p2 = piece.c[static_cast<std::size_t>(i + 1)];
+        const double area = 0.5 * std::abs((p1.u - p0.u) * (p2.v - p0.v) - (p2.u - p0.u) * (p1.v - p0.v));
+        const double a = e[0], b = e[static_cast<std::size_t>(i)], c = e[static_cast<std::size_t>(i + 1)];
+        out.sum_sq += area * (a * a + b * b + c * c + a * b + b * c + c * a) / 6.0;
+        out.area += area;
+    }
+}
+
+// Index of the cell [lines[i], lines[i + 1]] holding x, clamped to the cells.
+std::size_t cell_of(const std::vector<double>& lines, double x) {
+    const auto it = std::upper_bound(lines.begin(), lines.end(), x);
+    const std::ptrdiff_t i = (it - lines.begin()) - 1;
+    return static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(i, 0, static_cast<std::ptrdiff_t>(lines.size()) - 2));
+}
+
+// One tessellated triangle against every truth triangle under it.
+void measure_triangle(const TruthSurface& truth, const std::array<Corner, 3>& t, PatchError& out) {
+    const double umin = std::min({t[0].u, t[1].u, t[2].u}), umax = std::max({t[0].u, t[1].u, t[2].u});
+    const double vmin = std::min({t[0].v, t[1].v, t[2].v}), vmax = std::max({t[0].v, t[1].v, t[2].v});
+    if (!(umax > umin) || !(vmax > vmin)) return;  // no ground area (or NaN)
+    const double cross = (t[1].u - t[0].u) * (t[2].v - t[0].v) - (t[2].u - t[0].u) * (t[1].v - t[0].v);
+    if (cross == 0.0) return;
+    const std::size_t i0 = cell_of(truth.us, umin), i1 = cell_of(truth.us, umax);
+    const std::size_t j0 = cell_of(truth.vs, vmin), j1 = cell_of(truth.vs, vmax);
+    Polygon tri;
+    tri.n = 3;
+    for (std::size_t k = 0; k < 3; ++k) tri.c[k] = t[k];
+    for (std::size_t j = j0; j <= j1; ++j) {
+        const double v0 = truth.vs[j], v1 = truth.vs[j + 1], dv = v1 - v0;
+        const Polygon row = clip(clip(tri, 0.0, 1.0, -v0), 0.0, -1.0, v1);
+        if (row.n < 3) continue;
+        for (std::size_t i = i0; i <= i1; ++i) {
+            const double u0 = truth.us[i], u1 = truth.us[i + 1], du = u1 - u0;
+            const Polygon cell = clip(clip(row, 1.0, 0.0, -u0), -1.0, 0.0, u1);
+            if (cell.n < 3) continue;
+            const double ha = truth.height(i, j), hb = truth.height(i + 1, j);
+            const double hc = truth.height(i + 1, j + 1), hd = truth.height(i, j + 1);
+            // The diagonal from a = (u0, v0) to c = (u1, v1): f = (u - u0) dv - (v - v0) du.
+            // f >= 0: triangle (a, b, c), below the diagonal; f <= 0: triangle (a, c, d).
+            const Polygon lower = clip(cell, dv, -du, -u0 * dv + v0 * du);
+            measure_piece(lower, u0, v0, ha, (hb - ha) / du, (hc - hb) / dv, out);
+            const Polygon upper = clip(cell, -dv, du, u0 * dv - v0 * du);
+            measure_piece(upper, u0, v0, ha, (hc - hd) / du, (hd - ha) / dv, out);
+        }
+    }
+}
+
+}  // namespace
+
+GeometricError geometric_error(const TruthSurface& truth, const SurfaceMesh& mesh, const SceneCamera* camera) {
+    GeometricError result;
+    if (truth.us.size() < 2 || truth.vs.size() < 2 || mesh.triangles.empty()) return result;
+    // The triangles of each patch: they come patch after patch (pipeline.h OUTPUT).
+    std::vector<std::size_t> starts;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        if (t == 0 || mesh.patch_ids[mesh.triangles[t][0]] != mesh.patch_ids[mesh.triangles[t - 1][0]]) starts.push_back(t);
+    starts.push_back(mesh.triangles.size());
+    const std::size_t groups = starts.size() - 1;
+    std::vector<PatchError> slots(groups);
+    const bool xy = truth.plane_xy;
+    const auto corner = [&](std::uint32_t v) {
+        const glm::dvec3& p = mesh.positions[v];
+        return xy ? Corner{p.x, p.y, p.z} : Corner{p.x, p.z, p.y};
+    };
+    tessref::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
+        for (std::size_t t = starts[g]; t < starts[g + 1]; ++t) {
+            const auto& tri = mesh.triangles[t];
+            measure_triangle(truth, {corner(tri[0]), corner(tri[1]), corner(tri[2])}, slots[g]);
+        }
+    });
+
+    // The visible part of the segment from (u, v, g) to (u, v, t): clipped to the view
+    // volume (-w <= x, y, z <= w) in clip space, where it stays a segment, then projected.
+    const glm::dmat4 vp = camera ? camera->view_projection() : glm::dmat4(1.0);
+    const auto visible_pixels = [&](double u, double v, double g, double t) {
+        const auto clip_of = [&](double h) {
+            return vp * glm::dvec4(xy ? glm::dvec3(u, v, h) : glm::dvec3(u, h, v), 1.0);
+        };
+        const glm::dvec4 a = clip_of(g), b = clip_of(t);
+        double t0 = 0.0, t1 = 1.0;
+        for (int axis = 0; axis < 3; ++axis) {
+            for (const double sign : {1.0, -1.0}) {
+                // f(s) = w + sign * coordinate >= 0, linear along the segment.
+                const double fa = a.w + sign * a[axis], fb = b.w + sign * b[axis];
+                if (fa < 0.0 && fb < 0.0) return 0.0;
+                if (fa < 0.0) t0 = std::max(t0, fa / (fa - fb));
+                if (fb < 0.0) t1 = std::min(t1, fa / (fa - fb));
+            }
+        }
+        if (!(t1 > t0)) return 0.0;
+        const auto window = [&](double s) {
+            const glm::dvec4 c = a + s * (b - a);
+            return (glm::dvec2(c) / c.w * 0.5 + 0.5) * glm::dvec2(camera->viewport);
+        };
+        return glm::length(window(t1) - window(t0));
+    };
+    double sum_sq = 0.0, area = 0.0;
+    result.max = 0.0;
+    for (const PatchError& s : slots) {  // serially, in patch order: deterministic
+        if (s.max < 0.0) continue;
+        sum_sq += s.sum_sq;
+        area += s.area;
+        if (s.max > result.max) {
+            result.max = s.max;
+            result.max_at = {s.at.u, s.at.v};
+        }
+        if (camera) result.max_px = std::max(result.max_px, visible_pixels(s.at.u, s.at.v, s.truth_at, s.at.h));
+    }
+    result.area = area;
+    result.rms = area > 0.0 ? std::sqrt(std::max(0.0, sum_sq) / area) : 0.0;
+    return result;
+}
+
+}  // namespace tessref::sweep

@@ -1,0 +1,822 @@
+// `tessref sweep`: see sweep.h for the rows, groups and directory, docs/SWEEP.md for the
+// columns.
+#include "sweep/sweep.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "sweep/geometric_error.h"
+#include "sweep/report.h"
+#include "tessref/compare.h"
+#include "tessref/error.h"
+#include "tessref/limits.h"
+#include "tessref/pipeline.h"
+#include "tessref/render.h"
+#include "tessref/scene.h"
+
+namespace fs = std::filesystem;
+
+namespace tessref::sweep {
+
+const std::vector<std::string>& csv_columns() {
+    static const std::vector<std::string> columns{
+        "scene",       "model",       "level",          "spacing",           "precision",     "patches",
+        "triangles",   "points",      "control_ms",     "generator_ms",      "evaluation_ms", "geometry_ms",
+        "raster_shading_ms",          "total_ms",       "geo_max",           "geo_rms",       "geo_max_px",
+        "img_rmse",    "img_psnr",    "img_fail_px",    "gpu_exact_max_pos", "gpu_exact_image_differs",
+        "image",       "diff_image",  "wire_image",     "truth_image"};
+    return columns;
+}
+
+namespace {
+
+constexpr int kFormatVersion = 1;
+
+// ---- numbers and CSV ---------------------------------------------------------------------
+
+// Every real number of the CSV: "%.9g", NaN as "nan", infinities "inf" / "-inf".
+std::string real(double x) {
+    if (std::isnan(x)) return "nan";
+    if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+    char text[40];
+    std::snprintf(text, sizeof text, "%.9g", x);
+    return text;
+}
+// Timings: milliseconds with three decimals (microseconds).
+std::string milliseconds(double ms) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.3f", ms);
+    return text;
+}
+
+// RFC 4180: a field holding a comma, a quote or a line break is quoted, quotes doubled.
+std::string csv_field(const std::string& text) {
+    if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+    std::string quoted = "\"";
+    for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return quoted + "\"";
+}
+
+// One record of a CSV text: its fields and its raw text (without the final line break).
+struct CsvRecord {
+    std::vector<std::string> fields;
+    std::string raw;
+    std::size_t line = 0;
+};
+// Parses RFC 4180 text whose every record ends with "\n". Throws tessref::Error naming
+// `file` and the line for an unterminated quote, text after a closing quote, or a missing
+// final line break.
+std::vector<CsvRecord> parse_csv(const std::string& text, const std::string& file) {
+    std::vector<CsvRecord> records;
+    std::size_t i = 0, line = 1;
+    while (i < text.size()) {
+        CsvRecord record;
+        record.line = line;
+        const std::size_t start = i;
+        std::string field;
+        bool done = false;
+        while (!done) {
+            if (i < text.size() && text[i] == '"') {
+                ++i;
+                for (;;) {
+                    if (i >= text.size()) throw Error("unterminated quoted field", Where::in_file(file, record.line));
+                    if (text[i] == '"') {
+                        if (i + 1 < text.size() && text[i + 1] == '"') {
+                            field += '"';
+                            i += 2;
+                            continue;
+                        }
+                        ++i;
+                        break;
+                    }
+                    if (text[i] == '\n') ++line;
+                    field += text[i++];
+                }
+                if (i < text.size() && text[i] != ',' && text[i] != '\n')
+                    throw Error("text after a closing quote", Where::in_file(file, line));
+            } else {
+                while (i < text.size() && text[i] != ',' && text[i] != '\n') {
+                    if (text[i] == '"') throw Error("a quote inside an unquoted field", Where::in_file(file, line));
+                    field += text[i++];
+                }
+            }
+            record.fields.push_back(std::move(field));
+            field.clear();
+            if (i >= text.size()) throw Error("the last line has no line break (truncated?)", Where::in_file(file, line));
+            if (text[i] == '\n') done = true;
+            ++i;
+        }
+        record.raw = text.substr(start, i - 1 - start);
+        ++line;
+        records.push_back(std::move(record));
+    }
+    return records;
+}
+
+std::string read_text(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot read the file", Where::in_file(path.string()));
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void write_text(const fs::path& path, const std::string& bytes) {
+    std::ofstream out(path, std::ios::binary);
+    out << bytes;
+    out.close();
+    if (!out) throw Error("cannot write the file", Where::in_file(path.string()));
+}
+
+// ---- the output directory ----------------------------------------------------------------
+
+// Whether DIR may receive a sweep: a new name in an existing directory, an empty directory,
+// or an earlier sweep's directory (it holds sweep.json), which is replaced.
+void check_output_dir(const fs::path& given) {
+    if (given.empty()) throw Error("no output directory given", Where::in_file("-o"));
+    fs::path dir = fs::absolute(given).lexically_normal();
+    if (dir.filename().empty()) dir = dir.parent_path();  // "out/"
+    std::error_code ec;
+    const fs::file_status status = fs::symlink_status(dir, ec);
+    if (fs::exists(status)) {
+        if (!fs::is_directory(status))
+            throw Error("the output exists and is not a directory", Where::in_file(given.string()));
+        if (!fs::is_empty(dir, ec) && !fs::exists(dir / "sweep.json"))
+            throw Error("the output directory is not empty and holds no sweep (sweep.json); refusing to replace it",
+                        Where::in_file(given.string()));
+    }
+    if (!fs::is_directory(dir.parent_path()))
+        throw Error("the output's parent directory does not exist", Where::in_file(given.string()));
+}
+
+// A fresh directory beside the target; removed unless commit() put it in place.
+class TempDir {
+public:
+    explicit TempDir(fs::path target) : target_(fs::absolute(std::move(target)).lexically_normal()) {
+        if (target_.filename().empty()) target_ = target_.parent_path();
+        std::string pattern = (target_.parent_path() / ("." + target_.filename().string() + ".tmp-XXXXXX")).string();
+        std::vector<char> name(pattern.begin(), pattern.end());
+        name.push_back('\0');
+        if (!::mkdtemp(name.data()))
+            throw Error("cannot create a temporary directory beside the output", Where::in_file(target_.string()));
+        path_ = fs::path(name.data());
+    }
+    ~TempDir() {
+        std::error_code ec;
+        if (!committed_) fs::remove_all(path_, ec);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    const fs::path& path() const { return path_; }
+
+    void commit() {
+        check_output_dir(target_);
+        std::error_code ec;
+        std::optional<fs::path> old;
+        if (fs::exists(fs::symlink_status(target_, ec))) {
+            if (fs::is_empty(target_, ec)) {
+                fs::remove(target_, ec);
+            } else {  // an earlier sweep: out of the way first, removed once the new one is in
+                old = path_.string() + ".old";
+                fs::rename(target_, *old, ec);
+                if (ec) throw Error("cannot replace the output directory: " + ec.message(), Where::in_file(target_.string()));
+            }
+        }
+        fs::rename(path_, target_, ec);
+        if (ec) {
+            if (old) fs::rename(*old, target_, ec);
+            throw Error("cannot put the output directory in place: " + ec.message(), Where::in_file(target_.string()));
+        }
+        committed_ = true;
+        if (old) fs::remove_all(*old, ec);
+    }
+
+private:
+    fs::path target_, path_;
+    bool committed_ = false;
+};
+
+// ---- scenes and rows ---------------------------------------------------------------------
+
+struct SweepScene {
+    std::string file;
+    std::string name;   // [scene] name (the CSV's scene column)
+    std::string slug;   // name for file names
+    Scene scene;        // the camera's viewport set to the sweep's size
+    bool terrain = false;
+};
+
+struct Row {
+    std::size_t index = 0;  // CSV position in the unsharded run
+    std::size_t group = 0;
+    std::size_t scene = 0;
+    bool own = false;
+    double level = 0.0;     // uniform rows
+    Spacing spacing = Spacing::equal;
+    Precision precision = Precision::gpu;
+};
+
+std::string slug_of(const std::string& name) {
+    std::string s;
+    for (char c : name) s += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
+    if (s.empty() || s == "." || s == "..") s = "scene";
+    return s;
+}
+
+std::string control_model_name(const Scene& scene) {
+    return scene.control ? to_string(scene.control->model) : "none";
+}
+
+std::vector<SweepScene> load_scenes(const SweepParameters& p) {
+    if (p.scenes.empty()) throw Error("no scene given", Where::in_file("command line"));
+    std::vector<SweepScene> scenes;
+    std::map<std::string, std::string> names;
+    for (const std::string& file : p.scenes) {
+        SweepScene s;
+        s.file = file;
+        s.scene = load_scene(file);
+        if (!s.scene.camera)
+            throw Error("the sweep renders every row: the scene needs a [camera]", Where::at_key(file, "camera"));
+        s.scene.camera->viewport = p.size;
+        s.name = s.scene.name.empty() ? fs::path(file).stem().string() : s.scene.name;
+        s.slug = slug_of(s.name);
+        s.terrain = s.scene.grid.has_value();
+        if (!names.emplace(s.slug, file).second)
+            throw Error("two scenes are named '" + s.name + "' (also " + names[s.slug] +
+                            "): the sweep tells rows and pictures apart by the scene name",
+                        Where::at_key(file, "scene.name"));
+        scenes.push_back(std::move(s));
+    }
+    return scenes;
+}
+
+std::vector<Spacing> spacings_for(const SweepParameters& p, const Scene& scene) {
+    return p.spacings.empty() ? std::vector<Spacing>{scene.generator.spacing} : p.spacings;
+}
+
+// Every row of the sweep, in CSV order, with its group.
+std::vector<Row> plan_rows(const SweepParameters& p, const std::vector<SweepScene>& scenes) {
+    std::vector<Row> rows;
+    std::size_t group = 0;
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+        const Scene& scene = scenes[s].scene;
+        for (Precision precision : p.precisions) {
+            Row r;
+            r.group = group;
+            r.scene = s;
+            r.own = true;
+            r.spacing = scene.generator.spacing;
+            r.precision = precision;
+            rows.push_back(r);
+        }
+        ++group;
+        const std::vector<Spacing> spacings = spacings_for(p, scene);
+        for (std::size_t k = 0; k < spacings.size(); ++k) {
+            const std::size_t first_group = group;
+            for (Precision precision : p.precisions) {
+                for (std::size_t l = 0; l < p.levels.size(); ++l) {
+                    Row r;
+                    r.group = first_group + l;
+                    r.scene = s;
+                    r.level = p.levels[l];
+                    r.spacing = spacings[k];
+                    r.precision = precision;
+                    rows.push_back(r);
+                }
+            }
+            group += p.levels.size();
+        }
+    }
+    for (std::size_t i = 0; i < rows.size(); ++i) rows[i].index = i;
+    return rows;
+}
+
+// The scene with its control stage replaced by a uniform level (sweep.h).
+Scene uniform_scene(const Scene& base, double level, Spacing spacing) {
+    Scene s = base;
+    s.generator.spacing = spacing;
+    ControlStage control = base.control.value_or(ControlStage{});
+    if (base.evaluation.model == EvaluationModel::lab4) {
+        // Lab 4's evaluation reads its control stage's log levels (mip selection): every
+        // zone gets the level, and log2(max_level) - log2(level) = 0 samples mip 0.
+        control.model = ControlModel::lab4;
+        control.lab4.minLevel = level;
+        control.lab4.maxLevel = level;
+    } else {
+        control.model = ControlModel::constant;
+        control.constant.level = level;
+    }
+    s.control = control;
+    return s;
+}
+
+bool keeps_pictures(const Row& row, double largest_level) {
+    if (row.own) return true;
+    if (row.level == largest_level) return true;
+    int exponent = 0;
+    const double mantissa = std::frexp(row.level, &exponent);
+    return mantissa == 0.5;  // a power of two
+}
+
+std::string level_text(double level) { return real(level); }
+
+std::string row_description(const Row& row, const std::vector<SweepScene>& scenes) {
+    const SweepScene& s = scenes[row.scene];
+    std::string d = s.name + " " + (row.own ? control_model_name(s.scene) + " (own)" : "uniform " + level_text(row.level));
+    return d + " " + std::string(to_string(row.spacing)) + " " + std::string(to_string(row.precision));
+}
+
+// The parameters that make two shards parts of one sweep.
+nlohmann::ordered_json parameters_json(const SweepParameters& p, const std::vector<SweepScene>& scenes,
+                                       std::size_t rows, std::size_t groups) {
+    nlohmann::ordered_json j;
+    j["format"] = kFormatVersion;
+    j["tessref"] = TESSREF_VERSION;
+    nlohmann::ordered_json list = nlohmann::ordered_json::array();
+    for (const SweepScene& s : scenes) list.push_back({{"file", s.file}, {"name", s.name}});
+    j["scenes"] = list;
+    nlohmann::ordered_json levels = nlohmann::ordered_json::array();
+    for (double l : p.levels) levels.push_back(level_text(l));
+    j["levels"] = levels;
+    nlohmann::ordered_json precisions = nlohmann::ordered_json::array();
+    for (Precision x : p.precisions) precisions.push_back(std::string(to_string(x)));
+    j["precisions"] = precisions;
+    if (p.spacings.empty()) {
+        j["spacings"] = "each scene's own";
+    } else {
+        nlohmann::ordered_json spacings = nlohmann::ordered_json::array();
+        for (Spacing x : p.spacings) spacings.push_back(std::string(to_string(x)));
+        j["spacings"] = spacings;
+    }
+    j["repeat"] = p.repeat;
+    j["size"] = std::to_string(p.size.x) + "x" + std::to_string(p.size.y);
+    j["rows"] = rows;
+    j["groups"] = groups;
+    return j;
+}
+
+std::string sweep_json_text(const nlohmann::ordered_json& parameters, const Shard& shard,
+                            const std::vector<std::size_t>& row_indices) {
+    nlohmann::ordered_json j;
+    j["sweep"] = parameters;
+    j["shard"] = {{"index", shard.index}, {"count", shard.count}};
+    j["row_indices"] = row_indices;
+    return j.dump(2) + "\n";
+}
+
+std::string csv_header() {
+    std::string h;
+    for (const std::string& c : csv_columns()) h += (h.empty() ? "" : ",") + c;
+    return h + "\n";
+}
+
+// ---- running rows --------------------------------------------------------------------------
+
+FloatImage float_image(const RenderResult& image) {
+    const std::vector<std::uint8_t> rgba = to_rgba8(image);
+    FloatImage f;
+    f.width = image.width;
+    f.height = image.height;
+    f.channels = 4;
+    f.channel_names = {"R", "G", "B", "A"};
+    f.alpha_channel = 3;
+    f.samples.resize(rgba.size());
+    for (std::size_t i = 0; i < rgba.size(); ++i) f.samples[i] = static_cast<float>(rgba[i]) / 255.0f;  // as an 8-bit file reads
+    return f;
+}
+
+double median(std::vector<double> values) {
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// What a scene's rows share: the ground truth (terrain scenes).
+struct SceneTruth {
+    std::optional<TruthSurface> surface;
+    std::optional<FloatImage> image;
+    std::string image_path;  // relative to DIR
+};
+
+// One row's results, as CSV fields (by column name).
+using Fields = std::map<std::string, std::string>;
+
+struct PairData {
+    std::vector<glm::dvec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    std::vector<std::uint8_t> rgba;
+};
+
+class Runner {
+public:
+    Runner(const SweepParameters& p, const std::vector<SweepScene>& scenes, const fs::path& dir)
+        : p_(p), scenes_(scenes), dir_(dir), largest_level_(p.levels.empty() ? 0.0 : p.levels.back()) {}
+
+    // Runs one group's rows (one per precision), returns their fields in row order.
+    std::vector<Fields> run_group(const std::vector<const Row*>& rows, const std::function<void(const Row&)>& starting) {
+        std::vector<Fields> out;
+        std::vector<PairData> pair;
+        for (const Row* row : rows) {
+            starting(*row);
+            PairData data;
+            out.push_back(run_row(*row, data));
+            pair.push_back(std::move(data));
+        }
+        if (rows.size() == 2 && rows[0]->precision != rows[1]->precision) {
+            std::string max_pos;
+            if (pair[0].positions.size() == pair[1].positions.size() && pair[0].triangles == pair[1].triangles) {
+                double m = 0.0;
+                for (std::size_t v = 0; v < pair[0].positions.size(); ++v)
+                    m = std::max(m, glm::length(pair[0].positions[v] - pair[1].positions[v]));
+                max_pos = real(m);
+            }
+            const std::string differs = pair[0].rgba == pair[1].rgba ? "0" : "1";
+            for (Fields& f : out) {
+                f["gpu_exact_max_pos"] = max_pos;
+                f["gpu_exact_image_differs"] = differs;
+            }
+        }
+        return out;
+    }
+
+private:
+    SceneTruth& truth_of(std::size_t scene) {
+        if (truth_scene_ == scene) return truth_;
+        truth_ = SceneTruth{};
+        truth_scene_ = scene;
+        const SweepScene& s = scenes_[scene];
+        if (!s.terrain) return truth_;
+        truth_.surface = truth_surface(s.scene);
+        RenderOptions options;
+        options.size = p_.size;
+        const RenderResult image = raytrace_scene(s.scene, options);
+        truth_.image = float_image(image);
+        truth_.image_path = "images/" + s.slug + "/truth.png";
+        fs::create_directories(dir_ / "images" / s.slug);
+        write_image(image, (dir_ / truth_.image_path).string(), ImageFormat::png);
+        return truth_;
+    }
+
+    Fields run_row(const Row& row, PairData& pair) {
+        const SweepScene& s = scenes_[row.scene];
+        const Scene scene = row.own ? s.scene : uniform_scene(s.scene, row.level, row.spacing);
+        SceneTruth& truth = truth_of(row.scene);
+        Fields f;
+        f["scene"] = s.name;
+        f["model"] = row.own ? control_model_name(s.scene) : "uniform";
+        f["level"] = row.own ? "" : level_text(row.level);
+        f["spacing"] = std::string(to_string(row.spacing));
+        f["precision"] = std::string(to_string(row.precision));
+        f["patches"] = std::to_string(scene.patch_count());
+
+        // The timed runs: pipeline (per pass) and rasterizer + shading, median of repeat.
+        using Clock = std::chrono::steady_clock;
+        const auto ms = [](Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); };
+        std::array<std::vector<double>, 6> times;
+        std::shared_ptr<const PipelineResult> pipeline;
+        RenderResult image;
+        RenderOptions render_options;
+        render_options.size = p_.size;
+        render_options.precision = row.precision;
+        for (int r = 0; r < p_.repeat; ++r) {
+            PipelineTimings timings;
+            PipelineOptions options;
+            options.precision = row.precision;
+            options.timings = &timings;
+            image = RenderResult{};
+            pipeline.reset();
+            const Clock::time_point t0 = Clock::now();
+            pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene, options));
+            const Clock::time_point t1 = Clock::now();
+            image = render_surface(scene, pipeline, render_options);
+            const Clock::time_point t2 = Clock::now();
+            times[0].push_back(timings.control * 1e3);
+            times[1].push_back(timings.generator * 1e3);
+            times[2].push_back(timings.evaluation * 1e3);
+            times[3].push_back(timings.geometry * 1e3);
+            times[4].push_back(ms(t2 - t1));
+            times[5].push_back(ms(t2 - t0));
+        }
+        const char* time_columns[] = {"control_ms", "generator_ms", "evaluation_ms", "geometry_ms", "raster_shading_ms",
+                                      "total_ms"};
+        for (std::size_t k = 0; k < 6; ++k) f[time_columns[k]] = milliseconds(median(times[k]));
+        const SurfaceMesh& mesh = pipeline->mesh;
+        f["triangles"] = std::to_string(mesh.triangles.size());
+        f["points"] = std::to_string(mesh.positions.size());
+
+        if (truth.surface) {
+            const GeometricError e = geometric_error(*truth.surface, mesh, &*scene.camera);
+            f["geo_max"] = real(e.max);
+            f["geo_rms"] = real(e.rms);
+            f["geo_max_px"] = real(e.max_px);
+        }
+        const FloatImage picture = float_image(image);
+        std::optional<CompareResult> compared;
+        if (truth.image) {
+            compared = compare_images(*truth.image, picture);
+            f["img_rmse"] = real(compared->rmse);
+            f["img_psnr"] = real(compared->psnr);
+            f["img_fail_px"] = std::to_string(compared->failing_pixels);
+            f["truth_image"] = truth.image_path;
+        }
+        if (keeps_pictures(row, largest_level_)) {
+            const std::string stem = "images/" + s.slug + "/" +
+                                     (row.own ? "own" : std::string(to_string(row.spacing)) + "-L" + level_text(row.level)) +
+                                     "-" + std::string(to_string(row.precision));
+            fs::create_directories(dir_ / "images" / s.slug);
+            write_image(image, (dir_ / (stem + ".png")).string(), ImageFormat::png);
+            f["image"] = stem + ".png";
+            RenderOptions wire_options = render_options;
+            wire_options.mode = RenderMode::wireframe;
+            const RenderResult wire = render_surface(scene, pipeline, wire_options);
+            write_image(wire, (dir_ / (stem + "-wire.png")).string(), ImageFormat::png);
+            f["wire_image"] = stem + "-wire.png";
+            if (compared) {
+                write_float_image(difference_picture(*truth.image, *compared), (dir_ / (stem + "-diff.png")).string());
+                f["diff_image"] = stem + "-diff.png";
+            }
+        }
+        pair.positions = mesh.positions;
+        pair.triangles = mesh.triangles;
+        pair.rgba = to_rgba8(image);
+        return f;
+    }
+
+    const SweepParameters& p_;
+    const std::vector<SweepScene>& scenes_;
+    fs::path dir_;
+    double largest_level_;
+    std::size_t truth_scene_ = static_cast<std::size_t>(-1);
+    SceneTruth truth_;
+};
+
+std::string csv_line(const Fields& f) {
+    std::string line;
+    bool first = true;
+    for (const std::string& c : csv_columns()) {
+        const auto it = f.find(c);
+        line += (first ? "" : ",") + csv_field(it == f.end() ? std::string() : it->second);
+        first = false;
+    }
+    return line + "\n";
+}
+
+// Refuses, before any work, a uniform level that would exceed a scene's triangle budget.
+void check_budgets(const SweepParameters& p, const std::vector<SweepScene>& scenes) {
+    for (const SweepScene& s : scenes) {
+        for (Spacing spacing : spacings_for(p, s.scene)) {
+            for (double level : p.levels) {
+                TessSettings settings = s.scene.generator;
+                settings.spacing = spacing;
+                TessLevels levels;
+                levels.outer.fill(static_cast<float>(level));
+                levels.inner.fill(static_cast<float>(level));
+                const std::uint64_t estimate = estimate_triangles(settings, levels) * s.scene.patch_count();
+                if (estimate > s.scene.max_triangles)
+                    throw Error("uniform level " + level_text(level) + " (" + std::string(to_string(spacing)) +
+                                    ") asks for up to " + std::to_string(estimate) +
+                                    " triangles, more than the scene's limits.max_triangles = " +
+                                    std::to_string(s.scene.max_triangles),
+                                s.scene.max_triangles_where);
+            }
+        }
+    }
+}
+
+}  // namespace
+
+std::vector<double> parse_levels(const std::string& text) {
+    const Where where = Where::in_file("--levels");
+    std::vector<double> levels;
+    const auto number = [&](const std::string& item, const std::string& whole) {
+        std::size_t used = 0;
+        double x = 0.0;
+        try {
+            x = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        const auto rest = item.find_first_not_of(" \t", used);
+        if (used == 0 || rest != std::string::npos)
+            throw Error("'" + whole + "' is not a level (a number, or a range A..B)", where);
+        if (std::isnan(x)) throw Error("'" + whole + "': a level must be a number, not NaN", where);
+        if (!(x >= 1.0 && x <= 64.0)) throw Error("'" + whole + "': levels lie in 1..64", where);
+        return x;
+    };
+    std::size_t start = 0;
+    for (;;) {
+        const std::size_t comma = text.find(',', start);
+        std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        const auto b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
+        item = b == std::string::npos ? std::string() : item.substr(b, e - b + 1);
+        if (item.empty()) throw Error("an empty item in '" + text + "'", where);
+        const std::size_t dots = item.find("..");
+        if (dots != std::string::npos) {
+            const double lo = number(item.substr(0, dots), item), hi = number(item.substr(dots + 2), item);
+            if (lo != std::floor(lo) || hi != std::floor(hi))
+                throw Error("'" + item + "': a range runs over whole levels (A..B, integers)", where);
+            if (lo > hi) throw Error("'" + item + "': the range is reversed", where);
+            for (double l = lo; l <= hi; l += 1.0) levels.push_back(l);
+        } else {
+            levels.push_back(number(item, item));
+        }
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    return levels;
+}
+
+std::size_t run_sweep(const SweepParameters& p, const Shard& shard, const std::string& dir,
+                      const SweepProgress& progress) {
+    if (p.levels.empty()) throw Error("no levels", Where::in_file("--levels"));
+    if (p.precisions.empty()) throw Error("no precision", Where::in_file("--precision"));
+    if (p.repeat < 1) throw Error("--repeat must be at least 1", Where::in_file("--repeat"));
+    if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count)
+        throw Error("shard " + std::to_string(shard.index) + "/" + std::to_string(shard.count) +
+                        " is not one of 0/N .. N-1/N",
+                    Where::in_file("--shard"));
+    check_output_dir(dir);
+    const std::vector<SweepScene> scenes = load_scenes(p);
+    check_budgets(p, scenes);
+    require_memory(estimate_render_memory(p.size, RenderMode::fill, true, ImageFormat::png, {}) * 3,
+                   "images of " + std::to_string(p.size.x) + "x" + std::to_string(p.size.y) + " pixels",
+                   Where::in_file("--size"));
+    const std::vector<Row> rows = plan_rows(p, scenes);
+    const std::size_t groups = rows.empty() ? 0 : rows.back().group + 1;
+    // This shard's groups, each with its rows in row order.
+    std::map<std::size_t, std::vector<const Row*>> mine;
+    std::size_t mine_rows = 0;
+    for (const Row& r : rows)
+        if (r.group % static_cast<std::size_t>(shard.count) == static_cast<std::size_t>(shard.index)) {
+            mine[r.group].push_back(&r);
+            ++mine_rows;
+        }
+
+    TempDir temp(dir);
+    fs::create_directories(temp.path() / "images");
+    Runner runner(p, scenes, temp.path());
+    std::map<std::size_t, std::string> lines;  // row index -> CSV line
+    std::size_t done = 0;
+    for (const auto& [group, group_rows] : mine) {
+        const std::vector<Fields> fields = runner.run_group(group_rows, [&](const Row& row) {
+            if (progress) progress(done++, mine_rows, row_description(row, scenes));
+        });
+        for (std::size_t k = 0; k < group_rows.size(); ++k) lines[group_rows[k]->index] = csv_line(fields[k]);
+    }
+    if (progress) progress(done, mine_rows, "");
+    std::string csv = csv_header();
+    std::vector<std::size_t> indices;
+    for (const auto& [index, line] : lines) {
+        csv += line;
+        indices.push_back(index);
+    }
+    write_text(temp.path() / "sweep.csv", csv);
+    write_text(temp.path() / "sweep.json", sweep_json_text(parameters_json(p, scenes, rows.size(), groups), shard, indices));
+    write_sweep_report(temp.path().string());
+    temp.commit();
+    return lines.size();
+}
+
+// ---- merge -------------------------------------------------------------------------------
+
+namespace {
+
+struct ShardDir {
+    fs::path dir;
+    nlohmann::ordered_json parameters;
+    Shard shard;
+    std::vector<std::size_t> indices;
+    std::vector<CsvRecord> rows;  // without the header
+};
+
+ShardDir read_shard(const fs::path& dir) {
+    const Where where = Where::in_file(dir.string());
+    if (!fs::is_directory(dir)) throw Error("not a directory", where);
+    if (!fs::exists(dir / "sweep.json") || !fs::exists(dir / "sweep.csv"))
+        throw Error("not a sweep directory (no sweep.json or sweep.csv)", where);
+    ShardDir s;
+    s.dir = dir;
+    try {
+        const nlohmann::ordered_json j = nlohmann::ordered_json::parse(read_text(dir / "sweep.json"));
+        s.parameters = j.at("sweep");
+        s.shard.index = j.at("shard").at("index").get<int>();
+        s.shard.count = j.at("shard").at("count").get<int>();
+        s.indices = j.at("row_indices").get<std::vector<std::size_t>>();
+        (void)s.parameters.at("rows").get<std::size_t>();
+    } catch (const nlohmann::json::exception& e) {
+        throw Error(std::string("corrupt sweep.json: ") + e.what(), Where::in_file((dir / "sweep.json").string()));
+    }
+    if (s.shard.count < 1 || s.shard.index < 0 || s.shard.index >= s.shard.count)
+        throw Error("corrupt sweep.json: shard " + std::to_string(s.shard.index) + "/" + std::to_string(s.shard.count),
+                    Where::in_file((dir / "sweep.json").string()));
+    const std::string csv_path = (dir / "sweep.csv").string();
+    std::vector<CsvRecord> records = parse_csv(read_text(dir / "sweep.csv"), csv_path);
+    if (records.empty() || records[0].raw + "\n" != csv_header())
+        throw Error("corrupt sweep.csv: the header is not the sweep's", Where::in_file(csv_path, 1));
+    const std::size_t columns = csv_columns().size();
+    for (std::size_t k = 1; k < records.size(); ++k)
+        if (records[k].fields.size() != columns)
+            throw Error("corrupt sweep.csv: " + std::to_string(records[k].fields.size()) + " fields, the header has " +
+                            std::to_string(columns),
+                        Where::in_file(csv_path, records[k].line));
+    records.erase(records.begin());
+    if (records.size() != s.indices.size())
+        throw Error("corrupt sweep.csv: " + std::to_string(records.size()) + " rows, sweep.json lists " +
+                        std::to_string(s.indices.size()),
+                    Where::in_file(csv_path));
+    s.rows = std::move(records);
+    return s;
+}
+
+// Copies every file under from/images into to/images; a file both shards wrote (a scene's
+// truth picture) must hold the same bytes.
+void copy_images(const fs::path& from, const fs::path& to) {
+    const fs::path images = from / "images";
+    if (!fs::is_directory(images)) return;
+    for (const auto& entry : fs::recursive_directory_iterator(images)) {
+        const fs::path relative = fs::relative(entry.path(), from);
+        const fs::path target = to / relative;
+        if (entry.is_directory()) {
+            fs::create_directories(target);
+        } else if (entry.is_regular_file()) {
+            fs::create_directories(target.parent_path());
+            if (fs::exists(target)) {
+                if (read_text(target) != read_text(entry.path()))
+                    throw Error("this picture differs from the one another shard wrote", Where::in_file(entry.path().string()));
+                continue;
+            }
+            fs::copy_file(entry.path(), target);
+        }
+    }
+}
+
+}  // namespace
+
+void merge_sweeps(const std::vector<std::string>& dirs, const std::string& out) {
+    if (dirs.empty()) throw Error("no shard directories given", Where::in_file("command line"));
+    check_output_dir(out);
+    std::vector<ShardDir> shards;
+    for (const std::string& d : dirs) shards.push_back(read_shard(d));
+    const ShardDir& first = shards.front();
+    std::map<int, std::string> seen;
+    for (const ShardDir& s : shards) {
+        if (s.parameters != first.parameters || s.shard.count != first.shard.count)
+            throw Error("belongs to another sweep than " + first.dir.string() +
+                            " (its parameters or shard count differ; see sweep.json)",
+                        Where::in_file(s.dir.string()));
+        const auto [it, fresh] = seen.emplace(s.shard.index, s.dir.string());
+        if (!fresh)
+            throw Error("is shard " + std::to_string(s.shard.index) + "/" + std::to_string(s.shard.count) + ", as is " +
+                            it->second,
+                        Where::in_file(s.dir.string()));
+    }
+    for (int i = 0; i < first.shard.count; ++i)
+        if (!seen.count(i))
+            throw Error("shard " + std::to_string(i) + "/" + std::to_string(first.shard.count) + " is missing",
+                        Where::in_file(dirs.front()));
+    const std::size_t total = first.parameters.at("rows").get<std::size_t>();
+    std::vector<const CsvRecord*> rows(total, nullptr);
+    for (const ShardDir& s : shards) {
+        for (std::size_t k = 0; k < s.indices.size(); ++k) {
+            const std::size_t i = s.indices[k];
+            if (i >= total || rows[i])
+                throw Error("corrupt sweep.json: row " + std::to_string(i) + " is out of range or held twice",
+                            Where::in_file((s.dir / "sweep.json").string()));
+            rows[i] = &s.rows[k];
+        }
+    }
+    for (std::size_t i = 0; i < total; ++i)
+        if (!rows[i]) throw Error("row " + std::to_string(i) + " is in no shard", Where::in_file(dirs.front()));
+
+    TempDir temp(out);
+    fs::create_directories(temp.path() / "images");
+    std::string csv = csv_header();
+    std::vector<std::size_t> indices(total);
+    for (std::size_t i = 0; i < total; ++i) {
+        csv += rows[i]->raw + "\n";
+        indices[i] = i;
+    }
+    for (const ShardDir& s : shards) copy_images(s.dir, temp.path());
+    write_text(temp.path() / "sweep.csv", csv);
+    write_text(temp.path() / "sweep.json", sweep_json_text(first.parameters, Shard{0, 1}, indices));
+    write_sweep_report(temp.path().string());
+    temp.commit();
+}
+
+}  // namespace tessref::sweep

@@ -1,0 +1,518 @@
+// Tests of `tessref sweep` (src/sweep/, src/cli/cmd_sweep.cpp, docs/SWEEP.md).
+//
+// Where the expected values come from:
+//  - the geometric error (src/sweep/geometric_error.h) against hand-derived values: a flat
+//    height map gives a flat tessellation and a flat truth, so 0 at every level and spacing;
+//    one raised texel under a level-1 patch is a hat function of the truth's triangulation,
+//    whose maximum and area-weighted RMS follow from the hat's shape (worked out below); a
+//    ridge along a tessellation edge over a valley of the truth is largest where the edge
+//    crosses a texel grid line, where no vertex of either surface lies;
+//  - the pipeline's timings: the same mesh with and without asking for them;
+//  - the command: row counts from the definition (scenes x (precisions own rows + spacings
+//    x precisions x levels)), row order, sharded runs merged against the unsharded run,
+//    refusals (exit 2, nothing written), the SLURM variables.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "command_dir_test.h"
+#include "extremes/extremes.h"
+#include "run_program.h"
+#include "sweep/geometric_error.h"
+#include "tessref/pipeline.h"
+#include "tessref/scene.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using tessref::test::CommandDirTest;
+using tessref::test::read_file;
+using tessref::test::RunResult;
+using tessref::test::write_file;
+using tessref::test::extremes::Terrain;
+using tessref::test::extremes::write_pgm;
+
+const fs::path kSource = TESSREF_SOURCE_DIR;
+
+// ---- the geometric error, by hand -----------------------------------------------------------
+
+// A one-patch thesis terrain over [0, 8]^2 (texture coordinate = xy / 8), constant level,
+// written with its height map into `dir`.
+struct OnePatch {
+    fs::path dir;
+    int width = 4, height = 4;
+    std::vector<int> codes = std::vector<int>(16, 0);
+    double scale_z = 2.0;
+    double level = 1.0;
+    std::string spacing = "fractional_odd";
+
+    tessref::Scene scene() const {
+        write_pgm(dir / "map.pgm", width, height, 255, codes);
+        Terrain t;
+        t.nu = t.nv = 1;
+        t.heightmap = "map.pgm";
+        t.scale_z = scale_z;
+        t.spacing = spacing;
+        t.control = "model = \"constant\"\nlevel = " + tessref::test::extremes::num(level);
+        const fs::path file = dir / "scene.toml";
+        write_file(file, t.toml());
+        return tessref::load_scene(file.string());
+    }
+};
+
+tessref::sweep::GeometricError error_of(const tessref::Scene& scene, tessref::Precision precision,
+                                         tessref::PipelineResult* out = nullptr) {
+    tessref::PipelineOptions options;
+    options.precision = precision;
+    tessref::PipelineResult result = tessref::run_pipeline(scene, options);
+    const tessref::sweep::TruthSurface truth = tessref::sweep::truth_surface(scene);
+    const auto e = tessref::sweep::geometric_error(truth, result.mesh, &*scene.camera);
+    if (out) *out = std::move(result);
+    return e;
+}
+
+class SweepGeometricError : public CommandDirTest {};
+
+// A flat height map: every tessellated vertex and every truth vertex has the same height,
+// and both surfaces interpolate linearly between them, so the error is 0 everywhere, at any
+// level and spacing. Code 255 reads 1.0 and scale_z 2 gives 2.0, exact in float too, so the
+// gpu precision must also give exactly 0; any code in exact precision.
+TEST_F(SweepGeometricError, FlatHeightMapIsZeroAtEveryLevel) {
+    for (const int code : {255, 100}) {
+        for (const std::string spacing : {"equal", "fractional_odd", "fractional_even"}) {
+            for (const double level : {1.0, 2.0, 3.0, 5.5, 8.0, 17.0}) {
+                OnePatch p{dir_};
+                p.width = 5;  // texel centres off the tessellation's vertices
+                p.height = 3;
+                p.codes.assign(15, code);
+                p.spacing = spacing;
+                p.level = level;
+                const tessref::Scene scene = p.scene();
+                for (const auto precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
+                    if (code != 255 && precision == tessref::Precision::gpu) continue;
+                    const auto e = error_of(scene, precision);
+                    EXPECT_EQ(e.max, 0.0) << code << " " << spacing << " " << level;
+                    EXPECT_EQ(e.rms, 0.0) << code << " " << spacing << " " << level;
+                    EXPECT_EQ(e.max_px, 0.0);
+                    EXPECT_NEAR(e.area, 64.0, 1e-9);  // the whole patch is measured
+                }
+            }
+        }
+    }
+}
+
+// One raised texel at level 1. The 4 x 4 map is 0 except texel (1, 1) = 255 (1.0), scale_z
+// 2. The patch's corners read the corner texels (clamp to edge): all 0, so the tessellation
+// is the plane z = 0. The truth's vertex lines are the borders 0, 8 and the texel centres
+// 1, 3, 5, 7; it is 0 at every vertex but the centre of texel (1, 1), (3, 3) (or its mirror
+// image, wherever the loader puts row 1), where it is 2: a hat function of height 2 over
+// the six truth triangles that share that vertex (the quads split from low-low to
+// high-high corner: both triangles of [1,3]^2 and of [3,5]^2, one of each of the two other
+// quads), each of area 2 (half a 2 x 2 quad).
+//   max = 2, at the hat's top.
+//   integral of G^2 = 6 triangles x (area 2 x (2^2 + 0 + 0 + 0 + 0 + 0) / 6) = 8
+//   (a linear function with corner values a, b, c on a triangle of area A integrates its
+//   square to A (a^2 + b^2 + c^2 + ab + bc + ca) / 6), over the area 64:
+//   rms = sqrt(8 / 64) = sqrt(1/8).
+TEST_F(SweepGeometricError, OneRaisedTexelAtLevelOne) {
+    OnePatch p{dir_};
+    p.codes[1 * 4 + 1] = 255;
+    const tessref::Scene scene = p.scene();
+    for (const auto precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
+        tessref::PipelineResult result;
+        const auto e = error_of(scene, precision, &result);
+        ASSERT_EQ(result.mesh.triangles.size(), 2u);
+        EXPECT_NEAR(e.max, 2.0, 1e-12);
+        EXPECT_NEAR(e.rms, std::sqrt(1.0 / 8.0), 1e-12);
+        EXPECT_NEAR(e.area, 64.0, 1e-12);
+        EXPECT_NEAR(e.max_at.x, 3.0, 1e-12);
+        EXPECT_TRUE(std::abs(e.max_at.y - 3.0) < 1e-12 || std::abs(e.max_at.y - 5.0) < 1e-12) << e.max_at.y;
+        // The screen size: the segment from the hat's top down to the plane, both ends in
+        // view, projected by glm::project with the scene's camera (not the sweep's code).
+        const tessref::SceneCamera& c = *scene.camera;
+        const glm::dvec4 viewport(0.0, 0.0, c.viewport.x, c.viewport.y);
+        const glm::dvec3 top = glm::project(glm::dvec3(3.0, e.max_at.y, 2.0), c.view(), c.projection(), viewport);
+        const glm::dvec3 foot = glm::project(glm::dvec3(3.0, e.max_at.y, 0.0), c.view(), c.projection(), viewport);
+        EXPECT_NEAR(e.max_px, glm::length(glm::dvec2(top) - glm::dvec2(foot)), 1e-9);
+        EXPECT_GT(e.max_px, 1.0);
+    }
+}
+
+// The error is largest where a tessellation edge crosses a texel grid line, away from every
+// vertex of both surfaces. A 4 x 3 map over [0, 8]^2: texel centres at x = 1, 3, 5, 7 and
+// y = 4/3, 4, 20/3, so the patch's diagonal y = x (or x + y = 8) passes through none of them.
+// Two opposite corner texels are 255 (height H = 2), the rest 0. At level 1 the patch is two
+// triangles; the corners on the tessellation's diagonal are the high ones (the map is
+// mirrored if the generator splits along the other diagonal), so the tessellation is a
+// ridge of height H along that diagonal, falling linearly to 0 at the two other corners:
+// T = H (1 - |d| / 8) with d the distance of x from the diagonal along x.
+// The truth is 0 in the quads [3, 5] x [4/3, 4] and [3, 5] x [4, 20/3] (all four corners are
+// 0-texel centres), which the diagonal runs through: there the error is H, e.g. at (4, 4),
+// where the diagonal crosses the grid line y = 4. Sampling only vertices misses it: at the
+// tessellation's vertices the truth equals the tessellation (clamped corner texels), and at
+// the texel-centre vertices nearest the diagonal, (3, 4) and (5, 4) (|d| = 1), the error is
+// H (1 - 1/8) = 7H/8; the others are farther from the ridge or on a raised texel.
+TEST_F(SweepGeometricError, MaximumAtATessellationEdgeCrossingAGridLine) {
+    const double H = 2.0;
+    for (const bool mirrored : {false, true}) {
+        OnePatch p{dir_};
+        p.width = 4;
+        p.height = 3;
+        p.codes.assign(12, 0);
+        p.codes[mirrored ? 3 : 0] = 255;            // row 0: column 0 (or 3)
+        p.codes[2 * 4 + (mirrored ? 0 : 3)] = 255;  // row 2: column 3 (or 0)
+        const tessref::Scene scene = p.scene();
+        tessref::PipelineResult result;
+        const auto e = error_of(scene, tessref::Precision::exact, &result);
+        const auto& mesh = result.mesh;
+        ASSERT_EQ(mesh.triangles.size(), 2u);
+        // The two vertices both triangles share: the tessellation's diagonal.
+        std::vector<glm::dvec3> shared;
+        for (const auto a : mesh.triangles[0])
+            for (const auto b : mesh.triangles[1])
+                if (mesh.positions[a] == mesh.positions[b]) shared.push_back(mesh.positions[a]);
+        ASSERT_EQ(shared.size(), 2u);
+        if (shared[0].z != H || shared[1].z != H) continue;  // this map's high corners are off the diagonal
+        EXPECT_NEAR(e.max, H, 1e-12);
+        // Vertex-only sampling, done here: |T - G| at the tessellation's vertices and at the
+        // truth's vertices (T from the plane of the tessellated triangle holding the point).
+        // Its maximum is the hand-derived 7H/8, at (3, 4) and (5, 4), short of H.
+        const tessref::sweep::TruthSurface truth = tessref::sweep::truth_surface(scene);
+        const auto tessellation_at = [&](double x, double y) {
+            for (const auto& tri : mesh.triangles) {
+                const glm::dvec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+                const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+                const double s1 = ((x - a.x) * (c.y - a.y) - (c.x - a.x) * (y - a.y)) / det;
+                const double s2 = ((b.x - a.x) * (y - a.y) - (x - a.x) * (b.y - a.y)) / det;
+                if (s1 >= -1e-12 && s2 >= -1e-12 && s1 + s2 <= 1.0 + 1e-12) return a.z + s1 * (b.z - a.z) + s2 * (c.z - a.z);
+            }
+            ADD_FAILURE() << "no triangle holds (" << x << ", " << y << ")";
+            return 0.0;
+        };
+        double vertex_only = 0.0;
+        for (std::size_t j = 0; j < truth.vs.size(); ++j)
+            for (std::size_t i = 0; i < truth.us.size(); ++i)
+                vertex_only = std::max(vertex_only,
+                                       std::abs(tessellation_at(truth.us[i], truth.vs[j]) - truth.height(i, j)));
+        for (const glm::dvec3& v : mesh.positions) {
+            const std::size_t i = static_cast<std::size_t>(std::find(truth.us.begin(), truth.us.end(), v.x) - truth.us.begin());
+            const std::size_t j = static_cast<std::size_t>(std::find(truth.vs.begin(), truth.vs.end(), v.y) - truth.vs.begin());
+            ASSERT_TRUE(i < truth.us.size() && j < truth.vs.size());  // the patch's corners are truth vertices
+            vertex_only = std::max(vertex_only, std::abs(v.z - truth.height(i, j)));
+        }
+        EXPECT_NEAR(vertex_only, 7.0 * H / 8.0, 1e-12);
+        return;
+    }
+    FAIL() << "neither map put the raised corners on the tessellation's diagonal";
+}
+
+// ---- the pipeline's timings change nothing ---------------------------------------------------
+
+TEST(SweepPipelineTimings, FilledWithoutChangingTheOutput) {
+    const tessref::Scene scene = tessref::load_scene((kSource / "data/scenes/thesis-distance-4.toml").string());
+    for (const auto precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
+        tessref::PipelineOptions plain;
+        plain.precision = precision;
+        const tessref::PipelineResult a = tessref::run_pipeline(scene, plain);
+        tessref::PipelineTimings timings;
+        timings.control = -1.0;
+        tessref::PipelineOptions timed = plain;
+        timed.timings = &timings;
+        const tessref::PipelineResult b = tessref::run_pipeline(scene, timed);
+        EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+        EXPECT_EQ(a.mesh.normals, b.mesh.normals);
+        EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+        EXPECT_GE(timings.control, 0.0);
+        EXPECT_GE(timings.generator, 0.0);
+        EXPECT_GT(timings.evaluation, 0.0);
+        EXPECT_GE(timings.geometry, 0.0);
+    }
+}
+
+// ---- the command -----------------------------------------------------------------------------
+
+const std::vector<std::string> kColumns{
+    "scene",       "model",      "level",         "spacing",          "precision",     "patches",
+    "triangles",   "points",     "control_ms",    "generator_ms",     "evaluation_ms", "geometry_ms",
+    "raster_shading_ms",         "total_ms",      "geo_max",          "geo_rms",       "geo_max_px",
+    "img_rmse",    "img_psnr",   "img_fail_px",   "gpu_exact_max_pos", "gpu_exact_image_differs",
+    "image",       "diff_image", "wire_image",    "truth_image"};
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+    std::vector<std::string> fields;
+    std::string f;
+    for (char c : line) {
+        if (c == ',') {
+            fields.push_back(f);
+            f.clear();
+        } else {
+            f += c;
+        }
+    }
+    fields.push_back(f);
+    return fields;
+}
+
+struct Csv {
+    std::vector<std::string> header;
+    std::vector<std::map<std::string, std::string>> rows;
+    std::vector<std::string> lines;  // rows as text
+};
+Csv read_csv(const fs::path& path) {
+    Csv csv;
+    std::istringstream in(read_file(path));
+    std::string line;
+    std::getline(in, line);
+    csv.header = split_csv_line(line);
+    while (std::getline(in, line)) {
+        const auto fields = split_csv_line(line);
+        std::map<std::string, std::string> row;
+        for (std::size_t k = 0; k < fields.size() && k < csv.header.size(); ++k) row[csv.header[k]] = fields[k];
+        csv.rows.push_back(row);
+        csv.lines.push_back(line);
+    }
+    return csv;
+}
+
+// The CSV's text with every *_ms field emptied: what must be byte-identical between runs.
+std::string without_timings(const fs::path& path) {
+    const Csv csv = read_csv(path);
+    std::string text;
+    for (const std::string& line : csv.lines) {
+        const auto fields = split_csv_line(line);
+        for (std::size_t k = 0; k < fields.size(); ++k) {
+            const std::string& name = csv.header[k];
+            const bool timing = name.size() > 3 && name.compare(name.size() - 3, 3, "_ms") == 0;
+            text += (k ? "," : "") + (timing ? std::string() : fields[k]);
+        }
+        text += "\n";
+    }
+    return text;
+}
+
+std::map<std::string, std::string> files_under(const fs::path& dir) {
+    std::map<std::string, std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+        if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = read_file(e.path());
+    return files;
+}
+
+class SweepCommand : public CommandDirTest {
+protected:
+    // A 2 x 2 patch terrain over [0, 8]^2 on a 5 x 4 map with one raised texel, its own
+    // control stage the thesis's distance factor (so its own row differs from a uniform one).
+    std::string terrain(const std::string& name = "bump", bool flat = false) {
+        std::vector<int> codes(20, flat ? 255 : 40);
+        if (!flat) codes[1 * 5 + 2] = 250;
+        write_pgm(dir_ / (name + ".pgm"), 5, 4, 255, codes);
+        Terrain t;
+        t.heightmap = name + ".pgm";
+        t.control = "model = \"thesis\"\nfactor = \"distance\"\nlevel = 3.0";
+        std::string toml = t.toml();
+        toml.replace(toml.find("name = \"extreme\""), 16, "name = \"" + name + "\"");
+        write_file(dir_ / (name + ".toml"), toml);
+        return name + ".toml";
+    }
+    // tessref ARGS, run inside the test's directory (relative names are its files).
+    RunResult run_here(const std::vector<std::string>& args) {
+        return tessref::test::run_program(TESSREF_EXE, args, dir_, dir_);
+    }
+    RunResult sweep(std::vector<std::string> args) {
+        args.insert(args.begin(), "sweep");
+        args.push_back("--size");
+        args.push_back("64x40");
+        return run_here(args);
+    }
+};
+
+TEST_F(SweepCommand, RowsColumnsAndOrder) {
+    const std::string a = terrain("bump"), b = terrain("flat", true);
+    const RunResult r = sweep({a, b, "--levels", "1,2..3", "--precision", "gpu,exact", "--spacing",
+                               "equal,fractional_odd", "-o", "out"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Csv csv = read_csv(dir_ / "out/sweep.csv");
+    EXPECT_EQ(csv.header, kColumns);
+    // scenes x (precisions own rows + spacings x precisions x levels) = 2 x (2 + 2 x 2 x 3)
+    ASSERT_EQ(csv.rows.size(), 2u * (2u + 2u * 2u * 3u));
+    // The order: scene; its own rows first (per precision); then spacing, precision, level.
+    std::vector<std::string> order;
+    for (const auto& row : csv.rows)
+        order.push_back(row.at("scene") + " " + row.at("model") + " " + row.at("spacing") + " " + row.at("precision") +
+                        " " + row.at("level"));
+    EXPECT_EQ(order[0], "bump thesis fractional_odd gpu ");
+    EXPECT_EQ(order[1], "bump thesis fractional_odd exact ");
+    EXPECT_EQ(order[2], "bump uniform equal gpu 1");
+    EXPECT_EQ(order[4], "bump uniform equal gpu 3");
+    EXPECT_EQ(order[5], "bump uniform equal exact 1");
+    EXPECT_EQ(order[8], "bump uniform fractional_odd gpu 1");
+    EXPECT_EQ(order[13], "bump uniform fractional_odd exact 3");
+    EXPECT_EQ(order[14], "flat thesis fractional_odd gpu ");
+    for (const auto& row : csv.rows) {
+        EXPECT_EQ(row.at("patches"), "4");
+        if (row.at("model") == "uniform" && row.at("spacing") == "equal") {
+            // equal spacing at level L: (L x L quads) x 2 triangles per patch
+            const int level = std::stoi(row.at("level"));
+            EXPECT_EQ(row.at("triangles"), std::to_string(4 * 2 * level * level));
+        }
+        // The flat map (code 255 x scale_z 2.0 = 2.0, exact in float): no geometric error.
+        if (row.at("scene") == "flat") EXPECT_EQ(row.at("geo_max"), "0") << row.at("level");
+        if (row.at("scene") == "bump") EXPECT_NE(row.at("geo_max"), "0");
+        // Both precisions ran: the pair columns are filled.
+        EXPECT_FALSE(row.at("gpu_exact_max_pos").empty());
+        EXPECT_TRUE(row.at("gpu_exact_image_differs") == "0" || row.at("gpu_exact_image_differs") == "1");
+        EXPECT_FALSE(row.at("img_rmse").empty());
+        EXPECT_FALSE(row.at("img_fail_px").empty());
+        EXPECT_EQ(row.at("truth_image"), "images/" + row.at("scene") + "/truth.png");
+        // Pictures at chosen levels: the own row, powers of two (1, 2), the largest level
+        // (3): every row here.
+        for (const char* column : {"image", "diff_image", "wire_image"}) {
+            ASSERT_FALSE(row.at(column).empty()) << column;
+            EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / row.at(column))) << row.at(column);
+        }
+    }
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "out/images/bump/truth.png"));
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "out/index.html"));
+    // Not a chosen level: 3 of 1..4 keeps no pictures.
+    ASSERT_EQ(sweep({a, "--levels", "1..4", "-o", "four"}).status, 0);
+    for (const auto& row : read_csv(dir_ / "four/sweep.csv").rows)
+        EXPECT_EQ(row.at("image").empty(), row.at("level") == "3") << row.at("level");
+}
+
+TEST_F(SweepCommand, ShardsMergeToTheUnshardedRun) {
+    const std::string a = terrain("bump"), b = terrain("flat", true);
+    const std::vector<std::string> common{a, b, "--levels", "1..3", "--precision", "gpu,exact"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = common;
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    ASSERT_EQ(sweep(with({"-o", "whole", "--threads", "1"})).status, 0);
+    for (int i = 0; i < 3; ++i) {
+        const RunResult r = sweep(with({"-o", "s" + std::to_string(i), "--shard", std::to_string(i) + "/3"}));
+        ASSERT_EQ(r.status, 0) << r.err;
+    }
+    const RunResult m = run_here({"sweep", "merge", "s2", "s0", "s1", "-o", "merged"});
+    ASSERT_EQ(m.status, 0) << m.err;
+    EXPECT_EQ(without_timings(dir_ / "merged/sweep.csv"), without_timings(dir_ / "whole/sweep.csv"));
+    EXPECT_EQ(read_csv(dir_ / "merged/sweep.csv").rows.size(), 2u * (2u + 2u * 3u));
+    EXPECT_EQ(read_file(dir_ / "merged/sweep.json"), read_file(dir_ / "whole/sweep.json"));
+    // The pictures: the same names, the same bytes.
+    std::map<std::string, std::string> whole, merged;
+    for (const auto& [name, bytes] : files_under(dir_ / "whole/images")) whole[name] = bytes;
+    for (const auto& [name, bytes] : files_under(dir_ / "merged/images")) merged[name] = bytes;
+    EXPECT_EQ(whole, merged);
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "merged/index.html"));
+    // Another thread count changes nothing but the timings.
+    ASSERT_EQ(sweep(with({"-o", "two", "--threads", "2"})).status, 0);
+    EXPECT_EQ(without_timings(dir_ / "two/sweep.csv"), without_timings(dir_ / "whole/sweep.csv"));
+}
+
+TEST_F(SweepCommand, MergeRefusesMismatchedDuplicateMissingAndCorruptShards) {
+    const std::string a = terrain("bump");
+    for (int i = 0; i < 3; ++i)
+        ASSERT_EQ(sweep({a, "--levels", "1,2", "-o", "s" + std::to_string(i), "--shard", std::to_string(i) + "/3"}).status, 0);
+    ASSERT_EQ(sweep({a, "--levels", "1,3", "-o", "other", "--shard", "2/3"}).status, 0);
+    const auto refused = [&](const std::vector<std::string>& dirs, const std::string& named) {
+        std::vector<std::string> args{"sweep", "merge"};
+        args.insert(args.end(), dirs.begin(), dirs.end());
+        args.push_back("-o");
+        args.push_back("merged");
+        const RunResult r = run_here(args);
+        EXPECT_EQ(r.status, 2) << r.err;
+        EXPECT_NE(r.err.find(named), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir_ / "merged"));
+    };
+    refused({"s0", "s1", "other"}, "other");                  // another sweep
+    refused({"s0", "s1", "s1"}, "s1");                        // a shard twice
+    refused({"s0", "s1"}, "shard 2/3 is missing");            // a shard missing
+    refused({"s0", "s1", "nowhere"}, "nowhere");              // not a directory
+    fs::copy(dir_ / "s1", dir_ / "cut", fs::copy_options::recursive);
+    const std::string csv = read_file(dir_ / "cut/sweep.csv");
+    write_file(dir_ / "cut/sweep.csv", csv.substr(0, csv.size() - 10));  // a truncated last line
+    refused({"s0", "cut", "s2"}, "cut");
+    write_file(dir_ / "cut/sweep.csv", csv.substr(0, csv.find('\n') + 1) + "a,b\n");  // a short row
+    refused({"s0", "cut", "s2"}, "cut");
+}
+
+TEST_F(SweepCommand, BadInputExitsTwoAndWritesNothing) {
+    const std::string a = terrain("bump");
+    write_file(dir_ / "file", "x");
+    const std::set<std::string> before = files();
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
+        {{"missing.toml", "-o", "out"}, "missing.toml"},
+        {{a, "--levels", "0", "-o", "out"}, "--levels"},
+        {{a, "--levels", "65", "-o", "out"}, "--levels"},
+        {{a, "--levels", "nan", "-o", "out"}, "--levels"},
+        {{a, "--levels", "1,x", "-o", "out"}, "--levels"},
+        {{a, "--levels", "4..2", "-o", "out"}, "--levels"},
+        {{a, "--levels", "1..", "-o", "out"}, "--levels"},
+        {{a, "--precision", "gpu,double", "-o", "out"}, "--precision"},
+        {{a, "--spacing", "odd", "-o", "out"}, "--spacing"},
+        {{a, "--shard", "3/3", "-o", "out"}, "--shard"},
+        {{a, "--shard", "x", "-o", "out"}, "--shard"},
+        {{a, "--repeat", "0", "-o", "out"}, "--repeat"},
+        {{a, "-o", "file"}, "file"},
+        {{a, "-o", "no/such/dir"}, "no/such/dir"},
+        {{a, "-o", "."}, "."},  // not empty, and not an earlier sweep
+        {{a}, "-o"},
+    };
+    for (const auto& [args, named] : cases) {
+        const RunResult r = sweep(args);
+        EXPECT_EQ(r.status, 2) << args[0] << " " << args[1] << ": " << r.err;
+        EXPECT_NE(r.err.find(named), std::string::npos) << r.err;
+        EXPECT_EQ(files(), before) << r.err;
+    }
+}
+
+TEST_F(SweepCommand, SlurmArrayPicksTheShard) {
+    const std::string a = terrain("bump");
+    ASSERT_EQ(sweep({a, "--levels", "1..3", "-o", "by-flag", "--shard", "1/3"}).status, 0);
+    // An array 4..6: task 5 is the second of three.
+    const RunResult r = tessref::test::run_program(
+        "env",
+        {"SLURM_ARRAY_TASK_ID=5", "SLURM_ARRAY_TASK_MIN=4", "SLURM_ARRAY_TASK_COUNT=3", TESSREF_EXE, "sweep", a,
+         "--levels", "1..3", "--size", "64x40", "-o", "by-env"},
+        dir_, dir_);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto json = nlohmann::json::parse(read_file(dir_ / "by-env/sweep.json"));
+    EXPECT_EQ(json["shard"]["index"], 1);
+    EXPECT_EQ(json["shard"]["count"], 3);
+    EXPECT_EQ(without_timings(dir_ / "by-env/sweep.csv"), without_timings(dir_ / "by-flag/sweep.csv"));
+    // --shard wins over the environment; a task outside the array is bad input.
+    const RunResult bad = tessref::test::run_program(
+        "env",
+        {"SLURM_ARRAY_TASK_ID=9", "SLURM_ARRAY_TASK_COUNT=3", TESSREF_EXE, "sweep", a, "--size", "64x40", "-o", "bad"},
+        dir_, dir_);
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("SLURM_ARRAY_TASK_ID"), std::string::npos) << bad.err;
+    EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
+TEST_F(SweepCommand, MeshSceneHasNoGeometricOrImageError) {
+    const RunResult r =
+        sweep({(kSource / "data/scenes/pn-triangles.toml").string(), "--levels", "1,2", "-o", "out", "--repeat", "3"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Csv csv = read_csv(dir_ / "out/sweep.csv");
+    ASSERT_EQ(csv.rows.size(), 3u);
+    EXPECT_EQ(csv.rows[0].at("model"), "pn");
+    for (const auto& row : csv.rows) {
+        for (const char* column : {"geo_max", "geo_rms", "geo_max_px", "img_rmse", "img_psnr", "img_fail_px",
+                                   "truth_image", "diff_image", "gpu_exact_max_pos"})
+            EXPECT_EQ(row.at(column), "") << column;
+        EXPECT_FALSE(row.at("image").empty());
+        EXPECT_NE(row.at("triangles"), "0");
+    }
+}
+
+}  // namespace
