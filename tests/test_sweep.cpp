@@ -243,7 +243,7 @@ TEST(SweepPipelineTimings, FilledWithoutChangingTheOutput) {
 // ---- the command -----------------------------------------------------------------------------
 
 const std::vector<std::string> kColumns{
-    "scene",       "model",      "level",         "spacing",          "precision",     "patches",
+    "scene",       "model",      "level",         "spacing",          "precision",     "camera_relative", "patches",
     "triangles",   "points",     "control_ms",    "generator_ms",     "evaluation_ms", "geometry_ms",
     "raster_shading_ms",         "total_ms",      "geo_max",          "geo_rms",       "geo_max_px",
     "img_rmse",    "img_psnr",   "img_fail_px",   "gpu_exact_max_pos", "gpu_exact_image_differs",
@@ -387,6 +387,34 @@ TEST_F(SweepCommand, RowsColumnsAndOrder) {
     ASSERT_EQ(sweep({a, "--levels", "1..4", "-o", "four"}).status, 0);
     for (const auto& row : read_csv(dir_ / "four/sweep.csv").rows)
         EXPECT_EQ(row.at("image").empty(), row.at("level") == "3") << row.at("level");
+}
+
+// --camera-relative off,on runs every row both ways: the off rows of a scene first, then
+// the on rows in the same order, told apart by the camera_relative column and by pictures
+// whose names end in -cr. Exact precision ignores the option (PipelineOptions), so its on
+// rows repeat its off rows' measurements; a bad value is refused.
+TEST_F(SweepCommand, CameraRelativeRunsEveryRowBothWays) {
+    const std::string a = terrain("bump");
+    const RunResult r = sweep({a, "--levels", "1,2", "--precision", "gpu,exact", "--camera-relative", "off,on", "-o", "out"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Csv csv = read_csv(dir_ / "out/sweep.csv");
+    ASSERT_EQ(csv.rows.size(), 2u * (2u + 2u * 2u));
+    for (std::size_t k = 0; k < csv.rows.size(); ++k) {
+        const auto& row = csv.rows[k];
+        const bool on = k >= 6;
+        EXPECT_EQ(row.at("camera_relative"), on ? "1" : "0") << k;
+        if (k < 6) {
+            const auto& twin = csv.rows[k + 6];
+            EXPECT_EQ(twin.at("model") + twin.at("level") + twin.at("precision"),
+                      row.at("model") + row.at("level") + row.at("precision"));
+            if (row.at("precision") == "exact")
+                for (const char* column : {"triangles", "geo_max", "geo_rms", "img_rmse"})
+                    EXPECT_EQ(twin.at(column), row.at(column)) << column;
+        }
+        EXPECT_EQ(row.at("image").ends_with("-cr.png"), on) << row.at("image");
+    }
+    EXPECT_EQ(sweep({a, "--camera-relative", "sometimes", "-o", "bad"}).status, 2);
+    EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
 
 TEST_F(SweepCommand, ShardsMergeToTheUnshardedRun) {

@@ -37,6 +37,7 @@ struct SweepCommandOptions {
     std::string output;
     std::string levels = kDefaultLevels;
     std::string precision = "gpu";
+    std::string camera_relative = "off";
     std::string spacing;  // empty: each scene's own
     int repeat = 1;
     std::string shard;
@@ -135,6 +136,14 @@ int run_sweep_command(const SweepCommandOptions& o) {
         if (std::find(p.precisions.begin(), p.precisions.end(), precision) == p.precisions.end())
             p.precisions.push_back(precision);
     }
+    p.camera_relative.clear();
+    for (const std::string& item : split_list(o.camera_relative, "--camera-relative")) {
+        if (item != "off" && item != "on")
+            throw Error("--camera-relative takes off, on or off,on, not '" + item + "'", Where::in_file("--camera-relative"));
+        const bool relative = item == "on";
+        if (std::find(p.camera_relative.begin(), p.camera_relative.end(), relative) == p.camera_relative.end())
+            p.camera_relative.push_back(relative);
+    }
     if (!o.spacing.empty()) {
         for (const std::string& item : split_list(o.spacing, "--spacing")) {
             const std::optional<Spacing> spacing = parse_spacing(item);
@@ -184,6 +193,10 @@ Command add_sweep_command(CLI::App& parent) {
     app->add_option("--spacing", options->spacing,
                     "Spacings of the uniform rows, comma-separated: equal, fractional_odd, fractional_even "
                     "(default: each scene's own)");
+    app->add_option("--camera-relative", options->camera_relative,
+                    "Camera-relative evaluation (render --camera-relative), comma-separated: off, on; off,on runs "
+                    "every row both ways")
+        ->default_str("off");
     app->add_option("--repeat", options->repeat, "Runs per row; timings are the median")->default_val(1);
     app->add_option("--shard", options->shard,
                     "Run shard I of N (0 <= I < N) into DIR (default: SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN of "

@@ -34,7 +34,8 @@ namespace tessref::sweep {
 
 const std::vector<std::string>& csv_columns() {
     static const std::vector<std::string> columns{
-        "scene",       "model",       "level",          "spacing",           "precision",     "patches",
+        "scene",       "model",       "level",          "spacing",           "precision",
+        "camera_relative",            "patches",
         "triangles",   "points",      "control_ms",     "generator_ms",      "evaluation_ms", "geometry_ms",
         "raster_shading_ms",          "total_ms",       "geo_max",           "geo_rms",       "geo_max_px",
         "img_rmse",    "img_psnr",    "img_fail_px",    "gpu_exact_max_pos", "gpu_exact_image_differs",
@@ -228,6 +229,7 @@ struct Row {
     double level = 0.0;     // uniform rows
     Spacing spacing = Spacing::equal;
     Precision precision = Precision::gpu;
+    bool camera_relative = false;
 };
 
 std::string slug_of(const std::string& name) {
@@ -274,31 +276,35 @@ std::vector<Row> plan_rows(const SweepParameters& p, const std::vector<SweepScen
     std::size_t group = 0;
     for (std::size_t s = 0; s < scenes.size(); ++s) {
         const Scene& scene = scenes[s].scene;
-        for (Precision precision : p.precisions) {
-            Row r;
-            r.group = group;
-            r.scene = s;
-            r.own = true;
-            r.spacing = scene.generator.spacing;
-            r.precision = precision;
-            rows.push_back(r);
-        }
-        ++group;
-        const std::vector<Spacing> spacings = spacings_for(p, scene);
-        for (std::size_t k = 0; k < spacings.size(); ++k) {
-            const std::size_t first_group = group;
+        for (const bool relative : p.camera_relative) {
             for (Precision precision : p.precisions) {
-                for (std::size_t l = 0; l < p.levels.size(); ++l) {
-                    Row r;
-                    r.group = first_group + l;
-                    r.scene = s;
-                    r.level = p.levels[l];
-                    r.spacing = spacings[k];
-                    r.precision = precision;
-                    rows.push_back(r);
-                }
+                Row r;
+                r.group = group;
+                r.scene = s;
+                r.own = true;
+                r.spacing = scene.generator.spacing;
+                r.precision = precision;
+                r.camera_relative = relative;
+                rows.push_back(r);
             }
-            group += p.levels.size();
+            ++group;
+            const std::vector<Spacing> spacings = spacings_for(p, scene);
+            for (std::size_t k = 0; k < spacings.size(); ++k) {
+                const std::size_t first_group = group;
+                for (Precision precision : p.precisions) {
+                    for (std::size_t l = 0; l < p.levels.size(); ++l) {
+                        Row r;
+                        r.group = first_group + l;
+                        r.scene = s;
+                        r.level = p.levels[l];
+                        r.spacing = spacings[k];
+                        r.precision = precision;
+                        r.camera_relative = relative;
+                        rows.push_back(r);
+                    }
+                }
+                group += p.levels.size();
+            }
         }
     }
     for (std::size_t i = 0; i < rows.size(); ++i) rows[i].index = i;
@@ -337,7 +343,8 @@ std::string level_text(double level) { return real(level); }
 std::string row_description(const Row& row, const std::vector<SweepScene>& scenes) {
     const SweepScene& s = scenes[row.scene];
     std::string d = s.name + " " + (row.own ? control_model_name(s.scene) + " (own)" : "uniform " + level_text(row.level));
-    return d + " " + std::string(to_string(row.spacing)) + " " + std::string(to_string(row.precision));
+    return d + " " + std::string(to_string(row.spacing)) + " " + std::string(to_string(row.precision)) +
+           (row.camera_relative ? " camera-relative" : "");
 }
 
 // The parameters that make two shards parts of one sweep.
@@ -362,6 +369,9 @@ nlohmann::ordered_json parameters_json(const SweepParameters& p, const std::vect
         for (Spacing x : p.spacings) spacings.push_back(std::string(to_string(x)));
         j["spacings"] = spacings;
     }
+    nlohmann::ordered_json relative = nlohmann::ordered_json::array();
+    for (const bool r : p.camera_relative) relative.push_back(r);
+    j["camera_relative"] = relative;
     j["repeat"] = p.repeat;
     j["size"] = std::to_string(p.size.x) + "x" + std::to_string(p.size.y);
     j["rows"] = rows;
@@ -481,6 +491,7 @@ private:
         f["level"] = row.own ? "" : level_text(row.level);
         f["spacing"] = std::string(to_string(row.spacing));
         f["precision"] = std::string(to_string(row.precision));
+        f["camera_relative"] = row.camera_relative ? "1" : "0";
         f["patches"] = std::to_string(scene.patch_count());
 
         // The timed runs: pipeline (per pass) and rasterizer + shading, median of repeat.
@@ -492,10 +503,12 @@ private:
         RenderOptions render_options;
         render_options.size = p_.size;
         render_options.precision = row.precision;
+        render_options.camera_relative = row.camera_relative;
         for (int r = 0; r < p_.repeat; ++r) {
             PipelineTimings timings;
             PipelineOptions options;
             options.precision = row.precision;
+            options.camera_relative = row.camera_relative;
             options.timings = &timings;
             image = RenderResult{};
             pipeline.reset();
@@ -536,7 +549,7 @@ private:
         if (keeps_pictures(row, largest_level_)) {
             const std::string stem = "images/" + s.slug + "/" +
                                      (row.own ? "own" : std::string(to_string(row.spacing)) + "-L" + level_text(row.level)) +
-                                     "-" + std::string(to_string(row.precision));
+                                     "-" + std::string(to_string(row.precision)) + (row.camera_relative ? "-cr" : "");
             fs::create_directories(dir_ / "images" / s.slug);
             write_image(image, (dir_ / (stem + ".png")).string(), ImageFormat::png);
             f["image"] = stem + ".png";

@@ -10,9 +10,10 @@
 // against the ray-traced ground truth (render.h raytrace_scene, compare.h), and, where both
 // precisions run, how far the gpu run lies from the exact one.
 //
-// ROWS are numbered in their CSV order: per scene (command-line order), first the scene's
-// own rows (one per precision, in --precision order), then per spacing (--spacing order),
-// per precision, per level (ascending). A GROUP is the rows that differ only in precision
+// ROWS are numbered in their CSV order: per scene (command-line order), per camera_relative
+// value (--camera-relative order), first the scene's own rows (one per precision, in
+// --precision order), then per spacing (--spacing order), per precision, per level
+// (ascending). A GROUP is the rows that differ only in precision
 // (they share the gpu-exact comparison); groups are numbered in order of their first row.
 // Shard I of N runs the groups g with g % N == I: the unit of sharding is the group, so that
 // both rows of a gpu/exact pair are computed in one process.
@@ -39,6 +40,9 @@ struct SweepParameters {
     std::vector<double> levels;             // ascending, distinct, each in [1, 64]
     std::vector<Precision> precisions;      // distinct, in the order given
     std::vector<Spacing> spacings;          // distinct, in the order given; empty: each scene's own
+    // Camera-relative evaluation off and/or on (PipelineOptions::camera_relative), distinct,
+    // in the order given: every row is run once per value.
+    std::vector<bool> camera_relative{false};
     int repeat = 1;                         // timings: median of this many runs
     glm::ivec2 size{320, 200};              // image size (replaces the cameras' viewports)
 };
