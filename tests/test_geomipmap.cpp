@@ -176,18 +176,18 @@ TEST(GeoMipSelect, CoarsestLevelWithinTheBoundAndTheTweenBetween) {
     for (int k = 0; k < kLevels; ++k) e[0][k] = MaxErrorVertex{{3, 3}, errors[k], 0.0};
 
     Settings s;
-    s.error_bound_px = 2.0;  // levels 0..2 within; level 3's 4 px is not
+    s.params.error_bound_px = 2.0;  // levels 0..2 within; level 3's 4 px is not
     auto f = select_levels(m, e, s, vp, viewport);
     // t = (2 - 1.5) / (4 - 1.5) = 0.2
     EXPECT_NEAR(f[0], 2.2, 1e-12);
-    s.error_bound_px = 100.0;
+    s.params.error_bound_px = 100.0;
     EXPECT_EQ(select_levels(m, e, s, vp, viewport)[0], 4.0);
-    s.error_bound_px = 0.25;  // not even level 1: t = 0.25 / 0.5
+    s.params.error_bound_px = 0.25;  // not even level 1: t = 0.25 / 0.5
     EXPECT_NEAR(select_levels(m, e, s, vp, viewport)[0], 0.5, 1e-12);
-    s.error_bound_px = 2.0;
-    s.tween = 0.75;  // a fixed tween replaces the computed one
+    s.params.error_bound_px = 2.0;
+    s.params.tween = 0.75;  // a fixed tween replaces the computed one
     EXPECT_EQ(select_levels(m, e, s, vp, viewport)[0], 2.75);
-    s.tween = 1.5;
+    s.params.tween = 1.5;
     EXPECT_THROW(select_levels(m, e, s, vp, viewport), Error);
 }
 
@@ -200,7 +200,7 @@ TEST(GeoMipSelect, APatchBehindTheNearPlaneStaysFine) {
     const glm::dmat4 view = glm::lookAt(glm::dvec3(16, 16, 10), glm::dvec3(16, 16, 0), glm::dvec3(0, 1, 0));
     const glm::dmat4 proj = glm::perspective(glm::radians(60.0), 1.0, 0.1, 1000.0);
     Settings s;
-    s.error_bound_px = 1e9;
+    s.params.error_bound_px = 1e9;
     for (double f : select_levels(m, e, s, proj * view, {64, 64})) EXPECT_EQ(f, 0.0);
 }
 
@@ -215,7 +215,7 @@ TEST(GeoMipSurface, AdaptingTrianglesLeaveNoTJunctionAndWithoutThemCheckFindsThe
     EXPECT_EQ(adapted.count(DefectClass::t_junction), 0u);
     EXPECT_EQ(adapted.boundary_loop_count, 1u);
 
-    s.adapt = false;
+    s.params.adapt = false;
     const CheckReport plain = check_surface(build_surface(m, levels, s));
     EXPECT_FALSE(plain.passed);
     EXPECT_GT(plain.count(DefectClass::t_junction), 0u) << report_text(plain);
@@ -254,7 +254,7 @@ TEST(GeoMipSurface, TweenZeroIsTheDiscreteLevelAndTweenOneReachesTheNextLevel) {
         // all at true heights, so this is the surface the switch to level k + 1 shows).
         const double t = 1.0;
         Settings s;
-        s.tween = t;
+        s.params.tween = t;
         const SurfaceMesh morphed = build_surface(m, std::vector<double>(4, k + t * 0.999999999), s);
         const SurfaceMesh next = build_surface(m, std::vector<double>(4, k + 1), Settings{});
         double worst = 0.0;
@@ -278,4 +278,108 @@ TEST(GeoMipSurface, TweenZeroIsTheDiscreteLevelAndTweenOneReachesTheNextLevel) {
         }
         EXPECT_LT(worst, 1e-6) << "a vertex pops by " << worst << " at the switch to level " << k + 1;
     }
+}
+
+// ---- the scene model ([evaluation] model = "geomipmap") --------------------------------
+
+#include "command_dir_test.h"
+#include "tessref/pipeline.h"
+#include "tessref/scene.h"
+
+namespace {
+
+const std::string kShipped = std::string(TESSREF_SOURCE_DIR) + "/data/scenes/jacksboro-geomipmap.toml";
+
+// The shipped scene's text with one line replaced (or added to its [evaluation] table).
+std::string shipped_with(const std::string& from, const std::string& to) {
+    std::string text = tessref::test::read_file(kShipped);
+    const std::size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return text;
+}
+
+Scene shipped_scene_with(const std::string& from, const std::string& to) {
+    return load_scene_from_string(shipped_with(from, to), kShipped);
+}
+
+}  // namespace
+
+TEST(GeoMipScene, TheShippedSceneExportsWithoutTJunctionsAndWithoutAdaptationCheckFindsThem) {
+    const Scene scene = load_scene(kShipped);
+    const PipelineResult result = run_pipeline(scene);
+    // Several levels in one frame, or the adaptation is not exercised.
+    std::vector<int> per_level(kLevels, 0);
+    for (const TessLevels& l : result.levels) ++per_level[static_cast<int>(l.inner[0])];
+    int used = 0;
+    for (int n : per_level) used += n > 0;
+    EXPECT_GE(used, 3) << per_level[0] << " " << per_level[1] << " " << per_level[2] << " " << per_level[3] << " "
+                       << per_level[4];
+    const CheckReport adapted = check_surface(result.mesh);
+    EXPECT_TRUE(adapted.passed) << report_text(adapted);
+    EXPECT_EQ(adapted.count(DefectClass::t_junction), 0u);
+
+    const Scene plain = shipped_scene_with("error_bound_px = 4.0", "error_bound_px = 4.0\nadapt = false");
+    const CheckReport r = check_surface(run_pipeline(plain).mesh);
+    EXPECT_FALSE(r.passed);
+    EXPECT_GT(r.count(DefectClass::t_junction), 0u);
+    std::printf("[   INFO   ] jacksboro-geomipmap: patches per level 0..4: %d %d %d %d %d; %zu triangles; "
+                "without adaptation %zu T-junctions\n",
+                per_level[0], per_level[1], per_level[2], per_level[3], per_level[4], result.mesh.triangles.size(),
+                r.count(DefectClass::t_junction));
+}
+
+TEST(GeoMipScene, AFixedTweenIsReproducibleAndStillClosed) {
+    for (const char* tween : {"0.0", "0.5", "1.0"}) {
+        const Scene scene = shipped_scene_with("error_bound_px = 4.0", std::string("error_bound_px = 4.0\ntween = ") + tween);
+        const PipelineResult a = run_pipeline(scene), b = run_pipeline(scene);
+        EXPECT_EQ(a.mesh.positions, b.mesh.positions) << tween;
+        const CheckReport r = check_surface(a.mesh);
+        EXPECT_TRUE(r.passed) << "tween " << tween << "\n" << report_text(r);
+    }
+}
+
+TEST(GeoMipScene, ErrorBoundZeroIsTheFullResolutionMap) {
+    const Scene scene = shipped_scene_with("error_bound_px = 4.0", "error_bound_px = 0.0");
+    const PipelineResult r = run_pipeline(scene, PipelineOptions{Precision::exact});
+    EXPECT_EQ(r.mesh.triangles.size(), 256u * 512u);  // every patch at level 0: 2 x 16 x 16 each
+    // Every vertex at its sample's height: v / 65535 * scale_z (texel_exact of a unorm16).
+    const Texture& t = scene.grid->heightmap->texture;
+    for (std::size_t v = 0; v < r.mesh.positions.size(); v += 97) {
+        const glm::vec3 tc = r.mesh.tess_coords[v];
+        const std::uint32_t p = r.mesh.patch_ids[v];
+        const int x = static_cast<int>(p % 16) * 16 + static_cast<int>(std::lround(tc.x * 16));
+        const int y = static_cast<int>(p / 16) * 16 + static_cast<int>(std::lround(tc.y * 16));
+        EXPECT_EQ(r.mesh.positions[v].z, t.texel_exact(0, x, y) * 16.8) << v;
+    }
+}
+
+TEST(GeoMipScene, ScenesThatDoNotFitAreRefusedNamingTheKey) {
+    const auto refused = [](const std::string& text, const std::string& key) {
+        try {
+            load_scene_from_string(text, kShipped);
+            ADD_FAILURE() << "loaded: " << key;
+        } catch (const Error& e) {
+            EXPECT_NE(e.where().str().find(key), std::string::npos) << e.what() << " (" << e.where().str() << ")";
+        }
+    };
+    refused(shipped_with("patches = [16, 16]", "patches = [8, 8]"), "domain.patches");  // 129 samples needed
+    refused(shipped_with("error_bound_px = 4.0", "error_bound_px = 4.0\ntween = 1.5"), "evaluation.tween");
+    refused(shipped_with("error_bound_px = 4.0", "error_bound_px = -1.0"), "evaluation.error_bound_px");
+    refused(shipped_with("[evaluation]", "[control]\nmodel = \"constant\"\nlevel = 4.0\n\n[evaluation]"), "control");
+    refused(shipped_with("[evaluation]", "[generator]\nspacing = \"equal\"\n\n[evaluation]"), "generator");
+    refused(shipped_with("normals = \"smooth\"", "normals = \"normal_map\""), "geometry.normals");
+    refused(shipped_with("heightmap = ", "scale_xy = 1.0\nheightmap = "), "domain.scale_xy");
+}
+
+class GeoMipCommand : public tessref::test::CommandDirTest {};
+
+TEST_F(GeoMipCommand, GlAndRaytraceSayTheyDoNotModelItYet) {
+    const auto gl = run({"gl", kShipped, "--size", "32x20", "-o", "gl.png"});
+    EXPECT_EQ(gl.status, 2) << gl.err;
+    EXPECT_NE(gl.err.find("no GLSL twin"), std::string::npos) << gl.err;
+    const auto rt = run({"render", kShipped, "--size", "32x20", "--raytrace", "-o", "rt.png"});
+    EXPECT_EQ(rt.status, 2) << rt.err;
+    EXPECT_NE(rt.err.find("not modelled"), std::string::npos) << rt.err;
+    EXPECT_TRUE(files().empty());
 }

@@ -11,7 +11,8 @@
 // LEVELS. Level k (0..4) keeps every 2^k-th sample of a patch: level 0 is the full
 // 2 x 16 x 16 triangles, level 4 one quad of two triangles. Within a level, each cell of
 // step s = 2^k is split along the diagonal from its (low i, low j) corner to its
-// (high i, high j) corner.
+// (high i, high j) corner, and the ring of cells along the border is the zipper described
+// under NEIGHBOURS (with every side at the level's own step it covers the same samples).
 //
 // PRE-PROCESSING (preprocess). Per patch and level, the "maxerror vertex": the sample whose
 // true height is farthest from the level's surface (the level's triangles, heights linear
@@ -53,8 +54,9 @@
 //
 // OUTPUT. build_surface returns a SurfaceMesh (mesh.h): per patch in patch order, the
 // patch's vertices (patch_mesh's order) and triangles, counter-clockwise seen from +z.
-// Positions: x = (16 px + i) * scale_xy, y = (16 py + j) * scale_xy, z = height *
-// scale_z; uv = map sample / (map size - 1); tess_coords = (i / 16, j / 16, 0).
+// Map sample (x, y) stands at world (origin + (x, y) * spacing, height * scale_z), plane xy
+// with z up; uv = map sample / (map size - 1) (the article's one lightmap over the whole
+// terrain); tess_coords = (i / 16, j / 16, 0).
 #pragma once
 
 #include <array>
@@ -109,12 +111,18 @@ struct PatchMesh {
 };
 PatchMesh patch_mesh(int level, const SideSteps& side_steps);
 
-struct Settings {
-    double scale_xy = 1.0;
-    double scale_z = 1.0;
+// What a scene chooses ([evaluation] model = "geomipmap": data/scenes/README.md).
+struct Params {
     double error_bound_px = 1.0;   // the screen error a level may have
     bool adapt = true;             // adapting triangles toward coarser neighbours
     std::optional<double> tween;   // replaces every patch's tween (in [0, 1])
+};
+
+struct Settings {
+    glm::dvec2 origin{0.0};        // world x, y of map sample (0, 0)
+    glm::dvec2 spacing{1.0};       // world distance between neighbouring samples
+    double scale_z = 1.0;
+    Params params{};
 };
 
 // Fractional level per patch (patch order). view_projection maps world positions (as

@@ -263,9 +263,9 @@ PatchMesh patch_mesh(int level, const SideSteps& sides) {
 std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max_errors, const Settings& settings,
                                   const glm::dmat4& view_projection, glm::ivec2 viewport) {
     validate(map);
-    if (!(settings.error_bound_px >= 0.0) || !std::isfinite(settings.error_bound_px))
+    if (!(settings.params.error_bound_px >= 0.0) || !std::isfinite(settings.params.error_bound_px))
         throw Error("geomipmap: the error bound must be a finite number of pixels >= 0");
-    if (settings.tween && !(*settings.tween >= 0.0 && *settings.tween <= 1.0))
+    if (settings.params.tween && !(*settings.params.tween >= 0.0 && *settings.params.tween <= 1.0))
         throw Error("geomipmap: the tween must lie in [0, 1]");
     const std::size_t patches = static_cast<std::size_t>(map.patches_x()) * map.patches_y();
     if (max_errors.size() != patches) throw Error("geomipmap: the pre-processing is of another map");
@@ -281,21 +281,22 @@ std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max
         for (int k = 0; k < kLevels; ++k) {
             const MaxErrorVertex& m = max_errors[p][k];
             if (m.error() == 0.0) continue;  // the level is exact: no error on any screen
-            const double x = (origin.x + m.sample.x) * settings.scale_xy, y = (origin.y + m.sample.y) * settings.scale_xy;
+            const double x = settings.origin.x + (origin.x + m.sample.x) * settings.spacing.x;
+            const double y = settings.origin.y + (origin.y + m.sample.y) * settings.spacing.y;
             bool seen_true = false, seen_level = false;
             const glm::dvec2 a = to_pixels({x, y, m.true_height * settings.scale_z}, seen_true);
             const glm::dvec2 b = to_pixels({x, y, m.level_height * settings.scale_z}, seen_level);
             error[k] = seen_true && seen_level ? glm::length(a - b) : std::numeric_limits<double>::infinity();
         }
         int k = 0;
-        while (k + 1 < kLevels && error[k + 1] <= settings.error_bound_px) ++k;
+        while (k + 1 < kLevels && error[k + 1] <= settings.params.error_bound_px) ++k;
         double t = 0.0;
         if (k + 1 < kLevels) {
-            t = settings.tween ? *settings.tween
+            t = settings.params.tween ? *settings.params.tween
                                : (std::isinf(error[k + 1]) ? 0.0
-                                                            : (settings.error_bound_px - error[k]) / (error[k + 1] - error[k]));
+                                                            : (settings.params.error_bound_px - error[k]) / (error[k + 1] - error[k]));
             t = std::clamp(t, 0.0, 1.0);
-            if (!settings.tween) t = std::min(t, std::nextafter(1.0, 0.0));
+            if (!settings.params.tween) t = std::min(t, std::nextafter(1.0, 0.0));
         }
         levels[p] = k + t;
     }
@@ -330,7 +331,7 @@ SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& l
             for (int q = 0; q < 4; ++q) {
                 const int qx = px + offsets[q].x, qy = py + offsets[q].y;
                 double f = levels[p];
-                if (settings.adapt && qx >= 0 && qy >= 0 && qx < nx && qy < ny)
+                if (settings.params.adapt && qx >= 0 && qy >= 0 && qx < nx && qy < ny)
                     f = std::max(f, levels[static_cast<std::size_t>(qy) * nx + qx]);
                 int kq;
                 split(f, kq, side_tween[q]);
@@ -358,7 +359,8 @@ SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& l
                 const double tween = st.side < 0 ? t : side_tween[st.side];
                 const double z = tween == 0.0 ? h : h + tween * (target - h);
                 const glm::ivec2 g = origin + s;
-                mesh.positions.push_back({g.x * settings.scale_xy, g.y * settings.scale_xy, z * settings.scale_z});
+                mesh.positions.push_back({settings.origin.x + g.x * settings.spacing.x,
+                                          settings.origin.y + g.y * settings.spacing.y, z * settings.scale_z});
                 mesh.uvs.push_back({static_cast<double>(g.x) / (map.width - 1), static_cast<double>(g.y) / (map.height - 1)});
                 mesh.patch_ids.push_back(static_cast<std::uint32_t>(p));
                 mesh.tess_coords.push_back({static_cast<float>(s.x) / N, static_cast<float>(s.y) / N, 0.0f});
