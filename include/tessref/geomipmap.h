@@ -130,6 +130,13 @@ struct Settings {
 std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max_errors, const Settings& settings,
                                   const glm::dmat4& view_projection, glm::ivec2 viewport);
 
+// The fractional level that dictates side `side` of patch (px, py) (SideSteps order): the
+// larger of the patch's and the neighbour's across that side; the patch's own at the map's
+// edge or without adaptation. Both patches of a side get the same value, as both patches of
+// a tessellated edge compute the same outer level.
+double side_level(const std::vector<double>& levels, int patches_x, int patches_y, int px, int py, int side,
+                  bool adapt);
+
 // The mesh of the whole map at the given fractional levels (each in [0, 4]).
 SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings);
 

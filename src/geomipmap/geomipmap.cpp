@@ -303,6 +303,16 @@ std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max
     return levels;
 }
 
+double side_level(const std::vector<double>& levels, int patches_x, int patches_y, int px, int py, int side,
+                  bool adapt) {
+    static constexpr std::array<glm::ivec2, 4> offsets{glm::ivec2(0, -1), glm::ivec2(1, 0), glm::ivec2(0, 1),
+                                                       glm::ivec2(-1, 0)};
+    const double own = levels[static_cast<std::size_t>(py) * patches_x + px];
+    const int qx = px + offsets[side].x, qy = py + offsets[side].y;
+    if (!adapt || qx < 0 || qy < 0 || qx >= patches_x || qy >= patches_y) return own;
+    return std::max(own, levels[static_cast<std::size_t>(qy) * patches_x + qx]);
+}
+
 SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings) {
     validate(map);
     const int nx = map.patches_x(), ny = map.patches_y();
@@ -327,14 +337,9 @@ SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& l
             // level of the two), or the patch's own without adaptation or at the map's edge.
             SideSteps sides{};
             std::array<double, 4> side_tween{};
-            const std::array<glm::ivec2, 4> offsets{glm::ivec2(0, -1), glm::ivec2(1, 0), glm::ivec2(0, 1), glm::ivec2(-1, 0)};
             for (int q = 0; q < 4; ++q) {
-                const int qx = px + offsets[q].x, qy = py + offsets[q].y;
-                double f = levels[p];
-                if (settings.params.adapt && qx >= 0 && qy >= 0 && qx < nx && qy < ny)
-                    f = std::max(f, levels[static_cast<std::size_t>(qy) * nx + qx]);
                 int kq;
-                split(f, kq, side_tween[q]);
+                split(side_level(levels, nx, ny, px, py, q, settings.params.adapt), kq, side_tween[q]);
                 sides[q] = 1 << kq;
             }
             const std::array<int, 5> key{k, sides[0], sides[1], sides[2], sides[3]};

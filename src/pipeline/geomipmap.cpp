@@ -3,6 +3,7 @@
 // hardware tessellation (geomipmap.h): pre-processing, a level per patch from the camera,
 // the patches' meshes with adapting borders and geomorphed heights. The geometry stage's
 // normals follow as for every other model.
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -45,11 +46,20 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
         throw Error("the geomipmapped terrain has " + std::to_string(mesh.triangles.size()) +
                         " triangles, more than limits.max_triangles = " + std::to_string(scene.max_triangles),
                     scene.max_triangles_where);
+    // The levels, as a tessellated terrain reports them: each outer level is the side's
+    // dictating fractional level (geomipmap.h side_level, equal for both patches of the
+    // side), the inner levels the patch's own. Outer edges 0..3 are u = 0, v = 0, u = 1,
+    // v = 1 (tess coords (i / 16, j / 16)): the left, bottom, right and top sides.
+    const int nx = map.patches_x(), ny = map.patches_y();
+    static constexpr std::array<int, 4> side_of_edge{3, 0, 1, 2};
     result.levels.resize(levels.size());
     for (std::size_t p = 0; p < levels.size(); ++p) {
-        // The patch's fractional geomipmap level (0 = full resolution) in every entry.
-        const float f = static_cast<float>(levels[p]);
-        result.levels[p] = TessLevels{{f, f, f, f}, {f, f}};
+        const int px = static_cast<int>(p % nx), py = static_cast<int>(p / nx);
+        TessLevels& l = result.levels[p];
+        for (int e = 0; e < 4; ++e)
+            l.outer[e] = static_cast<float>(
+                geomip::side_level(levels, nx, ny, px, py, side_of_edge[e], settings.params.adapt));
+        l.inner = {static_cast<float>(levels[p]), static_cast<float>(levels[p])};
         if (options.progress) options.progress(p + 1, levels.size());
     }
 
