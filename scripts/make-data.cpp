@@ -16,6 +16,8 @@
 //    than a patch of the shipped scenes (one sample per edge midpoint must not miss them).
 //  - data/heightmaps/canyon.pgm          16-bit 512x512 canyon for lab 4: a plateau cut
 //    by a meandering, stepped canyon. Power-of-two so the mip pyramid halves cleanly.
+//  - data/heightmaps/jacksboro-257.pgm  16-bit 257x257: the middle of the Jacksboro fault
+//    DEM (data/jacksboro_fault_dem.pgm), for the geomipmapping scene (16n + 1 samples a side).
 //  - data/meshes/icosahedron.off, cube.off, bump.off: triangle meshes with averaged
 //    vertex normals (NOFF) for PN triangles. The cube's corner normals are the normalized
 //    sum of its three face planes, (+-1,+-1,+-1)/sqrt(3); the icosahedron's are radial; the
@@ -26,6 +28,7 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 
 #include <algorithm>
+#include <cctype>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -125,6 +128,48 @@ void write_pgm16(const std::string& path, int size, const std::vector<std::uint1
         std::exit(1);
     }
     std::printf("wrote %s\n", path.c_str());
+}
+
+// The geomipmapping scene's map: the middle 257 x 257 samples (16 x 16 patches of 17 x 17
+// samples sharing their borders) of the Jacksboro fault DEM, data/jacksboro_fault_dem.pgm
+// (403 x 344, 16-bit), cut out as they are: geomipmapping needs 16n + 1 samples a side.
+void make_jacksboro_257(const std::string& dir) {
+    const std::string source = dir + "/jacksboro_fault_dem.pgm";
+    std::FILE* f = std::fopen(source.c_str(), "rb");
+    // The header's four tokens (magic, width, height, maxval), '#' comments skipped, then
+    // one whitespace byte before the samples.
+    std::array<std::string, 4> token;
+    for (std::string& t : token) {
+        int c = f ? std::fgetc(f) : EOF;
+        while (c != EOF && (std::isspace(c) || c == '#')) {
+            if (c == '#')
+                while (c != EOF && c != '\n') c = std::fgetc(f);
+            c = std::fgetc(f);
+        }
+        while (c != EOF && !std::isspace(c)) {
+            t += static_cast<char>(c);
+            c = std::fgetc(f);
+        }
+    }
+    const int width = std::atoi(token[1].c_str()), height = std::atoi(token[2].c_str());
+    if (!f || token[0] != "P5" || token[3] != "65535" || width < 257 || height < 257) {
+        std::fprintf(stderr, "make-data: cannot read %s as a 16-bit P5 PGM\n", source.c_str());
+        std::exit(1);
+    }
+    std::vector<unsigned char> bytes(static_cast<std::size_t>(width) * height * 2);
+    if (std::fread(bytes.data(), 1, bytes.size(), f) != bytes.size()) {
+        std::fprintf(stderr, "make-data: %s is truncated\n", source.c_str());
+        std::exit(1);
+    }
+    std::fclose(f);
+    const int n = 257, x0 = (width - n) / 2, y0 = (height - n) / 2;
+    std::vector<std::uint16_t> pixels(static_cast<std::size_t>(n) * n);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const std::size_t at = (static_cast<std::size_t>(y0 + y) * width + (x0 + x)) * 2;
+            pixels[static_cast<std::size_t>(y) * n + x] = static_cast<std::uint16_t>(bytes[at] << 8 | bytes[at + 1]);
+        }
+    write_pgm16(dir + "/heightmaps/jacksboro-257.pgm", n, pixels);
 }
 
 // ---- height and tessellation maps -------------------------------------------------
@@ -313,6 +358,7 @@ int main(int argc, char** argv) {
     make_thesis_island(dir);
     make_thesis_roads(dir);
     make_canyon(dir);
+    make_jacksboro_257(dir);
     make_cube(dir);
     make_icosahedron(dir);
     make_bump(dir);

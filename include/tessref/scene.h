@@ -22,6 +22,7 @@
 #include <glm/glm.hpp>
 
 #include "tessref/control.h"
+#include "tessref/geomipmap.h"
 #include "tessref/error.h"
 #include "tessref/evaluation.h"
 #include "tessref/heightfield.h"
@@ -36,7 +37,9 @@ namespace tessref {
 
 enum class GroundPlane : std::uint8_t { xy, xz };
 enum class ControlModel : std::uint8_t { constant, thesis, cosc422, lab4, pn };
-enum class EvaluationModel : std::uint8_t { thesis, cosc422, lab4, pn };
+// geomipmap: not a tessellation shader; geomipmapping with geomorphing (geomipmap.h) builds
+// the terrain's meshes on the CPU, as the applications before hardware tessellation did.
+enum class EvaluationModel : std::uint8_t { thesis, cosc422, lab4, pn, geomipmap };
 enum class GeometryNormals : std::uint8_t { face, normal_map, height_field, smooth };
 
 const char* to_string(ControlModel model);
@@ -114,6 +117,7 @@ struct ControlStage {
 struct EvaluationStage {
     EvaluationModel model = EvaluationModel::thesis;
     PnEvaluationParams<double> pn{};
+    geomip::Params geomipmap{};
 };
 
 struct GeometryStage {

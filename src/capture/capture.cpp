@@ -49,6 +49,25 @@ std::vector<CapturedVertex> capture_from_pipeline(const Scene& scene, const Pipe
     for (std::size_t v = mesh.patch_ids.size(); v-- > 0;)
         if (mesh.patch_ids[v] < first_vertex.size()) first_vertex[mesh.patch_ids[v]] = v;
 
+    if (scene.evaluation.model == EvaluationModel::geomipmap) {
+        // No primitive generator: the CPU built each patch's triangles (geomipmap.h), and
+        // the capture is those triangles as the vertex buffer holds them, in mesh order.
+        for (std::size_t k = 0; k < triangles; ++k)
+            for (const std::uint32_t v : mesh.triangles[k]) {
+                CapturedVertex c;
+                c.patch_id = mesh.patch_ids[v];
+                c.tess_coord = mesh.tess_coords[v];
+                c.position = glm::vec3(mesh.positions[v]);
+                if (!result.face_normals.empty())
+                    c.normal = glm::vec3(result.face_normals[k]);
+                else if (!mesh.normals.empty())
+                    c.normal = glm::vec3(mesh.normals[v]);
+                c.levels = result.levels[c.patch_id];
+                capture.push_back(c);
+            }
+        return capture;
+    }
+
     PatternCache cache;
     std::size_t t = 0;
     while (t < triangles) {

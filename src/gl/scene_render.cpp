@@ -133,6 +133,10 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
             plan.position_expression = "evaluationOut.v3PositionOut";
             plan.normal_expression = "evaluationOut.v3NormalOut";
             break;
+        case EvaluationModel::geomipmap:
+            throw Error("tessref gl: evaluation model geomipmap has no GLSL twin yet (it draws CPU-built meshes "
+                        "with a morphing vertex shader, not tessellation shaders); use render, mesh or check",
+                        Where::at_key(scene.file, "evaluation.model"));
     }
     plan.stages.push_back(file_stage(GL_VERTEX_SHADER, base + ".vert"));
 
@@ -501,6 +505,7 @@ void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const Ren
         case EvaluationModel::cosc422: cosc422_uniforms(u, scene, m); break;
         case EvaluationModel::lab4: lab4_uniforms(u, scene, m); break;
         case EvaluationModel::pn: pn_uniforms(u, scene, m, viewport); break;
+        case EvaluationModel::geomipmap: break;  // refused by plan_for
     }
     if (scene.control) {
         const ControlStage& c = *scene.control;

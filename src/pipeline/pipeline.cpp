@@ -266,6 +266,7 @@ SceneCamera camera_moved_by(SceneCamera camera, const glm::dvec3& origin) {
 
 PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options) {
     if (scene.patch_count() == 0) throw Error("the scene has no patches", Where::in_file(scene.file));
+    if (scene.evaluation.model == EvaluationModel::geomipmap) return pipeline::run_geomipmap(scene, options);
     if (options.precision == Precision::gpu) return run<float>(scene, options);
     return run<double>(scene, options);
 }

@@ -17,6 +17,7 @@ std::unique_ptr<PatchProgram<T>> make_program(const Scene& scene, const glm::dve
         case EvaluationModel::cosc422: return make_cosc422_program<T>(scene, origin);
         case EvaluationModel::lab4: return make_lab4_program<T>(scene, origin);
         case EvaluationModel::pn: return make_pn_program<T>(scene, origin);
+        case EvaluationModel::geomipmap: break;  // no patch program: run_geomipmap
     }
     return nullptr;
 }

@@ -20,6 +20,7 @@
 #include "tessref/control.h"
 #include "tessref/pipeline.h"
 #include "tessref/mesh.h"
+#include "tessref/pipeline.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"
 
@@ -47,6 +48,10 @@ public:
     bool has_normals = false; // the evaluation or the geometry stage writes vertex normals
     bool flip = false;        // reverse each triangle so that it faces up / out
 };
+
+// A geomipmapped terrain has no tessellation stages and so no PatchProgram: run_pipeline
+// hands it to this whole-terrain pass instead (geomipmap.cpp).
+PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options);
 
 // The scene's program in precision T (float: Precision::gpu, double: Precision::exact).
 // origin: camera-relative evaluation (pipeline.h PipelineOptions::camera_relative) when

@@ -158,6 +158,7 @@ vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T l
             break;
         }
         case EvaluationModel::pn: break;  // no height field
+        case EvaluationModel::geomipmap: break;  // no patch program (run_geomipmap)
     }
     if (g.plane == GroundPlane::xz) return lab4_vertex_normal<T>(position.x, position.z, sampling);
     // Plane xy: appendix A's frame (x, up, z') has z' = world y, so its (nx, n_up, nz') is

@@ -25,6 +25,7 @@ GroundMap ground_map(const Scene& scene) {
             m.v = {1.0 / g.scale_xy, g.texcoord_offset.y};
             break;
         case EvaluationModel::pn: break;  // not a terrain
+        case EvaluationModel::geomipmap: break;  // refused by raytrace_scene
     }
     return m;
 }

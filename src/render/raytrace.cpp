@@ -107,6 +107,13 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
                     "full-resolution height field",
                     Where::at_key(scene.file, "mesh"));
     }
+    if (scene.evaluation.model == EvaluationModel::geomipmap) {
+        // Its samples sit on the extent's corners, not at texel centres as a texture's do;
+        // the truth surface below is built for the tessellation models' texture mapping.
+        throw Error("--raytrace of a geomipmapped terrain is not modelled yet: its full-resolution surface is "
+                    "`tessref render` with evaluation.error_bound_px = 0 (every patch at level 0)",
+                    Where::at_key(scene.file, "evaluation.model"));
+    }
     RenderResult result;
     result.camera = render_detail::camera_for(scene, options);
     result.shading = scene.shading;

@@ -36,6 +36,7 @@ const char* to_string(EvaluationModel model) {
         case EvaluationModel::cosc422: return "cosc422";
         case EvaluationModel::lab4: return "lab4";
         case EvaluationModel::pn: return "pn";
+        case EvaluationModel::geomipmap: return "geomipmap";
     }
     return "?";
 }
@@ -270,8 +271,11 @@ struct Loader {
             g.scale_xy = t.real("scale_xy", 0.0, HUGE_VAL, true, false,
                                 std::string("evaluation model ") + to_string(em) + " maps world to texture by it");
         else if (t.has("scale_xy"))
-            t.fail("scale_xy", "domain.scale_xy is not used by evaluation model cosc422 (its texture coordinates "
-                               "come from the extent domain.x and domain.z)");
+            t.fail("scale_xy", em == EvaluationModel::geomipmap
+                                   ? "domain.scale_xy is not used by evaluation model geomipmap (the height map's samples "
+                                     "span the extent domain.x and domain.y)"
+                                   : "domain.scale_xy is not used by evaluation model cosc422 (its texture coordinates "
+                                     "come from the extent domain.x and domain.z)");
         g.scale_z = t.real("scale_z", -HUGE_VAL, HUGE_VAL, false, false, "the height scale");
         if (auto off = t.vec2_opt("texcoord_offset")) {
             if (em != EvaluationModel::lab4) t.fail("texcoord_offset", "domain.texcoord_offset is used by evaluation model lab4 only");
@@ -293,6 +297,17 @@ struct Loader {
         g.heightmap = load_file(t, "heightmap", "cannot load height map", [&] {
             return std::make_shared<const HeightField>(load_height_field(g.heightmap_path, options));
         });
+
+        if (em == EvaluationModel::geomipmap) {
+            // 17 x 17 samples a patch, borders shared: the map has 16 nu + 1 x 16 nv + 1.
+            const Texture& h = g.heightmap->texture;
+            if (h.width() != 16 * g.patches_u + 1 || h.height() != 16 * g.patches_v + 1)
+                t.fail("patches", "evaluation model geomipmap cuts the height map into patches of 17 x 17 samples "
+                                  "sharing their borders: " + std::to_string(g.patches_u) + " x " +
+                                  std::to_string(g.patches_v) + " patches need " + std::to_string(16 * g.patches_u + 1) +
+                                  " x " + std::to_string(16 * g.patches_v + 1) + " samples, and " + g.heightmap_path +
+                                  " has " + std::to_string(h.width()) + " x " + std::to_string(h.height()));
+        }
 
         const bool needs_normal_map =
             (thesis_control && (scene.control->thesis.factor == ThesisFactor::normal ||
@@ -420,7 +435,11 @@ struct Loader {
             case EvaluationModel::cosc422: s = {Domain::quads, Spacing::equal, Winding::ccw, false}; break;
             case EvaluationModel::lab4: s = {Domain::quads, Spacing::equal, Winding::ccw, false}; break;
             case EvaluationModel::pn: s = {Domain::triangles, Spacing::fractional_odd, Winding::ccw, false}; break;
+            case EvaluationModel::geomipmap: s = {Domain::quads, Spacing::equal, Winding::ccw, false}; break;
         }
+        if (table && scene.evaluation.model == EvaluationModel::geomipmap)
+            throw Error("a geomipmapped terrain has no primitive generator to configure: remove [generator]",
+                        Where::at_key(file, "generator"));
         if (table) {
             TableReader t(file, *table, "generator", {"domain", "spacing", "winding"});
             if (auto d = t.choice_opt("domain", {"quads", "triangles", "isolines"})) {
@@ -522,13 +541,21 @@ struct Loader {
 
     // ---- [evaluation] -------------------------------------------------------------
     void read_evaluation(const toml::table& table) {
-        TableReader t(file, table, "evaluation", {"model", "influence", "normal", "watertight_edges"});
-        const std::string model = t.choice("model", {"thesis", "cosc422", "lab4", "pn"}, "the evaluation model");
+        TableReader t(file, table, "evaluation",
+                      {"model", "influence", "normal", "watertight_edges", "error_bound_px", "adapt", "tween"});
+        const std::string model =
+            t.choice("model", {"thesis", "cosc422", "lab4", "pn", "geomipmap"}, "the evaluation model");
         EvaluationStage e;
-        e.model = model == "thesis"    ? EvaluationModel::thesis
-                  : model == "cosc422" ? EvaluationModel::cosc422
-                  : model == "lab4"    ? EvaluationModel::lab4
-                                       : EvaluationModel::pn;
+        e.model = model == "thesis"      ? EvaluationModel::thesis
+                  : model == "cosc422"   ? EvaluationModel::cosc422
+                  : model == "lab4"      ? EvaluationModel::lab4
+                  : model == "geomipmap" ? EvaluationModel::geomipmap
+                                         : EvaluationModel::pn;
+        if (e.model == EvaluationModel::geomipmap) {
+            e.geomipmap.error_bound_px = t.real_or("error_bound_px", 1.0, 0.0, 1e6);
+            e.geomipmap.adapt = t.boolean_opt("adapt").value_or(true);
+            e.geomipmap.tween = t.real_opt("tween", 0.0, 1.0);
+        }
         if (e.model == EvaluationModel::pn) {
             e.pn.fInfluence = t.real_or("influence", 0.75, -1e6, 1e6);
             if (auto n = t.choice_opt("normal", {"quadratic", "linear"}))
@@ -686,6 +713,21 @@ struct Loader {
             case EvaluationModel::pn:
                 if (terrain) throw Error("evaluation model pn needs triangle meshes ([mesh]), not a terrain [domain]",
                                          where_of("evaluation", "model"));
+                break;
+            case EvaluationModel::geomipmap:
+                need_plane(GroundPlane::xy, "evaluation", "evaluation model geomipmap (z up)");
+                if (scene.control)
+                    throw Error("evaluation model geomipmap chooses its levels itself (evaluation.error_bound_px, "
+                                "evaluation.tween): remove [control]",
+                                where_of("control", "model"));
+                if (!scene.camera)
+                    throw Error("evaluation model geomipmap measures each level's screen error with the camera: "
+                                "add a [camera]",
+                                where_of("evaluation", "model"));
+                if (scene.geometry && scene.geometry->normals != GeometryNormals::face &&
+                    scene.geometry->normals != GeometryNormals::smooth)
+                    throw Error("evaluation model geomipmap takes geometry normals = \"face\" or \"smooth\"",
+                                where_of("geometry", "normals"));
                 break;
         }
         if (scene.control) {

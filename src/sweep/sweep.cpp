@@ -253,6 +253,10 @@ std::vector<SweepScene> load_scenes(const SweepParameters& p) {
         s.scene = load_scene(file);
         if (!s.scene.camera)
             throw Error("the sweep renders every row: the scene needs a [camera]", Where::at_key(file, "camera"));
+        if (s.scene.evaluation.model == EvaluationModel::geomipmap)
+            throw Error("a geomipmapped terrain is not swept yet: it has no tessellation level to make uniform and no "
+                        "ray-traced truth (render --raytrace refuses it)",
+                        Where::at_key(file, "evaluation.model"));
         s.scene.camera->viewport = p.size;
         s.name = s.scene.name.empty() ? fs::path(file).stem().string() : s.scene.name;
         s.slug = slug_of(s.name);

@@ -1,0 +1,143 @@
+// tessref/geomipmap.h — geomipmapping with geomorphing (de Boer's geo-mipmapping, as the
+// "Terrain Geomorphing in the Vertex Shader" article builds it): the terrain LOD that came
+// before hardware tessellation, modelled so it can be measured against it.
+//
+// THE MAP. A height map of (16a + 1) x (16b + 1) samples is cut into a x b patches of
+// 17 x 17 samples; neighbouring patches share their border samples (sample column 16 is
+// patch 0's right border and patch 1's left border). Patch (px, py) is patch
+// py * patches_x + px; its local sample (i, j), 0 <= i, j <= 16, is map sample
+// (16 px + i, 16 py + j).
+//
+// LEVELS. Level k (0..4) keeps every 2^k-th sample of a patch: level 0 is the full
+// 2 x 16 x 16 triangles, level 4 one quad of two triangles. Within a level, each cell of
+// step s = 2^k is split along the diagonal from its (low i, low j) corner to its
+// (high i, high j) corner, and the ring of cells along the border is the zipper described
+// under NEIGHBOURS (with every side at the level's own step it covers the same samples).
+//
+// PRE-PROCESSING (preprocess). Per patch and level, the "maxerror vertex": the sample whose
+// true height is farthest from the level's surface (the level's triangles, heights linear
+// in between), with its true height and the level's height there.
+//
+// SELECTION (select_levels). Each patch's maxerror vertices are projected with the camera:
+// the screen error of level k is the pixel distance between the true point and the point
+// at the level's height. The patch takes the coarsest level k such that levels 0..k all
+// have a screen error <= the bound (level 0's is 0). A vertex at or behind the camera's
+// near plane has an unbounded screen error, so such a patch stays at the finest level it
+// can prove. The fractional level f = k + t adds the tween toward level k + 1: the fraction
+// of the way the bound has gone from level k's error to level k + 1's,
+// t = (bound - e_k) / (e_{k+1} - e_k) in [0, 1); a fixed tween (a scene key) replaces t on
+// every patch below level 4, so that a frame is reproducible.
+//
+// NEIGHBOURS (patch_mesh). All levels are chosen first; then, where two patches meet, the
+// side is built with the step of the coarser one: the finer patch drops the border samples
+// the coarser one does not have and fills the ring of cells along its border with
+// "adapting triangles" (a zipper between the border and the patch's inner grid), so there
+// is no gap and no T-vertex. Without adaptation (adapt = false) every patch builds its
+// borders with its own step: T-vertices appear wherever levels differ (tessref check finds
+// them).
+//
+// GEOMORPHING (build_surface). A patch at fractional level f = k + t is drawn with level
+// k's triangles, each vertex moved from its true height toward its height on level k + 1's
+// surface by t (GLSL mix: h + t * (target - h)). At t = 0 the mesh is level k; as t -> 1
+// every vertex reaches level k + 1's surface, so switching to level k + 1 does not pop
+// (vertices that level k + 1 keeps never move). The article's five tween factors are the
+// patch's own t for its interior and, for each side, the tween of the side's dictating
+// patch: of the two patches that share a side, the one with the larger fractional level
+// (the coarser) dictates the side's step and tween, so both compute the same border
+// vertices and the surface stays closed at every tween. A border vertex that the side's
+// next coarser step drops moves toward the middle of its two neighbours on the border.
+// The article's tweeningA = (1 - tweeningL) * tweeningI is the weight its vertex shader
+// gives a vertex next to a border to blend the border's and the interior's motion; here
+// each such vertex reads its own target on level k + 1's surface directly, which is the
+// position the article's blend aims at, and tests/test_geomipmap.cpp checks the property
+// the factor exists for (no vertex pops when a patch or a neighbour changes level).
+//
+// OUTPUT. build_surface returns a SurfaceMesh (mesh.h): per patch in patch order, the
+// patch's vertices (patch_mesh's order) and triangles, counter-clockwise seen from +z.
+// Map sample (x, y) stands at world (origin + (x, y) * spacing, height * scale_z), plane xy
+// with z up; uv = map sample / (map size - 1) (the article's one lightmap over the whole
+// terrain); tess_coords = (i / 16, j / 16, 0).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "tessref/mesh.h"
+
+namespace tessref::geomip {
+
+constexpr int kPatchCells = 16;  // a patch is 17 x 17 samples
+constexpr int kLevels = 5;       // levels 0..4
+
+// Heights of the map, row-major: sample (x, y) at y * width + x.
+struct HeightSamples {
+    int width = 0;
+    int height = 0;
+    std::vector<double> samples;
+    double at(int x, int y) const { return samples[static_cast<std::size_t>(y) * width + x]; }
+    int patches_x() const { return (width - 1) / kPatchCells; }
+    int patches_y() const { return (height - 1) / kPatchCells; }
+};
+
+// Throws tessref::Error unless width and height are 16a + 1 with a >= 1 and every sample
+// is finite.
+void validate(const HeightSamples& map);
+
+struct MaxErrorVertex {
+    glm::ivec2 sample{0, 0};   // local sample (i, j)
+    double true_height = 0.0;
+    double level_height = 0.0; // the level's surface there
+    double error() const { return true_height > level_height ? true_height - level_height : level_height - true_height; }
+};
+
+// Per patch (patch order), per level.
+using MaxErrors = std::vector<std::array<MaxErrorVertex, kLevels>>;
+MaxErrors preprocess(const HeightSamples& map);
+
+// Sides in counter-clockwise order seen from +z: 0 bottom (j = 0), 1 right (i = 16),
+// 2 top (j = 16), 3 left (i = 0).
+using SideSteps = std::array<int, 4>;
+
+// One patch's triangulation at `level` with the given border step on each side (each a
+// power of two >= 2^level and <= 16). Vertices: the local samples used, row by row
+// (j, then i ascending); triangles counter-clockwise seen from +z.
+struct PatchMesh {
+    std::vector<glm::ivec2> vertices;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+PatchMesh patch_mesh(int level, const SideSteps& side_steps);
+
+// What a scene chooses ([evaluation] model = "geomipmap": data/scenes/README.md).
+struct Params {
+    double error_bound_px = 1.0;   // the screen error a level may have
+    bool adapt = true;             // adapting triangles toward coarser neighbours
+    std::optional<double> tween;   // replaces every patch's tween (in [0, 1])
+};
+
+struct Settings {
+    glm::dvec2 origin{0.0};        // world x, y of map sample (0, 0)
+    glm::dvec2 spacing{1.0};       // world distance between neighbouring samples
+    double scale_z = 1.0;
+    Params params{};
+};
+
+// Fractional level per patch (patch order). view_projection maps world positions (as
+// build_surface places them) to clip space; viewport is the image size in pixels.
+std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max_errors, const Settings& settings,
+                                  const glm::dmat4& view_projection, glm::ivec2 viewport);
+
+// The fractional level that dictates side `side` of patch (px, py) (SideSteps order): the
+// larger of the patch's and the neighbour's across that side; the patch's own at the map's
+// edge or without adaptation. Both patches of a side get the same value, as both patches of
+// a tessellated edge compute the same outer level.
+double side_level(const std::vector<double>& levels, int patches_x, int patches_y, int px, int py, int side,
+                  bool adapt);
+
+// The mesh of the whole map at the given fractional levels (each in [0, 4]).
+SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings);
+
+}  // namespace tessref::geomip
