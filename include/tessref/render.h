@@ -211,6 +211,32 @@ PixelProvenance pixel_provenance(const RenderResult& result, int x, int y);
 float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_t triangle,
                      std::string* source = nullptr);
 
+// ---- the ground under a point (lab 4's camera collision) -----------------------------
+
+// Lab 4 keeps its camera above the terrain by reading the height map under the camera. What
+// the viewer sees, though, is the tessellated surface the current levels produce, which lies
+// above or below the height map between its vertices. ground_height() answers both at a
+// ground point, so the difference (how far a camera that trusts the height map can sink
+// into, or float above, the drawn surface) can be measured.
+struct GroundHeight {
+    glm::dvec2 ground{0.0};         // the point: (x, y) on plane xy, (x, z) on plane xz
+    double height_map = 0.0;        // the full-resolution surface there (the ray-traced
+                                    // truth's: mip 0 in double, bilinear, times scale_z)
+    bool on_surface = false;        // false: no tessellated triangle covers the point
+    double tessellated = 0.0;       // the tessellated surface's height there (when on_surface)
+    std::uint32_t patch_id = kNoPixelId;
+    std::uint32_t triangle_id = kNoPixelId;
+    TessLevels patch_levels{};
+    double difference() const { return tessellated - height_map; }  // when on_surface
+};
+
+// The heights at `ground` of the scene's height map and of `pipeline`'s tessellated surface
+// (the first triangle, in triangle order, whose ground projection holds the point,
+// interpolated linearly, as the rasterizer would). Terrain scenes of the tessellation
+// models; throws tessref::Error for a mesh scene, a geomipmapped one (no ground map yet)
+// and a point outside the terrain's extent.
+GroundHeight ground_height(const Scene& scene, const PipelineResult& pipeline, glm::dvec2 ground);
+
 // ---- images ----------------------------------------------------------------------------
 
 // The colour map of the level heat map: log2(level) over [0, 6] (levels 1..64) through

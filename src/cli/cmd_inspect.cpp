@@ -4,9 +4,15 @@
 //
 //   tessref inspect SCENE --pixel X,Y [--json] [--size WxH] [--precision gpu|exact]
 //                   [--wireframe] [--threads N]
+//   tessref inspect SCENE --ground X,Y|camera [--json] [--size WxH] [--precision gpu|exact]
 //
 // X, Y: column from the left and row from the top of the image `tessref render` writes with
 // the same options (as an image viewer shows it).
+//
+// --ground: lab 4's camera collision question. The height of the height map and of the
+// tessellated surface (the levels the scene's camera gives) at ground point X,Y ((x, y) on
+// plane xy, (x, z) on plane xz; `camera`: under the eye), their difference, and with
+// `camera` the eye's clearance above each (render.h, ground_height).
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -32,6 +38,7 @@ namespace {
 struct InspectOptions {
     std::string scene;
     std::string pixel;
+    std::string ground;
     bool json = false;
     std::string size;
     std::string precision = "gpu";
@@ -82,7 +89,88 @@ std::string levels_text(const TessLevels& l) {
            vector_text(glm::vec2(l.inner[0], l.inner[1]));
 }
 
+// "X,Y" (finite reals) or "camera".
+std::optional<glm::dvec2> parse_ground(const std::string& text) {
+    if (text == "camera") return std::nullopt;
+    const std::size_t comma = text.find(',');
+    const std::optional<double> x = comma == std::string::npos ? std::nullopt : parse_double(text.substr(0, comma));
+    const std::optional<double> y = comma == std::string::npos ? std::nullopt : parse_double(text.substr(comma + 1));
+    if (!x || !y || !std::isfinite(*x) || !std::isfinite(*y))
+        throw Error("ground point '" + text + "' is not X,Y (two finite numbers) or camera", Where::in_file("--ground"));
+    return glm::dvec2(*x, *y);
+}
+
+int run_ground(const InspectOptions& options) {
+    const std::optional<glm::dvec2> point = parse_ground(options.ground);
+    const Precision precision = parse_precision_flag(options.precision);
+    const ThreadLimit thread_limit(options.threads);
+    Scene scene = load_scene(options.scene);
+    if (!options.size.empty() && scene.camera) scene.camera->viewport = parse_image_size(options.size);
+    if (!point && !scene.camera) throw Error("--ground camera needs a [camera] in the scene", Where::at_key(scene.file, "camera"));
+    const bool xy = !scene.grid || scene.grid->plane == GroundPlane::xy;
+    const glm::dvec2 ground = point ? *point
+                                    : (xy ? glm::dvec2(scene.camera->eye.x, scene.camera->eye.y)
+                                          : glm::dvec2(scene.camera->eye.x, scene.camera->eye.z));
+    PipelineOptions pipeline_options;
+    pipeline_options.precision = precision;
+    const PipelineResult pipeline = run_pipeline(scene, pipeline_options);
+    const GroundHeight h = ground_height(scene, pipeline, ground);
+    const double eye_height = scene.camera ? (xy ? scene.camera->eye.z : scene.camera->eye.y) : 0.0;
+
+    if (options.json) {
+        Json doc;
+        doc["scene"] = scene.name;
+        doc["ground"] = vector_json(h.ground);
+        doc["under_camera"] = !point;
+        doc["height_map"] = number(h.height_map);
+        doc["on_surface"] = h.on_surface;
+        if (h.on_surface) {
+            doc["tessellated"] = number(h.tessellated);
+            doc["difference"] = number(h.difference());
+            doc["patch_id"] = h.patch_id;
+            doc["triangle_id"] = h.triangle_id;
+            Json outer = Json::array(), inner = Json::array();
+            for (const float x : h.patch_levels.outer) outer.push_back(number(x));
+            for (const float x : h.patch_levels.inner) inner.push_back(number(x));
+            doc["patch_levels"] = {{"outer", outer}, {"inner", inner}};
+        }
+        if (!point) {
+            doc["eye_height"] = number(eye_height);
+            doc["clearance_height_map"] = number(eye_height - h.height_map);
+            if (h.on_surface) doc["clearance_tessellated"] = number(eye_height - h.tessellated);
+        }
+        std::cout << doc.dump(2) << "\n";
+        return 0;
+    }
+    std::ostringstream out;
+    out << "ground " << vector_text(h.ground) << " of " << scene.name
+        << (point ? "" : " (under the camera)") << ", " << (precision == Precision::gpu ? "gpu" : "exact")
+        << " precision\n";
+    out << "height map: " << format_double(h.height_map) << "\n";
+    if (!h.on_surface) {
+        out << "tessellated: none (no triangle covers the point: a culled patch)\n";
+    } else {
+        out << "tessellated: " << format_double(h.tessellated) << " (patch " << h.patch_id << ", levels "
+            << levels_text(h.patch_levels) << "; triangle " << h.triangle_id << ")\n";
+        out << "difference: " << format_double(h.difference()) << " (tessellated - height map)\n";
+    }
+    if (!point) {
+        out << "eye height: " << format_double(eye_height) << "; clearance above the height map "
+            << format_double(eye_height - h.height_map);
+        if (h.on_surface) out << ", above the tessellated surface " << format_double(eye_height - h.tessellated);
+        out << "\n";
+    }
+    std::cout << out.str();
+    return 0;
+}
+
 int run_inspect(const InspectOptions& options) {
+    if (options.pixel.empty() == options.ground.empty())
+        throw Error("give exactly one of --pixel X,Y and --ground X,Y|camera", Where::in_file("command line"));
+    if (!options.ground.empty()) {
+        if (options.wireframe) throw Error("--wireframe is for --pixel", Where::in_file("--wireframe"));
+        return run_ground(options);
+    }
     const glm::ivec2 pixel = parse_pixel(options.pixel);
     const Precision precision = parse_precision_flag(options.precision);
     const ThreadLimit thread_limit(options.threads);
@@ -162,12 +250,17 @@ Command add_inspect_command(CLI::App& parent) {
     CLI::App* app = parent.add_subcommand(
         "inspect",
         "Render a scene as `tessref render` does and print where one pixel came from: its patch and the "
-        "patch's tessellation levels, its triangle, tess coord, level, world position, depth and colour.");
+        "patch's tessellation levels, its triangle, tess coord, level, world position, depth and colour. Or, with "
+        "--ground, the height of the height map and of the tessellated surface at a ground point (lab 4's camera "
+        "collision).");
     app->add_option("scene", options->scene, "Scene file (TOML)")->required();
     app->add_option("--pixel", options->pixel,
                     "The pixel: column X from the left, row Y from the top (0,0 is the top-left corner)")
-        ->required()
         ->type_name("X,Y");
+    app->add_option("--ground", options->ground,
+                    "A ground point (x,y on plane xy; x,z on plane xz) or `camera` (under the eye): the heights of the "
+                    "height map and of the tessellated surface there")
+        ->type_name("X,Y|camera");
     app->add_flag("--json", options->json, "Print JSON instead of text");
     app->add_option("--size", options->size, "Image size WIDTHxHEIGHT, as given to `tessref render`")
         ->type_name("WxH");
