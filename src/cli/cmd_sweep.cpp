@@ -47,21 +47,7 @@ struct SweepCommandOptions {
     std::string merge_output;
 };
 
-std::vector<std::string> split_list(const std::string& text, const std::string& flag) {
-    std::vector<std::string> items;
-    std::size_t start = 0;
-    for (;;) {
-        const std::size_t comma = text.find(',', start);
-        std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-        const auto b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
-        item = b == std::string::npos ? std::string() : item.substr(b, e - b + 1);
-        if (item.empty()) throw Error("an empty item in '" + text + "'", Where::in_file(flag));
-        items.push_back(item);
-        if (comma == std::string::npos) break;
-        start = comma + 1;
-    }
-    return items;
-}
+using sweep::split_list;
 
 // "I/N" with 0 <= I < N.
 sweep::Shard parse_shard(const std::string& text, const std::string& where) {

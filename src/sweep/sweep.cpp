@@ -616,6 +616,22 @@ void check_budgets(const SweepParameters& p, const std::vector<SweepScene>& scen
 
 }  // namespace
 
+std::vector<std::string> split_list(const std::string& text, const std::string& flag) {
+    std::vector<std::string> items;
+    std::size_t start = 0;
+    for (;;) {
+        const std::size_t comma = text.find(',', start);
+        std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        const auto b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
+        item = b == std::string::npos ? std::string() : item.substr(b, e - b + 1);
+        if (item.empty()) throw Error("an empty item in '" + text + "'", Where::in_file(flag));
+        items.push_back(item);
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    return items;
+}
+
 std::vector<double> parse_levels(const std::string& text) {
     const Where where = Where::in_file("--levels");
     std::vector<double> levels;
@@ -634,13 +650,7 @@ std::vector<double> parse_levels(const std::string& text) {
         if (!(x >= 1.0 && x <= 64.0)) throw Error("'" + whole + "': levels lie in 1..64", where);
         return x;
     };
-    std::size_t start = 0;
-    for (;;) {
-        const std::size_t comma = text.find(',', start);
-        std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-        const auto b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
-        item = b == std::string::npos ? std::string() : item.substr(b, e - b + 1);
-        if (item.empty()) throw Error("an empty item in '" + text + "'", where);
+    for (const std::string& item : split_list(text, "--levels")) {
         const std::size_t dots = item.find("..");
         if (dots != std::string::npos) {
             const double lo = number(item.substr(0, dots), item), hi = number(item.substr(dots + 2), item);
@@ -651,8 +661,6 @@ std::vector<double> parse_levels(const std::string& text) {
         } else {
             levels.push_back(number(item, item));
         }
-        if (comma == std::string::npos) break;
-        start = comma + 1;
     }
     std::sort(levels.begin(), levels.end());
     levels.erase(std::unique(levels.begin(), levels.end()), levels.end());

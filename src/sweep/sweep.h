@@ -59,6 +59,10 @@ const std::vector<std::string>& csv_columns();
 // row's description); and once at the end with done == total and an empty description.
 using SweepProgress = std::function<void(std::size_t done, std::size_t total, const std::string& row)>;
 
+// The items of a comma-separated flag value, blanks around each trimmed. Throws
+// tessref::Error (where: flag) for an empty item.
+std::vector<std::string> split_list(const std::string& text, const std::string& flag);
+
 // Parses --levels: comma-separated items, each a number or an integer range A..B (both
 // ends included), e.g. "1..64", "1,2,4,8", "1..4,8,16.5". The result is sorted and
 // distinct. Throws tessref::Error (where: --levels) naming the item for a non-number, NaN,
