@@ -19,6 +19,9 @@ packages=(
   # ...) and refuses to configure when /usr/bin/iconvert is missing; --no-install-recommends
   # leaves them out, so they are named here.
   openimageio-tools
+  # A compiler cache (scripts/build.sh): rebuilds, and builds of other clones on the same
+  # machine, compile only what changed.
+  ccache
 )
 
 missing=()
