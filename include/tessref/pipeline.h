@@ -21,9 +21,12 @@
 // fills a pre-sized slot.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -95,6 +98,69 @@ struct PipelineResult {
     // origin (0, 0, 0) and no relative positions without the option.
     glm::dvec3 origin{0.0};
     std::vector<glm::vec3> relative_positions;
+};
+
+// The pipeline with its surface produced on demand, patch by patch, instead of all at once:
+// the first three passes (control, budget, generator) run in the constructor, and emit()
+// runs the fourth for one patch into storage of the caller's. run_pipeline() is a
+// PatchStream emitted into one mesh; a consumer that needs each patch only briefly (the
+// renderer, which projects, rasterizes and forgets it) holds a few patches at a time
+// instead of the surface. Everything emit() writes is bit-identical to what run_pipeline()
+// writes for that patch, so ids and values agree between the two.
+class PatchStream {
+public:
+    // The stream reads `scene` (its textures, grid and camera) whenever it evaluates: the
+    // scene must outlive it. Throws as run_pipeline does before tessellating (budget, empty scene). A geomipmapped
+    // terrain has no tessellation stages to stream: it throws (check streams()).
+    PatchStream(const Scene& scene, const PipelineOptions& options = {});
+    ~PatchStream();
+    PatchStream(PatchStream&&) noexcept;
+    PatchStream& operator=(PatchStream&&) noexcept;
+
+    // Whether the scene's surface can be streamed (every model but geomipmap).
+    static bool streams(const Scene& scene);
+
+    std::size_t patch_count() const;
+    const std::vector<TessLevels>& levels() const;   // per patch, as the control stage wrote them
+    std::uint64_t estimated_triangles() const;
+    std::size_t distinct_patterns() const;
+    const Pattern& pattern(std::size_t patch) const;
+    // Patch p's vertices and triangles in run_pipeline()'s mesh: [vertex_base(p), vertex_base(p + 1))
+    // and [triangle_base(p), triangle_base(p + 1)); p may be patch_count().
+    std::size_t vertex_base(std::size_t patch) const;
+    std::size_t triangle_base(std::size_t patch) const;
+    // The patch owning a triangle of run_pipeline()'s mesh.
+    std::size_t patch_of_triangle(std::size_t triangle) const;
+    bool has_uvs() const;       // emit() writes mesh.uvs
+    bool has_normals() const;   // emit() writes mesh.normals (per-vertex geometry normals)
+    bool face_normals() const;  // [geometry] normals = "face": emit() writes face normals
+    bool smooth_normals() const;  // [geometry] normals = "smooth": need the whole surface
+    // Camera-relative evaluation (PipelineOptions::camera_relative): positions from emit()
+    // are the evaluation's, relative to origin(); (0, 0, 0) otherwise.
+    glm::dvec3 origin() const;
+
+    // Pass 4 for one patch: its evaluated vertices at mesh index first_vertex on (positions,
+    // patch_ids, tess_coords, and uvs / normals where has_uvs() / has_normals()), its
+    // triangles at first_triangle on, indexing from first_vertex, and their face normals
+    // into face_normals[first_triangle...] when face_normals() and the pointer is not null.
+    // The caller sizes the arrays. Concurrent calls for different patches are safe.
+    void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
+              std::vector<glm::dvec3>* face_normals) const;
+    // The evaluation at some of a patch's domain points (indices into pattern(patch).points()),
+    // written like emit()'s vertices at mesh index first on; no triangles.
+    void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                         std::size_t first) const;
+
+    // One triangle of run_pipeline()'s mesh on its own: `out` gets its three vertices as
+    // run_pipeline()'s mesh holds them (world positions), in the triangle's order, and the
+    // one triangle {0, 1, 2}; face_normal (when not null and face_normals()) its face
+    // normal. Returns the vertices' indices in run_pipeline()'s mesh.
+    std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out, glm::dvec3* face_normal) const;
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
 };
 
 // Runs the scene's pipeline. Throws tessref::Error (key "limits.max_triangles") when the

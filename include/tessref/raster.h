@@ -54,6 +54,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -153,6 +154,37 @@ struct RasterStats {
 // image). The viewport is the whole framebuffer, depth range [0,1]. Throws tessref::Error on
 // a vertex index out of range, varying_count out of range or spans of the wrong size.
 RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSettings& settings);
+
+// Drawing in batches: a streamed draw (render.h: the renderer evaluates a few patches,
+// draws them, and reuses their memory). draw() sets up, bins and rasterizes its chunks
+// before it returns, chunk after chunk in the order given, so a sequence of draws leaves
+// the pixels one rasterize() of all the triangles in that order would. The framebuffer
+// gets triangle_id (the chunk's first_id + the triangle's index in it), depth, colour,
+// barycentric (and barycentric_dx/dy with quad_derivatives), front_facing and
+// fragment_count as a draw writes them; patch_id, tess_coord and varyings are left to the
+// caller, which knows its vertices (render.cpp resolves them after each draw).
+struct RasterChunk {
+    std::span<const glm::vec4> positions;  // gl_Position of the vertices the triangles index
+    std::span<const std::array<std::uint32_t, 3>> triangles;
+    std::uint32_t first_id = 0;            // id of triangles[0]; the others follow it
+};
+
+class Rasterizer {
+public:
+    // settings.threads is ignored: draws run in the caller's oneTBB arena.
+    Rasterizer(Framebuffer& fb, const RasterSettings& settings);
+    ~Rasterizer();
+    Rasterizer(const Rasterizer&) = delete;
+    Rasterizer& operator=(const Rasterizer&) = delete;
+    // Throws tessref::Error on a vertex index outside its chunk.
+    void draw(std::span<const RasterChunk> chunks);
+    RasterStats stats() const;  // of every draw so far
+
+    struct State;
+
+private:
+    std::unique_ptr<State> state_;
+};
 
 // GL's float -> unorm8 conversion (clamp to [0,1], x*255 rounded to nearest), row 0 on top:
 // width*height*4 bytes RGBA.

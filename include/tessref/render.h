@@ -83,6 +83,14 @@ struct RenderOptions {
     // rounded to float; RenderResult::mvp). render_surface() does so whenever the pipeline
     // result carries relative positions.
     bool camera_relative = false;
+    // Keep the tessellated surface in RenderResult::pipeline (its mesh and face normals, for
+    // pixel_provenance's vertices or a capture). Without it, a filled render of a scene whose
+    // surface can be streamed (not geomipmapped, no smooth normals) evaluates, rasterizes and
+    // resolves a batch of patches at a time and never holds the whole surface: its memory is
+    // bounded by the image and the batch, not by the triangle count, and the pipeline
+    // result keeps the levels only. The image and every per-pixel buffer are the same
+    // either way (tests/test_render_stream.cpp).
+    bool keep_surface = false;
     // Called from the calling thread with a stage name and the fraction of it done; may be
     // empty.
     std::function<void(std::string_view stage, double fraction)> progress;
@@ -117,8 +125,11 @@ struct RenderResult {
     std::vector<glm::vec3> tess_coord;       // interpolated gl_TessCoord
     std::vector<glm::vec3> barycentric;      // perspective-correct weights of the triangle
     std::vector<float> level;                // see LEVEL above; NaN where nothing is visible
-    // What produced it (kept for pixel_provenance; null for a ray-traced image).
+    // What produced it (kept for pixel_provenance; null for a ray-traced image). A streamed
+    // render (RenderOptions::keep_surface off) keeps the levels here, an empty mesh, and the
+    // stream, from which pixel_provenance evaluates the one triangle it names.
     std::shared_ptr<const PipelineResult> pipeline;
+    std::shared_ptr<const PatchStream> stream;
     RenderStats stats{};
 
     std::size_t index(int x, int y) const {

@@ -180,6 +180,7 @@ CpuReference cpu_reference(const Scene& scene, const fs::path& scene_path, glm::
     if (!scene.camera) throw Error("the scene has no [camera]: golden images need one", Where::in_file(scene_path.string()));
     RenderOptions render_options;
     render_options.size = size;
+    render_options.keep_surface = true;  // the capture reads the surface
     ref.image = render_scene(scene, render_options);
     ref.scene = scene;
     ref.scene.camera->viewport = size;  // the viewport the pipeline saw (render.h)

@@ -118,94 +118,201 @@ std::vector<std::shared_ptr<const Pattern>> patterns_of(const Scene& scene, cons
     return patterns;
 }
 
-template <typename T>
-PipelineResult run(const Scene& scene, const PipelineOptions& options) {
-    const Precision precision = options.precision;
-    const std::size_t n = scene.patch_count();
-    PipelineResult result;
-    // Camera-relative evaluation: gpu precision only (exact precision would gain nothing).
-    if (options.camera_relative && std::is_same_v<T, float>) result.origin = camera_relative_origin(scene);
-    const bool relative = result.origin != glm::dvec3(0.0);
-    const std::unique_ptr<pipeline::PatchProgram<T>> program = pipeline::make_program<T>(scene, result.origin);
-    // Pass timings (PipelineTimings), only when asked for; they change nothing else.
-    using Clock = std::chrono::steady_clock;
+using Clock = std::chrono::steady_clock;
+
+// Pass timings (PipelineTimings), only when asked for; they change nothing else.
+struct PassTimer {
+    PipelineTimings* timings;
     Clock::time_point lap = Clock::now();
-    const auto time_pass = [&](double PipelineTimings::*field) {
-        if (!options.timings) return;
+    void operator()(double PipelineTimings::*field) {
+        if (!timings) return;
         const Clock::time_point now = Clock::now();
-        options.timings->*field = std::chrono::duration<double>(now - lap).count();
+        timings->*field = std::chrono::duration<double>(now - lap).count();
         lap = now;
-    };
-    if (options.timings) *options.timings = PipelineTimings{};
-
-    // Pass 1: the vertex and control shaders.
-    std::vector<TessLevels> levels(n);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p) levels[p] = to_tess_levels(program->control(p));
-    });
-
-    // Pass 2: the budget, from the levels, before any tessellation.
-    std::uint64_t estimate = 0;
-    for (std::size_t p = 0; p < n; ++p) estimate += estimate_triangles(scene.generator, levels[p]);
-    result.estimated_triangles = estimate;
-    if (estimate > scene.max_triangles)
-        throw Error("the scene asks for up to " + std::to_string(estimate) +
-                        " triangles (estimated from its tessellation levels), more than limits.max_triangles = " +
-                        std::to_string(scene.max_triangles),
-                    scene.max_triangles_where);
-    time_pass(&PipelineTimings::control);
-
-    // Pass 3: the primitive generator, and every patch's place in the output.
-    PatternCache local_cache;
-    const auto patterns = patterns_of(scene, levels, precision, options.cache ? *options.cache : local_cache,
-                                      result.distinct_patterns);
-    std::vector<std::size_t> vertex_base(n + 1, 0), triangle_base(n + 1, 0);
-    for (std::size_t p = 0; p < n; ++p) {
-        vertex_base[p + 1] = vertex_base[p] + patterns[p]->points().size();
-        triangle_base[p + 1] = triangle_base[p] + patterns[p]->primitive_count();
     }
-    const std::size_t vertices = vertex_base[n], triangles = triangle_base[n];
-    if (vertices > 0xffffffffu)
-        throw Error("the scene emits " + std::to_string(vertices) + " vertices, more than 32-bit indices address",
-                    scene.max_triangles_where);
-    time_pass(&PipelineTimings::generator);
+};
 
-    // Pass 4: evaluation and geometry.
+}  // namespace
+
+struct PatchStream::Impl {
+    virtual ~Impl() = default;
+    virtual void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
+                      std::vector<glm::dvec3>* face_normals) const = 0;
+    virtual void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                                 std::size_t first) const = 0;
+    virtual std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out,
+                                                  glm::dvec3* face_normal) const = 0;
+
+    Precision precision = Precision::gpu;
+    glm::dvec3 origin{0.0};
+    std::vector<TessLevels> levels;
+    std::uint64_t estimated_triangles = 0;
+    std::size_t distinct_patterns = 0;
+    std::vector<std::shared_ptr<const Pattern>> patterns;
+    std::vector<std::size_t> vertex_base, triangle_base;
+    bool has_uvs = false, has_normals = false, face_normals = false, smooth_normals = false;
+};
+
+namespace {
+
+template <typename T>
+struct StreamImpl final : PatchStream::Impl {
+    std::unique_ptr<pipeline::PatchProgram<T>> program;
+
+    StreamImpl(const Scene& scene, const PipelineOptions& options, PassTimer& time_pass) {
+        precision = options.precision;
+        const std::size_t n = scene.patch_count();
+        // Camera-relative evaluation: gpu precision only (exact precision would gain nothing).
+        if (options.camera_relative && std::is_same_v<T, float>) origin = camera_relative_origin(scene);
+        program = pipeline::make_program<T>(scene, origin);
+        has_uvs = program->has_uvs;
+        has_normals = program->has_normals;
+        face_normals = scene.geometry && scene.geometry->normals == GeometryNormals::face;
+        smooth_normals = scene.geometry && scene.geometry->normals == GeometryNormals::smooth;
+
+        // Pass 1: the vertex and control shaders.
+        levels.resize(n);
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t p = r.begin(); p != r.end(); ++p) levels[p] = to_tess_levels(program->control(p));
+        });
+
+        // Pass 2: the budget, from the levels, before any tessellation.
+        std::uint64_t estimate = 0;
+        for (std::size_t p = 0; p < n; ++p) estimate += estimate_triangles(scene.generator, levels[p]);
+        estimated_triangles = estimate;
+        if (estimate > scene.max_triangles)
+            throw Error("the scene asks for up to " + std::to_string(estimate) +
+                            " triangles (estimated from its tessellation levels), more than limits.max_triangles = " +
+                            std::to_string(scene.max_triangles),
+                        scene.max_triangles_where);
+        time_pass(&PipelineTimings::control);
+
+        // Pass 3: the primitive generator, and every patch's place in the output.
+        PatternCache local_cache;
+        patterns = patterns_of(scene, levels, precision, options.cache ? *options.cache : local_cache,
+                               distinct_patterns);
+        vertex_base.assign(n + 1, 0);
+        triangle_base.assign(n + 1, 0);
+        for (std::size_t p = 0; p < n; ++p) {
+            vertex_base[p + 1] = vertex_base[p] + patterns[p]->points().size();
+            triangle_base[p + 1] = triangle_base[p] + patterns[p]->primitive_count();
+        }
+        if (vertex_base[n] > 0xffffffffu)
+            throw Error("the scene emits " + std::to_string(vertex_base[n]) +
+                            " vertices, more than 32-bit indices address",
+                        scene.max_triangles_where);
+        time_pass(&PipelineTimings::generator);
+    }
+
+    void write_coords(std::size_t p, std::span<const TessCoord> coords, SurfaceMesh& mesh, std::size_t first) const {
+        for (std::size_t k = 0; k < coords.size(); ++k) {
+            mesh.patch_ids[first + k] = static_cast<std::uint32_t>(p);
+            mesh.tess_coords[first + k] = glm::vec3(coords[k].u, coords[k].v, coords[k].w);
+        }
+    }
+
+    void emit(std::size_t p, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
+              std::vector<glm::dvec3>* normals_out) const override {
+        const Pattern& pattern = *patterns[p];
+        program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex);
+        write_coords(p, pattern.points(), mesh, first_vertex);
+        for (std::size_t t = 0; t < pattern.primitive_count(); ++t) {
+            const auto prim = pattern.primitive(t);
+            std::array<std::uint32_t, 3> tri{static_cast<std::uint32_t>(first_vertex + prim[0]),
+                                             static_cast<std::uint32_t>(first_vertex + prim[1]),
+                                             static_cast<std::uint32_t>(first_vertex + prim[2])};
+            if (program->flip) std::swap(tri[1], tri[2]);
+            mesh.triangles[first_triangle + t] = tri;
+            if (face_normals && normals_out) {
+                // The geometry shader's face normal, from the vertices as the evaluation wrote them.
+                const vec3_t<T> p0(mesh.positions[tri[0]]), p1(mesh.positions[tri[1]]), p2(mesh.positions[tri[2]]);
+                (*normals_out)[first_triangle + t] = glm::dvec3(face_normal<T>(p0, p1, p2));
+            }
+        }
+    }
+
+    std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out,
+                                          glm::dvec3* normal_out) const override {
+        const std::size_t p = static_cast<std::size_t>(
+            std::upper_bound(triangle_base.begin(), triangle_base.end(), triangle) - triangle_base.begin() - 1);
+        const auto prim = patterns[p]->primitive(triangle - triangle_base[p]);
+        std::array<std::uint32_t, 3> points{prim[0], prim[1], prim[2]};
+        if (program->flip) std::swap(points[1], points[2]);
+        out.positions.resize(3);
+        out.patch_ids.resize(3);
+        out.tess_coords.resize(3);
+        out.uvs.resize(has_uvs ? 3 : 0);
+        out.normals.resize(has_normals ? 3 : 0);
+        out.triangles.assign(1, {0, 1, 2});
+        evaluate_points(p, points, out, 0);
+        if (face_normals && normal_out) {
+            const vec3_t<T> p0(out.positions[0]), p1(out.positions[1]), p2(out.positions[2]);
+            *normal_out = glm::dvec3(face_normal<T>(p0, p1, p2));
+        }
+        for (glm::dvec3& position : out.positions) position += origin;
+        const auto first = static_cast<std::uint32_t>(vertex_base[p]);
+        return {first + points[0], first + points[1], first + points[2]};
+    }
+
+    void evaluate_points(std::size_t p, std::span<const std::uint32_t> indices, SurfaceMesh& mesh,
+                         std::size_t first) const override {
+        const Pattern& pattern = *patterns[p];
+        const auto all = domain_points<T>(pattern);
+        const auto coords = pattern.points();
+        // The evaluation is a function of each point alone: a few at a time give the same bits.
+        std::array<DomainPoint<T>, 16> points;
+        std::array<TessCoord, 16> tess;
+        for (std::size_t k0 = 0; k0 < indices.size(); k0 += points.size()) {
+            const std::size_t count = std::min(points.size(), indices.size() - k0);
+            for (std::size_t k = 0; k < count; ++k) {
+                points[k] = all[indices[k0 + k]];
+                tess[k] = coords[indices[k0 + k]];
+            }
+            program->evaluate(p, std::span<const DomainPoint<T>>(points.data(), count), mesh, first + k0);
+            write_coords(p, std::span<const TessCoord>(tess.data(), count), mesh, first + k0);
+        }
+    }
+};
+
+template <typename T>
+std::unique_ptr<PatchStream::Impl> make_stream(const Scene& scene, const PipelineOptions& options, PassTimer& timer) {
+    return std::make_unique<StreamImpl<T>>(scene, options, timer);
+}
+
+std::unique_ptr<PatchStream::Impl> open_stream(const Scene& scene, const PipelineOptions& options, PassTimer& timer) {
+    if (scene.patch_count() == 0) throw Error("the scene has no patches", Where::in_file(scene.file));
+    if (!PatchStream::streams(scene))
+        throw Error("a geomipmapped terrain has no tessellation stages to stream", Where::at_key(scene.file, "evaluation.model"));
+    if (options.precision == Precision::gpu) return make_stream<float>(scene, options, timer);
+    return make_stream<double>(scene, options, timer);
+}
+
+PipelineResult run(const Scene& scene, const PipelineOptions& options) {
+    PassTimer time_pass{options.timings};
+    if (options.timings) *options.timings = PipelineTimings{};
+    PatchStream stream(scene, options);
+    const std::size_t n = stream.patch_count();
+    const std::size_t vertices = stream.vertex_base(n), triangles = stream.triangle_base(n);
+    time_pass.lap = Clock::now();
+    PipelineResult result;
+    result.origin = stream.origin();
+    const bool relative = result.origin != glm::dvec3(0.0);
+
+    // Pass 4: evaluation and geometry, every patch into its slot.
     SurfaceMesh& mesh = result.mesh;
-    const bool face_normals = scene.geometry && scene.geometry->normals == GeometryNormals::face;
     mesh.positions.resize(vertices);
     mesh.patch_ids.resize(vertices);
     mesh.tess_coords.resize(vertices);
-    if (program->has_uvs) mesh.uvs.resize(vertices);
-    if (program->has_normals) mesh.normals.resize(vertices);
+    if (stream.has_uvs()) mesh.uvs.resize(vertices);
+    if (stream.has_normals()) mesh.normals.resize(vertices);
     mesh.triangles.resize(triangles);
-    if (face_normals) result.face_normals.resize(triangles);
+    if (stream.face_normals()) result.face_normals.resize(triangles);
 
     std::atomic<std::size_t> done{0};
     std::mutex progress_mutex;
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t p = r.begin(); p != r.end(); ++p) {
-            const Pattern& pattern = *patterns[p];
-            const std::size_t first_vertex = vertex_base[p];
-            program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex);
-            const auto tess_coords = pattern.points();
-            for (std::size_t k = 0; k < tess_coords.size(); ++k) {
-                mesh.patch_ids[first_vertex + k] = static_cast<std::uint32_t>(p);
-                mesh.tess_coords[first_vertex + k] = glm::vec3(tess_coords[k].u, tess_coords[k].v, tess_coords[k].w);
-            }
-            for (std::size_t t = 0; t < pattern.primitive_count(); ++t) {
-                const auto prim = pattern.primitive(t);
-                std::array<std::uint32_t, 3> tri{static_cast<std::uint32_t>(first_vertex + prim[0]),
-                                                 static_cast<std::uint32_t>(first_vertex + prim[1]),
-                                                 static_cast<std::uint32_t>(first_vertex + prim[2])};
-                if (program->flip) std::swap(tri[1], tri[2]);
-                mesh.triangles[triangle_base[p] + t] = tri;
-                if (face_normals) {
-                    // The geometry shader's face normal, from the vertices as the pipeline holds them.
-                    const vec3_t<T> p0(mesh.positions[tri[0]]), p1(mesh.positions[tri[1]]), p2(mesh.positions[tri[2]]);
-                    result.face_normals[triangle_base[p] + t] = glm::dvec3(face_normal<T>(p0, p1, p2));
-                }
-            }
+            stream.emit(p, mesh, stream.vertex_base(p), stream.triangle_base(p), &result.face_normals);
             const std::size_t d = ++done;
             if (options.progress) {
                 std::lock_guard<std::mutex> lock(progress_mutex);
@@ -224,23 +331,30 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
         }
     }
 
-    require_finite_positions(scene, mesh, precision);
+    require_finite_positions(scene, mesh, options.precision);
     time_pass(&PipelineTimings::evaluation);
 
-    if (scene.geometry && scene.geometry->normals == GeometryNormals::smooth) {
+    if (stream.smooth_normals()) {
         // From the positions as the evaluation wrote them (origin-relative when camera-relative).
-        std::vector<vec3_t<T>> positions(vertices);
-        for (std::size_t v = 0; v < vertices; ++v)
-            positions[v] = relative ? vec3_t<T>(result.relative_positions[v]) : vec3_t<T>(mesh.positions[v]);
-        const auto normals = smooth_vertex_normals<T>(std::span<const vec3_t<T>>(positions),
-                                                      std::span<const std::array<std::uint32_t, 3>>(mesh.triangles),
-                                                      Weld::by_position);
-        mesh.normals.resize(vertices);
-        for (std::size_t v = 0; v < vertices; ++v) mesh.normals[v] = glm::dvec3(normals[v]);
+        const auto smooth = [&](auto zero) {
+            using T = decltype(zero);
+            std::vector<vec3_t<T>> positions(vertices);
+            for (std::size_t v = 0; v < vertices; ++v)
+                positions[v] = relative ? vec3_t<T>(result.relative_positions[v]) : vec3_t<T>(mesh.positions[v]);
+            const auto normals = smooth_vertex_normals<T>(std::span<const vec3_t<T>>(positions),
+                                                          std::span<const std::array<std::uint32_t, 3>>(mesh.triangles),
+                                                          Weld::by_position);
+            mesh.normals.resize(vertices);
+            for (std::size_t v = 0; v < vertices; ++v) mesh.normals[v] = glm::dvec3(normals[v]);
+        };
+        if (options.precision == Precision::gpu) smooth(0.0f);
+        else smooth(0.0);
         time_pass(&PipelineTimings::geometry);
     }
 
-    result.levels = std::move(levels);
+    result.levels = stream.levels();
+    result.estimated_triangles = stream.estimated_triangles();
+    result.distinct_patterns = stream.distinct_patterns();
     result.stages.control = scene.control.has_value();
     result.stages.evaluation = true;
     result.stages.geometry = scene.geometry.has_value();
@@ -267,8 +381,49 @@ SceneCamera camera_moved_by(SceneCamera camera, const glm::dvec3& origin) {
 PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options) {
     if (scene.patch_count() == 0) throw Error("the scene has no patches", Where::in_file(scene.file));
     if (scene.evaluation.model == EvaluationModel::geomipmap) return pipeline::run_geomipmap(scene, options);
-    if (options.precision == Precision::gpu) return run<float>(scene, options);
-    return run<double>(scene, options);
+    return run(scene, options);
+}
+
+PatchStream::PatchStream(const Scene& scene, const PipelineOptions& options) {
+    PassTimer timer{options.timings};
+    impl_ = open_stream(scene, options, timer);
+}
+PatchStream::~PatchStream() = default;
+PatchStream::PatchStream(PatchStream&&) noexcept = default;
+PatchStream& PatchStream::operator=(PatchStream&&) noexcept = default;
+
+bool PatchStream::streams(const Scene& scene) { return scene.evaluation.model != EvaluationModel::geomipmap; }
+std::size_t PatchStream::patch_count() const { return impl_->levels.size(); }
+const std::vector<TessLevels>& PatchStream::levels() const { return impl_->levels; }
+std::uint64_t PatchStream::estimated_triangles() const { return impl_->estimated_triangles; }
+std::size_t PatchStream::distinct_patterns() const { return impl_->distinct_patterns; }
+const Pattern& PatchStream::pattern(std::size_t patch) const { return *impl_->patterns.at(patch); }
+std::size_t PatchStream::vertex_base(std::size_t patch) const { return impl_->vertex_base.at(patch); }
+std::size_t PatchStream::triangle_base(std::size_t patch) const { return impl_->triangle_base.at(patch); }
+std::size_t PatchStream::patch_of_triangle(std::size_t triangle) const {
+    const auto& base = impl_->triangle_base;
+    // The last patch whose first triangle is <= triangle (patches without triangles skipped).
+    const auto it = std::upper_bound(base.begin(), base.end(), triangle);
+    return static_cast<std::size_t>(it - base.begin()) - 1;
+}
+bool PatchStream::has_uvs() const { return impl_->has_uvs; }
+bool PatchStream::has_normals() const { return impl_->has_normals; }
+bool PatchStream::face_normals() const { return impl_->face_normals; }
+bool PatchStream::smooth_normals() const { return impl_->smooth_normals; }
+glm::dvec3 PatchStream::origin() const { return impl_->origin; }
+void PatchStream::emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
+                       std::vector<glm::dvec3>* face_normals) const {
+    impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals);
+}
+std::array<std::uint32_t, 3> PatchStream::triangle(std::size_t triangle, SurfaceMesh& out,
+                                                  glm::dvec3* face_normal) const {
+    if (triangle >= impl_->triangle_base.back())
+        throw Error("triangle " + std::to_string(triangle) + " is not in the surface", Where::at_key("triangle"));
+    return impl_->triangle(triangle, out, face_normal);
+}
+void PatchStream::evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                                  std::size_t first) const {
+    impl_->evaluate_points(patch, points, mesh, first);
 }
 
 }  // namespace tessref

@@ -95,9 +95,12 @@ constexpr std::size_t kMaxChunksPerBatch = 1024;
 struct PreparedVertex {
     glm::vec4 clip;
     glm::vec4 win;
+    std::int32_t fixed_x, fixed_y;  // the window position snapped as setup snaps it
     unsigned clipmask;
     bool finite;
 };
+
+PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, bool fused);
 
 struct Chunk {
     std::vector<Primitive> prims;
@@ -139,14 +142,12 @@ ScratchPool& scratch_pool() {
 }
 
 struct Context {
-    const RasterInput& input;
     const RasterSettings& settings;
     Framebuffer& fb;
     Viewport viewport;
     int tiles_x;
     int tiles_y;
-    std::vector<PreparedVertex>& vertices;
-    std::vector<std::uint32_t>& source;
+    std::uint32_t* source;  // per pixel: the input triangle of the visible primitive
 };
 
 // LLVM fuses llvmpipe's viewport multiply-add only where the CPU has FMA.
@@ -161,6 +162,17 @@ bool host_has_fma() {
 
 bool finite4(const glm::vec4& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+}
+
+PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, bool fused) {
+    PreparedVertex v;
+    v.clip = clip;
+    v.finite = finite4(clip);
+    v.clipmask = raster::compute_clipmask(clip);
+    v.win = raster::window_position(clip, viewport, fused);
+    v.fixed_x = raster::snap_fixed(v.win.x);
+    v.fixed_y = raster::snap_fixed(v.win.y);
+    return v;
 }
 
 // One triangle that left the clipper (or never needed it), with draw's edge flags
@@ -216,16 +228,36 @@ void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
     if ((edge_flags & 2u) && b.edgeflag) line(b, c);
 }
 
-void setup_chunk(const Context& ctx, std::size_t first, std::size_t last, Chunk& chunk) {
+// Sets up triangles [first, last) of tris, whose ids start at first_id (the chunk's first
+// triangle is first_id + 0), with their vertices prepared in `vertices`.
+void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
+                 std::span<const std::array<std::uint32_t, 3>> tris, std::size_t first, std::size_t last,
+                 std::uint32_t first_id, Chunk& chunk) {
     chunk.prims.clear();
     chunk.stats = {};
-    const auto& tris = ctx.input.triangles;
+    const bool filled = ctx.settings.polygon_mode == PolygonMode::fill;
     for (std::size_t t = first; t < last; ++t) {
         ++chunk.stats.triangles_in;
+        const auto& tri = tris[t];
+        const PreparedVertex& p0 = vertices[tri[0]];
+        const PreparedVertex& p1 = vertices[tri[1]];
+        const PreparedVertex& p2 = vertices[tri[2]];
+        if (filled && (p0.clipmask | p1.clipmask | p2.clipmask) == 0 && p0.finite && p1.finite && p2.finite) {
+            // Most triangles of a finely tessellated surface hold no pixel centre: the
+            // snapped bounding box (setup's own test, on positions snapped once per vertex)
+            // rejects them before any setup. The same triangles setup_triangle culls.
+            const std::int32_t x[3] = {p0.fixed_x, p1.fixed_x, p2.fixed_x};
+            const std::int32_t y[3] = {p0.fixed_y, p1.fixed_y, p2.fixed_y};
+            if (!raster::fixed_bbox_has_pixels(x, y, ctx.viewport)) {
+                ++chunk.stats.primitives;
+                ++chunk.stats.primitives_culled;
+                continue;
+            }
+        }
         ClipVertex cv[3];
         bool finite = true;
         for (int k = 0; k < 3; ++k) {
-            const PreparedVertex& pv = ctx.vertices[tris[t][static_cast<std::size_t>(k)]];
+            const PreparedVertex& pv = vertices[tri[static_cast<std::size_t>(k)]];
             cv[k].clip = pv.clip;
             cv[k].win = pv.win;
             cv[k].clipmask = pv.clipmask;
@@ -240,7 +272,7 @@ void setup_chunk(const Context& ctx, std::size_t first, std::size_t last, Chunk&
             ++chunk.stats.triangles_rejected;
             continue;
         }
-        const auto source = static_cast<std::uint32_t>(t);
+        const auto source = static_cast<std::uint32_t>(first_id + (t - first));
         if (mask_or == 0) {
             emit_triangle(ctx, cv[0], cv[1], cv[2], 7u, source, chunk);
             continue;
@@ -424,9 +456,9 @@ void validate(const Framebuffer& fb, const RasterInput& in) {
     }
 }
 
-void resolve(Context& ctx) {
-    Framebuffer& fb = ctx.fb;
-    const RasterInput& in = ctx.input;
+// Ids, tess coords and varyings of the visible surface from the input triangle each pixel
+// kept (source) and its weights.
+void resolve(Framebuffer& fb, const RasterInput& in, const std::uint32_t* source) {
     const auto vc = static_cast<std::size_t>(fb.varying_count);
     const auto ivc = static_cast<std::size_t>(in.varying_count);
     tessref::parallel_for(tbb::blocked_range<int>(0, fb.height), [&](const tbb::blocked_range<int>& rows) {
@@ -434,7 +466,7 @@ void resolve(Context& ctx) {
             for (int x = 0; x < fb.width; ++x) {
                 const std::size_t idx = static_cast<std::size_t>(y) * static_cast<std::size_t>(fb.width) +
                                         static_cast<std::size_t>(x);
-                const std::uint32_t src = ctx.source[idx];
+                const std::uint32_t src = source[idx];
                 if (src == kNoTriangle) continue;
                 const auto& tri = in.triangles[src];
                 const glm::vec3 b = fb.barycentric[idx];
@@ -458,41 +490,28 @@ void resolve(Context& ctx) {
     });
 }
 
-RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings& settings) {
-    std::unique_ptr<Scratch> scratch = scratch_pool().acquire();
-    Context ctx{input,    settings, fb, raster::make_viewport(fb.width, fb.height), 0, 0,
-                scratch->vertices, scratch->source};
-    ctx.tiles_x = (fb.width + kTileSize - 1) / kTileSize;
-    ctx.tiles_y = (fb.height + kTileSize - 1) / kTileSize;
-    const int tile_count = ctx.tiles_x * ctx.tiles_y;
+}  // namespace
 
-    ctx.vertices.resize(input.positions.size());
-    const bool fused = settings.window_transform == WindowTransform::vertex_shader && host_has_fma();
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                              PreparedVertex& v = ctx.vertices[i];
-                              v.clip = input.positions[i];
-                              v.finite = finite4(v.clip);
-                              v.clipmask = raster::compute_clipmask(v.clip);
-                              v.win = raster::window_position(v.clip, ctx.viewport, fused);
-                          }
-                      });
-    ctx.source.assign(fb.depth.size(), kNoTriangle);
-    if (settings.quad_derivatives) {
-        fb.barycentric_dx.resize(fb.depth.size(), glm::vec3(0.0f));
-        fb.barycentric_dy.resize(fb.depth.size(), glm::vec3(0.0f));
+// The machinery both entry points share: chunks set up in parallel, binned by tile, and
+// rasterized tile by tile once a batch has piled up.
+struct Rasterizer::State {
+    State(Framebuffer& framebuffer, const RasterSettings& s, std::uint32_t* source)
+        : settings(s),
+          ctx{settings, framebuffer, raster::make_viewport(framebuffer.width, framebuffer.height), 0, 0, source} {
+        ctx.tiles_x = (framebuffer.width + kTileSize - 1) / kTileSize;
+        ctx.tiles_y = (framebuffer.height + kTileSize - 1) / kTileSize;
+        tile_stats.resize(static_cast<std::size_t>(ctx.tiles_x * ctx.tiles_y));
+        fused = settings.window_transform == WindowTransform::vertex_shader && host_has_fma();
+        if (settings.quad_derivatives) {
+            framebuffer.barycentric_dx.resize(framebuffer.depth.size(), glm::vec3(0.0f));
+            framebuffer.barycentric_dy.resize(framebuffer.depth.size(), glm::vec3(0.0f));
+        }
     }
 
-    // Set up chunks in parallel waves and rasterize the tiles once enough primitives have
-    // piled up. Batches must be large: a batch of consecutive triangles of a tessellated
-    // surface covers few tiles, which would leave the tile phase to one thread.
-    RasterStats total;
-    std::vector<Chunk>& chunks = scratch->chunks;  // storage reused across batches and calls
-    std::size_t used = 0, batch_prims = 0;
-    std::vector<RasterStats> tile_stats(static_cast<std::size_t>(tile_count));
-    auto flush = [&] {
+    // Rasterizes the set-up chunks [0, used) into the tiles, then forgets them.
+    void flush() {
         if (used == 0) return;
+        const int tile_count = ctx.tiles_x * ctx.tiles_y;
         tessref::parallel_for(0, tile_count, [&](int tile) {
             raster_tile(ctx, tile, chunks, used, tile_stats[static_cast<std::size_t>(tile)]);
         });
@@ -505,27 +524,68 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
             total.primitives_culled += s.primitives_culled;
         }
         used = 0;
-        batch_prims = 0;
-    };
+    }
+
+    RasterStats stats() const {
+        RasterStats out = total;
+        for (const RasterStats& s : tile_stats) {
+            out.fragments += s.fragments;
+            out.fragments_passed += s.fragments_passed;
+        }
+        return out;
+    }
+
+    RasterSettings settings;
+    Context ctx;
+    bool fused = false;
+    std::vector<Chunk> chunks;  // storage reused across batches
+    std::size_t used = 0;
+    RasterStats total;
+    std::vector<RasterStats> tile_stats;
+};
+
+namespace {
+
+RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings& settings) {
+    std::unique_ptr<Scratch> scratch = scratch_pool().acquire();
+    scratch->source.assign(fb.depth.size(), kNoTriangle);
+    Rasterizer::State state(fb, settings, scratch->source.data());
+    state.chunks = std::move(scratch->chunks);
+
+    std::vector<PreparedVertex>& vertices = scratch->vertices;
+    vertices.resize(input.positions.size());
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i < r.end(); ++i)
+                                  vertices[i] = prepare_vertex(input.positions[i], state.ctx.viewport, state.fused);
+                          });
+
+    // Set up chunks in parallel waves and rasterize the tiles once enough primitives have
+    // piled up. Batches must be large: a batch of consecutive triangles of a tessellated
+    // surface covers few tiles, which would leave the tile phase to one thread.
+    std::size_t batch_prims = 0;
     const std::size_t tri_count = input.triangles.size();
     for (std::size_t wave_first = 0; wave_first < tri_count; wave_first += kChunkTriangles * kChunksPerWave) {
         const std::size_t wave_last = std::min(tri_count, wave_first + kChunkTriangles * kChunksPerWave);
         const std::size_t wave = (wave_last - wave_first + kChunkTriangles - 1) / kChunkTriangles;
-        if (chunks.size() < used + wave) chunks.resize(used + wave);
+        const std::size_t used = state.used;
+        if (state.chunks.size() < used + wave) state.chunks.resize(used + wave);
         tessref::parallel_for(std::size_t{0}, wave, [&](std::size_t c) {
             const std::size_t first = wave_first + c * kChunkTriangles;
-            setup_chunk(ctx, first, std::min(wave_last, first + kChunkTriangles), chunks[used + c]);
+            setup_chunk(state.ctx, vertices, input.triangles, first, std::min(wave_last, first + kChunkTriangles),
+                        static_cast<std::uint32_t>(first), state.chunks[used + c]);
         });
-        for (std::size_t c = 0; c < wave; ++c) batch_prims += chunks[used + c].prims.size();
-        used += wave;
-        if (batch_prims >= kBatchPrimitives || used >= kMaxChunksPerBatch) flush();
+        for (std::size_t c = 0; c < wave; ++c) batch_prims += state.chunks[used + c].prims.size();
+        state.used += wave;
+        if (batch_prims >= kBatchPrimitives || state.used >= kMaxChunksPerBatch) {
+            state.flush();
+            batch_prims = 0;
+        }
     }
-    flush();
-    for (const RasterStats& s : tile_stats) {
-        total.fragments += s.fragments;
-        total.fragments_passed += s.fragments_passed;
-    }
-    resolve(ctx);
+    state.flush();
+    resolve(fb, input, scratch->source.data());
+    const RasterStats total = state.stats();
+    scratch->chunks = std::move(state.chunks);
     scratch_pool().release(std::move(scratch));
     return total;
 }
@@ -542,5 +602,38 @@ RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSet
     }
     return run(fb, input, settings);
 }
+
+Rasterizer::Rasterizer(Framebuffer& fb, const RasterSettings& settings) {
+    if (fb.width < 1 || fb.height < 1 ||
+        fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height))
+        throw Error("framebuffer is not allocated (use Framebuffer::create)", Where::at_key("framebuffer"));
+    state_ = std::make_unique<State>(fb, settings, fb.triangle_id.data());
+}
+Rasterizer::~Rasterizer() = default;
+
+void Rasterizer::draw(std::span<const RasterChunk> chunks) {
+    State& s = *state_;
+    const std::size_t used = s.used;
+    if (s.chunks.size() < used + chunks.size()) s.chunks.resize(used + chunks.size());
+    tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t c) {
+        const RasterChunk& chunk = chunks[c];
+        thread_local std::vector<PreparedVertex> vertices;
+        vertices.resize(chunk.positions.size());
+        for (std::size_t i = 0; i < chunk.positions.size(); ++i)
+            vertices[i] = prepare_vertex(chunk.positions[i], s.ctx.viewport, s.fused);
+        for (const auto& tri : chunk.triangles)
+            for (const std::uint32_t v : tri)
+                if (v >= chunk.positions.size())
+                    throw Error("vertex index " + std::to_string(v) + " out of range (" +
+                                    std::to_string(chunk.positions.size()) + " vertices in the chunk)",
+                                Where::at_key("triangles"));
+        setup_chunk(s.ctx, vertices, chunk.triangles, 0, chunk.triangles.size(), chunk.first_id,
+                    s.chunks[used + c]);
+    });
+    s.used += chunks.size();
+    s.flush();
+}
+
+RasterStats Rasterizer::stats() const { return state_->stats(); }
 
 }  // namespace tessref

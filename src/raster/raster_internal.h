@@ -80,6 +80,13 @@ bool setup_triangle(const ClipVertex& v0, const ClipVertex& v1, const ClipVertex
 bool setup_line(const ClipVertex& v1, const ClipVertex& v2, const Viewport& viewport,
                 Primitive& prim);
 
+// A window coordinate in llvmpipe's 8-bit sub-pixel fixed point (calc_fixed_position:
+// (v - 0.5) * 256 rounded to nearest even, as cvtps2dq).
+std::int32_t snap_fixed(float window_coordinate);
+// Whether the pixel box do_triangle_ccw derives from three snapped vertices holds a pixel
+// of the viewport: a triangle whose box holds none covers no pixel (setup culls it).
+bool fixed_bbox_has_pixels(const std::int32_t (&x)[3], const std::int32_t (&y)[3], const Viewport& viewport);
+
 // Round-to-nearest-even as SSE's cvtps2dq (out of range: INT32_MIN), and Mesa's util_iround
 // on x86-64 ((int)(f + 0.5f), in float).
 std::int32_t cvt_rne(float v);

@@ -6,6 +6,10 @@
 #include <cmath>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "raster/raster_internal.h"
 
 namespace tessref::raster {
@@ -59,11 +63,42 @@ void triangle_plane(const float a[3], float ooa, float dx01, float dy01, float d
     out[2] = dady;
 }
 
+// do_triangle_ccw's bounding box; bottom_edge_rule = 1 gives adj = 1. Its x0 and y0 may
+// name a column/row whose centre lies left of / above the snapped triangle, or is its
+// topmost vertex, which the fill rule leaves out (llvmpipe lets the edge functions reject
+// them); tightening them changes no coverage and drops most sub-pixel triangles before any
+// plane is set up.
+void triangle_bbox(const std::int32_t* x, const std::int32_t* y, Primitive& prim) {
+    const int adj = 1;
+    const std::int32_t min_x = std::min({x[0], x[1], x[2]}), max_x = std::max({x[0], x[1], x[2]});
+    const std::int32_t min_y = std::min({y[0], y[1], y[2]}), max_y = std::max({y[0], y[1], y[2]});
+    prim.x0 = std::max(min_x >> kFixedOrder, (min_x + kFixedOne - 1) >> kFixedOrder);
+    prim.x1 = (max_x - 1) >> kFixedOrder;
+    prim.y0 = std::max((min_y + adj) >> kFixedOrder, (min_y + kFixedOne) >> kFixedOrder);
+    prim.y1 = (max_y - 1 + adj) >> kFixedOrder;
+}
+
 }  // namespace
 
+std::int32_t snap_fixed(float window_coordinate) {
+    return cvt_rne((window_coordinate - kPixelOffset) * static_cast<float>(kFixedOne));
+}
+
+bool fixed_bbox_has_pixels(const std::int32_t (&x)[3], const std::int32_t (&y)[3], const Viewport& viewport) {
+    Primitive prim;
+    triangle_bbox(x, y, prim);
+    return clamp_bbox(prim, viewport);
+}
+
 std::int32_t cvt_rne(float v) {
+#if defined(__SSE2__)
+    // The instruction itself (round to nearest even under the default MXCSR; out of range
+    // and NaN give INT32_MIN), without a libm call per vertex.
+    return _mm_cvtss_si32(_mm_set_ss(v));
+#else
     if (!(std::fabs(v) < 2147483648.0f)) return INT32_MIN;  // SSE "integer indefinite"
     return static_cast<std::int32_t>(std::nearbyint(v));
+#endif
 }
 
 std::int32_t util_iround(float f) {
@@ -83,8 +118,8 @@ bool setup_triangle(const ClipVertex& in0, const ClipVertex& in1, const ClipVert
     // calc_fixed_position (SSE path): (v - pixel_offset) * FIXED_ONE, cvtps2dq.
     std::int32_t x[3], y[3];
     for (int i = 0; i < 3; ++i) {
-        x[i] = cvt_rne((v[i]->win.x - kPixelOffset) * static_cast<float>(kFixedOne));
-        y[i] = cvt_rne((v[i]->win.y - kPixelOffset) * static_cast<float>(kFixedOne));
+        x[i] = snap_fixed(v[i]->win.x);
+        y[i] = snap_fixed(v[i]->win.y);
     }
     const std::int32_t dx01 = x[0] - x[1], dy01 = y[0] - y[1];
     const std::int32_t dx20 = x[2] - x[0], dy20 = y[2] - y[0];
@@ -100,18 +135,7 @@ bool setup_triangle(const ClipVertex& in0, const ClipVertex& in1, const ClipVert
     }
     prim.front = front;
 
-    // do_triangle_ccw bounding box; bottom_edge_rule = 1 gives adj = 1. Its x0 and y0 may
-    // name a column/row whose centre lies left of / above the snapped triangle, or is its
-    // topmost vertex, which the fill rule leaves out (llvmpipe lets the edge functions
-    // reject them); tightening them changes no coverage and drops most sub-pixel triangles
-    // before any plane is set up.
-    const int adj = 1;
-    const std::int32_t min_x = std::min({x[0], x[1], x[2]}), max_x = std::max({x[0], x[1], x[2]});
-    const std::int32_t min_y = std::min({y[0], y[1], y[2]}), max_y = std::max({y[0], y[1], y[2]});
-    prim.x0 = std::max(min_x >> kFixedOrder, (min_x + kFixedOne - 1) >> kFixedOrder);
-    prim.x1 = (max_x - 1) >> kFixedOrder;
-    prim.y0 = std::max((min_y + adj) >> kFixedOrder, (min_y + kFixedOne) >> kFixedOrder);
-    prim.y1 = (max_y - 1 + adj) >> kFixedOrder;
+    triangle_bbox(x, y, prim);
     if (!clamp_bbox(prim, vp)) return false;
     make_planes(x, y, 3, prim);
 

@@ -58,12 +58,15 @@ double seconds_since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// Everything the per-pixel passes read.
+// Everything the per-pixel passes read of the triangles a pass drew: the whole surface
+// (run_pipeline's mesh) or the patches of one streamed chunk (then triangle indices are the
+// chunk's and positions the evaluation's, relative to origin when camera-relative).
 struct SurfaceView {
     const SurfaceMesh& mesh;
-    const PipelineResult& pipeline;
+    const std::vector<glm::dvec3>& face_normals;  // per triangle with [geometry] normals = "face"
     const std::vector<glm::vec4>& clip;
-    bool face_normals = false;
+    bool use_face_normals = false;
+    glm::dvec3 origin{0.0};  // added to mesh positions (in double) to make world positions
 
     std::array<glm::dvec4, 3> clip_corners(std::uint32_t triangle) const {
         const auto& t = mesh.triangles[triangle];
@@ -74,6 +77,7 @@ struct SurfaceView {
         const auto& t = mesh.triangles[triangle];
         return b[0] * glm::vec2(mesh.uvs[t[0]]) + b[1] * glm::vec2(mesh.uvs[t[1]]) + b[2] * glm::vec2(mesh.uvs[t[2]]);
     }
+    glm::vec3 world(std::uint32_t vertex) const { return glm::vec3(mesh.positions[vertex] + origin); }
 };
 
 // The fragment inputs of a pixel whose visible triangle and weights are known (the texture
@@ -83,13 +87,10 @@ FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs,
     FragmentInputs f;
     const auto& t = s.mesh.triangles[triangle];
     f.depth = depth;
-    if (needs.worldPosition) {
-        f.worldPosition = b[0] * glm::vec3(s.mesh.positions[t[0]]) + b[1] * glm::vec3(s.mesh.positions[t[1]]) +
-                          b[2] * glm::vec3(s.mesh.positions[t[2]]);
-    }
+    if (needs.worldPosition) f.worldPosition = b[0] * s.world(t[0]) + b[1] * s.world(t[1]) + b[2] * s.world(t[2]);
     if (needs.normal) {
-        if (s.face_normals) {
-            f.normal = glm::vec3(s.pipeline.face_normals[triangle]);
+        if (s.use_face_normals) {
+            f.normal = glm::vec3(s.face_normals[triangle]);
         } else if (!s.mesh.normals.empty()) {
             f.normal = b[0] * glm::vec3(s.mesh.normals[t[0]]) + b[1] * glm::vec3(s.mesh.normals[t[1]]) +
                        b[2] * glm::vec3(s.mesh.normals[t[2]]);
@@ -142,19 +143,16 @@ glm::vec4 gl_position(const glm::mat4& m, const glm::vec3& p) {
 
 }  // namespace
 
-float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_t triangle, std::string* source) {
-    const SurfaceMesh& mesh = pipeline.mesh;
-    const auto& t = mesh.triangles.at(triangle);
-    const std::uint32_t patch = mesh.patch_ids[t[0]];
-    const TessLevels& levels = pipeline.levels.at(patch);
+namespace {
+
+// render.h's LEVEL rule for a triangle with these tess coords in a patch with these levels.
+float level_of(const TessLevels& levels, Domain domain, const std::array<glm::vec3, 3>& tess_coords,
+               std::string* source) {
     const int edges = domain == Domain::quads ? 4 : 3;
     int best_edge = -1, best_count = 0;
     for (int e = 0; e < edges; ++e) {
         int count = 0;
-        for (const std::uint32_t v : t) {
-            const glm::vec3& c = mesh.tess_coords[v];
-            count += on_outer_edge(domain, TessCoord{c.x, c.y, c.z}, e) ? 1 : 0;
-        }
+        for (const glm::vec3& c : tess_coords) count += on_outer_edge(domain, TessCoord{c.x, c.y, c.z}, e) ? 1 : 0;
         if (count > best_count) {
             best_count = count;
             best_edge = e;
@@ -168,8 +166,268 @@ float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_
     return domain == Domain::quads ? std::max(levels.inner[0], levels.inner[1]) : levels.inner[0];
 }
 
+float level_of(const SurfaceMesh& mesh, const std::vector<TessLevels>& levels, Domain domain, std::uint32_t triangle,
+               std::string* source = nullptr) {
+    const auto& t = mesh.triangles.at(triangle);
+    return level_of(levels.at(mesh.patch_ids[t[0]]), domain,
+                    {mesh.tess_coords[t[0]], mesh.tess_coords[t[1]], mesh.tess_coords[t[2]]}, source);
+}
+
+
+// The visible-surface buffers of RenderResult and the fragment stage's colour, for the pixels of
+// quad rows [quad_row_begin, quad_row_end) whose visible triangle (id) is in a view that
+// owns(id) returns, with the triangle's index in it (null: not this pass's). Quad by quad (2x2 pixels,
+// as llvmpipe shades): the pixels of a quad that show the same triangle share its
+// derivatives and level.
+template <typename Owns>
+void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<TessLevels>& levels, Domain domain,
+             const FragmentNeeds& needs, bool derivatives, bool line_derivatives, int quad_row_begin,
+             int quad_row_end, const Owns& owns) {
+    const int width = result.width, height = result.height;
+    for (int quad_row = quad_row_begin; quad_row < quad_row_end; ++quad_row) {
+        const int row0 = 2 * quad_row;
+        for (int x0 = 0; x0 < width; x0 += 2) {
+            std::uint32_t cached_triangle[4];
+            Derivatives cached[4];
+            float cached_level[4];
+            int cached_count = 0;
+            for (int row = row0; row < std::min(row0 + 2, height); ++row) {
+                for (int x = x0; x < std::min(x0 + 2, width); ++x) {
+                    const std::size_t i = result.index(x, row);  // the framebuffer's layout too
+                    const std::uint32_t id = fb.triangle_id[i];
+                    if (id == kNoTriangle) continue;
+                    const auto [view_of, tri] = owns(id);
+                    if (!view_of) continue;
+                    const SurfaceView& view = *view_of;
+                    const glm::vec3 b = fb.barycentric[i];
+                    const auto& t = view.mesh.triangles[tri];
+                    result.triangle_id[i] = id;
+                    result.patch_id[i] = view.mesh.patch_ids[t[0]];
+                    result.barycentric[i] = b;
+                    result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] + b[1] * view.mesh.tess_coords[t[1]] +
+                                           b[2] * view.mesh.tess_coords[t[2]];
+                    result.depth[i] = fb.depth[i];
+                    int k = 0;
+                    while (k < cached_count && cached_triangle[k] != id) ++k;
+                    if (k == cached_count) {
+                        cached_triangle[k] = id;
+                        cached_level[k] = level_of(view.mesh, levels, domain, tri);
+                        if (derivatives && !line_derivatives)
+                            cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
+                        ++cached_count;
+                    }
+                    result.level[i] = cached_level[k];
+                    FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
+                    if (line_derivatives) {
+                        // Per pixel: two edges of one triangle in a quad are two lines.
+                        // uv_at is linear: the weights' differences give the uv's.
+                        f.texCoord_dx = view.uv_at(tri, fb.barycentric_dx[i]);
+                        f.texCoord_dy = view.uv_at(tri, fb.barycentric_dy[i]);
+                    } else {
+                        f.texCoord_dx = cached[k].dx;
+                        f.texCoord_dy = cached[k].dy;
+                    }
+                    result.colour[i] = shade(result.shading.model, f);
+                }
+            }
+        }
+    }
+}
+
+// The pixels with a visible surface.
+std::uint64_t covered_pixels(const RenderResult& result) {
+    return static_cast<std::uint64_t>(
+        std::count_if(result.triangle_id.begin(), result.triangle_id.end(), [](std::uint32_t id) { return id != kNoPixelId; }));
+}
+
+}  // namespace
+
+float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_t triangle, std::string* source) {
+    return level_of(pipeline.mesh, pipeline.levels, domain, triangle, source);
+}
+
+namespace {
+
+// A few patches of a streamed surface, evaluated, projected and drawn together: storage
+// reused from batch to batch.
+struct PatchChunk {
+    std::size_t first_patch = 0, last_patch = 0;
+    std::uint32_t first_triangle = 0;
+    SurfaceMesh mesh;
+    std::vector<glm::dvec3> face_normals;
+    std::vector<glm::vec4> clip;
+    bool finite = true;
+};
+
+// Triangles per chunk (a chunk is one setup task) and per batch (what is evaluated and
+// held at once: about 100 bytes a vertex, half a vertex per triangle).
+constexpr std::size_t kStreamChunkTriangles = 8192;
+constexpr std::size_t kStreamBatchTriangles = std::size_t{1} << 20;
+
+// Fill mode, streamed: the surface is evaluated, projected, rasterized and resolved a
+// batch of patches at a time and never held whole (render.h, RenderOptions::keep_surface).
+// Every value is the one the materialized path computes: PatchStream::emit writes what
+// run_pipeline writes, the rasterizer's draws in submission order leave the pixels one
+// pass leaves, and each pixel is resolved from the batch that drew its final triangle.
+RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, const RenderOptions& options) {
+    const auto start = Clock::now();
+    auto progress = [&](std::string_view stage, double fraction) {
+        if (options.progress) options.progress(stage, fraction);
+    };
+    PipelineOptions pipeline_options;
+    pipeline_options.precision = options.precision;
+    pipeline_options.camera_relative = options.camera_relative;
+    // The stream reads its scene for as long as it lives (pixel_provenance evaluates from it
+    // after this returns): it keeps a copy of its own.
+    struct Owned {
+        Scene scene;
+        PatchStream stream;
+        Owned(const Scene& s, const PipelineOptions& o) : scene(s), stream(scene, o) {}
+    };
+    const auto owned = std::make_shared<const Owned>(pipeline_scene, pipeline_options);
+    const std::shared_ptr<const PatchStream> shared_stream(owned, &owned->stream);
+    const PatchStream& stream = *shared_stream;
+    const std::size_t n = stream.patch_count();
+
+    RenderResult result;
+    result.camera = render_detail::camera_for(scene, options);
+    result.shading = scene.shading;
+    const int width = result.camera.viewport.x, height = result.camera.viewport.y;
+    const glm::dvec3 origin = stream.origin();
+    const bool relative = origin != glm::dvec3(0.0);
+    result.mvp = glm::mat4(relative ? camera_moved_by(result.camera, origin).view_projection()
+                                    : result.camera.view_projection());
+    auto pipe = std::make_shared<PipelineResult>();
+    pipe->levels = stream.levels();
+    pipe->estimated_triangles = stream.estimated_triangles();
+    pipe->distinct_patterns = stream.distinct_patterns();
+    pipe->origin = origin;
+    pipe->stages = {scene.control.has_value(), true, scene.geometry.has_value()};
+    result.pipeline = pipe;
+    result.stream = shared_stream;
+    result.stats.triangles = stream.triangle_base(n);
+    result.stats.vertices = stream.vertex_base(n);
+    const Domain domain = scene.generator.domain;
+    result.domain = domain;
+    result.stats.seconds_pipeline = seconds_since(start);
+
+    const auto buffers_start = Clock::now();
+    render_detail::allocate(result, width, height);
+    RasterSettings settings;
+    settings.depth_func = DepthFunc::less;
+    Framebuffer fb = Framebuffer::create(width, height, 0);
+    Rasterizer rasterizer(fb, settings);
+    const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
+    const bool derivatives = needs.texCoord && needs.texCoord_derivatives && stream.has_uvs();
+    const glm::mat4 mvp = result.mvp;
+
+    // Chunks: runs of whole patches of about kStreamChunkTriangles triangles.
+    result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
+    std::vector<PatchChunk> chunks;
+    std::vector<RasterChunk> views;
+    std::size_t next_patch = 0;
+    while (next_patch < n) {
+        // The next batch's chunk boundaries, in patch order.
+        chunks.reserve(64);
+        std::size_t used = 0, batch_triangles = 0;
+        while (next_patch < n && batch_triangles < kStreamBatchTriangles) {
+            if (chunks.size() <= used) chunks.emplace_back();
+            PatchChunk& c = chunks[used++];
+            c.first_patch = next_patch;
+            c.first_triangle = static_cast<std::uint32_t>(stream.triangle_base(next_patch));
+            std::size_t triangles = 0;
+            while (next_patch < n && (triangles == 0 || triangles + (stream.triangle_base(next_patch + 1) -
+                                                                     stream.triangle_base(next_patch)) <=
+                                                            kStreamChunkTriangles)) {
+                triangles += stream.triangle_base(next_patch + 1) - stream.triangle_base(next_patch);
+                ++next_patch;
+            }
+            c.last_patch = next_patch;
+            batch_triangles += triangles;
+        }
+        // Evaluate and project the chunks' patches (pass 4 of the pipeline, then gl_Position).
+        auto lap = Clock::now();
+        tessref::parallel_for(std::size_t{0}, used, [&](std::size_t k) {
+            PatchChunk& c = chunks[k];
+            const std::size_t v0 = stream.vertex_base(c.first_patch), t0 = stream.triangle_base(c.first_patch);
+            const std::size_t vertices = stream.vertex_base(c.last_patch) - v0;
+            const std::size_t triangles = stream.triangle_base(c.last_patch) - t0;
+            SurfaceMesh& m = c.mesh;
+            m.positions.resize(vertices);
+            m.patch_ids.resize(vertices);
+            m.tess_coords.resize(vertices);
+            if (stream.has_uvs()) m.uvs.resize(vertices);
+            if (stream.has_normals()) m.normals.resize(vertices);
+            m.triangles.resize(triangles);
+            if (stream.face_normals()) c.face_normals.resize(triangles);
+            for (std::size_t p = c.first_patch; p < c.last_patch; ++p)
+                stream.emit(p, m, stream.vertex_base(p) - v0, stream.triangle_base(p) - t0, &c.face_normals);
+            c.clip.resize(vertices);
+            c.finite = true;
+            for (std::size_t v = 0; v < vertices; ++v) {
+                const glm::dvec3& q = m.positions[v];
+                c.finite = c.finite && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+                // The renderer's gl_Position of the evaluation's float position.
+                c.clip[v] = gl_position(mvp, glm::vec3(q));
+            }
+        });
+        for (std::size_t k = 0; k < used; ++k) {
+            if (!chunks[k].finite) {
+                // The materialized pipeline names the first non-finite vertex (and throws).
+                run_pipeline(pipeline_scene, pipeline_options);
+                throw Error("the surface has a non-finite vertex", Where::in_file(scene.file));
+            }
+        }
+        views.clear();
+        for (std::size_t k = 0; k < used; ++k)
+            views.push_back({chunks[k].clip, chunks[k].mesh.triangles, chunks[k].first_triangle});
+        result.stats.seconds_pipeline += seconds_since(lap);
+        lap = Clock::now();
+        rasterizer.draw(views);
+        result.stats.seconds_raster += seconds_since(lap);
+        lap = Clock::now();
+
+        // Resolve the pixels whose visible triangle this batch drew.
+        const std::uint32_t batch_first = chunks[0].first_triangle;
+        const std::uint32_t batch_end = static_cast<std::uint32_t>(stream.triangle_base(chunks[used - 1].last_patch));
+        std::vector<SurfaceView> chunk_views;
+        std::vector<std::uint32_t> chunk_first;
+        for (std::size_t k = 0; k < used; ++k) {
+            chunk_views.push_back({chunks[k].mesh, chunks[k].face_normals, chunks[k].clip, stream.face_normals(), origin});
+            chunk_first.push_back(chunks[k].first_triangle);
+        }
+        tessref::parallel_for(tbb::blocked_range<int>(0, (height + 1) / 2), [&](const tbb::blocked_range<int>& rows) {
+            resolve(result, fb, pipe->levels, domain, needs, derivatives, false, rows.begin(), rows.end(),
+                    [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
+                        if (id < batch_first || id >= batch_end) return {nullptr, 0};
+                        const std::size_t k = static_cast<std::size_t>(
+                            std::upper_bound(chunk_first.begin(), chunk_first.end(), id) - chunk_first.begin() - 1);
+                        return {&chunk_views[k], id - chunk_first[k]};
+                    });
+        });
+        result.stats.seconds_shade += seconds_since(lap);
+        progress("rasterizing", static_cast<double>(next_patch) / static_cast<double>(n));
+    }
+    result.stats.raster = rasterizer.stats();
+    result.stats.covered_pixels = covered_pixels(result);
+    return result;
+}
+
+}  // namespace
+
 RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
     const SceneCamera camera = render_detail::camera_for(scene, options);
+    // The pipeline sees the image's viewport, as it would see the application's window.
+    Scene resized;
+    if (camera.viewport != scene.camera->viewport) {
+        resized = scene;
+        resized.camera = camera;
+    }
+    const Scene& pipeline_scene = camera.viewport != scene.camera->viewport ? resized : scene;
+    if (!options.keep_surface && options.mode == RenderMode::fill && PatchStream::streams(scene) &&
+        !(scene.geometry && scene.geometry->normals == GeometryNormals::smooth))
+        return render_streamed(scene, pipeline_scene, options);
+
     const auto start = Clock::now();
     PipelineOptions pipeline_options;
     pipeline_options.precision = options.precision;
@@ -179,15 +437,7 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
             options.progress("tessellating", total ? static_cast<double>(done) / static_cast<double>(total) : 1.0);
         };
     }
-    // The pipeline sees the image's viewport, as it would see the application's window.
-    std::shared_ptr<const PipelineResult> pipeline;
-    if (camera.viewport == scene.camera->viewport) {
-        pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene, pipeline_options));
-    } else {
-        Scene resized = scene;
-        resized.camera = camera;
-        pipeline = std::make_shared<const PipelineResult>(run_pipeline(resized, pipeline_options));
-    }
+    auto pipeline = std::make_shared<const PipelineResult>(run_pipeline(pipeline_scene, pipeline_options));
     const double seconds_pipeline = seconds_since(start);
     RenderResult result = render_surface(scene, std::move(pipeline), options);
     result.stats.seconds_pipeline = seconds_pipeline;
@@ -263,64 +513,14 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     start = Clock::now();
     progress("shading", 0.0);
     render_detail::allocate(result, width, height);
-    const SurfaceView view{mesh, pipe, clip, face_normals};
+    const SurfaceView view{mesh, pipe.face_normals, clip, face_normals};  // world positions
     const Domain domain = scene.generator.domain;
     result.domain = domain;
-    // Quad by quad (2x2 pixels, as llvmpipe shades): the pixels of a quad that show the same
-    // triangle share its derivatives (and its level).
-    const auto covered = tessref::parallel_reduce(
-        tbb::blocked_range<int>(0, (height + 1) / 2), std::uint64_t{0},
-        [&](const tbb::blocked_range<int>& quad_rows, std::uint64_t count) {
-            for (int quad_row = quad_rows.begin(); quad_row < quad_rows.end(); ++quad_row) {
-                const int row0 = 2 * quad_row;
-                for (int x0 = 0; x0 < width; x0 += 2) {
-                    std::uint32_t cached_triangle[4];
-                    Derivatives cached[4];
-                    float cached_level[4];
-                    int cached_count = 0;
-                    for (int row = row0; row < std::min(row0 + 2, height); ++row) {
-                        for (int x = x0; x < std::min(x0 + 2, width); ++x) {
-                            const std::size_t i = result.index(x, row);  // the framebuffer's layout too
-                            const std::uint32_t tri = fb.triangle_id[i];
-                            if (tri == kNoTriangle) continue;
-                            ++count;
-                            const glm::vec3 b = fb.barycentric[i];
-                            const auto& t = mesh.triangles[tri];
-                            result.triangle_id[i] = tri;
-                            result.patch_id[i] = mesh.patch_ids[t[0]];
-                            result.barycentric[i] = b;
-                            result.tess_coord[i] = b[0] * mesh.tess_coords[t[0]] + b[1] * mesh.tess_coords[t[1]] +
-                                                   b[2] * mesh.tess_coords[t[2]];
-                            result.depth[i] = fb.depth[i];
-                            int k = 0;
-                            while (k < cached_count && cached_triangle[k] != tri) ++k;
-                            if (k == cached_count) {
-                                cached_triangle[k] = tri;
-                                cached_level[k] = triangle_level(pipe, domain, tri);
-                                if (derivatives && !line_derivatives)
-                                    cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
-                                ++cached_count;
-                            }
-                            result.level[i] = cached_level[k];
-                            FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
-                            if (line_derivatives) {
-                                // Per pixel: two edges of one triangle in a quad are two lines.
-                                // uv_at is linear: the weights' differences give the uv's.
-                                f.texCoord_dx = view.uv_at(tri, fb.barycentric_dx[i]);
-                                f.texCoord_dy = view.uv_at(tri, fb.barycentric_dy[i]);
-                            } else {
-                                f.texCoord_dx = cached[k].dx;
-                                f.texCoord_dy = cached[k].dy;
-                            }
-                            result.colour[i] = shade(result.shading.model, f);
-                        }
-                    }
-                }
-            }
-            return count;
-        },
-        std::plus<>());
-    result.stats.covered_pixels = covered;
+    tessref::parallel_for(tbb::blocked_range<int>(0, (height + 1) / 2), [&](const tbb::blocked_range<int>& rows) {
+        resolve(result, fb, pipe.levels, domain, needs, derivatives, line_derivatives, rows.begin(), rows.end(),
+                [&view](std::uint32_t id) { return std::pair{&view, id}; });
+    });
+    result.stats.covered_pixels = covered_pixels(result);
 
     if (options.mode == RenderMode::fill_with_wireframe) {
         // The lines over the filled image where they are not behind it (render.h).
@@ -398,22 +598,30 @@ PixelProvenance pixel_provenance(const RenderResult& result, int x, int y) {
     p.level = result.level[i];
     if (!result.pipeline) return p;  // a ray-traced image: no tessellation
     const PipelineResult& pipe = *result.pipeline;
-    const SurfaceMesh& mesh = pipe.mesh;
-    const auto& t = mesh.triangles[p.triangle_id];
-    p.vertices = t;
+    // A streamed render kept no surface: its one triangle, evaluated again (the same bits).
+    SurfaceMesh one;
+    glm::dvec3 face_normal(0.0);
+    const bool streamed = pipe.mesh.triangles.empty() && result.stream;
+    if (streamed) p.vertices = result.stream->triangle(p.triangle_id, one, &face_normal);
+    const SurfaceMesh& mesh = streamed ? one : pipe.mesh;
+    const std::uint32_t triangle = streamed ? 0 : p.triangle_id;
+    const auto& t = mesh.triangles.at(triangle);
+    if (!streamed) p.vertices = t;
     const glm::dvec3 b(p.barycentric);
     for (int k = 0; k < 3; ++k) {
         p.vertex_tess_coords[static_cast<std::size_t>(k)] = mesh.tess_coords[t[static_cast<std::size_t>(k)]];
         p.world_position += b[k] * mesh.positions[t[static_cast<std::size_t>(k)]];
     }
-    if (!pipe.face_normals.empty()) {
+    if (streamed && result.stream->face_normals()) {
+        p.normal = face_normal;
+    } else if (!pipe.face_normals.empty()) {
         p.normal = pipe.face_normals[p.triangle_id];
     } else if (!mesh.normals.empty()) {
         p.normal = b[0] * mesh.normals[t[0]] + b[1] * mesh.normals[t[1]] + b[2] * mesh.normals[t[2]];
     }
     if (!mesh.uvs.empty()) p.uv = b[0] * mesh.uvs[t[0]] + b[1] * mesh.uvs[t[1]] + b[2] * mesh.uvs[t[2]];
     p.patch_levels = pipe.levels.at(p.patch_id);
-    triangle_level(pipe, result.domain, p.triangle_id, &p.level_source);
+    level_of(mesh, pipe.levels, result.domain, triangle, &p.level_source);
     return p;
 }
 

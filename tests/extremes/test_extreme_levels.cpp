@@ -108,7 +108,9 @@ protected:
         const RunResult r = run({"gl", "scene.toml", "-o", "gl.png", "--capture", "gl.txt"});
         ASSERT_EQ(r.status, 0) << r.err;
         const tessref::Scene scene = load(t);
-        const tessref::RenderResult image = tessref::render_scene(scene);
+        tessref::RenderOptions keep;
+        keep.keep_surface = true;  // the capture reads the surface
+        const tessref::RenderResult image = tessref::render_scene(scene, keep);
         tessref::Capture cpu;
         cpu.vertices = tessref::capture_from_pipeline(scene, *image.pipeline);
         EXPECT_EQ(cpu.vertices.size(), 3 * expected_triangles);
@@ -133,6 +135,7 @@ TEST_F(ExtremeLevels, SceneLevelsThroughPipelineAndRender) {
             const tessref::Scene scene = load(level_scene(c.level, c.spacing));
             tessref::RenderOptions options;
             options.precision = precision;
+            options.keep_surface = true;  // per_patch counts the surface's triangles
             const tessref::RenderResult image = tessref::render_scene(scene, options);
             const std::size_t expected = c.n == 0 ? 0 : quad_triangles(c.n);
             EXPECT_EQ(per_patch(*image.pipeline, 4), std::vector<std::size_t>(4, expected));

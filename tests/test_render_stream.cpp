@@ -1,0 +1,241 @@
+// The streamed render (render.h RenderOptions::keep_surface off) against the materialized
+// one: a filled image evaluated, rasterized and resolved a batch of patches at a time must
+// give every per-pixel buffer the whole-surface pass gives, bit for bit, for every shipped
+// scene, both precisions, camera-relative evaluation and any thread count. And the
+// rasterizer's batched draws (raster.h Rasterizer) against one rasterize() of the same
+// triangles.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include "tessref/error.h"
+#include "tessref/pipeline.h"
+#include "tessref/raster.h"
+#include "tessref/render.h"
+#include "tessref/scene.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kScenes = fs::path(TESSREF_SOURCE_DIR) / "data" / "scenes";
+
+template <typename T>
+bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+// Every per-pixel buffer and the counts, byte for byte.
+void expect_identical(const tessref::RenderResult& streamed, const tessref::RenderResult& whole) {
+    EXPECT_TRUE(same_bytes(streamed.colour, whole.colour)) << "colour";
+    EXPECT_TRUE(same_bytes(streamed.depth, whole.depth)) << "depth";
+    EXPECT_TRUE(same_bytes(streamed.patch_id, whole.patch_id)) << "patch_id";
+    EXPECT_TRUE(same_bytes(streamed.triangle_id, whole.triangle_id)) << "triangle_id";
+    EXPECT_TRUE(same_bytes(streamed.tess_coord, whole.tess_coord)) << "tess_coord";
+    EXPECT_TRUE(same_bytes(streamed.barycentric, whole.barycentric)) << "barycentric";
+    EXPECT_TRUE(same_bytes(streamed.level, whole.level)) << "level";
+    EXPECT_EQ(streamed.stats.triangles, whole.stats.triangles);
+    EXPECT_EQ(streamed.stats.vertices, whole.stats.vertices);
+    EXPECT_EQ(streamed.stats.covered_pixels, whole.stats.covered_pixels);
+    EXPECT_EQ(streamed.stats.raster.triangles_in, whole.stats.raster.triangles_in);
+    EXPECT_EQ(streamed.stats.raster.triangles_clipped, whole.stats.raster.triangles_clipped);
+    EXPECT_EQ(streamed.stats.raster.triangles_rejected, whole.stats.raster.triangles_rejected);
+    EXPECT_EQ(streamed.stats.raster.primitives, whole.stats.raster.primitives);
+    EXPECT_EQ(streamed.stats.raster.primitives_culled, whole.stats.raster.primitives_culled);
+    EXPECT_EQ(streamed.stats.raster.fragments, whole.stats.raster.fragments);
+    EXPECT_EQ(streamed.stats.raster.fragments_passed, whole.stats.raster.fragments_passed);
+    EXPECT_EQ(streamed.mvp, whole.mvp);
+}
+
+// The streamed render never keeps the surface; the materialized one does.
+void compare_paths(const tessref::Scene& scene, tessref::RenderOptions options) {
+    options.keep_surface = false;
+    const tessref::RenderResult streamed = tessref::render_scene(scene, options);
+    options.keep_surface = true;
+    const tessref::RenderResult whole = tessref::render_scene(scene, options);
+    ASSERT_TRUE(streamed.pipeline && whole.pipeline);
+    // A geomipmapped terrain and smooth normals need the whole surface: those fall back to it.
+    const bool streams = tessref::PatchStream::streams(scene) &&
+                         !(scene.geometry && scene.geometry->normals == tessref::GeometryNormals::smooth);
+    EXPECT_EQ(streamed.pipeline->mesh.triangles.empty(), streams) << "streamed (surface not held): " << streams;
+    EXPECT_EQ(whole.pipeline->mesh.triangles.size(), whole.stats.triangles);
+    EXPECT_GT(streamed.stats.covered_pixels, 0u);
+    expect_identical(streamed, whole);
+}
+
+std::vector<fs::path> shipped_scenes() {
+    std::vector<fs::path> out;
+    for (const auto& e : fs::directory_iterator(kScenes))
+        if (e.path().extension() == ".toml") out.push_back(e.path());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
+TEST(RenderStream, EveryShippedSceneMatchesTheWholeSurfacePass) {
+    std::size_t compared = 0;
+    for (const fs::path& path : shipped_scenes()) {
+        SCOPED_TRACE(path.filename().string());
+        const tessref::Scene scene = tessref::load_scene(path.string());
+        if (!scene.camera) continue;
+        tessref::RenderOptions options;
+        options.size = {320, 200};  // a smaller image keeps the suite quick; every scene's surface is whole
+        compare_paths(scene, options);
+        ++compared;
+    }
+    EXPECT_GE(compared, 14u);  // the shipped scenes with a camera
+}
+
+TEST(RenderStream, ExactPrecisionAndCameraRelativeMatch) {
+    for (const char* name : {"thesis-all-10.toml", "cosc422-eye.toml", "lab4-canyon.toml", "pn-triangles.toml"}) {
+        SCOPED_TRACE(name);
+        const tessref::Scene scene = tessref::load_scene((kScenes / name).string());
+        tessref::RenderOptions options;
+        options.size = {256, 160};
+        options.precision = tessref::Precision::exact;
+        compare_paths(scene, options);
+        options.precision = tessref::Precision::gpu;
+        options.camera_relative = true;
+        compare_paths(scene, options);
+    }
+}
+
+// A surface large enough for several batches (2.0 M triangles at level 63: two batches of
+// 2^20) at the camera's full size.
+TEST(RenderStream, ManyBatchesMatchAtFullSize) {
+    const tessref::Scene scene = tessref::load_scene((kScenes / "thesis-constant-64.toml").string());
+    compare_paths(scene, {});
+}
+
+TEST(RenderStream, ThreadCountDoesNotChangeTheImage) {
+    const tessref::Scene scene = tessref::load_scene((kScenes / "jacksboro.toml").string());
+    tessref::RenderOptions options;
+    options.size = {640, 400};
+    const tessref::RenderResult many = tessref::render_scene(scene, options);
+    tessref::RenderResult one;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = tessref::render_scene(scene, options);
+    }
+    expect_identical(one, many);
+}
+
+// Batched draws leave the pixels one rasterize() of all the triangles leaves: a random soup
+// with clipped, culled, sub-pixel and overlapping triangles, cut into uneven chunks.
+TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
+    std::mt19937 rng(12345);
+    std::uniform_real_distribution<float> pos(-1.4f, 1.4f), small(-0.01f, 0.01f), depth(-0.9f, 0.9f),
+        w(0.6f, 1.6f);
+    std::vector<glm::vec4> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    for (std::uint32_t t = 0; t < 6000; ++t) {
+        const float cx = pos(rng), cy = pos(rng);
+        const bool tiny = t % 3 == 0;
+        for (int k = 0; k < 3; ++k) {
+            const float ww = w(rng);
+            const float x = tiny ? cx + small(rng) : pos(rng), y = tiny ? cy + small(rng) : pos(rng);
+            positions.emplace_back(x * ww, y * ww, depth(rng) * ww, ww);
+        }
+        triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+    }
+    positions[7].w = -0.5f;  // one vertex behind the eye: clipped
+
+    tessref::Framebuffer whole = tessref::Framebuffer::create(173, 97);
+    tessref::RasterInput input;
+    input.positions = positions;
+    input.triangles = triangles;
+    tessref::RasterSettings settings;
+    settings.quad_derivatives = true;
+    const tessref::RasterStats one = tessref::rasterize(whole, input, settings);
+
+    tessref::Framebuffer batched = tessref::Framebuffer::create(173, 97);
+    tessref::Rasterizer rasterizer(batched, settings);
+    // Uneven chunks, each indexing its own vertices from 0, two or three per draw.
+    std::vector<std::vector<glm::vec4>> chunk_positions;
+    std::vector<std::vector<std::array<std::uint32_t, 3>>> chunk_triangles;
+    std::vector<std::uint32_t> chunk_first;
+    for (std::uint32_t first = 0; first < triangles.size();) {
+        const std::uint32_t count = std::min<std::uint32_t>(1 + (first * 7919u) % 900u,
+                                                            static_cast<std::uint32_t>(triangles.size()) - first);
+        chunk_positions.emplace_back(positions.begin() + 3 * first, positions.begin() + 3 * (first + count));
+        std::vector<std::array<std::uint32_t, 3>> local;
+        for (std::uint32_t t = 0; t < count; ++t) local.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+        chunk_triangles.push_back(local);
+        chunk_first.push_back(first);
+        first += count;
+    }
+    for (std::size_t c = 0; c < chunk_first.size();) {
+        std::vector<tessref::RasterChunk> draw;
+        for (std::size_t k = 0; k < 2 + c % 2 && c < chunk_first.size(); ++k, ++c)
+            draw.push_back({chunk_positions[c], chunk_triangles[c], chunk_first[c]});
+        rasterizer.draw(draw);
+    }
+    const tessref::RasterStats many = rasterizer.stats();
+    EXPECT_GT(one.fragments_passed, 1000u);
+    EXPECT_GT(one.triangles_clipped, 0u);
+    EXPECT_GT(one.primitives_culled, 0u);
+    EXPECT_TRUE(same_bytes(batched.triangle_id, whole.triangle_id));
+    EXPECT_TRUE(same_bytes(batched.depth, whole.depth));
+    EXPECT_TRUE(same_bytes(batched.barycentric, whole.barycentric));
+    EXPECT_TRUE(same_bytes(batched.barycentric_dx, whole.barycentric_dx));
+    EXPECT_TRUE(same_bytes(batched.barycentric_dy, whole.barycentric_dy));
+    EXPECT_TRUE(same_bytes(batched.fragment_count, whole.fragment_count));
+    EXPECT_TRUE(same_bytes(batched.front_facing, whole.front_facing));
+    EXPECT_EQ(many.triangles_in, one.triangles_in);
+    EXPECT_EQ(many.triangles_clipped, one.triangles_clipped);
+    EXPECT_EQ(many.triangles_rejected, one.triangles_rejected);
+    EXPECT_EQ(many.primitives, one.primitives);
+    EXPECT_EQ(many.primitives_culled, one.primitives_culled);
+    EXPECT_EQ(many.fragments, one.fragments);
+    EXPECT_EQ(many.fragments_passed, one.fragments_passed);
+}
+
+TEST(Rasterizer, VertexIndexOutsideTheChunkIsAnError) {
+    tessref::Framebuffer fb = tessref::Framebuffer::create(8, 8);
+    tessref::Rasterizer rasterizer(fb, {});
+    const std::vector<glm::vec4> positions(3, glm::vec4(0, 0, 0, 1));
+    const std::vector<std::array<std::uint32_t, 3>> triangles{{0, 1, 3}};
+    const std::vector<tessref::RasterChunk> draw{{positions, triangles, 0}};
+    EXPECT_THROW(rasterizer.draw(draw), tessref::Error);
+}
+
+// pixel_provenance of a streamed render evaluates its triangle again: the same vertices,
+// world position, normal (face normals too), uv and level source as with the whole surface.
+TEST(RenderStream, ProvenanceMatchesTheWholeSurface) {
+    for (const char* name : {"thesis-all-10.toml", "cosc422.toml", "pn-triangles.toml", "lab4-canyon.toml"}) {
+        SCOPED_TRACE(name);
+        const tessref::Scene scene = tessref::load_scene((kScenes / name).string());
+        tessref::RenderOptions options;
+        options.size = {160, 100};
+        options.camera_relative = std::string(name) == "lab4-canyon.toml";
+        const tessref::RenderResult streamed = tessref::render_scene(scene, options);
+        options.keep_surface = true;
+        const tessref::RenderResult whole = tessref::render_scene(scene, options);
+        ASSERT_TRUE(streamed.stream);
+        int covered = 0;
+        for (int y = 0; y < 100; y += 3) {
+            for (int x = 0; x < 160; x += 3) {
+                const tessref::PixelProvenance a = tessref::pixel_provenance(streamed, x, y);
+                const tessref::PixelProvenance b = tessref::pixel_provenance(whole, x, y);
+                ASSERT_EQ(a.covered, b.covered);
+                if (!a.covered) continue;
+                ++covered;
+                EXPECT_EQ(a.vertices, b.vertices);
+                EXPECT_EQ(a.vertex_tess_coords, b.vertex_tess_coords);
+                EXPECT_EQ(a.world_position, b.world_position);
+                EXPECT_EQ(a.normal, b.normal);
+                EXPECT_EQ(a.uv, b.uv);
+                EXPECT_EQ(a.level_source, b.level_source);
+                EXPECT_EQ(a.patch_levels.outer, b.patch_levels.outer);
+            }
+        }
+        EXPECT_GT(covered, 100);
+    }
+}
