@@ -179,6 +179,13 @@ public:
     // Throws tessref::Error on a vertex index outside its chunk.
     void draw(std::span<const RasterChunk> chunks);
     RasterStats stats() const;  // of every draw so far
+    // The parts of the image the last draw changed: rectangles (x, row from the top, width,
+    // height; even-aligned, so no 2x2 quad straddles two) outside which no pixel's depth,
+    // triangle or weights changed.
+    struct Rect {
+        int x, row, width, height;
+    };
+    std::vector<Rect> drawn() const;
 
     struct State;
 

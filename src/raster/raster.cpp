@@ -512,8 +512,12 @@ struct Rasterizer::State {
     void flush() {
         if (used == 0) return;
         const int tile_count = ctx.tiles_x * ctx.tiles_y;
+        drawn.assign(static_cast<std::size_t>(tile_count), 0);
         tessref::parallel_for(0, tile_count, [&](int tile) {
-            raster_tile(ctx, tile, chunks, used, tile_stats[static_cast<std::size_t>(tile)]);
+            RasterStats& stats = tile_stats[static_cast<std::size_t>(tile)];
+            const std::uint64_t passed = stats.fragments_passed;
+            raster_tile(ctx, tile, chunks, used, stats);
+            drawn[static_cast<std::size_t>(tile)] = stats.fragments_passed != passed ? 1 : 0;
         });
         for (std::size_t c = 0; c < used; ++c) {
             const RasterStats& s = chunks[c].stats;
@@ -542,6 +546,7 @@ struct Rasterizer::State {
     std::size_t used = 0;
     RasterStats total;
     std::vector<RasterStats> tile_stats;
+    std::vector<std::uint8_t> drawn;  // per tile: a fragment passed in the last flush
 };
 
 namespace {
@@ -635,5 +640,17 @@ void Rasterizer::draw(std::span<const RasterChunk> chunks) {
 }
 
 RasterStats Rasterizer::stats() const { return state_->stats(); }
+
+std::vector<Rasterizer::Rect> Rasterizer::drawn() const {
+    const State& s = *state_;
+    std::vector<Rect> out;
+    for (std::size_t t = 0; t < s.drawn.size(); ++t) {
+        if (!s.drawn[t]) continue;
+        const int tx = static_cast<int>(t) % s.ctx.tiles_x, ty = static_cast<int>(t) / s.ctx.tiles_x;
+        out.push_back({tx * kTileSize, ty * kTileSize, std::min(kTileSize, s.ctx.fb.width - tx * kTileSize),
+                       std::min(kTileSize, s.ctx.fb.height - ty * kTileSize)});
+    }
+    return out;
+}
 
 }  // namespace tessref

@@ -6,6 +6,7 @@
 // GL window y = height - raster y.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include <glm/glm.hpp>
@@ -80,16 +81,51 @@ bool setup_triangle(const ClipVertex& v0, const ClipVertex& v1, const ClipVertex
 bool setup_line(const ClipVertex& v1, const ClipVertex& v2, const Viewport& viewport,
                 Primitive& prim);
 
-// A window coordinate in llvmpipe's 8-bit sub-pixel fixed point (calc_fixed_position:
-// (v - 0.5) * 256 rounded to nearest even, as cvtps2dq).
-std::int32_t snap_fixed(float window_coordinate);
-// Whether the pixel box do_triangle_ccw derives from three snapped vertices holds a pixel
-// of the viewport: a triangle whose box holds none covers no pixel (setup culls it).
-bool fixed_bbox_has_pixels(const std::int32_t (&x)[3], const std::int32_t (&y)[3], const Viewport& viewport);
+inline constexpr int kFixedOrder = 8;  // FIXED_ORDER: 8 sub-pixel bits
+inline constexpr int kFixedOne = 1 << kFixedOrder;
+
+// do_triangle_ccw's bounding box of three snapped vertices; bottom_edge_rule = 1 gives
+// adj = 1. Its x0 and y0 may name a column/row whose centre lies left of / above the
+// snapped triangle, or is its topmost vertex, which the fill rule leaves out (llvmpipe lets
+// the edge functions reject them); tightening them changes no coverage and drops most
+// sub-pixel triangles before any plane is set up. Inline: the rasterizer runs it on every
+// triangle of a tessellated surface.
+inline void triangle_bbox(const std::int32_t* x, const std::int32_t* y, Primitive& prim) {
+    const int adj = 1;
+    const std::int32_t min_x = std::min({x[0], x[1], x[2]}), max_x = std::max({x[0], x[1], x[2]});
+    const std::int32_t min_y = std::min({y[0], y[1], y[2]}), max_y = std::max({y[0], y[1], y[2]});
+    prim.x0 = std::max(min_x >> kFixedOrder, (min_x + kFixedOne - 1) >> kFixedOrder);
+    prim.x1 = (max_x - 1) >> kFixedOrder;
+    prim.y0 = std::max((min_y + adj) >> kFixedOrder, (min_y + kFixedOne) >> kFixedOrder);
+    prim.y1 = (max_y - 1 + adj) >> kFixedOrder;
+}
+
+// The box clamped to the viewport; false when nothing is left.
+inline bool clamp_bbox(Primitive& prim, const Viewport& vp) {
+    prim.x0 = std::max(prim.x0, 0);
+    prim.y0 = std::max(prim.y0, 0);
+    prim.x1 = std::min(prim.x1, vp.width - 1);
+    prim.y1 = std::min(prim.y1, vp.height - 1);
+    return prim.x0 <= prim.x1 && prim.y0 <= prim.y1;
+}
+
+// Whether the box of three snapped vertices holds a pixel of the viewport: a triangle whose
+// box holds none covers no pixel (setup culls it).
+inline bool fixed_bbox_has_pixels(const std::int32_t (&x)[3], const std::int32_t (&y)[3], const Viewport& viewport) {
+    Primitive prim;
+    triangle_bbox(x, y, prim);
+    return clamp_bbox(prim, viewport);
+}
 
 // Round-to-nearest-even as SSE's cvtps2dq (out of range: INT32_MIN), and Mesa's util_iround
 // on x86-64 ((int)(f + 0.5f), in float).
 std::int32_t cvt_rne(float v);
 std::int32_t util_iround(float f);
+
+// A window coordinate in llvmpipe's 8-bit sub-pixel fixed point (calc_fixed_position:
+// (v - 0.5) * 256 rounded to nearest even, as cvtps2dq).
+inline std::int32_t snap_fixed(float window_coordinate) {
+    return cvt_rne((window_coordinate - 0.5f) * static_cast<float>(kFixedOne));
+}
 
 }  // namespace tessref::raster

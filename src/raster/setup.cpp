@@ -16,8 +16,6 @@ namespace tessref::raster {
 
 namespace {
 
-constexpr int kFixedOrder = 8;  // FIXED_ORDER: 8 sub-pixel bits
-constexpr int kFixedOne = 1 << kFixedOrder;
 constexpr float kPixelOffset = 0.5f;  // half_pixel_center
 
 // Edge planes of a convex ccw polygon (in llvmpipe's sense: positive fixed-point area) with
@@ -42,13 +40,6 @@ void make_planes(const std::int32_t* x, const std::int32_t* y, int count, Primit
     }
 }
 
-bool clamp_bbox(Primitive& prim, const Viewport& vp) {
-    prim.x0 = std::max(prim.x0, 0);
-    prim.y0 = std::max(prim.y0, 0);
-    prim.x1 = std::min(prim.x1, vp.width - 1);
-    prim.y1 = std::min(prim.y1, vp.height - 1);
-    return prim.x0 <= prim.x1 && prim.y0 <= prim.y1;
-}
 
 // Plane through three (x, y, a) points, evaluated at pixel centres relative to vertex 0.
 void triangle_plane(const float a[3], float ooa, float dx01, float dy01, float dx20, float dy20,
@@ -63,32 +54,7 @@ void triangle_plane(const float a[3], float ooa, float dx01, float dy01, float d
     out[2] = dady;
 }
 
-// do_triangle_ccw's bounding box; bottom_edge_rule = 1 gives adj = 1. Its x0 and y0 may
-// name a column/row whose centre lies left of / above the snapped triangle, or is its
-// topmost vertex, which the fill rule leaves out (llvmpipe lets the edge functions reject
-// them); tightening them changes no coverage and drops most sub-pixel triangles before any
-// plane is set up.
-void triangle_bbox(const std::int32_t* x, const std::int32_t* y, Primitive& prim) {
-    const int adj = 1;
-    const std::int32_t min_x = std::min({x[0], x[1], x[2]}), max_x = std::max({x[0], x[1], x[2]});
-    const std::int32_t min_y = std::min({y[0], y[1], y[2]}), max_y = std::max({y[0], y[1], y[2]});
-    prim.x0 = std::max(min_x >> kFixedOrder, (min_x + kFixedOne - 1) >> kFixedOrder);
-    prim.x1 = (max_x - 1) >> kFixedOrder;
-    prim.y0 = std::max((min_y + adj) >> kFixedOrder, (min_y + kFixedOne) >> kFixedOrder);
-    prim.y1 = (max_y - 1 + adj) >> kFixedOrder;
-}
-
 }  // namespace
-
-std::int32_t snap_fixed(float window_coordinate) {
-    return cvt_rne((window_coordinate - kPixelOffset) * static_cast<float>(kFixedOne));
-}
-
-bool fixed_bbox_has_pixels(const std::int32_t (&x)[3], const std::int32_t (&y)[3], const Viewport& viewport) {
-    Primitive prim;
-    triangle_bbox(x, y, prim);
-    return clamp_bbox(prim, viewport);
-}
 
 std::int32_t cvt_rne(float v) {
 #if defined(__SSE2__)

@@ -175,18 +175,19 @@ float level_of(const SurfaceMesh& mesh, const std::vector<TessLevels>& levels, D
 
 
 // The visible-surface buffers of RenderResult and the fragment stage's colour, for the pixels of
-// quad rows [quad_row_begin, quad_row_end) whose visible triangle (id) is in a view that
+// quad rows [quad_row_begin, quad_row_end) and columns [x_begin, x_end) (even) whose visible triangle (id) is in a view that
 // owns(id) returns, with the triangle's index in it (null: not this pass's). Quad by quad (2x2 pixels,
 // as llvmpipe shades): the pixels of a quad that show the same triangle share its
 // derivatives and level.
 template <typename Owns>
 void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<TessLevels>& levels, Domain domain,
              const FragmentNeeds& needs, bool derivatives, bool line_derivatives, int quad_row_begin,
-             int quad_row_end, const Owns& owns) {
+             int quad_row_end, const Owns& owns, int x_begin = 0, int x_end = -1) {
     const int width = result.width, height = result.height;
+    if (x_end < 0) x_end = width;
     for (int quad_row = quad_row_begin; quad_row < quad_row_end; ++quad_row) {
         const int row0 = 2 * quad_row;
-        for (int x0 = 0; x0 < width; x0 += 2) {
+        for (int x0 = x_begin; x0 < x_end; x0 += 2) {
             std::uint32_t cached_triangle[4];
             Derivatives cached[4];
             float cached_level[4];
@@ -396,14 +397,19 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             chunk_views.push_back({chunks[k].mesh, chunks[k].face_normals, chunks[k].clip, stream.face_normals(), origin});
             chunk_first.push_back(chunks[k].first_triangle);
         }
-        tessref::parallel_for(tbb::blocked_range<int>(0, (height + 1) / 2), [&](const tbb::blocked_range<int>& rows) {
-            resolve(result, fb, pipe->levels, domain, needs, derivatives, false, rows.begin(), rows.end(),
+        // Only where the draw changed a pixel (the rasterizer's tiles).
+        const std::vector<Rasterizer::Rect> drawn = rasterizer.drawn();
+        tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
+            const Rasterizer::Rect& rect = drawn[r];
+            resolve(result, fb, pipe->levels, domain, needs, derivatives, false, rect.row / 2,
+                    (rect.row + rect.height + 1) / 2,
                     [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
                         if (id < batch_first || id >= batch_end) return {nullptr, 0};
                         const std::size_t k = static_cast<std::size_t>(
                             std::upper_bound(chunk_first.begin(), chunk_first.end(), id) - chunk_first.begin() - 1);
                         return {&chunk_views[k], id - chunk_first[k]};
-                    });
+                    },
+                    rect.x, rect.x + rect.width);
         });
         result.stats.seconds_shade += seconds_since(lap);
         progress("rasterizing", static_cast<double>(next_patch) / static_cast<double>(n));

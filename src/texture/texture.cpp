@@ -13,6 +13,10 @@
 
 #include <algorithm>
 #include <cmath>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -51,6 +55,26 @@ constexpr float kUnorm16Scale = 1.0f / 65535.0f;   // llvmpipe: code * (float)(1
 // and add fused (LLVM's fmuladd on an FMA CPU).
 inline float lerp_gpu(float v0, float v1, float w) { return std::fma(w, v1 - v0, v0); }
 
+// The per-sample arithmetic without a libm call each (the build targets baseline x86-64,
+// where fmin, fmax, floor and nearbyint are calls): the same values.
+// std::fmax(u, lo) for a number lo: a NaN u gives lo.
+inline float max_or(float u, float lo) { return u > lo ? u : lo; }
+// std::fmin(u, hi) for u not NaN.
+inline float min_of(float u, float hi) { return u < hi ? u : hi; }
+// std::floor(u) for |u| < 2^31 (u here is clamped to a texture's size).
+inline float floor_small(float u) {
+    const float t = static_cast<float>(static_cast<int>(u));
+    return t > u ? t - 1.0f : t;
+}
+// static_cast<int>(std::nearbyint(x)) under the default rounding mode, for |x| < 2^31.
+inline int round_even(float x) {
+#if defined(__SSE2__)
+    return _mm_cvtss_si32(_mm_set_ss(x));
+#else
+    return static_cast<int>(std::nearbyint(x));
+#endif
+}
+
 struct AxisF {
     int i0 = 0;
     int i1 = 0;
@@ -66,8 +90,8 @@ inline AxisF axis_gpu(float s, int size) {
     // Clamping u to [-1, size] changes no result (every texel index outside the texture
     // clamps to the same edge texel, and mix(a, a, w) == a) but keeps NaN and huge
     // coordinates away from the integer conversion: fmax/fmin return the non-NaN operand.
-    u = std::fmin(std::fmax(u, -1.0f), size_f);
-    const float fl = std::floor(u);
+    u = min_of(max_or(u, -1.0f), size_f);
+    const float fl = floor_small(u);
     AxisF axis;
     axis.weight = u - fl;
     const int i = static_cast<int>(fl);
@@ -89,8 +113,8 @@ inline AxisU8 axis_unorm8(float s, int size) {
     // integer, minus 128 (half a texel), then >> 8 and & 255.
     const float scaled_size = static_cast<float>(size * 256);
     float x = s * scaled_size;
-    x = std::fmin(std::fmax(x, -1024.0f), scaled_size + 1024.0f);  // no effect; NaN-safe
-    const int fixed = static_cast<int>(std::nearbyint(x)) - 128;
+    x = min_of(max_or(x, -1024.0f), scaled_size + 1024.0f);  // no effect; NaN-safe
+    const int fixed = round_even(x) - 128;
     AxisU8 axis;
     axis.weight = fixed & 255;
     const int i = fixed >> 8;  // arithmetic shift: floor
@@ -138,7 +162,12 @@ inline std::size_t index_of(const TextureLevel& level, int channels, int x, int 
            static_cast<std::size_t>(c);
 }
 
-// Float filter on a float32/unorm16 level: out[c] for c < channels.
+// Float filter on a float32/unorm16 level: out[c] for c < channels. Built twice on x86-64,
+// with and without FMA instructions, and chosen at load: std::fma is then one instruction
+// instead of a libm call (fma is exactly rounded either way: the same values).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("fma", "default")))
+#endif
 void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4]) {
     const AxisF ax = axis_gpu(st.x, level.width);
     const AxisF ay = axis_gpu(st.y, level.height);
@@ -525,7 +554,21 @@ double Texture::texel_exact(int lod, int x, int y, int channel) const {
     return exact_value(l, format_, lod, index_of(l, channels_, x, y, channel));
 }
 
-glm::vec4 Texture::texture(glm::vec2 st) const { return textureLod(st, 0.0f); }
+glm::vec4 Texture::texture(glm::vec2 st) const {
+    // textureLod(st, 0) without the level selection: lod 0 is level 0 with no blend.
+    if (empty()) throw Error("texture on an empty texture");
+    glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
+    if (format_ == TexelFormat::unorm8) {
+        int codes[4];
+        bilinear_unorm8(levels_[0], channels_, st, codes);
+        for (int c = 0; c < channels_; ++c) out[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+        return out;
+    }
+    float values[4];
+    bilinear_gpu(levels_[0], channels_, st, values);
+    for (int c = 0; c < channels_; ++c) out[c] = values[c];
+    return out;
+}
 glm::dvec4 Texture::texture(glm::dvec2 st) const { return textureLod(st, 0.0); }
 
 glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
