@@ -29,6 +29,9 @@ namespace {
 // Ancillary chunks (text, ICC profiles) are allocated whole by libpng; none that tessref
 // could meet needs more than this, and a hostile length is refused before it is allocated.
 constexpr png_alloc_size_t kChunkMallocMax = 64u << 20;
+// Sides beyond this are refused in the header (libpng's own default, said here); the
+// pixels' memory is checked by the caller (ReadOptions::check_header) before any is taken.
+constexpr png_uint_32 kMaxSide = 1000000;
 
 struct ErrorText {
     char text[256] = "";
@@ -65,6 +68,7 @@ bool read_header(Reader& r, PngHeader& h) {
     if (setjmp(png_jmpbuf(r.png))) return false;
     png_init_io(r.png, r.file);
     png_set_chunk_malloc_max(r.png, kChunkMallocMax);
+    png_set_user_limits(r.png, kMaxSide, kMaxSide);
     png_read_info(r.png, r.info);
     png_set_expand(r.png);
 #if __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
