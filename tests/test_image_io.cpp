@@ -318,6 +318,15 @@ TEST_F(ImageIo, WithoutTheModuleExrIsAClearErrorAndPngStillWorks) {
         dir());
     EXPECT_EQ(named.status, 0) << named.err;
     EXPECT_TRUE(fs::exists(dir() / "y.exr"));
+
+    // Named wrongly, it is the only place looked at, even beside a module in the build tree.
+    const std::string wrong = (dir() / "no-such-module.so").string();
+    const RunResult misnamed = run_program(
+        "env", {"TESSREF_OIIO_MODULE=" + wrong, TESSREF_EXE, "render", scene, "--size", "40x25", "-o", (dir() / "z.exr").string()},
+        dir());
+    EXPECT_EQ(misnamed.status, 2) << misnamed.err;
+    EXPECT_NE(misnamed.err.find("searched: " + wrong + "; set TESSREF_OIIO_MODULE"), std::string::npos) << misnamed.err;
+    EXPECT_FALSE(fs::exists(dir() / "z.exr"));
 }
 
 }  // namespace

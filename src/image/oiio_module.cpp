@@ -61,11 +61,9 @@ Loaded load() {
 
 std::vector<std::string> oiio_module_candidates() {
     std::vector<std::string> out;
-    if (const char* env = std::getenv("TESSREF_OIIO_MODULE"); env && *env) {
-        out.push_back(env);
-    } else {
-        out.push_back("TESSREF_OIIO_MODULE (unset)");
-    }
+    // Set, it is the only place: a module named on purpose is never swapped for another.
+    if (const char* env = std::getenv("TESSREF_OIIO_MODULE"); env && *env) return {env};
+    out.push_back("TESSREF_OIIO_MODULE (unset)");
     std::error_code ec;
     const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
     if (!ec) {

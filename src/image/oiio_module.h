@@ -11,7 +11,7 @@ namespace tessref::image {
 // The module's functions, loading it on the first call (thread-safe; it stays loaded).
 // `why` says what needed it ("reading texture a.exr"), for the error at `path` when it
 // cannot be loaded: a tessref::Error naming every place searched, first of
-//  1. $TESSREF_OIIO_MODULE when set (the module file, used as given);
+//  1. $TESSREF_OIIO_MODULE when set (the module file, used as given: then the only place);
 //  2. <directory of the running executable>/TESSREF_BIN_TO_MODULE/tessref_oiio.so — the
 //     installed layout (bin/tessref, lib/tessref/tessref_oiio.so), wherever the prefix moved;
 //  3. <directory of the running executable>/tessref_oiio.so — the build tree;
