@@ -1,5 +1,6 @@
 // fuzz/fuzz_heightmap.cpp — the height-map and texture loaders (src/heightfield/load.cpp):
-// PGM 8/16-bit, PFM, TIFF and PNG through OpenImageIO, with every nodata policy.
+// PGM 8/16-bit, PFM and PNG through tessref's readers (src/image/), TIFF through the
+// OpenImageIO module, with every nodata policy.
 //
 // Each input is loaded five ways (as a colour texture, and as a height field under each
 // NodataPolicy, with and without a nodata value), so every seed exercises every path and

@@ -50,7 +50,8 @@ build_targets() {
   fi
   local names=()
   for t in "$@"; do names+=("fuzz_$t"); done
-  cmake --build "$build" -j "${FUZZ_BUILD_JOBS:-2}" --target "${names[@]}"
+  # tessref_oiio: the OpenImageIO module, for inputs that are neither PNG nor PNM (TIFF).
+  cmake --build "$build" -j "${FUZZ_BUILD_JOBS:-2}" --target "${names[@]}" tessref_oiio
 }
 
 # fuzz_one TARGET LIBFUZZER-ARGS...: returns 1 on a finding.
@@ -76,6 +77,8 @@ fuzz_one() {
   # Leaks inside system libraries that tessref cannot free are suppressed, each with its
   # reason, in the same file the sanitized test suite uses.
   export LSAN_OPTIONS="suppressions=$root/scripts/sanitizers/lsan.supp:print_suppressions=0"
+  # The harnesses live in fuzz/, the OpenImageIO module beside the top-level targets.
+  export TESSREF_OIIO_MODULE="$build/tessref_oiio.so"
   # -rss_limit_mb and -timeout make out-of-memory and hangs findings; the library's own
   # memory limit is set lower by the harness (fuzz/fuzz_common.h) so oversized inputs are
   # refused before libFuzzer's limit is reached. -jobs > 1 makes libFuzzer write

@@ -54,7 +54,7 @@ protected:
 };
 
 TEST_F(Install, LaysOutBinLibIncludeShareAndThePackage) {
-    for (const char* file : {"bin/tessref", "lib/libtessref.a", "include/tessref/scene.h",
+    for (const char* file : {"bin/tessref", "lib/libtessref.a", "lib/tessref/tessref_oiio.so", "include/tessref/scene.h",
                              "include/tessref/tessellator.h", "share/tessref/shaders/capture_tess_coord.tesc",
                              "share/tessref/scenes/thesis-constant-1.toml", "share/tessref/heightmaps/thesis-island.pgm",
                              "share/tessref/LICENSES.md", "lib/cmake/tessref/tessrefConfig.cmake",
@@ -102,16 +102,25 @@ TEST_F(Install, ConsumerProjectBuildsAgainstThePackageAndRuns) {
     EXPECT_NE(run.out.find("consumer: ok"), std::string::npos) << run.out << run.err;
 }
 
-// The installed tree moved elsewhere still finds its shaders: ../share/tessref beside bin/.
+// The installed tree moved elsewhere still finds its shaders, ../share/tessref beside bin/,
+// and its OpenImageIO module, ../lib/tessref/tessref_oiio.so (an EXR needs it).
 TEST_F(Install, MovedInstalledExecutableFindsItsDataBesideItself) {
     const fs::path moved = root_ / "moved";
     fs::create_directories(moved);
     fs::copy(prefix_ / "bin", moved / "bin", fs::copy_options::recursive);
     fs::copy(prefix_ / "share", moved / "share", fs::copy_options::recursive);
+    fs::copy(prefix_ / "lib", moved / "lib", fs::copy_options::recursive);
     const fs::path out = root_ / "moved.png";
     const RunResult r = gl(moved / "bin" / "tessref", moved / "share" / "tessref" / "scenes" / kScene, out);
     EXPECT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_TRUE(fs::is_regular_file(out));
+    const fs::path exr = root_ / "moved.exr";
+    const RunResult e = run_program("env", {"-u", "TESSREF_OIIO_MODULE", "-u", "TESSREF_DATA_DIR", (moved / "bin" / "tessref").string(),
+                                            "render", (moved / "share" / "tessref" / "scenes" / kScene).string(), "-o",
+                                            exr.string(), "--size", "64x40"},
+                                    root_);
+    EXPECT_EQ(e.status, 0) << e.out << e.err;
+    EXPECT_TRUE(fs::is_regular_file(exr));
 }
 
 // Without its share/, the installed executable does not fall back to the source tree's

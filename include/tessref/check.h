@@ -249,7 +249,7 @@ std::string report_json(const CheckReport& report);
 std::string report_text(const CheckReport& report, std::size_t locations_per_class = 5);
 
 // A top view (along report.up_axis) of the mesh drawn lightly, the defects marked in one
-// colour per class, with a legend. Written through OpenImageIO to `path` as is (the caller
+// colour per class, with a legend. Written to `path` as is, in the format its extension names (the caller
 // makes it atomic). Throws tessref::Error when the image cannot be written.
 void write_defect_image(const IndexedMesh& mesh, const CheckReport& report,
                         const std::string& path, int width = 1024);

@@ -98,8 +98,8 @@ struct CompareResult {
 CompareResult compare_images(const FloatImage& reference, const FloatImage& test,
                              const CompareOptions& options = {});
 
-// Reads subimage 0, mip level 0 of an image file through OpenImageIO (PNG, TIFF, EXR and
-// whatever else it reads) into floats as THE RULE says. Throws tessref::Error naming the
+// Reads subimage 0, mip level 0 of an image file (PNG, PNM, and through OpenImageIO TIFF,
+// EXR and whatever else it reads) into floats as THE RULE says. Throws tessref::Error naming the
 // path when the file is missing, unreadable, empty, deep or a volume, or when its pixels
 // would exceed the memory limit (limits.h).
 FloatImage read_float_image(const std::string& path);
@@ -110,7 +110,8 @@ FloatImage read_float_image(const std::string& path);
 constexpr float kDiffDim = 0.25f;
 FloatImage difference_picture(const FloatImage& reference, const CompareResult& result);
 
-// Writes the picture through OpenImageIO, the format from the extension of `path`: 8-bit
+// Writes the picture in the format the extension of `path` names (PNG by tessref itself,
+// any other through OpenImageIO): 8-bit
 // for formats that have it (PNG, TIFF: round(v * 255) of v clamped to [0, 1]), float for
 // EXR. Writes `path` directly (callers wanting atomicity write to a temporary name).
 // Throws tessref::Error naming `path`.

@@ -1,23 +1,21 @@
 // tessref/heightfield.h — height fields and colour textures read from image files, and the
 // normals computed from a height field. The textures are sampled as tessref/texture.h says.
 //
-// Height fields: load_height_field() reads 8/16-bit PGM and PNG, float TIFF, PFM, EXR (any
-// format OpenImageIO reads) through OpenImageIO, first channel only: integer files as unorm
-// (0..1, as a GL UNORM texture sees them), float files as raw values. A PGM whose maxval is
-// neither 255 nor 65535 is rescaled by OpenImageIO to the full range (truncating). Known
-// defect of OpenImageIO 2.4.7 (Debian bookworm), inherited: its PNM reader computes
-// int(v) * 65535 / maxval in int, which overflows for 16-bit samples v > 32768 and returns
-// v - 1 there (so 32768 and 32769 both read as 32768; jacksboro's top sample 65535 reads as
-// 65534). 16-bit PNG is read exactly. Colour channels are read as stored
-// ("oiio:UnassociatedAlpha"), not premultiplied by alpha.
+// Height fields: load_height_field() reads 8/16-bit PGM and PNG, float TIFF, PFM, EXR (PNG
+// and the PNM family by tessref itself, every other format OpenImageIO reads through it),
+// first channel only: integer files as unorm (0..1, as a GL UNORM texture sees them), float
+// files as raw values. A PGM whose maxval is neither 255 nor 65535 is rescaled to the full
+// range as OpenImageIO does, min(v, maxval) * 65535 / maxval (or * 255), truncating; 16-bit
+// samples are exact (OpenImageIO 2.4.7's own PNM reader is not above 32768). Colour
+// channels are read as stored, not premultiplied by alpha.
 // Hostile files: what the header declares is checked before any pixel is read or memory
 // is allocated for it. The image and its mip pyramid must fit the process memory limit
 // (require_memory, tessref/limits.h; "height map of W x H samples needs ..."), so a
 // 100-byte file declaring 100000 x 100000 is refused at once. PNM headers are also checked
-// where OpenImageIO 2.4.7 does not: maxval must be 1..65535 (it accepts 0 and reads every
-// sample as 1) and a PFM's scale a non-zero number. A file with fewer or damaged pixels
-// than its header declares is "truncated or corrupt", also when OpenImageIO reports the read
-// as successful with its error set (a TIFF strip past the end of the file).
+// strictly: maxval must be 1..65535 and a PFM's scale a non-zero number; a PNG chunk may not
+// declare more bytes than the file holds. A file with fewer or damaged pixels than its
+// header declares is "truncated or corrupt", also when OpenImageIO reports the read as
+// successful with its error set (a TIFF strip past the end of the file).
 // NaN and infinite samples, and samples equal to an optional nodata value (compared with the
 // file's raw value: the integer code for integer files), are "missing"; NodataPolicy says
 // what happens to them (default: an error naming the file and the first missing texel).
@@ -35,7 +33,7 @@
 
 namespace tessref {
 
-// ---- Loading through OpenImageIO -------------------------------------------------------
+// ---- Loading -----------------------------------------------------------------------------
 
 // What a missing sample (NaN, +-inf, or equal to HeightFieldOptions::nodata_value) does.
 enum class NodataPolicy : std::uint8_t {
@@ -86,7 +84,7 @@ struct HeightField {
 // names the patch, tess coord and texel, and a double beyond the float range by
 // write_mesh (mesh.h).
 // uint8 files become unorm8 textures, uint16 files unorm16, every other sample type
-// float32 (other integer types read through OpenImageIO's normalization to 0..1).
+// float32 (other integer types, through OpenImageIO, normalized to 0..1).
 HeightField load_height_field(const std::string& path, const HeightFieldOptions& options = {});
 
 struct TextureLoadOptions {

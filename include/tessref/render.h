@@ -277,7 +277,8 @@ struct AovSelection {
 // tessref::Error (key "--aov") naming an unknown item.
 AovSelection parse_aovs(std::string_view list);
 
-// Writes the image through OpenImageIO to `path` in `format`: png and tiff as 8-bit RGBA
+// Writes the image to `path` in `format` (png by tessref itself, tiff and exr through
+// OpenImageIO): png and tiff as 8-bit RGBA
 // (to_rgba8); exr as 32-bit float R, G, B, A (the unclamped colour) plus the selected AOV
 // channels. AOVs need exr (an Error otherwise). The file at `path` is written directly:
 // callers that must not leave a partial file write to a temporary name and rename.

@@ -9,7 +9,8 @@
 // Conventions
 // - Texel addressing: texel (x, y) covers s in [x, x+1)/width, t in [y, y+1)/height; its centre
 //   is at ((x + 0.5)/width, (y + 0.5)/height). Row y = 0 is the image's top row as
-//   OpenImageIO reads it (its scanline 0), which is the first row stored in the file for PGM,
+//   OpenImageIO reads it (its scanline 0; tessref's own PNG and PNM readers agree), which
+//   is the first row stored in the file for PGM,
 //   PNG, TIFF, EXR and JPEG: uploaded with glTexImage2D in that order (what the seeds'
 //   loaders do), the first stored row is t = 0. PFM is the exception: it stores rows bottom
 //   to top and OpenImageIO flips them, so there the LAST stored row is t = 0.

@@ -7,11 +7,10 @@
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-
 #include "check/check_internal.h"
 #include "common/fill.h"
+#include "image/draw.h"
+#include "image/image_io.h"
 #include "tessref/error.h"
 
 namespace tessref {
@@ -131,24 +130,27 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
     const int legend_rows = (static_cast<int>(lines.size()) + columns - 1) / columns;
     const int legend_height = 2 * pad + row * legend_rows;
 
-    OIIO::ImageBuf image(OIIO::ImageSpec(w, h + legend_height, 3, OIIO::TypeDesc::UINT8));
-    const float white[3] = {1.0f, 1.0f, 1.0f}, black[3] = {0.0f, 0.0f, 0.0f};
-    OIIO::ImageBufAlgo::fill(image, white);
+    // 8-bit RGB, white; the grey view converted as OpenImageIO's setpixel did; then the
+    // lines, rings, swatches and text painted over it by OpenImageIO (image/draw.h).
+    const int total_height = h + legend_height;
+    std::vector<std::uint8_t> pixels(std::size_t(w) * total_height * 3, 255);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            const float g = grey[std::size_t(y) * w + x];
-            const float rgb[3] = {g, g, g};
-            image.setpixel(x, y, rgb);
+            const std::uint8_t g = image::float_to_code8(grey[std::size_t(y) * w + x]);
+            std::uint8_t* p = &pixels[(std::size_t(y) * w + x) * 3];
+            p[0] = p[1] = p[2] = g;
         }
+    image::Drawing drawing;
+    const Colour black = {0.0f, 0.0f, 0.0f};
     if (draw_edges) {
-        const float edge[3] = {0.55f, 0.55f, 0.55f};
+        const Colour edge = {0.55f, 0.55f, 0.55f};
         for (std::size_t f = 0; f < mesh.face_count(); ++f) {
             const auto face = mesh.face(f);
             for (std::size_t k = 0; k < face.size(); ++k) {
                 if (!view.drawable(mesh.positions[face[k]]) || !view.drawable(mesh.positions[face[(k + 1) % face.size()]])) continue;
                 const glm::dvec2 p = view.pixel(mesh.positions[face[k]]);
                 const glm::dvec2 q = view.pixel(mesh.positions[face[(k + 1) % face.size()]]);
-                OIIO::ImageBufAlgo::render_line(image, int(p.x), int(p.y), int(q.x), int(q.y), edge);
+                drawing.line(int(p.x), int(p.y), int(q.x), int(q.y), edge);
             }
         }
     }
@@ -166,7 +168,7 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
             const int thick = loop.allowed ? 0 : 1;
             for (int dx = -thick; dx <= thick; ++dx)
                 for (int dy = -thick; dy <= thick; ++dy)
-                    OIIO::ImageBufAlgo::render_line(image, int(p.x) + dx, int(p.y) + dy, int(q.x) + dx, int(q.y) + dy, c);
+                    drawing.line(int(p.x) + dx, int(p.y) + dy, int(q.x) + dx, int(q.y) + dy, c);
         }
     }
     // Every located defect: a ring in its class colour.
@@ -179,7 +181,7 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
             for (int r = radius; r <= radius + 1; ++r)
                 for (int step = 0; step < 8 * r; ++step) {
                     const double angle = step * (2.0 * 3.141592653589793 / (8 * r));
-                    OIIO::ImageBufAlgo::render_point(image, int(p.x + r * std::cos(angle)), int(p.y + r * std::sin(angle)), c);
+                    drawing.point(int(p.x + r * std::cos(angle)), int(p.y + r * std::sin(angle)), c);
                 }
         }
     }
@@ -187,22 +189,16 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
     const std::string font = std::filesystem::exists("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
                                  ? "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
                                  : "";
-    OIIO::ImageBufAlgo::render_line(image, 0, h, w - 1, h, black);
+    drawing.line(0, h, w - 1, h, black);
     for (std::size_t i = 0; i < lines.size(); ++i) {
         const int x = pad + 260 * (static_cast<int>(i) % columns);
         const int y = h + pad + row * (static_cast<int>(i) / columns);
-        OIIO::ImageBufAlgo::render_box(image, x, y + 3, x + 12, y + 15, swatches[i], true);
+        drawing.filled_box(x, y + 3, x + 12, y + 15, swatches[i]);
         // Without a font the swatches still tell the classes apart; the text is a bonus.
-        OIIO::ImageBufAlgo::render_text(image, x + 20, y + 14, lines[i], 13, font, black);
+        drawing.text(x + 20, y + 14, lines[i], 13, font, black, image::TextAlign::left);
     }
-    (void)image.geterror();
-
-    if (!image.write(path)) {
-        std::string reason = image.geterror();
-        if (reason.empty()) reason = OIIO::geterror();
-        if (reason.empty()) reason = "OpenImageIO gave no reason";
-        throw Error("cannot write the defect image: " + reason, Where::in_file(path));
-    }
+    drawing.paint({pixels.data(), w, total_height, 3, image::SampleType::uint8}, false, path);
+    image::write_image(path, {w, total_height, 3, image::SampleType::uint8, pixels.data()});
 }
 
 }  // namespace tessref

@@ -7,10 +7,10 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
-#include <OpenImageIO/imageio.h>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "image/image_io.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
 
@@ -43,11 +43,7 @@ int run_check(const CheckCommandOptions& options) {
     // Flags first: nothing is read for a command line that cannot succeed.
     const std::optional<double> tolerance =
         options.tolerance.empty() ? std::nullopt : std::optional<double>(parse_tolerance(options.tolerance));
-    if (!options.image.empty() && !OIIO::ImageOutput::create(options.image)) {
-        throw Error("no image format for '" + options.image +
-                        "': give the name an extension OpenImageIO writes, such as .png, .tif or .exr",
-                    Where::in_file("--image"));
-    }
+    if (!options.image.empty()) image::require_writable(options.image, "--image");
     StageProgress progress;
     const IndexedMesh mesh =
         read_mesh_for_check(options.mesh, [&progress](double fraction) { progress("check: reading", fraction); });
@@ -97,7 +93,7 @@ Command add_check_command(CLI::App& parent) {
                     "(default: 1e-7 of the larger of the bounding box diagonal and the largest coordinate, about single-precision rounding)")
         ->type_name("DISTANCE");
     app->add_flag("--json", options->json, "Print the whole report as JSON");
-    app->add_option("--image", options->image, "Write a top view with the defects marked (PNG, or any image OpenImageIO writes)");
+    app->add_option("--image", options->image, "Write a top view with the defects marked (PNG, or any image OpenImageIO writes: .tif, .exr, ...)");
     app->add_option("--probe-resolution", options->probe_resolution, "Rays per side of the ray-cast probe's grid")
         ->check(CLI::Range(1, 8192))
         ->default_str("512");

@@ -12,11 +12,11 @@
 #include <system_error>
 
 #include <CLI/CLI.hpp>
-#include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "image/image_io.h"
 #include "tessref/capture.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
@@ -349,11 +349,7 @@ int run_compare(const CompareCommandOptions& options) {
     compare.threshold = parse_threshold(options.threshold);
     compare.max_failing_pixels = static_cast<std::uint64_t>(parse_count(options.max_failing_pixels, "--max-failing-pixels"));
     compare.ignore_alpha = options.ignore_alpha;
-    if (!options.diff.empty() && !OIIO::ImageOutput::create(options.diff)) {
-        throw Error("no image format for '" + options.diff +
-                        "': give the name an extension OpenImageIO writes, such as .png, .tif or .exr",
-                    Where::in_file("--diff"));
-    }
+    if (!options.diff.empty()) image::require_writable(options.diff, "--diff");
 
     // A diff written over an input would destroy the golden image it was compared with.
     for (const std::string* input : {&options.reference, &options.test}) {

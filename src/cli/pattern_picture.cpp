@@ -7,11 +7,11 @@
 #include <filesystem>
 #include <functional>
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
 
 #include "cli/cli_util.h"
 #include "common/fill.h"
+#include "image/draw.h"
+#include "image/image_io.h"
 #include "tessref/error.h"
 
 namespace tessref::cli {
@@ -489,22 +489,28 @@ std::string picture_to_svg(const Picture& picture) {
 }
 
 // ---------------------------------------------------------------------------------------
-// Raster image through OpenImageIO
+// Raster image (src/image/: lines and text drawn by OpenImageIO, the file written as PNG)
 
 namespace {
 
-// The canvas: an RGB float image wrapped by an OIIO ImageBuf, so that our own fills and
-// ImageBufAlgo's lines and text paint into the same pixels, in order.
+// The canvas: an RGB float image that our own fills and OpenImageIO's lines and text
+// (image::Drawing) paint into, in order: queued lines are painted before the next fill.
 class Canvas {
 public:
-    Canvas(int width, int height, Color background)
-        : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height * 3),
-          image_(OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::FLOAT), pixels_.data()) {
+    Canvas(int width, int height, Color background, std::string path)
+        : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height * 3), path_(std::move(path)) {
         for (int y = 0; y < height; ++y)
             for (int x = 0; x < width; ++x) put(x, y, background);
     }
 
-    OIIO::ImageBuf& image() { return image_; }
+    image::Canvas target() { return {pixels_.data(), width_, height_, 3, image::SampleType::float32}; }
+    image::Drawing& drawing() { return drawing_; }
+    const std::vector<float>& pixels() const { return pixels_; }
+
+    // Paints the queued lines and text; see image::Drawing::paint.
+    bool flush(bool stop_at_failure = false, std::string* reason = nullptr) {
+        return drawing_.paint(target(), stop_at_failure, path_, reason);
+    }
 
     static std::array<float, 3> rgb(Color c) { return {c.r / 255.0f, c.g / 255.0f, c.b / 255.0f}; }
 
@@ -519,10 +525,12 @@ public:
 
     // Adjacent triangles of a pattern share edges: both paint the pixels on them.
     void fill_polygon(const std::vector<glm::dvec2>& points, Color color) {
+        flush();
         fill_convex_polygon(points, width_, height_, 1e-9, [&](int x, int y) { put(x, y, color); });
     }
 
     void fill_disc(glm::dvec2 centre, double radius, Color color) {
+        flush();
         const int x0 = static_cast<int>(std::floor(centre.x - radius));
         const int x1 = static_cast<int>(std::ceil(centre.x + radius));
         const int y0 = static_cast<int>(std::floor(centre.y - radius));
@@ -535,7 +543,7 @@ public:
         }
     }
 
-    // ImageBufAlgo::render_line is one pixel wide; wider lines are parallel copies offset
+    // OpenImageIO's render_line is one pixel wide; wider lines are parallel copies offset
     // across the line's minor axis.
     void line(glm::dvec2 from, glm::dvec2 to, Color color, double width, bool dashed) {
         const auto v = rgb(color);
@@ -545,10 +553,9 @@ public:
             for (int k = 0; k < copies; ++k) {
                 const double offset = k - (copies - 1) / 2.0;
                 const glm::dvec2 shift = mostly_horizontal ? glm::dvec2{0, offset} : glm::dvec2{offset, 0};
-                OIIO::ImageBufAlgo::render_line(image_, static_cast<int>(std::floor(a.x + shift.x)),
-                                                static_cast<int>(std::floor(a.y + shift.y)),
-                                                static_cast<int>(std::floor(b.x + shift.x)),
-                                                static_cast<int>(std::floor(b.y + shift.y)), v);
+                drawing_.line(static_cast<int>(std::floor(a.x + shift.x)), static_cast<int>(std::floor(a.y + shift.y)),
+                              static_cast<int>(std::floor(b.x + shift.x)), static_cast<int>(std::floor(b.y + shift.y)),
+                              v);
             }
         };
         if (!dashed) {
@@ -566,7 +573,8 @@ public:
 private:
     int width_, height_;
     std::vector<float> pixels_;
-    OIIO::ImageBuf image_;
+    std::string path_;
+    image::Drawing drawing_;
 };
 
 std::string font_for(TextFont font) {
@@ -586,7 +594,7 @@ std::string font_for(TextFont font) {
 std::vector<std::string> write_picture_image(const Picture& picture, const std::string& path,
                                              const std::string& error_name) {
     std::vector<std::string> warnings;
-    Canvas canvas(picture.width, picture.height, picture.background);
+    Canvas canvas(picture.width, picture.height, picture.background, error_name);
     for (const PicturePolygon& polygon : picture.polygons) {
         canvas.fill_polygon(polygon.points, polygon.fill);
         if (polygon.stroked) {
@@ -599,32 +607,26 @@ std::vector<std::string> write_picture_image(const Picture& picture, const std::
     for (const PictureLine& line : picture.lines) canvas.line(line.from, line.to, line.color, line.width, line.dashed);
     for (const PictureDisc& disc : picture.discs) canvas.fill_disc(disc.centre, disc.radius, disc.fill);
 
-    bool text_failed = false;
+    // Text last, so a failure (no font) leaves the rest of the picture drawn.
+    canvas.flush();
     for (const PictureText& text : picture.texts) {
-        if (text_failed) break;
-        const auto align = text.anchor == TextAnchor::start ? OIIO::ImageBufAlgo::TextAlignX::Left
-                           : text.anchor == TextAnchor::middle ? OIIO::ImageBufAlgo::TextAlignX::Center
-                                                               : OIIO::ImageBufAlgo::TextAlignX::Right;
-        const auto color = Canvas::rgb(text.color);
-        const bool ok = OIIO::ImageBufAlgo::render_text(
-            canvas.image(), static_cast<int>(std::lround(text.baseline.x)),
-            static_cast<int>(std::lround(text.baseline.y)), text.text, static_cast<int>(std::lround(text.size)),
-            font_for(text.font), color, align, OIIO::ImageBufAlgo::TextAlignY::Baseline);
-        if (!ok) {
-            text_failed = true;
-            std::string reason = canvas.image().geterror();
-            warnings.push_back("could not render text (" + (reason.empty() ? std::string("no font") : reason) +
-                               "); the picture has no labels");
-        }
+        const image::TextAlign align = text.anchor == TextAnchor::start    ? image::TextAlign::left
+                                       : text.anchor == TextAnchor::middle ? image::TextAlign::centre
+                                                                           : image::TextAlign::right;
+        canvas.drawing().text(static_cast<int>(std::lround(text.baseline.x)), static_cast<int>(std::lround(text.baseline.y)),
+                              text.text, static_cast<int>(std::lround(text.size)), font_for(text.font),
+                              Canvas::rgb(text.color), align);
     }
+    std::string reason;
+    if (!canvas.flush(true, &reason))
+        warnings.push_back("could not render text (" + (reason.empty() ? std::string("no font") : reason) +
+                           "); the picture has no labels");
 
-    // 8 bits per channel is what PNG viewers expect; OIIO converts from float on write.
-    canvas.image().set_write_format(OIIO::TypeDesc::UINT8);
-    if (!canvas.image().write(path)) {
-        std::string reason = canvas.image().geterror();
-        if (reason.empty()) reason = OIIO::geterror();
-        throw Error("cannot write image: " + (reason.empty() ? std::string("unknown error") : reason),
-                    Where::in_file(error_name));
+    // 8 bits per channel is what PNG viewers expect: the floats converted as OpenImageIO did.
+    try {
+        image::write_image(path, {picture.width, picture.height, 3, image::SampleType::float32, canvas.pixels().data()});
+    } catch (const Error& e) {
+        throw Error(e.message(), Where::in_file(error_name));  // `path` may be a temporary name
     }
     return warnings;
 }

@@ -83,7 +83,7 @@ Picture draw_pattern(const Pattern& pattern, const PatternPictureInfo& info);
 // A standalone SVG 1.1 document (starts with "<svg", ends with "</svg>\n").
 std::string picture_to_svg(const Picture& picture);
 
-// Rasterizes the picture with OpenImageIO (ImageBufAlgo::render_line / render_text, plus
+// Rasterizes the picture (lines and text by OpenImageIO through src/image/draw.h, plus
 // plain pixel fills for polygons and discs, no antialiasing) and writes it to `path`; the
 // codec follows the extension of `path`. Text uses DejaVu Sans; when no font can be loaded
 // the picture is still written, without text, and the returned warnings say so.

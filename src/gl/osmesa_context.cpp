@@ -1,15 +1,62 @@
 // The offscreen OSMesa OpenGL 4.5 core context (Mesa llvmpipe).
+#include <dlfcn.h>
+
 #include <cstdio>
 #include <cstdlib>
+#include <mutex>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "gl/gl_api.h"
 #include "tessref/error.h"
 
+#ifndef TESSREF_OSMESA_LIBRARY
+#error "TESSREF_OSMESA_LIBRARY (libOSMesa's soname) comes from CMakeLists.txt"
+#endif
+
 namespace tessref::gl {
 
 namespace {
+
+// libOSMesa, loaded on the first context: it brings LLVM (llvmpipe), whose loading and
+// relocation cost every tessref process some 20 ms before main() when linked, GL or not.
+// Its five OSMesa entry points are taken here; the GL functions through GetProcAddress.
+struct OsMesa {
+    decltype(&::OSMesaCreateContextAttribs) CreateContextAttribs = nullptr;
+    decltype(&::OSMesaMakeCurrent) MakeCurrent = nullptr;
+    decltype(&::OSMesaGetCurrentContext) GetCurrentContext = nullptr;
+    decltype(&::OSMesaDestroyContext) DestroyContext = nullptr;
+    decltype(&::OSMesaGetProcAddress) GetProcAddress = nullptr;
+    std::string failure;
+};
+
+const OsMesa& osmesa_library() {
+    static OsMesa lib;
+    static std::once_flag once;
+    std::call_once(once, [] {
+        void* handle = dlopen(TESSREF_OSMESA_LIBRARY, RTLD_NOW | RTLD_LOCAL);
+        if (handle == nullptr) {
+            const char* reason = dlerror();
+            lib.failure = std::string("cannot load " TESSREF_OSMESA_LIBRARY ": ") + (reason ? reason : "unknown reason") +
+                          " (Debian: libosmesa6)";
+            return;
+        }
+        std::string missing;
+        const auto take = [&](auto& slot, const char* name) {
+            slot = reinterpret_cast<std::remove_reference_t<decltype(slot)>>(dlsym(handle, name));
+            if (slot == nullptr) missing += (missing.empty() ? "" : ", ") + std::string(name);
+        };
+        take(lib.CreateContextAttribs, "OSMesaCreateContextAttribs");
+        take(lib.MakeCurrent, "OSMesaMakeCurrent");
+        take(lib.GetCurrentContext, "OSMesaGetCurrentContext");
+        take(lib.DestroyContext, "OSMesaDestroyContext");
+        take(lib.GetProcAddress, "OSMesaGetProcAddress");
+        if (!missing.empty()) lib.failure = TESSREF_OSMESA_LIBRARY " lacks " + missing;
+    });
+    if (!lib.failure.empty()) throw Error("OSMesa: " + lib.failure);
+    return lib;
+}
 
 const char* error_name(GLenum error) {
     switch (error) {
@@ -25,19 +72,20 @@ const char* error_name(GLenum error) {
 }  // namespace
 
 void Context::Impl::make_current() {
-    if (OSMesaGetCurrentContext() == osmesa) return;
-    if (!OSMesaMakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1))
+    const OsMesa& os = osmesa_library();
+    if (os.GetCurrentContext() == osmesa) return;
+    if (!os.MakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1))
         throw Error("OSMesa: cannot make the GL context current");
 }
 
 void Context::Impl::bind_color_buffer(float* pixels, int width, int height) {
-    if (!OSMesaMakeCurrent(osmesa, pixels, GL_FLOAT, width, height))
+    if (!osmesa_library().MakeCurrent(osmesa, pixels, GL_FLOAT, width, height))
         throw Error("OSMesa: cannot bind a " + std::to_string(width) + "x" + std::to_string(height) +
                     " float colour buffer");
 }
 
 void Context::Impl::release_color_buffer() {
-    if (!OSMesaMakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1))
+    if (!osmesa_library().MakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1))
         throw Error("OSMesa: cannot make the GL context current");
 }
 
@@ -51,8 +99,8 @@ void Context::Impl::check_error(const char* what) {
 
 Context::Impl::~Impl() {
     if (!osmesa) return;
-    if (OSMesaGetCurrentContext() == osmesa || OSMesaMakeCurrent(osmesa, color_buffer.data(),
-                                                                 GL_UNSIGNED_BYTE, 1, 1)) {
+    const OsMesa& os = osmesa_library();  // loaded: this context came from it
+    if (os.GetCurrentContext() == osmesa || os.MakeCurrent(osmesa, color_buffer.data(), GL_UNSIGNED_BYTE, 1, 1)) {
         for (auto& [key, program] : programs)
             if (program.program) gl.DeleteProgram(program.program);
         const GLuint buffers[] = {level_buffer, feedback_buffer};
@@ -61,7 +109,7 @@ Context::Impl::~Impl() {
         if (gl.DeleteQueries) gl.DeleteQueries(2, queries);
         if (gl.DeleteVertexArrays && vertex_array) gl.DeleteVertexArrays(1, &vertex_array);
     }
-    OSMesaDestroyContext(osmesa);
+    os.DestroyContext(osmesa);
 }
 
 Context Context::create() {
@@ -73,6 +121,7 @@ Context Context::create() {
                         " is not a software driver OSMesa can load (llvmpipe, softpipe); tessref gl needs llvmpipe",
                     Where::in_file("GALLIUM_DRIVER"));
     }
+    const OsMesa& os = osmesa_library();
     auto impl = std::make_unique<Impl>();
     const int attributes[] = {OSMESA_FORMAT,
                               OSMESA_RGBA,
@@ -89,7 +138,7 @@ Context Context::create() {
                               OSMESA_CONTEXT_MINOR_VERSION,
                               5,
                               0};
-    impl->osmesa = OSMesaCreateContextAttribs(attributes, nullptr);
+    impl->osmesa = os.CreateContextAttribs(attributes, nullptr);
     if (!impl->osmesa)
         throw Error(
             "OSMesa: cannot create an OpenGL 4.5 core-profile context (is libOSMesa built with "
@@ -99,7 +148,7 @@ Context Context::create() {
 
     std::string missing;
 #define TESSREF_GL_LOAD(name, ret, params)                                                   \
-    impl->gl.name = reinterpret_cast<ret(GLAPIENTRY*) params>(OSMesaGetProcAddress("gl" #name)); \
+    impl->gl.name = reinterpret_cast<ret(GLAPIENTRY*) params>(os.GetProcAddress("gl" #name));     \
     if (!impl->gl.name) missing += (missing.empty() ? "gl" : ", gl") + std::string(#name);
     TESSREF_GL_FUNCTIONS(TESSREF_GL_LOAD)
 #undef TESSREF_GL_LOAD

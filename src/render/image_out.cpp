@@ -1,16 +1,14 @@
-// Images of a render through OpenImageIO: 8-bit PNG/TIFF for eyes, float EXR with the
+// Images of a render (src/image/image_io.h): 8-bit PNG/TIFF for eyes, float EXR with the
 // provenance channels (render.h).
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <memory>
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
-
+#include "image/image_io.h"
 #include "render/render_internal.h"
 #include "tessref/error.h"
 #include "tessref/render.h"
@@ -62,17 +60,12 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
         throw Error("AOV channels need an EXR file (float channels): name the output *.exr", Where::in_file(path));
     const int width = result.width, height = result.height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
-    if (!out) throw Error("cannot write an image here: " + OIIO::geterror(), Where::in_file(path));
-
+    image::WriteOptions options;
+    options.software_tag = true;  // and no time stamp: the same render gives the same bytes
     if (format != ImageFormat::exr) {
         const std::vector<std::uint8_t> pixels = to_rgba8(result);
-        OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
-        spec.attribute("Software", "tessref " TESSREF_VERSION);
-        spec.attribute("DateTime", "");  // no time stamp: the same render gives the same bytes
-        if (format == ImageFormat::tiff) spec.attribute("compression", "zip");
-        if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close())
-            throw Error("cannot write the image: " + out->geterror(), Where::in_file(path));
+        if (format == ImageFormat::tiff) options.compression = "zip";
+        image::write_image(path, {width, height, 4, image::SampleType::uint8, pixels.data()}, options);
         return;
     }
 
@@ -100,15 +93,12 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
             for (int k = 0; k < 3; ++k) p[c++] = heat[k];
         }
     }
-    OIIO::ImageSpec spec(width, height, static_cast<int>(channels), OIIO::TypeDesc::FLOAT);
-    spec.channelnames = names;
-    spec.alpha_channel = 3;
-    spec.z_channel = aovs.depth ? 4 : -1;
-    spec.attribute("compression", "zip");
-    spec.attribute("Software", "tessref " TESSREF_VERSION);
-    spec.attribute("DateTime", "");  // OpenImageIO stamps TIFF and EXR files with the time unless told
-    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) || !out->close())
-        throw Error("cannot write the image: " + out->geterror(), Where::in_file(path));
+    options.channel_names = names;
+    options.alpha_channel = 3;
+    options.z_channel = aovs.depth ? 4 : -1;
+    options.compression = "zip";
+    image::write_image(path, {width, height, static_cast<int>(channels), image::SampleType::float32, pixels.data()},
+                       options);
 }
 
 }  // namespace tessref

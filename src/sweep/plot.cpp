@@ -10,10 +10,10 @@
 #include <numbers>
 #include <span>
 
-#include <OpenImageIO/imageio.h>
 #include <glm/vec2.hpp>
 
 #include "common/fill.h"
+#include "image/image_io.h"
 #include "tessref/error.h"
 
 namespace tessref::sweep {
@@ -409,13 +409,9 @@ std::vector<std::uint8_t> plot_to_rgba(const PlotShapes& shapes) {
 }
 
 void write_rgba_png(const std::vector<std::uint8_t>& rgba, int width, int height, const std::string& path) {
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
-    if (!out) throw Error("cannot write an image here: " + OIIO::geterror(), Where::in_file(path));
-    OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
-    spec.attribute("Software", "tessref " TESSREF_VERSION);
-    spec.attribute("DateTime", "");  // no time stamp: the same plot gives the same bytes
-    if (!out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgba.data()) || !out->close())
-        throw Error("cannot write the image: " + out->geterror(), Where::in_file(path));
+    image::WriteOptions options;
+    options.software_tag = true;  // and no time stamp: the same plot gives the same bytes
+    image::write_image(path, {width, height, 4, image::SampleType::uint8, rgba.data()}, options);
 }
 
 }  // namespace tessref::sweep

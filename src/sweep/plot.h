@@ -89,7 +89,7 @@ std::string plot_to_svg(const PlotShapes& shapes);
 // The same shapes painted into an RGBA8 buffer (row 0 on top, opaque, no antialiasing).
 std::vector<std::uint8_t> plot_to_rgba(const PlotShapes& shapes);
 
-// Writes an RGBA8 buffer as a PNG through OpenImageIO (no time stamp). Throws tessref::Error.
+// Writes an RGBA8 buffer as a PNG (src/image/image_io.h; no time stamp). Throws tessref::Error.
 void write_rgba_png(const std::vector<std::uint8_t>& rgba, int width, int height, const std::string& path);
 
 }  // namespace tessref::sweep

@@ -66,7 +66,7 @@ void write_text_atomically(const fs::path& target, const std::string& bytes) {
 }
 
 void write_png_atomically(const fs::path& target, const PlotShapes& shapes) {
-    const fs::path temp = temp_name(target);  // keeps ".png": OpenImageIO picks the codec by it
+    const fs::path temp = temp_name(target);  // keeps ".png": the writer picks the format by it
     try {
         write_rgba_png(plot_to_rgba(shapes), shapes.width, shapes.height, temp.string());
     } catch (...) {

@@ -1,11 +1,15 @@
 // Uses an installed tessref through its public headers only: the primitive generator, a
-// shipped scene loaded from the installed share/tessref/, and the GL backend (llvmpipe).
+// shipped scene loaded from the installed share/tessref/, the GL backend (llvmpipe), and an
+// EXR image (OpenImageIO through the installed module).
 // Exit 0 and "consumer: ok" when every count matches; the expected counts come from the
 // tessellation rules and the scene files, not from a run of tessref.
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
+#include <tessref/compare.h>
 #include <tessref/error.h>
 #include <tessref/gl_backend.h>
 #include <tessref/pipeline.h>
@@ -49,6 +53,22 @@ int main() {
         // $TESSREF_DATA_DIR, since this program does not live in the installed bin/.
         tessref::gl::Context context = tessref::gl::Context::create();
         expect("llvmpipe quads 4/4 triangles", tessref::gl::capture_pattern(context, quads, four).primitive_count(), 32);
+
+        // An EXR written and read back: OpenImageIO, through the installed module
+        // lib/tessref/tessref_oiio.so, which the library finds from $TESSREF_DATA_DIR.
+        tessref::FloatImage picture;
+        picture.width = 2;
+        picture.height = 1;
+        picture.channels = 3;
+        picture.channel_names = {"R", "G", "B"};
+        picture.samples = {0.25f, 0.5f, 1.5f, -1.0f, 2.0f, 0.125f};
+        const char* tmp = std::getenv("TMPDIR");
+        const std::string exr = std::string(tmp && *tmp ? tmp : "/tmp") + "/tessref-consumer-" +
+                                std::to_string(static_cast<long>(::getpid())) + ".exr";
+        tessref::write_float_image(picture, exr);
+        const tessref::FloatImage back = tessref::read_float_image(exr);
+        std::remove(exr.c_str());
+        expect("EXR samples read back unchanged", back.samples == picture.samples ? 1 : 0, 1);
     } catch (const tessref::Error& e) {
         std::fprintf(stderr, "consumer: error: %s\n", e.message().c_str());
         return 2;

@@ -1,0 +1,30 @@
+// src/image/codecs.h — the readers and writers behind image_io.h (private to src/image/).
+#pragma once
+
+#include <string>
+
+#include "image/image_io.h"
+
+namespace tessref::image::detail {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what);
+
+// A header with no pixels (a side of 0 or less, no channels) is refused here, as
+// "<kind> has no pixels: its header says W x H, C channel(s)"; then options.check_header.
+void accept_header(const std::string& path, const ReadOptions& options, const ImageHeader& header);
+
+// "Y" for one channel, "Y", "A" for two, "R", "G", "B"[, "A"] for three and four; the alpha channel.
+void default_channel_names(ImageHeader& header);
+
+// Sizes the sample vector of image.header.type for width * height * channels samples.
+void allocate_samples(Image& image);
+
+// The first 8 bytes are PNG's signature / the first two a PNM magic number (P1-P6, Pf, PF).
+bool is_png(const std::string& head);
+bool is_pnm(const std::string& head);
+
+Image read_png(const std::string& path, const ReadOptions& options);
+Image read_pnm(const std::string& path, const ReadOptions& options);
+void write_png(const std::string& path, const ImageView& image, const WriteOptions& options);
+
+}  // namespace tessref::image::detail
