@@ -107,9 +107,9 @@ struct Derivatives {
     glm::vec2 dx{0.0f}, dy{0.0f};
 };
 Derivatives quad_derivatives(const SurfaceView& s, std::uint32_t triangle, int x0, int row0, int width, int height) {
-    const auto c = s.clip_corners(triangle);
+    const render_detail::PerspectiveWeights weights(s.clip_corners(triangle));
     auto uv = [&](int px, int prow) {
-        const glm::dvec3 w = perspective_weights(c, pixel_ndc(px, prow, width, height));
+        const glm::dvec3 w = weights(pixel_ndc(px, prow, width, height));
         return s.uv_at(triangle, glm::vec3(w));
     };
     const glm::vec2 top_left = uv(x0, row0);

@@ -28,12 +28,24 @@ inline glm::dvec2 pixel_ndc(double x, double row, int width, int height) {
 // cyclic. No division by w_i: corners behind the eye are fine. Evaluates the triangle's
 // plane outside the triangle too (helper pixels). NaN or inf where the plane is seen
 // edge-on (the weights' sum vanishes).
+// The three cross products depend on the triangle alone: PerspectiveWeights computes them
+// once for any number of points (the same operations, so the same values).
+struct PerspectiveWeights {
+    glm::dvec3 c12, c20, c01;
+    explicit PerspectiveWeights(const std::array<glm::dvec4, 3>& c) {
+        const glm::dvec3 h0(c[0].x, c[0].y, c[0].w), h1(c[1].x, c[1].y, c[1].w), h2(c[2].x, c[2].y, c[2].w);
+        c12 = glm::cross(h1, h2);
+        c20 = glm::cross(h2, h0);
+        c01 = glm::cross(h0, h1);
+    }
+    glm::dvec3 operator()(glm::dvec2 p) const {
+        const glm::dvec3 q(p, 1.0);
+        const glm::dvec3 b(glm::dot(q, c12), glm::dot(q, c20), glm::dot(q, c01));
+        return b / (b.x + b.y + b.z);
+    }
+};
 inline glm::dvec3 perspective_weights(const std::array<glm::dvec4, 3>& c, glm::dvec2 p) {
-    const glm::dvec3 h0(c[0].x, c[0].y, c[0].w), h1(c[1].x, c[1].y, c[1].w), h2(c[2].x, c[2].y, c[2].w);
-    const glm::dvec3 q(p, 1.0);
-    const glm::dvec3 b(glm::dot(q, glm::cross(h1, h2)), glm::dot(q, glm::cross(h2, h0)),
-                       glm::dot(q, glm::cross(h0, h1)));
-    return b / (b.x + b.y + b.z);
+    return PerspectiveWeights(c)(p);
 }
 
 // Window z (depth range [0, 1]) of a clip-space point.
