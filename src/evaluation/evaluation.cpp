@@ -16,8 +16,9 @@ namespace {
 // compiler contracts them into an fma (-ffp-contract=on contracts within one expression).
 // mix(x, y, 0) == x exactly; mix(x, y, 1) == x + (y - x), which is y whenever y - x is
 // exact (always for the grid corners of the shipped scenes: see evaluation.h).
+// Inlined: called three times per evaluated vertex.
 template <typename T, int N>
-glm::vec<N, T> mix_gpu(const glm::vec<N, T>& x, const glm::vec<N, T>& y, T a) {
+[[gnu::always_inline]] inline glm::vec<N, T> mix_gpu(const glm::vec<N, T>& x, const glm::vec<N, T>& y, T a) {
     glm::vec<N, T> out;
     for (int c = 0; c < N; ++c) {
         const T difference = y[c] - x[c];

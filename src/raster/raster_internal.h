@@ -90,10 +90,10 @@ inline constexpr int kFixedOne = 1 << kFixedOrder;
 // the edge functions reject them); tightening them changes no coverage and drops most
 // sub-pixel triangles before any plane is set up. Inline: the rasterizer runs it on every
 // triangle of a tessellated surface.
-inline void triangle_bbox(const std::int32_t* x, const std::int32_t* y, Primitive& prim) {
+[[gnu::always_inline]] inline void triangle_bbox(const std::int32_t* x, const std::int32_t* y, Primitive& prim) {
     const int adj = 1;
-    const std::int32_t min_x = std::min({x[0], x[1], x[2]}), max_x = std::max({x[0], x[1], x[2]});
-    const std::int32_t min_y = std::min({y[0], y[1], y[2]}), max_y = std::max({y[0], y[1], y[2]});
+    const std::int32_t min_x = std::min(std::min(x[0], x[1]), x[2]), max_x = std::max(std::max(x[0], x[1]), x[2]);
+    const std::int32_t min_y = std::min(std::min(y[0], y[1]), y[2]), max_y = std::max(std::max(y[0], y[1]), y[2]);
     prim.x0 = std::max(min_x >> kFixedOrder, (min_x + kFixedOne - 1) >> kFixedOrder);
     prim.x1 = (max_x - 1) >> kFixedOrder;
     prim.y0 = std::max((min_y + adj) >> kFixedOrder, (min_y + kFixedOne) >> kFixedOrder);
