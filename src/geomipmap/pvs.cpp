@@ -1,0 +1,252 @@
+// pvs.cpp — the potentially visible set of a geomipmapped terrain (tessref/geomipmap.h, PVS;
+// the geomorphing article, "Optimizations": cells over the patches in layers, line of sight
+// from each cell to each patch, one bit per cell and patch).
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <mutex>
+
+#include "common/parallel.h"
+#include "tessref/error.h"
+#include "tessref/geomipmap.h"
+#include "tessref/raycast.h"
+
+namespace tessref::geomip {
+
+namespace {
+
+constexpr int N = kPatchCells;
+constexpr char kMagic[8] = {'T', 'R', 'P', 'V', 'S', '\0', '\r', '\n'};
+constexpr std::uint32_t kVersion = 1;
+constexpr std::size_t kHeaderBytes = 64;
+constexpr int kCellSamples = 3;  // per axis: the centres of the cell's thirds
+
+struct Fnv {
+    std::uint64_t h = 1469598103934665603ull;
+    void bytes(const void* data, std::size_t n) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (std::size_t i = 0; i < n; ++i) {
+            h ^= p[i];
+            h *= 1099511628211ull;
+        }
+    }
+    void u64(std::uint64_t v) {
+        for (int i = 0; i < 8; ++i) {
+            const unsigned char b = static_cast<unsigned char>(v >> (8 * i));
+            bytes(&b, 1);
+        }
+    }
+    void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
+};
+
+void put_u32(unsigned char* p, std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) p[i] = static_cast<unsigned char>(v >> (8 * i));
+}
+void put_u64(unsigned char* p, std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) p[i] = static_cast<unsigned char>(v >> (8 * i));
+}
+std::uint32_t get_u32(const unsigned char* p) {
+    std::uint32_t v = 0;
+    for (int i = 3; i >= 0; --i) v = v << 8 | p[i];
+    return v;
+}
+std::uint64_t get_u64(const unsigned char* p) {
+    std::uint64_t v = 0;
+    for (int i = 7; i >= 0; --i) v = v << 8 | p[i];
+    return v;
+}
+
+std::uint64_t checksum(const std::vector<std::uint8_t>& bits) {
+    Fnv f;
+    f.bytes(bits.data(), bits.size());
+    return f.h;
+}
+
+}  // namespace
+
+std::uint64_t terrain_identity(const HeightSamples& map, const Settings& settings) {
+    Fnv f;
+    f.u64(static_cast<std::uint64_t>(map.width));
+    f.u64(static_cast<std::uint64_t>(map.height));
+    for (double s : map.samples) f.f64(s);
+    f.f64(settings.origin.x);
+    f.f64(settings.origin.y);
+    f.f64(settings.spacing.x);
+    f.f64(settings.spacing.y);
+    f.f64(settings.scale_z);
+    return f.h;
+}
+
+std::optional<std::size_t> Pvs::cell_of(const glm::dvec3& p, const Settings& settings) const {
+    const double fx = (p.x - settings.origin.x) / (settings.spacing.x * N);
+    const double fy = (p.y - settings.origin.y) / (settings.spacing.y * N);
+    const double fz = (p.z - z_lo) / (z_hi - z_lo) * layers;
+    if (!(fx >= 0.0 && fx < patches_x && fy >= 0.0 && fy < patches_y && fz >= 0.0 && fz < layers)) return std::nullopt;
+    const auto px = static_cast<std::size_t>(fx), py = static_cast<std::size_t>(fy), l = static_cast<std::size_t>(fz);
+    return (l * static_cast<std::size_t>(patches_y) + py) * static_cast<std::size_t>(patches_x) + px;
+}
+
+glm::dvec3 pvs_cell_point(const Pvs& pvs, const Settings& settings, std::size_t cell, int sx, int sy, int sz) {
+    const std::size_t px = cell % static_cast<std::size_t>(pvs.patches_x);
+    const std::size_t py = cell / static_cast<std::size_t>(pvs.patches_x) % static_cast<std::size_t>(pvs.patches_y);
+    const std::size_t l = cell / pvs.patch_count();
+    const double third = 1.0 / kCellSamples;
+    const double gx = (static_cast<double>(px) + (sx + 0.5) * third) * N;
+    const double gy = (static_cast<double>(py) + (sy + 0.5) * third) * N;
+    const double layer_height = (pvs.z_hi - pvs.z_lo) / pvs.layers;
+    return {settings.origin.x + gx * settings.spacing.x, settings.origin.y + gy * settings.spacing.y,
+            pvs.z_lo + (static_cast<double>(l) + (sz + 0.5) * third) * layer_height};
+}
+
+Pvs build_pvs(const HeightSamples& map, const Settings& settings, int layers, int target_step,
+              const std::function<void(std::size_t, std::size_t)>& progress) {
+    validate(map);
+    if (layers < 1 || layers > 4096) throw Error("pvs: the layer count must lie in [1, 4096]");
+    if (target_step < 1 || target_step > N || N % target_step != 0)
+        throw Error("pvs: the target step must divide " + std::to_string(N));
+    Pvs pvs;
+    pvs.patches_x = map.patches_x();
+    pvs.patches_y = map.patches_y();
+    pvs.layers = layers;
+    pvs.terrain_id = terrain_identity(map, settings);
+    const auto [lo_it, hi_it] = std::minmax_element(map.samples.begin(), map.samples.end());
+    const double a = *lo_it * settings.scale_z, b = *hi_it * settings.scale_z;
+    const double lo = std::min(a, b), height = std::max(a, b) - lo;
+    // "32 layers in a range of three times the height of the landscape" (the article).
+    pvs.z_lo = lo;
+    pvs.z_hi = lo + 3.0 * (height > 0.0 ? height : 1.0);
+
+    // The occluder: the full-resolution surface (every sample a vertex, level 0).
+    const SurfaceMesh full = build_surface(map, std::vector<double>(pvs.patch_count(), 0.0), settings);
+    const RayScene rays(full.positions, full.triangles);
+    const double slack = 4.0 * rays.resolution();
+
+    // Targets: each patch's samples at the step, on the surface.
+    const int per_side = N / target_step + 1;
+    std::vector<glm::dvec3> targets(pvs.patch_count() * static_cast<std::size_t>(per_side * per_side));
+    for (std::size_t p = 0; p < pvs.patch_count(); ++p) {
+        const int ox = static_cast<int>(p % pvs.patches_x) * N, oy = static_cast<int>(p / pvs.patches_x) * N;
+        for (int j = 0; j < per_side; ++j)
+            for (int i = 0; i < per_side; ++i) {
+                const int x = ox + i * target_step, y = oy + j * target_step;
+                targets[p * per_side * per_side + static_cast<std::size_t>(j * per_side + i)] = {
+                    settings.origin.x + x * settings.spacing.x, settings.origin.y + y * settings.spacing.y,
+                    map.at(x, y) * settings.scale_z};
+            }
+    }
+    const std::size_t per_patch = static_cast<std::size_t>(per_side * per_side);
+
+    const std::size_t cells = pvs.cell_count(), patches = pvs.patch_count();
+    pvs.bits.assign((cells * patches + 7) / 8, 0);
+    std::vector<std::uint8_t> seen(cells * patches, 0);  // one byte per bit: cells write their own slots
+    std::atomic<std::size_t> done{0};
+    std::mutex progress_mutex;
+    tessref::parallel_for(std::size_t{0}, cells, [&](std::size_t cell) {
+        std::vector<glm::dvec3> sources;
+        for (int sz = 0; sz < kCellSamples; ++sz)
+            for (int sy = 0; sy < kCellSamples; ++sy)
+                for (int sx = 0; sx < kCellSamples; ++sx) {
+                    const glm::dvec3 s = pvs_cell_point(pvs, settings, cell, sx, sy, sz);
+                    // Below the surface when a ray straight up meets it.
+                    if (!rays.occluded(s, {0.0, 0.0, 1.0})) sources.push_back(s);
+                }
+        std::uint8_t* row = seen.data() + cell * patches;
+        if (sources.empty()) {
+            std::fill(row, row + patches, std::uint8_t{1});
+        } else {
+            for (std::size_t p = 0; p < patches; ++p) {
+                bool visible = false;
+                for (std::size_t t = 0; t < per_patch && !visible; ++t) {
+                    const glm::dvec3& target = targets[p * per_patch + t];
+                    for (const glm::dvec3& s : sources) {
+                        const glm::dvec3 d = target - s;
+                        const double length = glm::length(d);
+                        if (length <= slack ||
+                            !rays.occluded(s, d / length, 0.0, length - std::max(slack, 1e-6 * length))) {
+                            visible = true;
+                            break;
+                        }
+                    }
+                }
+                row[p] = visible ? 1 : 0;
+            }
+        }
+        const std::size_t n = done.fetch_add(1) + 1;
+        if (progress) {
+            const std::lock_guard<std::mutex> lock(progress_mutex);
+            progress(n, cells);
+        }
+    });
+    for (std::size_t b = 0; b < seen.size(); ++b)
+        if (seen[b]) pvs.bits[b / 8] = static_cast<std::uint8_t>(pvs.bits[b / 8] | (1u << (b % 8)));
+    return pvs;
+}
+
+void write_pvs(const Pvs& pvs, const std::string& path) {
+    unsigned char header[kHeaderBytes] = {};
+    std::memcpy(header, kMagic, 8);
+    put_u32(header + 8, kVersion);
+    put_u32(header + 12, static_cast<std::uint32_t>(pvs.patches_x));
+    put_u32(header + 16, static_cast<std::uint32_t>(pvs.patches_y));
+    put_u32(header + 20, static_cast<std::uint32_t>(pvs.layers));
+    put_u64(header + 24, std::bit_cast<std::uint64_t>(pvs.z_lo));
+    put_u64(header + 32, std::bit_cast<std::uint64_t>(pvs.z_hi));
+    put_u64(header + 40, pvs.terrain_id);
+    put_u64(header + 48, pvs.bits.size());
+    put_u64(header + 56, checksum(pvs.bits));
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(header), kHeaderBytes);
+    out.write(reinterpret_cast<const char*>(pvs.bits.data()), static_cast<std::streamsize>(pvs.bits.size()));
+    out.close();
+    if (!out) throw Error("cannot write the PVS file", Where::in_file(path));
+}
+
+Pvs read_pvs(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot open the PVS file", Where::in_file(path));
+    unsigned char header[kHeaderBytes];
+    in.read(reinterpret_cast<char*>(header), kHeaderBytes);
+    if (in.gcount() != static_cast<std::streamsize>(kHeaderBytes))
+        throw Error("not a PVS file: shorter than its 64-byte header (truncated?)", Where::in_file(path));
+    if (std::memcmp(header, kMagic, 8) != 0) throw Error("not a PVS file (bad magic)", Where::in_file(path));
+    if (get_u32(header + 8) != kVersion)
+        throw Error("PVS file version " + std::to_string(get_u32(header + 8)) + " (this tessref reads version " +
+                        std::to_string(kVersion) + ")",
+                    Where::in_file(path));
+    Pvs pvs;
+    const std::uint32_t nx = get_u32(header + 12), ny = get_u32(header + 16), nl = get_u32(header + 20);
+    if (nx < 1 || ny < 1 || nl < 1 || nx > 65536 || ny > 65536 || nl > 4096)
+        throw Error("corrupt PVS file: dimensions " + std::to_string(nx) + " x " + std::to_string(ny) + " x " +
+                        std::to_string(nl) + " out of range",
+                    Where::in_file(path));
+    pvs.patches_x = static_cast<int>(nx);
+    pvs.patches_y = static_cast<int>(ny);
+    pvs.layers = static_cast<int>(nl);
+    pvs.z_lo = std::bit_cast<double>(get_u64(header + 24));
+    pvs.z_hi = std::bit_cast<double>(get_u64(header + 32));
+    pvs.terrain_id = get_u64(header + 40);
+    const std::uint64_t bytes = get_u64(header + 48);
+    const long double expected_bits = static_cast<long double>(pvs.cell_count()) * pvs.patch_count();
+    if (static_cast<long double>(bytes) != std::ceil(expected_bits / 8.0L))
+        throw Error("corrupt PVS file: " + std::to_string(bytes) + " bytes of bits do not fit its dimensions",
+                    Where::in_file(path));
+    if (!(std::isfinite(pvs.z_lo) && std::isfinite(pvs.z_hi) && pvs.z_lo < pvs.z_hi))
+        throw Error("corrupt PVS file: bad layer range", Where::in_file(path));
+    pvs.bits.resize(bytes);
+    in.read(reinterpret_cast<char*>(pvs.bits.data()), static_cast<std::streamsize>(bytes));
+    if (static_cast<std::uint64_t>(in.gcount()) != bytes)
+        throw Error("truncated PVS file: " + std::to_string(in.gcount()) + " of " + std::to_string(bytes) +
+                        " bytes of bits",
+                    Where::in_file(path));
+    if (in.peek() != std::char_traits<char>::eof())
+        throw Error("corrupt PVS file: bytes after the bits", Where::in_file(path));
+    if (checksum(pvs.bits) != get_u64(header + 56))
+        throw Error("corrupt PVS file: the bits' checksum does not match", Where::in_file(path));
+    return pvs;
+}
+
+}  // namespace tessref::geomip

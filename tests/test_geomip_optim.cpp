@@ -1,0 +1,413 @@
+// tests/test_geomip_optim.cpp — the geomorphing article's remaining techniques on a
+// geomipmapped terrain: the light map and the material passes (shading model
+// geomip_lightmap), frustum culling of patches and the potentially visible set.
+//
+// Where the expected answers come from:
+//  - the light map: the cross product of two neighbour vectors worked out by hand for a map
+//    whose neighbouring heights are chosen for it (below, in each test);
+//  - the blend: one-texel textures of known values, the alpha blend src * a + dst * (1 - a)
+//    and the modulations done by hand;
+//  - culling: a camera over the terrain's middle looking along +x cannot see a point with
+//    x <= its own x and below it (angle to the view axis > 78 degrees, outside a 45 degree
+//    frustum), so the western half of the patches is culled;
+//  - the PVS: a wall of height 10 across a flat map; a line of sight from height z at x_s
+//    over the wall at x = 24 to the ground at x_t clears it only if z (x_t - 24) / (x_t - x_s)
+//    > 10 (similar triangles).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "command_dir_test.h"
+#include "scratch_dir.h"
+#include "tessref/error.h"
+#include "tessref/geomipmap.h"
+#include "tessref/pipeline.h"
+#include "tessref/render.h"
+#include "tessref/scene.h"
+#include "tessref/shading.h"
+
+using namespace tessref;
+using namespace tessref::geomip;
+
+namespace {
+
+const tessref::test::ScratchDir& scratch = tessref::test::ScratchDir::add("geomip_optim");
+const std::string kScenes = std::string(TESSREF_SOURCE_DIR) + "/data/scenes/";
+const std::string kLit = kScenes + "jacksboro-geomipmap-lit.toml";
+
+HeightSamples flat_map(int width, int height, double value = 0.0) {
+    HeightSamples m;
+    m.width = width;
+    m.height = height;
+    m.samples.assign(static_cast<std::size_t>(width) * height, value);
+    return m;
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+    const std::size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return text;
+}
+
+std::shared_ptr<const Texture> texel(glm::vec4 v) {
+    return std::make_shared<const Texture>(Texture::from_float(1, 1, 4, {v.r, v.g, v.b, v.a}));
+}
+
+// The key of the error load_scene_from_string(text) throws ("" when it loads).
+Error load_error(const std::string& text, const std::string& path) {
+    try {
+        load_scene_from_string(text, path);
+    } catch (const Error& e) {
+        return e;
+    }
+    return Error("loaded");
+}
+
+}  // namespace
+
+// ---- the light map -------------------------------------------------------------------
+
+TEST(GeoMipLightMap, TheTexelIsTheDiffuseLightOfTheCrossProduct) {
+    // Sample (0, 0) = 0 with (1, 0) = 0.5 and (0, 1) = 0.25; spacing (2, 1), scale_z 4:
+    // a = (2, 0, 2), b = (0, 1, 1), a x b = (0*1 - 2*1, 2*0 - 2*1, 2*1 - 0*0) = (-2, -2, 2),
+    // n = (-1, -1, 1) / sqrt(3). Light straight up: dot = 1/sqrt(3); ambient 0.2:
+    // 0.2 + 0.8 / sqrt(3).
+    HeightSamples map = flat_map(17, 17);
+    map.samples[1] = 0.5;
+    map.samples[17] = 0.25;
+    const glm::dvec3 n = sample_normal(map, {2.0, 1.0}, 4.0, 0, 0);
+    EXPECT_NEAR(n.x, -1.0 / std::sqrt(3.0), 1e-15);
+    EXPECT_NEAR(n.y, -1.0 / std::sqrt(3.0), 1e-15);
+    EXPECT_NEAR(n.z, 1.0 / std::sqrt(3.0), 1e-15);
+    const std::vector<double> light = light_map(map, {2.0, 1.0}, 4.0, {{0.0, 0.0, 1.0}, 0.2});
+    EXPECT_NEAR(light[0], 0.2 + 0.8 / std::sqrt(3.0), 1e-15);
+    // A sample with flat neighbours faces straight up: 0.2 + 0.8 * 1.
+    EXPECT_NEAR(light[5 * 17 + 5], 1.0, 1e-15);
+    // Facing away from the light: max(dot, 0) leaves the ambient. Light along +x:
+    // dot(n, (1, 0, 0)) = -1/sqrt(3) < 0.
+    EXPECT_NEAR(light_map(map, {2.0, 1.0}, 4.0, {{1.0, 0.0, 0.0}, 0.2})[0], 0.2, 1e-15);
+}
+
+TEST(GeoMipLightMap, TheLastColumnAndRowUseTheNeighbourBehind) {
+    // A ramp h = 0.01 x: at the last column the vector from (15, y) to (16, y) is still
+    // (dx, 0, 0.01 scale_z), so the normal is the ramp's everywhere: (-0.01 s, 0, dx) / |.|.
+    HeightSamples map = flat_map(17, 17);
+    for (int y = 0; y < 17; ++y)
+        for (int x = 0; x < 17; ++x) map.samples[static_cast<std::size_t>(y) * 17 + x] = 0.01 * x;
+    const double s = 10.0, dx = 0.5;
+    const glm::dvec3 expected = glm::normalize(glm::dvec3(-0.01 * s * 1.0, 0.0, dx * 1.0));
+    for (const glm::ivec2 at : {glm::ivec2(16, 3), glm::ivec2(3, 16), glm::ivec2(16, 16), glm::ivec2(7, 7)}) {
+        const glm::dvec3 n = sample_normal(map, {dx, 1.0}, s, at.x, at.y);
+        EXPECT_NEAR(glm::length(n - expected), 0.0, 1e-12) << at.x << "," << at.y;
+    }
+}
+
+TEST(GeoMipLightmapShading, MaterialsBlendByTheirAlphaAndTheCloudsMultiply) {
+    // Light 0.5; base (0.2, 0.4, 0.6) -> (0.1, 0.2, 0.3); rock (1, 0, 0) * 0.5 = (0.5, 0, 0)
+    // at alpha 0.25 -> (0.1 + 0.25 * 0.4, 0.2 - 0.25 * 0.2, 0.3 - 0.25 * 0.3) =
+    // (0.2, 0.15, 0.225); dry (0, 1, 0) * 0.5 = (0, 0.5, 0) at alpha 0.5 -> (0.1, 0.325,
+    // 0.1125); clouds 0.8 -> (0.08, 0.26, 0.09).
+    GeomipLightmapShading u;
+    u.lightMap = texel(glm::vec4(0.5f));
+    u.materials.push_back({texel({0.2f, 0.4f, 0.6f, 1.0f}), 7.0f, nullptr});
+    u.materials.push_back({texel({1.0f, 0.0f, 0.0f, 1.0f}), 3.0f, texel(glm::vec4(0.25f))});
+    u.materials.push_back({texel({0.0f, 1.0f, 0.0f, 1.0f}), 5.0f, texel(glm::vec4(0.5f))});
+    FragmentInputs f;
+    f.texCoord = {0.3f, 0.7f};
+    const glm::vec4 without = geomip_lightmap(f, u);
+    EXPECT_NEAR(without.r, 0.1f, 1e-6f);
+    EXPECT_NEAR(without.g, 0.325f, 1e-6f);
+    EXPECT_NEAR(without.b, 0.1125f, 1e-6f);
+    EXPECT_EQ(without.a, 1.0f);
+    u.clouds = texel(glm::vec4(0.8f));
+    const glm::vec4 with = geomip_lightmap(f, u);
+    EXPECT_NEAR(with.r, 0.08f, 1e-6f);
+    EXPECT_NEAR(with.g, 0.26f, 1e-6f);
+    EXPECT_NEAR(with.b, 0.09f, 1e-6f);
+}
+
+TEST(GeoMipLightmapShading, TheShippedSceneReadsItsLightMapTexelAtASample) {
+    const Scene scene = load_scene(kLit);
+    ASSERT_EQ(scene.shading.model.kind, ShadingKind::geomip_lightmap);
+    const GeomipLightmapShading& g = scene.shading.model.geomip;
+    ASSERT_EQ(g.materials.size(), 3u);
+    EXPECT_FALSE(g.materials[0].alpha);
+    EXPECT_EQ(g.materials[0].texture->wrap(), Wrap::repeat);
+    // The light map at sample (100, 60) is the cross-product light of that sample, from
+    // the height map's own values (spacing 192/256 and 238.08/256, scale_z 16.8).
+    const Texture& hm = scene.grid->heightmap->texture;
+    const auto h = [&](int x, int y) { return hm.texel_exact(0, x, y) * 16.8; };
+    const glm::dvec3 a(0.75, 0.0, h(101, 60) - h(100, 60)), b(0.0, 0.93, h(100, 61) - h(100, 60));
+    const double light = 0.3 + 0.7 * std::max(glm::dot(glm::normalize(glm::cross(a, b)),
+                                                        glm::normalize(glm::dvec3(-0.5, 0.4, 0.75))),
+                                               0.0);
+    EXPECT_NEAR(g.lightMap->texel(0, 100, 60), light, 1e-6);
+    // Sampled at the sample's uv (100/256, 60/256), the texel centre: the texel itself.
+    const glm::vec2 uv(100.0f / 256.0f, 60.0f / 256.0f);
+    EXPECT_NEAR(g.lightMap->texture(uv * g.lightMapScale + g.lightMapOffset).r, light, 1e-5);
+}
+
+TEST(GeoMipLightmapShading, BadTablesAreRefusedNamingTheKey) {
+    const std::string text = tessref::test::read_file(kLit);
+    const auto key_of = [&](const std::string& from, const std::string& to) {
+        return load_error(replaced(text, from, to), kLit);
+    };
+    const Error missing_file = key_of("geomip-rock.png", "no-such-rock.png");
+    EXPECT_EQ(missing_file.where().key, "shading.materials[1].texture");
+    EXPECT_NE(std::string(missing_file.what()).find("no-such-rock.png"), std::string::npos) << missing_file.what();
+    EXPECT_EQ(key_of("repeat = 48.0 }", "repeat = 48.0, alpha = \"../alphamaps/jacksboro-257-dry.pgm\" }")
+                  .where()
+                  .key,
+              "shading.materials[0].alpha");
+    EXPECT_EQ(key_of(", alpha = \"../alphamaps/jacksboro-257-rock.pgm\"", "").where().key,
+              "shading.materials[1].alpha");
+    EXPECT_EQ(key_of("../alphamaps/jacksboro-257-rock.pgm", "../heightmaps/canyon.pgm").where().key,
+              "shading.materials[1].alpha");  // 512 x 512, not one texel per sample
+    EXPECT_EQ(key_of("repeat = 32.0", "repeat = 0.0").where().key, "shading.materials[1].repeat");
+    EXPECT_EQ(key_of("ambient = 0.3", "ambient = 1.5").where().key, "shading.ambient");
+    EXPECT_EQ(key_of("clouds = {", "cloudz = {").where().key, "shading.cloudz");
+    const std::string no_clouds = replaced(text, text.substr(text.find("clouds = {"), text.find('\n', text.find("clouds = {")) - text.find("clouds = {")), "");
+    EXPECT_EQ(load_error(no_clouds, kLit).where().key, "shading.time");
+    EXPECT_EQ(key_of("light_direction = [-0.5, 0.4, 0.75]", "light_direction = [0, 0, 0]").where().key,
+              "shading.light_direction");
+    // Another evaluation model has no light map to compute.
+    const std::string thesis = tessref::test::read_file(kScenes + "thesis-all-10.toml");
+    const Error other = load_error(replaced(thesis, "model = \"thesis_single\"", "model = \"geomip_lightmap\""),
+                                   kScenes + "thesis-all-10.toml");
+    EXPECT_EQ(other.where().key, "shading.model");
+}
+
+// ---- culling -------------------------------------------------------------------------
+
+namespace {
+
+const std::string kPlain = kScenes + "jacksboro-geomipmap.toml";
+
+// jacksboro-geomipmap with its camera over the middle looking east (+x), down 11.8 degrees.
+std::string half_view_scene(bool culling) {
+    std::string text = tessref::test::read_file(kPlain);
+    text = replaced(text, "position = [96.0, -100.0, 110.0]\ntheta = 0.0\nphi = -35.0",
+                    "eye = [96.0, 119.0, 20.0]\ncenter = [192.0, 119.0, 0.0]");
+    text = replaced(text, "fov_y = 30.0", "fov_y = 45.0");
+    if (culling) text = replaced(text, "[evaluation]", "[culling]\nfrustum = true\n\n[evaluation]");
+    return text;
+}
+
+}  // namespace
+
+TEST(GeoMipCulling, ACameraSeeingHalfTheTerrainCullsTheOtherHalfAndTheImageIsTheSame) {
+    const Scene with = load_scene_from_string(half_view_scene(true), kPlain);
+    const Scene without = load_scene_from_string(half_view_scene(false), kPlain);
+    const PipelineResult culled = run_pipeline(with);
+    // Every patch of the western half (x <= 96) is culled; some of the eastern half drawn.
+    std::vector<bool> drawn(256, false);
+    for (std::uint32_t p : culled.mesh.patch_ids) drawn[p] = true;
+    for (int p = 0; p < 256; ++p)
+        if (p % 16 < 8) EXPECT_FALSE(drawn[static_cast<std::size_t>(p)]) << "patch " << p;
+    EXPECT_GE(culled.culled.frustum(), 128u);
+    EXPECT_LT(culled.culled.frustum(), 256u);
+    EXPECT_EQ(culled.culled.pvs, 0u);
+    // The same levels (a visible patch adapts to a culled neighbour as before).
+    EXPECT_EQ(culled.levels.size(), run_pipeline(without).levels.size());
+
+    RenderOptions options;
+    options.size = {320, 200};
+    const RenderResult a = render_scene(with, options), b = render_scene(without, options);
+    EXPECT_LT(a.stats.triangles, b.stats.triangles);
+    EXPECT_GT(a.stats.covered_pixels, 1000u);
+    EXPECT_EQ(a.stats.covered_pixels, b.stats.covered_pixels);
+    EXPECT_EQ(to_rgba8(a), to_rgba8(b));  // culling removes only what is not seen
+    EXPECT_EQ(a.colour, b.colour);
+    EXPECT_EQ(a.depth, b.depth);
+    EXPECT_EQ(a.patch_id, b.patch_id);
+    std::printf("[   INFO   ] half view: %zu of 256 patches culled (rectangle %zu, planes %zu), triangles %llu -> "
+                "%llu\n",
+                culled.culled.total(), culled.culled.ground_rectangle, culled.culled.frustum_planes,
+                static_cast<unsigned long long>(b.stats.triangles), static_cast<unsigned long long>(a.stats.triangles));
+}
+
+TEST(GeoMipCulling, BoxesOutsideOnePlaneAreCulledAndBoxesAcrossThemAreNot) {
+    // Camera at the origin looking down -y... a plain look-at: eye (0, 0, 0), centre (0, 1, 0).
+    SceneCamera camera;
+    camera.eye = {0.0, 0.0, 0.0};
+    camera.center = {0.0, 1.0, 0.0};
+    camera.up = {0.0, 0.0, 1.0};
+    camera.fov_y_degrees = 90.0;
+    camera.viewport = {100, 100};
+    camera.near_plane = 1.0;
+    camera.far_plane = 100.0;
+    const std::vector<Box> boxes{
+        {{-1.0, 10.0, -1.0}, {1.0, 12.0, 1.0}},      // straight ahead: visible
+        {{-1.0, -12.0, -1.0}, {1.0, -10.0, 1.0}},    // behind: culled
+        {{30.0, 10.0, -1.0}, {32.0, 12.0, 1.0}},     // far right of a 45-degree half angle
+        {{-1.0, 200.0, -1.0}, {1.0, 202.0, 1.0}},    // beyond the far plane
+        {{-50.0, -5.0, -1.0}, {50.0, 5.0, 1.0}},     // across the eye: not wholly outside any
+    };
+    const std::vector<Cull> c = cull_frustum(boxes, camera.view_projection());
+    EXPECT_EQ(c[0], Cull::visible);
+    EXPECT_NE(c[1], Cull::visible);
+    EXPECT_NE(c[2], Cull::visible);
+    EXPECT_NE(c[3], Cull::visible);
+    EXPECT_EQ(c[4], Cull::visible);
+}
+
+// ---- the PVS -------------------------------------------------------------------------
+
+namespace {
+
+// 49 x 49 samples (3 x 3 patches), flat at 0 but for a wall of height 1 (10 after
+// scale_z) along sample column 24; spacing 1.
+HeightSamples wall_map() {
+    HeightSamples m = flat_map(49, 49);
+    for (int y = 0; y < 49; ++y) m.samples[static_cast<std::size_t>(y) * 49 + 24] = 1.0;
+    return m;
+}
+Settings wall_settings() {
+    Settings s;
+    s.spacing = {1.0, 1.0};
+    s.scale_z = 10.0;
+    return s;
+}
+
+}  // namespace
+
+TEST(GeoMipPvs, AWallHidesTheGroundBehindItFromLowCellsOnly) {
+    const HeightSamples map = wall_map();
+    const Settings settings = wall_settings();
+    const Pvs pvs = build_pvs(map, settings);
+    ASSERT_EQ(pvs.layers, 32);
+    EXPECT_EQ(pvs.z_lo, 0.0);
+    EXPECT_EQ(pvs.z_hi, 30.0);  // three times the height
+    // Layer l's sample points are at z = (l + (k + 0.5) / 3) * 30 / 32. From the western
+    // column (x_s <= 13.33) to the eastern column's ground (x_t <= 48) a line clears the
+    // wall only when z > 10 (48 - 13.33) / 24 = 14.44: never below layer 14 (top sample
+    // 13.9), always from layer 15 up (its top sample, z = 15.83 * 30 / 32 = 14.84, at
+    // x_s = 13.33: the line to x_t = 48 passes x = 24 at 14.84 * 24 / 34.67 = 10.27 > 10).
+    for (int py = 0; py < 3; ++py)
+        for (int l = 0; l < 32; ++l) {
+            const std::size_t cell = (static_cast<std::size_t>(l) * 3 + py) * 3 + 0;
+            for (int qy = 0; qy < 3; ++qy) {
+                const std::size_t east = static_cast<std::size_t>(qy) * 3 + 2;
+                if (l <= 14) EXPECT_FALSE(pvs.visible(cell, east)) << "layer " << l << " py " << py << " qy " << qy;
+                if (l >= 15) EXPECT_TRUE(pvs.visible(cell, east)) << "layer " << l << " py " << py << " qy " << qy;
+                // Its own column and the wall's are always seen.
+                EXPECT_TRUE(pvs.visible(cell, static_cast<std::size_t>(qy) * 3 + 0)) << l;
+                EXPECT_TRUE(pvs.visible(cell, static_cast<std::size_t>(qy) * 3 + 1)) << l;
+            }
+        }
+    // Deterministic whatever the threads: the same bits again.
+    EXPECT_EQ(build_pvs(map, settings).bits, pvs.bits);
+    // cell_of: the eye at (5, 20, 3) is in patch (0, 1), layer floor(3 / (30 / 32)) = 3.
+    EXPECT_EQ(pvs.cell_of({5.0, 20.0, 3.0}, settings), std::optional<std::size_t>((3 * 3 + 1) * 3 + 0));
+    EXPECT_EQ(pvs.cell_of({5.0, 20.0, 31.0}, settings), std::nullopt);
+    EXPECT_EQ(pvs.cell_of({-1.0, 20.0, 3.0}, settings), std::nullopt);
+}
+
+TEST(GeoMipPvs, TheFileRoundTripsAndBadFilesAreRefusedNamingThem) {
+    const Pvs pvs = build_pvs(wall_map(), wall_settings(), 4, 8);
+    const std::string path = (scratch() / "wall.pvs").string();
+    write_pvs(pvs, path);
+    const Pvs back = read_pvs(path);
+    EXPECT_EQ(back.bits, pvs.bits);
+    EXPECT_EQ(back.patches_x, 3);
+    EXPECT_EQ(back.layers, 4);
+    EXPECT_EQ(back.terrain_id, terrain_identity(wall_map(), wall_settings()));
+    EXPECT_EQ(std::filesystem::file_size(path), 64u + (3u * 3u * 4u * 9u + 7u) / 8u);
+
+    std::string bytes = tessref::test::read_file(path);
+    const auto refused = [&](const std::string& content, const std::string& what) {
+        const std::string bad = (scratch() / "bad.pvs").string();
+        std::ofstream(bad, std::ios::binary) << content;
+        try {
+            read_pvs(bad);
+            ADD_FAILURE() << "read: " << what;
+        } catch (const Error& e) {
+            EXPECT_EQ(e.where().file, bad) << what;
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    refused(bytes.substr(0, bytes.size() - 1), "truncated");
+    refused(bytes.substr(0, 20), "truncated");
+    refused(bytes + "x", "after the bits");
+    std::string flipped = bytes;
+    flipped[70] = static_cast<char>(flipped[70] ^ 1);
+    refused(flipped, "checksum");
+    std::string magic = bytes;
+    magic[0] = 'X';
+    refused(magic, "magic");
+    std::string version = bytes;
+    version[8] = 2;
+    refused(version, "version");
+}
+
+namespace {
+
+// The wall map as a scene: a 16-bit PGM (wall 65535) under a geomipmap scene, camera low
+// in the western column looking east at the wall.
+std::string wall_scene(const std::string& culling) {
+    const std::filesystem::path pgm = scratch() / "wall.pgm";
+    if (!std::filesystem::exists(pgm)) {
+        std::ofstream out(pgm, std::ios::binary);
+        out << "P5\n49 49\n65535\n";
+        for (int y = 0; y < 49; ++y)
+            for (int x = 0; x < 49; ++x) out << (x == 24 ? '\xff' : '\0') << (x == 24 ? '\xff' : '\0');
+    }
+    return "[scene]\nname = \"wall\"\n[domain]\nplane = \"xy\"\npatches = [3, 3]\nx = [0.0, 48.0]\ny = [0.0, 48.0]\n"
+           "heightmap = \"wall.pgm\"\nscale_z = 10.0\n[camera]\neye = [6.0, 24.0, 3.0]\ncenter = [48.0, 24.0, 2.0]\n"
+           "fov_y = 60.0\nviewport = [160, 100]\n[evaluation]\nmodel = \"geomipmap\"\nerror_bound_px = 1.0\n" +
+           culling + "[shading]\nmodel = \"depth\"\n";
+}
+
+}  // namespace
+
+TEST(GeoMipPvs, TheRenderDropsTheHiddenPatchesAndNoPixelChanges) {
+    const std::string path = (scratch() / "scene.toml").string();
+    const Scene plain = load_scene_from_string(wall_scene(""), path);
+    const GeomipTerrain terrain = geomip_terrain(plain);
+    write_pvs(build_pvs(terrain.map, terrain.settings), (scratch() / "scene.pvs").string());
+    const Scene culled = load_scene_from_string(wall_scene("[culling]\nfrustum = false\npvs = \"scene.pvs\"\n"), path);
+    const PipelineResult r = run_pipeline(culled);
+    EXPECT_TRUE(r.culled.pvs_applied);
+    EXPECT_EQ(r.culled.pvs, 3u);  // the eastern column, behind the wall
+    EXPECT_EQ(r.culled.frustum(), 0u);
+    const RenderResult a = render_scene(culled), b = render_scene(plain);
+    EXPECT_EQ(a.colour, b.colour);
+    EXPECT_EQ(a.depth, b.depth);
+
+    // Another terrain's PVS is refused, naming the key and the file.
+    write_pvs(build_pvs(wall_map(), Settings{}, 4, 8), (scratch() / "other.pvs").string());
+    const Error e = load_error(wall_scene("[culling]\npvs = \"other.pvs\"\n"), path);
+    EXPECT_EQ(e.where().key, "culling.pvs");
+    EXPECT_NE(std::string(e.what()).find("other.pvs"), std::string::npos) << e.what();
+    const Error missing = load_error(wall_scene("[culling]\npvs = \"none.pvs\"\n"), path);
+    EXPECT_EQ(missing.where().key, "culling.pvs");
+    EXPECT_NE(std::string(missing.what()).find("none.pvs"), std::string::npos) << missing.what();
+    // [culling] belongs to a geomipmapped terrain.
+    const std::string thesis = tessref::test::read_file(kScenes + "thesis-all-10.toml");
+    EXPECT_EQ(load_error(replaced(thesis, "[evaluation]", "[culling]\n\n[evaluation]"), kScenes + "x.toml").where().key,
+              "culling");
+}
+
+class GeoMipOptimCommand : public tessref::test::CommandDirTest {};
+
+TEST_F(GeoMipOptimCommand, RenderPrintsTheCulledPatchesAndPvsWritesAFileOrNothing) {
+    // The lit scene with frustum culling, its relative paths made absolute.
+    std::string text = tessref::test::read_file(kLit);
+    for (std::size_t at = text.find("\"../"); at != std::string::npos; at = text.find("\"../", at + 1))
+        text.replace(at + 1, 3, kScenes + "../");
+    std::ofstream(path("culled.toml")) << replaced(text, "[shading]", "[culling]\nfrustum = true\n\n[shading]");
+    const auto r = run({"render", path("culled.toml"), "--size", "64x40", "-o", path("lit.png")});
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("patches culled (frustum "), std::string::npos) << r.out;
+    const auto bad = run({"pvs", kScenes + "thesis-all-10.toml", "-o", path("x.pvs")});
+    EXPECT_EQ(bad.status, 2) << bad.err;
+    const auto step = run({"pvs", kLit, "--target-step", "3", "-o", path("x.pvs")});
+    EXPECT_EQ(step.status, 2) << step.err;
+    EXPECT_EQ(files(), (std::set<std::string>{"culled.toml", "lit.png"}));
+}
