@@ -13,7 +13,9 @@
 //  - the PVS: a wall of height 10 across a flat map; a line of sight from height z at x_s
 //    over the wall at x = 24 to the ground at x_t clears it only if z (x_t - 24) / (x_t - x_s)
 //    > 10 (similar triangles).
+#include <array>
 #include <cmath>
+#include <memory>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -392,6 +394,80 @@ TEST(GeoMipPvs, TheRenderDropsTheHiddenPatchesAndNoPixelChanges) {
     const std::string thesis = tessref::test::read_file(kScenes + "thesis-all-10.toml");
     EXPECT_EQ(load_error(replaced(thesis, "[evaluation]", "[culling]\n\n[evaluation]"), kScenes + "x.toml").where().key,
               "culling");
+}
+
+// The contract of the PVS: a camera exactly at one of its cell's sample points loses no
+// covered pixel to it. The shipped jacksboro scene (16 x 16 patches, 32 layers, target step
+// 4) at 320 x 200 with frustum culling off, from the three eyes where the first PVS lost
+// 2685, 10933 and 8 pixels and from more sample points, low over the terrain where lines of
+// sight are blocked, each looking at the terrain's middle. Only the eye's row of the set is
+// built (PvsBuilder: the same algorithm as build_pvs, cell by cell); the other cells keep
+// every patch, which the render never reads.
+TEST(GeoMipPvs, ACameraAtACellSamplePointLosesNoPixelOnJacksboro) {
+    Scene plain = load_scene(kScenes + "jacksboro-geomipmap.toml");
+    const GeomipTerrain terrain = geomip_terrain(plain);
+    const PvsBuilder builder(terrain.map, terrain.settings);
+    const Pvs& layout = builder.layout();
+    ASSERT_EQ(layout.layers, 32);
+    // Eyes: the three measured ones (rounded to 0.01 in the report: snapped to the sample
+    // point of the eye's cell) and chosen (patch x, patch y, layer, sample x, y, z).
+    std::vector<glm::dvec3> eyes{{102.0, 126.48, 5.78}, {54.0, 74.4, 7.3}, {150.0, 200.0, 8.8}};
+    const std::vector<std::array<int, 6>> chosen{{2, 3, 2, 0, 2, 1},  {12, 10, 4, 2, 0, 0}, {5, 13, 3, 1, 1, 2},
+                                                 {14, 2, 5, 0, 1, 2}, {8, 1, 3, 2, 2, 0},   {1, 8, 6, 1, 0, 1}};
+    for (const auto& c : chosen) {
+        const std::size_t cell =
+            (static_cast<std::size_t>(c[2]) * layout.patches_y + c[1]) * layout.patches_x + static_cast<std::size_t>(c[0]);
+        eyes.push_back(pvs_cell_point(layout, terrain.settings, cell, c[3], c[4], c[5]));
+    }
+    const glm::dvec3 middle(96.0, 119.04, 8.0);
+    RenderOptions options;
+    options.size = {320, 200};
+    std::size_t total_lost = 0;
+    for (glm::dvec3 eye : eyes) {
+        const auto cell = layout.cell_of(eye, terrain.settings);
+        ASSERT_TRUE(cell.has_value()) << eye.x << " " << eye.y << " " << eye.z;
+        // The nearest sample point of the eye's cell (the second reported eye's y, 74.4, is
+        // a patch border, not a sample point: it becomes 76.88, the nearest).
+        glm::dvec3 nearest = pvs_cell_point(layout, terrain.settings, *cell, 0, 0, 0);
+        for (int sz = 0; sz < 3; ++sz)
+            for (int sy = 0; sy < 3; ++sy)
+                for (int sx = 0; sx < 3; ++sx) {
+                    const glm::dvec3 q = pvs_cell_point(layout, terrain.settings, *cell, sx, sy, sz);
+                    if (glm::length(q - eye) < glm::length(nearest - eye)) nearest = q;
+                }
+        eye = nearest;
+        auto pvs = std::make_shared<Pvs>(layout);
+        pvs->bits.assign((pvs->cell_count() * pvs->patch_count() + 7) / 8, 0xff);
+        const std::vector<std::uint8_t> row = builder.row(*cell);
+        std::size_t hidden = 0;
+        for (std::size_t p = 0; p < row.size(); ++p)
+            if (!row[p]) {
+                const std::size_t b = *cell * pvs->patch_count() + p;
+                pvs->bits[b / 8] = static_cast<std::uint8_t>(pvs->bits[b / 8] & ~(1u << (b % 8)));
+                ++hidden;
+            }
+        plain.camera->eye = eye;
+        plain.camera->center = middle;
+        plain.camera->up = {0.0, 0.0, 1.0};
+        plain.culling.reset();
+        Scene culled = plain;
+        culled.culling = CullingStage{false, "", pvs};
+        const RenderResult a = render_scene(plain, options), b = render_scene(culled, options);
+        ASSERT_EQ(a.patch_id.size(), b.patch_id.size());
+        std::size_t covered = 0, lost = 0;
+        for (std::size_t i = 0; i < a.patch_id.size(); ++i) {
+            if (a.patch_id[i] == kNoPixelId) continue;
+            ++covered;
+            if (b.patch_id[i] != a.patch_id[i] || b.colour[i] != a.colour[i] || b.depth[i] != a.depth[i]) ++lost;
+        }
+        total_lost += lost;
+        EXPECT_EQ(lost, 0u) << "eye " << eye.x << " " << eye.y << " " << eye.z;
+        EXPECT_EQ(b.pipeline->culled.pvs, hidden);
+        std::printf("  eye (%.4g, %.4g, %.4g) cell %zu: %zu of %zu patches hidden by the PVS, %zu of %zu covered "
+                    "pixels lost\n",
+                    eye.x, eye.y, eye.z, *cell, hidden, row.size(), lost, covered);
+    }
+    EXPECT_EQ(total_lost, 0u);
 }
 
 class GeoMipOptimCommand : public tessref::test::CommandDirTest {};

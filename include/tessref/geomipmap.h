@@ -93,6 +93,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -238,6 +239,27 @@ glm::dvec3 pvs_cell_point(const Pvs& pvs, const Settings& settings, std::size_t 
 // empty. Deterministic whatever the thread count.
 Pvs build_pvs(const HeightSamples& map, const Settings& settings, int layers = Pvs::kDefaultLayers,
               int target_step = 4, const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+// The set one cell at a time (what build_pvs does for every cell): the occluder and the
+// targets are built once by the constructor; row(cell) is thread-safe. Lets a caller (a
+// test) check chosen cells without building the whole set.
+class PvsBuilder {
+public:
+    // Throws tessref::Error as build_pvs does for bad arguments.
+    PvsBuilder(const HeightSamples& map, const Settings& settings, int layers = Pvs::kDefaultLayers,
+               int target_step = 4);
+    ~PvsBuilder();
+    PvsBuilder(const PvsBuilder&) = delete;
+    PvsBuilder& operator=(const PvsBuilder&) = delete;
+    // The set's dimensions, layer range and terrain identity; no bits.
+    const Pvs& layout() const;
+    // One byte per patch (patch order): 1 when the patch is potentially visible from `cell`.
+    std::vector<std::uint8_t> row(std::size_t cell) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 // The file: a 64-byte little-endian header, then the bits.
 //   0  magic "TRPVS\0\r\n" (8 bytes)   8  version (u32) = 1     12 patches_x (u32)

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <mutex>
+#include <optional>
 
 #include "common/parallel.h"
 #include "tessref/error.h"
@@ -102,13 +103,24 @@ glm::dvec3 pvs_cell_point(const Pvs& pvs, const Settings& settings, std::size_t 
             pvs.z_lo + (static_cast<double>(l) + (sz + 0.5) * third) * layer_height};
 }
 
-Pvs build_pvs(const HeightSamples& map, const Settings& settings, int layers, int target_step,
-              const std::function<void(std::size_t, std::size_t)>& progress) {
+struct PvsBuilder::Impl {
+    Pvs layout;
+    std::optional<RayScene> rays;
+    double slack = 0.0;
+    std::vector<glm::dvec3> targets;  // per patch, per_patch of them
+    std::size_t per_patch = 0;
+    Settings settings;
+};
+
+PvsBuilder::PvsBuilder(const HeightSamples& map, const Settings& settings, int layers, int target_step)
+    : impl_(std::make_unique<Impl>()) {
     validate(map);
     if (layers < 1 || layers > 4096) throw Error("pvs: the layer count must lie in [1, 4096]");
     if (target_step < 1 || target_step > N || N % target_step != 0)
         throw Error("pvs: the target step must divide " + std::to_string(N));
-    Pvs pvs;
+    Impl& m = *impl_;
+    m.settings = settings;
+    Pvs& pvs = m.layout;
     pvs.patches_x = map.patches_x();
     pvs.patches_y = map.patches_y();
     pvs.layers = layers;
@@ -122,59 +134,76 @@ Pvs build_pvs(const HeightSamples& map, const Settings& settings, int layers, in
 
     // The occluder: the full-resolution surface (every sample a vertex, level 0).
     const SurfaceMesh full = build_surface(map, std::vector<double>(pvs.patch_count(), 0.0), settings);
-    const RayScene rays(full.positions, full.triangles);
-    const double slack = 4.0 * rays.resolution();
+    m.rays.emplace(full.positions, full.triangles);
+    m.slack = 4.0 * m.rays->resolution();
 
     // Targets: each patch's samples at the step, on the surface.
     const int per_side = N / target_step + 1;
-    std::vector<glm::dvec3> targets(pvs.patch_count() * static_cast<std::size_t>(per_side * per_side));
+    m.per_patch = static_cast<std::size_t>(per_side * per_side);
+    m.targets.resize(pvs.patch_count() * m.per_patch);
     for (std::size_t p = 0; p < pvs.patch_count(); ++p) {
         const int ox = static_cast<int>(p % pvs.patches_x) * N, oy = static_cast<int>(p / pvs.patches_x) * N;
         for (int j = 0; j < per_side; ++j)
             for (int i = 0; i < per_side; ++i) {
                 const int x = ox + i * target_step, y = oy + j * target_step;
-                targets[p * per_side * per_side + static_cast<std::size_t>(j * per_side + i)] = {
+                m.targets[p * m.per_patch + static_cast<std::size_t>(j * per_side + i)] = {
                     settings.origin.x + x * settings.spacing.x, settings.origin.y + y * settings.spacing.y,
                     map.at(x, y) * settings.scale_z};
             }
     }
-    const std::size_t per_patch = static_cast<std::size_t>(per_side * per_side);
+}
 
+PvsBuilder::~PvsBuilder() = default;
+
+const Pvs& PvsBuilder::layout() const { return impl_->layout; }
+
+std::vector<std::uint8_t> PvsBuilder::row(std::size_t cell) const {
+    const Impl& m = *impl_;
+    const Pvs& pvs = m.layout;
+    if (cell >= pvs.cell_count()) throw Error("pvs: cell " + std::to_string(cell) + " out of range");
+    const RayScene& rays = *m.rays;
+    const std::size_t patches = pvs.patch_count();
+    std::vector<glm::dvec3> sources;
+    for (int sz = 0; sz < kCellSamples; ++sz)
+        for (int sy = 0; sy < kCellSamples; ++sy)
+            for (int sx = 0; sx < kCellSamples; ++sx) {
+                const glm::dvec3 s = pvs_cell_point(pvs, m.settings, cell, sx, sy, sz);
+                // Below the surface when a ray straight up meets it.
+                if (!rays.occluded(s, {0.0, 0.0, 1.0})) sources.push_back(s);
+            }
+    std::vector<std::uint8_t> row(patches, 1);
+    if (sources.empty()) return row;
+    for (std::size_t p = 0; p < patches; ++p) {
+        bool visible = false;
+        for (std::size_t t = 0; t < m.per_patch && !visible; ++t) {
+            const glm::dvec3& target = m.targets[p * m.per_patch + t];
+            for (const glm::dvec3& s : sources) {
+                const glm::dvec3 d = target - s;
+                const double length = glm::length(d);
+                if (length <= m.slack ||
+                    !rays.occluded(s, d / length, 0.0, length - std::max(m.slack, 1e-6 * length))) {
+                    visible = true;
+                    break;
+                }
+            }
+        }
+        row[p] = visible ? 1 : 0;
+    }
+    return row;
+}
+
+Pvs build_pvs(const HeightSamples& map, const Settings& settings, int layers, int target_step,
+              const std::function<void(std::size_t, std::size_t)>& progress) {
+    const PvsBuilder builder(map, settings, layers, target_step);
+    Pvs pvs = builder.layout();
     const std::size_t cells = pvs.cell_count(), patches = pvs.patch_count();
     pvs.bits.assign((cells * patches + 7) / 8, 0);
     std::vector<std::uint8_t> seen(cells * patches, 0);  // one byte per bit: cells write their own slots
     std::atomic<std::size_t> done{0};
     std::mutex progress_mutex;
     tessref::parallel_for(std::size_t{0}, cells, [&](std::size_t cell) {
-        std::vector<glm::dvec3> sources;
-        for (int sz = 0; sz < kCellSamples; ++sz)
-            for (int sy = 0; sy < kCellSamples; ++sy)
-                for (int sx = 0; sx < kCellSamples; ++sx) {
-                    const glm::dvec3 s = pvs_cell_point(pvs, settings, cell, sx, sy, sz);
-                    // Below the surface when a ray straight up meets it.
-                    if (!rays.occluded(s, {0.0, 0.0, 1.0})) sources.push_back(s);
-                }
-        std::uint8_t* row = seen.data() + cell * patches;
-        if (sources.empty()) {
-            std::fill(row, row + patches, std::uint8_t{1});
-        } else {
-            for (std::size_t p = 0; p < patches; ++p) {
-                bool visible = false;
-                for (std::size_t t = 0; t < per_patch && !visible; ++t) {
-                    const glm::dvec3& target = targets[p * per_patch + t];
-                    for (const glm::dvec3& s : sources) {
-                        const glm::dvec3 d = target - s;
-                        const double length = glm::length(d);
-                        if (length <= slack ||
-                            !rays.occluded(s, d / length, 0.0, length - std::max(slack, 1e-6 * length))) {
-                            visible = true;
-                            break;
-                        }
-                    }
-                }
-                row[p] = visible ? 1 : 0;
-            }
-        }
+        const std::vector<std::uint8_t> row = builder.row(cell);
+        std::copy(row.begin(), row.end(), seen.begin() + static_cast<std::ptrdiff_t>(cell * patches));
         const std::size_t n = done.fetch_add(1) + 1;
         if (progress) {
             const std::lock_guard<std::mutex> lock(progress_mutex);
