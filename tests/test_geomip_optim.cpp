@@ -10,8 +10,11 @@
 //  - culling: a camera over the terrain's middle looking along +x cannot see a point with
 //    x <= its own x and below it (angle to the view axis > 78 degrees, outside a 45 degree
 //    frustum), so the western half of the patches is culled;
-//  - the PVS: a wall of height 10 across a flat map; a line of sight from height z at x_s
-//    over the wall at x = 24 to the ground at x_t clears it only if z (x_t - 24) / (x_t - x_s)
+//  - the PVS: a plateau of height 10 (a whole column of patches) across a flat map; the
+//    occluder is the plateau lowered by 0.01 and eroded by 4 samples at its borders
+//    (x in [53, 59]), targets stand 0.01 over their patch's highest sample, and a line of
+//    sight from height z at x_s to the ground at x_t passes x = 59 at
+//    z (x_t - 59) / (x_t - x_s) + 0.01 (59 - x_s) / (x_t - x_s) (similar triangles);
 //    > 10 (similar triangles).
 #include <array>
 #include <cmath>
@@ -263,11 +266,13 @@ TEST(GeoMipCulling, BoxesOutsideOnePlaneAreCulledAndBoxesAcrossThemAreNot) {
 
 namespace {
 
-// 49 x 49 samples (3 x 3 patches), flat at 0 but for a wall of height 1 (10 after
-// scale_z) along sample column 24; spacing 1.
+// 113 x 49 samples (7 x 3 patches), flat at 0 but for a plateau of height 1 (10 after
+// scale_z) over sample columns 48..64: patch column 3 wholly (its lowest sample 10), the
+// border columns of patch columns 2 and 4 (their highest 10, lowest 0); spacing 1.
 HeightSamples wall_map() {
-    HeightSamples m = flat_map(49, 49);
-    for (int y = 0; y < 49; ++y) m.samples[static_cast<std::size_t>(y) * 49 + 24] = 1.0;
+    HeightSamples m = flat_map(113, 49);
+    for (int y = 0; y < 49; ++y)
+        for (int x = 48; x <= 64; ++x) m.samples[static_cast<std::size_t>(y) * 113 + x] = 1.0;
     return m;
 }
 Settings wall_settings() {
@@ -279,34 +284,44 @@ Settings wall_settings() {
 
 }  // namespace
 
-TEST(GeoMipPvs, AWallHidesTheGroundBehindItFromLowCellsOnly) {
+TEST(GeoMipPvs, APlateauHidesTheGroundBehindItFromLowCellsOnly) {
     const HeightSamples map = wall_map();
     const Settings settings = wall_settings();
     const Pvs pvs = build_pvs(map, settings);
     ASSERT_EQ(pvs.layers, 32);
     EXPECT_EQ(pvs.z_lo, 0.0);
     EXPECT_EQ(pvs.z_hi, 30.0);  // three times the height
-    // Layer l's sample points are at z = (l + (k + 0.5) / 3) * 30 / 32. From the western
-    // column (x_s <= 13.33) to the eastern column's ground (x_t <= 48) a line clears the
-    // wall only when z > 10 (48 - 13.33) / 24 = 14.44: never below layer 14 (top sample
-    // 13.9), always from layer 15 up (its top sample, z = 15.83 * 30 / 32 = 14.84, at
-    // x_s = 13.33: the line to x_t = 48 passes x = 24 at 14.84 * 24 / 34.67 = 10.27 > 10).
+    // The occluder (margin 1e-3 * 10 = 0.01): the plateau at 9.99 on the sample vertices
+    // x = 53..59 (a vertex takes the lowest patch within 4 samples: 1 spacing plus
+    // d = 4 sqrt(2) / 2 = 2.83, rounded up). From the western column (x_s = 2.67, 8, 13.33)
+    // to patch column 6's targets (x_t = 96..112 at 0.01) a descending line is lowest over
+    // the plateau at x = 59, and clears it only if z (x_t - 59) / (x_t - x_s)
+    // + 0.01 (59 - x_s) / (x_t - x_s) >= 9.99; the best pair (13.33, 112) needs
+    // z >= (9.99 - 0.0046) / 0.5372 = 18.59. Layer l's sample points are at
+    // z = (l + (k + 0.5) / 3) * 30 / 32: layer 18's highest is 17.66 (hidden), layer 20's
+    // 19.53 (seen); layer 19's (18.594) clears by 0.003, too close to test. Patch column 5
+    // (x_t = 80..96, ratio at most 37 / 82.67) is hidden up to z = 22.3: layers <= 18 too.
     for (int py = 0; py < 3; ++py)
         for (int l = 0; l < 32; ++l) {
-            const std::size_t cell = (static_cast<std::size_t>(l) * 3 + py) * 3 + 0;
+            const std::size_t cell = (static_cast<std::size_t>(l) * 3 + py) * 7 + 0;
             for (int qy = 0; qy < 3; ++qy) {
-                const std::size_t east = static_cast<std::size_t>(qy) * 3 + 2;
-                if (l <= 14) EXPECT_FALSE(pvs.visible(cell, east)) << "layer " << l << " py " << py << " qy " << qy;
-                if (l >= 15) EXPECT_TRUE(pvs.visible(cell, east)) << "layer " << l << " py " << py << " qy " << qy;
-                // Its own column and the wall's are always seen.
-                EXPECT_TRUE(pvs.visible(cell, static_cast<std::size_t>(qy) * 3 + 0)) << l;
-                EXPECT_TRUE(pvs.visible(cell, static_cast<std::size_t>(qy) * 3 + 1)) << l;
+                const std::size_t east = static_cast<std::size_t>(qy) * 7 + 6;
+                if (l <= 18) EXPECT_FALSE(pvs.visible(cell, east)) << "layer " << l << " py " << py << " qy " << qy;
+                if (l <= 18) EXPECT_FALSE(pvs.visible(cell, east - 1)) << "layer " << l << " py " << py << " qy " << qy;
+                if (l >= 20) EXPECT_TRUE(pvs.visible(cell, east)) << "layer " << l << " py " << py << " qy " << qy;
+                // Its own column, the next and the plateau's are always seen.
+                for (int qx = 0; qx <= 3; ++qx)
+                    EXPECT_TRUE(pvs.visible(cell, static_cast<std::size_t>(qy) * 7 + qx)) << l << " " << qx;
             }
         }
+    // A cell with a sample point at or under its patch's highest sample keeps every patch:
+    // over the plateau (patch column 3, highest 10), layer 10's lowest point is at 9.53.
+    for (std::size_t p = 0; p < pvs.patch_count(); ++p)
+        EXPECT_TRUE(pvs.visible((10 * 3 + 1) * 7 + 3, p)) << p;
     // Deterministic whatever the threads: the same bits again.
     EXPECT_EQ(build_pvs(map, settings).bits, pvs.bits);
     // cell_of: the eye at (5, 20, 3) is in patch (0, 1), layer floor(3 / (30 / 32)) = 3.
-    EXPECT_EQ(pvs.cell_of({5.0, 20.0, 3.0}, settings), std::optional<std::size_t>((3 * 3 + 1) * 3 + 0));
+    EXPECT_EQ(pvs.cell_of({5.0, 20.0, 3.0}, settings), std::optional<std::size_t>((3 * 3 + 1) * 7 + 0));
     EXPECT_EQ(pvs.cell_of({5.0, 20.0, 31.0}, settings), std::nullopt);
     EXPECT_EQ(pvs.cell_of({-1.0, 20.0, 3.0}, settings), std::nullopt);
 }
@@ -317,10 +332,10 @@ TEST(GeoMipPvs, TheFileRoundTripsAndBadFilesAreRefusedNamingThem) {
     write_pvs(pvs, path);
     const Pvs back = read_pvs(path);
     EXPECT_EQ(back.bits, pvs.bits);
-    EXPECT_EQ(back.patches_x, 3);
+    EXPECT_EQ(back.patches_x, 7);
     EXPECT_EQ(back.layers, 4);
     EXPECT_EQ(back.terrain_id, terrain_identity(wall_map(), wall_settings()));
-    EXPECT_EQ(std::filesystem::file_size(path), 64u + (3u * 3u * 4u * 9u + 7u) / 8u);
+    EXPECT_EQ(std::filesystem::file_size(path), 64u + (7u * 3u * 4u * 21u + 7u) / 8u);
 
     std::string bytes = tessref::test::read_file(path);
     const auto refused = [&](const std::string& content, const std::string& what) {
@@ -344,24 +359,27 @@ TEST(GeoMipPvs, TheFileRoundTripsAndBadFilesAreRefusedNamingThem) {
     magic[0] = 'X';
     refused(magic, "magic");
     std::string version = bytes;
-    version[8] = 2;
+    version[8] = 1;  // version 1: the first, non-conservative set
     refused(version, "version");
 }
 
 namespace {
 
-// The wall map as a scene: a 16-bit PGM (wall 65535) under a geomipmap scene, camera low
-// in the western column looking east at the wall.
+// The plateau map as a scene: a 16-bit PGM (plateau 65535) under a geomipmap scene,
+// camera low in the western column looking east at the plateau.
 std::string wall_scene(const std::string& culling) {
-    const std::filesystem::path pgm = scratch() / "wall.pgm";
+    const std::filesystem::path pgm = scratch() / "plateau.pgm";
     if (!std::filesystem::exists(pgm)) {
         std::ofstream out(pgm, std::ios::binary);
-        out << "P5\n49 49\n65535\n";
+        out << "P5\n113 49\n65535\n";
         for (int y = 0; y < 49; ++y)
-            for (int x = 0; x < 49; ++x) out << (x == 24 ? '\xff' : '\0') << (x == 24 ? '\xff' : '\0');
+            for (int x = 0; x < 113; ++x) {
+                const char v = x >= 48 && x <= 64 ? '\xff' : '\0';
+                out << v << v;
+            }
     }
-    return "[scene]\nname = \"wall\"\n[domain]\nplane = \"xy\"\npatches = [3, 3]\nx = [0.0, 48.0]\ny = [0.0, 48.0]\n"
-           "heightmap = \"wall.pgm\"\nscale_z = 10.0\n[camera]\neye = [6.0, 24.0, 3.0]\ncenter = [48.0, 24.0, 2.0]\n"
+    return "[scene]\nname = \"wall\"\n[domain]\nplane = \"xy\"\npatches = [7, 3]\nx = [0.0, 112.0]\ny = [0.0, 48.0]\n"
+           "heightmap = \"plateau.pgm\"\nscale_z = 10.0\n[camera]\neye = [6.0, 24.0, 3.0]\ncenter = [112.0, 24.0, 2.0]\n"
            "fov_y = 60.0\nviewport = [160, 100]\n[evaluation]\nmodel = \"geomipmap\"\nerror_bound_px = 1.0\n" +
            culling + "[shading]\nmodel = \"depth\"\n";
 }
@@ -376,7 +394,11 @@ TEST(GeoMipPvs, TheRenderDropsTheHiddenPatchesAndNoPixelChanges) {
     const Scene culled = load_scene_from_string(wall_scene("[culling]\nfrustum = false\npvs = \"scene.pvs\"\n"), path);
     const PipelineResult r = run_pipeline(culled);
     EXPECT_TRUE(r.culled.pvs_applied);
-    EXPECT_EQ(r.culled.pvs, 3u);  // the eastern column, behind the wall
+    // Patch columns 4 to 6, behind the plateau: from layer 3 (sample points up to 3.59)
+    // column 6 and 5 as in APlateauHides...; column 4's targets (x_t = 64..80 at 10.01) by a
+    // rising line, lowest over the plateau at x = 53: at most
+    // 3.59 + (10.01 - 3.59) (53 - 2.67) / (64 - 2.67) = 8.86 < 9.99.
+    EXPECT_EQ(r.culled.pvs, 9u);
     EXPECT_EQ(r.culled.frustum(), 0u);
     const RenderResult a = render_scene(culled), b = render_scene(plain);
     EXPECT_EQ(a.colour, b.colour);

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <mutex>
 #include <optional>
 
@@ -22,7 +23,7 @@ namespace {
 
 constexpr int N = kPatchCells;
 constexpr char kMagic[8] = {'T', 'R', 'P', 'V', 'S', '\0', '\r', '\n'};
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: the conservative set (1: full-resolution lines, not conservative)
 constexpr std::size_t kHeaderBytes = 64;
 constexpr int kCellSamples = 3;  // per axis: the centres of the cell's thirds
 
@@ -103,13 +104,28 @@ glm::dvec3 pvs_cell_point(const Pvs& pvs, const Settings& settings, std::size_t 
             pvs.z_lo + (static_cast<double>(l) + (sz + 0.5) * third) * layer_height};
 }
 
+// The conservative construction (geomipmap.h, PVS; docs/GEOMIPMAP.md has the argument).
+// Whatever the levels and tweens, every vertex of patch R is a sample of R or a convex
+// combination of R's samples, so the drawn surface over R lies between R's lowest and
+// highest sample (R's box, patch_bounds). Hence:
+//  - targets: P's box top (its highest sample, raised by the margin) at every target_step
+//    samples: a line of sight to any drawn point of P can be raised to the top over the
+//    same ground point, and is then within d (half the diagonal of a target_step cell) of
+//    a line to a target;
+//  - occluder: over patch R, R's lowest sample ("the low blocks", which the drawn surface
+//    never goes under), eroded by d (near a border, the lowest of the patches within
+//    d plus one sample spacing) and lowered by the margin, on a mesh of one vertex per
+//    sample whose every vertex is at most the eroded blocks over its cells;
+//  - sources: a sample point at or under its patch's box top (plus the margin) may be under
+//    the drawn surface: its cell keeps every patch.
 struct PvsBuilder::Impl {
     Pvs layout;
-    std::optional<RayScene> rays;
-    double slack = 0.0;
-    std::vector<glm::dvec3> targets;  // per patch, per_patch of them
-    std::size_t per_patch = 0;
     Settings settings;
+    std::vector<Box> boxes;          // per patch (patch_bounds)
+    double margin = 0.0;             // world height: targets up, occluder down, sources up
+    std::optional<RayScene> rays;    // the lowered, eroded low blocks
+    std::vector<glm::dvec3> targets; // per patch, per_patch of them
+    std::size_t per_patch = 0;
 };
 
 PvsBuilder::PvsBuilder(const HeightSamples& map, const Settings& settings, int layers, int target_step)
@@ -132,12 +148,41 @@ PvsBuilder::PvsBuilder(const HeightSamples& map, const Settings& settings, int l
     pvs.z_lo = lo;
     pvs.z_hi = lo + 3.0 * (height > 0.0 ? height : 1.0);
 
-    // The occluder: the full-resolution surface (every sample a vertex, level 0).
-    const SurfaceMesh full = build_surface(map, std::vector<double>(pvs.patch_count(), 0.0), settings);
-    m.rays.emplace(full.positions, full.triangles);
-    m.slack = 4.0 * m.rays->resolution();
+    m.boxes = patch_bounds(map, settings);
+    // Far above float rounding of the drawn vertices, of the rasterizer and of Embree.
+    m.margin = 1e-3 * (height > 0.0 ? height : 1.0);
+    const double sx = std::abs(settings.spacing.x), sy = std::abs(settings.spacing.y);
+    const double d = 0.5 * target_step * std::sqrt(sx * sx + sy * sy);
+    // A vertex's value serves every point of its cells (within one spacing per axis) and
+    // every point within d of those: patches meeting the window of +-r samples.
+    const int rx = static_cast<int>(std::ceil((sx + d) / sx)), ry = static_cast<int>(std::ceil((sy + d) / sy));
+    const int nx = pvs.patches_x, ny = pvs.patches_y;
+    std::vector<glm::dvec3> positions(static_cast<std::size_t>(map.width) * map.height);
+    for (int y = 0; y < map.height; ++y) {
+        const int qy0 = std::max(0, static_cast<int>(std::ceil((y - ry - N) / double(N))));
+        const int qy1 = std::min(ny - 1, static_cast<int>(std::floor((y + ry) / double(N))));
+        for (int x = 0; x < map.width; ++x) {
+            const int qx0 = std::max(0, static_cast<int>(std::ceil((x - rx - N) / double(N))));
+            const int qx1 = std::min(nx - 1, static_cast<int>(std::floor((x + rx) / double(N))));
+            double z = std::numeric_limits<double>::infinity();
+            for (int qy = qy0; qy <= qy1; ++qy)
+                for (int qx = qx0; qx <= qx1; ++qx)
+                    z = std::min(z, m.boxes[static_cast<std::size_t>(qy) * nx + qx].lo.z);
+            positions[static_cast<std::size_t>(y) * map.width + x] = {
+                settings.origin.x + x * settings.spacing.x, settings.origin.y + y * settings.spacing.y, z - m.margin};
+        }
+    }
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    triangles.reserve(2 * static_cast<std::size_t>(map.width - 1) * (map.height - 1));
+    for (int y = 0; y + 1 < map.height; ++y)
+        for (int x = 0; x + 1 < map.width; ++x) {
+            const auto v = [&](int i, int j) { return static_cast<std::uint32_t>((y + j) * map.width + x + i); };
+            triangles.push_back({v(0, 0), v(1, 0), v(1, 1)});
+            triangles.push_back({v(0, 0), v(1, 1), v(0, 1)});
+        }
+    m.rays.emplace(positions, triangles);
 
-    // Targets: each patch's samples at the step, on the surface.
+    // Targets: each patch's box top at every target_step samples.
     const int per_side = N / target_step + 1;
     m.per_patch = static_cast<std::size_t>(per_side * per_side);
     m.targets.resize(pvs.patch_count() * m.per_patch);
@@ -148,7 +193,7 @@ PvsBuilder::PvsBuilder(const HeightSamples& map, const Settings& settings, int l
                 const int x = ox + i * target_step, y = oy + j * target_step;
                 m.targets[p * m.per_patch + static_cast<std::size_t>(j * per_side + i)] = {
                     settings.origin.x + x * settings.spacing.x, settings.origin.y + y * settings.spacing.y,
-                    map.at(x, y) * settings.scale_z};
+                    m.boxes[p].hi.z + m.margin};
             }
     }
 }
@@ -163,25 +208,26 @@ std::vector<std::uint8_t> PvsBuilder::row(std::size_t cell) const {
     if (cell >= pvs.cell_count()) throw Error("pvs: cell " + std::to_string(cell) + " out of range");
     const RayScene& rays = *m.rays;
     const std::size_t patches = pvs.patch_count();
+    std::vector<std::uint8_t> row(patches, 1);
+    // The cell's sample points lie inside its patch's ground rectangle (the thirds' centres).
+    const double top = m.boxes[cell % patches].hi.z + m.margin;
     std::vector<glm::dvec3> sources;
     for (int sz = 0; sz < kCellSamples; ++sz)
         for (int sy = 0; sy < kCellSamples; ++sy)
             for (int sx = 0; sx < kCellSamples; ++sx) {
                 const glm::dvec3 s = pvs_cell_point(pvs, m.settings, cell, sx, sy, sz);
-                // Below the surface when a ray straight up meets it.
-                if (!rays.occluded(s, {0.0, 0.0, 1.0})) sources.push_back(s);
+                if (!(s.z > top)) return row;  // may be under the drawn surface: keep every patch
+                sources.push_back(s);
             }
-    std::vector<std::uint8_t> row(patches, 1);
-    if (sources.empty()) return row;
     for (std::size_t p = 0; p < patches; ++p) {
         bool visible = false;
         for (std::size_t t = 0; t < m.per_patch && !visible; ++t) {
             const glm::dvec3& target = m.targets[p * m.per_patch + t];
             for (const glm::dvec3& s : sources) {
-                const glm::dvec3 d = target - s;
-                const double length = glm::length(d);
-                if (length <= m.slack ||
-                    !rays.occluded(s, d / length, 0.0, length - std::max(m.slack, 1e-6 * length))) {
+                const glm::dvec3 dir = target - s;
+                const double length = glm::length(dir);
+                // The target stands 2 margins above the occluder under it: the whole segment.
+                if (length == 0.0 || !rays.occluded(s, dir / length, 0.0, length)) {
                     visible = true;
                     break;
                 }
