@@ -174,6 +174,18 @@ double side_level(const std::vector<double>& levels, int patches_x, int patches_
 // The mesh of the whole map at the given fractional levels (each in [0, 4]).
 SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings);
 
+// Bounds on the drawn surface over each sample square (x, y) to (x + 1, y + 1), row-major,
+// (width - 1) x (height - 1), in map heights (before scale_z): whatever the patch's level,
+// its sides' steps and all tweens, every point of the drawn surface over the square lies in
+// [lo, hi]. From every topology (level, side steps) the triangles' vertices, each at its
+// sample height or its tween target (a vertex's height is affine in its one tween, so the
+// extremes are at tween 0 or 1); a triangle bounds every square its box meets.
+struct SurfaceBounds {
+    std::vector<double> lo;
+    std::vector<double> hi;
+};
+SurfaceBounds surface_bounds(const HeightSamples& map);
+
 // ---- the light map -------------------------------------------------------------------
 
 struct LightMapParams {

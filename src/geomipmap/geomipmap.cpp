@@ -313,6 +313,75 @@ double side_level(const std::vector<double>& levels, int patches_x, int patches_
     return std::max(own, levels[static_cast<std::size_t>(qy) * patches_x + qx]);
 }
 
+SurfaceBounds surface_bounds(const HeightSamples& map) {
+    validate(map);
+    // Every topology a patch can take: level k, each side's step 2^k .. 16.
+    struct Tri {
+        std::array<std::uint32_t, 3> v;
+        glm::ivec2 lo, hi;  // the squares its box meets
+    };
+    struct Topo {
+        std::vector<std::vector<glm::ivec2>> samples;  // per vertex: it and its target's samples
+        std::vector<Tri> triangles;
+    };
+    std::vector<Topo> topos;
+    for (int k = 0; k < kLevels; ++k) {
+        const int n = kLevels - k;  // step choices per side
+        for (int c = 0; c < n * n * n * n; ++c) {
+            SideSteps sides{};
+            for (int q = 0, r = c; q < 4; ++q, r /= n) sides[q] = 1 << (k + r % n);
+            const Topology t = make_topology(k, sides);
+            Topo topo;
+            for (std::size_t v = 0; v < t.mesh.vertices.size(); ++v) {
+                std::vector<glm::ivec2> list{t.mesh.vertices[v]};
+                for (int i = 0; i < t.stencils[v].count; ++i) list.push_back(t.stencils[v].sample[i]);
+                topo.samples.push_back(std::move(list));
+            }
+            for (const auto& tri : t.mesh.triangles) {
+                const glm::ivec2 a = t.mesh.vertices[tri[0]], b = t.mesh.vertices[tri[1]], d = t.mesh.vertices[tri[2]];
+                const glm::ivec2 lo = glm::min(glm::min(a, b), d), hi = glm::max(glm::max(a, b), d);
+                // Squares meeting the box [lo, hi]: lo - 1 .. hi (within the patch's 0..15).
+                topo.triangles.push_back({tri, glm::max(lo - 1, glm::ivec2(0)), glm::min(hi, glm::ivec2(N - 1))});
+            }
+            topos.push_back(std::move(topo));
+        }
+    }
+    const int w = map.width - 1, h = map.height - 1;
+    SurfaceBounds out;
+    out.lo.assign(static_cast<std::size_t>(w) * h, std::numeric_limits<double>::infinity());
+    out.hi.assign(static_cast<std::size_t>(w) * h, -std::numeric_limits<double>::infinity());
+    std::vector<double> vlo, vhi;
+    for (int py = 0; py < map.patches_y(); ++py)
+        for (int px = 0; px < map.patches_x(); ++px) {
+            const glm::ivec2 origin(px * N, py * N);
+            for (const Topo& topo : topos) {
+                vlo.assign(topo.samples.size(), 0.0);
+                vhi.assign(topo.samples.size(), 0.0);
+                for (std::size_t v = 0; v < topo.samples.size(); ++v) {
+                    double a = std::numeric_limits<double>::infinity(), b = -a;
+                    for (const glm::ivec2 s : topo.samples[v]) {
+                        const double z = map.at(origin.x + s.x, origin.y + s.y);
+                        a = std::min(a, z);
+                        b = std::max(b, z);
+                    }
+                    vlo[v] = a;
+                    vhi[v] = b;
+                }
+                for (const Tri& t : topo.triangles) {
+                    const double a = std::min({vlo[t.v[0]], vlo[t.v[1]], vlo[t.v[2]]});
+                    const double b = std::max({vhi[t.v[0]], vhi[t.v[1]], vhi[t.v[2]]});
+                    for (int j = t.lo.y; j <= t.hi.y; ++j)
+                        for (int i = t.lo.x; i <= t.hi.x; ++i) {
+                            const std::size_t q = static_cast<std::size_t>(origin.y + j) * w + origin.x + i;
+                            out.lo[q] = std::min(out.lo[q], a);
+                            out.hi[q] = std::max(out.hi[q], b);
+                        }
+                }
+            }
+        }
+    return out;
+}
+
 SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings) {
     validate(map);
     const int nx = map.patches_x(), ny = map.patches_y();

@@ -107,21 +107,24 @@ glm::dvec3 pvs_cell_point(const Pvs& pvs, const Settings& settings, std::size_t 
 // The conservative construction (geomipmap.h, PVS; docs/GEOMIPMAP.md has the argument).
 // Whatever the levels and tweens, every vertex of patch R is a sample of R or a convex
 // combination of R's samples, so the drawn surface over R lies between R's lowest and
-// highest sample (R's box, patch_bounds). Hence:
+// highest sample (R's box, patch_bounds), and over each sample square between the bounds
+// surface_bounds gives (lo <= box lo, hi <= box hi). Hence:
 //  - targets: P's box top (its highest sample, raised by the margin) at every target_step
 //    samples: a line of sight to any drawn point of P can be raised to the top over the
 //    same ground point, and is then within d (half the diagonal of a target_step cell) of
 //    a line to a target;
-//  - occluder: over patch R, R's lowest sample ("the low blocks", which the drawn surface
-//    never goes under), eroded by d (near a border, the lowest of the patches within
-//    d plus one sample spacing) and lowered by the margin, on a mesh of one vertex per
+//  - occluder: over each sample square its lower bound ("the low blocks", which the drawn
+//    surface never goes under), eroded by d (a vertex takes the lowest square within d
+//    plus one sample spacing) and lowered by the margin, on a mesh of one vertex per
 //    sample whose every vertex is at most the eroded blocks over its cells;
-//  - sources: a sample point at or under its patch's box top (plus the margin) may be under
-//    the drawn surface: its cell keeps every patch.
+//  - sources: a sample point at or under the upper bound of the square under it (plus the
+//    margin) may be under the drawn surface: its cell keeps every patch.
 struct PvsBuilder::Impl {
     Pvs layout;
     Settings settings;
     std::vector<Box> boxes;          // per patch (patch_bounds)
+    std::vector<double> square_hi;   // per sample square, world: surface_bounds' upper bound
+    int squares_x = 0, squares_y = 0;
     double margin = 0.0;             // world height: targets up, occluder down, sources up
     std::optional<RayScene> rays;    // the lowered, eroded low blocks
     std::vector<glm::dvec3> targets; // per patch, per_patch of them
@@ -154,20 +157,27 @@ PvsBuilder::PvsBuilder(const HeightSamples& map, const Settings& settings, int l
     const double sx = std::abs(settings.spacing.x), sy = std::abs(settings.spacing.y);
     const double d = 0.5 * target_step * std::sqrt(sx * sx + sy * sy);
     // A vertex's value serves every point of its cells (within one spacing per axis) and
-    // every point within d of those: patches meeting the window of +-r samples.
+    // every point within d of those: the squares meeting the window of +-r samples.
     const int rx = static_cast<int>(std::ceil((sx + d) / sx)), ry = static_cast<int>(std::ceil((sy + d) / sy));
-    const int nx = pvs.patches_x, ny = pvs.patches_y;
+    const SurfaceBounds bounds = surface_bounds(map);
+    const int w = map.width - 1, h = map.height - 1;
+    m.squares_x = w;
+    m.squares_y = h;
+    std::vector<double> square_lo(bounds.lo.size());
+    m.square_hi.resize(bounds.hi.size());
+    for (std::size_t q = 0; q < bounds.lo.size(); ++q) {
+        const double u = bounds.lo[q] * settings.scale_z, v = bounds.hi[q] * settings.scale_z;
+        square_lo[q] = std::min(u, v);
+        m.square_hi[q] = std::max(u, v);
+    }
     std::vector<glm::dvec3> positions(static_cast<std::size_t>(map.width) * map.height);
     for (int y = 0; y < map.height; ++y) {
-        const int qy0 = std::max(0, static_cast<int>(std::ceil((y - ry - N) / double(N))));
-        const int qy1 = std::min(ny - 1, static_cast<int>(std::floor((y + ry) / double(N))));
+        const int j0 = std::max(0, y - ry - 1), j1 = std::min(h - 1, y + ry);
         for (int x = 0; x < map.width; ++x) {
-            const int qx0 = std::max(0, static_cast<int>(std::ceil((x - rx - N) / double(N))));
-            const int qx1 = std::min(nx - 1, static_cast<int>(std::floor((x + rx) / double(N))));
+            const int i0 = std::max(0, x - rx - 1), i1 = std::min(w - 1, x + rx);
             double z = std::numeric_limits<double>::infinity();
-            for (int qy = qy0; qy <= qy1; ++qy)
-                for (int qx = qx0; qx <= qx1; ++qx)
-                    z = std::min(z, m.boxes[static_cast<std::size_t>(qy) * nx + qx].lo.z);
+            for (int j = j0; j <= j1; ++j)
+                for (int i = i0; i <= i1; ++i) z = std::min(z, square_lo[static_cast<std::size_t>(j) * w + i]);
             positions[static_cast<std::size_t>(y) * map.width + x] = {
                 settings.origin.x + x * settings.spacing.x, settings.origin.y + y * settings.spacing.y, z - m.margin};
         }
@@ -209,14 +219,24 @@ std::vector<std::uint8_t> PvsBuilder::row(std::size_t cell) const {
     const RayScene& rays = *m.rays;
     const std::size_t patches = pvs.patch_count();
     std::vector<std::uint8_t> row(patches, 1);
-    // The cell's sample points lie inside its patch's ground rectangle (the thirds' centres).
-    const double top = m.boxes[cell % patches].hi.z + m.margin;
+    // The highest the drawn surface can be under a point: the squares whose closed
+    // rectangle holds it.
+    const auto top = [&](const glm::dvec3& s) {
+        const double u = (s.x - m.settings.origin.x) / m.settings.spacing.x;
+        const double v = (s.y - m.settings.origin.y) / m.settings.spacing.y;
+        const int i0 = std::max(0, static_cast<int>(std::ceil(u)) - 1), i1 = std::min(m.squares_x - 1, static_cast<int>(std::floor(u)));
+        const int j0 = std::max(0, static_cast<int>(std::ceil(v)) - 1), j1 = std::min(m.squares_y - 1, static_cast<int>(std::floor(v)));
+        double z = -std::numeric_limits<double>::infinity();
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) z = std::max(z, m.square_hi[static_cast<std::size_t>(j) * m.squares_x + i]);
+        return z + m.margin;
+    };
     std::vector<glm::dvec3> sources;
     for (int sz = 0; sz < kCellSamples; ++sz)
         for (int sy = 0; sy < kCellSamples; ++sy)
             for (int sx = 0; sx < kCellSamples; ++sx) {
                 const glm::dvec3 s = pvs_cell_point(pvs, m.settings, cell, sx, sy, sz);
-                if (!(s.z > top)) return row;  // may be under the drawn surface: keep every patch
+                if (!(s.z > top(s))) return row;  // may be under the drawn surface: keep every patch
                 sources.push_back(s);
             }
     for (std::size_t p = 0; p < patches; ++p) {
