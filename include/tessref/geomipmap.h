@@ -76,12 +76,13 @@
 // patches' ground rectangles times `layers` (32) layers of equal height from the lowest
 // sample up to three times the terrain's height above it. Patch P is potentially visible
 // from cell C when a line of sight from one of C's sample points (3 x 3 x 3 in the cell, at
-// the centres of its thirds; points below the full-resolution surface are skipped) to one of
-// P's sample points (its height samples at a fixed step, on the surface) meets no triangle
-// of the full-resolution surface (every sample a vertex: level 0) before it reaches the
-// target. The set is sampled: a camera between sample points may see a patch through a gap
-// that no sampled line passes (docs/GEOMIPMAP.md). A cell whose sample points are all below
-// the surface sees every patch.
+// the centres of its thirds) to one of P's targets (its box top, the highest sample, at a
+// fixed step) meets no triangle of the occluder: the lower bounds of surface_bounds ("the
+// low blocks", under every level's and tween's surface), eroded by the targets' spacing
+// and lowered by a margin; a cell with a sample point at or under surface_bounds' upper
+// bound keeps every patch. Conservative at the sample points: a camera at one loses no
+// pixel whatever the levels (docs/GEOMIPMAP.md has the argument); a camera between them may
+// see a patch through a gap that no sampled line passes.
 //
 // OUTPUT. build_surface returns a SurfaceMesh (mesh.h): per patch in patch order, the
 // patch's vertices (patch_mesh's order) and triangles, counter-clockwise seen from +z.

@@ -1,6 +1,7 @@
 // tessref pvs — the potentially visible set of a geomipmapped scene (include/tessref/
 // geomipmap.h, PVS): cells over the patches in layers, a line of sight from each cell to each
-// patch against the full-resolution surface (Embree), one bit per cell and patch.
+// patch against a lower bound of every level's drawn surface (Embree; conservative at the
+// cells' sample points, docs/GEOMIPMAP.md), one bit per cell and patch.
 //
 //   tessref pvs SCENE -o FILE [--layers N] [--target-step S] [--threads N]
 //
@@ -80,7 +81,7 @@ Command add_pvs_command(CLI::App& parent) {
         "pvs",
         "Build the potentially visible set of a geomipmapped scene (the geomorphing article's PVS): for each cell "
         "(patch x layer, 32 layers over three times the terrain's height) the patches a line of sight from the cell "
-        "reaches, against the full-resolution surface. A scene uses it with [culling] pvs = \"FILE\".");
+        "reaches, conservatively (against a lower bound of every level's surface, to the top of each patch's box). A scene uses it with [culling] pvs = \"FILE\".");
     app->add_option("scene", options->scene, "Scene file (TOML), evaluation model geomipmap")->required();
     app->add_option("-o,--output", options->output, "Output PVS file")->required();
     app->add_option("--layers", options->layers, "Layers of cells over three times the terrain's height")

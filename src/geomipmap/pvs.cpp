@@ -220,12 +220,16 @@ std::vector<std::uint8_t> PvsBuilder::row(std::size_t cell) const {
     const std::size_t patches = pvs.patch_count();
     std::vector<std::uint8_t> row(patches, 1);
     // The highest the drawn surface can be under a point: the squares whose closed
-    // rectangle holds it.
+    // rectangle holds it, with a tolerance (a sample point can lie on a sample line, as the
+    // middle third's centre does, and its division by the spacing round either way).
     const auto top = [&](const glm::dvec3& s) {
+        constexpr double kTolerance = 1e-6;  // in samples
         const double u = (s.x - m.settings.origin.x) / m.settings.spacing.x;
         const double v = (s.y - m.settings.origin.y) / m.settings.spacing.y;
-        const int i0 = std::max(0, static_cast<int>(std::ceil(u)) - 1), i1 = std::min(m.squares_x - 1, static_cast<int>(std::floor(u)));
-        const int j0 = std::max(0, static_cast<int>(std::ceil(v)) - 1), j1 = std::min(m.squares_y - 1, static_cast<int>(std::floor(v)));
+        const int i0 = std::max(0, static_cast<int>(std::ceil(u - kTolerance)) - 1);
+        const int i1 = std::min(m.squares_x - 1, static_cast<int>(std::floor(u + kTolerance)));
+        const int j0 = std::max(0, static_cast<int>(std::ceil(v - kTolerance)) - 1);
+        const int j1 = std::min(m.squares_y - 1, static_cast<int>(std::floor(v + kTolerance)));
         double z = -std::numeric_limits<double>::infinity();
         for (int j = j0; j <= j1; ++j)
             for (int i = i0; i <= i1; ++i) z = std::max(z, m.square_hi[static_cast<std::size_t>(j) * m.squares_x + i]);
