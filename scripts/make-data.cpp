@@ -18,6 +18,15 @@
 //    by a meandering, stepped canyon. Power-of-two so the mip pyramid halves cleanly.
 //  - data/heightmaps/jacksboro-257.pgm  16-bit 257x257: the middle of the Jacksboro fault
 //    DEM (data/jacksboro_fault_dem.pgm), for the geomipmapping scene (16n + 1 samples a side).
+//  - data/textures/geomip-grass.png, geomip-rock.png, geomip-dry.png  8-bit RGB 128x128,
+//    tileable (periodic value noise): the material textures of the geomorphing article's
+//    material passes, repeated over the terrain (jacksboro-geomipmap-lit).
+//  - data/textures/geomip-clouds.png  8-bit grey 256x256, tileable: the cloud-shadow layer,
+//    1 in the clear sky, down to 0.55 under a cloud (multiplied into the frame).
+//  - data/alphamaps/jacksboro-257-rock.pgm, jacksboro-257-dry.pgm  8-bit 257x257, one texel
+//    per sample of jacksboro-257.pgm: the alpha maps of the rock and dry-grass passes, from
+//    the slope (rock: smoothstep(0.5, 0.9, |grad h|) in the scene's world units) and the
+//    height (dry: smoothstep(0.45, 0.7, h) with h the sample over its range).
 //  - data/meshes/icosahedron.off, cube.off, bump.off: triangle meshes with averaged
 //    vertex normals (NOFF) for PN triangles. The cube's corner normals are the normalized
 //    sum of its three face planes, (+-1,+-1,+-1)/sqrt(3); the icosahedron's are radial; the
@@ -73,6 +82,30 @@ double fbm(double x, double y, int octaves, std::uint32_t seed) {
         amplitude *= 0.5;
     }
     return sum / norm;  // 0..1
+}
+
+// Value noise and fbm that repeat every `period` lattice cells (for tileable textures).
+double periodic_noise(double x, double y, int period, std::uint32_t seed) {
+    const double fx = std::floor(x), fy = std::floor(y);
+    const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+    const double tx = smooth(x - fx), ty = smooth(y - fy);
+    const auto at = [&](int i, int j) { return lattice(((i % period) + period) % period, ((j % period) + period) % period, seed); };
+    const double a = at(ix, iy), b = at(ix + 1, iy), c = at(ix, iy + 1), d = at(ix + 1, iy + 1);
+    return (a + (b - a) * tx) * (1 - ty) + (c + (d - c) * tx) * ty;
+}
+double periodic_fbm(double u, double v, int period, int octaves, std::uint32_t seed) {
+    double sum = 0, amplitude = 0.5, norm = 0;
+    for (int o = 0; o < octaves; ++o) {
+        sum += amplitude * periodic_noise(u * period, v * period, period, seed + 101u * o);
+        norm += amplitude;
+        period *= 2;
+        amplitude *= 0.5;
+    }
+    return sum / norm;  // 0..1
+}
+double smoothstep(double e0, double e1, double x) {
+    const double t = std::clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+    return t * t * (3.0 - 2.0 * t);
 }
 
 double distance_to_segment(double px, double py, double ax, double ay, double bx, double by) {
@@ -133,7 +166,7 @@ void write_pgm16(const std::string& path, int size, const std::vector<std::uint1
 // The geomipmapping scene's map: the middle 257 x 257 samples (16 x 16 patches of 17 x 17
 // samples sharing their borders) of the Jacksboro fault DEM, data/jacksboro_fault_dem.pgm
 // (403 x 344, 16-bit), cut out as they are: geomipmapping needs 16n + 1 samples a side.
-void make_jacksboro_257(const std::string& dir) {
+std::vector<std::uint16_t> make_jacksboro_257(const std::string& dir) {
     const std::string source = dir + "/jacksboro_fault_dem.pgm";
     std::FILE* f = std::fopen(source.c_str(), "rb");
     // The header's four tokens (magic, width, height, maxval), '#' comments skipped, then
@@ -170,6 +203,79 @@ void make_jacksboro_257(const std::string& dir) {
             pixels[static_cast<std::size_t>(y) * n + x] = static_cast<std::uint16_t>(bytes[at] << 8 | bytes[at + 1]);
         }
     write_pgm16(dir + "/heightmaps/jacksboro-257.pgm", n, pixels);
+    return pixels;
+}
+
+void write_rgb_png(const std::string& path, int n, int channels, const std::vector<std::uint8_t>& pixels) {
+    auto out = OIIO::ImageOutput::create(path);
+    OIIO::ImageSpec spec(n, n, channels, OIIO::TypeDesc::UINT8);
+    if (!out || !out->open(path, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close()) {
+        std::fprintf(stderr, "make-data: cannot write %s\n", path.c_str());
+        std::exit(1);
+    }
+    std::printf("wrote %s\n", path.c_str());
+}
+
+// The geomorphing article's materials for jacksboro-geomipmap-lit: three tileable material
+// textures, a cloud layer, and two alpha maps from the height map's slope and height.
+void make_geomip_materials(const std::string& dir, const std::vector<std::uint16_t>& heights) {
+    struct Material {
+        const char* name;
+        double r, g, b;      // the mean colour
+        double variation;    // how far the noise moves it
+        std::uint32_t seed;
+    };
+    const Material materials[] = {{"grass", 0.30, 0.48, 0.18, 0.35, 11u},
+                                  {"rock", 0.52, 0.48, 0.44, 0.45, 23u},
+                                  {"dry", 0.66, 0.58, 0.36, 0.30, 37u}};
+    const int m = 128;
+    for (const Material& mat : materials) {
+        std::vector<std::uint8_t> rgb(static_cast<std::size_t>(m) * m * 3);
+        for (int y = 0; y < m; ++y)
+            for (int x = 0; x < m; ++x) {
+                const double f = periodic_fbm((x + 0.5) / m, (y + 0.5) / m, 8, 4, mat.seed);
+                const double k = 1.0 + mat.variation * (2.0 * f - 1.0);
+                const double c[3] = {mat.r * k, mat.g * k, mat.b * k};
+                for (int ch = 0; ch < 3; ++ch)
+                    rgb[(static_cast<std::size_t>(y) * m + x) * 3 + ch] =
+                        static_cast<std::uint8_t>(std::lround(std::clamp(c[ch], 0.0, 1.0) * 255.0));
+            }
+        write_rgb_png(dir + "/textures/geomip-" + mat.name + ".png", m, 3, rgb);
+    }
+    const int c = 256;
+    std::vector<std::uint8_t> clouds(static_cast<std::size_t>(c) * c);
+    for (int y = 0; y < c; ++y)
+        for (int x = 0; x < c; ++x) {
+            const double f = periodic_fbm((x + 0.5) / c, (y + 0.5) / c, 4, 5, 53u);
+            clouds[static_cast<std::size_t>(y) * c + x] =
+                static_cast<std::uint8_t>(std::lround((1.0 - 0.45 * smoothstep(0.45, 0.7, f)) * 255.0));
+        }
+    write_rgb_png(dir + "/textures/geomip-clouds.png", c, 1, clouds);
+
+    // Alpha maps: one texel per height sample. World units of jacksboro-geomipmap-lit.toml:
+    // samples 0.75 x 0.93 apart, height = sample / 65535 * 16.8.
+    const int n = 257;
+    const double dx = 0.75, dy = 0.93, scale_z = 16.8;
+    const auto h = [&](int x, int y) {
+        x = std::clamp(x, 0, n - 1);
+        y = std::clamp(y, 0, n - 1);
+        return heights[static_cast<std::size_t>(y) * n + x] / 65535.0;
+    };
+    const auto [lo, hi] = std::minmax_element(heights.begin(), heights.end());
+    std::vector<std::uint8_t> rock(static_cast<std::size_t>(n) * n), dry(rock.size());
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const double gx = (h(x + 1, y) - h(x - 1, y)) * scale_z / (2.0 * dx);
+            const double gy = (h(x, y + 1) - h(x, y - 1)) * scale_z / (2.0 * dy);
+            const double slope = std::sqrt(gx * gx + gy * gy);
+            const double height = (heights[static_cast<std::size_t>(y) * n + x] - *lo) / double(*hi - *lo);
+            rock[static_cast<std::size_t>(y) * n + x] =
+                static_cast<std::uint8_t>(std::lround(smoothstep(0.5, 0.9, slope) * 255.0));
+            dry[static_cast<std::size_t>(y) * n + x] =
+                static_cast<std::uint8_t>(std::lround(smoothstep(0.45, 0.7, height) * 255.0));
+        }
+    write_gray(dir + "/alphamaps/jacksboro-257-rock.pgm", n, rock, OIIO::TypeDesc::UINT8);
+    write_gray(dir + "/alphamaps/jacksboro-257-dry.pgm", n, dry, OIIO::TypeDesc::UINT8);
 }
 
 // ---- height and tessellation maps -------------------------------------------------
@@ -358,7 +464,7 @@ int main(int argc, char** argv) {
     make_thesis_island(dir);
     make_thesis_roads(dir);
     make_canyon(dir);
-    make_jacksboro_257(dir);
+    make_geomip_materials(dir, make_jacksboro_257(dir));
     make_cube(dir);
     make_icosahedron(dir);
     make_bump(dir);

@@ -6,7 +6,7 @@ set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-mkdir -p "$root/data/heightmaps" "$root/data/tessmaps" "$root/data/meshes" "$root/data/textures"
+mkdir -p "$root/data/heightmaps" "$root/data/tessmaps" "$root/data/meshes" "$root/data/textures" "$root/data/alphamaps"
 g++ -std=c++20 -O2 -o "$work/make-data" "$root/scripts/make-data.cpp" \
     -lOpenImageIO -lOpenImageIO_Util -lOpenMeshCore
 "$work/make-data" "$root/data"

@@ -52,6 +52,38 @@
 // position the article's blend aims at, and tests/test_geomipmap.cpp checks the property
 // the factor exists for (no vertex pops when a patch or a neighbour changes level).
 //
+// LIGHT MAP (light_map; the article's "Building the Mesh" and "Materials"). The mesh changes
+// with the levels, so vertex normals would make the light pop; the article lights the
+// terrain with one precomputed light map over the whole map instead. Per sample, two vectors
+// point from the sample's world position to its neighbours' (+x and +y; at the last column
+// or row the vector comes from the neighbour behind, so it still points along +x or +y), and
+// their cross product is the normal: with a = (dx, 0, ha) and b = (0, dy, hb) (dx, dy the
+// sample spacing, ha, hb the world height differences) n = a x b = (-ha dy, -dx hb, dx dy),
+// normalized. The texel is ambient + (1 - ambient) * max(dot(n, l), 0), l the normalized
+// direction toward the light.
+//
+// CULLING (cull_patches; the article's "Optimizations"). Before a frame, patches that cannot
+// be seen are not drawn, in the article's steps: (1) the rectangle that covers the view
+// frustum's projection onto the ground plane (the xy bounds of its eight corners): a patch
+// whose ground rectangle misses it is culled; (2) the patch's bounding box (its samples'
+// extent: every level's and every tween's vertices lie between the lowest and the highest
+// sample, since they are samples or averages of samples) against the six frustum planes: a
+// box wholly outside one plane is culled; (3) a potentially visible set (PVS below). Levels
+// are chosen for every patch first, so a visible patch adapts to a culled neighbour exactly
+// as without culling, and the surface drawn is the same minus the culled patches.
+//
+// PVS (build_pvs; the article's "Optimizations", after Airey and Teller). Cells are the
+// patches' ground rectangles times `layers` (32) layers of equal height from the lowest
+// sample up to three times the terrain's height above it. Patch P is potentially visible
+// from cell C when a line of sight from one of C's sample points (3 x 3 x 3 in the cell, at
+// the centres of its thirds) to one of P's targets (its box top, the highest sample, at a
+// fixed step) meets no triangle of the occluder: the lower bounds of surface_bounds ("the
+// low blocks", under every level's and tween's surface), eroded by the targets' spacing
+// and lowered by a margin; a cell with a sample point at or under surface_bounds' upper
+// bound keeps every patch. Conservative at the sample points: a camera at one loses no
+// pixel whatever the levels (docs/GEOMIPMAP.md has the argument); a camera between them may
+// see a patch through a gap that no sampled line passes.
+//
 // OUTPUT. build_surface returns a SurfaceMesh (mesh.h): per patch in patch order, the
 // patch's vertices (patch_mesh's order) and triangles, counter-clockwise seen from +z.
 // Map sample (x, y) stands at world (origin + (x, y) * spacing, height * scale_z), plane xy
@@ -61,7 +93,10 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -139,5 +174,116 @@ double side_level(const std::vector<double>& levels, int patches_x, int patches_
 
 // The mesh of the whole map at the given fractional levels (each in [0, 4]).
 SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings);
+
+// Bounds on the drawn surface over each sample square (x, y) to (x + 1, y + 1), row-major,
+// (width - 1) x (height - 1), in map heights (before scale_z): whatever the patch's level,
+// its sides' steps and all tweens, every point of the drawn surface over the square lies in
+// [lo, hi]. From every topology (level, side steps) the triangles' vertices, each at its
+// sample height or its tween target (a vertex's height is affine in its one tween, so the
+// extremes are at tween 0 or 1); a triangle bounds every square its box meets.
+struct SurfaceBounds {
+    std::vector<double> lo;
+    std::vector<double> hi;
+};
+SurfaceBounds surface_bounds(const HeightSamples& map);
+
+// ---- the light map -------------------------------------------------------------------
+
+struct LightMapParams {
+    glm::dvec3 light_direction{-0.5, 0.4, 0.75};  // toward the light; normalized before use
+    double ambient = 0.3;                         // in [0, 1]
+};
+// The normal at sample (x, y) from the cross product of the two neighbour vectors (LIGHT MAP).
+glm::dvec3 sample_normal(const HeightSamples& map, glm::dvec2 spacing, double scale_z, int x, int y);
+// One light value per sample, row-major as the map. Throws tessref::Error for a light
+// direction that cannot be normalized or an ambient outside [0, 1].
+std::vector<double> light_map(const HeightSamples& map, glm::dvec2 spacing, double scale_z,
+                              const LightMapParams& params);
+
+// ---- culling -------------------------------------------------------------------------
+
+struct Box {
+    glm::dvec3 lo{0.0};
+    glm::dvec3 hi{0.0};
+};
+// Per patch (patch order): the world box of its samples (x, y from its corners, z from its
+// lowest and highest sample).
+std::vector<Box> patch_bounds(const HeightSamples& map, const Settings& settings);
+
+enum class Cull : std::uint8_t { visible, ground_rectangle, frustum_planes, pvs };
+// Steps (1) and (2) of CULLING for the camera whose view-projection (GL clip space) is
+// given: per patch, visible or the step that culled it. The tests are conservative by a
+// relative margin of 1e-6 (float clip coordinates on the rasterizer's side).
+std::vector<Cull> cull_frustum(const std::vector<Box>& boxes, const glm::dmat4& view_projection);
+
+// ---- the potentially visible set -----------------------------------------------------
+
+struct Pvs {
+    static constexpr int kDefaultLayers = 32;
+    int patches_x = 0;
+    int patches_y = 0;
+    int layers = 0;
+    double z_lo = 0.0;   // the bottom of layer 0 (world height)
+    double z_hi = 0.0;   // the top of the last layer
+    std::uint64_t terrain_id = 0;  // terrain_identity() of the terrain it was built for
+    // One bit per (cell, patch): cell c = (layer * patches_y + py) * patches_x + px, bit
+    // c * patch_count + patch, least significant bit first within each byte.
+    std::vector<std::uint8_t> bits;
+
+    std::size_t patch_count() const { return static_cast<std::size_t>(patches_x) * patches_y; }
+    std::size_t cell_count() const { return patch_count() * static_cast<std::size_t>(layers); }
+    bool visible(std::size_t cell, std::size_t patch) const {
+        const std::size_t b = cell * patch_count() + patch;
+        return (bits[b / 8] >> (b % 8)) & 1u;
+    }
+    // The cell holding a world point; nullopt outside the cells (no PVS applies there).
+    std::optional<std::size_t> cell_of(const glm::dvec3& p, const Settings& settings) const;
+};
+
+// A 64-bit FNV-1a digest of what the set depends on: the map's size and samples, and the
+// world placement (origin, spacing, scale_z). A PVS of another terrain does not apply.
+std::uint64_t terrain_identity(const HeightSamples& map, const Settings& settings);
+
+// The world point of sample (sx, sy, sz) (each 0..2, thirds' centres) of cell `cell`.
+glm::dvec3 pvs_cell_point(const Pvs& pvs, const Settings& settings, std::size_t cell, int sx, int sy, int sz);
+
+// Builds the set (PVS above). `target_step` is the step between a patch's target samples (a
+// divisor of 16). progress(done cells, all cells) from worker threads, serialized; may be
+// empty. Deterministic whatever the thread count.
+Pvs build_pvs(const HeightSamples& map, const Settings& settings, int layers = Pvs::kDefaultLayers,
+              int target_step = 4, const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+// The set one cell at a time (what build_pvs does for every cell): the occluder and the
+// targets are built once by the constructor; row(cell) is thread-safe. Lets a caller (a
+// test) check chosen cells without building the whole set.
+class PvsBuilder {
+public:
+    // Throws tessref::Error as build_pvs does for bad arguments.
+    PvsBuilder(const HeightSamples& map, const Settings& settings, int layers = Pvs::kDefaultLayers,
+               int target_step = 4);
+    ~PvsBuilder();
+    PvsBuilder(const PvsBuilder&) = delete;
+    PvsBuilder& operator=(const PvsBuilder&) = delete;
+    // The set's dimensions, layer range and terrain identity; no bits.
+    const Pvs& layout() const;
+    // One byte per patch (patch order): 1 when the patch is potentially visible from `cell`.
+    std::vector<std::uint8_t> row(std::size_t cell) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// The file: a 64-byte little-endian header, then the bits.
+//   0  magic "TRPVS\0\r\n" (8 bytes)   8  version (u32) = 1     12 patches_x (u32)
+//   16 patches_y (u32)                   20 layers (u32)          24 z_lo (f64)
+//   32 z_hi (f64)                        40 terrain_id (u64)      48 bit bytes (u64)
+//   56 FNV-1a 64 of the bit bytes (u64)  64 the bits
+// write_pvs writes `path` as it is (`tessref pvs` gives it a temporary name and renames it
+// into place, never leaving a partial file). read_pvs
+// throws tessref::Error naming the file for a bad magic or version, a truncated or longer
+// file, a size that does not match the dimensions, or a checksum mismatch.
+void write_pvs(const Pvs& pvs, const std::string& path);
+Pvs read_pvs(const std::string& path);
 
 }  // namespace tessref::geomip

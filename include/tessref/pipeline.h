@@ -78,6 +78,17 @@ struct PipelineOptions {
     PipelineTimings* timings = nullptr;    // filled when not null (see PipelineTimings)
 };
 
+// Patches a geomipmapped terrain's [culling] removed (geomipmap.h, CULLING and PVS); all 0
+// without [culling] and for the other models.
+struct CullStats {
+    std::size_t ground_rectangle = 0;  // outside the frustum's ground rectangle
+    std::size_t frustum_planes = 0;    // box outside one of the six planes
+    std::size_t pvs = 0;               // inside the frustum, not in the eye's cell's set
+    bool pvs_applied = false;          // the scene has a PVS and the eye is inside its cells
+    std::size_t frustum() const { return ground_rectangle + frustum_planes; }
+    std::size_t total() const { return frustum() + pvs; }
+};
+
 // Which stages ran (a stage the scene does not name does not run).
 struct StagesRun {
     bool control = false;
@@ -92,6 +103,9 @@ struct PipelineResult {
     std::uint64_t estimated_triangles = 0;
     std::size_t distinct_patterns = 0;     // distinct level sets (patterns) of this run
     StagesRun stages{};
+    // Culled patches (geomipmap [culling]) emit no vertex and no triangle; their levels are
+    // still chosen and reported (a visible neighbour adapts to them as without culling).
+    CullStats culled{};
 
     // camera_relative (PipelineOptions): the point the evaluation worked relative to, and its
     // float output positions (mesh.positions[v] == origin + relative_positions[v] in double).
@@ -168,6 +182,15 @@ private:
 // evaluates to infinity or NaN (naming the patch, the tess coord and, for a terrain, the
 // height texel).
 PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options = {});
+
+// A geomipmapped scene's height samples (mip 0, exactly) and their world placement, as
+// run_pipeline() builds its terrain from them (and `tessref pvs` its PVS). Throws
+// tessref::Error for a scene without a terrain grid.
+struct GeomipTerrain {
+    geomip::HeightSamples map;
+    geomip::Settings settings;
+};
+GeomipTerrain geomip_terrain(const Scene& scene);
 
 // camera_relative: the origin the evaluation works relative to (see PipelineOptions): the
 // camera's eye, for a terrain with its up-axis component 0; (0, 0, 0) without a camera.

@@ -52,6 +52,10 @@ public:
     std::vector<RayHit> all_hits(const glm::dvec3& origin, const glm::dvec3& direction, double t_near = 0.0,
                                  double t_far = std::numeric_limits<double>::infinity()) const;
 
+    // Whether any triangle meets the ray with t in [t_near, t_far] (Embree's occlusion query:
+    // the first hit found ends the search). Thread-safe.
+    bool occluded(const glm::dvec3& origin, const glm::dvec3& direction, double t_near = 0.0,
+                  double t_far = std::numeric_limits<double>::infinity()) const;
     std::size_t triangle_count() const;
 
     // The distance under which Embree's single-precision arithmetic cannot tell on which

@@ -124,6 +124,14 @@ struct GeometryStage {
     GeometryNormals normals = GeometryNormals::smooth;
 };
 
+// [culling]: a geomipmapped terrain's patch culling (geomipmap.h, CULLING and PVS). Absent:
+// every patch is drawn.
+struct CullingStage {
+    bool frustum = true;                   // the ground rectangle and the six planes
+    std::string pvs_path;                  // empty: no PVS
+    std::shared_ptr<const geomip::Pvs> pvs;
+};
+
 // [shaders]: one entry per stage named, in the order vertex .. fragment.
 enum class ShaderStage : std::uint8_t { vertex, tess_control, tess_evaluation, geometry, fragment };
 const char* to_string(ShaderStage stage);  // "vertex", "tess_control", ... ([shaders] keys)
@@ -149,6 +157,7 @@ struct Scene {
     std::optional<ControlStage> control;   // absent: every level 1
     EvaluationStage evaluation{};
     std::optional<GeometryStage> geometry; // absent: evaluation normals or none
+    std::optional<CullingStage> culling;   // [culling] (geomipmap only)
     RenderShading shading{};                   // [shading] (default: depth), textures loaded
     std::vector<StageShader> shaders;          // [shaders] (`tessref gl` only)
     std::uint64_t max_triangles = 50'000'000;

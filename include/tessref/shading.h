@@ -9,6 +9,8 @@
 //   cosc422          cosc422_terrain.frag           cosc422_terrain        (COSC422 step 6)
 //   pn               pn_triangles.frag              pn_triangles
 //   flat, depth      (none: the "no shading" modes) flat_colour, depth_colour
+//   geomip_lightmap  (none yet: CPU only)           geomip_lightmap        (the geomorphing
+//                                                   article's light map, materials, clouds)
 // and shade(model, fragment) dispatches on the kind. The light of the thesis's listing 3,
 // shared by both thesis shaders, is thesis_light().
 //
@@ -76,9 +78,9 @@
 
 namespace tessref {
 
-enum class ShadingKind : std::uint8_t { flat, depth, thesis_single, thesis_multi, lab4, cosc422, pn };
+enum class ShadingKind : std::uint8_t { flat, depth, thesis_single, thesis_multi, lab4, cosc422, pn, geomip_lightmap };
 
-// "flat", "depth", "thesis_single", "thesis_multi", "lab4", "cosc422", "pn".
+// "flat", "depth", "thesis_single", "thesis_multi", "lab4", "cosc422", "pn", "geomip_lightmap".
 const char* to_string(ShadingKind kind);
 // The inverse of to_string; nullopt for an unknown name.
 std::optional<ShadingKind> shading_kind_from_string(std::string_view name);
@@ -163,6 +165,30 @@ struct DepthShading {
     float far_plane = 10000.0f;
 };
 
+// The geomorphing article's terrain shading ("Materials"): a light map computed from the
+// height map (geomipmap.h, LIGHT MAP) instead of vertex normals, which would pop as the levels
+// change; material textures repeated over the terrain, each modulated by the light map and
+// alpha-blended over the passes before it by its alpha map; then an optional cloud-shadow
+// texture, repeated and scrolled, multiplied in. The article draws one pass per material into
+// the framebuffer; this is the single-pass equivalent (one fragment, the blend in float, no
+// 8-bit rounding between passes). No GLSL twin yet.
+struct GeomipMaterial {
+    std::shared_ptr<const Texture> texture;  // the material, sampled with GL_REPEAT
+    float repeat = 1.0f;                     // tiles across the terrain (the texture matrix's scale)
+    std::shared_ptr<const Texture> alpha;    // its alpha map (red channel); null for the base pass
+};
+struct GeomipLightmapShading {
+    std::shared_ptr<const Texture> lightMap;  // one texel per height sample (red channel)
+    // uv (sample / (size - 1)) -> light and alpha map coordinates with texel centres on the
+    // samples: st = uv * (size - 1) / size + 0.5 / size.
+    glm::vec2 lightMapScale{1.0f};
+    glm::vec2 lightMapOffset{0.0f};
+    std::vector<GeomipMaterial> materials;    // at least one; the first is the base pass
+    std::shared_ptr<const Texture> clouds;    // null: no cloud pass; sampled with GL_REPEAT
+    float cloudRepeat = 1.0f;
+    glm::vec2 cloudOffset{0.0f};              // fract(velocity * time): the scrolled translation
+};
+
 // ---- textures ----------------------------------------------------------------------------
 
 // Every sampler of the shaders, by its GLSL name (binding in comments). Null: none bound.
@@ -205,6 +231,7 @@ struct ShadingModel {
     Lab4Shading lab4{};
     Cosc422Shading cosc422{};
     PnShading pn{};
+    GeomipLightmapShading geomip{};
     ShadingTextures textures{};
 };
 
@@ -274,6 +301,8 @@ glm::vec4 lab4_terrain(const FragmentInputs& fragment, const Lab4Shading& unifor
 glm::vec4 cosc422_terrain(const FragmentInputs& fragment, const Cosc422Shading& uniforms,
                           const Texture* heightMap);
 glm::vec4 pn_triangles(const FragmentInputs& fragment, const PnShading& uniforms);
+
+glm::vec4 geomip_lightmap(const FragmentInputs& fragment, const GeomipLightmapShading& uniforms);
 
 glm::vec4 flat_colour(const FlatShading& uniforms);
 glm::vec4 depth_colour(const FragmentInputs& fragment, const DepthShading& uniforms);

@@ -84,6 +84,12 @@ enum class TexelFormat : std::uint8_t { unorm8, unorm16, float32 };
 enum class MipmapRule : std::uint8_t { llvmpipe_blit, mesa_software_box };
 // GL_TEXTURE_MIN_FILTER. With linear, textureLod() samples level 0 whatever the lod (GL).
 enum class MinFilter : std::uint8_t { linear_mipmap_linear, linear };
+// GL_TEXTURE_WRAP_S and _T together. clamp_to_edge is the seeds' state and the default;
+// repeat (the geomorphing article's tiled material and cloud textures) takes fract(s) and
+// wraps the filter's texel indices modulo the level's size, so the filter reaches across the
+// seam to the opposite edge as GL_REPEAT does (GL 4.5 8.14.2: i mod size). Not measured
+// against llvmpipe: no scene with a GLSL twin uses it.
+enum class Wrap : std::uint8_t { clamp_to_edge, repeat };
 
 const char* to_string(TexelFormat format);
 const char* to_string(MipmapRule rule);
@@ -130,6 +136,8 @@ public:
 
     MinFilter min_filter() const { return min_filter_; }
     void set_min_filter(MinFilter filter) { min_filter_ = filter; }
+    Wrap wrap() const { return wrap_; }
+    void set_wrap(Wrap wrap) { wrap_ = wrap; }
 
     // GLSL texture(sampler, st) in a TCS/TES/GS: no derivatives there, so the implicit lod
     // is 0 and this is exactly textureLod(st, 0).
@@ -149,6 +157,7 @@ private:
     TexelFormat format_ = TexelFormat::float32;
     MipmapRule rule_ = MipmapRule::llvmpipe_blit;
     MinFilter min_filter_ = MinFilter::linear_mipmap_linear;
+    Wrap wrap_ = Wrap::clamp_to_edge;
 };
 
 // Bytes a Texture of this size and format holds, its whole mip pyramid included (saturating

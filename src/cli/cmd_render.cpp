@@ -101,6 +101,14 @@ int run_render(const RenderCommandOptions& options) {
         std::cout << to_string(precision) << " precision, " << result.stats.triangles << " triangles, ";
     }
     std::cout << result.stats.covered_pixels << " covered pixels";
+    if (!options.raytrace && scene.culling && result.pipeline) {
+        // geomipmap [culling]: the patches not drawn, by the step that removed them.
+        const CullStats& c = result.pipeline->culled;
+        std::cout << ", " << c.total() << " of " << scene.patch_count() << " patches culled (frustum " << c.frustum();
+        if (scene.culling->pvs)
+            std::cout << ", pvs " << (c.pvs_applied ? std::to_string(c.pvs) : std::string("- (eye outside its cells)"));
+        std::cout << ")";
+    }
     if (!options.raytrace) {
         char times[160];
         std::snprintf(times, sizeof times, " (pipeline %.3f s, raster %.3f s, shading %.3f s)",

@@ -39,6 +39,8 @@ Command add_gl_command(CLI::App& parent);  // tessref gl: src/cli/cmd_gl.cpp
 Command add_golden_command(CLI::App& parent);  // tessref golden: src/cli/cmd_golden.cpp
 Command add_sweep_command(CLI::App& parent);  // tessref sweep: src/cli/cmd_sweep.cpp
 
+Command add_pvs_command(CLI::App& parent);  // tessref pvs: src/cli/cmd_pvs.cpp
+
 // Later subcommands, one file each (declare here, list in main.cpp).
 
 }  // namespace tessref::cli

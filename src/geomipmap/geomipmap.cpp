@@ -313,6 +313,75 @@ double side_level(const std::vector<double>& levels, int patches_x, int patches_
     return std::max(own, levels[static_cast<std::size_t>(qy) * patches_x + qx]);
 }
 
+SurfaceBounds surface_bounds(const HeightSamples& map) {
+    validate(map);
+    // Every topology a patch can take: level k, each side's step 2^k .. 16.
+    struct Tri {
+        std::array<std::uint32_t, 3> v;
+        glm::ivec2 lo, hi;  // the squares its box meets
+    };
+    struct Topo {
+        std::vector<std::vector<glm::ivec2>> samples;  // per vertex: it and its target's samples
+        std::vector<Tri> triangles;
+    };
+    std::vector<Topo> topos;
+    for (int k = 0; k < kLevels; ++k) {
+        const int n = kLevels - k;  // step choices per side
+        for (int c = 0; c < n * n * n * n; ++c) {
+            SideSteps sides{};
+            for (int q = 0, r = c; q < 4; ++q, r /= n) sides[q] = 1 << (k + r % n);
+            const Topology t = make_topology(k, sides);
+            Topo topo;
+            for (std::size_t v = 0; v < t.mesh.vertices.size(); ++v) {
+                std::vector<glm::ivec2> list{t.mesh.vertices[v]};
+                for (int i = 0; i < t.stencils[v].count; ++i) list.push_back(t.stencils[v].sample[i]);
+                topo.samples.push_back(std::move(list));
+            }
+            for (const auto& tri : t.mesh.triangles) {
+                const glm::ivec2 a = t.mesh.vertices[tri[0]], b = t.mesh.vertices[tri[1]], d = t.mesh.vertices[tri[2]];
+                const glm::ivec2 lo = glm::min(glm::min(a, b), d), hi = glm::max(glm::max(a, b), d);
+                // Squares meeting the box [lo, hi]: lo - 1 .. hi (within the patch's 0..15).
+                topo.triangles.push_back({tri, glm::max(lo - 1, glm::ivec2(0)), glm::min(hi, glm::ivec2(N - 1))});
+            }
+            topos.push_back(std::move(topo));
+        }
+    }
+    const int w = map.width - 1, h = map.height - 1;
+    SurfaceBounds out;
+    out.lo.assign(static_cast<std::size_t>(w) * h, std::numeric_limits<double>::infinity());
+    out.hi.assign(static_cast<std::size_t>(w) * h, -std::numeric_limits<double>::infinity());
+    std::vector<double> vlo, vhi;
+    for (int py = 0; py < map.patches_y(); ++py)
+        for (int px = 0; px < map.patches_x(); ++px) {
+            const glm::ivec2 origin(px * N, py * N);
+            for (const Topo& topo : topos) {
+                vlo.assign(topo.samples.size(), 0.0);
+                vhi.assign(topo.samples.size(), 0.0);
+                for (std::size_t v = 0; v < topo.samples.size(); ++v) {
+                    double a = std::numeric_limits<double>::infinity(), b = -a;
+                    for (const glm::ivec2 s : topo.samples[v]) {
+                        const double z = map.at(origin.x + s.x, origin.y + s.y);
+                        a = std::min(a, z);
+                        b = std::max(b, z);
+                    }
+                    vlo[v] = a;
+                    vhi[v] = b;
+                }
+                for (const Tri& t : topo.triangles) {
+                    const double a = std::min({vlo[t.v[0]], vlo[t.v[1]], vlo[t.v[2]]});
+                    const double b = std::max({vhi[t.v[0]], vhi[t.v[1]], vhi[t.v[2]]});
+                    for (int j = t.lo.y; j <= t.hi.y; ++j)
+                        for (int i = t.lo.x; i <= t.hi.x; ++i) {
+                            const std::size_t q = static_cast<std::size_t>(origin.y + j) * w + origin.x + i;
+                            out.lo[q] = std::min(out.lo[q], a);
+                            out.hi[q] = std::max(out.hi[q], b);
+                        }
+                }
+            }
+        }
+    return out;
+}
+
 SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings) {
     validate(map);
     const int nx = map.patches_x(), ny = map.patches_y();
@@ -373,6 +442,108 @@ SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& l
             for (const auto& tri : topo.mesh.triangles) mesh.triangles.push_back({base + tri[0], base + tri[1], base + tri[2]});
         }
     return mesh;
+}
+
+}  // namespace tessref::geomip
+
+namespace tessref::geomip {
+
+// ---- the light map (the article, "Building the Mesh": two vectors from the sample to its
+// neighbours, their cross product the normal, the normal's diffuse light the texel) ---------
+
+glm::dvec3 sample_normal(const HeightSamples& map, glm::dvec2 spacing, double scale_z, int x, int y) {
+    // The vector along +x: to the right neighbour, or from the left one at the last column.
+    const int x0 = x + 1 < map.width ? x : x - 1, y0 = y + 1 < map.height ? y : y - 1;
+    const double ha = (map.at(x0 + 1, y) - map.at(x0, y)) * scale_z;
+    const double hb = (map.at(x, y0 + 1) - map.at(x, y0)) * scale_z;
+    const glm::dvec3 a(spacing.x, 0.0, ha), b(0.0, spacing.y, hb);
+    return glm::normalize(glm::cross(a, b));
+}
+
+std::vector<double> light_map(const HeightSamples& map, glm::dvec2 spacing, double scale_z,
+                              const LightMapParams& params) {
+    validate(map);
+    const double d = glm::dot(params.light_direction, params.light_direction);
+    if (!(d > 0.0) || !std::isfinite(d)) throw Error("geomipmap: the light direction cannot be normalized");
+    if (!(params.ambient >= 0.0 && params.ambient <= 1.0)) throw Error("geomipmap: the ambient light must lie in [0, 1]");
+    const glm::dvec3 l = glm::normalize(params.light_direction);
+    std::vector<double> light(map.samples.size());
+    for (int y = 0; y < map.height; ++y)
+        for (int x = 0; x < map.width; ++x) {
+            const glm::dvec3 n = sample_normal(map, spacing, scale_z, x, y);
+            light[static_cast<std::size_t>(y) * map.width + x] =
+                params.ambient + (1.0 - params.ambient) * std::max(glm::dot(n, l), 0.0);
+        }
+    return light;
+}
+
+// ---- culling (the article, "Optimizations": the frustum's ground rectangle, then the
+// patches' boxes against the frustum's six sides) ---------------------------------------
+
+std::vector<Box> patch_bounds(const HeightSamples& map, const Settings& settings) {
+    validate(map);
+    const int nx = map.patches_x(), ny = map.patches_y();
+    std::vector<Box> boxes(static_cast<std::size_t>(nx) * ny);
+    for (int py = 0; py < ny; ++py)
+        for (int px = 0; px < nx; ++px) {
+            double lo = map.at(px * N, py * N), hi = lo;
+            for (int j = 0; j <= N; ++j)
+                for (int i = 0; i <= N; ++i) {
+                    const double h = map.at(px * N + i, py * N + j);
+                    lo = std::min(lo, h);
+                    hi = std::max(hi, h);
+                }
+            const glm::dvec2 a = settings.origin + glm::dvec2(px * N, py * N) * settings.spacing;
+            const glm::dvec2 b = settings.origin + glm::dvec2((px + 1) * N, (py + 1) * N) * settings.spacing;
+            Box& box = boxes[static_cast<std::size_t>(py) * nx + px];
+            box.lo = {std::min(a.x, b.x), std::min(a.y, b.y), std::min(lo * settings.scale_z, hi * settings.scale_z)};
+            box.hi = {std::max(a.x, b.x), std::max(a.y, b.y), std::max(lo * settings.scale_z, hi * settings.scale_z)};
+        }
+    return boxes;
+}
+
+std::vector<Cull> cull_frustum(const std::vector<Box>& boxes, const glm::dmat4& view_projection) {
+    // The six planes of GL clip space, -w <= x, y, z <= w, as rows of the matrix
+    // (Gribb and Hartmann): plane k holds dot(plane, (p, 1)) >= 0 inside.
+    const glm::dmat4 m = glm::transpose(view_projection);  // m[r] is row r
+    const std::array<glm::dvec4, 6> planes{m[3] + m[0], m[3] - m[0], m[3] + m[1],
+                                           m[3] - m[1], m[3] + m[2], m[3] - m[2]};
+    // (1) The ground rectangle: the frustum's eight corners (NDC cube corners through the
+    // inverse) projected onto the ground plane.
+    const glm::dmat4 inverse = glm::inverse(view_projection);
+    glm::dvec2 rect_lo(std::numeric_limits<double>::infinity()), rect_hi(-std::numeric_limits<double>::infinity());
+    bool rectangle = true;
+    for (int c = 0; c < 8; ++c) {
+        const glm::dvec4 q = inverse * glm::dvec4(c & 1 ? 1.0 : -1.0, c & 2 ? 1.0 : -1.0, c & 4 ? 1.0 : -1.0, 1.0);
+        if (!(q.w > 0.0) || !std::isfinite(q.x / q.w) || !std::isfinite(q.y / q.w)) rectangle = false;
+        const glm::dvec2 g(q.x / q.w, q.y / q.w);
+        rect_lo = glm::min(rect_lo, g);
+        rect_hi = glm::max(rect_hi, g);
+    }
+    constexpr double kMargin = 1e-6;
+    const glm::dvec2 pad = (rect_hi - rect_lo) * kMargin;
+    std::vector<Cull> out(boxes.size(), Cull::visible);
+    for (std::size_t p = 0; p < boxes.size(); ++p) {
+        const Box& b = boxes[p];
+        if (rectangle && (b.hi.x < rect_lo.x - pad.x || b.lo.x > rect_hi.x + pad.x || b.hi.y < rect_lo.y - pad.y ||
+                          b.lo.y > rect_hi.y + pad.y)) {
+            out[p] = Cull::ground_rectangle;
+            continue;
+        }
+        // (2) A box is outside a plane when even its corner farthest along the plane's
+        // normal is outside; the margin is relative to the terms' size.
+        for (const glm::dvec4& pl : planes) {
+            const glm::dvec3 far(pl.x >= 0.0 ? b.hi.x : b.lo.x, pl.y >= 0.0 ? b.hi.y : b.lo.y,
+                                 pl.z >= 0.0 ? b.hi.z : b.lo.z);
+            const double d = pl.x * far.x + pl.y * far.y + pl.z * far.z + pl.w;
+            const double size = std::abs(pl.x * far.x) + std::abs(pl.y * far.y) + std::abs(pl.z * far.z) + std::abs(pl.w);
+            if (d < -kMargin * size) {
+                out[p] = Cull::frustum_planes;
+                break;
+            }
+        }
+    }
+    return out;
 }
 
 }  // namespace tessref::geomip

@@ -187,6 +187,9 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         case ShadingKind::lab4: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "lab4_terrain.frag")); break;
         case ShadingKind::cosc422: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "cosc422_terrain.frag")); break;
         case ShadingKind::pn: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pn_triangles.frag")); break;
+        case ShadingKind::geomip_lightmap:
+            throw Error("tessref gl: shading model geomip_lightmap has no GLSL twin yet",
+                        Where::at_key(scene.file, "shading.model"));
     }
     return plan;
 }
@@ -492,6 +495,7 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
             u.v3("v3DiffuseColour", s.pn.v3DiffuseColour);
             u.f("fShininess", s.pn.fShininess);
             break;
+        case ShadingKind::geomip_lightmap: break;  // refused when the program is planned
     }
 }
 

@@ -12,12 +12,14 @@
 #include "tessref/geomipmap.h"
 #include "tessref/pipeline.h"
 
-namespace tessref::pipeline {
+namespace tessref {
 
-PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options) {
+GeomipTerrain geomip_terrain(const Scene& scene) {
+    if (!scene.grid || !scene.grid->heightmap) throw Error("a geomipmapped terrain needs a [domain] with a height map");
     const TerrainGrid& g = *scene.grid;
     const Texture& texture = g.heightmap->texture;
-    geomip::HeightSamples map;
+    GeomipTerrain terrain;
+    geomip::HeightSamples& map = terrain.map;
     map.width = texture.width();
     map.height = texture.height();
     map.samples.resize(static_cast<std::size_t>(map.width) * map.height);
@@ -26,12 +28,52 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
             map.samples[static_cast<std::size_t>(y) * map.width + x] = texture.texel_exact(0, x, y);
 
     // The samples span the grid's extent: sample 0 at the first corner, the last at the last.
-    geomip::Settings settings;
+    geomip::Settings& settings = terrain.settings;
     settings.origin = {g.u_coords.front(), g.v_coords.front()};
     settings.spacing = {(g.u_coords.back() - g.u_coords.front()) / (map.width - 1),
                         (g.v_coords.back() - g.v_coords.front()) / (map.height - 1)};
     settings.scale_z = g.scale_z;
     settings.params = scene.evaluation.geomipmap;
+    return terrain;
+}
+
+}  // namespace tessref
+
+namespace tessref::pipeline {
+
+namespace {
+
+// Keeps the vertices and triangles of the patches whose `keep` is true (patch order and
+// vertex order unchanged), with their face normals.
+void keep_patches(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, const std::vector<bool>& keep) {
+    std::vector<std::uint32_t> remap(mesh.positions.size(), 0);
+    SurfaceMesh out;
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        if (!keep[mesh.patch_ids[v]]) continue;
+        remap[v] = static_cast<std::uint32_t>(out.positions.size());
+        out.positions.push_back(mesh.positions[v]);
+        if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[v]);
+        if (!mesh.uvs.empty()) out.uvs.push_back(mesh.uvs[v]);
+        out.patch_ids.push_back(mesh.patch_ids[v]);
+        out.tess_coords.push_back(mesh.tess_coords[v]);
+    }
+    std::vector<glm::dvec3> normals_out;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const auto& tri = mesh.triangles[t];
+        if (!keep[mesh.patch_ids[tri[0]]]) continue;  // a triangle's vertices are its patch's
+        out.triangles.push_back({remap[tri[0]], remap[tri[1]], remap[tri[2]]});
+        if (!face_normals.empty()) normals_out.push_back(face_normals[t]);
+    }
+    mesh = std::move(out);
+    face_normals = std::move(normals_out);
+}
+
+}  // namespace
+
+PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options) {
+    const GeomipTerrain terrain = geomip_terrain(scene);
+    const geomip::HeightSamples& map = terrain.map;
+    const geomip::Settings& settings = terrain.settings;
 
     const geomip::MaxErrors max_errors = geomip::preprocess(map);
     const std::vector<double> levels = geomip::select_levels(map, max_errors, settings, scene.camera->view_projection(),
@@ -87,6 +129,28 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
             normals_in(0.0f);
         else
             normals_in(0.0);
+    }
+    // Culling (geomipmap.h, CULLING): after the levels and the normals, so that what stays
+    // is exactly what the unculled run draws there (smooth normals weld across patches).
+    if (scene.culling) {
+        std::vector<geomip::Cull> cull(levels.size(), geomip::Cull::visible);
+        if (scene.culling->frustum)
+            cull = geomip::cull_frustum(geomip::patch_bounds(map, settings), scene.camera->view_projection());
+        if (const auto& pvs = scene.culling->pvs) {
+            if (const auto cell = pvs->cell_of(scene.camera->eye, settings)) {
+                result.culled.pvs_applied = true;
+                for (std::size_t p = 0; p < cull.size(); ++p)
+                    if (cull[p] == geomip::Cull::visible && !pvs->visible(*cell, p)) cull[p] = geomip::Cull::pvs;
+            }
+        }
+        std::vector<bool> keep(cull.size());
+        for (std::size_t p = 0; p < cull.size(); ++p) {
+            keep[p] = cull[p] == geomip::Cull::visible;
+            result.culled.ground_rectangle += cull[p] == geomip::Cull::ground_rectangle;
+            result.culled.frustum_planes += cull[p] == geomip::Cull::frustum_planes;
+            result.culled.pvs += cull[p] == geomip::Cull::pvs;
+        }
+        if (result.culled.total() > 0) keep_patches(mesh, result.face_normals, keep);
     }
     result.distinct_patterns = 0;
     result.stages.control = true;  // the level selection

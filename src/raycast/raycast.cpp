@@ -216,4 +216,13 @@ RayHit RayScene::intersect(const glm::dvec3& origin, const glm::dvec3& direction
     return impl_->hit(query.ray.tfar, query.hit.primID, query.hit.u, query.hit.v, direction);
 }
 
+bool RayScene::occluded(const glm::dvec3& origin, const glm::dvec3& direction, double t_near, double t_far) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray{};
+    set_ray(ray, origin - impl_->shift, direction, t_near, t_far);
+    rtcOccluded1(impl_->scene, &context, &ray);
+    return ray.tfar < 0.0f;  // Embree sets tfar to -inf when the ray is blocked
+}
+
 }  // namespace tessref

@@ -13,6 +13,7 @@
 #include "scene/shading_load.h"
 #include "scene/toml_reader.h"
 #include "tessref/check.h"
+#include "tessref/pipeline.h"
 #include "tessref/scene.h"
 
 namespace tessref {
@@ -102,7 +103,8 @@ namespace fs = std::filesystem;
 
 // The tables a scene may have.
 const std::vector<std::string> kTopLevel = {"scene",      "domain",   "mesh",     "camera",  "generator", "control",
-                                            "evaluation", "geometry", "shading", "shaders", "limits"};
+                                            "evaluation", "geometry", "shading", "shaders", "limits",
+                                            "culling"};
 
 struct Loader {
     std::string file;     // as given, for messages
@@ -596,6 +598,33 @@ struct Loader {
         t.finish();
     }
 
+    // ---- [culling] ----------------------------------------------------------------
+    // After the domain's data: a PVS is checked against the terrain it was built for.
+    void read_culling(const toml::table& table) {
+        TableReader t(file, table, "culling", {"frustum", "pvs"});
+        if (scene.evaluation.model != EvaluationModel::geomipmap)
+            throw Error("[culling] culls the patches of a geomipmapped terrain (evaluation model geomipmap); a "
+                        "tessellated scene has no patch culling",
+                        t.where_table());
+        CullingStage c;
+        c.frustum = t.boolean_opt("frustum").value_or(true);
+        if (const auto path = t.string_opt("pvs")) {
+            if (path->empty()) t.fail("pvs", "culling.pvs must name a PVS file (made by tessref pvs SCENE -o FILE)");
+            c.pvs_path = resolve(*path);
+            geomip::Pvs pvs = load_file(t, "pvs", "cannot load the PVS file " + c.pvs_path,
+                                        [&] { return geomip::read_pvs(c.pvs_path); });
+            const GeomipTerrain terrain = geomip_terrain(scene);
+            if (pvs.patches_x != terrain.map.patches_x() || pvs.patches_y != terrain.map.patches_y() ||
+                pvs.terrain_id != geomip::terrain_identity(terrain.map, terrain.settings))
+                t.fail("pvs", "the PVS file " + c.pvs_path +
+                                  " was built for another terrain (its height map, extent or scale_z differ): "
+                                  "rebuild it with tessref pvs");
+            c.pvs = std::make_shared<const geomip::Pvs>(std::move(pvs));
+        }
+        t.finish();
+        scene.culling = std::move(c);
+    }
+
     // ---- [limits] -----------------------------------------------------------------
     void read_limits(const toml::table& table) {
         TableReader t(file, table, "limits", {"max_triangles"});
@@ -627,7 +656,7 @@ struct Loader {
                 const bool looks_like_stage = n.is_table() || n.is_array();
                 throw Error((looks_like_stage ? "unknown stage or table [" + ks + "]" : "unknown top-level key " + ks) +
                                 " (known: scene, domain, mesh, camera, generator, control, evaluation, geometry, "
-                                "shading, shaders, limits)",
+                                "shading, shaders, limits, culling)",
                             where_at(file, k.source(), ks));
             }
             if (ks != "mesh" && !n.is_table())
@@ -670,6 +699,7 @@ struct Loader {
             read_domain_data(*domain_reader);
             domain_reader->finish();
         }
+        if (const toml::node* c = root.get("culling")) read_culling(*c->as_table());
         // A grid alone beyond the budget is refused before anything is computed (each
         // patch emits at least one triangle unless culled).
         const std::uint64_t min_triangles = static_cast<std::uint64_t>(scene.patch_count()) *

@@ -8,7 +8,9 @@
 #include <vector>
 
 #include "scene/toml_reader.h"
+#include "tessref/geomipmap.h"
 #include "tessref/heightfield.h"
+#include "tessref/pipeline.h"
 
 namespace tessref::scene_detail {
 
@@ -25,7 +27,8 @@ const std::vector<std::string> kShadingKeys = {
     "shininess",                                                                    // thesis_*, pn
     "light_direction",                                                              // lab4, cosc422, pn
     "sand_colour", "rock_colour", "sand_height", "blend_width",                     // lab4
-    "ambient",                                                                      // cosc422
+    "ambient",                                                                      // cosc422, geomip_lightmap
+    "materials", "clouds", "time",                                                  // geomip_lightmap
     "diffuse_colour",                                                               // pn
     "textures"};                                                                    // the models with samplers
 
@@ -106,6 +109,7 @@ void read_model(TableReader& t, ShadingModel& m) {
             set(m.pn.v3DiffuseColour, t.vec3_opt("diffuse_colour"));
             read_shininess(t, m.pn.fShininess);
             break;
+        case ShadingKind::geomip_lightmap: break;  // read_geomip_lightmap
     }
 }
 
@@ -180,6 +184,95 @@ std::shared_ptr<const Texture> read_texture(TableReader& textures, const std::st
     return std::make_shared<const Texture>(std::move(texture));
 }
 
+// An image named by key `k` of table `t`, loaded (an error names the key and the file).
+std::shared_ptr<const Texture> read_image(TableReader& t, const std::string& k, const Resolve& resolve, Wrap wrap) {
+    const std::string path = t.string(k, "an image");
+    if (path.empty()) t.fail(k, t.key(k) + " must name an image");
+    const std::string file = resolve(path);
+    Texture texture;
+    try {
+        texture = load_texture(file);
+    } catch (const Error& e) {
+        throw Error("cannot load texture " + file + ": " + e.message(), t.where(k));
+    } catch (const std::exception& e) {
+        throw Error("cannot load texture " + file + ": " + std::string(e.what()), t.where(k));
+    }
+    texture.set_wrap(wrap);
+    return std::make_shared<const Texture>(std::move(texture));
+}
+
+// geomip_lightmap: the light map computed from the terrain, the materials, the clouds.
+void read_geomip_lightmap(TableReader& t, const Scene& scene, GeomipLightmapShading& g, const Resolve& resolve) {
+    if (scene.evaluation.model != EvaluationModel::geomipmap || !scene.grid)
+        t.fail("model", "shading model geomip_lightmap lights a geomipmapped terrain from its height map: it needs "
+                        "evaluation model geomipmap");
+    const GeomipTerrain terrain = geomip_terrain(scene);
+    const int w = terrain.map.width, h = terrain.map.height;
+
+    // The light map (geomipmap.h, LIGHT MAP), computed here once: the scene's light.
+    geomip::LightMapParams light;
+    if (const auto d = t.vec3_opt("light_direction")) {
+        light.light_direction = *d;
+        const double dd = glm::dot(*d, *d);
+        if (!(dd > 0.0) || !std::isfinite(dd))
+            t.fail("light_direction", t.key("light_direction") + " cannot be normalized");
+    }
+    light.ambient = t.real_or("ambient", light.ambient, 0.0, 1.0);
+    const std::vector<double> values = geomip::light_map(terrain.map, terrain.settings.spacing, terrain.settings.scale_z, light);
+    g.lightMap = std::make_shared<const Texture>(
+        Texture::from_float(w, h, 1, std::vector<float>(values.begin(), values.end())));
+    g.lightMapScale = glm::vec2(glm::dvec2(w - 1, h - 1) / glm::dvec2(w, h));
+    g.lightMapOffset = glm::vec2(glm::dvec2(0.5) / glm::dvec2(w, h));
+
+    // The materials: an array of { texture, repeat, alpha }; the first is the base pass.
+    const toml::node* n = t.node("materials");
+    if (!n) t.missing("materials", "the material passes, the first without an alpha map");
+    const toml::array* list = n->as_array();
+    if (!list) t.wrong_type("materials", *n, "an array of tables { texture = \"...\", repeat = r, alpha = \"...\" }");
+    if (list->empty()) t.fail("materials", t.key("materials") + " must name at least one material (the base pass)");
+    for (std::size_t i = 0; i < list->size(); ++i) {
+        const toml::node& e = *list->get(i);
+        const std::string name = t.key("materials") + "[" + std::to_string(i) + "]";
+        const toml::table* tbl = e.as_table();
+        if (!tbl)
+            throw Error(name + " must be a table { texture = \"...\", repeat = r, alpha = \"...\" }, not " +
+                            type_name(e),
+                        where_at(t.file(), e.source(), name));
+        TableReader m(t.file(), *tbl, name, {"texture", "repeat", "alpha"});
+        GeomipMaterial material;
+        material.texture = read_image(m, "texture", resolve, Wrap::repeat);
+        material.repeat = static_cast<float>(m.real_or("repeat", 1.0, 0.0, 1e6, true));
+        if (i == 0) {
+            if (m.has("alpha"))
+                m.fail("alpha", m.key("alpha") + ": the base pass has no alpha map (nothing is drawn before it)");
+        } else {
+            material.alpha = read_image(m, "alpha", resolve, Wrap::clamp_to_edge);
+            if (material.alpha->width() != w || material.alpha->height() != h)
+                m.fail("alpha", m.key("alpha") + ": the alpha map is " + std::to_string(material.alpha->width()) + "x" +
+                                    std::to_string(material.alpha->height()) + ", the height map " + std::to_string(w) +
+                                    "x" + std::to_string(h) + " (one alpha texel per height sample)");
+        }
+        m.finish();
+        g.materials.push_back(std::move(material));
+    }
+
+    // The clouds: { texture, repeat, velocity }, scrolled to velocity * time.
+    if (const toml::table* c = t.table_opt("clouds")) {
+        TableReader ct(t.file(), *c, t.key("clouds"), {"texture", "repeat", "velocity"});
+        g.clouds = read_image(ct, "texture", resolve, Wrap::repeat);
+        g.cloudRepeat = static_cast<float>(ct.real_or("repeat", 1.0, 0.0, 1e6, true));
+        const glm::dvec2 velocity = ct.vec2_opt("velocity").value_or(glm::dvec2(0.0));
+        const double time = t.real_or("time", 0.0, -1e12, 1e12);
+        // The translation in double, reduced to [0, 1) before float sees it: a texture that
+        // repeats is the same there, and a large time keeps its precision.
+        const glm::dvec2 offset = velocity * time;
+        g.cloudOffset = glm::vec2(offset - glm::floor(offset));
+        ct.finish();
+    } else if (t.has("time")) {
+        t.fail("time", t.key("time") + " moves the cloud shadows: it is not used without shading.clouds");
+    }
+}
+
 std::string joined(const std::vector<std::string>& names) {
     std::string list;
     for (const std::string& s : names) list += (list.empty() ? "" : ", ") + s;
@@ -207,13 +300,17 @@ RenderShading read_shading(const std::string& file, const toml::table* table, co
         const auto kind = shading_kind_from_string(*name);
         if (!kind)
             t.fail("model", "unknown shading model '" + *name +
-                                "'; expected flat, depth, thesis_single, thesis_multi, lab4, cosc422 or pn");
+                                "'; expected flat, depth, thesis_single, thesis_multi, lab4, cosc422, pn or "
+                                "geomip_lightmap");
         m.kind = *kind;
         model = *name;
     }
     set(out.background, t.colour_opt("background"));
     set(out.wireframe_colour, t.colour_opt("wireframe_colour"));
-    read_model(t, m);
+    if (m.kind == ShadingKind::geomip_lightmap)
+        read_geomip_lightmap(t, scene, m.geomip, resolve);
+    else
+        read_model(t, m);
 
     // Textures: only the samplers of the model's shader, by their GLSL names.
     const std::vector<std::string> samplers(sampler_names(m.kind).begin(), sampler_names(m.kind).end());

@@ -46,7 +46,7 @@ constexpr std::array<std::string_view, 11> kThesisMultiSamplers{
     "VertDetail_0_90_mask", "Grass_mask",        "Flow_mask",     "AmbientOcc"};
 constexpr std::array<std::string_view, 1> kCosc422Samplers{"heightMap"};
 
-constexpr std::array<std::pair<ShadingKind, const char*>, 7> kKindNames{{
+constexpr std::array<std::pair<ShadingKind, const char*>, 8> kKindNames{{
     {ShadingKind::flat, "flat"},
     {ShadingKind::depth, "depth"},
     {ShadingKind::thesis_single, "thesis_single"},
@@ -54,6 +54,7 @@ constexpr std::array<std::pair<ShadingKind, const char*>, 7> kKindNames{{
     {ShadingKind::lab4, "lab4"},
     {ShadingKind::cosc422, "cosc422"},
     {ShadingKind::pn, "pn"},
+    {ShadingKind::geomip_lightmap, "geomip_lightmap"},
 }};
 
 }  // namespace
@@ -82,6 +83,7 @@ FragmentNeeds fragment_needs(ShadingKind kind) {
             break;
         case ShadingKind::lab4:
         case ShadingKind::pn: needs.worldPosition = needs.normal = true; break;
+        case ShadingKind::geomip_lightmap: needs.texCoord = needs.texCoord_derivatives = true; break;
     }
     return needs;
 }
@@ -329,6 +331,39 @@ glm::vec4 pn_triangles(const FragmentInputs& fragment, const PnShading& u) {
     return glm::vec4(u.v3DiffuseColour * (0.1f + 0.9f * fDiffuse) + glm::vec3(0.3f * fSpecular), 1.0f);
 }
 
+// ---- the geomorphing article's materials (no GLSL twin yet) -------------------------------
+
+glm::vec4 geomip_lightmap(const FragmentInputs& fragment, const GeomipLightmapShading& u) {
+    const FragmentCoord uv = texture_coordinate(fragment);
+    // "Materials": one light map spans the terrain, uv (0, 0) to (1, 1); its texels (and the
+    // alpha maps') are centred on the height samples.
+    const FragmentCoord st{uv.P * u.lightMapScale + u.lightMapOffset, uv.dPdx * u.lightMapScale,
+                           uv.dPdy * u.lightMapScale};
+    const float light = texture(u.lightMap, st).r;
+    glm::vec3 colour(0.0f);
+    for (std::size_t i = 0; i < u.materials.size(); ++i) {
+        const GeomipMaterial& m = u.materials[i];
+        // Two texture stages, modulated: the repeated material times the light map.
+        const glm::vec3 pass = glm::vec3(texture(m.texture, uv * m.repeat)) * light;
+        if (i == 0) {
+            colour = pass;  // the base pass: nothing drawn before it, no alpha map
+        } else {
+            // Alpha-blended over the passes before it (SRC_ALPHA, ONE_MINUS_SRC_ALPHA), its
+            // alpha from the material's alpha map: GLSL mix(colour, pass, alpha).
+            const float alpha = texture(m.alpha, st).r;
+            colour = colour + alpha * (pass - colour);
+        }
+    }
+    // The cloud pass: the repeated shadow texture (grey: its red channel), its translation
+    // moved with time, multiplied into the frame (DST_COLOR, ZERO).
+    if (u.clouds) {
+        const FragmentCoord cloud{uv.P * u.cloudRepeat + u.cloudOffset, uv.dPdx * u.cloudRepeat,
+                                  uv.dPdy * u.cloudRepeat};
+        colour = colour * texture(u.clouds, cloud).r;
+    }
+    return glm::vec4(colour, 1.0f);
+}
+
 // ---- no shading ----------------------------------------------------------------------------
 
 glm::vec4 flat_colour(const FlatShading& u) { return u.colour; }
@@ -359,6 +394,7 @@ glm::vec4 shade(const ShadingModel& model, const FragmentInputs& fragment) {
         case ShadingKind::lab4: return lab4_terrain(fragment, model.lab4);
         case ShadingKind::cosc422: return cosc422_terrain(fragment, model.cosc422, model.textures.heightMap.get());
         case ShadingKind::pn: return pn_triangles(fragment, model.pn);
+        case ShadingKind::geomip_lightmap: return geomip_lightmap(fragment, model.geomip);
     }
     return flat_colour(model.flat);
 }

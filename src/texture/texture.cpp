@@ -83,8 +83,12 @@ struct AxisF {
 
 // Texel-space coordinate for GL_LINEAR with GL_CLAMP_TO_EDGE: u = s * size - 0.5, the two
 // texels floor(u) and floor(u) + 1 clamped to [0, size - 1], weight frac(u).
-inline AxisF axis_gpu(float s, int size) {
+// Texel index i wrapped into [0, size) (GL_REPEAT: i mod size, for negative i too).
+inline int wrap_index(int i, int size) { return ((i % size) + size) % size; }
+
+inline AxisF axis_gpu(float s, int size, bool repeat = false) {
     const float size_f = static_cast<float>(size);
+    if (repeat) s = s - std::floor(s);  // GL_REPEAT: fract(s), then the same filter, indices mod size
     float u = s * size_f;
     u = u - 0.5f;
     // Clamping u to [-1, size] changes no result (every texel index outside the texture
@@ -95,8 +99,8 @@ inline AxisF axis_gpu(float s, int size) {
     AxisF axis;
     axis.weight = u - fl;
     const int i = static_cast<int>(fl);
-    axis.i0 = std::clamp(i, 0, size - 1);
-    axis.i1 = std::clamp(i + 1, 0, size - 1);
+    axis.i0 = repeat ? wrap_index(i, size) : std::clamp(i, 0, size - 1);
+    axis.i1 = repeat ? wrap_index(i + 1, size) : std::clamp(i + 1, 0, size - 1);
     return axis;
 }
 
@@ -108,7 +112,8 @@ struct AxisU8 {
     int weight = 0;  // 0..255, 8 fractional bits
 };
 
-inline AxisU8 axis_unorm8(float s, int size) {
+inline AxisU8 axis_unorm8(float s, int size, bool repeat = false) {
+    if (repeat) s = s - std::floor(s);
     // lp_build_sample_image_linear (AoS): s * float(size << 8), rounded to the nearest
     // integer, minus 128 (half a texel), then >> 8 and & 255.
     const float scaled_size = static_cast<float>(size * 256);
@@ -118,8 +123,8 @@ inline AxisU8 axis_unorm8(float s, int size) {
     AxisU8 axis;
     axis.weight = fixed & 255;
     const int i = fixed >> 8;  // arithmetic shift: floor
-    axis.i0 = std::clamp(i, 0, size - 1);
-    axis.i1 = std::clamp(i + 1, 0, size - 1);
+    axis.i0 = repeat ? wrap_index(i, size) : std::clamp(i, 0, size - 1);
+    axis.i1 = repeat ? wrap_index(i + 1, size) : std::clamp(i + 1, 0, size - 1);
     return axis;
 }
 
@@ -141,16 +146,17 @@ struct AxisD {
     double weight = 0.0;
 };
 
-inline AxisD axis_exact(double s, int size) {
+inline AxisD axis_exact(double s, int size, bool repeat = false) {
     const double size_d = static_cast<double>(size);
+    if (repeat) s = s - std::floor(s);
     double u = s * size_d - 0.5;
     u = std::fmin(std::fmax(u, -1.0), size_d);
     const double fl = std::floor(u);
     AxisD axis;
     axis.weight = u - fl;
     const int i = static_cast<int>(fl);
-    axis.i0 = std::clamp(i, 0, size - 1);
-    axis.i1 = std::clamp(i + 1, 0, size - 1);
+    axis.i0 = repeat ? wrap_index(i, size) : std::clamp(i, 0, size - 1);
+    axis.i1 = repeat ? wrap_index(i + 1, size) : std::clamp(i + 1, 0, size - 1);
     return axis;
 }
 
@@ -168,9 +174,9 @@ inline std::size_t index_of(const TextureLevel& level, int channels, int x, int 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("fma", "default")))
 #endif
-void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4]) {
-    const AxisF ax = axis_gpu(st.x, level.width);
-    const AxisF ay = axis_gpu(st.y, level.height);
+void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4], bool repeat = false) {
+    const AxisF ax = axis_gpu(st.x, level.width, repeat);
+    const AxisF ay = axis_gpu(st.y, level.height, repeat);
     for (int c = 0; c < channels; ++c) {
         const float t00 = level.texels[index_of(level, channels, ax.i0, ay.i0, c)];
         const float t10 = level.texels[index_of(level, channels, ax.i1, ay.i0, c)];
@@ -183,9 +189,9 @@ void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float o
 }
 
 // 8-bit filter on a unorm8 level: 8-bit codes.
-void bilinear_unorm8(const TextureLevel& level, int channels, glm::vec2 st, int out[4]) {
-    const AxisU8 ax = axis_unorm8(st.x, level.width);
-    const AxisU8 ay = axis_unorm8(st.y, level.height);
+void bilinear_unorm8(const TextureLevel& level, int channels, glm::vec2 st, int out[4], bool repeat = false) {
+    const AxisU8 ax = axis_unorm8(st.x, level.width, repeat);
+    const AxisU8 ay = axis_unorm8(st.y, level.height, repeat);
     for (int c = 0; c < channels; ++c) {
         const int t00 = level.unorm8[index_of(level, channels, ax.i0, ay.i0, c)];
         const int t10 = level.unorm8[index_of(level, channels, ax.i1, ay.i0, c)];
@@ -211,9 +217,9 @@ inline double exact_value(const TextureLevel& level, TexelFormat format, int lod
 }
 
 void bilinear_exact(const TextureLevel& level, TexelFormat format, int lod, int channels,
-                    glm::dvec2 st, double out[4]) {
-    const AxisD ax = axis_exact(st.x, level.width);
-    const AxisD ay = axis_exact(st.y, level.height);
+                    glm::dvec2 st, double out[4], bool repeat = false) {
+    const AxisD ax = axis_exact(st.x, level.width, repeat);
+    const AxisD ay = axis_exact(st.y, level.height, repeat);
     for (int c = 0; c < channels; ++c) {
         const double t00 = exact_value(level, format, lod, index_of(level, channels, ax.i0, ay.i0, c));
         const double t10 = exact_value(level, format, lod, index_of(level, channels, ax.i1, ay.i0, c));
@@ -560,12 +566,12 @@ glm::vec4 Texture::texture(glm::vec2 st) const {
     glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
     if (format_ == TexelFormat::unorm8) {
         int codes[4];
-        bilinear_unorm8(levels_[0], channels_, st, codes);
+        bilinear_unorm8(levels_[0], channels_, st, codes, wrap_ == Wrap::repeat);
         for (int c = 0; c < channels_; ++c) out[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
         return out;
     }
     float values[4];
-    bilinear_gpu(levels_[0], channels_, st, values);
+    bilinear_gpu(levels_[0], channels_, st, values, wrap_ == Wrap::repeat);
     for (int c = 0; c < channels_; ++c) out[c] = values[c];
     return out;
 }
@@ -582,25 +588,26 @@ glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
     const int level0 = static_cast<int>(floor_lod);
     const float fraction = clamped - floor_lod;
     const int level1 = std::min(level0 + 1, max_level());
+    const bool repeat = wrap_ == Wrap::repeat;
     glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
     if (format_ == TexelFormat::unorm8) {
         int codes[4];
-        bilinear_unorm8(levels_[level0], channels_, st, codes);
+        bilinear_unorm8(levels_[level0], channels_, st, codes, repeat);
         // lp_build_sample_mipmap (AoS): weight trunc(frac * 256), lerp only when it is > 0.
         const int weight = static_cast<int>(fraction * 256.0f);
         if (weight > 0 && level1 != level0) {
             int codes1[4];
-            bilinear_unorm8(levels_[level1], channels_, st, codes1);
+            bilinear_unorm8(levels_[level1], channels_, st, codes1, repeat);
             for (int c = 0; c < channels_; ++c) codes[c] = lerp_unorm8(codes[c], codes1[c], weight);
         }
         for (int c = 0; c < channels_; ++c) out[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
         return out;
     }
     float values[4];
-    bilinear_gpu(levels_[level0], channels_, st, values);
+    bilinear_gpu(levels_[level0], channels_, st, values, repeat);
     if (fraction > 0.0f && level1 != level0) {
         float values1[4];
-        bilinear_gpu(levels_[level1], channels_, st, values1);
+        bilinear_gpu(levels_[level1], channels_, st, values1, repeat);
         for (int c = 0; c < channels_; ++c) values[c] = lerp_gpu(values[c], values1[c], fraction);
     }
     for (int c = 0; c < channels_; ++c) out[c] = values[c];
@@ -616,11 +623,12 @@ glm::dvec4 Texture::textureLod(glm::dvec2 st, double lod) const {
     const int level0 = static_cast<int>(floor_lod);
     const double fraction = clamped - floor_lod;
     const int level1 = std::min(level0 + 1, max_level());
+    const bool repeat = wrap_ == Wrap::repeat;
     double values[4];
-    bilinear_exact(levels_[level0], format_, level0, channels_, st, values);
+    bilinear_exact(levels_[level0], format_, level0, channels_, st, values, repeat);
     if (fraction > 0.0 && level1 != level0) {
         double values1[4];
-        bilinear_exact(levels_[level1], format_, level1, channels_, st, values1);
+        bilinear_exact(levels_[level1], format_, level1, channels_, st, values1, repeat);
         for (int c = 0; c < channels_; ++c) values[c] = mix_exact(values[c], values1[c], fraction);
     }
     glm::dvec4 out(0.0, 0.0, 0.0, 1.0);
