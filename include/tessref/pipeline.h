@@ -153,6 +153,10 @@ public:
     // are the evaluation's, relative to origin(); (0, 0, 0) otherwise.
     glm::dvec3 origin() const;
 
+    // Sizes `mesh` (and face_normals, when face_normals()) for `vertices` and `triangles`
+    // of emit()'s output: the arrays emit() writes, and only those.
+    void size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, std::size_t vertices,
+              std::size_t triangles) const;
     // Pass 4 for one patch: its evaluated vertices at mesh index first_vertex on (positions,
     // patch_ids, tess_coords, and uvs / normals where has_uvs() / has_normals()), its
     // triangles at first_triangle on, indexing from first_vertex, and their face normals

@@ -300,13 +300,7 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
 
     // Pass 4: evaluation and geometry, every patch into its slot.
     SurfaceMesh& mesh = result.mesh;
-    mesh.positions.resize(vertices);
-    mesh.patch_ids.resize(vertices);
-    mesh.tess_coords.resize(vertices);
-    if (stream.has_uvs()) mesh.uvs.resize(vertices);
-    if (stream.has_normals()) mesh.normals.resize(vertices);
-    mesh.triangles.resize(triangles);
-    if (stream.face_normals()) result.face_normals.resize(triangles);
+    stream.size(mesh, result.face_normals, vertices, triangles);
 
     std::atomic<std::size_t> done{0};
     std::mutex progress_mutex;
@@ -411,6 +405,16 @@ bool PatchStream::has_normals() const { return impl_->has_normals; }
 bool PatchStream::face_normals() const { return impl_->face_normals; }
 bool PatchStream::smooth_normals() const { return impl_->smooth_normals; }
 glm::dvec3 PatchStream::origin() const { return impl_->origin; }
+void PatchStream::size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, std::size_t vertices,
+                       std::size_t triangles) const {
+    mesh.positions.resize(vertices);
+    mesh.patch_ids.resize(vertices);
+    mesh.tess_coords.resize(vertices);
+    if (impl_->has_uvs) mesh.uvs.resize(vertices);
+    if (impl_->has_normals) mesh.normals.resize(vertices);
+    mesh.triangles.resize(triangles);
+    if (impl_->face_normals) face_normals.resize(triangles);
+}
 void PatchStream::emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
                        std::vector<glm::dvec3>* face_normals) const {
     impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals);

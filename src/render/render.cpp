@@ -354,13 +354,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             const std::size_t vertices = stream.vertex_base(c.last_patch) - v0;
             const std::size_t triangles = stream.triangle_base(c.last_patch) - t0;
             SurfaceMesh& m = c.mesh;
-            m.positions.resize(vertices);
-            m.patch_ids.resize(vertices);
-            m.tess_coords.resize(vertices);
-            if (stream.has_uvs()) m.uvs.resize(vertices);
-            if (stream.has_normals()) m.normals.resize(vertices);
-            m.triangles.resize(triangles);
-            if (stream.face_normals()) c.face_normals.resize(triangles);
+            stream.size(m, c.face_normals, vertices, triangles);
             for (std::size_t p = c.first_patch; p < c.last_patch; ++p)
                 stream.emit(p, m, stream.vertex_base(p) - v0, stream.triangle_base(p) - t0, &c.face_normals);
             c.clip.resize(vertices);
