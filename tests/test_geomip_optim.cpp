@@ -30,6 +30,7 @@
 #include "command_dir_test.h"
 #include "scratch_dir.h"
 #include "tessref/error.h"
+#include "geomip_maps.h"
 #include "tessref/geomipmap.h"
 #include "tessref/pipeline.h"
 #include "tessref/render.h"
@@ -45,13 +46,7 @@ const tessref::test::ScratchDir& scratch = tessref::test::ScratchDir::add("geomi
 const std::string kScenes = std::string(TESSREF_SOURCE_DIR) + "/data/scenes/";
 const std::string kLit = kScenes + "jacksboro-geomipmap-lit.toml";
 
-HeightSamples flat_map(int width, int height, double value = 0.0) {
-    HeightSamples m;
-    m.width = width;
-    m.height = height;
-    m.samples.assign(static_cast<std::size_t>(width) * height, value);
-    return m;
-}
+using tessref::test::flat_map;
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
     const std::size_t at = text.find(from);

@@ -23,6 +23,7 @@
 
 #include "tessref/check.h"
 #include "tessref/error.h"
+#include "geomip_maps.h"
 #include "tessref/geomipmap.h"
 
 using namespace tessref;
@@ -30,13 +31,7 @@ using namespace tessref::geomip;
 
 namespace {
 
-HeightSamples flat_map(int width, int height, double value = 0.0) {
-    HeightSamples m;
-    m.width = width;
-    m.height = height;
-    m.samples.assign(static_cast<std::size_t>(width) * height, value);
-    return m;
-}
+using tessref::test::flat_map;
 
 HeightSamples random_map(int width, int height, unsigned seed) {
     HeightSamples m = flat_map(width, height);
