@@ -337,6 +337,35 @@ TEST(RasterSubPixel, TinyTrianglesCoverTheCentreTheyContainAndNothingElse) {
     EXPECT_EQ(s.primitives_culled, 1u);
 }
 
+TEST(RasterSubPixel, ABoxHoldingACentreOutsideTheTriangleIsSetUpNotCulledAndDrawsNothing) {
+    // (3.3, 4.3), (3.65, 4.3), (3.3, 4.65): counter-clockwise, area 0.06125 pixels, box
+    // [3.3, 3.65] x [4.3, 4.65] around the centre (3.5, 4.5) of pixel (3, 4), which lies
+    // beyond the long edge x + y = 7.95 (3.5 + 4.5 = 8). Setup keeps the triangle (non-zero
+    // area, a pixel centre in its box), and its edge functions reject that centre: one
+    // primitive, none culled, no fragment, through both entry points.
+    constexpr int W = 8, H = 8;
+    Mesh m;
+    m.add(at_window(3.3f, 4.3f, W, H));
+    m.add(at_window(3.65f, 4.3f, W, H));
+    m.add(at_window(3.3f, 4.65f, W, H));
+    m.triangles = {{0, 1, 2}};
+    Framebuffer fb = Framebuffer::create(W, H);
+    const RasterStats s = tessref::rasterize(fb, m.input(), counting());
+    EXPECT_TRUE(covered(fb).empty());
+    EXPECT_EQ(s.primitives, 1u);
+    EXPECT_EQ(s.primitives_culled, 0u);
+    EXPECT_EQ(s.fragments, 0u);
+
+    Framebuffer fb2 = Framebuffer::create(W, H);
+    tessref::Rasterizer rasterizer(fb2, counting());
+    const tessref::RasterChunk chunk{m.positions, m.triangles, 0};
+    rasterizer.draw(std::span<const tessref::RasterChunk>(&chunk, 1));
+    EXPECT_TRUE(covered(fb2).empty());
+    EXPECT_EQ(rasterizer.stats().primitives, 1u);
+    EXPECT_EQ(rasterizer.stats().primitives_culled, 0u);
+    EXPECT_EQ(rasterizer.stats().fragments, 0u);
+}
+
 TEST(RasterCulling, ZeroAreaTrianglesAreCulled) {
     constexpr int W = 16, H = 16;
     Mesh m;

@@ -157,6 +157,10 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
 
     tessref::Framebuffer batched = tessref::Framebuffer::create(173, 97);
     tessref::Rasterizer rasterizer(batched, settings);
+    // The same draws into a visibility framebuffer (depth, ids and weights only).
+    tessref::Framebuffer visible = tessref::Framebuffer::create_visibility(173, 97);
+    ASSERT_TRUE(visible.color.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
+    tessref::Rasterizer visible_rasterizer(visible, settings);
     // Uneven chunks, each indexing its own vertices from 0, two or three per draw.
     std::vector<std::vector<glm::vec4>> chunk_positions;
     std::vector<std::vector<std::array<std::uint32_t, 3>>> chunk_triangles;
@@ -176,6 +180,7 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
         for (std::size_t k = 0; k < 2 + c % 2 && c < chunk_first.size(); ++k, ++c)
             draw.push_back({chunk_positions[c], chunk_triangles[c], chunk_first[c]});
         rasterizer.draw(draw);
+        visible_rasterizer.draw(draw);
     }
     const tessref::RasterStats many = rasterizer.stats();
     EXPECT_GT(one.fragments_passed, 1000u);
@@ -195,6 +200,17 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     EXPECT_EQ(many.primitives_culled, one.primitives_culled);
     EXPECT_EQ(many.fragments, one.fragments);
     EXPECT_EQ(many.fragments_passed, one.fragments_passed);
+    EXPECT_TRUE(same_bytes(visible.triangle_id, whole.triangle_id));
+    EXPECT_TRUE(same_bytes(visible.depth, whole.depth));
+    EXPECT_TRUE(same_bytes(visible.barycentric, whole.barycentric));
+    EXPECT_TRUE(same_bytes(visible.barycentric_dx, whole.barycentric_dx));
+    EXPECT_TRUE(same_bytes(visible.barycentric_dy, whole.barycentric_dy));
+    EXPECT_TRUE(visible.color.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
+    const tessref::RasterStats lean = visible_rasterizer.stats();
+    EXPECT_EQ(lean.primitives, one.primitives);
+    EXPECT_EQ(lean.primitives_culled, one.primitives_culled);
+    EXPECT_EQ(lean.fragments, one.fragments);
+    EXPECT_EQ(lean.fragments_passed, one.fragments_passed);
 }
 
 TEST(Rasterizer, VertexIndexOutsideTheChunkIsAnError) {

@@ -132,6 +132,11 @@ struct Framebuffer {
 
     // Throws tessref::Error for a size outside 1..16384 or varying_count outside 0..16.
     static Framebuffer create(int width, int height, int varying_count = 0);
+    // Only what a renderer resolves its pixels from: depth, triangle_id and barycentric (and
+    // the quad differences when asked for); every other buffer stays empty and the
+    // Rasterizer class (not rasterize(), which refuses it) leaves it so. A quarter of the
+    // memory to clear and fault in for each image.
+    static Framebuffer create_visibility(int width, int height);
     void clear();  // every buffer to its cleared value
 
     std::size_t index(int x, int y_gl) const {  // GL window coordinates, y up

@@ -26,12 +26,18 @@ using raster::Primitive;
 using raster::Viewport;
 
 
-Framebuffer Framebuffer::create(int width, int height, int varying_count) {
+namespace {
+void check_framebuffer_size(int width, int height) {
     if (width < 1 || height < 1 || width > 16384 || height > 16384) {
         throw Error("framebuffer size " + std::to_string(width) + "x" + std::to_string(height) +
                         " is outside 1..16384",
                     Where::at_key("framebuffer"));
     }
+}
+}  // namespace
+
+Framebuffer Framebuffer::create(int width, int height, int varying_count) {
+    check_framebuffer_size(width, height);
     if (varying_count < 0 || varying_count > kMaxVaryings) {
         throw Error("varying count " + std::to_string(varying_count) + " is outside 0..16",
                     Where::at_key("varying_count"));
@@ -51,6 +57,18 @@ Framebuffer Framebuffer::create(int width, int height, int varying_count) {
     fb.front_facing.resize(n);
     fb.fragment_count.resize(n);
     fb.clear();
+    return fb;
+}
+
+Framebuffer Framebuffer::create_visibility(int width, int height) {
+    check_framebuffer_size(width, height);
+    Framebuffer fb;
+    fb.width = width;
+    fb.height = height;
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    fb.depth.assign(n, 1.0f);
+    fb.triangle_id.assign(n, kNoTriangle);
+    fb.barycentric.assign(n, glm::vec3(0.0f));
     return fb;
 }
 
@@ -148,6 +166,7 @@ struct Context {
     int tiles_x;
     int tiles_y;
     std::uint32_t* source;  // per pixel: the input triangle of the visible primitive
+    bool all_buffers = true;  // false: a visibility framebuffer (no colour, count, facing)
 };
 
 // LLVM fuses llvmpipe's viewport multiply-add only where the CPU has FMA.
@@ -190,11 +209,13 @@ void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
         if (s.cull == CullMode::front) face = raster::Face::back_only;
         Primitive prim;
         ++chunk.stats.primitives;
-        if (raster::setup_triangle(a, b, c, face, ctx.viewport, prim)) {
-            prim.source = source;
-            chunk.prims.push_back(prim);
-        } else {
-            ++chunk.stats.primitives_culled;
+        switch (raster::setup_triangle(a, b, c, face, ctx.viewport, prim)) {
+            case raster::Setup::culled: ++chunk.stats.primitives_culled; break;
+            case raster::Setup::empty: break;  // set up, no pixel to draw
+            case raster::Setup::drawn:
+                prim.source = source;
+                chunk.prims.push_back(prim);
+                break;
         }
         return;
     }
@@ -234,6 +255,9 @@ void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
                  std::span<const std::array<std::uint32_t, 3>> tris, std::size_t first, std::size_t last,
                  std::uint32_t first_id, Chunk& chunk) {
     chunk.prims.clear();
+    // At most one primitive a triangle unless clipped: no reallocation (and copy into fresh
+    // pages) as the chunk fills; pages are only touched as primitives are written.
+    chunk.prims.reserve(last - first);
     chunk.stats = {};
     const bool filled = ctx.settings.polygon_mode == PolygonMode::fill;
     for (std::size_t t = first; t < last; ++t) {
@@ -330,7 +354,7 @@ inline void fragment(Context& ctx, const Primitive& p, int px, int py, RasterSta
     const RasterSettings& s = ctx.settings;
     const std::size_t idx = static_cast<std::size_t>(py) * static_cast<std::size_t>(fb.width) +
                             static_cast<std::size_t>(px);
-    ++fb.fragment_count[idx];
+    if (ctx.all_buffers) ++fb.fragment_count[idx];
     ++stats.fragments;
     const float fx = static_cast<float>(px) - p.ox;
     const float fy = static_cast<float>(py) - p.oy;
@@ -356,8 +380,10 @@ inline void fragment(Context& ctx, const Primitive& p, int px, int py, RasterSta
         fb.barycentric_dx[idx] = weights(qx + 1.0f, qy) - top_left;
         fb.barycentric_dy[idx] = top_left - weights(qx, qy + 1.0f);
     }
-    fb.color[idx] = s.color;
-    fb.front_facing[idx] = p.front ? 1 : 0;
+    if (ctx.all_buffers) {
+        fb.color[idx] = s.color;
+        fb.front_facing[idx] = p.front ? 1 : 0;
+    }
     ctx.source[idx] = p.source;
 }
 
@@ -421,6 +447,9 @@ void validate(const Framebuffer& fb, const RasterInput& in) {
         fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height)) {
         throw Error("framebuffer is not allocated (use Framebuffer::create)", Where::at_key("framebuffer"));
     }
+    if (fb.color.size() != fb.depth.size() || fb.fragment_count.size() != fb.depth.size())
+        throw Error("rasterize() writes every buffer: a visibility framebuffer is for the Rasterizer class",
+                    Where::at_key("framebuffer"));
     if (in.varying_count < 0 || in.varying_count > kMaxVaryings) {
         throw Error("varying count " + std::to_string(in.varying_count) + " is outside 0..16",
                     Where::at_key("varying_count"));
@@ -500,6 +529,9 @@ struct Rasterizer::State {
           ctx{settings, framebuffer, raster::make_viewport(framebuffer.width, framebuffer.height), 0, 0, source} {
         ctx.tiles_x = (framebuffer.width + kTileSize - 1) / kTileSize;
         ctx.tiles_y = (framebuffer.height + kTileSize - 1) / kTileSize;
+        ctx.all_buffers = framebuffer.color.size() == framebuffer.depth.size() &&
+                          framebuffer.fragment_count.size() == framebuffer.depth.size() &&
+                          framebuffer.front_facing.size() == framebuffer.depth.size();
         tile_stats.resize(static_cast<std::size_t>(ctx.tiles_x * ctx.tiles_y));
         fused = settings.window_transform == WindowTransform::vertex_shader && host_has_fma();
         if (settings.quad_derivatives) {
@@ -610,7 +642,8 @@ RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSet
 
 Rasterizer::Rasterizer(Framebuffer& fb, const RasterSettings& settings) {
     if (fb.width < 1 || fb.height < 1 ||
-        fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height))
+        fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height) ||
+        fb.triangle_id.size() != fb.depth.size() || fb.barycentric.size() != fb.depth.size())
         throw Error("framebuffer is not allocated (use Framebuffer::create)", Where::at_key("framebuffer"));
     state_ = std::make_unique<State>(fb, settings, fb.triangle_id.data());
 }

@@ -71,11 +71,14 @@ struct Primitive {
     bool front;
 };
 
-// llvmpipe's triangle setup (calc_fixed_position + do_triangle_ccw). Returns false when the
-// triangle is culled (zero area, culled face, or empty bounding box).
+// llvmpipe's triangle setup (calc_fixed_position + do_triangle_ccw): culled (zero area,
+// culled face, or empty bounding box, as llvmpipe culls), empty (set up, but a box of at most
+// four pixels none of whose centres passes the edge functions: it would draw nothing, so its
+// attribute planes are not computed and prim holds only its box and edges), or drawn.
 enum class Face { both, front_only, back_only };
-bool setup_triangle(const ClipVertex& v0, const ClipVertex& v1, const ClipVertex& v2, Face face,
-                    const Viewport& viewport, Primitive& prim);
+enum class Setup { culled, empty, drawn };
+Setup setup_triangle(const ClipVertex& v0, const ClipVertex& v1, const ClipVertex& v2, Face face,
+                     const Viewport& viewport, Primitive& prim);
 
 // llvmpipe's one-pixel-wide line setup (try_setup_line, diamond-exit rule, non-rectangular).
 bool setup_line(const ClipVertex& v1, const ClipVertex& v2, const Viewport& viewport,

@@ -23,17 +23,24 @@ using render_detail::window_depth;
 
 namespace render_detail {
 
-void allocate(RenderResult& r, int width, int height) {
+void allocate(RenderResult& r, int width, int height, bool visibility) {
     r.width = width;
     r.height = height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     r.colour.assign(n, r.shading.background);
-    r.depth.assign(n, 1.0f);
     r.patch_id.assign(n, kNoPixelId);
-    r.triangle_id.assign(n, kNoPixelId);
     r.tess_coord.assign(n, glm::vec3(0.0f));
-    r.barycentric.assign(n, glm::vec3(0.0f));
     r.level.assign(n, std::numeric_limits<float>::quiet_NaN());
+    if (!visibility) return;
+    r.depth.assign(n, 1.0f);
+    r.triangle_id.assign(n, kNoPixelId);
+    r.barycentric.assign(n, glm::vec3(0.0f));
+}
+
+void take_visibility(RenderResult& r, Framebuffer& fb) {
+    r.depth = std::move(fb.depth);
+    r.triangle_id = std::move(fb.triangle_id);
+    r.barycentric = std::move(fb.barycentric);
 }
 
 SceneCamera camera_for(const Scene& scene, const RenderOptions& options) {
@@ -202,12 +209,9 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                     const SurfaceView& view = *view_of;
                     const glm::vec3 b = fb.barycentric[i];
                     const auto& t = view.mesh.triangles[tri];
-                    result.triangle_id[i] = id;
                     result.patch_id[i] = view.mesh.patch_ids[t[0]];
-                    result.barycentric[i] = b;
                     result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] + b[1] * view.mesh.tess_coords[t[1]] +
                                            b[2] * view.mesh.tess_coords[t[2]];
-                    result.depth[i] = fb.depth[i];
                     int k = 0;
                     while (k < cached_count && cached_triangle[k] != id) ++k;
                     if (k == cached_count) {
@@ -313,10 +317,11 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     result.stats.seconds_pipeline = seconds_since(start);
 
     const auto buffers_start = Clock::now();
-    render_detail::allocate(result, width, height);
+    // The framebuffer's depth, ids and weights become the result's at the end.
+    render_detail::allocate(result, width, height, false);
     RasterSettings settings;
     settings.depth_func = DepthFunc::less;
-    Framebuffer fb = Framebuffer::create(width, height, 0);
+    Framebuffer fb = Framebuffer::create_visibility(width, height);
     Rasterizer rasterizer(fb, settings);
     const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
     const bool derivatives = needs.texCoord && needs.texCoord_derivatives && stream.has_uvs();
@@ -409,6 +414,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         progress("rasterizing", static_cast<double>(next_patch) / static_cast<double>(n));
     }
     result.stats.raster = rasterizer.stats();
+    render_detail::take_visibility(result, fb);
     result.stats.covered_pixels = covered_pixels(result);
     return result;
 }
@@ -512,7 +518,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     // ---- resolve and shade every pixel -----------------------------------------------------
     start = Clock::now();
     progress("shading", 0.0);
-    render_detail::allocate(result, width, height);
+    render_detail::allocate(result, width, height, false);  // fb's visibility at the end
     const SurfaceView view{mesh, pipe.face_normals, clip, face_normals};  // world positions
     const Domain domain = scene.generator.domain;
     result.domain = domain;
@@ -520,7 +526,6 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
         resolve(result, fb, pipe.levels, domain, needs, derivatives, line_derivatives, rows.begin(), rows.end(),
                 [&view](std::uint32_t id) { return std::pair{&view, id}; });
     });
-    result.stats.covered_pixels = covered_pixels(result);
 
     if (options.mode == RenderMode::fill_with_wireframe) {
         // The lines over the filled image where they are not behind it (render.h).
@@ -544,6 +549,8 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
             }
         });
     }
+    render_detail::take_visibility(result, fb);
+    result.stats.covered_pixels = covered_pixels(result);
     result.stats.seconds_shade = seconds_since(start);
     progress("shading", 1.0);
     return result;

@@ -9,6 +9,7 @@
 #include <glm/glm.hpp>
 
 #include "tessref/error.h"
+#include "tessref/raster.h"
 #include "tessref/render.h"
 
 namespace tessref::render_detail {
@@ -60,8 +61,12 @@ struct QuadPixels {
 };
 inline QuadPixels quad_of(int x, int row) { return {x & ~1, row & ~1}; }
 
-// Resizes and clears the per-pixel buffers of `result` for a width x height image.
-void allocate(RenderResult& result, int width, int height);
+// Resizes and clears the per-pixel buffers of `result` for a width x height image; without
+// `visibility`, all but depth, triangle_id and barycentric, which the rasterizing renderer
+// takes from its framebuffer when done (take_visibility: the same values, moved, not
+// allocated and copied a second time).
+void allocate(RenderResult& result, int width, int height, bool visibility = true);
+void take_visibility(RenderResult& result, Framebuffer& fb);
 
 // The camera with the image size applied (RenderOptions::size), and the size checked.
 SceneCamera camera_for(const Scene& scene, const RenderOptions& options);
