@@ -145,7 +145,16 @@ LevelBits level_bits(const TessLevels& levels);
 
 // Whether a tess coord lies on outer edge `edge` of its patch (gl_TessLevelOuter index;
 // quads: u == 0, v == 0, u == 1, v == 1; triangles: u == 0, v == 0, w == 0).
-bool on_outer_edge(Domain domain, const TessCoord& tess_coord, int edge);
+// Inline: the renderer asks it for every visible pixel's triangle.
+inline bool on_outer_edge(Domain domain, const TessCoord& c, int edge) {
+    switch (edge) {
+        case 0: return c.u == 0.0f;
+        case 1: return c.v == 0.0f;
+        case 2: return domain == Domain::quads ? c.u == 1.0f : c.w == 0.0f;
+        case 3: return domain == Domain::quads && c.v == 1.0f;
+    }
+    return false;
+}
 
 // An upper bound on the triangles the primitive generator emits for these levels (0 for a
 // culled patch, and for isolines), without tessellating: used to refuse a run beyond its

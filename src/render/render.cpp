@@ -267,7 +267,7 @@ struct PatchChunk {
 // Triangles per chunk (a chunk is one setup task) and per batch (what is evaluated and
 // held at once: about 100 bytes a vertex, half a vertex per triangle).
 constexpr std::size_t kStreamChunkTriangles = 8192;
-constexpr std::size_t kStreamBatchTriangles = std::size_t{1} << 20;
+constexpr std::size_t kStreamBatchTriangles = std::size_t{1} << 18;
 
 // Fill mode, streamed: the surface is evaluated, projected, rasterized and resolved a
 // batch of patches at a time and never held whole (render.h, RenderOptions::keep_surface).
@@ -644,13 +644,18 @@ glm::vec3 level_heat_colour(float level) {
 
 std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
     std::vector<std::uint8_t> out(result.colour.size() * 4);
-    for (std::size_t i = 0; i < result.colour.size(); ++i) {
-        for (int c = 0; c < 4; ++c) {
-            float v = result.colour[i][c];
-            v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-            out[i * 4 + static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::lrint(v * 255.0f));
-        }
-    }
+    // In parallel: it sits between the render and the image write, where nothing else runs.
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, result.colour.size(), 65536),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  for (int c = 0; c < 4; ++c) {
+                                      float v = result.colour[i][c];
+                                      v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
+                                      out[i * 4 + static_cast<std::size_t>(c)] =
+                                          static_cast<std::uint8_t>(std::lrint(v * 255.0f));
+                                  }
+                              }
+                          });
     return out;
 }
 

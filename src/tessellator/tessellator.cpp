@@ -664,24 +664,6 @@ LevelBits level_bits(const TessLevels& levels) {
     return bits;
 }
 
-bool on_outer_edge(Domain domain, const TessCoord& c, int edge) {
-    if (domain == Domain::quads) {
-        switch (edge) {
-            case 0: return c.u == 0.0f;
-            case 1: return c.v == 0.0f;
-            case 2: return c.u == 1.0f;
-            case 3: return c.v == 1.0f;
-        }
-        return false;
-    }
-    switch (edge) {
-        case 0: return c.u == 0.0f;
-        case 1: return c.v == 0.0f;
-        case 2: return c.w == 0.0f;
-    }
-    return false;
-}
-
 namespace {
 
 // Segments an edge of level f is cut into (after the generator's clamping and rounding to
