@@ -190,6 +190,10 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         case ShadingKind::geomip_lightmap:
             throw Error("tessref gl: shading model geomip_lightmap has no GLSL twin yet",
                         Where::at_key(scene.file, "shading.model"));
+        case ShadingKind::pom:
+            throw Error("tessref gl: shading model pom is not wired into the GL backend yet "
+                        "(its twin data/shaders/pom.frag reads dFdx/dFdy of a position no program passes)",
+                        Where::at_key(scene.file, "shading.model"));
     }
     return plan;
 }
@@ -495,7 +499,8 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
             u.v3("v3DiffuseColour", s.pn.v3DiffuseColour);
             u.f("fShininess", s.pn.fShininess);
             break;
-        case ShadingKind::geomip_lightmap: break;  // refused when the program is planned
+        case ShadingKind::geomip_lightmap:
+        case ShadingKind::pom: break;  // refused when the program is planned
     }
 }
 
