@@ -6,7 +6,7 @@
 // defined result: the tangent frame comes from dFdx/dFdy of position and uv (no tangent
 // attribute) with a handedness sign; z of the normal map is sqrt(max(.., 0)); the layer
 // count rounds half to even; v2LastUV starts at the unshifted uv.
-// Not yet wired into the GL backend (tessref gl refuses shading model pom).
+// tessref gl uses it with the PN program (its EvaluationData block) only.
 
 layout(location = 0) in EvaluationData {
     vec3 v3PositionOut;
@@ -16,9 +16,9 @@ layout(location = 0) in EvaluationData {
 
 layout(location = 0) out vec4 v4ColourOut;
 
-layout(binding = 0) uniform sampler2D s2DiffuseTexture;
-layout(binding = 1) uniform sampler2D s2NormalTexture;
-layout(binding = 2) uniform sampler2D s2BumpTexture;
+layout(binding = 4) uniform sampler2D s2DiffuseTexture;
+layout(binding = 5) uniform sampler2D s2NormalTexture;
+layout(binding = 6) uniform sampler2D s2BumpTexture;
 
 uniform vec3 v3CameraPosition;
 uniform vec3 v3LightDirection = vec3(0.4, 0.8, 0.45);

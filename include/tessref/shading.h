@@ -233,7 +233,7 @@ struct ShadingTextures {
     // scene holding a shared_ptr<const HeightField> hf can pass
     // std::shared_ptr<const Texture>(hf, &hf->texture).
     std::shared_ptr<const Texture> heightMap;
-    // pom.frag: the tutorial's diffuse, normal and bump (height) maps (bindings 0, 1, 2)
+    // pom.frag: the tutorial's diffuse, normal and bump (height) maps (bindings 4, 5, 6)
     std::shared_ptr<const Texture> s2DiffuseTexture;
     std::shared_ptr<const Texture> s2NormalTexture;
     std::shared_ptr<const Texture> s2BumpTexture;
