@@ -61,7 +61,7 @@ EOF
 }
 
 raise() {  # raise "[x, y, z]" -> y + depth
-    python3 -c "import sys; x, y, z = eval(sys.argv[1]); print(f'[{x}, {y + $depth}, {z}]')" "$1"
+    echo "$1" | tr -d '[],' | awk -v d="$depth" '{printf "[%s, %.4f, %s]\n", $1, $2 + d, $3}'
 }
 
 # compare A B -> "rmse  interior_rmse  silhouette_pixels": the RMSE of the whole pictures
