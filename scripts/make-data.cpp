@@ -32,6 +32,16 @@
 //    sum of its three face planes, (+-1,+-1,+-1)/sqrt(3); the icosahedron's are radial; the
 //    bump is a flat 7x7 grid with a raised middle, so its outer faces are flat (all three
 //    normals exactly (0,0,1)) and exercise the "flat patch at level 1" rule.
+//  - data/meshes/bump-uv.obj: the same plate with texture coordinates u = (x + 1) / 2,
+//    v = (y + 1) / 2, for normal and parallax mapping on PN triangles (pn-pom).
+//  - data/textures/pom-bricks-height.png, pom-bricks-normal.png, pom-bricks-diffuse.png:
+//    8-bit 256x256, tileable: a brick wall for the PN-triangles tutorial's normal and
+//    parallax occlusion mapping (pn-pom, terrain-pom). Height: 1 on the brick faces, 0.25
+//    in the mortar, a 10-texel smoothstep bevel between. Normal: the tangent-space
+//    normal of the surface z = 0.04 * height over uv (the scenes' bump_scale), by central
+//    differences with wrap-around: normalize(-dz/du, -dz/dv, 1) * 0.5 + 0.5, x along the
+//    image's columns (u), y along its rows (v, the first row is v = 0). Diffuse: brick red
+//    with noise, grey mortar.
 #include <OpenImageIO/imageio.h>
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
@@ -457,6 +467,87 @@ void make_bump(const std::string& dir) {
     write_mesh(mesh, dir + "/meshes/bump.off");
 }
 
+// ---- normal and parallax mapping (the PN-triangles tutorial, parts 1 and 2) ---------
+void make_bump_uv(const std::string& dir) {
+    Mesh mesh;
+    mesh.request_vertex_normals();
+    mesh.request_face_normals();
+    mesh.request_vertex_texcoords2D();
+    const int n = 7;  // as make_bump
+    std::vector<Mesh::VertexHandle> v(n * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float x = -1.f + 2.f * i / (n - 1), y = -1.f + 2.f * j / (n - 1);
+            const int ring = std::max(std::abs(i - n / 2), std::abs(j - n / 2));
+            const float z = ring == 0 ? 0.6f : ring == 1 ? 0.2f : 0.f;
+            v[j * n + i] = mesh.add_vertex(Mesh::Point(x, y, z));
+            mesh.set_texcoord2D(v[j * n + i], Mesh::TexCoord2D(float(i) / (n - 1), float(j) / (n - 1)));
+        }
+    for (int j = 0; j + 1 < n; ++j)
+        for (int i = 0; i + 1 < n; ++i) {
+            const auto a = v[j * n + i], b = v[j * n + i + 1], c = v[(j + 1) * n + i + 1], d = v[(j + 1) * n + i];
+            mesh.add_face(a, b, c);
+            mesh.add_face(a, c, d);
+        }
+    mesh.update_face_normals();
+    for (auto vh : mesh.vertices()) {
+        Mesh::Normal sum(0, 0, 0);
+        for (auto fh : mesh.vf_range(vh)) sum += mesh.normal(fh);
+        mesh.set_normal(vh, sum.normalize());
+    }
+    const std::string path = dir + "/meshes/bump-uv.obj";
+    OpenMesh::IO::Options options(OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord);
+    if (!OpenMesh::IO::write_mesh(mesh, path, options, 9)) {
+        std::fprintf(stderr, "make-data: cannot write %s\n", path.c_str());
+        std::exit(1);
+    }
+    std::printf("wrote %s\n", path.c_str());
+}
+
+void make_pom_bricks(const std::string& dir) {
+    const int n = 256, brick_w = 128, brick_h = 64, mortar = 4, bevel = 10;
+    const double scale = 0.04;  // the scenes' bump_scale (uv units per unit of height)
+    std::vector<double> height(n * n);
+    std::vector<std::uint8_t> h8(n * n), normal(n * n * 3), diffuse(n * n * 3);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            const int row = y / brick_h;
+            const int xs = (x + (row % 2) * brick_w / 2) % n;
+            // Distance in texels to the nearest mortar line (joints at brick edges).
+            const int dx = std::min(xs % brick_w, brick_w - 1 - xs % brick_w);
+            const int dy = std::min(y % brick_h, brick_h - 1 - y % brick_h);
+            const double d = std::min(dx, dy) - mortar + 0.5;
+            const double face = 1.0;  // flat faces at the surface: the trace toward the light starts level
+            const double t = std::clamp(d / bevel, 0.0, 1.0);
+            const double h = d < 0 ? 0.25 : 0.25 + (face - 0.25) * smooth(t);
+            const std::uint8_t code = static_cast<std::uint8_t>(std::lround(std::clamp(h, 0.0, 1.0) * 255.0));
+            h8[y * n + x] = code;
+            height[y * n + x] = code / 255.0;  // what the sampler reads
+            const double noise = periodic_fbm(double(x) / n, double(y) / n, 16, 3, 202u);
+            const bool brick = d >= 0;
+            const double r = brick ? 0.55 + 0.25 * noise : 0.62 + 0.1 * noise;
+            const double g = brick ? 0.22 + 0.12 * noise : 0.60 + 0.1 * noise;
+            const double b = brick ? 0.16 + 0.08 * noise : 0.55 + 0.1 * noise;
+            const double rgb[3] = {r, g, b};
+            for (int c = 0; c < 3; ++c)
+                diffuse[(y * n + x) * 3 + c] = static_cast<std::uint8_t>(std::lround(std::clamp(rgb[c], 0.0, 1.0) * 255.0));
+        }
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            auto at = [&](int i, int j) { return height[((j + n) % n) * n + (i + n) % n]; };
+            // dz/du = scale * dh/du, dh/du = (h(x+1) - h(x-1)) / 2 texels * n texels per uv
+            const double dzdu = scale * (at(x + 1, y) - at(x - 1, y)) * 0.5 * n;
+            const double dzdv = scale * (at(x, y + 1) - at(x, y - 1)) * 0.5 * n;
+            const double len = std::sqrt(dzdu * dzdu + dzdv * dzdv + 1.0);
+            const double nv[3] = {-dzdu / len, -dzdv / len, 1.0 / len};
+            for (int c = 0; c < 3; ++c)
+                normal[(y * n + x) * 3 + c] = static_cast<std::uint8_t>(std::lround((nv[c] * 0.5 + 0.5) * 255.0));
+        }
+    write_rgb_png(dir + "/textures/pom-bricks-height.png", n, 1, h8);
+    write_rgb_png(dir + "/textures/pom-bricks-normal.png", n, 3, normal);
+    write_rgb_png(dir + "/textures/pom-bricks-diffuse.png", n, 3, diffuse);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -468,5 +559,7 @@ int main(int argc, char** argv) {
     make_cube(dir);
     make_icosahedron(dir);
     make_bump(dir);
+    make_bump_uv(dir);
+    make_pom_bricks(dir);
     return 0;
 }

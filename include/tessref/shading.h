@@ -8,6 +8,9 @@
 //   lab4             lab4_terrain.frag              lab4_terrain           (lab 4, 2.6)
 //   cosc422          cosc422_terrain.frag           cosc422_terrain        (COSC422 step 6)
 //   pn               pn_triangles.frag              pn_triangles
+//   pom              pom.frag                       pom_shading            (the PN-triangles
+//                                                   tutorial's normal and parallax occlusion
+//                                                   mapping; parallax.h)
 //   flat, depth      (none: the "no shading" modes) flat_colour, depth_colour
 //   geomip_lightmap  (none yet: CPU only)           geomip_lightmap        (the geomorphing
 //                                                   article's light map, materials, clouds)
@@ -74,13 +77,15 @@
 
 #include <glm/glm.hpp>
 
+#include "tessref/parallax.h"
 #include "tessref/texture.h"
 
 namespace tessref {
 
-enum class ShadingKind : std::uint8_t { flat, depth, thesis_single, thesis_multi, lab4, cosc422, pn, geomip_lightmap };
+enum class ShadingKind : std::uint8_t { flat, depth, thesis_single, thesis_multi, lab4, cosc422, pn, geomip_lightmap, pom };
 
-// "flat", "depth", "thesis_single", "thesis_multi", "lab4", "cosc422", "pn", "geomip_lightmap".
+// "flat", "depth", "thesis_single", "thesis_multi", "lab4", "cosc422", "pn", "geomip_lightmap",
+// "pom".
 const char* to_string(ShadingKind kind);
 // The inverse of to_string; nullopt for an unknown name.
 std::optional<ShadingKind> shading_kind_from_string(std::string_view name);
@@ -94,6 +99,10 @@ struct FragmentInputs {
     glm::vec2 texCoord_dx{0.0f};  // dFdx(texCoord)
     glm::vec2 texCoord_dy{0.0f};  // dFdy(texCoord)
     float depth = 0.0f;           // gl_FragCoord.z
+    // The uv derivatives of the fragment's triangle (parallax.h, TANGENT FRAME): what pom.frag
+    // derives from dFdx/dFdy of its position and uv. Zero when the surface has no uv.
+    glm::vec3 dPdu{0.0f};
+    glm::vec3 dPdv{0.0f};
 };
 
 // Which FragmentInputs members a model reads.
@@ -103,6 +112,7 @@ struct FragmentNeeds {
     bool texCoord = false;
     bool texCoord_derivatives = false;  // only models that sample a texture
     bool depth = false;
+    bool uv_derivatives = false;  // dPdu, dPdv (pom)
 };
 FragmentNeeds fragment_needs(ShadingKind kind);
 
@@ -146,6 +156,20 @@ struct PnShading {
     glm::vec3 v3LightDirection{0.4f, 0.8f, 0.45f};
     glm::vec3 v3DiffuseColour{0.8f, 0.8f, 0.85f};
     float fShininess = 32.0f;
+};
+
+// pom.frag's uniforms (the PN-triangles tutorial's normal mapping, parallax occlusion
+// mapping and self-shadowing; parallax.h); defaults are the shader's initializers. The
+// light is pn_triangles.frag's. Its three textures are sampled with GL_REPEAT (GL's default
+// wrap mode; the scene loader sets it), so that fUvRepeat tiles them.
+struct PomShading {
+    glm::vec3 v3CameraPosition{0.0f};  // no initializer in GLSL: the scene's camera eye
+    glm::vec3 v3LightDirection{0.4f, 0.8f, 0.45f};
+    glm::vec3 v3DiffuseColour{1.0f};   // times the diffuse texture
+    float fShininess = 32.0f;
+    ParallaxParams parallax{};         // iParallaxMode, fBumpScale, fMinLayers, fMaxLayers, fShadowLayers
+    bool bSelfShadow = true;
+    float fUvRepeat = 1.0f;            // v2UV = texCoord * fUvRepeat: tiles across the surface's uv
 };
 
 // The "no shading" modes.
@@ -209,6 +233,10 @@ struct ShadingTextures {
     // scene holding a shared_ptr<const HeightField> hf can pass
     // std::shared_ptr<const Texture>(hf, &hf->texture).
     std::shared_ptr<const Texture> heightMap;
+    // pom.frag: the tutorial's diffuse, normal and bump (height) maps (bindings 4, 5, 6)
+    std::shared_ptr<const Texture> s2DiffuseTexture;
+    std::shared_ptr<const Texture> s2NormalTexture;
+    std::shared_ptr<const Texture> s2BumpTexture;
 };
 
 // The samplers a model's shader declares, in binding order ("diffuse", ..., "AmbientOcc";
@@ -232,6 +260,7 @@ struct ShadingModel {
     Cosc422Shading cosc422{};
     PnShading pn{};
     GeomipLightmapShading geomip{};
+    PomShading pom{};
     ShadingTextures textures{};
 };
 
@@ -303,6 +332,11 @@ glm::vec4 cosc422_terrain(const FragmentInputs& fragment, const Cosc422Shading& 
 glm::vec4 pn_triangles(const FragmentInputs& fragment, const PnShading& uniforms);
 
 glm::vec4 geomip_lightmap(const FragmentInputs& fragment, const GeomipLightmapShading& uniforms);
+
+// Normal mapping with the tangent frame of fragment.dPdu/dPdv, the parallax of
+// uniforms.parallax.mode and, with bSelfShadow, the self-shadow trace (parallax.h); the
+// diffuse texture at the shifted uv times v3DiffuseColour, lit as pn_triangles.
+glm::vec4 pom_shading(const FragmentInputs& fragment, const PomShading& uniforms, const ShadingTextures& textures);
 
 glm::vec4 flat_colour(const FlatShading& uniforms);
 glm::vec4 depth_colour(const FragmentInputs& fragment, const DepthShading& uniforms);

@@ -404,7 +404,11 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
 
     // (2) The GL backend against the golden image and the CPU capture.
-    if (scene.evaluation.model == EvaluationModel::geomipmap) {  // no GLSL twin yet (gl refuses it)
+    // No GLSL twin in the GL backend yet (gl refuses it): geomipmapping. pom shading has one
+    // (pn-pom) but its layer search flips on the last bits of llvmpipe's dFdx tangent frame in
+    // a few pixels, beyond this step's one-code rule: tests/test_parallax.cpp holds it with
+    // its own count, and its golden files are checked on the CPU only.
+    if (scene.evaluation.model == EvaluationModel::geomipmap || scene.shading.model.kind == ShadingKind::pom) {
         v.gl_compared = false;
         return v;
     }

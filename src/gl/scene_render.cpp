@@ -190,6 +190,15 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         case ShadingKind::geomip_lightmap:
             throw Error("tessref gl: shading model geomip_lightmap has no GLSL twin yet",
                         Where::at_key(scene.file, "shading.model"));
+        case ShadingKind::pom:
+            // pom.frag reads the PN evaluation shader's EvaluationData block; the terrain
+            // programs hand other blocks to the fragment stage.
+            if (em != EvaluationModel::pn)
+                throw Error("tessref gl: shading model pom has a GLSL twin for evaluation model pn only (not '" +
+                                std::string(to_string(em)) + "')",
+                            Where::at_key(scene.file, "shading.model"));
+            plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pom.frag"));
+            break;
     }
     return plan;
 }
@@ -495,6 +504,19 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
             u.v3("v3DiffuseColour", s.pn.v3DiffuseColour);
             u.f("fShininess", s.pn.fShininess);
             break;
+        case ShadingKind::pom:
+            u.v3("v3CameraPosition", s.pom.v3CameraPosition);
+            u.v3("v3LightDirection", s.pom.v3LightDirection);
+            u.v3("v3DiffuseColour", s.pom.v3DiffuseColour);
+            u.f("fShininess", s.pom.fShininess);
+            u.i("iParallaxMode", static_cast<int>(s.pom.parallax.mode));
+            u.f("fBumpScale", s.pom.parallax.fBumpScale);
+            u.f("fMinLayers", s.pom.parallax.fMinLayers);
+            u.f("fMaxLayers", s.pom.parallax.fMaxLayers);
+            u.f("fShadowLayers", s.pom.parallax.fShadowLayers);
+            u.i("bSelfShadow", s.pom.bSelfShadow ? 1 : 0);
+            u.f("fUvRepeat", s.pom.fUvRepeat);
+            break;
         case ShadingKind::geomip_lightmap: break;  // refused when the program is planned
     }
 }
@@ -560,14 +582,16 @@ GLuint upload(Context::Impl& c, const Texture& t, const std::string& what) {
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER,
                      t.min_filter() == MinFilter::linear ? GL_LINEAR : GL_LINEAR_MIPMAP_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    const GLint wrap = t.wrap() == Wrap::repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE;  // pom's samplers repeat
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrap);
     c.check_error(("uploading the texture " + what).c_str());
     return name;
 }
 
 // Texture units as the twins' layout(binding = N): 0 heightMap, 1 tessellationMap,
-// 2 normalMap, 4..14 the thesis fragment shaders' samplers (shading.h), 0 cosc422's heightMap.
+// 2 normalMap, 4..14 the thesis fragment shaders' samplers (shading.h), 0 cosc422's heightMap,
+// 4..6 pom's.
 struct BoundTextures {
     Context::Impl& c;
     std::vector<GLuint> names;

@@ -104,6 +104,14 @@ FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs,
         }
     }
     if (needs.texCoord && !s.mesh.uvs.empty()) f.texCoord = s.uv_at(triangle, b);
+    if (needs.uv_derivatives && !s.mesh.uvs.empty()) {
+        // pom.frag's dFdx/dFdy of position and uv, solved per triangle (parallax.h)
+        const UvDerivatives d = triangle_uv_derivatives(s.world(t[0]), s.world(t[1]), s.world(t[2]),
+                                                        glm::vec2(s.mesh.uvs[t[0]]), glm::vec2(s.mesh.uvs[t[1]]),
+                                                        glm::vec2(s.mesh.uvs[t[2]]));
+        f.dPdu = d.dPdu;
+        f.dPdv = d.dPdv;
+    }
     return f;
 }
 

@@ -29,7 +29,9 @@ const std::vector<std::string> kShadingKeys = {
     "sand_colour", "rock_colour", "sand_height", "blend_width",                     // lab4
     "ambient",                                                                      // cosc422, geomip_lightmap
     "materials", "clouds", "time",                                                  // geomip_lightmap
-    "diffuse_colour",                                                               // pn
+    "diffuse_colour",                                                               // pn, pom
+    "bump_scale", "parallax", "min_layers", "max_layers", "self_shadow", "shadow_layers",  // pom
+    "uv_repeat",                                                                    // pom
     "textures"};                                                                    // the models with samplers
 
 void set(float& target, const std::optional<double>& v) {
@@ -110,6 +112,26 @@ void read_model(TableReader& t, ShadingModel& m) {
             read_shininess(t, m.pn.fShininess);
             break;
         case ShadingKind::geomip_lightmap: break;  // read_geomip_lightmap
+        case ShadingKind::pom: {
+            read_direction(t, "light_direction", m.pom.v3LightDirection);
+            set(m.pom.v3DiffuseColour, t.vec3_opt("diffuse_colour"));
+            read_shininess(t, m.pom.fShininess);
+            ParallaxParams& p = m.pom.parallax;
+            if (const auto mode = t.choice_opt("parallax", {"none", "parallax", "steep", "occlusion"}))
+                p.mode = *parallax_mode_from_string(*mode);
+            set(p.fBumpScale, t.real_opt("bump_scale", 0.0, 16.0));
+            // The layer counts are loop bounds in the shader: whole numbers from 1 to 256.
+            if (const auto v = t.integer_opt("min_layers", 1, 256)) p.fMinLayers = static_cast<float>(*v);
+            if (const auto v = t.integer_opt("max_layers", 1, 256)) p.fMaxLayers = static_cast<float>(*v);
+            if (const auto v = t.integer_opt("shadow_layers", 1, 256)) p.fShadowLayers = static_cast<float>(*v);
+            if (p.fMinLayers > p.fMaxLayers)
+                t.fail(t.has("min_layers") ? "min_layers" : "max_layers",
+                       t.key("min_layers") + " = " + format_number(p.fMinLayers) + " is above " + t.key("max_layers") +
+                           " = " + format_number(p.fMaxLayers));
+            if (const auto v = t.boolean_opt("self_shadow")) m.pom.bSelfShadow = *v;
+            set(m.pom.fUvRepeat, t.real_opt("uv_repeat", 0.0, 65536.0, true));
+            break;
+        }
     }
 }
 
@@ -289,6 +311,7 @@ RenderShading read_shading(const std::string& file, const toml::table* table, co
         const glm::vec3 eye(scene.camera->eye);
         m.lab4.cameraPosition = eye;
         m.pn.v3CameraPosition = eye;
+        m.pom.v3CameraPosition = eye;
         m.depth.near_plane = static_cast<float>(scene.camera->near_plane);
         m.depth.far_plane = static_cast<float>(scene.camera->far_plane);
     }
@@ -300,8 +323,8 @@ RenderShading read_shading(const std::string& file, const toml::table* table, co
         const auto kind = shading_kind_from_string(*name);
         if (!kind)
             t.fail("model", "unknown shading model '" + *name +
-                                "'; expected flat, depth, thesis_single, thesis_multi, lab4, cosc422, pn or "
-                                "geomip_lightmap");
+                                "'; expected flat, depth, thesis_single, thesis_multi, lab4, cosc422, pn, "
+                                "geomip_lightmap or pom");
         m.kind = *kind;
         model = *name;
     }
@@ -331,6 +354,16 @@ RenderShading read_shading(const std::string& file, const toml::table* table, co
     // COSC422's fragment shader samples the terrain's own height map.
     if (m.kind == ShadingKind::cosc422 && !m.textures.heightMap && scene.grid && scene.grid->heightmap)
         m.textures.heightMap = std::shared_ptr<const Texture>(scene.grid->heightmap, &scene.grid->heightmap->texture);
+    // pom.frag's samplers wrap (GL's default), so that uv_repeat tiles them.
+    if (m.kind == ShadingKind::pom)
+        for (const std::string& name : samplers) {
+            auto& slot = *sampler_slot(m.textures, name);
+            if (slot && slot->wrap() != Wrap::repeat) {
+                auto copy = std::make_shared<Texture>(*slot);
+                copy->set_wrap(Wrap::repeat);
+                slot = std::move(copy);
+            }
+        }
     t.finish("by shading model " + model);
 
     // GL would read (0, 0, 0, 1) from a sampler with no texture: surely not what was meant.

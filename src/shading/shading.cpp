@@ -45,8 +45,9 @@ constexpr std::array<std::string_view, 11> kThesisMultiSamplers{
     "dry_grass12",       "romanian_sand05",      "VertRock_0_90_mask",
     "VertDetail_0_90_mask", "Grass_mask",        "Flow_mask",     "AmbientOcc"};
 constexpr std::array<std::string_view, 1> kCosc422Samplers{"heightMap"};
+constexpr std::array<std::string_view, 3> kPomSamplers{"s2DiffuseTexture", "s2NormalTexture", "s2BumpTexture"};
 
-constexpr std::array<std::pair<ShadingKind, const char*>, 8> kKindNames{{
+constexpr std::array<std::pair<ShadingKind, const char*>, 9> kKindNames{{
     {ShadingKind::flat, "flat"},
     {ShadingKind::depth, "depth"},
     {ShadingKind::thesis_single, "thesis_single"},
@@ -55,6 +56,7 @@ constexpr std::array<std::pair<ShadingKind, const char*>, 8> kKindNames{{
     {ShadingKind::cosc422, "cosc422"},
     {ShadingKind::pn, "pn"},
     {ShadingKind::geomip_lightmap, "geomip_lightmap"},
+    {ShadingKind::pom, "pom"},
 }};
 
 }  // namespace
@@ -84,6 +86,10 @@ FragmentNeeds fragment_needs(ShadingKind kind) {
         case ShadingKind::lab4:
         case ShadingKind::pn: needs.worldPosition = needs.normal = true; break;
         case ShadingKind::geomip_lightmap: needs.texCoord = needs.texCoord_derivatives = true; break;
+        case ShadingKind::pom:
+            needs.worldPosition = needs.normal = needs.texCoord = needs.texCoord_derivatives = true;
+            needs.uv_derivatives = true;
+            break;
     }
     return needs;
 }
@@ -104,6 +110,7 @@ std::span<const std::string_view> sampler_names(ShadingKind kind) {
         case ShadingKind::thesis_single: return kThesisSingleSamplers;
         case ShadingKind::thesis_multi: return kThesisMultiSamplers;
         case ShadingKind::cosc422: return kCosc422Samplers;
+        case ShadingKind::pom: return kPomSamplers;
         default: return {};
     }
 }
@@ -121,6 +128,9 @@ std::shared_ptr<const Texture>* sampler_slot(ShadingTextures& t, std::string_vie
     if (name == "Flow_mask") return &t.Flow_mask;
     if (name == "AmbientOcc") return &t.AmbientOcc;
     if (name == "heightMap") return &t.heightMap;
+    if (name == "s2DiffuseTexture") return &t.s2DiffuseTexture;
+    if (name == "s2NormalTexture") return &t.s2NormalTexture;
+    if (name == "s2BumpTexture") return &t.s2BumpTexture;
     return nullptr;
 }
 
@@ -395,6 +405,7 @@ glm::vec4 shade(const ShadingModel& model, const FragmentInputs& fragment) {
         case ShadingKind::cosc422: return cosc422_terrain(fragment, model.cosc422, model.textures.heightMap.get());
         case ShadingKind::pn: return pn_triangles(fragment, model.pn);
         case ShadingKind::geomip_lightmap: return geomip_lightmap(fragment, model.geomip);
+        case ShadingKind::pom: return pom_shading(fragment, model.pom, model.textures);
     }
     return flat_colour(model.flat);
 }
