@@ -156,29 +156,44 @@ WeldIndex weld_index(const SurfaceMesh& mesh) {
     std::vector<std::uint32_t>& source = result.source;
     {
         source.reserve(n);
-        // Open addressing, linear probing, at most half full: a slot holds a welded
-        // vertex id (or `empty`). Several times faster than std::unordered_map here, which
-        // allocates a node per vertex.
-        constexpr std::uint32_t empty = std::numeric_limits<std::uint32_t>::max();
+        // Open addressing, linear probing, at most half full: a slot holds a welded vertex id
+        // in its low 32 bits and the high 32 bits of its key's hash above them (all ones:
+        // empty; no id is 2^32 - 1), so that a probe passing another vertex's slot rarely
+        // reads that vertex's position. Several times faster than std::unordered_map here,
+        // which allocates a node per vertex; the slot a few vertices ahead is prefetched,
+        // the table being far larger than the caches.
+        constexpr std::uint64_t empty = std::numeric_limits<std::uint64_t>::max();
         std::size_t capacity = 16;
         while (capacity < 2 * n) capacity *= 2;
         const std::size_t mask = capacity - 1;
-        std::vector<std::uint32_t> slots(capacity, empty);
+        std::vector<std::uint64_t> slots(capacity, empty);
         const bool has_patch_ids = !mesh.patch_ids.empty();
+        const auto hash_of = [&mesh](std::size_t i) {
+            return static_cast<std::uint64_t>(PositionKeyHash{}(position_key(mesh.positions[i])));
+        };
+        constexpr std::size_t ahead = 8;
         for (std::uint32_t i = 0; i < n; ++i) {
+            if (i + ahead < n) __builtin_prefetch(&slots[hash_of(i + ahead) & mask]);
             const PositionKey key = position_key(mesh.positions[i]);
-            std::size_t slot = PositionKeyHash{}(key) & mask;
+            const std::uint64_t hash = PositionKeyHash{}(key);
+            const std::uint64_t tag = hash >> 32;
+            std::size_t slot = hash & mask;
             // A welded vertex's key is its source copy's: every copy has the same key.
-            while (slots[slot] != empty && !(position_key(mesh.positions[source[slots[slot]]]) == key))
+            while (slots[slot] != empty &&
+                   !((slots[slot] >> 32) == tag &&
+                     position_key(mesh.positions[source[static_cast<std::uint32_t>(slots[slot])]]) == key))
                 slot = (slot + 1) & mask;
+            std::uint32_t welded;
             if (slots[slot] == empty) {
-                slots[slot] = static_cast<std::uint32_t>(source.size());
+                welded = static_cast<std::uint32_t>(source.size());
+                slots[slot] = tag << 32 | welded;
                 source.push_back(i);
-            } else if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[slots[slot]]]) {
+            } else {
+                welded = static_cast<std::uint32_t>(slots[slot]);
                 // Lowest patch id wins; on a tie the earlier copy (already there) stays.
-                source[slots[slot]] = i;
+                if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[welded]]) source[welded] = i;
             }
-            result.vertex_map[i] = slots[slot];
+            result.vertex_map[i] = welded;
         }
     }
     source.shrink_to_fit();
