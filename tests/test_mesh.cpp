@@ -1,4 +1,6 @@
-// tests/test_mesh.cpp — export of a SurfaceMesh through OpenMesh (include/tessref/mesh.h).
+// tests/test_mesh.cpp — export of a SurfaceMesh (include/tessref/mesh.h): PLY by tessref's
+// writer, which must write byte for byte what OpenMesh's PLY writer writes; OBJ, OFF, STL
+// through OpenMesh.
 //
 // The contract checked here:
 //  - welding merges exactly the bitwise-equal positions (one ulp apart stays apart), and
