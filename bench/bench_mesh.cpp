@@ -6,7 +6,9 @@
 //    and exact (double) precision: the whole command (pipeline + binary PLY written to
 //    memory), and the pipeline alone. The scene is loaded once, outside the timing.
 //    Counters: patches/s and triangles/s, per second of process CPU time (all threads).
-//  - BM_ExportSynthetic / BM_WeldSynthetic: the export alone on a synthetic terrain.
+//  - BM_ExportSynthetic / BM_WeldSynthetic: the export alone on a synthetic terrain; for
+//    PLY also through OpenMesh's PLY writer (writer = 0, the reference tessref's own PLY
+//    writer reproduces byte for byte; writer = 1 is write_mesh's), for a same-run ratio.
 //
 //   build/bench_mesh --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -18,6 +20,7 @@
 #include <streambuf>
 #include <string>
 
+#include "mesh/openmesh.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
 
@@ -143,6 +146,7 @@ tessref::SurfaceMesh synthetic_terrain(int side, int level) {
 void BM_ExportSynthetic(benchmark::State& state) {
     const auto format = static_cast<tessref::MeshFormat>(state.range(0));
     const bool binary = state.range(1) != 0;
+    const bool openmesh_writer = state.range(2) == 0;
     const tessref::SurfaceMesh mesh = synthetic_terrain(16, 64);
     tessref::MeshWriteOptions options;
     options.format = format;
@@ -151,22 +155,28 @@ void BM_ExportSynthetic(benchmark::State& state) {
     for (auto _ : state) {
         CountingBuffer buffer;
         std::ostream out(&buffer);
-        const tessref::MeshWriteReport report = tessref::write_mesh(mesh, out, options);
+        const tessref::MeshWriteReport report = openmesh_writer
+                                                    ? tessref::mesh_detail::write_mesh_through_openmesh(mesh, out, options)
+                                                    : tessref::write_mesh(mesh, out, options);
         triangles += report.triangles;
         bytes += buffer.bytes();
     }
     state.counters["triangles/s"] = benchmark::Counter(static_cast<double>(triangles), benchmark::Counter::kIsRate);
     state.counters["bytes/s"] = benchmark::Counter(static_cast<double>(bytes), benchmark::Counter::kIsRate);
-    state.SetLabel(std::string(tessref::to_string(format)) + (binary ? " binary" : " ascii"));
+    state.SetLabel(std::string(tessref::to_string(format)) + (binary ? " binary" : " ascii") +
+                   (format == tessref::MeshFormat::ply ? (openmesh_writer ? ", OpenMesh's writer" : ", tessref's writer")
+                                                       : ""));
 }
 
 BENCHMARK(BM_ExportSynthetic)
-    ->Args({0, 0})
-    ->Args({0, 1})
-    ->Args({1, 0})
-    ->Args({2, 1})
-    ->Args({3, 1})
-    ->ArgNames({"format", "binary"})
+    ->Args({0, 0, 1})
+    ->Args({0, 0, 0})
+    ->Args({0, 1, 1})
+    ->Args({0, 1, 0})
+    ->Args({1, 0, 1})
+    ->Args({2, 1, 1})
+    ->Args({3, 1, 1})
+    ->ArgNames({"format", "binary", "writer"})
     ->Unit(benchmark::kMillisecond);
 
 // Welding alone on the same mesh.

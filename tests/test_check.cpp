@@ -700,6 +700,77 @@ TEST(CheckReport, SameReportWhateverTheThreadCount) {
     EXPECT_EQ(one, tessref::report_json(tessref::check_mesh(broken, quick())));
 }
 
+// read_and_check_mesh() (the command's path, OpenMesh's import skipped where the topology
+// proves it refuses nothing) against read_mesh_for_check() then check_mesh(): the same mesh,
+// refused faces included, and the same report.
+void expect_read_and_check_as_before(const fs::path& file, const CheckOptions& options) {
+    SCOPED_TRACE(file.string());
+    const IndexedMesh before = tessref::read_mesh_for_check(file.string());
+    const std::string before_report = tessref::report_json(tessref::check_mesh(before, options));
+    const tessref::CheckedMesh after = tessref::read_and_check_mesh(file.string(), options);
+    EXPECT_EQ(after.mesh.kernel_refused_faces, before.kernel_refused_faces);
+    EXPECT_EQ(after.mesh.positions, before.positions);
+    EXPECT_EQ(after.mesh.face_vertices, before.face_vertices);
+    EXPECT_EQ(tessref::report_json(after.report), before_report);
+}
+
+// An OFF file of `mesh`'s triangles in the order `order` gives (indices into its triangles).
+void write_off(const fs::path& file, const IndexedMesh& mesh, const std::vector<std::size_t>& order) {
+    std::ofstream out(file);
+    out.precision(17);
+    out << "OFF\n" << mesh.vertex_count() << " " << order.size() << " 0\n";
+    for (const glm::dvec3& p : mesh.positions) out << p.x << " " << p.y << " " << p.z << "\n";
+    for (const std::size_t f : order) {
+        const auto face = mesh.face(f);
+        out << face.size();
+        for (const std::uint32_t v : face) out << " " << v;
+        out << "\n";
+    }
+}
+
+TEST(CheckReadAndCheck, SameMeshAndReportForEveryCorpusFile) {
+    for (const auto& entry : fs::directory_iterator(corpus_dir)) {
+        const std::string ext = entry.path().extension().string();
+        if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl") continue;
+        expect_read_and_check_as_before(entry.path(), quick());
+    }
+    for (const auto& entry : fs::directory_iterator(fs::path(TESSREF_DATA_DIR) / "meshes"))
+        expect_read_and_check_as_before(entry.path(), quick());
+}
+
+TEST(CheckReadAndCheck, SameRefusedFacesWhateverTheFaceOrder) {
+    // OpenMesh's kernel adds faces one by one, re-linking the fans that meet at a vertex;
+    // the order decides how it links them. Terrains with faces shuffled, with random faces
+    // left out (holes, pinched vertices between them), some flipped, some repeated: where the
+    // fast path applies it must agree with the kernel, whatever the order.
+    const IndexedMesh shapes[] = {
+        tessref::indexed_mesh_from(grid_terrain(3, 4, hills)),
+        tessref::read_mesh_file((fs::path(TESSREF_DATA_DIR) / "meshes" / "icosahedron.off").string()),
+        tessref::read_mesh_file((fs::path(TESSREF_DATA_DIR) / "meshes" / "bump.off").string())};
+    std::uint64_t random = 12345;
+    const auto next = [&random](std::uint64_t n) {
+        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<std::size_t>((random >> 33) % n);
+    };
+    const fs::path dir = scratch_dir();
+    for (int trial = 0; trial < 60; ++trial) {
+        const IndexedMesh& terrain = shapes[trial % 3];
+        std::vector<std::size_t> order;
+        for (std::size_t f = 0; f < terrain.face_count(); ++f)
+            if (trial % 4 == 0 || next(10) != 0) order.push_back(f);  // one trial in four keeps all
+        for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[next(i)]);
+        IndexedMesh mesh = terrain;
+        if (trial % 5 == 3) {  // one face flipped
+            const std::size_t f = order[next(order.size())];
+            std::swap(mesh.face_vertices[mesh.face_start[f]], mesh.face_vertices[mesh.face_start[f] + 1]);
+        }
+        if (trial % 7 == 5) order.push_back(order[next(order.size())]);  // a duplicate face
+        const fs::path file = dir / ("shuffled-" + std::to_string(trial) + ".off");
+        write_off(file, mesh, order);
+        expect_read_and_check_as_before(file, quick());
+    }
+}
+
 TEST(CheckReport, LocationsAreCappedCountsAreNot) {
     CheckOptions options = quick();
     options.max_locations = 1;

@@ -1,4 +1,6 @@
-// tests/test_mesh.cpp — export of a SurfaceMesh through OpenMesh (include/tessref/mesh.h).
+// tests/test_mesh.cpp — export of a SurfaceMesh (include/tessref/mesh.h): PLY by tessref's
+// writer, which must write byte for byte what OpenMesh's PLY writer writes; OBJ, OFF, STL
+// through OpenMesh.
 //
 // The contract checked here:
 //  - welding merges exactly the bitwise-equal positions (one ulp apart stays apart), and
@@ -33,6 +35,7 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include "mesh/openmesh.h"
 #include "tessref/error.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
@@ -501,6 +504,99 @@ TEST(MeshFormat, WritingIsDeterministic) {
             tessref::write_mesh(two_patch_mesh(), b, options);
             EXPECT_FALSE(a.str().empty());
             EXPECT_EQ(a.str(), b.str()) << tessref::to_string(format) << (binary ? " binary" : "");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// tessref's PLY writer against OpenMesh's: the same bytes
+
+// write_mesh() (tessref's PLY writer) and OpenMesh's PLY writer on one mesh and options.
+void expect_ply_as_openmesh_writes_it(const SurfaceMesh& mesh, MeshWriteOptions options, const std::string& what) {
+    options.format = MeshFormat::ply;
+    std::ostringstream ours, reference;
+    const tessref::MeshWriteReport a = tessref::write_mesh(mesh, ours, options);
+    const tessref::MeshWriteReport b = tessref::mesh_detail::write_mesh_through_openmesh(mesh, reference, options);
+    const std::string label = what + (options.binary ? " binary" : " ascii") + " digits " +
+                              std::to_string(options.ascii_digits) + (options.weld ? "" : " unwelded");
+    EXPECT_FALSE(ours.str().empty()) << label;
+    EXPECT_TRUE(ours.str() == reference.str())
+        << label << ": " << ours.str().size() << " bytes against OpenMesh's " << reference.str().size()
+        << "; first difference at byte "
+        << (std::mismatch(ours.str().begin(), ours.str().end(), reference.str().begin(), reference.str().end()).first -
+            ours.str().begin());
+    EXPECT_EQ(a.vertices, b.vertices) << label;
+    EXPECT_EQ(a.triangles, b.triangles) << label;
+    EXPECT_EQ(a.degenerate_triangles, b.degenerate_triangles) << label;
+    EXPECT_EQ(a.float_distinct_vertices, b.float_distinct_vertices) << label;
+    EXPECT_EQ(a.float_degenerate_triangles, b.float_degenerate_triangles) << label;
+}
+
+void expect_ply_as_openmesh_writes_it(const SurfaceMesh& mesh, const std::string& what) {
+    for (const bool binary : {false, true}) {
+        for (const bool weld : {true, false}) {
+            for (const int digits : {9, 4, 17}) {
+                if (binary && digits != 9) continue;  // binary has no digits
+                MeshWriteOptions options;
+                options.binary = binary;
+                options.weld = weld;
+                options.ascii_digits = digits;
+                expect_ply_as_openmesh_writes_it(mesh, options, what);
+            }
+        }
+    }
+}
+
+TEST(PlyWriter, WritesWhatOpenMeshWritesForEveryAttributeCombination) {
+    for (int dropped = 0; dropped < 16; ++dropped) {
+        for (const bool exact : {false, true}) {
+            SurfaceMesh mesh = exact ? two_patch_mesh_double() : two_patch_mesh();
+            std::string what = exact ? "double positions" : "float positions";
+            if (dropped & 1) mesh.normals.clear(), what += ", no normals";
+            if (dropped & 2) mesh.uvs.clear(), what += ", no uvs";
+            if (dropped & 4) mesh.patch_ids.clear(), what += ", no patch ids";
+            if (dropped & 8) mesh.tess_coords.clear(), what += ", no tess coords";
+            expect_ply_as_openmesh_writes_it(mesh, what);
+        }
+    }
+}
+
+TEST(PlyWriter, WritesWhatOpenMeshWritesForOddMeshes) {
+    // Negative zeros, huge and tiny numbers, a degenerate triangle, patch ids beyond 2^31
+    // (written as PLY's int, wrapped as OpenMesh's int property wraps them), no triangle.
+    SurfaceMesh mesh = two_patch_mesh();
+    mesh.positions[0] = {-0.0, 3.4e38, -1e-45};
+    mesh.normals[1] = {-0.0, 0.0, -1.0};
+    mesh.uvs[2] = {-1e30, 1e-30};
+    mesh.patch_ids[3] = 0x80000005u;
+    mesh.tess_coords[4] = {-0.0f, 1e-40f, 0.5f};
+    mesh.triangles.push_back({0, 0, 1});
+    expect_ply_as_openmesh_writes_it(mesh, "odd values");
+    SurfaceMesh no_triangles = two_patch_mesh();
+    no_triangles.triangles.clear();
+    expect_ply_as_openmesh_writes_it(no_triangles, "no triangles");
+    SurfaceMesh positions_only;
+    positions_only.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+    positions_only.triangles = {{0, 1, 2}, {1, 3, 2}};
+    expect_ply_as_openmesh_writes_it(positions_only, "positions only");
+}
+
+TEST(PlyWriter, WritesWhatOpenMeshWritesForShippedScenes) {
+    // A terrain with normals and uvs (thesis), one with face normals' scenes, the PN
+    // triangle mesh (a closed mesh from a file), in both precisions.
+    for (const char* name : {"thesis-map-4", "jacksboro", "pn-triangles", "cosc422", "olinda"}) {
+        const fs::path path = fs::path(TESSREF_DATA_DIR) / "scenes" / (std::string(name) + ".toml");
+        const tessref::Scene scene = tessref::load_scene(path.string());
+        for (const tessref::Precision precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
+            tessref::PipelineOptions options;
+            options.precision = precision;
+            const tessref::PipelineResult result = tessref::run_pipeline(scene, options);
+            for (const bool binary : {false, true}) {
+                MeshWriteOptions write_options;
+                write_options.binary = binary;
+                expect_ply_as_openmesh_writes_it(result.mesh, write_options,
+                                                 std::string(name) + " " + std::string(tessref::to_string(precision)));
+            }
         }
     }
 }

@@ -243,6 +243,23 @@ struct CheckReport {
 // whatever the thread count.
 CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options = {});
 
+// read_mesh_for_check() then check_mesh(), as `tessref check` runs them: the same mesh
+// (kernel_refused_faces included) and the same report, in less time. OpenMesh's import,
+// which asks its kernel which faces it refuses, is sequential and about a fifth of the
+// whole; it is skipped where the check's own topology proves that the kernel refuses no face
+// but those with a repeated vertex or fewer than three vertices (its importer drops them):
+// every edge has at most two faces and they traverse it in opposite directions, every vertex
+// has one fan, and no face is a duplicate or has a non-finite corner. Then no face the
+// importer adds, in any order, meets a complex edge, a complex vertex or a failed patch
+// re-linking (OpenMesh's PolyConnectivity::add_face), so none is refused. Otherwise the
+// import runs as read_mesh_for_check() runs it.
+struct CheckedMesh {
+    IndexedMesh mesh;
+    CheckReport report;
+};
+CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options = {},
+                                const std::function<void(double)>& read_progress = {});
+
 // The whole report as JSON text (pretty-printed, ends with a newline).
 std::string report_json(const CheckReport& report);
 // A human-readable summary: counts per class and the first few locations of each.

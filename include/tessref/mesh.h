@@ -17,8 +17,12 @@
 //     tess coord, patch id), the welded vertex takes ALL of them from one copy: the copy
 //     with the lowest patch id, and among those the one emitted first. The result does not
 //     depend on the order of the input vertices beyond that tie-break.
-//  3. Write through OpenMesh's writers (OpenMesh::IO::IOManager, on a stream, fed by an
-//     exporter; see below). What each format carries:
+//  3. Write: PLY through tessref's own writer, which writes byte for byte what OpenMesh's
+//     PLY writer writes for the same mesh and options (tests/test_mesh.cpp compares the two;
+//     src/mesh/openmesh.h keeps OpenMesh's as the reference) straight from the welded
+//     arrays, in large buffered writes; OBJ, OFF and STL through OpenMesh's writers
+//     (OpenMesh::IO::IOManager, on a stream, fed by an exporter; see below). What each
+//     format carries:
 //       ply  positions, vertex normals (nx ny nz), uv (u v), and the provenance of every
 //            vertex as extra properties: `property int patch_id`, `property float tess_u`,
 //            `tess_v`, `tess_w`; ascii or --binary (little endian).
@@ -118,7 +122,9 @@ struct MeshWriteOptions {
     bool weld = true;
     // Called from the calling thread with a stage ("welding", "collecting", "writing") and
     // the fraction of it done, a few hundred times at most; may be empty. OpenMesh's
-    // writer reports nothing while it runs, so "writing" comes at 0 and 1 only.
+    // writer reports nothing while it runs, so for OBJ, OFF and STL "writing" comes at 0
+    // and 1 only, after "collecting" (the copy into OpenMesh's kernel); PLY has no
+    // "collecting" and reports its writing as it goes.
     std::function<void(std::string_view stage, double fraction)> progress;
 };
 
@@ -141,8 +147,11 @@ struct MeshWriteReport {
     std::string precision_warning() const;
 };
 
-// Welds `mesh` and writes it to `out` (opened in binary mode for a binary format) through
-// OpenMesh. Throws tessref::Error when the mesh is inconsistent, a position is not finite
+// Welds `mesh` and writes it to `out` (opened in binary mode for a binary format), PLY with
+// tessref's writer, the other formats through OpenMesh. Besides `mesh`, the memory it takes
+// is the weld's (while welding, a hash table of 16 to 32 bytes and a map of 4 bytes per
+// emitted vertex; then 4 bytes per welded vertex and 12 per triangle), and for OBJ, OFF and
+// STL OpenMesh's copy of the welded vertices. Throws tessref::Error when the mesh is inconsistent, a position is not finite
 // or beyond the float range (files store floats; the error names the vertex, its patch and
 // tess coord), the options ask for what the format cannot do, or the stream fails. `out` may then hold part of a file: a caller
 // writing a file writes a temporary file next to it and renames it only on success, as

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <functional>
 #include <unordered_map>
 
 #include "check/check_internal.h"
@@ -104,9 +105,9 @@ void classify_faces(CheckState& state) {
     }
 }
 
-void report_refused_faces(CheckState& state) {
+void report_refused_faces(CheckState& state, const std::vector<std::uint32_t>& refused_faces) {
     const IndexedMesh& mesh = state.mesh;
-    for (std::uint32_t f : mesh.kernel_refused_faces) {
+    for (std::uint32_t f : refused_faces) {
         if (f >= mesh.face_count()) continue;
         Defect d;
         const auto face = mesh.face(f);
@@ -145,9 +146,11 @@ void attach_faces(CheckState& state) {
         }
 }
 
-}  // namespace
+// Which faces OpenMesh's kernel refuses, asked once the topology is known (after
+// find_non_manifold_vertices): read_and_check_mesh() may then answer without the import.
+using RefusedFaces = std::function<const std::vector<std::uint32_t>&(const CheckState&)>;
 
-CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
+CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, const RefusedFaces& refused_faces) {
     CheckReport report;
     report.source = mesh.source;
     report.format = mesh.format;
@@ -184,7 +187,6 @@ CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
     report.unreferenced_vertices = static_cast<std::size_t>(
         std::count(state.vertex_referenced.begin(), state.vertex_referenced.end(), std::uint8_t{0}));
 
-    report_refused_faces(state);
     build_half_edges(state);
     state.progress("topology", 0.15);
     find_duplicate_faces(state);
@@ -192,6 +194,9 @@ CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
     report.closed = state.boundary.empty();
     state.progress("topology", 0.3);
     find_non_manifold_vertices(state);
+    // Only this step adds refused_face defects, and no later step reads them: here or first,
+    // the report is the same.
+    report_refused_faces(state, refused_faces(state));
     state.progress("topology", 0.4);
     find_components(state);
     check_orientation(state);
@@ -226,6 +231,49 @@ CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
     report.passed = std::all_of(report.defects.begin(), report.defects.end(), [](const DefectReport& r) { return r.count == 0; });
     state.progress("done", 1.0);
     return report;
+}
+
+// Whether the kernel provably refuses only the faces its importer drops (check.h,
+// read_and_check_mesh): every face it adds is kept, and the kept faces are an oriented
+// 2-manifold with boundary.
+bool kernel_refuses_only_dropped_faces(const CheckState& state) {
+    if (state.non_manifold_edges != 0 || state.inconsistent_edges != 0) return false;
+    if (state.report.count(DefectClass::non_manifold_vertex) != 0) return false;
+    return std::all_of(state.face_status.begin(), state.face_status.end(), [](std::uint8_t status) {
+        return status == face_kept || status == face_too_few_vertices || status == face_repeated_vertex;
+    });
+}
+
+}  // namespace
+
+CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
+    return run_checks(mesh, options, [&mesh](const CheckState&) -> const std::vector<std::uint32_t>& {
+        return mesh.kernel_refused_faces;
+    });
+}
+
+CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options,
+                                const std::function<void(double)>& read_progress) {
+    MeshFileOptions read_options;
+    read_options.progress = read_progress;
+    CheckedMesh out;
+    out.mesh = read_mesh_file(path, read_options);
+    std::vector<std::uint32_t>& refused = out.mesh.kernel_refused_faces;
+    out.report = run_checks(out.mesh, options, [&refused](const CheckState& state) -> const std::vector<std::uint32_t>& {
+        refused.clear();
+        if (kernel_refuses_only_dropped_faces(state)) {
+            // An add_face with a complex edge needs a half-edge already traversed the same way;
+            // a complex vertex, a closed fan and a further face there (a second fan, or a third
+            // face on one of its edges); a failed re-linking, the new face closing a fan while
+            // another fan waits at the vertex (again a second fan). None exists here.
+            for (std::size_t f = 0; f < state.face_status.size(); ++f)
+                if (state.face_status[f] != face_kept) refused.push_back(static_cast<std::uint32_t>(f));
+        } else {
+            refused = kernel_refused_faces(state.mesh);
+        }
+        return refused;
+    });
+    return out;
 }
 
 }  // namespace tessref

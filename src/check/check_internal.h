@@ -160,6 +160,10 @@ void find_coincident_vertices(CheckState& state);
 void find_t_junctions(CheckState& state);
 void run_ray_probe(CheckState& state);
 
+// The faces of `mesh` OpenMesh's kernel refuses (IndexedMesh::kernel_refused_faces), by
+// importing it (src/mesh/openmesh.h).
+std::vector<std::uint32_t> kernel_refused_faces(const IndexedMesh& mesh);
+
 // Shared geometry helpers.
 glm::dvec3 face_vector_area(const IndexedMesh& mesh, std::size_t f);  // Newell, half the normal sum
 std::string format_point(const glm::dvec3& p);

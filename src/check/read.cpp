@@ -1198,10 +1198,14 @@ IndexedMesh read_mesh_for_check(const std::string& path, const std::function<voi
     MeshFileOptions options;
     options.progress = progress;
     IndexedMesh mesh = read_mesh_file(path, options);
+    mesh.kernel_refused_faces = check_detail::kernel_refused_faces(mesh);
+    return mesh;
+}
+
+std::vector<std::uint32_t> check_detail::kernel_refused_faces(const IndexedMesh& mesh) {
     // The importer explains each refusal on omerr(); the check's report does that.
     const mesh_detail::QuietStream quiet(::omerr());
-    mesh.kernel_refused_faces = mesh_detail::import_half_edge_mesh(mesh, false).refused_faces;
-    return mesh;
+    return mesh_detail::import_half_edge_mesh(mesh, false).refused_faces;
 }
 
 IndexedMesh indexed_mesh_from(const SurfaceMesh& surface) {

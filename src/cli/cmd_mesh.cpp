@@ -1,6 +1,6 @@
 // tessref mesh — runs a scene's pipeline and writes the tessellated surface as a mesh file
-// through OpenMesh (PLY, OBJ, OFF, STL; see include/tessref/mesh.h for what each carries
-// and how vertices are welded).
+// (PLY with tessref's writer, byte for byte OpenMesh's; OBJ, OFF, STL through OpenMesh; see
+// include/tessref/mesh.h for what each carries and how vertices are welded).
 //
 //   tessref mesh SCENE [-o OUT.{ply,obj,off,stl}] [--capture CAP.{txt,ply}] [--precision gpu|exact]
 //                [--binary] [--solid [--base B]] [--threads N] [--camera-relative]

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -135,44 +136,89 @@ struct PositionKeyHash {
 
 }  // namespace
 
-WeldedMesh weld_bitwise(const SurfaceMesh& mesh) {
+namespace {
+
+// What welding decides, without copying any attribute: the emitted copy each welded vertex
+// takes its attributes from (`source`, in welded order), emitted vertex -> welded vertex,
+// and the welded triangles (degenerate ones left out and counted). Validates `mesh` first.
+struct WeldIndex {
+    std::vector<std::uint32_t> source;
+    std::vector<std::uint32_t> vertex_map;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    std::size_t degenerate_triangles = 0;
+};
+
+WeldIndex weld_index(const SurfaceMesh& mesh) {
     validate(mesh);
     const std::size_t n = mesh.positions.size();
-    WeldedMesh result;
+    WeldIndex result;
     result.vertex_map.resize(n);
-
-    // The emitted copy each welded vertex takes its attributes from, and its key.
-    std::vector<std::uint32_t> source;
-    std::vector<PositionKey> keys;
-    source.reserve(n);
-    keys.reserve(n);
+    std::vector<std::uint32_t>& source = result.source;
     {
-        // Open addressing, linear probing, at most half full: a slot holds a welded
-        // vertex id (or `empty`). Several times faster than std::unordered_map here, which
-        // allocates a node per vertex.
-        constexpr std::uint32_t empty = std::numeric_limits<std::uint32_t>::max();
+        source.reserve(n);
+        // Open addressing, linear probing, at most half full: a slot holds a welded vertex id
+        // in its low 32 bits and the high 32 bits of its key's hash above them (all ones:
+        // empty; no id is 2^32 - 1), so that a probe passing another vertex's slot rarely
+        // reads that vertex's position. Several times faster than std::unordered_map here,
+        // which allocates a node per vertex; the slot a few vertices ahead is prefetched,
+        // the table being far larger than the caches.
+        constexpr std::uint64_t empty = std::numeric_limits<std::uint64_t>::max();
         std::size_t capacity = 16;
         while (capacity < 2 * n) capacity *= 2;
         const std::size_t mask = capacity - 1;
-        std::vector<std::uint32_t> slots(capacity, empty);
+        std::vector<std::uint64_t> slots(capacity, empty);
         const bool has_patch_ids = !mesh.patch_ids.empty();
+        const auto hash_of = [&mesh](std::size_t i) {
+            return static_cast<std::uint64_t>(PositionKeyHash{}(position_key(mesh.positions[i])));
+        };
+        constexpr std::size_t ahead = 8;
         for (std::uint32_t i = 0; i < n; ++i) {
+            if (i + ahead < n) __builtin_prefetch(&slots[hash_of(i + ahead) & mask]);
             const PositionKey key = position_key(mesh.positions[i]);
-            std::size_t slot = PositionKeyHash{}(key) & mask;
-            while (slots[slot] != empty && !(keys[slots[slot]] == key)) slot = (slot + 1) & mask;
+            const std::uint64_t hash = PositionKeyHash{}(key);
+            const std::uint64_t tag = hash >> 32;
+            std::size_t slot = hash & mask;
+            // A welded vertex's key is its source copy's: every copy has the same key.
+            while (slots[slot] != empty &&
+                   !((slots[slot] >> 32) == tag &&
+                     position_key(mesh.positions[source[static_cast<std::uint32_t>(slots[slot])]]) == key))
+                slot = (slot + 1) & mask;
+            std::uint32_t welded;
             if (slots[slot] == empty) {
-                slots[slot] = static_cast<std::uint32_t>(source.size());
+                welded = static_cast<std::uint32_t>(source.size());
+                slots[slot] = tag << 32 | welded;
                 source.push_back(i);
-                keys.push_back(key);
-            } else if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[slots[slot]]]) {
+            } else {
+                welded = static_cast<std::uint32_t>(slots[slot]);
                 // Lowest patch id wins; on a tie the earlier copy (already there) stays.
-                source[slots[slot]] = i;
+                if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[welded]]) source[welded] = i;
             }
-            result.vertex_map[i] = slots[slot];
+            result.vertex_map[i] = welded;
         }
     }
+    source.shrink_to_fit();
 
+    result.triangles.reserve(mesh.triangles.size());
+    for (const auto& triangle : mesh.triangles) {
+        const std::array<std::uint32_t, 3> welded{result.vertex_map[triangle[0]],
+                                                  result.vertex_map[triangle[1]],
+                                                  result.vertex_map[triangle[2]]};
+        if (welded[0] == welded[1] || welded[1] == welded[2] || welded[2] == welded[0]) {
+            ++result.degenerate_triangles;
+            continue;
+        }
+        result.triangles.push_back(welded);
+    }
+    return result;
+}
+
+}  // namespace
+
+WeldedMesh weld_bitwise(const SurfaceMesh& mesh) {
+    WeldIndex index = weld_index(mesh);
+    WeldedMesh result;
     SurfaceMesh& out = result.mesh;
+    const std::vector<std::uint32_t>& source = index.source;
     const std::size_t m = source.size();
     out.positions.resize(m);
     for (std::size_t v = 0; v < m; ++v) out.positions[v] = mesh.positions[source[v]];
@@ -185,18 +231,9 @@ WeldedMesh weld_bitwise(const SurfaceMesh& mesh) {
     gather(mesh.uvs, out.uvs);
     gather(mesh.patch_ids, out.patch_ids);
     gather(mesh.tess_coords, out.tess_coords);
-
-    out.triangles.reserve(mesh.triangles.size());
-    for (const auto& triangle : mesh.triangles) {
-        const std::array<std::uint32_t, 3> welded{result.vertex_map[triangle[0]],
-                                                  result.vertex_map[triangle[1]],
-                                                  result.vertex_map[triangle[2]]};
-        if (welded[0] == welded[1] || welded[1] == welded[2] || welded[2] == welded[0]) {
-            ++result.degenerate_triangles;
-            continue;
-        }
-        out.triangles.push_back(welded);
-    }
+    out.triangles = std::move(index.triangles);
+    result.vertex_map = std::move(index.vertex_map);
+    result.degenerate_triangles = index.degenerate_triangles;
     return result;
 }
 
@@ -254,33 +291,50 @@ std::string number(double x) {
     return buffer;
 }
 
+// The welded surface as the writers read it, without a copy of its attributes: written
+// vertex v is emitted vertex at(v) of `mesh` (every emitted vertex, in order, when
+// `source` is null: an unwelded export), and `triangles` index the written vertices.
+struct WeldedView {
+    const SurfaceMesh* mesh = nullptr;
+    const std::vector<std::uint32_t>* source = nullptr;
+    const std::vector<std::array<std::uint32_t, 3>>* triangles = nullptr;
+
+    std::size_t vertex_count() const { return source ? source->size() : mesh->positions.size(); }
+    std::uint32_t at(std::size_t v) const { return source ? (*source)[v] : static_cast<std::uint32_t>(v); }
+    const glm::dvec3& position(std::size_t v) const { return mesh->positions[at(v)]; }
+};
+
 // The file stores floats: a position beyond the float range would be written as inf, and
 // a non-finite one as inf or nan. Neither is geometry; the export stops, naming the vertex.
-void require_finite_floats(const SurfaceMesh& w) {
-    for (std::size_t v = 0; v < w.positions.size(); ++v) {
-        const glm::dvec3& p = w.positions[v];
+void require_finite_floats(const WeldedView& w) {
+    const SurfaceMesh& mesh = *w.mesh;
+    for (std::size_t v = 0; v < w.vertex_count(); ++v) {
+        const std::uint32_t e = w.at(v);
+        const glm::dvec3& p = mesh.positions[e];
         const OpenMesh::Vec3f f = to_float(p);
         if (std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2])) continue;
         const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
         std::string what = "vertex (" + number(p.x) + ", " + number(p.y) + ", " + number(p.z) + ")";
-        if (!w.tess_coords.empty()) {
-            const glm::vec3 tc = w.tess_coords[v];
+        if (!mesh.tess_coords.empty()) {
+            const glm::vec3 tc = mesh.tess_coords[e];
             what += " at tess coord (" + number(tc.x) + ", " + number(tc.y) + ", " + number(tc.z) + ")";
         }
         what += finite ? " is beyond the 32-bit float range (largest " +
                              number(std::numeric_limits<float>::max()) + ") that mesh files store"
                        : " is not finite";
-        throw Error(what, w.patch_ids.empty() ? Where{} : Where::at_patch(w.patch_ids[v]));
+        throw Error(what, mesh.patch_ids.empty() ? Where{} : Where::at_patch(mesh.patch_ids[e]));
     }
 }
 
 // What storing positions as float loses of a double computation: distinct vertices that
 // round to one float point, and triangles with area whose float corners have none.
 // Nothing when every position is already a float (gpu precision).
-void measure_float_storage(const SurfaceMesh& w, MeshWriteReport& report) {
+void measure_float_storage(const WeldedView& w, MeshWriteReport& report) {
+    const std::size_t n = w.vertex_count();
     double largest = 0.0;
     bool all_floats = true;
-    for (const glm::dvec3& p : w.positions) {
+    for (std::size_t v = 0; v < n; ++v) {
+        const glm::dvec3& p = w.position(v);
         for (int c = 0; c < 3; ++c) {
             largest = std::max(largest, std::abs(p[c]));
             all_floats = all_floats && static_cast<double>(static_cast<float>(p[c])) == p[c];
@@ -290,13 +344,13 @@ void measure_float_storage(const SurfaceMesh& w, MeshWriteReport& report) {
     report.largest_coordinate = largest;
     report.float_spacing = static_cast<double>(std::nextafter(largest_f, std::numeric_limits<float>::infinity())) -
                            static_cast<double>(largest_f);
-    report.float_distinct_vertices = w.positions.size();
+    report.float_distinct_vertices = n;
     if (all_floats) return;
 
-    const auto stored = [&w](std::uint32_t v) { return glm::dvec3(glm::vec3(w.positions[v])); };
-    std::vector<std::array<std::uint32_t, 3>> keys(w.positions.size());
+    const auto stored = [&w](std::uint32_t v) { return glm::dvec3(glm::vec3(w.position(v))); };
+    std::vector<std::array<std::uint32_t, 3>> keys(n);
     for (std::uint32_t v = 0; v < keys.size(); ++v) {
-        const glm::vec3 f(w.positions[v]);
+        const glm::vec3 f(w.position(v));
         for (int c = 0; c < 3; ++c) keys[v][c] = std::bit_cast<std::uint32_t>(f[c] == 0.0f ? 0.0f : f[c]);
     }
     std::sort(keys.begin(), keys.end());
@@ -308,11 +362,240 @@ void measure_float_storage(const SurfaceMesh& w, MeshWriteReport& report) {
     const auto zero_area = [](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
         return glm::cross(b - a, c - a) == glm::dvec3(0.0);
     };
-    for (const auto& t : w.triangles) {
+    for (const auto& t : *w.triangles) {
         if (zero_area(stored(t[0]), stored(t[1]), stored(t[2])) &&
-            !zero_area(w.positions[t[0]], w.positions[t[1]], w.positions[t[2]]))
+            !zero_area(w.position(t[0]), w.position(t[1]), w.position(t[2])))
             ++report.float_degenerate_triangles;
     }
+}
+
+// What a file carries of the mesh (see mesh.h).
+struct WrittenAttributes {
+    bool normals = false, uvs = false, patch_ids = false, tess_coords = false;
+};
+
+using Progress = std::function<void(std::string_view, double)>;
+
+// Through OpenMesh's writer (every format; PLY's reference): the vertices copied into an
+// OpenMesh kernel, the triangles served from the list.
+void write_through_openmesh(const WeldedView& w, const WrittenAttributes& written, const MeshWriteOptions& options,
+                            std::ostream& out, const Progress& progress) {
+    const MeshFormat format = options.format;
+    const SurfaceMesh& mesh = *w.mesh;
+    const std::size_t n = w.vertex_count();
+    ExportMesh om;
+    om.reserve(n, 0, 0);
+    if (written.normals) om.request_vertex_normals();
+    if (written.uvs) om.request_vertex_texcoords2D();
+    // PLY extra properties: OpenMesh's PLY writer emits every persistent vertex property
+    // of a supported scalar type under its own name, in the order they were added.
+    OpenMesh::VPropHandleT<int> patch_id_property;
+    OpenMesh::VPropHandleT<float> tess_u_property, tess_v_property, tess_w_property;
+    if (written.patch_ids) {
+        om.add_property(patch_id_property, "patch_id");
+        om.property(patch_id_property).set_persistent(true);
+    }
+    if (written.tess_coords) {
+        om.add_property(tess_u_property, "tess_u");
+        om.add_property(tess_v_property, "tess_v");
+        om.add_property(tess_w_property, "tess_w");
+        om.property(tess_u_property).set_persistent(true);
+        om.property(tess_v_property).set_persistent(true);
+        om.property(tess_w_property).set_persistent(true);
+    }
+
+    constexpr std::size_t progress_step = std::size_t{1} << 16;
+    for (std::size_t v = 0; v < n; ++v) {
+        if (v % progress_step == 0) progress("collecting", static_cast<double>(v) / static_cast<double>(n));
+        const std::uint32_t e = w.at(v);
+        const ExportMesh::VertexHandle vh = om.add_vertex(to_float(mesh.positions[e]));
+        if (written.normals) om.set_normal(vh, to_float(mesh.normals[e]));
+        if (written.uvs) {
+            om.set_texcoord2D(vh, ExportMesh::TexCoord2D(static_cast<float>(mesh.uvs[e].x),
+                                                         static_cast<float>(mesh.uvs[e].y)));
+        }
+        if (written.patch_ids) {
+            // PLY's `int`: patch ids beyond 2^31 - 1 would need more patches than any
+            // triangle budget allows.
+            om.property(patch_id_property, vh) = static_cast<int>(mesh.patch_ids[e]);
+        }
+        if (written.tess_coords) {
+            om.property(tess_u_property, vh) = mesh.tess_coords[e].x;
+            om.property(tess_v_property, vh) = mesh.tess_coords[e].y;
+            om.property(tess_w_property, vh) = mesh.tess_coords[e].z;
+        }
+    }
+    progress("collecting", 1.0);
+
+    OpenMesh::IO::Options io_options;
+    if (options.binary) {
+        io_options += OpenMesh::IO::Options::Binary;
+        if (format == MeshFormat::ply) io_options += OpenMesh::IO::Options::LSB;
+    }
+    if (written.normals) io_options += OpenMesh::IO::Options::VertexNormal;
+    if (written.uvs) io_options += OpenMesh::IO::Options::VertexTexCoord;
+    if (written.patch_ids || written.tess_coords) io_options += OpenMesh::IO::Options::Custom;
+
+    bool ok = false;
+    progress("writing", 0.0);
+    {
+        // OpenMesh's writers chat about every file they write.
+        const mesh_detail::QuietStream quiet_log(::omlog());
+        const mesh_detail::QuietStream quiet_out(::omout());
+        TriangleListExporter exporter(om, *w.triangles);
+        ok = OpenMesh::IO::IOManager().write(out, "." + std::string(to_string(format)), exporter, io_options,
+                                             options.ascii_digits);
+    }
+    out.flush();
+    if (!ok) throw Error("OpenMesh could not write the mesh as " + std::string(to_string(format)));
+}
+
+// Bytes gathered in a large buffer and handed to the stream a few MiB at a time: one
+// ostream::write per chunk instead of one (with its sentry) per number.
+class ChunkedOutput {
+public:
+    explicit ChunkedOutput(std::ostream& out) : out_(out), buffer_(capacity) {}
+    // Room for `bytes` (at most `record_limit`) more bytes; advance() says how many were used.
+    char* room(std::size_t bytes) {
+        if (used_ + bytes > buffer_.size()) flush();
+        return buffer_.data() + used_;
+    }
+    void advance(char* end) { used_ = static_cast<std::size_t>(end - buffer_.data()); }
+    void put(std::string_view text) {
+        char* p = room(text.size());
+        std::memcpy(p, text.data(), text.size());
+        advance(p + text.size());
+    }
+    void flush() {
+        if (used_ > 0 && out_) out_.write(buffer_.data(), static_cast<std::streamsize>(used_));
+        used_ = 0;
+    }
+    static constexpr std::size_t record_limit = 1024;
+
+private:
+    static constexpr std::size_t capacity = std::size_t{4} << 20;
+    std::ostream& out_;
+    std::vector<char> buffer_;
+    std::size_t used_ = 0;
+};
+
+// Little-endian 32-bit values (PLY's binary_little_endian), whatever the machine's order.
+char* store_le32(char* p, std::uint32_t bits) {
+    if constexpr (std::endian::native == std::endian::big) {
+        bits = (bits >> 24) | ((bits >> 8) & 0xff00u) | ((bits << 8) & 0xff0000u) | (bits << 24);
+    }
+    std::memcpy(p, &bits, 4);
+    return p + 4;
+}
+char* store_le(char* p, float value) { return store_le32(p, std::bit_cast<std::uint32_t>(value)); }
+char* store_le(char* p, std::int32_t value) { return store_le32(p, static_cast<std::uint32_t>(value)); }
+
+// ASCII numbers as OpenMesh's PLY writer prints them (operator<< of a float at the
+// stream's precision, i.e. printf's %.<digits>g of the float's value; std::to_chars in
+// general format with a precision is specified to print exactly that).
+char* print(char* p, float value, int digits) {
+    return std::to_chars(p, p + 64, static_cast<double>(value), std::chars_format::general, digits).ptr;
+}
+char* print(char* p, std::int64_t value) { return std::to_chars(p, p + 32, value).ptr; }
+
+// PLY, written here: byte for byte what OpenMesh 9's PLY writer writes for the same mesh,
+// options and properties (tests/test_mesh.cpp compares the two on every attribute
+// combination, ascii and binary), straight from the welded view, without the kernel copy.
+void write_ply(const WeldedView& w, const WrittenAttributes& written, const MeshWriteOptions& options,
+               std::ostream& out, const Progress& progress) {
+    const SurfaceMesh& mesh = *w.mesh;
+    const std::size_t n = w.vertex_count();
+    const std::vector<std::array<std::uint32_t, 3>>& triangles = *w.triangles;
+    const bool binary = options.binary;
+    const int digits = options.ascii_digits;
+
+    std::string header = "ply\n";
+    header += binary ? "format binary_little_endian 1.0\n" : "format ascii 1.0\n";
+    header += "element vertex " + std::to_string(n) + "\n";
+    header += "property float x\nproperty float y\nproperty float z\n";
+    if (written.normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (written.uvs) header += "property float u\nproperty float v\n";
+    if (written.patch_ids) header += "property int patch_id\n";
+    if (written.tess_coords) header += "property float tess_u\nproperty float tess_v\nproperty float tess_w\n";
+    header += "element face " + std::to_string(triangles.size()) + "\n";
+    header += "property list uchar int vertex_indices\n";
+    header += "end_header\n";
+
+    progress("writing", 0.0);
+    ChunkedOutput chunks(out);
+    chunks.put(header);
+    const double total = static_cast<double>(n + triangles.size());
+    // A few hundred calls at most (mesh.h).
+    const std::size_t progress_step = std::max<std::size_t>(std::size_t{1} << 16, (n + triangles.size()) / 128);
+    for (std::size_t v = 0; v < n; ++v) {
+        if (v % progress_step == 0) progress("writing", static_cast<double>(v) / total);
+        const std::uint32_t e = w.at(v);
+        float values[12];
+        int count = 0;
+        const glm::dvec3& p = mesh.positions[e];
+        values[count++] = static_cast<float>(p.x);
+        values[count++] = static_cast<float>(p.y);
+        values[count++] = static_cast<float>(p.z);
+        if (written.normals) {
+            const glm::dvec3& normal = mesh.normals[e];
+            values[count++] = static_cast<float>(normal.x);
+            values[count++] = static_cast<float>(normal.y);
+            values[count++] = static_cast<float>(normal.z);
+        }
+        if (written.uvs) {
+            values[count++] = static_cast<float>(mesh.uvs[e].x);
+            values[count++] = static_cast<float>(mesh.uvs[e].y);
+        }
+        char* q = chunks.room(ChunkedOutput::record_limit);
+        // PLY's `int` (see write_through_openmesh).
+        const std::int32_t patch_id = written.patch_ids ? static_cast<std::int32_t>(mesh.patch_ids[e]) : 0;
+        const glm::vec3 tess = written.tess_coords ? mesh.tess_coords[e] : glm::vec3(0.0f);
+        if (binary) {
+            for (int i = 0; i < count; ++i) q = store_le(q, values[i]);
+            if (written.patch_ids) q = store_le(q, patch_id);
+            if (written.tess_coords) {
+                q = store_le(q, tess.x);
+                q = store_le(q, tess.y);
+                q = store_le(q, tess.z);
+            }
+        } else {
+            for (int i = 0; i < count; ++i) {
+                if (i > 0) *q++ = ' ';
+                q = print(q, values[i], digits);
+            }
+            if (written.patch_ids) {
+                *q++ = ' ';
+                q = print(q, patch_id);
+            }
+            if (written.tess_coords) {
+                for (const float t : {tess.x, tess.y, tess.z}) {
+                    *q++ = ' ';
+                    q = print(q, t, digits);
+                }
+            }
+            *q++ = '\n';
+        }
+        chunks.advance(q);
+    }
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+        if (t % progress_step == 0) progress("writing", static_cast<double>(n + t) / total);
+        const auto& triangle = triangles[t];
+        char* q = chunks.room(ChunkedOutput::record_limit);
+        if (binary) {
+            *q++ = 3;
+            for (const std::uint32_t index : triangle) q = store_le(q, static_cast<std::int32_t>(index));
+        } else {
+            *q++ = '3';
+            for (const std::uint32_t index : triangle) {
+                *q++ = ' ';
+                q = print(q, static_cast<std::int64_t>(index));
+            }
+            *q++ = '\n';
+        }
+        chunks.advance(q);
+    }
+    chunks.flush();
+    out.flush();
 }
 
 }  // namespace
@@ -326,8 +609,10 @@ std::string MeshWriteReport::precision_warning() const {
            "): the file does not hold what the double computation had; move the scene nearer the origin";
 }
 
-MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
-                           const MeshWriteOptions& options) {
+namespace {
+
+MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out, const MeshWriteOptions& options,
+                           bool openmesh_ply_writer) {
     const MeshFormat format = options.format;
     if (options.binary && !mesh_format_has_binary(format)) {
         throw Error(std::string(to_string(format)) + " has no binary form; drop --binary or "
@@ -342,105 +627,54 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
     };
 
     progress("welding", 0.0);
-    WeldedMesh welded;
+    WeldIndex index;
+    WeldedView w{&mesh, nullptr, &mesh.triangles};
     if (options.weld) {
-        welded = weld_bitwise(mesh);
+        index = weld_index(mesh);
+        w.source = &index.source;
+        w.triangles = &index.triangles;
     } else {
         validate(mesh);
-        welded.mesh = mesh;
     }
     progress("welding", 1.0);
-    const SurfaceMesh& w = welded.mesh;
-    if (w.positions.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
-        w.triangles.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
-        throw Error("mesh too large for OpenMesh's 32-bit handles: " + std::to_string(w.positions.size()) +
-                    " vertices, " + std::to_string(w.triangles.size()) + " triangles");
+    if (w.vertex_count() > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
+        w.triangles->size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+        throw Error("mesh too large for OpenMesh's 32-bit handles: " + std::to_string(w.vertex_count()) +
+                    " vertices, " + std::to_string(w.triangles->size()) + " triangles");
     }
     MeshWriteReport report;
     report.emitted_vertices = mesh.positions.size();
-    report.vertices = w.positions.size();
-    report.triangles = w.triangles.size();
-    report.degenerate_triangles = welded.degenerate_triangles;
+    report.vertices = w.vertex_count();
+    report.triangles = w.triangles->size();
+    report.degenerate_triangles = index.degenerate_triangles;
     require_finite_floats(w);
     measure_float_storage(w, report);
+    // Only the writer reads the emitted vertex -> welded vertex map.
+    index.vertex_map = {};
 
     // What the format can carry, and what the mesh has.
-    const bool write_normals = format != MeshFormat::stl && !w.normals.empty();
-    const bool write_uvs = format != MeshFormat::stl && !w.uvs.empty();
-    const bool write_patch_ids = format == MeshFormat::ply && !w.patch_ids.empty();
-    const bool write_tess_coords = format == MeshFormat::ply && !w.tess_coords.empty();
+    WrittenAttributes written;
+    written.normals = format != MeshFormat::stl && !mesh.normals.empty();
+    written.uvs = format != MeshFormat::stl && !mesh.uvs.empty();
+    written.patch_ids = format == MeshFormat::ply && !mesh.patch_ids.empty();
+    written.tess_coords = format == MeshFormat::ply && !mesh.tess_coords.empty();
 
-    ExportMesh om;
-    om.reserve(w.positions.size(), 0, 0);
-    if (write_normals) om.request_vertex_normals();
-    if (write_uvs) om.request_vertex_texcoords2D();
-    // PLY extra properties: OpenMesh's PLY writer emits every persistent vertex property
-    // of a supported scalar type under its own name, in the order they were added.
-    OpenMesh::VPropHandleT<int> patch_id_property;
-    OpenMesh::VPropHandleT<float> tess_u_property, tess_v_property, tess_w_property;
-    if (write_patch_ids) {
-        om.add_property(patch_id_property, "patch_id");
-        om.property(patch_id_property).set_persistent(true);
-    }
-    if (write_tess_coords) {
-        om.add_property(tess_u_property, "tess_u");
-        om.add_property(tess_v_property, "tess_v");
-        om.add_property(tess_w_property, "tess_w");
-        om.property(tess_u_property).set_persistent(true);
-        om.property(tess_v_property).set_persistent(true);
-        om.property(tess_w_property).set_persistent(true);
-    }
-
-    constexpr std::size_t progress_step = std::size_t{1} << 16;
-    for (std::size_t v = 0; v < w.positions.size(); ++v) {
-        if (v % progress_step == 0) {
-            progress("collecting", static_cast<double>(v) / static_cast<double>(w.positions.size()));
-        }
-        const ExportMesh::VertexHandle vh = om.add_vertex(to_float(w.positions[v]));
-        if (write_normals) om.set_normal(vh, to_float(w.normals[v]));
-        if (write_uvs) {
-            om.set_texcoord2D(vh, ExportMesh::TexCoord2D(static_cast<float>(w.uvs[v].x),
-                                                         static_cast<float>(w.uvs[v].y)));
-        }
-        if (write_patch_ids) {
-            // PLY's `int`: patch ids beyond 2^31 - 1 would need more patches than any
-            // triangle budget allows.
-            om.property(patch_id_property, vh) = static_cast<int>(w.patch_ids[v]);
-        }
-        if (write_tess_coords) {
-            om.property(tess_u_property, vh) = w.tess_coords[v].x;
-            om.property(tess_v_property, vh) = w.tess_coords[v].y;
-            om.property(tess_w_property, vh) = w.tess_coords[v].z;
-        }
-    }
-    progress("collecting", 1.0);
-
-    OpenMesh::IO::Options io_options;
-    if (options.binary) {
-        io_options += OpenMesh::IO::Options::Binary;
-        if (format == MeshFormat::ply) io_options += OpenMesh::IO::Options::LSB;
-    }
-    if (write_normals) io_options += OpenMesh::IO::Options::VertexNormal;
-    if (write_uvs) io_options += OpenMesh::IO::Options::VertexTexCoord;
-    if (write_patch_ids || write_tess_coords) io_options += OpenMesh::IO::Options::Custom;
-
-    bool written = false;
-    progress("writing", 0.0);
-    {
-        // OpenMesh's writers chat about every file they write.
-        const mesh_detail::QuietStream quiet_log(::omlog());
-        const mesh_detail::QuietStream quiet_out(::omout());
-        TriangleListExporter exporter(om, w.triangles);
-        written = OpenMesh::IO::IOManager().write(out, "." + std::string(to_string(format)), exporter,
-                                                  io_options, options.ascii_digits);
-    }
-    out.flush();
-    if (!written) {
-        throw Error("OpenMesh could not write the mesh as " + std::string(to_string(format)));
-    }
+    if (format == MeshFormat::ply && !openmesh_ply_writer) write_ply(w, written, options, out, progress);
+    else write_through_openmesh(w, written, options, out, progress);
     if (!out) throw Error("cannot write the mesh: output stream failed");
     progress("writing", 1.0);
     return report;
+}
+
+}  // namespace
+
+MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out, const MeshWriteOptions& options) {
+    return write_mesh(mesh, out, options, false);
+}
+
+MeshWriteReport mesh_detail::write_mesh_through_openmesh(const SurfaceMesh& mesh, std::ostream& out,
+                                                         const MeshWriteOptions& options) {
+    return write_mesh(mesh, out, options, true);
 }
 
 }  // namespace tessref

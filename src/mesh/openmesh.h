@@ -9,12 +9,14 @@
 #pragma once
 
 #include <cstdint>
+#include <iosfwd>
 #include <vector>
 
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include "tessref/check.h"
+#include "tessref/mesh.h"
 
 namespace tessref::mesh_detail {
 
@@ -35,6 +37,12 @@ struct HalfEdgeImport {
 // compute_missing_normals, a file without normals gets OpenMesh's vertex normals: the
 // normalized sum of the incident face normals, from faces in its circulation order.
 HalfEdgeImport import_half_edge_mesh(const IndexedMesh& file, bool compute_missing_normals);
+
+// write_mesh() with a PLY file written by OpenMesh's PLY writer, the reference that
+// tessref's own PLY writer (write_mesh's) reproduces byte for byte; the other formats go
+// through OpenMesh's writers in write_mesh() too, so for them the two are the same.
+MeshWriteReport write_mesh_through_openmesh(const SurfaceMesh& mesh, std::ostream& out,
+                                            const MeshWriteOptions& options);
 
 // Silences one of OpenMesh's log streams (omlog(), omerr()) for a scope, restoring its
 // previous state afterwards.
