@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <random>
 #include <utility>
@@ -369,14 +370,36 @@ TEST(GeoMipScene, ScenesThatDoNotFitAreRefusedNamingTheKey) {
 
 class GeoMipCommand : public tessref::test::CommandDirTest {};
 
-TEST_F(GeoMipCommand, GlDrawsItAndRaytraceSaysItDoesNotModelItYet) {
+TEST_F(GeoMipCommand, GlDrawsIt) {
     const auto gl = run({"gl", kShipped, "--size", "32x20", "-o", path("gl.png")});
     EXPECT_EQ(gl.status, 0) << gl.err;
     EXPECT_NE(gl.out.find("every count as predicted"), std::string::npos) << gl.out;
-    const auto rt = run({"render", kShipped, "--size", "32x20", "--raytrace", "-o", "rt.png"});
-    EXPECT_EQ(rt.status, 2) << rt.err;
-    EXPECT_NE(rt.err.find("not modelled"), std::string::npos) << rt.err;
     EXPECT_EQ(files(), std::set<std::string>{"gl.png"});
+}
+
+// The ray-traced truth of a geomipmapped terrain is its level-0 mesh: vertex lines at the
+// samples (texel centres (k + 0.5) / W at world origin + k spacing), the same diagonal, the
+// same smooth normals and uv. So `render --raytrace` and `render` with error_bound_px = 0
+// (every patch at level 0, tween 0 since no level's error is within a bound of 0 unless it
+// is exact) cover the same pixels but one or two on silhouettes, and differ by rounding:
+// measured at 320x200, 52812 against 52811 covered pixels, RMSE 0.0038.
+TEST_F(GeoMipCommand, RaytraceIsTheLevelZeroMesh) {
+    std::string text = tessref::test::read_file(kShipped);
+    const std::string data = std::string(TESSREF_SOURCE_DIR) + "/data/";
+    for (std::size_t at = text.find("\"../"); at != std::string::npos; at = text.find("\"../", at))
+        text.replace(at + 1, 3, data);
+    text.replace(text.find("error_bound_px = 4.0"), 20, "error_bound_px = 0.0");
+    std::ofstream(path("l0.toml")) << text;
+    const auto rt = run({"render", kShipped, "--size", "320x200", "--raytrace", "-o", path("rt.png")});
+    ASSERT_EQ(rt.status, 0) << rt.err;
+    EXPECT_NE(rt.out.find("257x257 vertices (131072 triangles)"), std::string::npos) << rt.out;
+    const auto l0 = run({"render", path("l0.toml"), "--size", "320x200", "-o", path("l0.png")});
+    ASSERT_EQ(l0.status, 0) << l0.err;
+    EXPECT_NE(l0.out.find("131072 triangles"), std::string::npos) << l0.out;
+    const auto cmp = run({"compare", path("rt.png"), path("l0.png")});
+    const std::size_t at = cmp.out.find("rmse");
+    ASSERT_NE(at, std::string::npos) << cmp.out;
+    EXPECT_LT(std::stod(cmp.out.substr(at + 4)), 0.006) << cmp.out;
 }
 
 // geomip_terrain.vert's height, by hand: mix(2, 6, 0.25) = 2 + 0.25 * 4 = 3, times scaleZ 3
