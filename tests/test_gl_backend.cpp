@@ -757,7 +757,7 @@ INSTANTIATE_TEST_SUITE_P(Shipped, GlGeomipmap,
 // Bad input: a shading model whose fragment shader reads what geomip_terrain.vert does not
 // write, and more materials than geomip_terrain.frag's arrays hold, are exit 2 naming the
 // key; no image is written.
-TEST_F(GlBackend, GeomipmapWithoutATwinForItsShadingIsExit2NamingTheKey) {
+TEST_F(GlBackend, GeomipmapWithoutATwinForItsShadingOrStagesIsExit2NamingThem) {
     const fs::path scene = dir_ / "s.toml", out = dir_ / "out.png";
     write_file(scene, scene_text("jacksboro-geomipmap", "", "[shading]\nmodel = \"cosc422\""));
     RunResult r = run({"gl", scene.string(), "-o", out.string(), "--size", "64x40"});
@@ -778,6 +778,18 @@ TEST_F(GlBackend, GeomipmapWithoutATwinForItsShadingIsExit2NamingTheKey) {
     EXPECT_NE(r.err.find("shading.materials"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("at most 4"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));
+
+    // A user's tessellation shader has no patches to run on; a user's fragment shader runs.
+    const std::string raised = (kUserShaders / "raised.tese").string();
+    r = run({"gl", scene_path("jacksboro-geomipmap").string(), "-o", out.string(), "--size", "64x40", "--shader",
+             "tese=" + raised});
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find(raised), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("geomipmapped"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    r = run({"gl", scene_path("jacksboro-geomipmap").string(), "-o", out.string(), "--size", "64x40", "--shader",
+             "frag=" + (kUserShaders / "red.frag").string()});
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
 }
 
 }  // namespace

@@ -176,3 +176,25 @@ TEST_F(Ground, BadClearanceIsExit2NamingTheKeyAndWritesNothing) {
 }
 
 }  // namespace
+
+namespace {
+
+// A geomipmapped terrain (the geomorphing article's), 17 x 17 samples of code 255 with
+// scale_z 2: every level's surface is at height 2 exactly, so ground_clearance 0.75 puts the
+// eye at z = 2.75 exactly and the ground under any point reads 2 on both surfaces.
+TEST_F(Ground, ClearanceOverAGeomipmappedTerrain) {
+    write_pgm(dir_ / "flat17.pgm", 17, 17, 255, std::vector<int>(17 * 17, 255));
+    const std::string text =
+        "[scene]\nname = \"g\"\n[domain]\nplane = \"xy\"\npatches = [1, 1]\nx = [0.0, 16.0]\ny = [0.0, 16.0]\n"
+        "heightmap = \"flat17.pgm\"\nscale_z = 2.0\n[camera]\neye = [8.0, 8.0, 9.0]\ncenter = [8.0, 9.0, 0.0]\n"
+        "viewport = [160, 100]\nground_clearance = 0.75\n[evaluation]\nmodel = \"geomipmap\"\n";
+    const tessref::Scene scene = tessref::load_scene_from_string(text, path("scene.toml"));
+    EXPECT_EQ(scene.camera->eye, glm::dvec3(8.0, 8.0, 2.75));
+    EXPECT_EQ(scene.camera->center, glm::dvec3(8.0, 9.0, -6.25));
+    const tessref::GroundHeight under = tessref::ground_height(scene, tessref::run_pipeline(scene), {3.3, 12.1});
+    ASSERT_TRUE(under.on_surface);
+    EXPECT_EQ(under.height_map, 2.0);
+    EXPECT_EQ(under.tessellated, 2.0);
+}
+
+}  // namespace

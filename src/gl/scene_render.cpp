@@ -865,6 +865,13 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     Plan plan = plan_for(scene, result.shading);
     result.user_shaders = user_shaders(scene, options);
     apply_user_shaders(plan, result.user_shaders);
+    if (plan.geomipmap)  // triangles drawn as triangles: no patches for a tessellation stage
+        for (const StageShader& user : result.user_shaders)
+            if (user.stage == ShaderStage::tess_control || user.stage == ShaderStage::tess_evaluation)
+                throw Error(std::string("tessref gl: the ") + to_string(user.stage) + " shader " + user.path + " of " +
+                                user.origin + " cannot run on a geomipmapped terrain: it draws the CPU's triangles "
+                                "with no tessellation stages (geomip_terrain.vert)",
+                            user.where);
     const std::string user_note = count_note(plan);
     const std::vector<Batch> batches = make_batches(per_patch, options.max_primitives_per_draw);
 
