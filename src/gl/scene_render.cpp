@@ -149,6 +149,10 @@ Plan geomip_plan(const Scene& scene, const RenderShading& shading) {
                             "stage's outputs than geomip_terrain.vert writes)",
                         Where::at_key(scene.file, "shading.model"));
     }
+    if (plan.stages.back().stage != GL_FRAGMENT_SHADER)  // a shading model added later, not listed above
+        throw Error(std::string("tessref gl: shading model '") + to_string(shading.model.kind) +
+                        "' with evaluation model geomipmap has no GLSL twin",
+                    Where::at_key(scene.file, "shading.model"));
     return plan;
 }
 
