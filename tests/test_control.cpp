@@ -673,7 +673,7 @@ TEST(Shaders, EveryPipelineLinks) {
         if (file.extension() != ".frag") pipelines["thesis_terrain_single"].push_back(file);
     }
     for (const char* name : {"thesis_terrain", "thesis_terrain_single", "cosc422_terrain",
-                             "lab4_terrain", "pn_triangles"}) {
+                             "lab4_terrain", "pn_triangles", "geomip_terrain"}) {
         ASSERT_TRUE(pipelines.count(name)) << name;
         std::string command = "glslangValidator -l";
         for (const fs::path& file : pipelines[name]) command += " \"" + file.string() + "\"";
@@ -688,7 +688,7 @@ TEST(Shaders, EveryPipelineLinks) {
 TEST(Shaders, CppCommentsPointAtTheShaderLinesTheyMirror) {
     const std::regex reference(R"(GLSL: ([A-Za-z0-9_]+\.(?:vert|tesc|tese|geom|frag)):([0-9]+) (.+)$)");
     int references = 0;
-    for (const char* stage : {"control", "evaluation", "geometry"}) {
+    for (const char* stage : {"control", "evaluation", "geometry", "geomipmap"}) {
         for (const auto& entry : fs::directory_iterator(fs::path(TESSREF_SOURCE_DIR) / "src" / stage)) {
             std::ifstream source(entry.path());
             std::string line;

@@ -9,12 +9,15 @@
 // transcendental functions (pow, normalize's inverse square root: llvmpipe's are not
 // libm's) and its FMA-contracted arithmetic moved them by a few float ulps. Hence threshold
 // 1/255, no position deviation, no failing pixel. Jacksboro is the exception, see its case.
+// The two geomipmapped scenes (CPU-built triangles, geomip_terrain.vert) keep the rule:
+// their vertex buffers are the CPU's bit for bit, at most one code in any pixel.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <array>
@@ -94,6 +97,9 @@ INSTANTIATE_TEST_SUITE_P(
                       SceneCase{"cosc422", kOneCode, "0"}, SceneCase{"cosc422-eye", kOneCode, "0"},
                       SceneCase{"lab4-canyon", kOneCode, "0"}, SceneCase{"pn-triangles", kOneCode, "0"},
                       SceneCase{"olinda", kOneCode, "0"},
+                      // Geomipmapping: CPU-built triangles through geomip_terrain.vert (GlGeomipmap).
+                      SceneCase{"jacksboro-geomipmap", kOneCode, "0"},
+                      SceneCase{"jacksboro-geomipmap-lit", kOneCode, "0"},
                       // Jacksboro: 2 pixels beyond one code at 320x200 (max 8 codes), on ridges.
                       // GL's control shader writes levels other than the CPU's in 380 of its 576
                       // patches (the normal factor's acos/normalize; test GlCapture), so the
@@ -652,6 +658,138 @@ TEST(GlEvaluation, LlvmpipeMixIsAPlusTTimesBMinusANotGlmMixAndHeightIsBitExact) 
     EXPECT_EQ(height_exact, r.capture.size());
     EXPECT_EQ(llvmpipe_mix, r.capture.size());
     EXPECT_LT(glm_mix, r.capture.size());
+}
+
+}  // namespace
+
+namespace {
+
+// ---- geomipmapping: geomip_terrain.vert (+ the thesis's or geomip_terrain.frag) ---------
+//
+// The CPU chose the levels and built the triangles; GL draws them with the geomorphing
+// vertex shader. The capture (the vertex shader's outputs by transform feedback, the mvp
+// the identity) must be the CPU pipeline's vertex buffer bit for bit, corner by corner in
+// triangle order: the same heights mix(sampleHeight, morphTarget, tween) * scaleZ, at tween
+// 0 (every patch at its discrete level), 1 (every vertex on the next level's surface) and
+// a fraction; and the picture must match `tessref render` by the shipped scenes' rule.
+struct GeomipCase {
+    const char* scene;
+    const char* tween;
+};
+
+class GlGeomipmap : public GlBackend, public ::testing::WithParamInterface<GeomipCase> {
+protected:
+    // The shipped scene with `tween = t` in its [evaluation] table.
+    fs::path scene_with_tween(const GeomipCase& c) {
+        std::string text = scene_text(c.scene, "");
+        const std::string model = "model = \"geomipmap\"";
+        const std::size_t at = text.find(model);
+        EXPECT_NE(at, std::string::npos);
+        text.insert(at + model.size(), std::string("\ntween = ") + c.tween);
+        const fs::path path = dir_ / "scene.toml";
+        write_file(path, text);
+        return path;
+    }
+};
+
+TEST_P(GlGeomipmap, CaptureIsTheCpuVertexBufferBitForBitAndThePictureMatchesRender) {
+    const GeomipCase c = GetParam();
+    const fs::path path = scene_with_tween(c);
+    tessref::gl::Context context = tessref::gl::Context::create();
+    const tessref::Scene scene = tessref::load_scene(path.string());
+    tessref::gl::SceneRenderOptions options;
+    options.size = {320, 200};
+    options.capture = true;
+    const tessref::gl::SceneRender r = tessref::gl::render_scene(context, scene, options);
+    ASSERT_TRUE(r.batch_failure.empty()) << r.batch_failure;
+    const tessref::PipelineResult& pipe = *r.pipeline;
+    const std::vector<tessref::CapturedVertex> cpu = tessref::capture_from_pipeline(scene, pipe);
+    ASSERT_EQ(r.capture.size(), cpu.size());
+    ASSERT_EQ(cpu.size(), pipe.mesh.triangles.size() * 3);
+    std::size_t position_bits = 0, other_bits = 0, tweened = 0;
+    for (std::size_t i = 0; i < cpu.size(); ++i) {
+        const auto& g = r.capture[i];
+        const auto& e = cpu[i];
+        other_bits += g.patch_id != e.patch_id || key(g.tess_coord) != key(e.tess_coord) ||
+                      key(g.normal) != key(e.normal) || std::memcmp(&g.levels, &e.levels, sizeof g.levels) != 0;
+        position_bits += key(g.position) != key(e.position);
+        // The vertex moved: its height is not the sample's.
+        const std::uint32_t v = pipe.mesh.triangles[i / 3][i % 3];
+        tweened += pipe.geomorph[v].z != 0.0f && pipe.geomorph[v].x != pipe.geomorph[v].y;
+    }
+    EXPECT_EQ(position_bits, 0u) << "captured positions other than the CPU's vertex buffer";
+    EXPECT_EQ(other_bits, 0u) << "captured patch ids, tess coords, normals or levels other than the CPU's";
+    if (std::string(c.tween) == "0" || std::string(c.tween) == "1") {
+        // Tween 0 is level k itself; tween 1 is level k + 1 (a fractional level k + 1, drawn
+        // as level k + 1 at tween 0): every patch at a whole level, no vertex moved.
+        EXPECT_EQ(tweened, 0u);
+        for (const tessref::TessLevels& l : pipe.levels) EXPECT_EQ(l.inner[0], std::floor(l.inner[0]));
+    } else {
+        EXPECT_GT(tweened, 0u) << "the tween moved no vertex: the test would not see the geomorph";
+    }
+
+    // The picture, against `tessref render` of the same scene.
+    const std::string gl_png = (dir_ / "gl.png").string(), cpu_png = (dir_ / "cpu.png").string();
+    const RunResult gl = run({"gl", path.string(), "-o", gl_png, "--size", "320x200"});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    EXPECT_NE(gl.out.find("every count as predicted"), std::string::npos) << gl.out;
+    ASSERT_EQ(run({"render", path.string(), "-o", cpu_png, "--size", "320x200"}).status, 0);
+    const RunResult cmp = run({"compare", cpu_png, gl_png, "--threshold", kOneCode, "--max-failing-pixels", "0"});
+    EXPECT_EQ(cmp.status, 0) << cmp.out << cmp.err;
+    std::printf("[gl geomip] %s tween %s: %zu triangles, %zu vertices moved; compare: %s", c.scene, c.tween,
+                cpu.size() / 3, tweened, cmp.out.c_str());
+}
+
+INSTANTIATE_TEST_SUITE_P(Shipped, GlGeomipmap,
+                         ::testing::Values(GeomipCase{"jacksboro-geomipmap", "0"},
+                                           GeomipCase{"jacksboro-geomipmap", "1"},
+                                           GeomipCase{"jacksboro-geomipmap", "0.37"},
+                                           GeomipCase{"jacksboro-geomipmap-lit", "0"},
+                                           GeomipCase{"jacksboro-geomipmap-lit", "1"},
+                                           GeomipCase{"jacksboro-geomipmap-lit", "0.37"}),
+                         [](const auto& info) {
+                             std::string name = std::string(info.param.scene) + "_tween_" + info.param.tween;
+                             std::replace(name.begin(), name.end(), '-', '_');
+                             std::replace(name.begin(), name.end(), '.', '_');
+                             return name;
+                         });
+
+// Bad input: a shading model whose fragment shader reads what geomip_terrain.vert does not
+// write, and more materials than geomip_terrain.frag's arrays hold, are exit 2 naming the
+// key; no image is written.
+TEST_F(GlBackend, GeomipmapWithoutATwinForItsShadingOrStagesIsExit2NamingThem) {
+    const fs::path scene = dir_ / "s.toml", out = dir_ / "out.png";
+    write_file(scene, scene_text("jacksboro-geomipmap", "", "[shading]\nmodel = \"cosc422\""));
+    RunResult r = run({"gl", scene.string(), "-o", out.string(), "--size", "64x40"});
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("shading.model"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+
+    std::string lit = scene_text("jacksboro-geomipmap-lit", "");
+    const std::string rock = "{ texture = \"" + (kSource / "data" / "textures" / "geomip-rock.png").string() +
+                             "\", repeat = 32.0, alpha = \"" +
+                             (kSource / "data" / "alphamaps" / "jacksboro-257-rock.pgm").string() + "\" },\n";
+    const std::size_t grass = lit.find("geomip-grass.png");
+    ASSERT_NE(grass, std::string::npos);
+    lit.insert(lit.find('\n', grass) + 1, rock + rock);  // five materials, the base pass first
+    write_file(scene, lit);
+    r = run({"gl", scene.string(), "-o", out.string(), "--size", "64x40"});
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("shading.materials"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("at most 4"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+
+    // A user's tessellation shader has no patches to run on; a user's fragment shader runs.
+    const std::string raised = (kUserShaders / "raised.tese").string();
+    r = run({"gl", scene_path("jacksboro-geomipmap").string(), "-o", out.string(), "--size", "64x40", "--shader",
+             "tese=" + raised});
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find(raised), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("geomipmapped"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    r = run({"gl", scene_path("jacksboro-geomipmap").string(), "-o", out.string(), "--size", "64x40", "--shader",
+             "frag=" + (kUserShaders / "red.frag").string()});
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
 }
 
 }  // namespace

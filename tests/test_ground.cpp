@@ -97,4 +97,104 @@ TEST_F(Ground, InspectPrintsBothAndTheCameraClearance) {
     EXPECT_EQ(run({"inspect", "scene.toml", "--ground", "99,4"}).status, 2);
 }
 
+// ---- camera collision: [camera] ground_clearance = d -----------------------------------
+//
+// The loader lifts the eye to (the tessellated surface's height under it) + d, moving the
+// center with it. On a flat map of code 255 with scale_z 2 every surface is at height 2
+// exactly (the texel reads 1.0, times 2, in float as in double), so d = 0.5 puts the eye at
+// z = 2.5 exactly and the center, 8 below the eye as given, at 2.5 - 8 = -5.5.
+
+std::string with_clearance(const Terrain& t, const std::string& value) {
+    std::string text = t.toml();
+    text.insert(text.find("[generator]"), "ground_clearance = " + value + "\n");
+    return text;
+}
+
+TEST_F(Ground, ClearanceOverAFlatTerrainPutsTheEyeExactlyDAboveIt) {
+    write_pgm(dir_ / "flat2.pgm", 2, 2, 255, {255, 255, 255, 255});
+    Terrain t;
+    t.heightmap = "flat2.pgm";
+    t.scale_z = 2.0;
+    t.eye = {4.0, 4.0, 8.0};
+    t.center = {4.0, 5.0, 0.0};
+    const tessref::Scene scene = tessref::load_scene_from_string(with_clearance(t, "0.5"), path("scene.toml"));
+    ASSERT_TRUE(scene.camera);
+    EXPECT_EQ(scene.camera->eye, glm::dvec3(4.0, 4.0, 2.5));
+    EXPECT_EQ(scene.camera->center, glm::dvec3(4.0, 5.0, -5.5));
+    // Clearance 0: the eye on the surface.
+    const tessref::Scene on = tessref::load_scene_from_string(with_clearance(t, "0"), path("scene.toml"));
+    EXPECT_EQ(on.camera->eye.z, 2.0);
+    // Lab 4's plane (xz, y up): the up coordinate is y.
+    Terrain xz = t;
+    xz.plane = "xz";
+    xz.evaluation = "lab4";
+    xz.control = "model = \"lab4\"";
+    xz.eye = {4.0, 8.0, 4.0};
+    xz.center = {4.0, 0.0, 5.0};
+    xz.up = {0.0, 1.0, 0.0};
+    const tessref::Scene lab4 = tessref::load_scene_from_string(with_clearance(xz, "1.25"), path("scene.toml"));
+    EXPECT_EQ(lab4.camera->eye, glm::dvec3(4.0, 3.25, 4.0));
+    EXPECT_EQ(lab4.camera->center, glm::dvec3(4.0, -4.75, 5.0));
+}
+
+// Over the 2 x 2 map at level 1 the surface under (4, 4) is a diagonal's mean (0.3 or 1.5),
+// not the height map's 0.9: the eye follows the tessellated surface.
+TEST_F(Ground, ClearanceFollowsTheTessellatedSurfaceNotTheHeightMap) {
+    Terrain t = two_by_two(1.0);
+    t.eye = {4.0, 4.0, 8.0};
+    t.center = {4.0, 5.0, 0.0};
+    const tessref::Scene scene = tessref::load_scene_from_string(with_clearance(t, "0.25"), path("scene.toml"));
+    const tessref::GroundHeight under = tessref::ground_height(scene, tessref::run_pipeline(scene), {4.0, 4.0});
+    ASSERT_TRUE(under.on_surface);
+    EXPECT_EQ(scene.camera->eye.z, under.tessellated + 0.25);
+    EXPECT_TRUE(std::abs(scene.camera->eye.z - 0.55) < 1e-6 || std::abs(scene.camera->eye.z - 1.75) < 1e-6)
+        << scene.camera->eye.z;
+}
+
+TEST_F(Ground, BadClearanceIsExit2NamingTheKeyAndWritesNothing) {
+    Terrain t = two_by_two(1.0);
+    t.eye = {4.0, 4.0, 8.0};
+    t.center = {4.0, 5.0, 0.0};
+    struct Case {
+        std::string value;
+        glm::dvec3 eye;
+        const char* says;
+    };
+    for (const Case& c : {Case{"-1.0", t.eye, "camera.ground_clearance"}, Case{"\"high\"", t.eye, "camera.ground_clearance"},
+                          Case{"nan", t.eye, "camera.ground_clearance"},
+                          Case{"0.5", glm::dvec3(4.0, -6.0, 8.0), "outside the terrain"}}) {
+        Terrain bad = t;
+        bad.eye = c.eye;
+        write_file(dir_ / "scene.toml", with_clearance(bad, c.value));
+        const RunResult r = run({"render", "scene.toml", "-o", "out.png", "--size", "16x10"});
+        EXPECT_EQ(r.status, 2) << c.value << ": " << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << c.value << ": " << r.err;
+        EXPECT_NE(r.err.find("ground_clearance"), std::string::npos) << c.value << ": " << r.err;
+        EXPECT_NE(r.err.find("scene.toml"), std::string::npos) << c.value << ": " << r.err;
+        EXPECT_FALSE(std::filesystem::exists(dir_ / "out.png")) << c.value;
+    }
+}
+
+}  // namespace
+
+namespace {
+
+// A geomipmapped terrain (the geomorphing article's), 17 x 17 samples of code 255 with
+// scale_z 2: every level's surface is at height 2 exactly, so ground_clearance 0.75 puts the
+// eye at z = 2.75 exactly and the ground under any point reads 2 on both surfaces.
+TEST_F(Ground, ClearanceOverAGeomipmappedTerrain) {
+    write_pgm(dir_ / "flat17.pgm", 17, 17, 255, std::vector<int>(17 * 17, 255));
+    const std::string text =
+        "[scene]\nname = \"g\"\n[domain]\nplane = \"xy\"\npatches = [1, 1]\nx = [0.0, 16.0]\ny = [0.0, 16.0]\n"
+        "heightmap = \"flat17.pgm\"\nscale_z = 2.0\n[camera]\neye = [8.0, 8.0, 9.0]\ncenter = [8.0, 9.0, 0.0]\n"
+        "viewport = [160, 100]\nground_clearance = 0.75\n[evaluation]\nmodel = \"geomipmap\"\n";
+    const tessref::Scene scene = tessref::load_scene_from_string(text, path("scene.toml"));
+    EXPECT_EQ(scene.camera->eye, glm::dvec3(8.0, 8.0, 2.75));
+    EXPECT_EQ(scene.camera->center, glm::dvec3(8.0, 9.0, -6.25));
+    const tessref::GroundHeight under = tessref::ground_height(scene, tessref::run_pipeline(scene), {3.3, 12.1});
+    ASSERT_TRUE(under.on_surface);
+    EXPECT_EQ(under.height_map, 2.0);
+    EXPECT_EQ(under.tessellated, 2.0);
+}
+
 }  // namespace

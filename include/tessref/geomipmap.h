@@ -172,8 +172,26 @@ std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max
 double side_level(const std::vector<double>& levels, int patches_x, int patches_y, int px, int py, int side,
                   bool adapt);
 
-// The mesh of the whole map at the given fractional levels (each in [0, 4]).
-SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings);
+// What the geomorphing vertex shader (data/shaders/geomip_terrain.vert) reads of a vertex
+// besides its ground position: its true height, its target on the next coarser level's
+// surface and the tween that drives it (the patch's own, or its side's dictating one), all
+// in map heights (before scale_z). build_surface's z is (height + tween (target - height))
+// * scale_z, in double.
+struct MorphVertex {
+    double height = 0.0;
+    double target = 0.0;
+    double tween = 0.0;
+};
+
+// The mesh of the whole map at the given fractional levels (each in [0, 4]). With `morph`,
+// also each vertex's MorphVertex (one per mesh vertex, in mesh order).
+SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings,
+                          std::vector<MorphVertex>* morph = nullptr);
+
+// The vertex shader's world height in float, as llvmpipe computes it (GLSL mix(x, y, a) is
+// x + a * (y - x)): mix(sampleHeight, morphTarget, tween) * scaleZ (geomip_terrain.vert).
+// The gpu precision's vertex buffer holds this z.
+float morph_height(float sampleHeight, float morphTarget, float tween, float scaleZ);
 
 // Bounds on the drawn surface over each sample square (x, y) to (x + 1, y + 1), row-major,
 // (width - 1) x (height - 1), in map heights (before scale_z): whatever the patch's level,

@@ -106,6 +106,10 @@ struct PipelineResult {
     // Culled patches (geomipmap [culling]) emit no vertex and no triangle; their levels are
     // still chosen and reported (a visible neighbour adapts to them as without culling).
     CullStats culled{};
+    // Geomipmapped terrains only: per mesh vertex, the geomorphing vertex shader's attributes
+    // (geomip_terrain.vert: sampleHeight, morphTarget, tween) as floats; with the gpu
+    // precision each position's z is geomip::morph_height of them. Empty for other models.
+    std::vector<glm::vec3> geomorph;
 
     // camera_relative (PipelineOptions): the point the evaluation worked relative to, and its
     // float output positions (mesh.positions[v] == origin + relative_positions[v] in double).

@@ -243,9 +243,9 @@ struct GroundHeight {
 
 // The heights at `ground` of the scene's height map and of `pipeline`'s tessellated surface
 // (the first triangle, in triangle order, whose ground projection holds the point,
-// interpolated linearly, as the rasterizer would). Terrain scenes of the tessellation
-// models; throws tessref::Error for a mesh scene, a geomipmapped one (no ground map yet)
-// and a point outside the terrain's extent.
+// interpolated linearly, as the rasterizer would). Terrain scenes (a geomipmapped one's
+// height map is bilinear between its samples, ground_truth.h); throws tessref::Error for a
+// mesh scene and a point outside the terrain's extent.
 GroundHeight ground_height(const Scene& scene, const PipelineResult& pipeline, glm::dvec2 ground);
 
 // ---- images ----------------------------------------------------------------------------

@@ -12,7 +12,7 @@
 //                                                   tutorial's normal and parallax occlusion
 //                                                   mapping; parallax.h)
 //   flat, depth      (none: the "no shading" modes) flat_colour, depth_colour
-//   geomip_lightmap  (none yet: CPU only)           geomip_lightmap        (the geomorphing
+//   geomip_lightmap  geomip_terrain.frag            geomip_lightmap        (the geomorphing
 //                                                   article's light map, materials, clouds)
 // and shade(model, fragment) dispatches on the kind. The light of the thesis's listing 3,
 // shared by both thesis shaders, is thesis_light().
@@ -195,7 +195,7 @@ struct DepthShading {
 // alpha-blended over the passes before it by its alpha map; then an optional cloud-shadow
 // texture, repeated and scrolled, multiplied in. The article draws one pass per material into
 // the framebuffer; this is the single-pass equivalent (one fragment, the blend in float, no
-// 8-bit rounding between passes). No GLSL twin yet.
+// 8-bit rounding between passes). GLSL twin: geomip_terrain.frag (at most 4 materials).
 struct GeomipMaterial {
     std::shared_ptr<const Texture> texture;  // the material, sampled with GL_REPEAT
     float repeat = 1.0f;                     // tiles across the terrain (the texture matrix's scale)

@@ -347,8 +347,8 @@ struct SceneVerdict {
     double level_difference = 0.0;  // the largest |reference level - GL level| of those patches
     std::vector<std::string> failures;  // why the GL side fails
     double seconds_gl = 0.0;
-    // False for a scene whose model has no GLSL twin (geomipmap): only step (1) ran, and
-    // the verdict says so instead of claiming a GL comparison.
+    // False for a scene whose model has no GLSL twin: only step (1) ran, and the verdict
+    // says so instead of claiming a GL comparison (every shipped model has one now).
     bool gl_compared = true;
 
     std::string verdict() const {
@@ -404,11 +404,10 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
 
     // (2) The GL backend against the golden image and the CPU capture.
-    // No GLSL twin in the GL backend yet (gl refuses it): geomipmapping. pom shading has one
-    // (pn-pom) but its layer search flips on the last bits of llvmpipe's dFdx tangent frame in
+    // pom shading has a twin (pn-pom) but its layer search flips on the last bits of llvmpipe's dFdx tangent frame in
     // a few pixels, beyond this step's one-code rule: tests/test_parallax.cpp holds it with
     // its own count, and its golden files are checked on the CPU only.
-    if (scene.evaluation.model == EvaluationModel::geomipmap || scene.shading.model.kind == ShadingKind::pom) {
+    if (scene.shading.model.kind == ShadingKind::pom) {
         v.gl_compared = false;
         return v;
     }

@@ -382,7 +382,15 @@ SurfaceBounds surface_bounds(const HeightSamples& map) {
     return out;
 }
 
-SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings) {
+float morph_height(float sampleHeight, float morphTarget, float tween, float scaleZ) {
+    // GLSL: geomip_terrain.vert:33 float height = mix(sampleHeight, morphTarget, tween);
+    const float height = sampleHeight + tween * (morphTarget - sampleHeight);
+    // GLSL: geomip_terrain.vert:35 vec4 position = vec4(groundPosition, height * scaleZ, 1.0);
+    return height * scaleZ;
+}
+
+SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& levels, const Settings& settings,
+                          std::vector<MorphVertex>* morph) {
     validate(map);
     const int nx = map.patches_x(), ny = map.patches_y();
     if (levels.size() != static_cast<std::size_t>(nx) * ny)
@@ -396,6 +404,7 @@ SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& l
     };
     std::map<std::array<int, 5>, Topology> topologies;
     SurfaceMesh mesh;
+    if (morph) morph->clear();
     for (int py = 0; py < ny; ++py)
         for (int px = 0; px < nx; ++px) {
             const std::size_t p = static_cast<std::size_t>(py) * nx + px;
@@ -432,6 +441,7 @@ SurfaceMesh build_surface(const HeightSamples& map, const std::vector<double>& l
                 }
                 const double tween = st.side < 0 ? t : side_tween[st.side];
                 const double z = tween == 0.0 ? h : h + tween * (target - h);
+                if (morph) morph->push_back({h, target, tween});
                 const glm::ivec2 g = origin + s;
                 mesh.positions.push_back({settings.origin.x + g.x * settings.spacing.x,
                                           settings.origin.y + g.y * settings.spacing.y, z * settings.scale_z});

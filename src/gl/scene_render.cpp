@@ -85,6 +85,9 @@ void main()
 }
 )";
 
+// geomip_terrain.frag's sampler arrays: materials[4], alphaMaps[4].
+constexpr std::size_t kGeomipMaxMaterials = 4;
+
 struct Plan {
     std::vector<StageSource> stages;
     bool has_control_shader = false;
@@ -92,6 +95,9 @@ struct Plan {
     std::string position_expression;  // world position in the evaluation shader (capture)
     std::string normal_expression;    // the normal in the last stage before rasterization
     bool identity_mvp_for_capture = false;
+    // A geomipmapped terrain: triangles the CPU built, drawn with the geomorphing vertex
+    // shader and no tessellation stages; its capture wraps the vertex shader.
+    bool geomipmap = false;
 };
 
 StageSource file_stage(GLenum stage, const std::string& file) {
@@ -108,6 +114,47 @@ StageSource text_stage(GLenum stage, const char* text) {
     return s;
 }
 
+
+// Geomipmapping (geomipmap.h): the CPU chose the levels and built the triangles, adapting
+// borders included, as the geomorphing article's application does; geomip_terrain.vert
+// moves each vertex by its tween, and the normals of a [geometry] stage are the CPU's,
+// handed on as a vertex attribute (the article lights the terrain with its light map
+// instead). The fragment shaders that read GeometryData { gNormal, gTextureCoordinate }
+// take its output: the thesis's, geomip_terrain.frag (geomip_lightmap) and the no-shading
+// ones.
+Plan geomip_plan(const Scene& scene, const RenderShading& shading) {
+    Plan plan;
+    plan.geomipmap = true;
+    plan.position_expression = "gl_Position.xyz";  // mvp = identity in the capture pass
+    plan.identity_mvp_for_capture = true;
+    plan.normal_expression = "vertexOut.gNormal";
+    plan.stages.push_back(file_stage(GL_VERTEX_SHADER, "geomip_terrain.vert"));
+    switch (shading.model.kind) {
+        case ShadingKind::flat: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kFlatFragmentShader)); break;
+        case ShadingKind::depth: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kDepthFragmentShader)); break;
+        case ShadingKind::thesis_single: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain_single.frag")); break;
+        case ShadingKind::thesis_multi: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain.frag")); break;
+        case ShadingKind::geomip_lightmap:
+            if (shading.model.geomip.materials.size() > kGeomipMaxMaterials)
+                throw Error("tessref gl: geomip_terrain.frag blends at most " + std::to_string(kGeomipMaxMaterials) +
+                                " materials, the scene has " + std::to_string(shading.model.geomip.materials.size()),
+                            Where::at_key(scene.file, "shading.materials"));
+            plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "geomip_terrain.frag"));
+            break;
+        case ShadingKind::lab4:
+        case ShadingKind::cosc422:
+        case ShadingKind::pn:
+            throw Error(std::string("tessref gl: shading model '") + to_string(shading.model.kind) +
+                            "' with evaluation model geomipmap has no GLSL twin (its fragment shader reads another "
+                            "stage's outputs than geomip_terrain.vert writes)",
+                        Where::at_key(scene.file, "shading.model"));
+    }
+    if (plan.stages.back().stage != GL_FRAGMENT_SHADER)  // a shading model added later, not listed above
+        throw Error(std::string("tessref gl: shading model '") + to_string(shading.model.kind) +
+                        "' with evaluation model geomipmap has no GLSL twin",
+                    Where::at_key(scene.file, "shading.model"));
+    return plan;
+}
 
 Plan plan_for(const Scene& scene, const RenderShading& shading) {
     Plan plan;
@@ -133,10 +180,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
             plan.position_expression = "evaluationOut.v3PositionOut";
             plan.normal_expression = "evaluationOut.v3NormalOut";
             break;
-        case EvaluationModel::geomipmap:
-            throw Error("tessref gl: evaluation model geomipmap has no GLSL twin yet (it draws CPU-built meshes "
-                        "with a morphing vertex shader, not tessellation shaders); use render, mesh or check",
-                        Where::at_key(scene.file, "evaluation.model"));
+        case EvaluationModel::geomipmap: return geomip_plan(scene, shading);
     }
     plan.stages.push_back(file_stage(GL_VERTEX_SHADER, base + ".vert"));
 
@@ -188,7 +232,8 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         case ShadingKind::cosc422: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "cosc422_terrain.frag")); break;
         case ShadingKind::pn: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pn_triangles.frag")); break;
         case ShadingKind::geomip_lightmap:
-            throw Error("tessref gl: shading model geomip_lightmap has no GLSL twin yet",
+            throw Error("tessref gl: shading model geomip_lightmap shades a geomipmapped terrain: it needs "
+                        "evaluation model geomipmap",
                         Where::at_key(scene.file, "shading.model"));
         case ShadingKind::pom:
             // pom.frag reads the PN evaluation shader's EvaluationData block; the terrain
@@ -302,7 +347,19 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
     for (const StageSource& s : plan.stages) {
         if (s.stage == GL_FRAGMENT_SHADER) continue;
         StageSource c = s;
-        if (s.stage == GL_TESS_EVALUATION_SHADER) {
+        if (plan.geomipmap && s.stage == GL_VERTEX_SHADER) {
+            // No primitive generator: the tess coord, patch and levels are the CPU's, carried
+            // as vertex attributes 6..9 (vertex_data) and handed on with the vertex.
+            c.prefix = "layout(location = 6) in int tessref_patch_id;\nlayout(location = 7) in vec3 tessref_tess_coord;\n"
+                       "layout(location = 8) in vec4 tessref_outer;\nlayout(location = 9) in vec2 tessref_inner;\n"
+                       "out vec3 tessref_cap_tess_coord;\nflat out int tessref_cap_patch_id;\nout vec3 "
+                       "tessref_cap_position;\nout vec3 tessref_cap_normal;\nout vec4 tessref_cap_outer;\nout vec2 "
+                       "tessref_cap_inner;\n#define main tessref_twin_main\n";
+            c.suffix = "#undef main\nvoid main()\n{\n    tessref_twin_main();\n"
+                       "    tessref_cap_tess_coord = tessref_tess_coord;\n    tessref_cap_patch_id = tessref_patch_id;\n"
+                       "    tessref_cap_position = " + plan.position_expression + ";\n    tessref_cap_normal = " + normal +
+                       ";\n    tessref_cap_outer = tessref_outer;\n    tessref_cap_inner = tessref_inner;\n}\n";
+        } else if (s.stage == GL_TESS_EVALUATION_SHADER) {
             const std::string out = plan.has_geometry_shader ? "tessref_te_" : "tessref_cap_";
             c.prefix = "out vec3 " + out + "tess_coord;\nout int " + out + "patch_id;\nout vec3 " + out +
                        "position;\nout vec4 " + out + "outer;\nout vec2 " + out + "inner;\n" +
@@ -468,6 +525,22 @@ void pn_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m, glm::
         u.i("flatEdgesAtLevel1", scene.control->pn.flatEdgesAtLevel1 ? 1 : 0);
 }
 
+void geomip_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
+    u.m4("mvp", m.view_projection);
+    u.f("scaleZ", scene.grid->scale_z);  // the pipeline's float(settings.scale_z)
+}
+
+void geomip_shading_uniforms(const Uniforms& u, const GeomipLightmapShading& g) {
+    u.i("materialCount", static_cast<int>(g.materials.size()));
+    for (std::size_t i = 0; i < g.materials.size(); ++i)
+        u.f(("materialRepeat[" + std::to_string(i) + "]").c_str(), g.materials[i].repeat);
+    u.v2("lightMapScale", g.lightMapScale);
+    u.v2("lightMapOffset", g.lightMapOffset);
+    u.i("cloudsEnabled", g.clouds ? 1 : 0);
+    u.f("cloudRepeat", g.cloudRepeat);
+    u.v2("cloudOffset", g.cloudOffset);
+}
+
 void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
     switch (s.kind) {
         case ShadingKind::flat: u.v4("colour", s.flat.colour); break;
@@ -517,7 +590,7 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
             u.i("bSelfShadow", s.pom.bSelfShadow ? 1 : 0);
             u.f("fUvRepeat", s.pom.fUvRepeat);
             break;
-        case ShadingKind::geomip_lightmap: break;  // refused when the program is planned
+        case ShadingKind::geomip_lightmap: geomip_shading_uniforms(u, s.geomip); break;
     }
 }
 
@@ -531,7 +604,7 @@ void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const Ren
         case EvaluationModel::cosc422: cosc422_uniforms(u, scene, m); break;
         case EvaluationModel::lab4: lab4_uniforms(u, scene, m); break;
         case EvaluationModel::pn: pn_uniforms(u, scene, m, viewport); break;
-        case EvaluationModel::geomipmap: break;  // refused by plan_for
+        case EvaluationModel::geomipmap: geomip_uniforms(u, scene, m); break;
     }
     if (scene.control) {
         const ControlStage& c = *scene.control;
@@ -582,7 +655,7 @@ GLuint upload(Context::Impl& c, const Texture& t, const std::string& what) {
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER,
                      t.min_filter() == MinFilter::linear ? GL_LINEAR : GL_LINEAR_MIPMAP_LINEAR);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    const GLint wrap = t.wrap() == Wrap::repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE;  // pom's samplers repeat
+    const GLint wrap = t.wrap() == Wrap::repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE;  // texture.h Wrap
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap);
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrap);
     c.check_error(("uploading the texture " + what).c_str());
@@ -621,6 +694,15 @@ void bind_textures(BoundTextures& b, const Scene& scene, const RenderShading& sh
     }
     if (scene.control && scene.control->model == ControlModel::thesis && scene.control->tessellation_map)
         b.bind(1, scene.control->tessellation_map.get(), "tessellationMap");
+    if (shading.model.kind == ShadingKind::geomip_lightmap) {  // geomip_terrain.frag's bindings
+        const GeomipLightmapShading& g = shading.model.geomip;
+        b.bind(4, g.lightMap.get(), "lightMap");
+        for (std::size_t i = 0; i < g.materials.size(); ++i) {
+            b.bind(5 + static_cast<int>(i), g.materials[i].texture.get(), "materials[" + std::to_string(i) + "]");
+            b.bind(9 + static_cast<int>(i), g.materials[i].alpha.get(), "alphaMaps[" + std::to_string(i) + "]");
+        }
+        b.bind(13, g.clouds.get(), "clouds");
+    }
     const auto names = sampler_names(shading.model.kind);
     for (std::size_t i = 0; i < names.size(); ++i) {
         const auto* slot = sampler_slot(shading.model.textures, names[i]);
@@ -670,6 +752,58 @@ VertexData vertex_data(const Scene& scene) {
             }
     }
     return d;
+}
+
+// A geomipmapped terrain: three vertices per triangle of the CPU's mesh (triangle order, so
+// that a batch of patches is a range of vertices), kGeomipVertexWords 32-bit words each:
+// groundPosition (2), sampleHeight, morphTarget, tween, normal (3), textureCoordinate (2)
+// for geomip_terrain.vert (locations 0..5); then for the capture's wrapper (locations 6..9)
+// the patch id (an int), the tess coord (3), the outer (4) and inner (2) levels. Every
+// vertex of a triangle is written out so that a face normal ([geometry] normals = "face")
+// can be each corner's normal.
+constexpr std::size_t kGeomipVertexWords = 20;
+
+VertexData geomip_vertex_data(const Scene& scene, const PipelineResult& pipe) {
+    VertexData d;
+    d.patch_vertices = 3;
+    const SurfaceMesh& mesh = pipe.mesh;
+    if (pipe.geomorph.size() != mesh.positions.size())
+        throw Error("tessref gl: the geomipmapped pipeline result has no geomorph attributes", Where::at_key(scene.file, "evaluation.model"));
+    const bool face = !pipe.face_normals.empty();
+    d.floats.reserve(mesh.triangles.size() * 3 * kGeomipVertexWords);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (const std::uint32_t v : mesh.triangles[t]) {
+            const glm::vec3 m = pipe.geomorph[v];
+            const glm::vec3 n = face ? glm::vec3(pipe.face_normals[t])
+                                     : mesh.normals.empty() ? glm::vec3(0.0f) : glm::vec3(mesh.normals[v]);
+            const glm::vec2 uv(mesh.uvs[v]);
+            const std::uint32_t patch = mesh.patch_ids[v];
+            float patch_bits;
+            std::memcpy(&patch_bits, &patch, sizeof patch_bits);
+            const TessLevels& l = pipe.levels[patch];
+            const glm::vec3 tc = mesh.tess_coords[v];
+            d.floats.insert(d.floats.end(),
+                            {static_cast<float>(mesh.positions[v].x), static_cast<float>(mesh.positions[v].y), m.x,
+                             m.y, m.z, n.x, n.y, n.z, uv.x, uv.y, patch_bits, tc.x, tc.y, tc.z, l.outer[0],
+                             l.outer[1], l.outer[2], l.outer[3], l.inner[0], l.inner[1]});
+        }
+    return d;
+}
+
+void geomip_attributes(GlFunctions& gl) {
+    const GLsizei stride = kGeomipVertexWords * sizeof(float);
+    const auto at = [](std::size_t word) { return reinterpret_cast<const void*>(word * sizeof(float)); };
+    gl.VertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, stride, at(0));   // groundPosition
+    gl.VertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, stride, at(2));   // sampleHeight
+    gl.VertexAttribPointer(2, 1, GL_FLOAT, GL_FALSE, stride, at(3));   // morphTarget
+    gl.VertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, at(4));   // tween
+    gl.VertexAttribPointer(4, 3, GL_FLOAT, GL_FALSE, stride, at(5));   // normal
+    gl.VertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, stride, at(8));   // textureCoordinate
+    gl.VertexAttribIPointer(6, 1, GL_INT, stride, at(10));             // the capture's patch id
+    gl.VertexAttribPointer(7, 3, GL_FLOAT, GL_FALSE, stride, at(11));  // tess coord
+    gl.VertexAttribPointer(8, 4, GL_FLOAT, GL_FALSE, stride, at(14));  // outer levels
+    gl.VertexAttribPointer(9, 2, GL_FLOAT, GL_FALSE, stride, at(18));  // inner levels
+    for (GLuint i = 0; i < 10; ++i) gl.EnableVertexAttribArray(i);
 }
 
 struct GlObjects {
@@ -758,6 +892,13 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     Plan plan = plan_for(scene, result.shading);
     result.user_shaders = user_shaders(scene, options);
     apply_user_shaders(plan, result.user_shaders);
+    if (plan.geomipmap)  // triangles drawn as triangles: no patches for a tessellation stage
+        for (const StageShader& user : result.user_shaders)
+            if (user.stage == ShaderStage::tess_control || user.stage == ShaderStage::tess_evaluation)
+                throw Error(std::string("tessref gl: the ") + to_string(user.stage) + " shader " + user.path + " of " +
+                                user.origin + " cannot run on a geomipmapped terrain: it draws the CPU's triangles "
+                                "with no tessellation stages (geomip_terrain.vert)",
+                            user.where);
     const std::string user_note = count_note(plan);
     const std::vector<Batch> batches = make_batches(per_patch, options.max_primitives_per_draw);
 
@@ -785,14 +926,27 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     const GLuint program = objects.programs.back();
     bind_textures(textures, scene, result.shading);
 
-    const VertexData vertices = vertex_data(scene);
+    const VertexData vertices = plan.geomipmap ? geomip_vertex_data(scene, pipe) : vertex_data(scene);
+    // A batch's first vertex and vertex count: patches of the tessellated models, the
+    // patches' triangles (in patch order, three vertices each) of a geomipmapped terrain.
+    std::vector<std::size_t> first_triangle(per_patch.size() + 1, 0);
+    for (std::size_t p = 0; p < per_patch.size(); ++p) first_triangle[p + 1] = first_triangle[p] + per_patch[p];
+    const GLenum draw_mode = plan.geomipmap ? GL_TRIANGLES : GL_PATCHES;
+    const auto draw_range = [&](const Batch& b) {
+        const std::size_t first = plan.geomipmap ? first_triangle[b.first] : b.first;
+        const std::size_t count = plan.geomipmap ? first_triangle[b.first + b.count] - first_triangle[b.first] : b.count;
+        const std::size_t n = static_cast<std::size_t>(vertices.patch_vertices);
+        return std::pair{static_cast<GLint>(first * n), static_cast<GLsizei>(count * n)};
+    };
     gl.GenVertexArrays(1, &objects.vao);
     gl.BindVertexArray(objects.vao);
     gl.GenBuffers(1, &objects.vbo);
     gl.BindBuffer(GL_ARRAY_BUFFER, objects.vbo);
     gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.floats.size() * sizeof(float)),
                   vertices.floats.data(), GL_STATIC_DRAW);
-    if (scene.grid) {
+    if (plan.geomipmap) {
+        geomip_attributes(gl);
+    } else if (scene.grid) {
         gl.VertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 4 * sizeof(float), nullptr);
         gl.EnableVertexAttribArray(0);
     } else {
@@ -802,8 +956,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         gl.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(6 * sizeof(float)));
         for (GLuint i = 0; i < 3; ++i) gl.EnableVertexAttribArray(i);
     }
-    gl.PatchParameteri(GL_PATCH_VERTICES, vertices.patch_vertices);
-    if (!plan.has_control_shader) {
+    if (!plan.geomipmap) gl.PatchParameteri(GL_PATCH_VERTICES, vertices.patch_vertices);
+    if (!plan.geomipmap && !plan.has_control_shader) {
         const float level = scene.control ? static_cast<float>(scene.control->constant.level) : 1.0f;
         const float outer[4] = {level, level, level, level};
         const float inner[2] = {level, level};
@@ -833,8 +987,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     for (std::size_t k = 0; k < batches.size(); ++k) {
         const Batch& b = batches[k];
         gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.query);
-        gl.DrawArrays(GL_PATCHES, static_cast<GLint>(b.first * static_cast<std::size_t>(vertices.patch_vertices)),
-                      static_cast<GLsizei>(b.count * static_cast<std::size_t>(vertices.patch_vertices)));
+        const auto [first, count] = draw_range(b);
+        gl.DrawArrays(draw_mode, first, count);
         gl.EndQuery(GL_PRIMITIVES_GENERATED);
         GLuint generated = 0;
         gl.GetQueryObjectuiv(objects.query, GL_QUERY_RESULT, &generated);
@@ -891,8 +1045,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.query);
         gl.BeginQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, objects.query_written);
         gl.BeginTransformFeedback(GL_TRIANGLES);
-        gl.DrawArrays(GL_PATCHES, static_cast<GLint>(b.first * static_cast<std::size_t>(vertices.patch_vertices)),
-                      static_cast<GLsizei>(b.count * static_cast<std::size_t>(vertices.patch_vertices)));
+        const auto [first, count] = draw_range(b);
+        gl.DrawArrays(draw_mode, first, count);
         gl.EndTransformFeedback();
         gl.EndQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN);
         gl.EndQuery(GL_PRIMITIVES_GENERATED);
@@ -922,7 +1076,9 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         gl.UnmapBuffer(GL_TRANSFORM_FEEDBACK_BUFFER);
         for (const FeedbackRecord& r : records) {
             CapturedVertex v;
-            v.patch_id = static_cast<std::uint32_t>(b.first + static_cast<std::size_t>(r.patch_id));
+            // gl_PrimitiveID counts the draw's patches; a geomipmapped vertex carries its own.
+            v.patch_id = plan.geomipmap ? static_cast<std::uint32_t>(r.patch_id)
+                                        : static_cast<std::uint32_t>(b.first + static_cast<std::size_t>(r.patch_id));
             v.tess_coord = glm::vec3(r.tess_coord[0], r.tess_coord[1], r.tess_coord[2]);
             v.position = glm::vec3(r.position[0], r.position[1], r.position[2]);
             v.normal = glm::vec3(r.normal[0], r.normal[1], r.normal[2]);

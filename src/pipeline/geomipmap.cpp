@@ -45,7 +45,9 @@ namespace {
 
 // Keeps the vertices and triangles of the patches whose `keep` is true (patch order and
 // vertex order unchanged), with their face normals.
-void keep_patches(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, const std::vector<bool>& keep) {
+void keep_patches(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, std::vector<glm::vec3>& geomorph,
+                  const std::vector<bool>& keep) {
+    std::vector<glm::vec3> geomorph_out;
     std::vector<std::uint32_t> remap(mesh.positions.size(), 0);
     SurfaceMesh out;
     for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
@@ -56,6 +58,7 @@ void keep_patches(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, cons
         if (!mesh.uvs.empty()) out.uvs.push_back(mesh.uvs[v]);
         out.patch_ids.push_back(mesh.patch_ids[v]);
         out.tess_coords.push_back(mesh.tess_coords[v]);
+        if (!geomorph.empty()) geomorph_out.push_back(geomorph[v]);
     }
     std::vector<glm::dvec3> normals_out;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -66,6 +69,7 @@ void keep_patches(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, cons
     }
     mesh = std::move(out);
     face_normals = std::move(normals_out);
+    geomorph = std::move(geomorph_out);
 }
 
 }  // namespace
@@ -79,10 +83,24 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
     const std::vector<double> levels = geomip::select_levels(map, max_errors, settings, scene.camera->view_projection(),
                                                              scene.camera->viewport);
     PipelineResult result;
-    result.mesh = geomip::build_surface(map, levels, settings);
+    std::vector<geomip::MorphVertex> morph;
+    result.mesh = geomip::build_surface(map, levels, settings, &morph);
     SurfaceMesh& mesh = result.mesh;
-    if (options.precision == Precision::gpu)  // the vertex buffer holds floats
-        for (glm::dvec3& p : mesh.positions) p = glm::dvec3(glm::vec3(p));
+    // The vertex shader's attributes (geomip_terrain.vert), rounded to float as the vertex
+    // buffer holds them.
+    result.geomorph.resize(morph.size());
+    for (std::size_t v = 0; v < morph.size(); ++v)
+        result.geomorph[v] = glm::vec3(glm::dvec3(morph[v].height, morph[v].target, morph[v].tween));
+    if (options.precision == Precision::gpu) {
+        // The vertex buffer holds floats, and the vertex shader morphs them: the ground
+        // position as uploaded, the height as geomip_terrain.vert computes it.
+        const float scaleZ = static_cast<float>(settings.scale_z);
+        for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+            const glm::vec3& m = result.geomorph[v];
+            const glm::vec2 ground(glm::dvec2(mesh.positions[v]));
+            mesh.positions[v] = glm::dvec3(ground.x, ground.y, geomip::morph_height(m.x, m.y, m.z, scaleZ));
+        }
+    }
     result.estimated_triangles = mesh.triangles.size();
     if (mesh.triangles.size() > scene.max_triangles)
         throw Error("the geomipmapped terrain has " + std::to_string(mesh.triangles.size()) +
@@ -150,7 +168,7 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
             result.culled.frustum_planes += cull[p] == geomip::Cull::frustum_planes;
             result.culled.pvs += cull[p] == geomip::Cull::pvs;
         }
-        if (result.culled.total() > 0) keep_patches(mesh, result.face_normals, keep);
+        if (result.culled.total() > 0) keep_patches(mesh, result.face_normals, result.geomorph, keep);
     }
     result.distinct_patterns = 0;
     result.stages.control = true;  // the level selection

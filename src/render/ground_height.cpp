@@ -14,9 +14,6 @@ GroundHeight ground_height(const Scene& scene, const PipelineResult& pipeline, g
     if (!scene.grid)
         throw Error("the ground under a point needs a terrain scene ([domain] with a height map)",
                     Where::at_key(scene.file, "mesh"));
-    if (scene.evaluation.model == EvaluationModel::geomipmap)
-        throw Error("the ground under a point of a geomipmapped terrain is not modelled yet",
-                    Where::at_key(scene.file, "evaluation.model"));
     if (!std::isfinite(ground.x) || !std::isfinite(ground.y))
         throw Error("the ground point must be finite", Where::in_file("--ground"));
     const TerrainGrid& g = *scene.grid;

@@ -25,7 +25,17 @@ GroundMap ground_map(const Scene& scene) {
             m.v = {1.0 / g.scale_xy, g.texcoord_offset.y};
             break;
         case EvaluationModel::pn: break;  // not a terrain
-        case EvaluationModel::geomipmap: break;  // refused by raytrace_scene
+        case EvaluationModel::geomipmap: {
+            // Sample k stands at origin + k * spacing (geomipmap.h): the texel centre
+            // (k + 0.5) / W, so the vertex lines are the samples themselves and the truth is
+            // the level-0 mesh (the same diagonal), heights exact at the samples.
+            const double w = g.heightmap->texture.width(), h = g.heightmap->texture.height();
+            const double du = (g.u_coords.back() - g.u_coords.front()) / (w - 1);
+            const double dv = (g.v_coords.back() - g.v_coords.front()) / (h - 1);
+            m.u = {1.0 / (du * w), 0.5 / w - g.u_coords.front() / (du * w)};
+            m.v = {1.0 / (dv * h), 0.5 / h - g.v_coords.front() / (dv * h)};
+            break;
+        }
     }
     return m;
 }

@@ -107,13 +107,6 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
                     "full-resolution height field",
                     Where::at_key(scene.file, "mesh"));
     }
-    if (scene.evaluation.model == EvaluationModel::geomipmap) {
-        // Its samples sit on the extent's corners, not at texel centres as a texture's do;
-        // the truth surface below is built for the tessellation models' texture mapping.
-        throw Error("--raytrace of a geomipmapped terrain is not modelled yet: its full-resolution surface is "
-                    "`tessref render` with evaluation.error_bound_px = 0 (every patch at level 0)",
-                    Where::at_key(scene.file, "evaluation.model"));
-    }
     RenderResult result;
     result.camera = render_detail::camera_for(scene, options);
     result.shading = scene.shading;
@@ -147,7 +140,13 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
                                                                           : std::nullopt);
     const glm::mat3 normalMatrix(1.0f);  // the model matrix is the identity (as in the pipeline)
 
+    // A geomipmapped terrain's texture coordinate is not the height map's: uv = sample /
+    // (size - 1) over the extent (geomipmap.h OUTPUT), the article's one light map.
+    const bool geomipmap = scene.evaluation.model == EvaluationModel::geomipmap;
+    const glm::dvec2 extent_lo(grid.u_coords.front(), grid.v_coords.front());
+    const glm::dvec2 extent(grid.u_coords.back() - grid.u_coords.front(), grid.v_coords.back() - grid.v_coords.front());
     auto tex_coord = [&](const glm::dvec3& p) {
+        if (geomipmap) return (glm::dvec2(p.x, p.y) - extent_lo) / extent;
         return glm::dvec2(map.u.st(p.x), map.v.st(xy ? p.y : p.z));
     };
     // The scene's geometry stage at a point of the surface instead of at a vertex.

@@ -14,6 +14,7 @@
 #include "scene/toml_reader.h"
 #include "tessref/check.h"
 #include "tessref/pipeline.h"
+#include "tessref/render.h"
 #include "tessref/scene.h"
 
 namespace tessref {
@@ -144,7 +145,8 @@ struct Loader {
     // ---- [camera] -----------------------------------------------------------------
     void read_camera(const toml::table& table, const glm::dvec3& default_up) {
         TableReader t(file, table, "camera",
-                      {"position", "theta", "phi", "eye", "center", "up", "fov_y", "viewport", "near", "far"});
+                      {"position", "theta", "phi", "eye", "center", "up", "fov_y", "viewport", "near", "far",
+                       "ground_clearance"});
         SceneCamera cam;
         const bool thesis_style = t.has("position") || t.has("theta") || t.has("phi");
         const bool lookat_style = t.has("eye") || t.has("center");
@@ -182,6 +184,8 @@ struct Loader {
         cam.near_plane = t.real_or("near", 1.0, 0.0, HUGE_VAL, true);
         cam.far_plane = t.real_or("far", 10000.0, 0.0, HUGE_VAL, true);
         if (!(cam.far_plane > cam.near_plane)) t.fail("far", "camera.far must be greater than camera.near");
+        ground_clearance = t.real_opt("ground_clearance", 0.0, 1e12);
+        if (ground_clearance) ground_clearance_where = t.where("ground_clearance");
         t.finish();
         scene.camera = cam;
     }
@@ -711,11 +715,45 @@ struct Loader {
                             std::to_string(scene.max_triangles),
                         w);
         }
+        if (scene.camera && ground_clearance) lift_camera_above_ground();
         // Last: the scene's other errors come first, its textures are the slowest to load,
         // and COSC422's default heightMap is the grid's.
         const toml::node* shading = root.get("shading");
         scene.shading = scene_detail::read_shading(file, shading ? shading->as_table() : nullptr, scene,
                                                    [this](const std::string& p) { return resolve(p); });
+    }
+
+    // ---- camera collision (lab 4) -----------------------------------------------------
+    // [camera] ground_clearance = d: the pipeline runs with the camera as given (the current
+    // frame's levels), the tessellated surface's height h under the eye is found
+    // (render.h ground_height), and the eye's up coordinate becomes h + d, the center moving
+    // with it. The render then tessellates again from the lifted eye, so levels that depend
+    // on the eye may differ a little from those the height was read on, as in an
+    // application that moves the camera with the previous frame's surface.
+    std::optional<double> ground_clearance;
+    Where ground_clearance_where;
+    void lift_camera_above_ground() {
+        SceneCamera& cam = *scene.camera;
+        const Where& w = ground_clearance_where;
+        if (!scene.grid || !scene.grid->heightmap)
+            throw Error("camera.ground_clearance keeps the eye above a terrain: the scene needs a [domain] with a "
+                        "height map",
+                        w);
+        const bool xy = scene.grid->plane == GroundPlane::xy;
+        const glm::dvec2 ground = xy ? glm::dvec2(cam.eye.x, cam.eye.y) : glm::dvec2(cam.eye.x, cam.eye.z);
+        GroundHeight h;
+        try {
+            h = ground_height(scene, run_pipeline(scene), ground);
+        } catch (const Error& e) {
+            throw Error("camera.ground_clearance: " + e.message(), w);
+        }
+        if (!h.on_surface)
+            throw Error("camera.ground_clearance: no triangle of the surface lies under the eye", w);
+        const double up = h.tessellated + *ground_clearance;
+        double& eye_up = xy ? cam.eye.z : cam.eye.y;
+        double& center_up = xy ? cam.center.z : cam.center.y;
+        center_up += up - eye_up;
+        eye_up = up;
     }
 
     // Models, domain and camera must fit together.

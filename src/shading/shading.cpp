@@ -341,26 +341,34 @@ glm::vec4 pn_triangles(const FragmentInputs& fragment, const PnShading& u) {
     return glm::vec4(u.v3DiffuseColour * (0.1f + 0.9f * fDiffuse) + glm::vec3(0.3f * fSpecular), 1.0f);
 }
 
-// ---- the geomorphing article's materials (no GLSL twin yet) -------------------------------
+// ---- the geomorphing article's materials (geomip_terrain.frag) -----------------------------
 
 glm::vec4 geomip_lightmap(const FragmentInputs& fragment, const GeomipLightmapShading& u) {
+    // GLSL: geomip_terrain.frag:32 vec2 uv = geometryIn.gTextureCoordinate;
     const FragmentCoord uv = texture_coordinate(fragment);
     // "Materials": one light map spans the terrain, uv (0, 0) to (1, 1); its texels (and the
     // alpha maps') are centred on the height samples.
+    // GLSL: geomip_terrain.frag:33 vec2 st = uv * lightMapScale + lightMapOffset;
     const FragmentCoord st{uv.P * u.lightMapScale + u.lightMapOffset, uv.dPdx * u.lightMapScale,
                            uv.dPdy * u.lightMapScale};
+    // GLSL: geomip_terrain.frag:34 float light = texture(lightMap, st).r;
     const float light = texture(u.lightMap, st).r;
     glm::vec3 colour(0.0f);
     for (std::size_t i = 0; i < u.materials.size(); ++i) {
         const GeomipMaterial& m = u.materials[i];
-        // Two texture stages, modulated: the repeated material times the light map.
-        const glm::vec3 pass = glm::vec3(texture(m.texture, uv * m.repeat)) * light;
         if (i == 0) {
-            colour = pass;  // the base pass: nothing drawn before it, no alpha map
+            // The base pass: nothing drawn before it, no alpha map. Two texture stages,
+            // modulated: the repeated material times the light map.
+            // GLSL: geomip_terrain.frag:37 vec3 colour = texture(materials[0], uv * materialRepeat[0]).rgb * light;
+            colour = glm::vec3(texture(m.texture, uv * m.repeat)) * light;
         } else {
+            // GLSL: geomip_terrain.frag:39 vec3 pass = texture(materials[i], uv * materialRepeat[i]).rgb * light;
+            const glm::vec3 pass = glm::vec3(texture(m.texture, uv * m.repeat)) * light;
             // Alpha-blended over the passes before it (SRC_ALPHA, ONE_MINUS_SRC_ALPHA), its
-            // alpha from the material's alpha map: GLSL mix(colour, pass, alpha).
+            // alpha from the material's alpha map.
+            // GLSL: geomip_terrain.frag:40 float alpha = texture(alphaMaps[i], st).r;
             const float alpha = texture(m.alpha, st).r;
+            // GLSL: geomip_terrain.frag:41 colour = mix(colour, pass, alpha);
             colour = colour + alpha * (pass - colour);
         }
     }
@@ -369,8 +377,10 @@ glm::vec4 geomip_lightmap(const FragmentInputs& fragment, const GeomipLightmapSh
     if (u.clouds) {
         const FragmentCoord cloud{uv.P * u.cloudRepeat + u.cloudOffset, uv.dPdx * u.cloudRepeat,
                                   uv.dPdy * u.cloudRepeat};
+        // GLSL: geomip_terrain.frag:46 colour = colour * texture(clouds, uv * cloudRepeat + cloudOffset).r;
         colour = colour * texture(u.clouds, cloud).r;
     }
+    // GLSL: geomip_terrain.frag:48 fragment = vec4(colour, 1.0);
     return glm::vec4(colour, 1.0f);
 }
 
