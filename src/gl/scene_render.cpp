@@ -144,6 +144,7 @@ Plan geomip_plan(const Scene& scene, const RenderShading& shading) {
         case ShadingKind::lab4:
         case ShadingKind::cosc422:
         case ShadingKind::pn:
+        case ShadingKind::pom:
             throw Error(std::string("tessref gl: shading model '") + to_string(shading.model.kind) +
                             "' with evaluation model geomipmap has no GLSL twin (its fragment shader reads another "
                             "stage's outputs than geomip_terrain.vert writes)",
