@@ -6,7 +6,10 @@
 // triangles.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -254,4 +257,55 @@ TEST(RenderStream, ProvenanceMatchesTheWholeSurface) {
         }
         EXPECT_GT(covered, 100);
     }
+}
+
+// PatchStream::emit with VertexNormals::later writes everything but the vertex normals, and
+// evaluate_points gives each vertex the normal emit() writes with VertexNormals::now: the
+// streamed render relies on both to compute normals only where a triangle wins a pixel.
+// Normal-map, height-field (at lab 4's mip level) and PN normals, both precisions and
+// camera-relative evaluation.
+TEST(PatchStream, DeferredVertexNormalsAreTheEmittedOnes) {
+    using tessref::PatchStream;
+    int patches_compared = 0;
+    for (const char* name : {"thesis-all-10.toml", "lab4-canyon.toml", "terrain-pom.toml", "pn-triangles.toml"}) {
+        for (int variant = 0; variant < 3; ++variant) {
+            SCOPED_TRACE(std::string(name) + " variant " + std::to_string(variant));
+            const tessref::Scene scene = tessref::load_scene((kScenes / name).string());
+            tessref::PipelineOptions options;
+            options.precision = variant == 1 ? tessref::Precision::exact : tessref::Precision::gpu;
+            options.camera_relative = variant == 2;
+            const PatchStream stream(scene, options);
+            ASSERT_TRUE(stream.has_normals());
+            const std::size_t n = stream.patch_count();
+            for (std::size_t p = 0; p < n; p += std::max<std::size_t>(1, n / 16)) {
+                const std::size_t vertices = stream.vertex_base(p + 1) - stream.vertex_base(p);
+                const std::size_t triangles = stream.triangle_base(p + 1) - stream.triangle_base(p);
+                tessref::SurfaceMesh now, later, some;
+                std::vector<glm::dvec3> faces;
+                stream.size(now, faces, vertices, triangles);
+                stream.size(later, faces, vertices, triangles);
+                const glm::dvec3 untouched(std::numeric_limits<double>::quiet_NaN());
+                std::fill(later.normals.begin(), later.normals.end(), untouched);
+                stream.emit(p, now, 0, 0, &faces);
+                stream.emit(p, later, 0, 0, &faces, PatchStream::VertexNormals::later);
+                for (const glm::dvec3& normal : later.normals) ASSERT_TRUE(std::isnan(normal.x));
+                EXPECT_TRUE(same_bytes(later.positions, now.positions));
+                EXPECT_TRUE(same_bytes(later.uvs, now.uvs));
+                EXPECT_TRUE(same_bytes(later.tess_coords, now.tess_coords));
+                EXPECT_TRUE(same_bytes(later.patch_ids, now.patch_ids));
+                EXPECT_TRUE(same_bytes(later.triangles, now.triangles));
+                // Every other vertex, backwards: evaluate_points takes any subset in any order.
+                std::vector<std::uint32_t> points;
+                for (std::size_t v = vertices; v-- > 0;)
+                    if (v % 2 == 0) points.push_back(static_cast<std::uint32_t>(v));
+                stream.size(some, faces, points.size(), 0);
+                stream.evaluate_points(p, points, some, 0);
+                for (std::size_t j = 0; j < points.size(); ++j)
+                    ASSERT_EQ(std::memcmp(&some.normals[j], &now.normals[points[j]], sizeof(glm::dvec3)), 0)
+                        << "patch " << p << " vertex " << points[j];
+                ++patches_compared;
+            }
+        }
+    }
+    EXPECT_GE(patches_compared, 4 * 3 * 4);  // at least 4 patches of each of the 12 streams
 }

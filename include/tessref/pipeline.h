@@ -166,10 +166,15 @@ public:
     // triangles at first_triangle on, indexing from first_vertex, and their face normals
     // into face_normals[first_triangle...] when face_normals() and the pointer is not null.
     // The caller sizes the arrays. Concurrent calls for different patches are safe.
+    // VertexNormals::later: mesh.normals is left as it is; evaluate_points() gives the same
+    // normals for the vertices that need one (the renderer: those of triangles that win a
+    // pixel, a tenth of them on a finely tessellated terrain), saving the geometry stage's
+    // texture fetch for the rest.
+    enum class VertexNormals { now, later };
     void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-              std::vector<glm::dvec3>* face_normals) const;
+              std::vector<glm::dvec3>* face_normals, VertexNormals normals = VertexNormals::now) const;
     // The evaluation at some of a patch's domain points (indices into pattern(patch).points()),
-    // written like emit()'s vertices at mesh index first on; no triangles.
+    // written like emit()'s vertices at mesh index first on (normals included); no triangles.
     void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
                          std::size_t first) const;
 

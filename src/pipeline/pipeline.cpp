@@ -137,7 +137,7 @@ struct PassTimer {
 struct PatchStream::Impl {
     virtual ~Impl() = default;
     virtual void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-                      std::vector<glm::dvec3>* face_normals) const = 0;
+                      std::vector<glm::dvec3>* face_normals, bool vertex_normals) const = 0;
     virtual void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
                                  std::size_t first) const = 0;
     virtual std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out,
@@ -212,9 +212,9 @@ struct StreamImpl final : PatchStream::Impl {
     }
 
     void emit(std::size_t p, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-              std::vector<glm::dvec3>* normals_out) const override {
+              std::vector<glm::dvec3>* normals_out, bool vertex_normals) const override {
         const Pattern& pattern = *patterns[p];
-        program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex);
+        program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals);
         write_coords(p, pattern.points(), mesh, first_vertex);
         for (std::size_t t = 0; t < pattern.primitive_count(); ++t) {
             const auto prim = pattern.primitive(t);
@@ -268,7 +268,7 @@ struct StreamImpl final : PatchStream::Impl {
                 points[k] = all[indices[k0 + k]];
                 tess[k] = coords[indices[k0 + k]];
             }
-            program->evaluate(p, std::span<const DomainPoint<T>>(points.data(), count), mesh, first + k0);
+            program->evaluate(p, std::span<const DomainPoint<T>>(points.data(), count), mesh, first + k0, true);
             write_coords(p, std::span<const TessCoord>(tess.data(), count), mesh, first + k0);
         }
     }
@@ -416,8 +416,8 @@ void PatchStream::size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals,
     if (impl_->face_normals) face_normals.resize(triangles);
 }
 void PatchStream::emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-                       std::vector<glm::dvec3>* face_normals) const {
-    impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals);
+                       std::vector<glm::dvec3>* face_normals, VertexNormals normals) const {
+    impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals, normals == VertexNormals::now);
 }
 std::array<std::uint32_t, 3> PatchStream::triangle(std::size_t triangle, SurfaceMesh& out,
                                                   glm::dvec3* face_normal) const {

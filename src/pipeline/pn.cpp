@@ -55,13 +55,13 @@ public:
     }
 
     void evaluate(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
-                  std::size_t first_vertex) const override {
+                  std::size_t first_vertex, bool normals) const override {
         for (std::size_t k = 0; k < points.size(); ++k) {
             const EvaluatedVertex<T> ev = pn_evaluate<T>(patches[p], points[k], evaluation);
             const std::size_t v = first_vertex + k;
             mesh.positions[v] = glm::dvec3(ev.position);
             if (this->has_uvs) mesh.uvs[v] = glm::dvec2(ev.textureCoordinate);
-            if (this->has_normals) mesh.normals[v] = glm::dvec3(ev.normal);
+            if (this->has_normals && normals) mesh.normals[v] = glm::dvec3(ev.normal);
         }
     }
 

@@ -39,10 +39,12 @@ public:
 
     // The evaluation shader at each of the patch's domain points, then the geometry
     // stage's per-vertex normal if the scene asks for one: writes positions (and uvs and
-    // normals where has_uvs / has_normals) at mesh indices first_vertex + k. Called after
-    // control() of the same patch, concurrently for different patches.
+    // normals where has_uvs / has_normals) at mesh indices first_vertex + k. normals false:
+    // leaves mesh.normals alone (the renderer computes them later for the few vertices that
+    // need them; every output is a function of its own point, so the values are the same).
+    // Called after control() of the same patch, concurrently for different patches.
     virtual void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
-                          std::size_t first_vertex) const = 0;
+                          std::size_t first_vertex, bool normals) const = 0;
 
     bool has_uvs = false;     // the evaluation writes texture coordinates
     bool has_normals = false; // the evaluation or the geometry stage writes vertex normals

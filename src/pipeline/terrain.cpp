@@ -102,13 +102,14 @@ PatchLevels<T> TerrainProgram<T>::control(std::size_t p) {
 
 template <typename T>
 void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
-                                 std::size_t first_vertex) const {
+                                 std::size_t first_vertex, bool normals) const {
+    const bool write_normals = geometry_vertex_normals && normals;
     for (std::size_t k = 0; k < points.size(); ++k) {
         const EvaluatedVertex<T> ev = evaluate_point(p, points[k]);
         const std::size_t v = first_vertex + k;
         mesh.positions[v] = glm::dvec3(ev.position);
         mesh.uvs[v] = glm::dvec2(ev.textureCoordinate);
-        if (geometry_vertex_normals) mesh.normals[v] = glm::dvec3(vertex_normal(ev, vertex_lod(p, points[k])));
+        if (write_normals) mesh.normals[v] = glm::dvec3(vertex_normal(ev, vertex_lod(p, points[k])));
     }
 }
 

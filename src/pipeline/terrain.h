@@ -28,7 +28,7 @@ class TerrainProgram : public PatchProgram<T> {
 public:
     PatchLevels<T> control(std::size_t patch) override;
     void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
-                  std::size_t first_vertex) const override;
+                  std::size_t first_vertex, bool normals) const override;
 
 protected:
     TerrainProgram(const Scene& scene, const glm::dvec3& origin);

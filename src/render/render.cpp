@@ -2,6 +2,7 @@
 #include "tessref/render.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -269,6 +270,9 @@ struct PatchChunk {
     SurfaceMesh mesh;
     std::vector<glm::dvec3> face_normals;
     std::vector<glm::vec4> clip;
+    // Per vertex, with deferred vertex normals: whether a triangle of it won a pixel in this
+    // batch's draw (then its normal is computed before the resolve reads it).
+    std::vector<std::uint8_t> wins;
     bool finite = true;
 };
 
@@ -334,6 +338,13 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     const FragmentNeeds needs = fragment_needs(result.shading.model.kind);
     const bool derivatives = needs.texCoord && needs.texCoord_derivatives && stream.has_uvs();
     const glm::mat4 mvp = result.mvp;
+    // The geometry stage's vertex normals (a normal-map fetch or a height-field difference
+    // each) only for the vertices of triangles that win a pixel: at level 63 on the bench
+    // terrain about 1 vertex in 10. They are computed between the draw and the resolve, by
+    // the same evaluation (PatchStream::evaluate_points), so every value is the one emit()
+    // would have written.
+    const bool defer_normals = stream.has_normals();
+    const auto normals_mode = defer_normals ? PatchStream::VertexNormals::later : PatchStream::VertexNormals::now;
 
     // Chunks: runs of whole patches of about kStreamChunkTriangles triangles.
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
@@ -369,7 +380,9 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             SurfaceMesh& m = c.mesh;
             stream.size(m, c.face_normals, vertices, triangles);
             for (std::size_t p = c.first_patch; p < c.last_patch; ++p)
-                stream.emit(p, m, stream.vertex_base(p) - v0, stream.triangle_base(p) - t0, &c.face_normals);
+                stream.emit(p, m, stream.vertex_base(p) - v0, stream.triangle_base(p) - t0, &c.face_normals,
+                            normals_mode);
+            if (defer_normals) c.wins.assign(vertices, 0);
             c.clip.resize(vertices);
             c.finite = true;
             for (std::size_t v = 0; v < vertices; ++v) {
@@ -404,17 +417,58 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             chunk_views.push_back({chunks[k].mesh, chunks[k].face_normals, chunks[k].clip, stream.face_normals(), origin});
             chunk_first.push_back(chunks[k].first_triangle);
         }
+        // A triangle id of this batch: its chunk and its index there; used = none.
+        auto chunk_of = [&](std::uint32_t id) -> std::pair<std::size_t, std::uint32_t> {
+            if (id < batch_first || id >= batch_end) return {used, 0};
+            const std::size_t k = static_cast<std::size_t>(
+                std::upper_bound(chunk_first.begin(), chunk_first.end(), id) - chunk_first.begin() - 1);
+            return {k, id - chunk_first[k]};
+        };
         // Only where the draw changed a pixel (the rasterizer's tiles).
         const std::vector<Rasterizer::Rect> drawn = rasterizer.drawn();
+        if (defer_normals && needs.normal) {
+            // Mark the vertices the resolve reads: every pixel of the whole quads it visits
+            // (a superset does no harm), then evaluate their normals chunk by chunk.
+            tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
+                const Rasterizer::Rect& rect = drawn[r];
+                const int row_end = std::min(2 * ((rect.row + rect.height + 1) / 2), height);
+                const int x_end = std::min(rect.x + 2 * ((rect.width + 1) / 2), width);
+                for (int row = 2 * (rect.row / 2); row < row_end; ++row) {
+                    for (int x = rect.x; x < x_end; ++x) {
+                        const auto [k, tri] = chunk_of(fb.triangle_id[result.index(x, row)]);
+                        if (k == used) continue;
+                        PatchChunk& c = chunks[k];
+                        for (const std::uint32_t v : c.mesh.triangles[tri])
+                            std::atomic_ref<std::uint8_t>(c.wins[v]).store(1, std::memory_order_relaxed);
+                    }
+                }
+            });
+            tessref::parallel_for(std::size_t{0}, used, [&](std::size_t k) {
+                PatchChunk& c = chunks[k];
+                const std::size_t v0 = stream.vertex_base(c.first_patch);
+                SurfaceMesh some;
+                std::vector<glm::dvec3> no_faces;
+                std::vector<std::uint32_t> points;
+                for (std::size_t p = c.first_patch; p < c.last_patch; ++p) {
+                    const std::size_t first = stream.vertex_base(p) - v0, end = stream.vertex_base(p + 1) - v0;
+                    points.clear();
+                    for (std::size_t v = first; v < end; ++v)
+                        if (c.wins[v]) points.push_back(static_cast<std::uint32_t>(v - first));
+                    if (points.empty()) continue;
+                    stream.size(some, no_faces, points.size(), 0);
+                    stream.evaluate_points(p, points, some, 0);
+                    for (std::size_t j = 0; j < points.size(); ++j) c.mesh.normals[first + points[j]] = some.normals[j];
+                }
+            });
+        }
         tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
             const Rasterizer::Rect& rect = drawn[r];
             resolve(result, fb, pipe->levels, domain, needs, derivatives, false, rect.row / 2,
                     (rect.row + rect.height + 1) / 2,
                     [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
-                        if (id < batch_first || id >= batch_end) return {nullptr, 0};
-                        const std::size_t k = static_cast<std::size_t>(
-                            std::upper_bound(chunk_first.begin(), chunk_first.end(), id) - chunk_first.begin() - 1);
-                        return {&chunk_views[k], id - chunk_first[k]};
+                        const auto [k, tri] = chunk_of(id);
+                        if (k == used) return {nullptr, 0};
+                        return {&chunk_views[k], tri};
                     },
                     rect.x, rect.x + rect.width);
         });
