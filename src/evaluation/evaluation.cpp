@@ -42,9 +42,12 @@ EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
 
     EvaluatedVertex<T> out;
     // GLSL: thesis_terrain.tese:31 textureCoordinate
-    out.textureCoordinate = vec2_t<T>(position.x, position.y) / evaluation.scaleXY;
+    // (A local, passed on in registers: read back from `out`, the two separately stored
+    // halves stalled every vertex on a failed store-to-load forward.)
+    const vec2_t<T> textureCoordinate = vec2_t<T>(position.x, position.y) / evaluation.scaleXY;
+    out.textureCoordinate = textureCoordinate;
     // GLSL: thesis_terrain.tese:34 height
-    const T height = evaluation.heightMap(out.textureCoordinate).r * evaluation.scaleZ;
+    const T height = evaluation.heightMap(textureCoordinate).r * evaluation.scaleZ;
     // GLSL: thesis_terrain.tese:36 positionWithHeight
     const vec4_t<T> positionWithHeight(position.x, position.y, height, T(1));
     out.position = vec3_t<T>(positionWithHeight);
