@@ -620,17 +620,20 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
 
 std::uint64_t estimate_render_memory(glm::ivec2 size, RenderMode mode, bool raytrace, ImageFormat format,
                                      const AovSelection& aovs) {
-    // Per pixel, from the buffers each phase holds at once (a render keeps its Framebuffer,
-    // 57 bytes a pixel, and the RenderResult, 56, while shading; the Framebuffer is gone
-    // when the image is written), checked against measured peaks: `/usr/bin/time -f %M
-    // tessref render data/scenes/thesis-map-4.toml --size S -o x.png --threads 1` (maximum
-    // resident set) gave 1024x1024 262 MiB, 2048x2048 614 MiB, 4096x4096 2017 MiB: 116.9
-    // bytes/pixel above a base of about 145 MiB; .exr with every AOV 627 and 2036 MiB at
-    // 2048 and 4096 (117.4 bytes/pixel: the write phase, RenderResult + 14 float channels,
-    // stays under the render phase); --overlay-wireframe 842 MiB at 2048x2048 (+57
-    // bytes/pixel, the lines' Framebuffer); --wireframe of a textured scene +24 bytes/pixel,
-    // the lines' quad derivatives (2048x2048: 757 MiB against 660 MiB filled, same machine).
-    // The slack keeps the estimate above those.
+    // Per pixel, from the buffers each phase holds at once. A render that materializes the
+    // surface (wireframe, smooth normals, a geomipmapped terrain, keep_surface) keeps a full
+    // Framebuffer, 57 bytes a pixel, and the RenderResult, 56, while shading; the streamed
+    // fill render holds only a visibility framebuffer (depth, id, weights: 20 bytes) that
+    // becomes part of the 56-byte result. The estimate takes the larger and errs high for
+    // the streamed render. Measured peaks, `/usr/bin/time -f %M tessref render SCENE --size S
+    // -o x.png --threads 1` (maximum resident set), 2048x2048 and 4096x4096:
+    // data/scenes/thesis-map-4.toml (streamed) 269 and 990 MiB, 60 bytes/pixel above a base
+    // of about 29 MiB; data/scenes/jacksboro-geomipmap.toml (materialized) 429 and 1594 MiB,
+    // 97 bytes/pixel above about 41 MiB. Before the streamed render (same command,
+    // thesis-map-4): 117 bytes/pixel; .exr with every AOV 117.4 bytes/pixel (the write phase,
+    // RenderResult + 14 float channels, stays under the render phase); --overlay-wireframe
+    // +57 bytes/pixel (the lines' Framebuffer); --wireframe of a textured scene +24
+    // bytes/pixel, the lines' quad derivatives. The slack keeps the estimate above those.
     constexpr std::uint64_t framebuffer = 57, result = 56, slack = 8, line_derivatives = 24;
     const std::uint64_t render_phase =
         (raytrace ? 0 : framebuffer) * (mode == RenderMode::fill_with_wireframe ? 2 : 1) +
