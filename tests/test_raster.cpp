@@ -68,6 +68,14 @@ glm::vec4 at_window(float x, float y, int width, int height, float z = 0.0f) {
             1.0f};
 }
 
+// One triangle a, b, c in GL window coordinates of a width x height viewport (w = 1, z = 0).
+Mesh window_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, int width, int height) {
+    Mesh m;
+    for (const glm::vec2& p : {a, b, c}) m.add(at_window(p.x, p.y, width, height));
+    m.triangles = {{0, 1, 2}};
+    return m;
+}
+
 RasterSettings counting() {
     RasterSettings s;
     s.depth_func = DepthFunc::always;  // every fragment counts, none is hidden
@@ -315,11 +323,7 @@ TEST(RasterSubPixel, TinyTrianglesCoverTheCentreTheyContainAndNothingElse) {
     constexpr int W = 8, H = 8;
     Framebuffer fb = Framebuffer::create(W, H);
     auto draw = [&](glm::vec2 a, glm::vec2 b, glm::vec2 c) {
-        Mesh m;
-        m.add(at_window(a.x, a.y, W, H));
-        m.add(at_window(b.x, b.y, W, H));
-        m.add(at_window(c.x, c.y, W, H));
-        m.triangles = {{0, 1, 2}};
+        const Mesh m = window_triangle(a, b, c, W, H);
         fb.clear();
         return tessref::rasterize(fb, m.input(), counting());
     };
@@ -344,11 +348,7 @@ TEST(RasterSubPixel, ABoxHoldingACentreOutsideTheTriangleIsSetUpNotCulledAndDraw
     // area, a pixel centre in its box), and its edge functions reject that centre: one
     // primitive, none culled, no fragment, through both entry points.
     constexpr int W = 8, H = 8;
-    Mesh m;
-    m.add(at_window(3.3f, 4.3f, W, H));
-    m.add(at_window(3.65f, 4.3f, W, H));
-    m.add(at_window(3.3f, 4.65f, W, H));
-    m.triangles = {{0, 1, 2}};
+    const Mesh m = window_triangle({3.3f, 4.3f}, {3.65f, 4.3f}, {3.3f, 4.65f}, W, H);
     Framebuffer fb = Framebuffer::create(W, H);
     const RasterStats s = tessref::rasterize(fb, m.input(), counting());
     EXPECT_TRUE(covered(fb).empty());
@@ -604,11 +604,7 @@ TEST(RasterDepth, LessKeepsTheNearestAndTheFirstOfEquals) {
 
 TEST(RasterProvenance, IdsPatchAndTessCoordOfTheVisibleSurface) {
     constexpr int W = 32, H = 32;
-    Mesh m;
-    m.add(at_window(1, 1, W, H));
-    m.add(at_window(31, 1, W, H));
-    m.add(at_window(1, 31, W, H));
-    m.triangles = {{0, 1, 2}};
+    const Mesh m = window_triangle({1, 1}, {31, 1}, {1, 31}, W, H);
     const std::vector<std::uint32_t> ids = {4711}, patches = {42};
     const std::vector<glm::vec3> tess = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     RasterInput in = m.input();
@@ -724,11 +720,7 @@ TEST(RasterWireframe, EdgesThroughPixelCentresFollowTheDiamondExitRule) {
     // v0->v1 row 2, x = 2..11; v1->v2 the diagonal (12,2), (11,3) ... (3,11); v2->v0 column
     // 2, y = 12 down to 3. 30 pixels, each once.
     constexpr int W = 16, H = 16;
-    Mesh m;
-    m.add(at_window(2.5f, 2.5f, W, H));
-    m.add(at_window(12.5f, 2.5f, W, H));
-    m.add(at_window(2.5f, 12.5f, W, H));
-    m.triangles = {{0, 1, 2}};
+    const Mesh m = window_triangle({2.5f, 2.5f}, {12.5f, 2.5f}, {2.5f, 12.5f}, W, H);
     Framebuffer fb = Framebuffer::create(W, H);
     RasterSettings s = counting();
     s.polygon_mode = PolygonMode::line;
@@ -749,11 +741,7 @@ TEST(RasterWireframe, ClippedTriangleDrawsNoEdgeAlongTheClipPlane) {
     // A triangle half outside the right border: the visible parts of its two crossing edges
     // and its inside edge are drawn, nothing along x = W (column W-1 only where an edge ends).
     constexpr int W = 32, H = 32;
-    Mesh m;
-    m.add(at_window(4.5f, 4.5f, W, H));
-    m.add(at_window(60.5f, 16.5f, W, H));
-    m.add(at_window(4.5f, 28.5f, W, H));
-    m.triangles = {{0, 1, 2}};
+    const Mesh m = window_triangle({4.5f, 4.5f}, {60.5f, 16.5f}, {4.5f, 28.5f}, W, H);
     Framebuffer fb = Framebuffer::create(W, H);
     RasterSettings s = counting();
     s.polygon_mode = PolygonMode::line;
