@@ -45,6 +45,16 @@ void expect_vec3(glm::vec3 a, glm::vec3 b, float tol = 1e-6f) {
 
 const glm::vec2 kZero(0.0f);
 
+// A pom model with a white diffuse texture, a flat normal map and `bump` as its height map.
+ShadingModel pom_model(std::shared_ptr<const Texture> bump) {
+    ShadingModel m;
+    m.kind = ShadingKind::pom;
+    m.textures.s2DiffuseTexture = rgb(1, 1, 1);
+    m.textures.s2NormalTexture = rgb(0.5f, 0.5f, 1.0f);
+    m.textures.s2BumpTexture = std::move(bump);
+    return m;
+}
+
 namespace fs = std::filesystem;
 const test::ScratchDir& scratch_dir = test::ScratchDir::add("parallax");
 
@@ -220,11 +230,7 @@ TEST(ParallaxShadow, StepEdgeShadowsTheLowSideTowardTheLight) {
 TEST(PomShading, FlatMapsShadeAsPnTriangles) {
     // A flat normal map, the height at the surface and a white diffuse texture: the pom model
     // is pn_triangles.frag's light with the same uniforms.
-    ShadingModel pom;
-    pom.kind = ShadingKind::pom;
-    pom.textures.s2DiffuseTexture = rgb(1, 1, 1);
-    pom.textures.s2NormalTexture = rgb(0.5f, 0.5f, 1.0f);
-    pom.textures.s2BumpTexture = constant(1.0f);
+    ShadingModel pom = pom_model(constant(1.0f));
     pom.pom.v3DiffuseColour = glm::vec3(0.8f, 0.8f, 0.85f);
     pom.pom.v3CameraPosition = glm::vec3(1.0f, 3.0f, 2.0f);
     ShadingModel pn;
@@ -244,11 +250,7 @@ TEST(PomShading, FlatMapsShadeAsPnTriangles) {
 TEST(PomShading, SelfShadowDarkensToAmbient) {
     // A step edge lit across it: the low side's diffuse and specular are gone, 0.1 of the
     // albedo is left.
-    ShadingModel m;
-    m.kind = ShadingKind::pom;
-    m.textures.s2DiffuseTexture = rgb(1, 1, 1);
-    m.textures.s2NormalTexture = rgb(0.5f, 0.5f, 1.0f);
-    m.textures.s2BumpTexture = grey(16, 1, [](int x, int) { return x < 8 ? 0.5f : 1.0f; });
+    ShadingModel m = pom_model(grey(16, 1, [](int x, int) { return x < 8 ? 0.5f : 1.0f; }));
     m.pom.v3DiffuseColour = glm::vec3(1.0f);
     m.pom.parallax.mode = ParallaxMode::none;
     m.pom.parallax.fBumpScale = 0.8f;
@@ -410,10 +412,7 @@ TEST(PomScenes, GlTwinMatchesRenderOnATerrainOnLlvmpipe) {
 
 // The combinations still without a twin: exit 2 naming the key, no image.
 TEST(PomScenes, GlRefusesPomWhereItHasNoTwinNamingTheKey) {
-    std::string text = test::read_file(shipped_scene("terrain-pom"));
-    const std::string data = std::string(TESSREF_DATA_DIR) + "/";
-    for (std::size_t at = text.find("\"../"); at != std::string::npos; at = text.find("\"../", at))
-        text.replace(at + 1, 3, data);
+    const std::string text = test::with_absolute_data_paths(test::read_file(shipped_scene("terrain-pom")), TESSREF_DATA_DIR);
     const std::string height_field = "normals = \"height_field\"";
     ASSERT_NE(text.find(height_field), std::string::npos);
     const auto with = [&](const std::string& from, const std::string& to) {
