@@ -410,6 +410,30 @@ TEST(PomScenes, GlTwinMatchesRenderOnATerrainOnLlvmpipe) {
     expect_gl_matches_render(shipped_scene("terrain-pom"), "482");
 }
 
+// terrain-pom's capture (`tessref gl --capture`) against the CPU's (`tessref mesh --capture`)
+// under golden verify's capture rule (src/cli/cmd_golden.cpp): positions bit-identical,
+// normals within 3 ulps or 1e-6. The normals are cosc422_terrain.tese's height-field normal
+// against the CPU geometry stage's (measured: 2 ulps at most).
+TEST(PomScenes, GlTerrainCaptureHasTheCpuHeightFieldNormals) {
+    const fs::path scene = shipped_scene("terrain-pom");
+    const fs::path gl_txt = scratch_dir() / "terrain-pom-gl.txt", cpu_txt = scratch_dir() / "terrain-pom-cpu.txt";
+    const test::RunResult gl = test::run_program(
+        TESSREF_EXE,
+        {"gl", scene.string(), "-o", (scratch_dir() / "capture.png").string(), "--size", "160x100", "--capture",
+         gl_txt.string()},
+        scratch_dir());
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    const test::RunResult cpu =
+        test::run_program(TESSREF_EXE, {"mesh", scene.string(), "--capture", cpu_txt.string()}, scratch_dir());
+    ASSERT_EQ(cpu.status, 0) << cpu.out << cpu.err;
+    const test::RunResult cmp = test::run_program(
+        TESSREF_EXE,
+        {"compare", cpu_txt.string(), gl_txt.string(), "--max-position-ulps", "0", "--max-normal-ulps", "3",
+         "--max-normal-abs", "1e-6"},
+        scratch_dir());
+    EXPECT_EQ(cmp.status, 0) << cmp.out << cmp.err;
+}
+
 // The combinations still without a twin: exit 2 naming the key, no image.
 TEST(PomScenes, GlRefusesPomWhereItHasNoTwinNamingTheKey) {
     const std::string text = test::with_absolute_data_paths(test::read_file(shipped_scene("terrain-pom")), TESSREF_DATA_DIR);
