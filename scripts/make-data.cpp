@@ -388,8 +388,8 @@ void make_canyon(const std::string& dir) {
 }
 
 // ---- meshes through OpenMesh -------------------------------------------------------
-void write_mesh(const Mesh& mesh, const std::string& path) {
-    OpenMesh::IO::Options options(OpenMesh::IO::Options::VertexNormal);
+void write_mesh(const Mesh& mesh, const std::string& path,
+                OpenMesh::IO::Options options = OpenMesh::IO::Options::VertexNormal) {
     if (!OpenMesh::IO::write_mesh(mesh, path, options, 9)) {
         std::fprintf(stderr, "make-data: cannot write %s\n", path.c_str());
         std::exit(1);
@@ -436,10 +436,15 @@ void make_icosahedron(const std::string& dir) {
     write_mesh(mesh, dir + "/meshes/icosahedron.off");
 }
 
-void make_bump(const std::string& dir) {
+// The bumped plate: 7x7 vertices on [-1,1]^2, z up, a centre at 0.6 in a ring at 0.2.
+// bump.off for the PN scenes; with_uv: bump-uv.obj, the same plate with texture
+// coordinates u = (x + 1) / 2, v = (y + 1) / 2 for normal and parallax mapping (the
+// PN-triangles tutorial, parts 1 and 2).
+void make_bump(const std::string& dir, bool with_uv) {
     Mesh mesh;
     mesh.request_vertex_normals();
     mesh.request_face_normals();
+    if (with_uv) mesh.request_vertex_texcoords2D();
     const int n = 7;  // 7x7 vertices on [-1,1]^2, z up
     std::vector<Mesh::VertexHandle> v(n * n);
     for (int j = 0; j < n; ++j)
@@ -448,6 +453,7 @@ void make_bump(const std::string& dir) {
             const int ring = std::max(std::abs(i - n / 2), std::abs(j - n / 2));
             const float z = ring == 0 ? 0.6f : ring == 1 ? 0.2f : 0.f;
             v[j * n + i] = mesh.add_vertex(Mesh::Point(x, y, z));
+            if (with_uv) mesh.set_texcoord2D(v[j * n + i], Mesh::TexCoord2D(float(i) / (n - 1), float(j) / (n - 1)));
         }
     for (int j = 0; j + 1 < n; ++j)
         for (int i = 0; i + 1 < n; ++i) {
@@ -464,46 +470,14 @@ void make_bump(const std::string& dir) {
         for (auto fh : mesh.vf_range(vh)) sum += mesh.normal(fh);
         mesh.set_normal(vh, sum.normalize());
     }
-    write_mesh(mesh, dir + "/meshes/bump.off");
+    if (with_uv)
+        write_mesh(mesh, dir + "/meshes/bump-uv.obj",
+                   OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord);
+    else
+        write_mesh(mesh, dir + "/meshes/bump.off");
 }
 
 // ---- normal and parallax mapping (the PN-triangles tutorial, parts 1 and 2) ---------
-void make_bump_uv(const std::string& dir) {
-    Mesh mesh;
-    mesh.request_vertex_normals();
-    mesh.request_face_normals();
-    mesh.request_vertex_texcoords2D();
-    const int n = 7;  // as make_bump
-    std::vector<Mesh::VertexHandle> v(n * n);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            const float x = -1.f + 2.f * i / (n - 1), y = -1.f + 2.f * j / (n - 1);
-            const int ring = std::max(std::abs(i - n / 2), std::abs(j - n / 2));
-            const float z = ring == 0 ? 0.6f : ring == 1 ? 0.2f : 0.f;
-            v[j * n + i] = mesh.add_vertex(Mesh::Point(x, y, z));
-            mesh.set_texcoord2D(v[j * n + i], Mesh::TexCoord2D(float(i) / (n - 1), float(j) / (n - 1)));
-        }
-    for (int j = 0; j + 1 < n; ++j)
-        for (int i = 0; i + 1 < n; ++i) {
-            const auto a = v[j * n + i], b = v[j * n + i + 1], c = v[(j + 1) * n + i + 1], d = v[(j + 1) * n + i];
-            mesh.add_face(a, b, c);
-            mesh.add_face(a, c, d);
-        }
-    mesh.update_face_normals();
-    for (auto vh : mesh.vertices()) {
-        Mesh::Normal sum(0, 0, 0);
-        for (auto fh : mesh.vf_range(vh)) sum += mesh.normal(fh);
-        mesh.set_normal(vh, sum.normalize());
-    }
-    const std::string path = dir + "/meshes/bump-uv.obj";
-    OpenMesh::IO::Options options(OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord);
-    if (!OpenMesh::IO::write_mesh(mesh, path, options, 9)) {
-        std::fprintf(stderr, "make-data: cannot write %s\n", path.c_str());
-        std::exit(1);
-    }
-    std::printf("wrote %s\n", path.c_str());
-}
-
 void make_pom_bricks(const std::string& dir) {
     const int n = 256, brick_w = 128, brick_h = 64, mortar = 4, bevel = 10;
     const double scale = 0.04;  // the scenes' bump_scale (uv units per unit of height)
@@ -558,8 +532,8 @@ int main(int argc, char** argv) {
     make_geomip_materials(dir, make_jacksboro_257(dir));
     make_cube(dir);
     make_icosahedron(dir);
-    make_bump(dir);
-    make_bump_uv(dir);
+    make_bump(dir, false);
+    make_bump(dir, true);
     make_pom_bricks(dir);
     return 0;
 }

@@ -31,6 +31,16 @@ inline void write_file(const std::filesystem::path& path, const std::string& byt
     out << bytes;
 }
 
+// A scene's text with its "../" paths (the shipped scenes' data/ layout) made absolute
+// against `data_dir`, so that a variant of the scene written to a test's directory still
+// finds its files.
+inline std::string with_absolute_data_paths(std::string text, const std::filesystem::path& data_dir) {
+    const std::string data = data_dir.string() + "/";
+    for (std::size_t at = text.find("\"../"); at != std::string::npos; at = text.find("\"../", at))
+        text.replace(at + 1, 3, data);
+    return text;
+}
+
 inline std::string shell_quote(const std::string& arg) {
     std::string quoted = "'";
     for (const char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);

@@ -59,8 +59,22 @@ protected:
     }
     void TearDown() override { fs::remove_all(dir_); }
     RunResult run(const std::vector<std::string>& args) { return run_program(kExe, args, dir_); }
+    // `env ASSIGNMENT tessref gl thesis-constant-1 -o OUT --size 64x40`.
+    RunResult run_gl_with_environment(const std::string& assignment, const fs::path& out) {
+        return run_program("env",
+                           {assignment, kExe, "gl", scene_path("thesis-constant-1").string(), "-o", out.string(),
+                            "--size", "64x40"},
+                           dir_);
+    }
     fs::path dir_;
 };
+
+// Exit 2, stderr naming `what`, and no image at `out`.
+void expect_refused(const RunResult& r, const std::string& what, const fs::path& out) {
+    EXPECT_EQ(r.status, 2) << what << "\n" << r.out << r.err;
+    EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << what;
+}
 
 // ---- every shipped scene, against `tessref render` -------------------------------------
 
@@ -334,13 +348,7 @@ TEST_F(GlBackend, WrongDrawCountGivesExit1NamingTheDrawAndWritesNoImage) {
 // A context below 4.5 (Mesa told to offer 3.3 only): a clear error, exit 2, no image.
 TEST_F(GlBackend, ContextBelow45IsAClearErrorAndExit2) {
     const fs::path out = dir_ / "x.png";
-    const RunResult r = run_program("env", {"MESA_GL_VERSION_OVERRIDE=3.3", kExe, "gl",
-                                            scene_path("thesis-constant-1").string(), "-o", out.string(), "--size",
-                                            "64x40"},
-                                    dir_);
-    EXPECT_EQ(r.status, 2) << r.out << r.err;
-    EXPECT_NE(r.err.find("OpenGL 4.5"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
+    expect_refused(run_gl_with_environment("MESA_GL_VERSION_OVERRIDE=3.3", out), "OpenGL 4.5", out);
 }
 
 // --wireframe: every draw count as predicted. (Its picture is held against `tessref render
@@ -363,13 +371,8 @@ TEST_F(GlBackend, WrongCaptureExtensionIsExit2) {
 // OSMesaCreateContextAttribs): now a clear error naming the variable, exit 2, no image.
 TEST_F(GlBackend, UnknownGalliumDriverIsAClearErrorNotACrash) {
     const fs::path out = dir_ / "x.png";
-    const RunResult r = run_program("env", {"GALLIUM_DRIVER=no_such_driver", kExe, "gl",
-                                            scene_path("thesis-constant-1").string(), "-o", out.string(), "--size",
-                                            "64x40"},
-                                    dir_);
-    EXPECT_EQ(r.status, 2) << r.out << r.err;
-    EXPECT_NE(r.err.find("GALLIUM_DRIVER=no_such_driver"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
+    expect_refused(run_gl_with_environment("GALLIUM_DRIVER=no_such_driver", out), "GALLIUM_DRIVER=no_such_driver",
+                   out);
 }
 
 // ---- user shaders: [shaders] and --shader -------------------------------------------------
@@ -380,10 +383,7 @@ const fs::path kUserShaders = kSource / "tests" / "data" / "gl";
 // test's directory (and name user shaders relative to it); `shading` replaces its
 // [shading] table when given, `extra` is appended.
 std::string scene_text(const std::string& name, const std::string& extra, const std::string& shading = "") {
-    std::string text = read_file(scene_path(name));
-    const std::string data = (kSource / "data").string() + "/";
-    for (std::size_t at = text.find("\"../"); at != std::string::npos; at = text.find("\"../", at))
-        text.replace(at + 1, 3, data);
+    std::string text = tessref::test::with_absolute_data_paths(read_file(scene_path(name)), kSource / "data");
     if (!shading.empty()) text = text.substr(0, text.find("\n[shading]")) + "\n" + shading + "\n";
     return text + "\n" + extra + "\n";
 }
@@ -760,10 +760,7 @@ INSTANTIATE_TEST_SUITE_P(Shipped, GlGeomipmap,
 TEST_F(GlBackend, GeomipmapWithoutATwinForItsShadingOrStagesIsExit2NamingThem) {
     const fs::path scene = dir_ / "s.toml", out = dir_ / "out.png";
     write_file(scene, scene_text("jacksboro-geomipmap", "", "[shading]\nmodel = \"cosc422\""));
-    RunResult r = run({"gl", scene.string(), "-o", out.string(), "--size", "64x40"});
-    EXPECT_EQ(r.status, 2) << r.out << r.err;
-    EXPECT_NE(r.err.find("shading.model"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
+    expect_refused(run({"gl", scene.string(), "-o", out.string(), "--size", "64x40"}), "shading.model", out);
 
     std::string lit = scene_text("jacksboro-geomipmap-lit", "");
     const std::string rock = "{ texture = \"" + (kSource / "data" / "textures" / "geomip-rock.png").string() +
@@ -773,20 +770,16 @@ TEST_F(GlBackend, GeomipmapWithoutATwinForItsShadingOrStagesIsExit2NamingThem) {
     ASSERT_NE(grass, std::string::npos);
     lit.insert(lit.find('\n', grass) + 1, rock + rock);  // five materials, the base pass first
     write_file(scene, lit);
-    r = run({"gl", scene.string(), "-o", out.string(), "--size", "64x40"});
-    EXPECT_EQ(r.status, 2) << r.out << r.err;
-    EXPECT_NE(r.err.find("shading.materials"), std::string::npos) << r.err;
+    RunResult r = run({"gl", scene.string(), "-o", out.string(), "--size", "64x40"});
+    expect_refused(r, "shading.materials", out);
     EXPECT_NE(r.err.find("at most 4"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
 
     // A user's tessellation shader has no patches to run on; a user's fragment shader runs.
     const std::string raised = (kUserShaders / "raised.tese").string();
     r = run({"gl", scene_path("jacksboro-geomipmap").string(), "-o", out.string(), "--size", "64x40", "--shader",
              "tese=" + raised});
-    EXPECT_EQ(r.status, 2) << r.out << r.err;
-    EXPECT_NE(r.err.find(raised), std::string::npos) << r.err;
+    expect_refused(r, raised, out);
     EXPECT_NE(r.err.find("geomipmapped"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
     r = run({"gl", scene_path("jacksboro-geomipmap").string(), "-o", out.string(), "--size", "64x40", "--shader",
              "frag=" + (kUserShaders / "red.frag").string()});
     EXPECT_EQ(r.status, 0) << r.out << r.err;

@@ -6,13 +6,29 @@
 // defined result: the tangent frame comes from dFdx/dFdy of position and uv (no tangent
 // attribute) with a handedness sign; z of the normal map is sqrt(max(.., 0)); the layer
 // count rounds half to even; v2LastUV starts at the unshifted uv.
-// tessref gl uses it with the PN program (its EvaluationData block) only.
+// The evaluation stage's position, normal and uv: pn_triangles.tese's EvaluationData block,
+// or with TERRAIN_NORMALS (tessref gl defines it for a cosc422 terrain with [geometry]
+// normals = "height_field") the terrain block cosc422_terrain.tese then writes.
 
+#ifdef TERRAIN_NORMALS
+layout(location = 0) in EvaluationData {
+    vec3 worldPosition;
+    vec3 normal;
+    vec2 texCoord;
+} evaluationIn;
+#define POSITION_IN evaluationIn.worldPosition
+#define NORMAL_IN evaluationIn.normal
+#define UV_IN evaluationIn.texCoord
+#else
 layout(location = 0) in EvaluationData {
     vec3 v3PositionOut;
     vec3 v3NormalOut;
     vec2 v2UVOut;
 } evaluationIn;
+#define POSITION_IN evaluationIn.v3PositionOut
+#define NORMAL_IN evaluationIn.v3NormalOut
+#define UV_IN evaluationIn.v2UVOut
+#endif
 
 layout(location = 0) out vec4 v4ColourOut;
 
@@ -116,10 +132,10 @@ float parallaxShadow(in vec3 v3TangentLight, in vec2 v2UV)
 
 void main()
 {
-    vec2 v2UVIn = evaluationIn.v2UVOut * fUvRepeat;
+    vec2 v2UVIn = UV_IN * fUvRepeat;
     v2Dx = dFdx(v2UVIn); v2Dy = dFdy(v2UVIn);
-    tangentFrame(evaluationIn.v3NormalOut, evaluationIn.v3PositionOut, evaluationIn.v2UVOut);
-    vec3 v3View = normalize(v3CameraPosition - evaluationIn.v3PositionOut);
+    tangentFrame(NORMAL_IN, POSITION_IN, UV_IN);
+    vec3 v3View = normalize(v3CameraPosition - POSITION_IN);
     vec3 v3Light = normalize(v3LightDirection);
     vec2 v2UV = parallaxMap(normalize(toTangent(v3View)), v2UVIn);
     vec3 v3MappedNormal = normalMap(v2UV);

@@ -62,20 +62,20 @@ EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>& glInPosition
                                     const Cosc422Evaluation<T>& evaluation) {
     const T u = glTessCoord.u;
     const T v = glTessCoord.v;
-    // GLSL: cosc422_terrain.tese:29 posn
+    // GLSL: cosc422_terrain.tese:55 posn
     vec4_t<T> posn = mix_gpu(mix_gpu(glInPosition[0], glInPosition[3], u),
                               mix_gpu(glInPosition[1], glInPosition[2], u), v);
-    // GLSL: cosc422_terrain.tese:32 s
+    // GLSL: cosc422_terrain.tese:58 s
     const T s = (posn.x - evaluation.xMin) / (evaluation.xMax - evaluation.xMin);
     const T t = (posn.z - evaluation.zMin) / (evaluation.zMax - evaluation.zMin);
-    // GLSL: cosc422_terrain.tese:35 height
+    // GLSL: cosc422_terrain.tese:61 height
     const T height = evaluation.heightMap(vec2_t<T>(s, t)).r * evaluation.heightScale;
     posn.y = height;
 
     EvaluatedVertex<T> out;
     out.position = vec3_t<T>(posn);
     out.textureCoordinate = vec2_t<T>(s, t);
-    // GLSL: cosc422_terrain.tese:40 gl_Position
+    // GLSL: cosc422_terrain.tese:69 gl_Position
     out.glPosition = evaluation.mvpMatrix * posn;
     return out;
 }

@@ -98,6 +98,10 @@ struct Plan {
     // A geomipmapped terrain: triangles the CPU built, drawn with the geomorphing vertex
     // shader and no tessellation stages; its capture wraps the vertex shader.
     bool geomipmap = false;
+    // #defines for the twins' files (not a user's): TERRAIN_NORMALS, with which
+    // cosc422_terrain.tese computes the height-field normal and pom.frag reads the terrain's
+    // EvaluationData block.
+    std::string defines;
 };
 
 StageSource file_stage(GLenum stage, const std::string& file) {
@@ -216,6 +220,19 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         } else if (em == EvaluationModel::cosc422 && n == GeometryNormals::face) {
             plan.stages.push_back(file_stage(GL_GEOMETRY_SHADER, "cosc422_terrain.geom"));
             plan.normal_expression = "geometryOut.faceNormal";
+        } else if (em == EvaluationModel::cosc422 && n == GeometryNormals::height_field) {
+            // No geometry stage: cosc422_terrain.tese computes the normal per vertex, as the
+            // CPU's geometry stage does (pipeline/terrain.cpp, height_field_normal), and hands
+            // it on in EvaluationData { worldPosition, normal, texCoord }. Only the fragment
+            // shaders that read that block or nothing can follow it.
+            const ShadingKind k = shading.model.kind;
+            if (k != ShadingKind::pom && k != ShadingKind::flat && k != ShadingKind::depth)
+                throw Error(std::string("tessref gl: [geometry] normals = \"height_field\" with evaluation model "
+                                        "cosc422 has a GLSL twin for shading models pom, flat and depth only (not '") +
+                                to_string(k) + "', whose fragment shader reads another stage's outputs)",
+                            Where::at_key(scene.file, "geometry.normals"));
+            plan.defines = "#define TERRAIN_NORMALS\n";
+            plan.normal_expression = "evaluationOut.normal";
         } else if (!(em == EvaluationModel::lab4 && n == GeometryNormals::height_field)) {
             throw Error(std::string("tessref gl: [geometry] normals = \"") + to_string(n) + "\" with evaluation model '" +
                             to_string(em) + "' has no GLSL twin",
@@ -237,15 +254,20 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
                         "evaluation model geomipmap",
                         Where::at_key(scene.file, "shading.model"));
         case ShadingKind::pom:
-            // pom.frag reads the PN evaluation shader's EvaluationData block; the terrain
-            // programs hand other blocks to the fragment stage.
-            if (em != EvaluationModel::pn)
-                throw Error("tessref gl: shading model pom has a GLSL twin for evaluation model pn only (not '" +
-                                std::string(to_string(em)) + "')",
+            // pom.frag reads the PN evaluation shader's EvaluationData block, or with
+            // TERRAIN_NORMALS cosc422_terrain.tese's (set above for height-field normals); the
+            // other terrain programs hand the fragment stage blocks without the normal it needs.
+            if (em != EvaluationModel::pn && plan.defines.empty())
+                throw Error("tessref gl: shading model pom has a GLSL twin for evaluation model pn, and cosc422 with "
+                            "[geometry] normals = \"height_field\", only (not '" + std::string(to_string(em)) + "'" +
+                                (scene.geometry ? std::string(" with normals = \"") + to_string(scene.geometry->normals) + "\""
+                                                : std::string(" without [geometry]")) +
+                                ")",
                             Where::at_key(scene.file, "shading.model"));
             plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pom.frag"));
             break;
     }
+    for (StageSource& s : plan.stages) s.prefix = plan.defines + s.prefix;
     return plan;
 }
 
@@ -351,7 +373,7 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
         if (plan.geomipmap && s.stage == GL_VERTEX_SHADER) {
             // No primitive generator: the tess coord, patch and levels are the CPU's, carried
             // as vertex attributes 6..9 (vertex_data) and handed on with the vertex.
-            c.prefix = "layout(location = 6) in int tessref_patch_id;\nlayout(location = 7) in vec3 tessref_tess_coord;\n"
+            c.prefix = s.prefix + "layout(location = 6) in int tessref_patch_id;\nlayout(location = 7) in vec3 tessref_tess_coord;\n"
                        "layout(location = 8) in vec4 tessref_outer;\nlayout(location = 9) in vec2 tessref_inner;\n"
                        "out vec3 tessref_cap_tess_coord;\nflat out int tessref_cap_patch_id;\nout vec3 "
                        "tessref_cap_position;\nout vec3 tessref_cap_normal;\nout vec4 tessref_cap_outer;\nout vec2 "
@@ -362,7 +384,7 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
                        ";\n    tessref_cap_outer = tessref_outer;\n    tessref_cap_inner = tessref_inner;\n}\n";
         } else if (s.stage == GL_TESS_EVALUATION_SHADER) {
             const std::string out = plan.has_geometry_shader ? "tessref_te_" : "tessref_cap_";
-            c.prefix = "out vec3 " + out + "tess_coord;\nout int " + out + "patch_id;\nout vec3 " + out +
+            c.prefix = s.prefix + "out vec3 " + out + "tess_coord;\nout int " + out + "patch_id;\nout vec3 " + out +
                        "position;\nout vec4 " + out + "outer;\nout vec2 " + out + "inner;\n" +
                        (plan.has_geometry_shader ? "" : "out vec3 tessref_cap_normal;\n") +
                        "#define main tessref_twin_main\n";
@@ -373,7 +395,7 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
                        "gl_TessLevelOuter[3]);\n    " + out + "inner = vec2(gl_TessLevelInner[0], gl_TessLevelInner[1]);\n" +
                        (plan.has_geometry_shader ? "" : "    tessref_cap_normal = " + normal + ";\n") + "}\n";
         } else if (s.stage == GL_GEOMETRY_SHADER) {
-            c.prefix =
+            c.prefix = s.prefix +
                 "in vec3 tessref_te_tess_coord[];\nin int tessref_te_patch_id[];\nin vec3 tessref_te_position[];\n"
                 "in vec4 tessref_te_outer[];\nin vec2 tessref_te_inner[];\n"
                 "out vec3 tessref_cap_tess_coord;\nout int tessref_cap_patch_id;\nout vec3 tessref_cap_position;\n"
@@ -493,6 +515,8 @@ void cosc422_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) 
     u.f("zMin", g.extent_v.x);
     u.f("zMax", g.extent_v.y);
     u.f("heightScale", g.scale_z);
+    // TERRAIN_NORMALS: one texel, as the CPU's height_field_normal (pipeline/terrain.cpp)
+    u.f("gridStep", std::abs(g.extent_u.y - g.extent_u.x) / g.heightmap->texture.width());
     if (scene.control && scene.control->model == ControlModel::cosc422)
         u.i("levelSpace", scene.control->cosc422 == Cosc422Space::eye ? 1 : 0);
 }

@@ -148,13 +148,16 @@ vec3_t<T> height_field_normal(const Scene& scene, const vec3_t<T>& position, T l
             sampling.h = static_cast<T>(g.scale_xy / texture.width());
             break;
         case EvaluationModel::cosc422: {
+            // GLSL: cosc422_terrain.tese:36 (x - xMin) / (xMax - xMin)
             // s = (x - xMin) / (xMax - xMin), t = (z - zMin) / (zMax - zMin), as the
             // evaluation shader maps it; horizontalScale 1 and no offset pass (x, z) through.
+            // GLSL: cosc422_terrain.tese:40 height_field_normal (tessref gl defines TERRAIN_NORMALS)
             const vec2_t<T> lo(static_cast<T>(g.extent_u.x - o.x), static_cast<T>(g.extent_v.x - o.y));
             const vec2_t<T> size(static_cast<T>(g.extent_u.y - g.extent_u.x), static_cast<T>(g.extent_v.y - g.extent_v.x));
             sampling.heightMap = [&texture, lo, size](vec2_t<T> p, T level) {
                 return texture.textureLod((p - lo) / size, level);
             };
+            // GLSL: cosc422_terrain.tese:32 gridStep (set by tessref gl as this h, in double, then rounded)
             sampling.h = static_cast<T>(std::abs(g.extent_u.y - g.extent_u.x) / texture.width());
             break;
         }

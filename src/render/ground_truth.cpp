@@ -14,7 +14,7 @@ GroundMap ground_map(const Scene& scene) {
             m.u = {1.0 / g.scale_xy, 0.0};
             m.v = {1.0 / g.scale_xy, 0.0};
             break;
-        case EvaluationModel::cosc422: {  // cosc422_terrain.tese:32 (x - xMin) / (xMax - xMin)
+        case EvaluationModel::cosc422: {  // cosc422_terrain.tese:58 (posn.x - xMin) / (xMax - xMin)
             const double au = 1.0 / (g.extent_u.y - g.extent_u.x), av = 1.0 / (g.extent_v.y - g.extent_v.x);
             m.u = {au, -g.extent_u.x * au};
             m.v = {av, -g.extent_v.x * av};

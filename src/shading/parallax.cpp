@@ -12,7 +12,7 @@ namespace tessref {
 
 UvDerivatives triangle_uv_derivatives(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec2 uv0, glm::vec2 uv1,
                                       glm::vec2 uv2) {
-    // GLSL: pom.frag:44-47 the same solve from dFdx/dFdy of position and uv (one triangle's
+    // GLSL: pom.frag:60-63 the same solve from dFdx/dFdy of position and uv (one triangle's
     // position and uv are affine, so its screen derivatives give these exactly up to rounding)
     const glm::vec3 e1 = p1 - p0, e2 = p2 - p0;
     const glm::vec2 d1 = uv1 - uv0, d2 = uv2 - uv0;
@@ -26,21 +26,21 @@ UvDerivatives triangle_uv_derivatives(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, 
 
 TangentFrame tangent_frame(glm::vec3 normal, const UvDerivatives& d) {
     TangentFrame f;
-    // GLSL: pom.frag:48 v3Normal = normalize(v3NormalIn);
+    // GLSL: pom.frag:64 v3Normal = normalize(v3NormalIn);
     f.normal = glm::normalize(normal);
-    // GLSL: pom.frag:49 v3Tangent = v3dPdu - v3Normal * dot(v3Normal, v3dPdu);
+    // GLSL: pom.frag:65 v3Tangent = v3dPdu - v3Normal * dot(v3Normal, v3dPdu);
     glm::vec3 t = d.dPdu - f.normal * glm::dot(f.normal, d.dPdu);
     float tt = glm::dot(t, t);
     if (!(tt > 0.0f) || !std::isfinite(tt)) {
-        // GLSL: pom.frag:50-52 no usable dP/du: any direction in the tangent plane
+        // GLSL: pom.frag:66-68 no usable dP/du: any direction in the tangent plane
         const glm::vec3 axis = std::abs(f.normal.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 0.0f, 1.0f);
         t = axis - f.normal * glm::dot(f.normal, axis);
     }
-    // GLSL: pom.frag:53 v3Tangent = normalize(v3Tangent);
+    // GLSL: pom.frag:69 v3Tangent = normalize(v3Tangent);
     f.tangent = glm::normalize(t);
-    // GLSL: pom.frag:54 v3BiTangent = cross(v3Normal, v3Tangent);
+    // GLSL: pom.frag:70 v3BiTangent = cross(v3Normal, v3Tangent);
     f.bitangent = glm::cross(f.normal, f.tangent);
-    // GLSL: pom.frag:55 if (dot(v3BiTangent, v3dPdv) < 0.0) v3BiTangent = -v3BiTangent;
+    // GLSL: pom.frag:71 if (dot(v3BiTangent, v3dPdv) < 0.0) v3BiTangent = -v3BiTangent;
     if (glm::dot(f.bitangent, d.dPdv) < 0.0f) f.bitangent = -f.bitangent;
     return f;
 }
@@ -50,12 +50,12 @@ glm::vec3 to_tangent_space(const TangentFrame& f, glm::vec3 d) {
 }
 
 glm::vec3 normal_map(const TangentFrame& f, const Texture* s2NormalTexture, glm::vec2 uv, glm::vec2 dx, glm::vec2 dy) {
-    // GLSL: pom.frag:60 vec2 v2NormalMap = (textureGrad(s2NormalTexture, v2LocalUV, v2Dx, v2Dy).rg - 0.5) * 2.0;
+    // GLSL: pom.frag:76 vec2 v2NormalMap = (textureGrad(s2NormalTexture, v2LocalUV, v2Dx, v2Dy).rg - 0.5) * 2.0;
     const glm::vec4 texel = textureGrad(s2NormalTexture, uv, dx, dy);
     const glm::vec2 v2NormalMap = (glm::vec2(texel) - 0.5f) * 2.0f;
-    // GLSL: pom.frag:61 vec3 v3NormalMap = vec3(v2NormalMap, sqrt(max(1.0 - dot(v2NormalMap, v2NormalMap), 0.0)));
+    // GLSL: pom.frag:77 vec3 v3NormalMap = vec3(v2NormalMap, sqrt(max(1.0 - dot(v2NormalMap, v2NormalMap), 0.0)));
     const glm::vec3 v3NormalMap(v2NormalMap, std::sqrt(std::max(1.0f - glm::dot(v2NormalMap, v2NormalMap), 0.0f)));
-    // GLSL: pom.frag:62 return normalize(mat3(v3Tangent, v3BiTangent, v3Normal) * v3NormalMap);
+    // GLSL: pom.frag:78 return normalize(mat3(v3Tangent, v3BiTangent, v3Normal) * v3NormalMap);
     return glm::normalize(glm::mat3(f.tangent, f.bitangent, f.normal) * v3NormalMap);
 }
 
@@ -83,7 +83,7 @@ std::optional<ParallaxMode> parallax_mode_from_string(std::string_view name) {
 }
 
 float parallax_layers(glm::vec3 v, const ParallaxParams& p) {
-    // GLSL: pom.frag:77 float fNumLayers = roundEven(mix(fMaxLayers, fMinLayers, abs(v3TangentView.z)));
+    // GLSL: pom.frag:93 float fNumLayers = roundEven(mix(fMaxLayers, fMinLayers, abs(v3TangentView.z)));
     const float t = std::abs(v.z);
     return std::nearbyint(p.fMaxLayers * (1.0f - t) + p.fMinLayers * t);
 }
@@ -93,7 +93,7 @@ glm::vec2 parallax_uv(glm::vec3 v, glm::vec2 uv, const Texture* s2BumpTexture, g
     switch (p.mode) {
         case ParallaxMode::none: return uv;
         case ParallaxMode::parallax: {
-            // GLSL: pom.frag:74 return v2UV - fBumpScale * v3TangentView.xy / v3TangentView.z * (1.0 - h);
+            // GLSL: pom.frag:90 return v2UV - fBumpScale * v3TangentView.xy / v3TangentView.z * (1.0 - h);
             const float h = height_at(s2BumpTexture, uv, dx, dy);
             return uv - p.fBumpScale * glm::vec2(v) / v.z * (1.0f - h);
         }
@@ -101,97 +101,97 @@ glm::vec2 parallax_uv(glm::vec3 v, glm::vec2 uv, const Texture* s2BumpTexture, g
         case ParallaxMode::occlusion: break;
     }
     const float fNumLayers = parallax_layers(v, p);
-    // GLSL: pom.frag:79 float fLayerHeight = 1.0 / fNumLayers;
+    // GLSL: pom.frag:95 float fLayerHeight = 1.0 / fNumLayers;
     const float fLayerHeight = 1.0f / fNumLayers;
-    // GLSL: pom.frag:80 vec2 v2DTex = fBumpScale * v3TangentView.xy / (v3TangentView.z * fNumLayers);
+    // GLSL: pom.frag:96 vec2 v2DTex = fBumpScale * v3TangentView.xy / (v3TangentView.z * fNumLayers);
     const glm::vec2 v2DTex = p.fBumpScale * glm::vec2(v) / (v.z * fNumLayers);
-    // GLSL: pom.frag:82 vec2 v2CurrUV = v2UV;
+    // GLSL: pom.frag:98 vec2 v2CurrUV = v2UV;
     glm::vec2 v2CurrUV = uv;
-    // GLSL: pom.frag:83 float fCurrHeight = textureGrad(s2BumpTexture, v2CurrUV, v2Dx, v2Dy).r;
+    // GLSL: pom.frag:99 float fCurrHeight = textureGrad(s2BumpTexture, v2CurrUV, v2Dx, v2Dy).r;
     float fCurrHeight = height_at(s2BumpTexture, v2CurrUV, dx, dy);
-    // GLSL: pom.frag:84-86 fViewHeight = 1, fLastHeight = 1, v2LastUV = v2UV (the tutorial leaves
+    // GLSL: pom.frag:100-102 fViewHeight = 1, fLastHeight = 1, v2LastUV = v2UV (the tutorial leaves
     // v2LastUV unset; a break at layer 0 then mixes it with weight 0, which NaN would spoil)
     float fViewHeight = 1.0f;
     float fLastHeight = 1.0f;
     glm::vec2 v2LastUV = uv;
-    // GLSL: pom.frag:87 for (int i = 0; i < int(fNumLayers); i++)
+    // GLSL: pom.frag:103 for (int i = 0; i < int(fNumLayers); i++)
     const int layers = static_cast<int>(fNumLayers);
     for (int i = 0; i < layers; i++) {
-        // GLSL: pom.frag:88 if (fCurrHeight >= fViewHeight) break;
+        // GLSL: pom.frag:104 if (fCurrHeight >= fViewHeight) break;
         if (fCurrHeight >= fViewHeight) break;
-        // GLSL: pom.frag:89-90
+        // GLSL: pom.frag:105-106
         fLastHeight = fCurrHeight;
         v2LastUV = v2CurrUV;
-        // GLSL: pom.frag:91 fViewHeight -= fLayerHeight;
+        // GLSL: pom.frag:107 fViewHeight -= fLayerHeight;
         fViewHeight -= fLayerHeight;
-        // GLSL: pom.frag:92 v2CurrUV -= v2DTex;
+        // GLSL: pom.frag:108 v2CurrUV -= v2DTex;
         v2CurrUV -= v2DTex;
-        // GLSL: pom.frag:93 fCurrHeight = textureGrad(s2BumpTexture, v2CurrUV, v2Dx, v2Dy).r;
+        // GLSL: pom.frag:109 fCurrHeight = textureGrad(s2BumpTexture, v2CurrUV, v2Dx, v2Dy).r;
         fCurrHeight = height_at(s2BumpTexture, v2CurrUV, dx, dy);
     }
-    // GLSL: pom.frag:95 if (iParallaxMode == 2) return v2CurrUV;
+    // GLSL: pom.frag:111 if (iParallaxMode == 2) return v2CurrUV;
     if (p.mode == ParallaxMode::steep) return v2CurrUV;
-    // GLSL: pom.frag:96 float fNextHeight = fCurrHeight - fViewHeight;
+    // GLSL: pom.frag:112 float fNextHeight = fCurrHeight - fViewHeight;
     const float fNextHeight = fCurrHeight - fViewHeight;
-    // GLSL: pom.frag:97 float fPrevHeight = fLastHeight - (fViewHeight + fLayerHeight);
+    // GLSL: pom.frag:113 float fPrevHeight = fLastHeight - (fViewHeight + fLayerHeight);
     const float fPrevHeight = fLastHeight - (fViewHeight + fLayerHeight);
-    // GLSL: pom.frag:98 float fWeight = fNextHeight / (fNextHeight - fPrevHeight);
+    // GLSL: pom.frag:114 float fWeight = fNextHeight / (fNextHeight - fPrevHeight);
     const float fWeight = fNextHeight / (fNextHeight - fPrevHeight);
-    // GLSL: pom.frag:99 return mix(v2CurrUV, v2LastUV, fWeight);
+    // GLSL: pom.frag:115 return mix(v2CurrUV, v2LastUV, fWeight);
     return v2CurrUV * (1.0f - fWeight) + v2LastUV * fWeight;
 }
 
 float parallax_shadow(glm::vec3 l, glm::vec2 uv, const Texture* s2BumpTexture, glm::vec2 dx, glm::vec2 dy,
                       const ParallaxParams& p) {
-    // GLSL: pom.frag:104 if (!(v3TangentLight.z > 0.0)) return 0.0;
+    // GLSL: pom.frag:120 if (!(v3TangentLight.z > 0.0)) return 0.0;
     if (!(l.z > 0.0f)) return 0.0f;
-    // GLSL: pom.frag:105 float fRayHeight = textureGrad(s2BumpTexture, v2UV, v2Dx, v2Dy).r;
+    // GLSL: pom.frag:121 float fRayHeight = textureGrad(s2BumpTexture, v2UV, v2Dx, v2Dy).r;
     float fRayHeight = height_at(s2BumpTexture, uv, dx, dy);
-    // GLSL: pom.frag:106 float fStep = (1.0 - fRayHeight) / fShadowLayers;
+    // GLSL: pom.frag:122 float fStep = (1.0 - fRayHeight) / fShadowLayers;
     const float fStep = (1.0f - fRayHeight) / p.fShadowLayers;
-    // GLSL: pom.frag:107 vec2 v2DTex = fBumpScale * v3TangentLight.xy / v3TangentLight.z * fStep;
+    // GLSL: pom.frag:123 vec2 v2DTex = fBumpScale * v3TangentLight.xy / v3TangentLight.z * fStep;
     const glm::vec2 v2DTex = p.fBumpScale * glm::vec2(l) / l.z * fStep;
     glm::vec2 v2CurrUV = uv;
-    // GLSL: pom.frag:109 for (int i = 0; i < int(fShadowLayers); i++)
+    // GLSL: pom.frag:125 for (int i = 0; i < int(fShadowLayers); i++)
     const int steps = static_cast<int>(p.fShadowLayers);
     for (int i = 0; i < steps; i++) {
-        // GLSL: pom.frag:110-111
+        // GLSL: pom.frag:126-127
         fRayHeight += fStep;
         v2CurrUV += v2DTex;
-        // GLSL: pom.frag:112 if (textureGrad(s2BumpTexture, v2CurrUV, v2Dx, v2Dy).r > fRayHeight) return 0.0;
+        // GLSL: pom.frag:128 if (textureGrad(s2BumpTexture, v2CurrUV, v2Dx, v2Dy).r > fRayHeight) return 0.0;
         if (height_at(s2BumpTexture, v2CurrUV, dx, dy) > fRayHeight) return 0.0f;
     }
     return 1.0f;
 }
 
 glm::vec4 pom_shading(const FragmentInputs& fragment, const PomShading& u, const ShadingTextures& textures) {
-    // GLSL: pom.frag:121 tangentFrame(...) (lines 42-56)
+    // GLSL: pom.frag:137 tangentFrame(...) (lines 58-72)
     const TangentFrame frame = tangent_frame(fragment.normal, {fragment.dPdu, fragment.dPdv});
-    // GLSL: pom.frag:119-120 the tiled uv and its derivatives
+    // GLSL: pom.frag:135-136 the tiled uv and its derivatives
     const glm::vec2 v2UVIn = fragment.texCoord * u.fUvRepeat;
     const glm::vec2 v2Dx = fragment.texCoord_dx * u.fUvRepeat, v2Dy = fragment.texCoord_dy * u.fUvRepeat;
-    // GLSL: pom.frag:122 vec3 v3View = normalize(v3CameraPosition - evaluationIn.v3PositionOut);
+    // GLSL: pom.frag:138 vec3 v3View = normalize(v3CameraPosition - POSITION_IN);
     const glm::vec3 v3View = glm::normalize(u.v3CameraPosition - fragment.worldPosition);
-    // GLSL: pom.frag:123 vec3 v3Light = normalize(v3LightDirection);
+    // GLSL: pom.frag:139 vec3 v3Light = normalize(v3LightDirection);
     const glm::vec3 v3Light = glm::normalize(u.v3LightDirection);
-    // GLSL: pom.frag:124 vec2 v2UV = parallaxMap(normalize(toTangent(v3View)), v2UVIn);
+    // GLSL: pom.frag:140 vec2 v2UV = parallaxMap(normalize(toTangent(v3View)), v2UVIn);
     const glm::vec2 v2UV = parallax_uv(glm::normalize(to_tangent_space(frame, v3View)), v2UVIn,
                                        textures.s2BumpTexture.get(), v2Dx, v2Dy, u.parallax);
-    // GLSL: pom.frag:125 vec3 v3MappedNormal = normalMap(v2UV);
+    // GLSL: pom.frag:141 vec3 v3MappedNormal = normalMap(v2UV);
     const glm::vec3 v3MappedNormal = normal_map(frame, textures.s2NormalTexture.get(), v2UV, v2Dx, v2Dy);
-    // GLSL: pom.frag:126 float fShadow = bSelfShadow ? parallaxShadow(normalize(toTangent(v3Light)), v2UV) : 1.0;
+    // GLSL: pom.frag:142 float fShadow = bSelfShadow ? parallaxShadow(normalize(toTangent(v3Light)), v2UV) : 1.0;
     const float fShadow = u.bSelfShadow ? parallax_shadow(glm::normalize(to_tangent_space(frame, v3Light)), v2UV,
                                                           textures.s2BumpTexture.get(), v2Dx, v2Dy, u.parallax)
                                         : 1.0f;
-    // GLSL: pom.frag:127 vec3 v3Albedo = v3DiffuseColour * textureGrad(s2DiffuseTexture, v2UV, v2Dx, v2Dy).rgb;
+    // GLSL: pom.frag:143 vec3 v3Albedo = v3DiffuseColour * textureGrad(s2DiffuseTexture, v2UV, v2Dx, v2Dy).rgb;
     const glm::vec3 v3Albedo = u.v3DiffuseColour * glm::vec3(textureGrad(textures.s2DiffuseTexture.get(), v2UV, v2Dx, v2Dy));
-    // GLSL: pom.frag:128 vec3 v3Half = normalize(v3Light + v3View);
+    // GLSL: pom.frag:144 vec3 v3Half = normalize(v3Light + v3View);
     const glm::vec3 v3Half = glm::normalize(v3Light + v3View);
-    // GLSL: pom.frag:129 float fDiffuse = max(dot(v3MappedNormal, v3Light), 0.0) * fShadow;
+    // GLSL: pom.frag:145 float fDiffuse = max(dot(v3MappedNormal, v3Light), 0.0) * fShadow;
     const float fDiffuse = std::max(glm::dot(v3MappedNormal, v3Light), 0.0f) * fShadow;
-    // GLSL: pom.frag:130 float fSpecular = pow(max(dot(v3MappedNormal, v3Half), 0.0), fShininess) * fShadow;
+    // GLSL: pom.frag:146 float fSpecular = pow(max(dot(v3MappedNormal, v3Half), 0.0), fShininess) * fShadow;
     const float fSpecular = std::pow(std::max(glm::dot(v3MappedNormal, v3Half), 0.0f), u.fShininess) * fShadow;
-    // GLSL: pom.frag:131 v4ColourOut = vec4(v3Albedo * (0.1 + 0.9 * fDiffuse) + vec3(0.3 * fSpecular), 1.0);
+    // GLSL: pom.frag:147 v4ColourOut = vec4(v3Albedo * (0.1 + 0.9 * fDiffuse) + vec3(0.3 * fSpecular), 1.0);
     return glm::vec4(v3Albedo * (0.1f + 0.9f * fDiffuse) + glm::vec3(0.3f * fSpecular), 1.0f);
 }
 
