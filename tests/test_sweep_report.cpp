@@ -465,10 +465,13 @@ TEST_F(SweepReport, GeomipRowsReadAndShown) {
     EXPECT_NE(index.find("is a geomipmapped terrain"), std::string::npos);
     EXPECT_NE(index.find("geomip L4"), std::string::npos);
     EXPECT_NE(index.find("bound 0.5 px"), std::string::npos);
-    EXPECT_NE(index.find("geo gpu geomip_bound"), std::string::npos);  // a plot series of its own
+    const std::string plot = read_text(dir() / "plots/error-vs-triangles.svg");
+    EXPECT_NE(plot.find("geo gpu geomip_bound"), std::string::npos);  // plot series of their own
+    EXPECT_NE(plot.find("geo gpu geomip_level"), std::string::npos);
     // The other scenes' verdicts are unchanged by the geomip rows.
     EXPECT_NE(index.find("stops improving"), std::string::npos);
 
+    fs::remove(dir() / "index.html");  // error_for checks that a failed report writes none
     const std::string header = join(kHeader) + "\n";
     const auto says = [&](const std::string& line, const std::string& what) {
         const Error e = error_for(header + line + "\n");
