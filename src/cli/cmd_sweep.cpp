@@ -175,7 +175,8 @@ Command add_sweep_command(CLI::App& parent) {
     CLI::App* app = parent.add_subcommand(
         "sweep",
         "Measure the speed/accuracy trade of tessellation levels: every scene at every uniform level, spacing and "
-        "precision, plus its own control stage; per row the stage timings, the geometric error against the "
+        "precision, plus its own control stage (a geomipmapped terrain: at forced geomip levels and screen-error "
+        "bounds); per row the stage timings, the geometric error against the "
         "full-resolution height field, the image error against the ray-traced ground truth, pictures at chosen "
         "levels. Writes DIR/sweep.csv and a report (docs/SWEEP.md).");
     app->add_option("scenes", options->scenes, "Scene files (TOML)");

@@ -397,8 +397,8 @@ std::string row_description(const Row& row, const std::vector<SweepScene>& scene
     std::string d = s.name + " " + (row.own ? control_model_name(s.scene) + " (own)" : "uniform " + level_text(row.level));
     if (row.geomip == Row::Geomip::level) d = s.name + " geomip level " + level_text(row.level);
     if (row.geomip == Row::Geomip::bound) d = s.name + " geomip error bound " + level_text(row.level) + " px";
-    return d + (s.geomip ? std::string() : " " + std::string(to_string(row.spacing))) + " " + std::string(to_string(row.precision)) +
-           (row.camera_relative ? " camera-relative" : "");
+    if (!s.geomip) d += " " + std::string(to_string(row.spacing));  // a geomipmapped terrain has no generator
+    return d + " " + std::string(to_string(row.precision)) + (row.camera_relative ? " camera-relative" : "");
 }
 
 // The parameters that make two shards parts of one sweep.
@@ -615,7 +615,8 @@ private:
             f["truth_image"] = truth.image_path;
         }
         if (keeps_pictures(row, largest_level_)) {
-            const std::string stem = "images/" + s.slug + "/" + row_stem(row) + "-" + std::string(to_string(row.precision)) + (row.camera_relative ? "-cr" : "");
+            const std::string stem = "images/" + s.slug + "/" + row_stem(row) + "-" +
+                                     std::string(to_string(row.precision)) + (row.camera_relative ? "-cr" : "");
             fs::create_directories(dir_ / "images" / s.slug);
             write_image(image, (dir_ / (stem + ".png")).string(), ImageFormat::png);
             f["image"] = stem + ".png";
