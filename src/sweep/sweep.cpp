@@ -665,14 +665,14 @@ void check_budgets(const SweepParameters& p, const std::vector<SweepScene>& scen
             const std::uint64_t patches = s.scene.patch_count();
             const auto refuse = [&](const std::string& what, std::uint64_t estimate) {
                 if (estimate > s.scene.max_triangles)
-                    throw Error(what + " asks for up to " + std::to_string(estimate) +
+                    throw Error(what + " for up to " + std::to_string(estimate) +
                                     " triangles, more than the scene's limits.max_triangles = " +
                                     std::to_string(s.scene.max_triangles),
                                 s.scene.max_triangles_where);
             };
-            refuse("the geomipmapped terrain's own rows and error-bound rows (every patch at level 0 at worst)",
+            refuse("the geomipmapped terrain's own and error-bound rows (every patch at level 0 at worst) ask",
                    per_patch(0) * patches);
-            for (int k : p.geomip_levels) refuse("geomip level " + std::to_string(k), per_patch(k) * patches);
+            for (int k : p.geomip_levels) refuse("geomip level " + std::to_string(k) + " asks", per_patch(k) * patches);
             continue;
         }
         for (Spacing spacing : spacings_for(p, s.scene)) {
