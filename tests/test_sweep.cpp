@@ -543,4 +543,240 @@ TEST_F(SweepCommand, MeshSceneHasNoGeometricOrImageError) {
     }
 }
 
+// ---- geomipmapped scenes ---------------------------------------------------------------------
+//
+// Where the expected values come from:
+//  - rows: per scene and camera_relative value, the own rows (one per precision), then per
+//    precision the forced geomip levels (ascending), then per precision the screen-error
+//    bounds (ascending) (docs/SWEEP.md, "Geomipmapped scenes");
+//  - triangles at a forced level k: every patch keeps every 2^k-th sample of its 17 x 17, so
+//    (16 / 2^k)^2 cells of two triangles, and with every patch at one level every side has
+//    the level's own step (no zipper cells): 2 (16 / 2^k)^2 per patch;
+//  - the truth of a geomipmapped terrain is its level-0 mesh (docs/GEOMIPMAP.md), so level 0
+//    has the smallest geometric error, and its image error is the rasterizer against
+//    the ray tracer on the same mesh (GeoMipCommand.RaytraceIsTheLevelZeroMesh: below 0.006
+//    at 320x200 on the shipped scene). "The same" but for the border ring of each patch:
+//    level 0 draws it as the zipper, whose triangulation differs from the truth's in some
+//    ring cells, so level 0's geometric error is small, not 0.
+
+// A 2 x 2 patch geomipmapped terrain: 33 x 33 samples of a smooth 8-bit hill-and-valley
+// field (no level but 0 is exact anywhere), over [0, 32]^2, heights x 4.
+std::string geomip_scene(const fs::path& dir, const std::string& name = "geo", const std::string& extra = "") {
+    std::vector<int> codes;
+    for (int y = 0; y < 33; ++y)
+        for (int x = 0; x < 33; ++x)
+            codes.push_back(static_cast<int>(std::lround(128 + 90 * std::sin(x / 3.1) * std::cos(y / 4.3) + 20 * std::sin((x + y) / 1.7))));
+    write_pgm(dir / (name + ".pgm"), 33, 33, 255, codes);
+    const std::string toml = "[scene]\nname = \"" + name + "\"\n\n[domain]\nplane = \"xy\"\npatches = [2, 2]\n"
+                             "x = [0.0, 32.0]\ny = [0.0, 32.0]\nheightmap = \"" + name + ".pgm\"\nscale_z = 4.0\n\n"
+                             "[camera]\nposition = [16.0, -18.0, 26.0]\ntheta = 0.0\nphi = -40.0\nfov_y = 45.0\n"
+                             "viewport = [320, 200]\n\n[evaluation]\nmodel = \"geomipmap\"\nerror_bound_px = 2.0\n\n"
+                             "[geometry]\nnormals = \"smooth\"\n" + extra;
+    write_file(dir / (name + ".toml"), toml);
+    return name + ".toml";
+}
+
+double number(const std::map<std::string, std::string>& row, const char* column) {
+    return std::stod(row.at(column));
+}
+
+// [evaluation] level forces every patch's level: 2 (16 / 2^k)^2 triangles per patch, every
+// vertex at its sample's height (no tween); a level outside 0..4 and a level beside
+// error_bound_px are refused naming the key.
+TEST_F(SweepCommand, GeomipForcedLevelHasTheHandDerivedTriangles) {
+    const std::string file = geomip_scene(dir_);
+    const std::string text = read_file(dir_ / file);
+    for (int k = 0; k <= 4; ++k) {
+        std::string forced = text;
+        forced.replace(forced.find("error_bound_px = 2.0"), 20, "level = " + std::to_string(k));
+        const tessref::Scene scene = tessref::load_scene_from_string(forced, (dir_ / file).string());
+        const tessref::PipelineResult r = tessref::run_pipeline(scene);
+        const int cells = 16 >> k;
+        EXPECT_EQ(r.mesh.triangles.size(), 4u * 2u * cells * cells) << k;
+        for (const auto& l : r.levels) EXPECT_EQ(l.inner[0], static_cast<float>(k));
+    }
+    const auto refused = [&](const std::string& to, const std::string& key) {
+        std::string bad = text;
+        bad.replace(bad.find("error_bound_px = 2.0"), 20, to);
+        try {
+            tessref::load_scene_from_string(bad, (dir_ / file).string());
+            ADD_FAILURE() << to;
+        } catch (const tessref::Error& e) {
+            EXPECT_NE(e.where().str().find(key), std::string::npos) << e.what();
+        }
+    };
+    refused("level = 5", "evaluation.level");
+    refused("level = -1", "evaluation.level");
+    refused("level = 1.5", "evaluation.level");
+    refused("level = 2\nerror_bound_px = 1.0", "evaluation.level");
+}
+
+TEST_F(SweepCommand, GeomipRowsOrderTrianglesAndErrors) {
+    const std::string g = geomip_scene(dir_), t = terrain("bump");
+    const RunResult r = sweep({g, t, "--levels", "1,2", "--precision", "gpu,exact", "-o", "out"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Csv csv = read_csv(dir_ / "out/sweep.csv");
+    EXPECT_EQ(csv.header, kColumns);
+    // geo: 2 own + 2 x 5 levels + 2 x 6 bounds; bump: 2 own + 1 spacing x 2 x 2 levels.
+    ASSERT_EQ(csv.rows.size(), (2u + 2u * 5u + 2u * 6u) + (2u + 2u * 2u));
+    std::vector<std::string> order;
+    for (const auto& row : csv.rows)
+        order.push_back(row.at("scene") + " " + row.at("model") + " " + row.at("spacing") + " " + row.at("precision") +
+                        " " + row.at("level"));
+    EXPECT_EQ(order[0], "geo geomipmap  gpu ");
+    EXPECT_EQ(order[1], "geo geomipmap  exact ");
+    EXPECT_EQ(order[2], "geo geomip_level  gpu 0");
+    EXPECT_EQ(order[6], "geo geomip_level  gpu 4");
+    EXPECT_EQ(order[7], "geo geomip_level  exact 0");
+    EXPECT_EQ(order[12], "geo geomip_bound  gpu 0");
+    EXPECT_EQ(order[13], "geo geomip_bound  gpu 0.5");
+    EXPECT_EQ(order[17], "geo geomip_bound  gpu 8");
+    EXPECT_EQ(order[23], "geo geomip_bound  exact 8");
+    EXPECT_EQ(order[24], "bump thesis fractional_odd gpu ");
+    EXPECT_EQ(order[26], "bump uniform fractional_odd gpu 1");
+    std::map<std::string, const std::map<std::string, std::string>*> by;
+    for (const auto& row : csv.rows) by[row.at("model") + " " + row.at("precision") + " " + row.at("level")] = &row;
+    for (const char* precision : {"gpu", "exact"}) {
+        const std::string p = precision;
+        double previous = 1e300;
+        for (int k = 0; k <= 4; ++k) {
+            const auto& row = *by.at("geomip_level " + p + " " + std::to_string(k));
+            const int cells = 16 >> k;
+            EXPECT_EQ(row.at("triangles"), std::to_string(4 * 2 * cells * cells)) << k;
+            EXPECT_EQ(row.at("patches"), "4");
+            previous = number(row, "triangles");
+        }
+        (void)previous;
+        previous = 1e300;
+        for (const char* bound : {"0", "0.5", "1", "2", "4", "8"}) {
+            const auto& row = *by.at("geomip_bound " + p + " " + bound);
+            EXPECT_LE(number(row, "triangles"), previous) << bound;  // non-increasing as the bound grows
+            previous = number(row, "triangles");
+        }
+        EXPECT_LT(previous, 4 * 512);  // the coarsest bound coarsens something
+        // Bound 0 keeps every patch at level 0 untweened (no level but 0 is exact): the level-0 row.
+        const auto& l0 = *by.at("geomip_level " + p + " 0");
+        const auto& b0 = *by.at("geomip_bound " + p + " 0");
+        for (const char* column : {"triangles", "points", "geo_max", "geo_rms", "img_rmse", "img_fail_px"})
+            EXPECT_EQ(l0.at(column), b0.at(column)) << column;
+        // The own row is the bound-2 row (the scene's error_bound_px).
+        const auto& own = *by.at("geomipmap " + p + " ");
+        const auto& b2 = *by.at("geomip_bound " + p + " 2");
+        for (const char* column : {"triangles", "geo_max", "img_rmse"}) EXPECT_EQ(own.at(column), b2.at(column)) << column;
+        // The geometric error means what it means for a tessellated terrain: vertical distance to
+        // the full-resolution truth. Level 0 has every sample at its true height and the truth's
+        // diagonal in the inner 14 x 14 cells of a patch, but its border ring is the zipper
+        // (geomipmap.h), which splits some ring cells along the other diagonal and spans two
+        // cells at the corners: a small error there only (measured: geo_max 0.125, geo_rms
+        // 0.0071 here, against 0.074 at level 1), growing with every coarser level.
+        double max = 0.0, rms = 0.0;
+        for (int k = 0; k <= 4; ++k) {
+            const auto& row = *by.at("geomip_level " + p + " " + std::to_string(k));
+            EXPECT_GT(number(row, "geo_max"), 0.0) << k;
+            EXPECT_GE(number(row, "geo_max"), max) << k;
+            EXPECT_GT(number(row, "geo_rms"), rms) << k;
+            max = number(row, "geo_max");
+            rms = number(row, "geo_rms");
+        }
+        EXPECT_LT(number(l0, "geo_rms"), 0.01);
+    }
+    for (const auto& row : csv.rows) {
+        if (row.at("scene") != "geo") continue;
+        EXPECT_EQ(row.at("spacing"), "");  // no generator
+        for (const char* column : {"geo_max", "geo_rms", "geo_max_px", "img_rmse", "img_psnr", "img_fail_px",
+                                   "gpu_exact_max_pos", "gpu_exact_image_differs", "image", "diff_image", "wire_image"})
+            EXPECT_FALSE(row.at(column).empty()) << column << " " << row.at("model") << " " << row.at("level");
+        EXPECT_EQ(row.at("truth_image"), "images/geo/truth.png");
+        EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / row.at("image"))) << row.at("image");
+    }
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "out/images/geo/geomip-L3-exact.png"));
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "out/images/geo/geomip-B0.5-gpu-diff.png"));
+    // The report reads the rows and says what does not apply.
+    const std::string index = read_file(dir_ / "out/index.html");
+    EXPECT_NE(index.find("is a geomipmapped terrain"), std::string::npos);
+    EXPECT_NE(index.find("geomip L4"), std::string::npos);
+    EXPECT_NE(index.find("bound 0.5 px"), std::string::npos);
+    const auto json = nlohmann::json::parse(read_file(dir_ / "out/sweep.json"));
+    EXPECT_EQ(json["sweep"]["geomip_levels"].size(), 5u);
+    EXPECT_EQ(json["sweep"]["error_bounds"].size(), 6u);
+}
+
+// Every column but the timings is the same for any thread count, and shards merge to the
+// unsharded run.
+TEST_F(SweepCommand, GeomipRowsAreTheSameForAnyThreadCountAndShard) {
+    const std::string g = geomip_scene(dir_);
+    const std::vector<std::string> common{g, "--geomip-levels", "0,2..3", "--error-bounds", "1,0,4", "--precision",
+                                          "gpu,exact"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> args = common;
+        args.insert(args.end(), extra.begin(), extra.end());
+        return args;
+    };
+    ASSERT_EQ(sweep(with({"-o", "one", "--threads", "1"})).status, 0);
+    ASSERT_EQ(sweep(with({"-o", "two", "--threads", "2"})).status, 0);
+    EXPECT_EQ(read_csv(dir_ / "one/sweep.csv").rows.size(), 2u + 2u * 3u + 2u * 3u);
+    EXPECT_EQ(without_timings(dir_ / "two/sweep.csv"), without_timings(dir_ / "one/sweep.csv"));
+    for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(sweep(with({"-o", "s" + std::to_string(i), "--shard", std::to_string(i) + "/2"})).status, 0);
+    ASSERT_EQ(run_here({"sweep", "merge", "s1", "s0", "-o", "merged"}).status, 0);
+    EXPECT_EQ(without_timings(dir_ / "merged/sweep.csv"), without_timings(dir_ / "one/sweep.csv"));
+    EXPECT_EQ(read_file(dir_ / "merged/sweep.json"), read_file(dir_ / "one/sweep.json"));
+}
+
+TEST_F(SweepCommand, GeomipBadFlagsExitTwoAndWriteNothing) {
+    const std::string g = geomip_scene(dir_);
+    geomip_scene(dir_, "tight", "\n[limits]\nmax_triangles = 1000\n");  // level 0 needs 2048
+    const std::set<std::string> before = files();
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
+        {{g, "--geomip-levels", "5", "-o", "out"}, "--geomip-levels"},
+        {{g, "--geomip-levels", "-1", "-o", "out"}, "--geomip-levels"},
+        {{g, "--geomip-levels", "1.5", "-o", "out"}, "--geomip-levels"},
+        {{g, "--geomip-levels", "3..1", "-o", "out"}, "--geomip-levels"},
+        {{g, "--geomip-levels", "0,,1", "-o", "out"}, "--geomip-levels"},
+        {{g, "--error-bounds", "-1", "-o", "out"}, "--error-bounds"},
+        {{g, "--error-bounds", "nan", "-o", "out"}, "--error-bounds"},
+        {{g, "--error-bounds", "inf", "-o", "out"}, "--error-bounds"},
+        {{g, "--error-bounds", "1px", "-o", "out"}, "--error-bounds"},
+        {{"tight.toml", "-o", "out"}, "limits.max_triangles"},
+        // A bad flag is refused before anything runs, whatever comes after it.
+        {{g, "--error-bounds", "2", "--levels", "0", "-o", "out"}, "--levels"},
+    };
+    for (const auto& [args, named] : cases) {
+        const RunResult r = sweep(args);
+        EXPECT_EQ(r.status, 2) << args[1] << " " << args[2] << ": " << r.err;
+        EXPECT_NE(r.err.find("tessref: error: "), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(named), std::string::npos) << r.err;
+        EXPECT_EQ(files(), before) << r.err;
+    }
+    // "none" drops an axis: the own rows only.
+    ASSERT_EQ(sweep({g, "--geomip-levels", "none", "--error-bounds", "none", "-o", "own"}).status, 0);
+    EXPECT_EQ(read_csv(dir_ / "own/sweep.csv").rows.size(), 1u);
+}
+
+// At the finest setting the picture is the level-0 mesh rasterized, and its error against the
+// ray-traced truth is what GeoMipCommand.RaytraceIsTheLevelZeroMesh establishes (the shipped
+// scene at 320x200: below 0.006); `tessref compare` on the kept pictures prints the same.
+TEST_F(SweepCommand, GeomipLevelZeroIsTheRayTracedTruthUpToRasterization) {
+    const RunResult r = run_here({"sweep", (kSource / "data/scenes/jacksboro-geomipmap.toml").string(), "--size",
+                                  "320x200", "--geomip-levels", "0", "--error-bounds", "0", "-o", "out"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Csv csv = read_csv(dir_ / "out/sweep.csv");
+    ASSERT_EQ(csv.rows.size(), 3u);
+    const auto& l0 = csv.rows[1];
+    const auto& b0 = csv.rows[2];
+    ASSERT_EQ(l0.at("model"), "geomip_level");
+    ASSERT_EQ(b0.at("model"), "geomip_bound");
+    EXPECT_EQ(l0.at("triangles"), "131072");
+    EXPECT_EQ(b0.at("triangles"), "131072");
+    EXPECT_EQ(l0.at("img_rmse"), b0.at("img_rmse"));
+    const double rmse = number(l0, "img_rmse");
+    EXPECT_GT(rmse, 0.0);
+    EXPECT_LT(rmse, 0.006);
+    EXPECT_LT(rmse, number(csv.rows[0], "img_rmse"));  // the own 4 px bound is coarser
+    const RunResult cmp = run_here({"compare", "out/" + l0.at("truth_image"), "out/" + l0.at("image")});
+    const std::size_t at = cmp.out.find("rmse");
+    ASSERT_NE(at, std::string::npos) << cmp.out;
+    EXPECT_NEAR(std::stod(cmp.out.substr(at + 4)), rmse, 1e-4) << cmp.out;
+}
+
 }  // namespace

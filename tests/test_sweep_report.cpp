@@ -434,6 +434,59 @@ TEST_F(SweepReport, FractionalLevelsAndNonFiniteMeasurements) {
     EXPECT_EQ(read_text(dir() / "plots/error-vs-time.svg").find("left out"), std::string::npos);
 }
 
+// A geomipmapped scene's rows: level 0..4 on geomip_level rows, a bound >= 0 in pixels on
+// geomip_bound rows, an empty spacing (no generator). The report reads them, shows them as
+// their own series and says that the uniform-level rules do not apply; out-of-range levels
+// and bounds, and an empty spacing on another scene's row, are refused naming the line.
+TEST_F(SweepReport, GeomipRowsReadAndShown) {
+    const auto geo = [](const std::string& model, const std::string& level, const std::string& triangles,
+                        const std::string& rmse) {
+        return row({{"scene", "geo"}, {"model", model}, {"level", level}, {"spacing", ""}, {"precision", "gpu"},
+                    {"patches", "4"}, {"triangles", triangles}, {"total_ms", "1.5"}, {"geo_max", "0.5"},
+                    {"img_rmse", rmse}});
+    };
+    std::vector<std::string> rows = sample_rows();
+    for (const std::string& r : {geo("geomipmap", "", "600", "0.03"), geo("geomip_level", "0", "2048", "0.004"),
+                                 geo("geomip_level", "2", "128", "0.05"), geo("geomip_level", "4", "8", "0.09"),
+                                 geo("geomip_bound", "0", "2048", "0.004"), geo("geomip_bound", "0.5", "1500", "0.01"),
+                                 geo("geomip_bound", "8", "8", "0.09")})
+        rows.push_back(r);
+    make_sweep(rows);
+    const tessref::sweep::SweepTable t = tessref::sweep::read_sweep_csv(csv().string());
+    std::vector<std::string> geo_order;
+    for (const auto& r : t.rows)
+        if (r.scene == "geo") geo_order.push_back(r.model + " " + (r.level ? std::to_string(*r.level) : "-"));
+    const std::vector<std::string> expected{"geomipmap -",          "geomip_level 0.000000", "geomip_level 2.000000",
+                                            "geomip_level 4.000000", "geomip_bound 0.000000", "geomip_bound 0.500000",
+                                            "geomip_bound 8.000000"};
+    EXPECT_EQ(geo_order, expected);
+    tessref::sweep::write_sweep_report(dir().string());
+    const std::string index = read_text(dir() / "index.html");
+    EXPECT_NE(index.find("is a geomipmapped terrain"), std::string::npos);
+    EXPECT_NE(index.find("geomip L4"), std::string::npos);
+    EXPECT_NE(index.find("bound 0.5 px"), std::string::npos);
+    const std::string plot = read_text(dir() / "plots/error-vs-triangles.svg");
+    EXPECT_NE(plot.find("geo gpu geomip_bound"), std::string::npos);  // plot series of their own
+    EXPECT_NE(plot.find("geo gpu geomip_level"), std::string::npos);
+    // The other scenes' verdicts are unchanged by the geomip rows.
+    EXPECT_NE(index.find("stops improving"), std::string::npos);
+
+    fs::remove(dir() / "index.html");  // error_for checks that a failed report writes none
+    const std::string header = join(kHeader) + "\n";
+    const auto says = [&](const std::string& line, const std::string& what) {
+        const Error e = error_for(header + line + "\n");
+        EXPECT_EQ(e.where().line, 2) << e.message();
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.message();
+    };
+    says(geo("geomip_level", "5", "8", "0.1"), "0..4");
+    says(geo("geomip_level", "1.5", "8", "0.1"), "0..4");
+    says(geo("geomip_bound", "-1", "8", "0.1"), "bound");
+    says(geo("geomip_bound", "", "8", "0.1"), "needs a level");
+    says(row({{"scene", "alpha"}, {"model", "uniform"}, {"level", "1"}, {"spacing", ""}, {"precision", "gpu"},
+              {"triangles", "2"}, {"total_ms", "1"}, {"img_rmse", "0.1"}}),
+         "spacing");
+}
+
 TEST_F(SweepReport, EmptyTableStillMakesAPage) {
     write_text(csv(), join(kHeader) + "\n");
     tessref::sweep::write_sweep_report(dir().string());

@@ -151,6 +151,11 @@ struct Params {
     double error_bound_px = 1.0;   // the screen error a level may have
     bool adapt = true;             // adapting triangles toward coarser neighbours
     std::optional<double> tween;   // replaces every patch's tween (in [0, 1])
+    // Forces every patch to this level (0..4) instead of selecting by error_bound_px: the
+    // uniform level of a geomipmapped terrain (`tessref sweep`'s geomip_level rows). Each
+    // patch's fractional level is then level + tween (the fixed tween, 0 without one; 0 at
+    // level 4).
+    std::optional<int> level;
 };
 
 struct Settings {
@@ -160,7 +165,8 @@ struct Settings {
     Params params{};
 };
 
-// Fractional level per patch (patch order). view_projection maps world positions (as
+// Fractional level per patch (patch order); with params.level, that level (plus the fixed
+// tween) on every patch, whatever the camera. view_projection maps world positions (as
 // build_surface places them) to clip space; viewport is the image size in pixels.
 std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max_errors, const Settings& settings,
                                   const glm::dmat4& view_projection, glm::ivec2 viewport);

@@ -3,6 +3,7 @@
 //
 //   tessref sweep SCENE... -o DIR [--levels 1,2,4,8,16,32,64 | --levels 1..64]
 //                 [--precision gpu,exact] [--spacing equal,fractional_odd,fractional_even]
+//                 [--geomip-levels 0..4] [--error-bounds 0,0.5,1,2,4,8]
 //                 [--repeat N] [--shard I/N] [--size WxH] [--threads N]
 //   tessref sweep merge DIR... -o OUT
 //
@@ -31,11 +32,16 @@ namespace {
 
 // The default levels: the powers of two 1..64 (see docs/SWEEP.md, "Levels").
 constexpr const char* kDefaultLevels = "1,2,4,8,16,32,64";
+// A geomipmapped scene's axes (docs/SWEEP.md, "Geomipmapped scenes").
+constexpr const char* kDefaultGeomipLevels = "0..4";
+constexpr const char* kDefaultErrorBounds = "0,0.5,1,2,4,8";
 
 struct SweepCommandOptions {
     std::vector<std::string> scenes;
     std::string output;
     std::string levels = kDefaultLevels;
+    std::string geomip_levels = kDefaultGeomipLevels;
+    std::string error_bounds = kDefaultErrorBounds;
     std::string precision = "gpu";
     std::string camera_relative = "off";
     std::string spacing;  // empty: each scene's own
@@ -117,6 +123,8 @@ int run_sweep_command(const SweepCommandOptions& o) {
     if (p.scenes.empty()) throw Error("no scene given: tessref sweep SCENE... -o DIR", Where::in_file("command line"));
     if (o.output.empty()) throw Error("no output directory given", Where::in_file("-o"));
     p.levels = sweep::parse_levels(o.levels);
+    p.geomip_levels = sweep::parse_geomip_levels(o.geomip_levels);
+    p.error_bounds = sweep::parse_error_bounds(o.error_bounds);
     for (const std::string& item : split_list(o.precision, "--precision")) {
         const Precision precision = parse_precision_flag(item);
         if (std::find(p.precisions.begin(), p.precisions.end(), precision) == p.precisions.end())
@@ -167,7 +175,8 @@ Command add_sweep_command(CLI::App& parent) {
     CLI::App* app = parent.add_subcommand(
         "sweep",
         "Measure the speed/accuracy trade of tessellation levels: every scene at every uniform level, spacing and "
-        "precision, plus its own control stage; per row the stage timings, the geometric error against the "
+        "precision, plus its own control stage (a geomipmapped terrain: at forced geomip levels and screen-error "
+        "bounds); per row the stage timings, the geometric error against the "
         "full-resolution height field, the image error against the ray-traced ground truth, pictures at chosen "
         "levels. Writes DIR/sweep.csv and a report (docs/SWEEP.md).");
     app->add_option("scenes", options->scenes, "Scene files (TOML)");
@@ -175,6 +184,14 @@ Command add_sweep_command(CLI::App& parent) {
     app->add_option("--levels", options->levels,
                     "Uniform levels: numbers and integer ranges A..B, comma-separated, each in 1..64")
         ->default_str(kDefaultLevels);
+    app->add_option("--geomip-levels", options->geomip_levels,
+                    "Geomipmapped scenes: forced levels (every patch at the level), integers and ranges A..B in "
+                    "0..4, or none")
+        ->default_str(kDefaultGeomipLevels);
+    app->add_option("--error-bounds", options->error_bounds,
+                    "Geomipmapped scenes: screen-error bounds in pixels (evaluation.error_bound_px), comma-separated, "
+                    "each in [0, 1e6], or none")
+        ->default_str(kDefaultErrorBounds);
     app->add_option("--precision", options->precision, "Precisions, comma-separated: gpu, exact")->default_str("gpu");
     app->add_option("--spacing", options->spacing,
                     "Spacings of the uniform rows, comma-separated: equal, fractional_odd, fractional_even "

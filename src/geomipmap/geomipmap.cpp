@@ -269,6 +269,11 @@ std::vector<double> select_levels(const HeightSamples& map, const MaxErrors& max
         throw Error("geomipmap: the tween must lie in [0, 1]");
     const std::size_t patches = static_cast<std::size_t>(map.patches_x()) * map.patches_y();
     if (max_errors.size() != patches) throw Error("geomipmap: the pre-processing is of another map");
+    if (const std::optional<int> forced = settings.params.level) {
+        if (*forced < 0 || *forced >= kLevels) throw Error("geomipmap: a forced level must lie in 0..4");
+        const double t = *forced + 1 < kLevels ? settings.params.tween.value_or(0.0) : 0.0;
+        return std::vector<double>(patches, *forced + t);
+    }
     const auto to_pixels = [&](glm::dvec3 p, bool& visible) {
         const glm::dvec4 c = view_projection * glm::dvec4(p, 1.0);
         visible = c.w > 0.0 && c.z >= -c.w;  // in front of the near plane

@@ -4,6 +4,7 @@
 // the patches' meshes with adapting borders and geomorphed heights. The geometry stage's
 // normals follow as for every other model.
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -75,6 +76,18 @@ void keep_patches(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, std:
 }  // namespace
 
 PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options) {
+    // PipelineTimings, only when asked for: control = pre-processing and the level
+    // selection; generator 0 (no primitive generator); evaluation = the patches' meshes,
+    // geomorphing and the reported levels; geometry = the normals and culling.
+    using Clock = std::chrono::steady_clock;
+    if (options.timings) *options.timings = PipelineTimings{};
+    Clock::time_point lap = Clock::now();
+    const auto time_pass = [&](double PipelineTimings::*field) {
+        if (!options.timings) return;
+        const Clock::time_point now = Clock::now();
+        options.timings->*field = std::chrono::duration<double>(now - lap).count();
+        lap = now;
+    };
     const GeomipTerrain terrain = geomip_terrain(scene);
     const geomip::HeightSamples& map = terrain.map;
     const geomip::Settings& settings = terrain.settings;
@@ -82,6 +95,7 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
     const geomip::MaxErrors max_errors = geomip::preprocess(map);
     const std::vector<double> levels = geomip::select_levels(map, max_errors, settings, scene.camera->view_projection(),
                                                              scene.camera->viewport);
+    time_pass(&PipelineTimings::control);
     PipelineResult result;
     std::vector<geomip::MorphVertex> morph;
     result.mesh = geomip::build_surface(map, levels, settings, &morph);
@@ -122,6 +136,7 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
         l.inner = {static_cast<float>(levels[p]), static_cast<float>(levels[p])};
         if (options.progress) options.progress(p + 1, levels.size());
     }
+    time_pass(&PipelineTimings::evaluation);
 
     if (scene.geometry) {
         const auto normals_in = [&](auto zero) {
@@ -170,6 +185,7 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
         }
         if (result.culled.total() > 0) keep_patches(mesh, result.face_normals, result.geomorph, keep);
     }
+    time_pass(&PipelineTimings::geometry);
     result.distinct_patterns = 0;
     result.stages.control = true;  // the level selection
     result.stages.evaluation = true;

@@ -548,7 +548,7 @@ struct Loader {
     // ---- [evaluation] -------------------------------------------------------------
     void read_evaluation(const toml::table& table) {
         TableReader t(file, table, "evaluation",
-                      {"model", "influence", "normal", "watertight_edges", "error_bound_px", "adapt", "tween"});
+                      {"model", "influence", "normal", "watertight_edges", "error_bound_px", "adapt", "tween", "level"});
         const std::string model =
             t.choice("model", {"thesis", "cosc422", "lab4", "pn", "geomipmap"}, "the evaluation model");
         EvaluationStage e;
@@ -561,6 +561,11 @@ struct Loader {
             e.geomipmap.error_bound_px = t.real_or("error_bound_px", 1.0, 0.0, 1e6);
             e.geomipmap.adapt = t.boolean_opt("adapt").value_or(true);
             e.geomipmap.tween = t.real_opt("tween", 0.0, 1.0);
+            if (auto level = t.integer_opt("level", 0, geomip::kLevels - 1)) {
+                if (t.has("error_bound_px"))
+                    t.fail("level", "evaluation.level forces every patch's level: error_bound_px does not apply with it");
+                e.geomipmap.level = static_cast<int>(*level);
+            }
         }
         if (e.model == EvaluationModel::pn) {
             e.pn.fInfluence = t.real_or("influence", 0.75, -1e6, 1e6);

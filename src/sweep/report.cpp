@@ -121,6 +121,7 @@ std::string count(const std::optional<double>& x) { return x ? num(*x, 15) : "�
 struct Series {
     std::string scene, spacing, precision;
     bool camera_relative = false;
+    std::string axis;  // a geomipmapped scene's geomip_level or geomip_bound rows: that model; else empty
     std::vector<const SweepRow*> rows;
 
     std::vector<LevelError> curve() const {
@@ -137,7 +138,8 @@ struct Series {
 };
 
 std::string series_label(const Series& s, bool has_camera_relative) {
-    std::string label = s.scene + " " + s.spacing + " " + s.precision;
+    std::string label = s.scene + (s.spacing.empty() ? "" : " " + s.spacing) + " " + s.precision;
+    if (!s.axis.empty()) label += " " + s.axis;
     if (has_camera_relative) label += s.camera_relative ? " camera-relative" : " world";
     return label;
 }
@@ -145,9 +147,11 @@ std::string series_label(const Series& s, bool has_camera_relative) {
 std::vector<Series> group_series(const SweepTable& table) {
     std::vector<Series> series;
     for (const SweepRow& row : table.rows) {
+        const std::string axis = row.geomip_axis() ? row.model : std::string();
         if (series.empty() || series.back().scene != row.scene || series.back().spacing != row.spacing ||
-            series.back().precision != row.precision || series.back().camera_relative != row.camera_relative)
-            series.push_back({row.scene, row.spacing, row.precision, row.camera_relative, {}});
+            series.back().precision != row.precision || series.back().camera_relative != row.camera_relative ||
+            series.back().axis != axis)
+            series.push_back({row.scene, row.spacing, row.precision, row.camera_relative, axis, {}});
         series.back().rows.push_back(&row);
     }
     return series;
@@ -173,7 +177,7 @@ PlotSpec make_plot(const SweepTable& table, const std::vector<Series>& series, c
                 ++left_out;
                 continue;
             }
-            spec.points.push_back({*x, *row->img_rmse, s, !row->uniform(), false});
+            spec.points.push_back({*x, *row->img_rmse, s, !row->uniform() && !row->geomip_axis(), false});
             point_scene.push_back(row->scene);
         }
     }
@@ -224,11 +228,13 @@ figcaption{font-size:12px;color:#444}
 code{font-size:13px})";
 
 std::string level_text(const SweepRow& row) {
+    if (row.model == "geomip_level") return "geomip level " + level_str(*row.level) + " on every patch";
+    if (row.model == "geomip_bound") return "geomip error bound " + level_str(*row.level) + " px";
     return row.uniform() ? "level " + level_str(*row.level) : "the scene's own levels (" + row.model + ")";
 }
 
 std::string series_words(const Series& s, bool has_camera_relative) {
-    std::string words = s.spacing + " spacing, " + s.precision + " precision";
+    std::string words = (s.spacing.empty() ? std::string() : s.spacing + " spacing, ") + s.precision + " precision";
     if (has_camera_relative) words += s.camera_relative ? ", camera-relative" : ", world coordinates";
     return words;
 }
@@ -254,6 +260,13 @@ std::string verdict(const std::vector<const Series*>& series, bool has_camera_re
         return text;
     };
     std::string text = "In <b>" + html(series.front()->scene) + "</b> the image error ";
+    const bool geomip = std::all_of(series.begin(), series.end(), [](const Series* s) {
+        return std::all_of(s->rows.begin(), s->rows.end(), [](const SweepRow* r) { return r->geomip(); });
+    });
+    if (geomip)
+        return "<b>" + html(series.front()->scene) + "</b> is a geomipmapped terrain: it has no uniform tessellation "
+               "level, so the rules on uniform levels do not apply; its forced geomip levels (geomip_level) and "
+               "screen-error bounds (geomip_bound) are the runs below and the joined points of the plots.";
     if (by_level.empty()) return text + "cannot be placed: no uniform level has an image error.";
     text += "stops improving";
     std::size_t i = 0;
@@ -284,7 +297,8 @@ void summary_table(std::string& out, const std::vector<const Series*>& series, b
         std::set<double> levels;
         for (const SweepRow* row : s->rows)
             if (row->uniform()) levels.insert(*row->level);
-        out += "<tr><td class=t>" + html(s->spacing) + "</td><td class=t>" + html(s->precision) + "</td>";
+        const std::string spacing = !s->spacing.empty() ? s->spacing : !s->axis.empty() ? s->axis : "–";
+        out += "<tr><td class=t>" + html(spacing) + "</td><td class=t>" + html(s->precision) + "</td>";
         if (has_camera_relative) out += coordinates_cell(s->camera_relative);
         out += "<td>" + (levels.empty() ? std::string("none")
                                          : std::to_string(levels.size()) + " (" + level_str(*levels.begin()) +
@@ -305,7 +319,7 @@ void summary_table(std::string& out, const std::vector<const Series*>& series, b
         // The scene's own levels, and the cheapest uniform level that matches their error.
         const SweepRow* own = nullptr;
         for (const SweepRow* row : s->rows)
-            if (!row->uniform()) own = own ? own : row;
+            if (!row->uniform() && !row->geomip_axis()) own = own ? own : row;
         if (own) {
             std::string matched = "none";
             if (own->img_rmse)
@@ -334,9 +348,14 @@ void runs_table(std::string& out, const std::vector<const Series*>& series, bool
            "<th>gpu_exact_image_differs</th></tr>\n";
     for (const Series* s : series) {
         for (const SweepRow* row : s->rows) {
-            out += "<tr><td class=t>" + html(row->spacing) + "</td><td class=t>" + html(row->precision) + "</td>";
+            out += "<tr><td class=t>" + html(row->spacing.empty() ? std::string("–") : row->spacing) +
+                   "</td><td class=t>" + html(row->precision) + "</td>";
             if (has_camera_relative) out += coordinates_cell(row->camera_relative);
-            out += "<td class=t>" + html(row->uniform() ? level_str(*row->level) : row->model) + "</td><td>" +
+            const std::string levels = row->uniform()                  ? level_str(*row->level)
+                                       : row->model == "geomip_level" ? "geomip L" + level_str(*row->level)
+                                       : row->model == "geomip_bound" ? "bound " + level_str(*row->level) + " px"
+                                                                      : row->model;
+            out += "<td class=t>" + html(levels) + "</td><td>" +
                    count(row->patches) + "</td><td>" + count(row->triangles) + "</td><td>" + count(row->points) +
                    "</td><td>" + num(row->geo_max) + "</td><td>" + num(row->geo_rms) + "</td><td>" +
                    num(row->geo_max_px) + "</td><td>" + num(row->img_rmse) + "</td><td>" + num(row->img_psnr) +
@@ -435,7 +454,7 @@ std::string make_index(const SweepTable& table, const std::vector<Series>& serie
         out += "<p class=verdict>" + verdict(of_scene, table.has_camera_relative) + "</p>\n";
         // gpu/exact: pairs of series that differ only in precision.
         for (const Series* gpu : of_scene) {
-            if (gpu->precision != "gpu") continue;
+            if (gpu->precision != "gpu" || gpu->spacing.empty()) continue;  // empty: a geomipmapped scene's
             for (const Series* exact : of_scene) {
                 if (exact->precision != "exact" || exact->spacing != gpu->spacing ||
                     exact->camera_relative != gpu->camera_relative)

@@ -57,9 +57,10 @@ bool safe_relative_path(const std::string& path) {
 
 // The order of the report: scene, spacing, precision, camera_relative, the scene's own
 // rows (no level) before the uniform ones, then level, then model name.
+int axis_rank(const SweepRow& row) { return row.model == "geomip_level" ? 1 : row.model == "geomip_bound" ? 2 : 0; }
 auto sort_key(const SweepRow& row) {
     return std::make_tuple(std::cref(row.scene), std::cref(row.spacing), std::cref(row.precision), row.camera_relative,
-                           row.level.has_value(), row.level.value_or(0), std::cref(row.model));
+                           row.level.has_value(), axis_rank(row), row.level.value_or(0), std::cref(row.model));
 }
 
 }  // namespace
@@ -133,15 +134,23 @@ SweepTable read_sweep_csv(const std::string& path) {
         row.spacing = text("spacing");
         row.precision = text("precision");
         for (const char* name : {"scene", "model", "spacing", "precision"})
-            if (text(name).empty()) throw Error(std::string("column ") + name + " is empty", where(name));
+            if (text(name).empty() && !(row.geomip() && std::string(name) == "spacing"))
+                throw Error(std::string("column ") + name + " is empty", where(name));
         if (const std::string t = text("level"); !t.empty()) {
             const std::optional<double> level = parse_number(t);
-            if (!level || !(*level >= 1 && *level <= 64))  // NaN fails too
+            if (row.model == "geomip_level") {
+                if (!level || !(*level >= 0 && *level <= 4 && *level == std::floor(*level)))
+                    throw Error("column level: '" + t + "' is not a geomip level 0..4", where("level"));
+            } else if (row.model == "geomip_bound") {
+                if (!level || !(*level >= 0 && std::isfinite(*level)))
+                    throw Error("column level: '" + t + "' is not a screen-error bound >= 0", where("level"));
+            } else if (!level || !(*level >= 1 && *level <= 64)) {  // NaN fails too
                 throw Error("column level: '" + t + "' is not a level in [1, 64]", where("level"));
+            }
             row.level = *level;
         }
-        if (row.uniform() && !row.level)
-            throw Error("a uniform row needs a level", where("level"));
+        if ((row.uniform() || row.geomip_axis()) && !row.level)
+            throw Error("a " + row.model + " row needs a level", where("level"));
         if (const std::string t = text("camera_relative"); !t.empty()) {
             if (t != "0" && t != "1")
                 throw Error("column camera_relative: '" + t + "' is not 0 or 1", where("camera_relative"));

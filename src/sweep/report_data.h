@@ -22,9 +22,11 @@ namespace tessref::sweep {
 struct SweepRow {
     std::size_t line = 0;        // 1-based line in sweep.csv (the header is line 1)
     std::string scene;
-    std::string model;           // "uniform", or the scene's own control model
-    std::optional<double> level;  // uniform rows: in [1, 64], not always whole; the scene's own rows: none
-    std::string spacing;
+    std::string model;           // "uniform", geomip_level, geomip_bound, or the scene's own control model
+    // uniform rows: in [1, 64], not always whole; geomip_level rows: 0..4; geomip_bound rows:
+    // the screen-error bound in pixels (>= 0); the scene's own rows: none
+    std::optional<double> level;
+    std::string spacing;         // empty on a geomipmapped scene's rows (no generator)
     std::string precision;       // "gpu" or "exact" (others are shown as given)
     bool camera_relative = false;  // the optional camera_relative column (0/1)
     std::optional<double> patches, triangles, points;
@@ -35,6 +37,10 @@ struct SweepRow {
     std::string image, diff_image, wire_image, truth_image;  // relative to DIR
 
     bool uniform() const { return model == "uniform"; }
+    // A geomipmapped scene's swept rows: a forced level or a screen-error bound.
+    bool geomip_axis() const { return model == "geomip_level" || model == "geomip_bound"; }
+    // Any row of a geomipmapped scene (its own rows' model is "geomipmap").
+    bool geomip() const { return geomip_axis() || model == "geomipmap"; }
 };
 
 struct SweepTable {
@@ -49,10 +55,13 @@ struct SweepTable {
 // another number of fields than the header; a quote (fields are never quoted); a non-number
 // in a numeric column (the writer's "nan" and "inf" are numbers); a negative number; a level
 // outside [1, 64]; a count, a time or img_rmse that is not finite (the measurements only
-// shown may be nan or inf, e.g. img_psnr); a uniform row without a level; a picture path that
+// shown may be nan or inf, e.g. img_psnr); a uniform or geomip_* row without a level (a
+// geomip_level outside 0..4, a geomip_bound below 0); an empty spacing outside a
+// geomipmapped scene's rows; a picture path that
 // is absolute or climbs out of DIR (".."); two rows of the same run (same scene, model,
 // level, spacing, precision, camera_relative). Rows come back sorted by scene, spacing,
-// precision, camera_relative, then the scene's own rows before the uniform ones by level: a
+// precision, camera_relative, then the scene's own rows before the uniform ones by level
+// (geomip_level rows, then geomip_bound rows, each by level, after any uniform ones): a
 // merged set of shards reads as one unsharded file.
 SweepTable read_sweep_csv(const std::string& path);
 

@@ -219,6 +219,7 @@ struct SweepScene {
     std::string slug;   // name for file names
     Scene scene;        // the camera's viewport set to the sweep's size
     bool terrain = false;
+    bool geomip = false;  // a geomipmapped terrain: geomip rows in place of uniform ones
 };
 
 struct Row {
@@ -226,11 +227,16 @@ struct Row {
     std::size_t group = 0;
     std::size_t scene = 0;
     bool own = false;
-    double level = 0.0;     // uniform rows
+    // A geomipmapped scene's rows other than its own: a forced level (level = 0..4) or a
+    // screen-error bound (level = the bound in pixels).
+    enum class Geomip : std::uint8_t { none, level, bound } geomip = Geomip::none;
+    double level = 0.0;     // uniform rows; geomip rows: the level or the bound
     Spacing spacing = Spacing::equal;
     Precision precision = Precision::gpu;
     bool camera_relative = false;
 };
+
+std::string level_text(double level) { return real(level); }
 
 std::string slug_of(const std::string& name) {
     std::string s;
@@ -240,6 +246,7 @@ std::string slug_of(const std::string& name) {
 }
 
 std::string control_model_name(const Scene& scene) {
+    if (scene.evaluation.model == EvaluationModel::geomipmap) return "geomipmap";
     return scene.control ? to_string(scene.control->model) : "none";
 }
 
@@ -253,10 +260,7 @@ std::vector<SweepScene> load_scenes(const SweepParameters& p) {
         s.scene = load_scene(file);
         if (!s.scene.camera)
             throw Error("the sweep renders every row: the scene needs a [camera]", Where::at_key(file, "camera"));
-        if (s.scene.evaluation.model == EvaluationModel::geomipmap)
-            throw Error("a geomipmapped terrain is not swept yet: it has no tessellation level to make uniform and no "
-                        "ray-traced truth (render --raytrace refuses it)",
-                        Where::at_key(file, "evaluation.model"));
+        s.geomip = s.scene.evaluation.model == EvaluationModel::geomipmap;
         s.scene.camera->viewport = p.size;
         s.name = s.scene.name.empty() ? fs::path(file).stem().string() : s.scene.name;
         s.slug = slug_of(s.name);
@@ -292,6 +296,28 @@ std::vector<Row> plan_rows(const SweepParameters& p, const std::vector<SweepScen
                 rows.push_back(r);
             }
             ++group;
+            if (scenes[s].geomip) {
+                // Forced levels, then bounds; per axis per precision per value, one group per value.
+                const auto axis = [&](Row::Geomip kind, const std::vector<double>& values) {
+                    for (Precision precision : p.precisions) {
+                        for (std::size_t l = 0; l < values.size(); ++l) {
+                            Row r;
+                            r.group = group + l;
+                            r.scene = s;
+                            r.geomip = kind;
+                            r.level = values[l];
+                            r.spacing = scene.generator.spacing;
+                            r.precision = precision;
+                            r.camera_relative = relative;
+                            rows.push_back(r);
+                        }
+                    }
+                    group += values.size();
+                };
+                axis(Row::Geomip::level, std::vector<double>(p.geomip_levels.begin(), p.geomip_levels.end()));
+                axis(Row::Geomip::bound, p.error_bounds);
+                continue;
+            }
             const std::vector<Spacing> spacings = spacings_for(p, scene);
             for (std::size_t k = 0; k < spacings.size(); ++k) {
                 const std::size_t first_group = group;
@@ -334,21 +360,45 @@ Scene uniform_scene(const Scene& base, double level, Spacing spacing) {
     return s;
 }
 
+// A geomipmapped scene at a forced level (no tween) or with another screen-error bound (its
+// own adapt and tween kept).
+Scene geomip_scene(const Scene& base, const Row& row) {
+    Scene s = base;
+    geomip::Params& g = s.evaluation.geomipmap;
+    if (row.geomip == Row::Geomip::level) {
+        g.level = static_cast<int>(row.level);
+        g.tween.reset();
+    } else {
+        g.level.reset();
+        g.error_bound_px = row.level;
+    }
+    return s;
+}
+
+// The part of a picture's name that tells the row apart (images/<scene>/<this>-<precision>).
+std::string row_stem(const Row& row) {
+    if (row.own) return "own";
+    if (row.geomip == Row::Geomip::level) return "geomip-L" + level_text(row.level);
+    if (row.geomip == Row::Geomip::bound) return "geomip-B" + level_text(row.level);
+    return std::string(to_string(row.spacing)) + "-L" + level_text(row.level);
+}
+
 bool keeps_pictures(const Row& row, double largest_level) {
     if (row.own) return true;
+    if (row.geomip != Row::Geomip::none) return true;  // at most 5 levels and a few bounds
     if (row.level == largest_level) return true;
     int exponent = 0;
     const double mantissa = std::frexp(row.level, &exponent);
     return mantissa == 0.5;  // a power of two
 }
 
-std::string level_text(double level) { return real(level); }
-
 std::string row_description(const Row& row, const std::vector<SweepScene>& scenes) {
     const SweepScene& s = scenes[row.scene];
     std::string d = s.name + " " + (row.own ? control_model_name(s.scene) + " (own)" : "uniform " + level_text(row.level));
-    return d + " " + std::string(to_string(row.spacing)) + " " + std::string(to_string(row.precision)) +
-           (row.camera_relative ? " camera-relative" : "");
+    if (row.geomip == Row::Geomip::level) d = s.name + " geomip level " + level_text(row.level);
+    if (row.geomip == Row::Geomip::bound) d = s.name + " geomip error bound " + level_text(row.level) + " px";
+    if (!s.geomip) d += " " + std::string(to_string(row.spacing));  // a geomipmapped terrain has no generator
+    return d + " " + std::string(to_string(row.precision)) + (row.camera_relative ? " camera-relative" : "");
 }
 
 // The parameters that make two shards parts of one sweep.
@@ -363,6 +413,15 @@ nlohmann::ordered_json parameters_json(const SweepParameters& p, const std::vect
     nlohmann::ordered_json levels = nlohmann::ordered_json::array();
     for (double l : p.levels) levels.push_back(level_text(l));
     j["levels"] = levels;
+    if (std::any_of(scenes.begin(), scenes.end(), [](const SweepScene& s) { return s.geomip; })) {
+        // Only when a geomipmapped scene runs, so a sweep without one keeps its sweep.json.
+        nlohmann::ordered_json geomip_levels = nlohmann::ordered_json::array();
+        for (int l : p.geomip_levels) geomip_levels.push_back(l);
+        j["geomip_levels"] = geomip_levels;
+        nlohmann::ordered_json bounds = nlohmann::ordered_json::array();
+        for (double b : p.error_bounds) bounds.push_back(level_text(b));
+        j["error_bounds"] = bounds;
+    }
     nlohmann::ordered_json precisions = nlohmann::ordered_json::array();
     for (Precision x : p.precisions) precisions.push_back(std::string(to_string(x)));
     j["precisions"] = precisions;
@@ -487,13 +546,18 @@ private:
 
     Fields run_row(const Row& row, PairData& pair) {
         const SweepScene& s = scenes_[row.scene];
-        const Scene scene = row.own ? s.scene : uniform_scene(s.scene, row.level, row.spacing);
+        const Scene scene = row.own                           ? s.scene
+                            : row.geomip != Row::Geomip::none ? geomip_scene(s.scene, row)
+                                                              : uniform_scene(s.scene, row.level, row.spacing);
         SceneTruth& truth = truth_of(row.scene);
         Fields f;
         f["scene"] = s.name;
-        f["model"] = row.own ? control_model_name(s.scene) : "uniform";
+        f["model"] = row.own                              ? control_model_name(s.scene)
+                     : row.geomip == Row::Geomip::level ? "geomip_level"
+                     : row.geomip == Row::Geomip::bound ? "geomip_bound"
+                                                        : "uniform";
         f["level"] = row.own ? "" : level_text(row.level);
-        f["spacing"] = std::string(to_string(row.spacing));
+        f["spacing"] = s.geomip ? "" : std::string(to_string(row.spacing));  // no generator
         f["precision"] = std::string(to_string(row.precision));
         f["camera_relative"] = row.camera_relative ? "1" : "0";
         f["patches"] = std::to_string(scene.patch_count());
@@ -551,9 +615,8 @@ private:
             f["truth_image"] = truth.image_path;
         }
         if (keeps_pictures(row, largest_level_)) {
-            const std::string stem = "images/" + s.slug + "/" +
-                                     (row.own ? "own" : std::string(to_string(row.spacing)) + "-L" + level_text(row.level)) +
-                                     "-" + std::string(to_string(row.precision)) + (row.camera_relative ? "-cr" : "");
+            const std::string stem = "images/" + s.slug + "/" + row_stem(row) + "-" +
+                                     std::string(to_string(row.precision)) + (row.camera_relative ? "-cr" : "");
             fs::create_directories(dir_ / "images" / s.slug);
             write_image(image, (dir_ / (stem + ".png")).string(), ImageFormat::png);
             f["image"] = stem + ".png";
@@ -595,6 +658,23 @@ std::string csv_line(const Fields& f) {
 // Refuses, before any work, a uniform level that would exceed a scene's triangle budget.
 void check_budgets(const SweepParameters& p, const std::vector<SweepScene>& scenes) {
     for (const SweepScene& s : scenes) {
+        if (s.geomip) {
+            // Level k: 2 (16 / 2^k)^2 triangles per patch. The own and bound rows may put
+            // every patch at level 0 (a bound of 0 does), so their worst case is level 0's.
+            const auto per_patch = [](int k) { return std::uint64_t(2) * (16u >> k) * (16u >> k); };
+            const std::uint64_t patches = s.scene.patch_count();
+            const auto refuse = [&](const std::string& what, std::uint64_t estimate) {
+                if (estimate > s.scene.max_triangles)
+                    throw Error(what + " for up to " + std::to_string(estimate) +
+                                    " triangles, more than the scene's limits.max_triangles = " +
+                                    std::to_string(s.scene.max_triangles),
+                                s.scene.max_triangles_where);
+            };
+            refuse("the geomipmapped terrain's own and error-bound rows (every patch at level 0 at worst) ask",
+                   per_patch(0) * patches);
+            for (int k : p.geomip_levels) refuse("geomip level " + std::to_string(k) + " asks", per_patch(k) * patches);
+            continue;
+        }
         for (Spacing spacing : spacings_for(p, s.scene)) {
             for (double level : p.levels) {
                 TessSettings settings = s.scene.generator;
@@ -665,6 +745,60 @@ std::vector<double> parse_levels(const std::string& text) {
     std::sort(levels.begin(), levels.end());
     levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
     return levels;
+}
+
+std::vector<int> parse_geomip_levels(const std::string& text) {
+    const Where where = Where::in_file("--geomip-levels");
+    std::vector<int> levels;
+    if (text == "none") return levels;
+    const auto number = [&](const std::string& item, const std::string& whole) {
+        std::size_t used = 0;
+        int k = -1;
+        try {
+            k = std::stoi(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size())
+            throw Error("'" + whole + "' is not a geomip level (an integer 0..4, a range A..B, or none)", where);
+        if (k < 0 || k >= geomip::kLevels) throw Error("'" + whole + "': geomip levels lie in 0..4", where);
+        return k;
+    };
+    for (const std::string& item : split_list(text, "--geomip-levels")) {
+        const std::size_t dots = item.find("..");
+        if (dots != std::string::npos) {
+            const int lo = number(item.substr(0, dots), item), hi = number(item.substr(dots + 2), item);
+            if (lo > hi) throw Error("'" + item + "': the range is reversed", where);
+            for (int l = lo; l <= hi; ++l) levels.push_back(l);
+        } else {
+            levels.push_back(number(item, item));
+        }
+    }
+    std::sort(levels.begin(), levels.end());
+    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    return levels;
+}
+
+std::vector<double> parse_error_bounds(const std::string& text) {
+    const Where where = Where::in_file("--error-bounds");
+    std::vector<double> bounds;
+    if (text == "none") return bounds;
+    for (const std::string& item : split_list(text, "--error-bounds")) {
+        std::size_t used = 0;
+        double x = 0.0;
+        try {
+            x = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size())
+            throw Error("'" + item + "' is not an error bound (a number of pixels, or none)", where);
+        if (!(x >= 0.0 && x <= 1e6)) throw Error("'" + item + "': error bounds lie in [0, 1e6] pixels", where);
+        bounds.push_back(x);
+    }
+    std::sort(bounds.begin(), bounds.end());
+    bounds.erase(std::unique(bounds.begin(), bounds.end()), bounds.end());
+    return bounds;
 }
 
 std::size_t run_sweep(const SweepParameters& p, const Shard& shard, const std::string& dir,

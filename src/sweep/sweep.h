@@ -13,7 +13,9 @@
 // ROWS are numbered in their CSV order: per scene (command-line order), per camera_relative
 // value (--camera-relative order), first the scene's own rows (one per precision, in
 // --precision order), then per spacing (--spacing order), per precision, per level
-// (ascending). A GROUP is the rows that differ only in precision
+// (ascending). A geomipmapped scene's rows: per camera_relative value, its own rows, then
+// per precision per forced geomip level (ascending), then per precision per screen-error
+// bound (ascending). A GROUP is the rows that differ only in precision
 // (they share the gpu-exact comparison); groups are numbered in order of their first row.
 // Shard I of N runs the groups g with g % N == I: the unit of sharding is the group, so that
 // both rows of a gpu/exact pair are computed in one process.
@@ -43,6 +45,13 @@ struct SweepParameters {
     // Camera-relative evaluation off and/or on (PipelineOptions::camera_relative), distinct,
     // in the order given: every row is run once per value.
     std::vector<bool> camera_relative{false};
+    // Geomipmapped scenes ([evaluation] model = "geomipmap") have no tessellation level: in
+    // place of the uniform rows they get one row per forced geomip level (every patch at
+    // that level, no tween) and one per screen-error bound (the scene's selection with that
+    // error_bound_px). Each ascending and distinct; either may be empty. --levels and
+    // --spacing do not apply to them.
+    std::vector<int> geomip_levels{0, 1, 2, 3, 4};              // each in 0..4
+    std::vector<double> error_bounds{0.0, 0.5, 1.0, 2.0, 4.0, 8.0};  // pixels, each in [0, 1e6]
     int repeat = 1;                         // timings: median of this many runs
     glm::ivec2 size{320, 200};              // image size (replaces the cameras' viewports)
 };
@@ -68,6 +77,14 @@ std::vector<std::string> split_list(const std::string& text, const std::string& 
 // distinct. Throws tessref::Error (where: --levels) naming the item for a non-number, NaN,
 // a level outside 1..64, or an empty or reversed range.
 std::vector<double> parse_levels(const std::string& text);
+
+// Parses --geomip-levels: as --levels, items in 0..4 (integers), or "none" (no such rows).
+// Throws tessref::Error (where: --geomip-levels).
+std::vector<int> parse_geomip_levels(const std::string& text);
+
+// Parses --error-bounds: comma-separated numbers of pixels in [0, 1e6], or "none". Sorted,
+// distinct. Throws tessref::Error (where: --error-bounds).
+std::vector<double> parse_error_bounds(const std::string& text);
 
 // Runs the sweep's rows of `shard` and writes DIR (see DIRECTORY). Loads and checks every
 // scene first (an unknown scene, one without a camera, duplicate scene names, a uniform
