@@ -712,9 +712,22 @@ std::vector<std::string> split_list(const std::string& text, const std::string& 
     return items;
 }
 
-std::vector<double> parse_levels(const std::string& text) {
-    const Where where = Where::in_file("--levels");
-    std::vector<double> levels;
+namespace {
+
+// A comma-separated list of numbers and ranges A..B (whole numbers, both ends included),
+// each in [lo, hi] (whole numbers too); sorted, duplicates dropped. Errors name the flag.
+struct NumberList {
+    const char* flag;   // "--levels"
+    const char* noun;   // "level"
+    const char* forms;  // what an item may be, for the error
+    int lo, hi;
+    bool integers;      // every item a whole number
+};
+
+std::vector<double> parse_number_list(const std::string& text, const NumberList& rule) {
+    const Where where = Where::in_file(rule.flag);
+    const std::string noun = rule.noun;
+    std::vector<double> values;
     const auto number = [&](const std::string& item, const std::string& whole) {
         std::size_t used = 0;
         double x = 0.0;
@@ -724,59 +737,43 @@ std::vector<double> parse_levels(const std::string& text) {
             used = 0;
         }
         const auto rest = item.find_first_not_of(" \t", used);
-        if (used == 0 || rest != std::string::npos)
-            throw Error("'" + whole + "' is not a level (a number, or a range A..B)", where);
-        if (std::isnan(x)) throw Error("'" + whole + "': a level must be a number, not NaN", where);
-        if (!(x >= 1.0 && x <= 64.0)) throw Error("'" + whole + "': levels lie in 1..64", where);
+        if (used == 0 || rest != std::string::npos || (rule.integers && std::isfinite(x) && x != std::floor(x)))
+            throw Error("'" + whole + "' is not a " + noun + " (" + rule.forms + ")", where);
+        if (std::isnan(x)) throw Error("'" + whole + "': a " + noun + " must be a number, not NaN", where);
+        if (!(x >= rule.lo && x <= rule.hi))
+            throw Error("'" + whole + "': " + noun + "s lie in " + std::to_string(rule.lo) + ".." +
+                            std::to_string(rule.hi),
+                        where);
         return x;
     };
-    for (const std::string& item : split_list(text, "--levels")) {
+    for (const std::string& item : split_list(text, rule.flag)) {
         const std::size_t dots = item.find("..");
         if (dots != std::string::npos) {
             const double lo = number(item.substr(0, dots), item), hi = number(item.substr(dots + 2), item);
             if (lo != std::floor(lo) || hi != std::floor(hi))
-                throw Error("'" + item + "': a range runs over whole levels (A..B, integers)", where);
+                throw Error("'" + item + "': a range runs over whole " + noun + "s (A..B, integers)", where);
             if (lo > hi) throw Error("'" + item + "': the range is reversed", where);
-            for (double l = lo; l <= hi; l += 1.0) levels.push_back(l);
+            for (double v = lo; v <= hi; v += 1.0) values.push_back(v);
         } else {
-            levels.push_back(number(item, item));
+            values.push_back(number(item, item));
         }
     }
-    std::sort(levels.begin(), levels.end());
-    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-    return levels;
+    std::sort(values.begin(), values.end());
+    values.erase(std::unique(values.begin(), values.end()), values.end());
+    return values;
+}
+
+}  // namespace
+
+std::vector<double> parse_levels(const std::string& text) {
+    return parse_number_list(text, {"--levels", "level", "a number, or a range A..B", 1, 64, false});
 }
 
 std::vector<int> parse_geomip_levels(const std::string& text) {
-    const Where where = Where::in_file("--geomip-levels");
-    std::vector<int> levels;
-    if (text == "none") return levels;
-    const auto number = [&](const std::string& item, const std::string& whole) {
-        std::size_t used = 0;
-        int k = -1;
-        try {
-            k = std::stoi(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != item.size())
-            throw Error("'" + whole + "' is not a geomip level (an integer 0..4, a range A..B, or none)", where);
-        if (k < 0 || k >= geomip::kLevels) throw Error("'" + whole + "': geomip levels lie in 0..4", where);
-        return k;
-    };
-    for (const std::string& item : split_list(text, "--geomip-levels")) {
-        const std::size_t dots = item.find("..");
-        if (dots != std::string::npos) {
-            const int lo = number(item.substr(0, dots), item), hi = number(item.substr(dots + 2), item);
-            if (lo > hi) throw Error("'" + item + "': the range is reversed", where);
-            for (int l = lo; l <= hi; ++l) levels.push_back(l);
-        } else {
-            levels.push_back(number(item, item));
-        }
-    }
-    std::sort(levels.begin(), levels.end());
-    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
-    return levels;
+    if (text == "none") return {};
+    const std::vector<double> values = parse_number_list(
+        text, {"--geomip-levels", "geomip level", "an integer 0..4, a range A..B, or none", 0, geomip::kLevels - 1, true});
+    return std::vector<int>(values.begin(), values.end());
 }
 
 std::vector<double> parse_error_bounds(const std::string& text) {
