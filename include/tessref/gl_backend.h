@@ -167,7 +167,7 @@ struct SceneRenderOptions {
     glm::ivec2 size{0, 0};  // {0, 0}: the camera's viewport
     bool wireframe = false; // glPolygonMode(GL_FRONT_AND_BACK, GL_LINE)
     bool capture = false;   // also record every evaluated vertex by transform feedback
-    std::size_t max_primitives_per_draw = 32768;
+    std::size_t max_primitives_per_draw = 32768;  // `tessref gl --max-primitives-per-draw N`
     // Test hook: the prediction of this draw (0-based) is made one too high, so that the
     // check must fail there. -1: none.
     long long corrupt_prediction_of_batch = -1;
