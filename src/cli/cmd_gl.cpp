@@ -173,8 +173,8 @@ Command add_gl_command(CLI::App& parent) {
         ->allow_extra_args(false);  // one file per flag: the scene after it stays the scene
     app->add_option("--max-primitives-per-draw", options->max_primitives_per_draw,
                     "Predicted primitives per draw at most (default 32768; a draw holds at least one patch): "
-                    "the size of the draws whose counts are checked. llvmpipe was fastest at about 16 patches "
-                    "per draw at level 16 and 4 at level 63 (README: Benchmarks)")
+                    "the size of the draws whose counts are checked. Above the default, llvmpipe can draw a wrong "
+                    "picture with every count right (README: Benchmarks)")
         ->type_name("N");
     app->add_flag("--camera-relative", options->camera_relative,
                   "Refused (exit 2): camera-relative evaluation is `tessref render` and `tessref mesh`'s only");
