@@ -345,6 +345,44 @@ TEST_F(GlBackend, WrongDrawCountGivesExit1NamingTheDrawAndWritesNoImage) {
     EXPECT_EQ(left, 0u) << "a temporary file was left behind";
 }
 
+// --max-primitives-per-draw N: smaller draws, the same picture and every count as predicted;
+// a draw that disagrees is named among many (the counts are read after every draw is
+// submitted, draw order kept).
+TEST_F(GlBackend, MaxPrimitivesPerDrawSplitsTheDrawsAndKeepsThePicture) {
+    const std::string scene = scene_path("lab4-canyon").string();
+    const RunResult whole = run({"gl", scene, "-o", (dir_ / "a.png").string(), "--size", "320x200"});
+    ASSERT_EQ(whole.status, 0) << whole.out << whole.err;
+    // 133496 triangles: 5 draws of at most 32768, at least 33 of at most 4096.
+    EXPECT_NE(whole.out.find(" in 5 draws (every count as predicted)"), std::string::npos) << whole.out;
+    const RunResult split = run({"gl", scene, "-o", (dir_ / "b.png").string(), "--size", "320x200",
+                                 "--max-primitives-per-draw", "4096"});
+    ASSERT_EQ(split.status, 0) << split.out << split.err;
+    const std::size_t at = split.out.find(" draws (every count as predicted)");
+    ASSERT_NE(at, std::string::npos) << split.out;
+    const std::size_t from = split.out.rfind(' ', at - 1) + 1;
+    EXPECT_GE(std::stoul(split.out.substr(from, at - from)), 33u) << split.out;
+    EXPECT_EQ(read_file(dir_ / "a.png"), read_file(dir_ / "b.png"));
+
+    const fs::path out = dir_ / "c.png";
+    const RunResult wrong = run_program("env", {"TESSREF_GL_CORRUPT_BATCH=20", kExe, "gl", scene, "-o", out.string(),
+                                                "--size", "320x200", "--max-primitives-per-draw", "4096"},
+                                        dir_);
+    EXPECT_EQ(wrong.status, 1) << wrong.out << wrong.err;
+    EXPECT_NE(wrong.err.find("tessref: gl: draw 20 (patches "), std::string::npos) << wrong.err;
+    EXPECT_NE(wrong.err.find("no image written"), std::string::npos) << wrong.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(GlBackend, MaxPrimitivesPerDrawMustBeAPositiveInteger) {
+    for (const std::string bad : {"0", "-1", "x", "1.5", "2147483648"}) {
+        const fs::path out = dir_ / "x.png";
+        const RunResult r = run({"gl", scene_path("thesis-constant-1").string(), "-o", out.string(), "--size",
+                                 "64x40", "--max-primitives-per-draw", bad});
+        expect_refused(r, "tessref: error: '" + bad + "' is not a whole number in 1..2147483647 "
+                          "(--max-primitives-per-draw)", out);
+    }
+}
+
 // A context below 4.5 (Mesa told to offer 3.3 only): a clear error, exit 2, no image.
 TEST_F(GlBackend, ContextBelow45IsAClearErrorAndExit2) {
     const fs::path out = dir_ / "x.png";

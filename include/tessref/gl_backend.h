@@ -109,7 +109,9 @@ std::string dump(const CapturedPatch& patch);
 //
 // The CPU pipeline runs first: its per-patch triangle counts size the draws (at most
 // max_primitives_per_draw predicted primitives per draw, at least one patch) and every
-// draw's GL_PRIMITIVES_GENERATED must equal its prediction. A draw that disagrees ends the
+// draw's GL_PRIMITIVES_GENERATED must equal its prediction; the counts are read once every
+// draw is submitted (one query object per draw), so that llvmpipe's draws overlap as a
+// plain application's would. A draw that disagrees (the first in draw order) ends the
 // render: batch_failure names it and no image is returned (llvmpipe corrupts large
 // tessellated draws silently; a level computed differently by the GLSL twin shows here too).
 //
@@ -165,7 +167,7 @@ struct SceneRenderOptions {
     glm::ivec2 size{0, 0};  // {0, 0}: the camera's viewport
     bool wireframe = false; // glPolygonMode(GL_FRONT_AND_BACK, GL_LINE)
     bool capture = false;   // also record every evaluated vertex by transform feedback
-    std::size_t max_primitives_per_draw = 32768;
+    std::size_t max_primitives_per_draw = 32768;  // `tessref gl --max-primitives-per-draw N`
     // Test hook: the prediction of this draw (0-based) is made one too high, so that the
     // check must fail there. -1: none.
     long long corrupt_prediction_of_batch = -1;

@@ -2,7 +2,7 @@
 // (Mesa llvmpipe): the picture a GPU driver makes of the scene, beside `tessref render`'s.
 //
 //   tessref gl SCENE -o OUT.{png,exr,tif} [--size WxH] [--wireframe] [--capture OUT.{txt,ply}]
-//              [--shader STAGE=FILE]...
+//              [--shader STAGE=FILE]... [--max-primitives-per-draw N]
 //
 // Exit 1, with no image written, when a draw's GL_PRIMITIVES_GENERATED differs from the CPU
 // primitive generator's count (gl_backend.h). TESSREF_GL_CORRUPT_BATCH=N (a test hook) makes
@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,7 @@ struct GlCommandOptions {
     bool wireframe = false;
     std::string capture;
     std::vector<std::string> shaders;  // STAGE=FILE, as typed
+    std::string max_primitives_per_draw;  // empty: SceneRenderOptions' default
     bool camera_relative = false;      // refused (see run_gl)
 };
 
@@ -65,6 +67,15 @@ std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flag
     return shaders;
 }
 
+// --max-primitives-per-draw N: 1..2^31-1 (a draw's GL_PRIMITIVES_GENERATED is read as a GLuint).
+std::size_t parse_max_primitives_per_draw(const std::string& text) {
+    const std::string flag = "--max-primitives-per-draw";
+    const std::optional<long long> value = parse_integer(text);
+    if (!value || *value < 1 || *value > 2147483647LL)
+        throw Error("'" + text + "' is not a whole number in 1..2147483647", Where::in_file(flag));
+    return static_cast<std::size_t>(*value);
+}
+
 int run_gl(const GlCommandOptions& options) {
     // Camera-relative evaluation is the CPU pipeline's only (render, mesh): the GLSL twins
     // compute texture coordinates from the world position (thesis xy / scaleXY, COSC422 the
@@ -83,6 +94,8 @@ int run_gl(const GlCommandOptions& options) {
     render_options.wireframe = options.wireframe;
     render_options.capture = !options.capture.empty();
     render_options.shaders = parse_shader_flags(options.shaders);
+    if (!options.max_primitives_per_draw.empty())
+        render_options.max_primitives_per_draw = parse_max_primitives_per_draw(options.max_primitives_per_draw);
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)
         render_options.corrupt_prediction_of_batch = std::atoll(hook);
     AtomicOutput output(options.output);
@@ -158,6 +171,11 @@ Command add_gl_command(CLI::App& parent) {
                     "own layout(...) in; (README: Debugging your own shader)")
         ->type_name("STAGE=FILE")
         ->allow_extra_args(false);  // one file per flag: the scene after it stays the scene
+    app->add_option("--max-primitives-per-draw", options->max_primitives_per_draw,
+                    "Predicted primitives per draw at most (default 32768; a draw holds at least one patch): "
+                    "the size of the draws whose counts are checked. Above the default, llvmpipe can draw a wrong "
+                    "picture with every count right (README: Benchmarks)")
+        ->type_name("N");
     app->add_flag("--camera-relative", options->camera_relative,
                   "Refused (exit 2): camera-relative evaluation is `tessref render` and `tessref mesh`'s only");
     app->footer("Example: tessref gl data/scenes/thesis-all-10.toml -o gl.png --size 320x200\n"
