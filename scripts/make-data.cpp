@@ -16,6 +16,8 @@
 //    than a patch of the shipped scenes (one sample per edge midpoint must not miss them).
 //  - data/heightmaps/canyon.pgm          16-bit 512x512 canyon for lab 4: a plateau cut
 //    by a meandering, stepped canyon. Power-of-two so the mip pyramid halves cleanly.
+//  - data/heightmaps/canyon-257.pgm      16-bit 257x257: the middle of canyon.pgm cut out
+//    unchanged (16n + 1 samples a side), for geomipmapping where the PVS culls (walls).
 //  - data/heightmaps/jacksboro-257.pgm  16-bit 257x257: the middle of the Jacksboro fault
 //    DEM (data/jacksboro_fault_dem.pgm), for the geomipmapping scene (16n + 1 samples a side).
 //  - data/textures/geomip-grass.png, geomip-rock.png, geomip-dry.png  8-bit RGB 128x128,
@@ -385,6 +387,13 @@ void make_canyon(const std::string& dir) {
             pixels[j * n + i] = static_cast<std::uint16_t>(std::lround(std::clamp(h, 0.0, 1.0) * 65535.0));
         }
     write_pgm16(dir + "/heightmaps/canyon.pgm", n, pixels);
+    // The middle 257 x 257 samples, as jacksboro-257.pgm is cut from its DEM.
+    const int m = 257, x0 = (n - m) / 2, y0 = (n - m) / 2;
+    std::vector<std::uint16_t> middle(static_cast<std::size_t>(m) * m);
+    for (int y = 0; y < m; ++y)
+        for (int x = 0; x < m; ++x)
+            middle[static_cast<std::size_t>(y) * m + x] = pixels[static_cast<std::size_t>(y0 + y) * n + (x0 + x)];
+    write_pgm16(dir + "/heightmaps/canyon-257.pgm", m, middle);
 }
 
 // ---- meshes through OpenMesh -------------------------------------------------------

@@ -487,6 +487,79 @@ TEST(GeoMipPvs, ACameraAtACellSamplePointLosesNoPixelOnJacksboro) {
     EXPECT_EQ(total_lost, 0u);
 }
 
+// Where the PVS pays: the canyon (tests/data/geomip/canyon-geomipmap.toml, 16 x 16 patches
+// of the middle of lab 4's canyon, floor about 14 to 20, plateau about 130 to 150, 32 layers
+// of 11.94 from 13.96). Eyes at cell sample points of layer 1 (27.9 to 35.9 high, over the
+// canyon floor) look along the canyon. Patches must be culled: the canyon bends, and between
+// the eye and the canyon beyond a bend, and between it and the plateau beyond the rim, stand
+// patches whose every sample is on the plateau (over 100 high), whose low blocks stay near
+// that height, and a line from a sample point under 38 to a target on the floor beyond or
+// low on the plateau passes under them; those patches are in front of the eye, so the frustum
+// keeps them and only the PVS culls them (measured: 79, 100, 30 and 5). And no covered
+// pixel may change: the eyes are sample points (the contract above).
+TEST(GeoMipPvs, InTheCanyonThePvsCullsPatchesAndNoPixelChanges) {
+    Scene plain = load_scene(std::string(TESSREF_SOURCE_DIR) + "/tests/data/geomip/canyon-geomipmap.toml");
+    const GeomipTerrain terrain = geomip_terrain(plain);
+    const PvsBuilder builder(terrain.map, terrain.settings);
+    const Pvs& layout = builder.layout();
+    ASSERT_EQ(layout.layers, 32);
+    EXPECT_NEAR(layout.z_lo, 13.96, 0.01);
+    EXPECT_NEAR((layout.z_hi - layout.z_lo) / layout.layers, 11.94, 0.01);
+    // (patch x, patch y, layer, sample x, y, z) of the eye, and where it looks (on the floor).
+    struct View {
+        std::array<int, 6> cell;
+        glm::dvec3 center;
+    };
+    const std::vector<View> views{{{12, 0, 1, 1, 1, 1}, {250.0, 200.0, 20.0}},
+                                  {{12, 0, 1, 1, 1, 0}, {400.0, 400.0, 20.0}},
+                                  {{3, 13, 1, 1, 1, 1}, {144.0, 256.0, 20.0}},
+                                  {{4, 6, 1, 1, 1, 0}, {400.0, 20.0, 20.0}}};
+    RenderOptions options;
+    options.size = {320, 200};
+    for (const View& v : views) {
+        const auto& c = v.cell;
+        const std::size_t cell =
+            (static_cast<std::size_t>(c[2]) * layout.patches_y + c[1]) * layout.patches_x + static_cast<std::size_t>(c[0]);
+        const glm::dvec3 eye = pvs_cell_point(layout, terrain.settings, cell, c[3], c[4], c[5]);
+        ASSERT_EQ(layout.cell_of(eye, terrain.settings), std::optional<std::size_t>(cell));
+        auto pvs = std::make_shared<Pvs>(layout);
+        pvs->bits.assign((pvs->cell_count() * pvs->patch_count() + 7) / 8, 0xff);
+        const std::vector<std::uint8_t> row = builder.row(cell);
+        std::size_t hidden = 0;
+        for (std::size_t p = 0; p < row.size(); ++p)
+            if (!row[p]) {
+                const std::size_t b = cell * pvs->patch_count() + p;
+                pvs->bits[b / 8] = static_cast<std::uint8_t>(pvs->bits[b / 8] & ~(1u << (b % 8)));
+                ++hidden;
+            }
+        plain.camera->eye = eye;
+        plain.camera->center = v.center;
+        plain.camera->up = {0.0, 0.0, 1.0};
+        plain.culling = CullingStage{true, "", nullptr};
+        Scene culled = plain;
+        culled.culling = CullingStage{true, "", pvs};
+        const RenderResult a = render_scene(plain, options), b = render_scene(culled, options);
+        ASSERT_EQ(a.patch_id.size(), b.patch_id.size());
+        std::size_t covered = 0, lost = 0;
+        for (std::size_t i = 0; i < a.patch_id.size(); ++i) {
+            if (a.patch_id[i] == kNoPixelId) continue;
+            ++covered;
+            if (b.patch_id[i] != a.patch_id[i] || b.colour[i] != a.colour[i] || b.depth[i] != a.depth[i]) ++lost;
+        }
+        EXPECT_EQ(a.colour, b.colour) << "eye " << eye.x << " " << eye.y << " " << eye.z;
+        EXPECT_EQ(lost, 0u) << "eye " << eye.x << " " << eye.y << " " << eye.z;
+        EXPECT_GT(covered, 0u);
+        EXPECT_TRUE(b.pipeline->culled.pvs_applied);
+        EXPECT_GT(b.pipeline->culled.pvs, 0u) << "eye " << eye.x << " " << eye.y << " " << eye.z;
+        EXPECT_EQ(b.pipeline->culled.frustum(), a.pipeline->culled.frustum());
+        EXPECT_LT(b.pipeline->mesh.triangles.size(), a.pipeline->mesh.triangles.size());
+        std::printf("  eye (%.4g, %.4g, %.4g) cell %zu: %zu of %zu patches hidden, frustum culls %zu, the PVS %zu more; "
+                    "%zu of %zu covered pixels lost\n",
+                    eye.x, eye.y, eye.z, cell, hidden, row.size(), a.pipeline->culled.frustum(), b.pipeline->culled.pvs,
+                    lost, covered);
+    }
+}
+
 class GeoMipOptimCommand : public tessref::test::CommandDirTest {};
 
 TEST_F(GeoMipOptimCommand, RenderPrintsTheCulledPatchesAndPvsWritesAFileOrNothing) {
