@@ -110,6 +110,33 @@ TEST(RenderStream, ExactPrecisionAndCameraRelativeMatch) {
     }
 }
 
+// The streamed render defers vertex normals to the vertices of winning triangles where
+// there are more than 8 triangles a pixel (render.cpp): an 8x5 image makes every scene with
+// vertex normals take that path (normal-map, height-field and PN normals, both precisions,
+// camera-relative evaluation), and it must still equal the whole-surface pass.
+TEST(RenderStream, DeferredVertexNormalsMatchTheWholeSurfacePass) {
+    for (const char* name : {"thesis-all-10.toml", "jacksboro.toml", "lab4-canyon.toml", "terrain-pom.toml",
+                             "pn-triangles.toml"}) {
+        for (int variant = 0; variant < 3; ++variant) {
+            SCOPED_TRACE(std::string(name) + " variant " + std::to_string(variant));
+            tessref::Scene scene = tessref::load_scene((kScenes / name).string());
+            if (scene.control && scene.control->model == tessref::ControlModel::pn) {
+                // The PN control stage's levels follow the image's pixels: a fixed level instead.
+                scene.control->model = tessref::ControlModel::constant;
+                scene.control->constant.level = 16.0;
+            }
+            tessref::RenderOptions options;
+            options.size = {8, 5};
+            options.precision = variant == 1 ? tessref::Precision::exact : tessref::Precision::gpu;
+            options.camera_relative = variant == 2;
+            options.keep_surface = false;
+            const tessref::RenderResult streamed = tessref::render_scene(scene, options);
+            ASSERT_GT(streamed.stats.triangles, 8u * 8u * 5u) << "too few triangles to defer the normals";
+            compare_paths(scene, options);
+        }
+    }
+}
+
 // A surface large enough for several batches (2.0 M triangles at level 63: two batches of
 // 2^20) at the camera's full size.
 TEST(RenderStream, ManyBatchesMatchAtFullSize) {
