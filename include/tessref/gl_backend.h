@@ -109,9 +109,7 @@ std::string dump(const CapturedPatch& patch);
 //
 // The CPU pipeline runs first: its per-patch triangle counts size the draws (at most
 // max_primitives_per_draw predicted primitives per draw, at least one patch) and every
-// draw's GL_PRIMITIVES_GENERATED must equal its prediction; the counts are read once every
-// draw is submitted (one query object per draw), so that llvmpipe's draws overlap as a
-// plain application's would. A draw that disagrees (the first in draw order) ends the
+// draw's GL_PRIMITIVES_GENERATED must equal its prediction. A draw that disagrees ends the
 // render: batch_failure names it and no image is returned (llvmpipe corrupts large
 // tessellated draws silently; a level computed differently by the GLSL twin shows here too).
 //

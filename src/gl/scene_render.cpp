@@ -834,7 +834,6 @@ void geomip_attributes(GlFunctions& gl) {
 struct GlObjects {
     Context::Impl& c;
     GLuint vao = 0, vbo = 0, feedback = 0, query = 0, query_written = 0;
-    std::vector<GLuint> draw_queries;  // the picture's GL_PRIMITIVES_GENERATED, one per draw
     std::vector<GLuint> programs;
     explicit GlObjects(Context::Impl& context) : c(context) {}
     GlObjects(const GlObjects&) = delete;
@@ -846,7 +845,6 @@ struct GlObjects {
         gl.DeleteBuffers(2, buffers);
         const GLuint queries[] = {query, query_written};
         gl.DeleteQueries(2, queries);
-        if (!draw_queries.empty()) gl.DeleteQueries(static_cast<GLsizei>(draw_queries.size()), draw_queries.data());
         if (vao) gl.DeleteVertexArrays(1, &vao);
     }
 };
@@ -993,8 +991,6 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     }
     gl.GenQueries(1, &objects.query);
     gl.GenQueries(1, &objects.query_written);
-    objects.draw_queries.resize(batches.size());
-    if (!batches.empty()) gl.GenQueries(static_cast<GLsizei>(batches.size()), objects.draw_queries.data());
     c.check_error("setting up the scene's draws");
 
     auto predicted_of = [&](std::size_t index) {
@@ -1013,21 +1009,15 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     gl.DepthFunc(GL_LESS);
     gl.PolygonMode(GL_FRONT_AND_BACK, options.wireframe ? GL_LINE : GL_FILL);
     c.check_error("setting the scene's uniforms and state");
-    // Every draw is submitted before any count is read: reading a query's result right after
-    // its draw would make llvmpipe finish that draw (its rasterizer threads idle) before the
-    // next one's vertex and tessellation work starts, which a plain application does not do.
-    for (std::size_t k = 0; k < batches.size(); ++k) {
-        gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.draw_queries[k]);
-        const auto [first, count] = draw_range(batches[k]);
-        gl.DrawArrays(draw_mode, first, count);
-        gl.EndQuery(GL_PRIMITIVES_GENERATED);
-    }
-    c.check_error("the scene's draws");
     for (std::size_t k = 0; k < batches.size(); ++k) {
         const Batch& b = batches[k];
+        gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.query);
+        const auto [first, count] = draw_range(b);
+        gl.DrawArrays(draw_mode, first, count);
+        gl.EndQuery(GL_PRIMITIVES_GENERATED);
         GLuint generated = 0;
-        gl.GetQueryObjectuiv(objects.draw_queries[k], GL_QUERY_RESULT, &generated);
-        c.check_error("a scene draw's primitive count");
+        gl.GetQueryObjectuiv(objects.query, GL_QUERY_RESULT, &generated);
+        c.check_error("a scene draw");
         ++result.stats.draws;
         result.stats.triangles += generated;
         if (generated != predicted_of(k)) {
