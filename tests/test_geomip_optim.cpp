@@ -379,6 +379,18 @@ std::string wall_scene(const std::string& culling) {
            culling + "[shading]\nmodel = \"depth\"\n";
 }
 
+// The covered pixels of render a, and how many of them render b does not show alike (patch,
+// colour or depth differs).
+std::pair<std::size_t, std::size_t> covered_and_lost(const RenderResult& a, const RenderResult& b) {
+    std::size_t covered = 0, lost = 0;
+    for (std::size_t i = 0; i < a.patch_id.size(); ++i) {
+        if (a.patch_id[i] == kNoPixelId) continue;
+        ++covered;
+        if (b.patch_id[i] != a.patch_id[i] || b.colour[i] != a.colour[i] || b.depth[i] != a.depth[i]) ++lost;
+    }
+    return {covered, lost};
+}
+
 }  // namespace
 
 TEST(GeoMipPvs, TheRenderDropsTheHiddenPatchesAndNoPixelChanges) {
@@ -471,12 +483,7 @@ TEST(GeoMipPvs, ACameraAtACellSamplePointLosesNoPixelOnJacksboro) {
         culled.culling = CullingStage{false, "", pvs};
         const RenderResult a = render_scene(plain, options), b = render_scene(culled, options);
         ASSERT_EQ(a.patch_id.size(), b.patch_id.size());
-        std::size_t covered = 0, lost = 0;
-        for (std::size_t i = 0; i < a.patch_id.size(); ++i) {
-            if (a.patch_id[i] == kNoPixelId) continue;
-            ++covered;
-            if (b.patch_id[i] != a.patch_id[i] || b.colour[i] != a.colour[i] || b.depth[i] != a.depth[i]) ++lost;
-        }
+        const auto [covered, lost] = covered_and_lost(a, b);
         total_lost += lost;
         EXPECT_EQ(lost, 0u) << "eye " << eye.x << " " << eye.y << " " << eye.z;
         EXPECT_EQ(b.pipeline->culled.pvs, hidden);
@@ -540,12 +547,7 @@ TEST(GeoMipPvs, InTheCanyonThePvsCullsPatchesAndNoPixelChanges) {
         culled.culling = CullingStage{true, "", pvs};
         const RenderResult a = render_scene(plain, options), b = render_scene(culled, options);
         ASSERT_EQ(a.patch_id.size(), b.patch_id.size());
-        std::size_t covered = 0, lost = 0;
-        for (std::size_t i = 0; i < a.patch_id.size(); ++i) {
-            if (a.patch_id[i] == kNoPixelId) continue;
-            ++covered;
-            if (b.patch_id[i] != a.patch_id[i] || b.colour[i] != a.colour[i] || b.depth[i] != a.depth[i]) ++lost;
-        }
+        const auto [covered, lost] = covered_and_lost(a, b);
         EXPECT_EQ(a.colour, b.colour) << "eye " << eye.x << " " << eye.y << " " << eye.z;
         EXPECT_EQ(lost, 0u) << "eye " << eye.x << " " << eye.y << " " << eye.z;
         EXPECT_GT(covered, 0u);

@@ -724,18 +724,24 @@ struct NumberList {
     bool integers;      // every item a whole number
 };
 
+// std::stod of the number at the start of item, its length in used (0: none there).
+double leading_number(const std::string& item, std::size_t& used) {
+    used = 0;
+    try {
+        return std::stod(item, &used);
+    } catch (const std::exception&) {
+        used = 0;
+        return 0.0;
+    }
+}
+
 std::vector<double> parse_number_list(const std::string& text, const NumberList& rule) {
     const Where where = Where::in_file(rule.flag);
     const std::string noun = rule.noun;
     std::vector<double> values;
     const auto number = [&](const std::string& item, const std::string& whole) {
         std::size_t used = 0;
-        double x = 0.0;
-        try {
-            x = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
+        const double x = leading_number(item, used);
         const auto rest = item.find_first_not_of(" \t", used);
         if (used == 0 || rest != std::string::npos || (rule.integers && std::isfinite(x) && x != std::floor(x)))
             throw Error("'" + whole + "' is not a " + noun + " (" + rule.forms + ")", where);
@@ -782,12 +788,7 @@ std::vector<double> parse_error_bounds(const std::string& text) {
     if (text == "none") return bounds;
     for (const std::string& item : split_list(text, "--error-bounds")) {
         std::size_t used = 0;
-        double x = 0.0;
-        try {
-            x = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
+        const double x = leading_number(item, used);
         if (used == 0 || used != item.size())
             throw Error("'" + item + "' is not an error bound (a number of pixels, or none)", where);
         if (!(x >= 0.0 && x <= 1e6)) throw Error("'" + item + "': error bounds lie in [0, 1e6] pixels", where);
