@@ -196,6 +196,30 @@ PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, b
 
 // One triangle that left the clipper (or never needed it), with draw's edge flags
 // (bit 0: v0->v1, bit 1: v1->v2, bit 2: v2->v0), into primitives.
+// A filled triangle into a primitive (or none).
+void emit_filled(const Context& ctx, const raster::SetupCorner& a, const raster::SetupCorner& b,
+                 const raster::SetupCorner& c, std::uint32_t source, Chunk& chunk) {
+    raster::Face face = raster::Face::both;
+    if (ctx.settings.cull == CullMode::back) face = raster::Face::front_only;
+    if (ctx.settings.cull == CullMode::front) face = raster::Face::back_only;
+    Primitive prim;
+    ++chunk.stats.primitives;
+    switch (raster::setup_triangle(a, b, c, face, ctx.viewport, prim)) {
+        case raster::Setup::culled: ++chunk.stats.primitives_culled; break;
+        case raster::Setup::empty: break;  // set up, no pixel to draw
+        case raster::Setup::drawn:
+            prim.source = source;
+            chunk.prims.push_back(prim);
+            break;
+    }
+}
+
+raster::SetupCorner corner(const ClipVertex& v) {
+    return {&v.win, &v.bary, raster::snap_fixed(v.win.x), raster::snap_fixed(v.win.y)};
+}
+
+// One triangle that left the clipper (or never needed it), with draw's edge flags
+// (bit 0: v0->v1, bit 1: v1->v2, bit 2: v2->v0), into primitives.
 void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
                    const ClipVertex& c, unsigned edge_flags, std::uint32_t source, Chunk& chunk) {
     if (!finite4(a.win) || !finite4(b.win) || !finite4(c.win)) {
@@ -204,19 +228,7 @@ void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
     }
     const RasterSettings& s = ctx.settings;
     if (s.polygon_mode == PolygonMode::fill) {
-        raster::Face face = raster::Face::both;
-        if (s.cull == CullMode::back) face = raster::Face::front_only;
-        if (s.cull == CullMode::front) face = raster::Face::back_only;
-        Primitive prim;
-        ++chunk.stats.primitives;
-        switch (raster::setup_triangle(a, b, c, face, ctx.viewport, prim)) {
-            case raster::Setup::culled: ++chunk.stats.primitives_culled; break;
-            case raster::Setup::empty: break;  // set up, no pixel to draw
-            case raster::Setup::drawn:
-                prim.source = source;
-                chunk.prims.push_back(prim);
-                break;
-        }
+        emit_filled(ctx, corner(a), corner(b), corner(c), source, chunk);
         return;
     }
     // glPolygonMode(GL_LINE) runs draw's cull stage (draw_pipe_cull.c) on every triangle the
@@ -249,6 +261,9 @@ void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
     if ((edge_flags & 2u) && b.edgeflag) line(b, c);
 }
 
+// An unclipped triangle's corners weigh its own vertices.
+const glm::vec3 kUnitWeights[3] = {glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.0f, 0.0f, 1.0f)};
+
 // Sets up triangles [first, last) of tris, whose ids start at first_id (the chunk's first
 // triangle is first_id + 0), with their vertices prepared in `vertices`.
 void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
@@ -277,6 +292,16 @@ void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
                 ++chunk.stats.primitives_culled;
                 continue;
             }
+            // Unclipped: emit_triangle's path with the vertices themselves as corners.
+            if (!finite4(p0.win) || !finite4(p1.win) || !finite4(p2.win)) {
+                ++chunk.stats.primitives_culled;
+                continue;
+            }
+            emit_filled(ctx, {&p0.win, &kUnitWeights[0], p0.fixed_x, p0.fixed_y},
+                        {&p1.win, &kUnitWeights[1], p1.fixed_x, p1.fixed_y},
+                        {&p2.win, &kUnitWeights[2], p2.fixed_x, p2.fixed_y},
+                        static_cast<std::uint32_t>(first_id + (t - first)), chunk);
+            continue;
         }
         ClipVertex cv[3];
         bool finite = true;

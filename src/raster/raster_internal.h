@@ -77,7 +77,16 @@ struct Primitive {
 // attribute planes are not computed and prim holds only its box and edges), or drawn.
 enum class Face { both, front_only, back_only };
 enum class Setup { culled, empty, drawn };
-Setup setup_triangle(const ClipVertex& v0, const ClipVertex& v1, const ClipVertex& v2, Face face,
+// A corner as setup reads it: its window position, its weights of the source triangle's
+// vertices, and the window position snapped (snap_fixed of win.x and win.y). Pointers: an
+// unclipped triangle's corners are its prepared vertices, snapped once per vertex rather
+// than once per triangle, and their weights the unit vectors (no ClipVertex copies).
+struct SetupCorner {
+    const glm::vec4* win;
+    const glm::vec3* bary;
+    std::int32_t x, y;
+};
+Setup setup_triangle(const SetupCorner& v0, const SetupCorner& v1, const SetupCorner& v2, Face face,
                      const Viewport& viewport, Primitive& prim);
 
 // llvmpipe's one-pixel-wide line setup (try_setup_line, diamond-exit rule, non-rectangular).

@@ -98,15 +98,10 @@ bool small_box_has_coverage(const Primitive& p) {
 
 }  // namespace
 
-Setup setup_triangle(const ClipVertex& in0, const ClipVertex& in1, const ClipVertex& in2,
-                     Face face, const Viewport& vp, Primitive& prim) {
-    const ClipVertex* v[3] = {&in0, &in1, &in2};
-    // calc_fixed_position (SSE path): (v - pixel_offset) * FIXED_ONE, cvtps2dq.
-    std::int32_t x[3], y[3];
-    for (int i = 0; i < 3; ++i) {
-        x[i] = snap_fixed(v[i]->win.x);
-        y[i] = snap_fixed(v[i]->win.y);
-    }
+Setup setup_triangle(const SetupCorner& in0, const SetupCorner& in1, const SetupCorner& in2, Face face,
+                     const Viewport& vp, Primitive& prim) {
+    const SetupCorner* v[3] = {&in0, &in1, &in2};
+    std::int32_t x[3] = {in0.x, in1.x, in2.x}, y[3] = {in0.y, in1.y, in2.y};
     const std::int32_t dx01 = x[0] - x[1], dy01 = y[0] - y[1];
     const std::int32_t dx20 = x[2] - x[0], dy20 = y[2] - y[0];
     const std::int64_t area = static_cast<std::int64_t>(dx01) * dy20 - static_cast<std::int64_t>(dx20) * dy01;
@@ -127,17 +122,17 @@ Setup setup_triangle(const ClipVertex& in0, const ClipVertex& in1, const ClipVer
     if (!small_box_has_coverage(prim)) return Setup::empty;
 
     // Attribute planes from the unsnapped window positions (like lp_setup's coefficients).
-    const float fdx01 = v[0]->win.x - v[1]->win.x, fdy01 = v[0]->win.y - v[1]->win.y;
-    const float fdx20 = v[2]->win.x - v[0]->win.x, fdy20 = v[2]->win.y - v[0]->win.y;
+    const float fdx01 = v[0]->win->x - v[1]->win->x, fdy01 = v[0]->win->y - v[1]->win->y;
+    const float fdx20 = v[2]->win->x - v[0]->win->x, fdy20 = v[2]->win->y - v[0]->win->y;
     const float ooa = 1.0f / (fdx01 * fdy20 - fdx20 * fdy01);
-    prim.ox = v[0]->win.x - kPixelOffset;
-    prim.oy = v[0]->win.y - kPixelOffset;
-    const float z[3] = {v[0]->win.z, v[1]->win.z, v[2]->win.z};
-    const float oow[3] = {v[0]->win.w, v[1]->win.w, v[2]->win.w};
+    prim.ox = v[0]->win->x - kPixelOffset;
+    prim.oy = v[0]->win->y - kPixelOffset;
+    const float z[3] = {v[0]->win->z, v[1]->win->z, v[2]->win->z};
+    const float oow[3] = {v[0]->win->w, v[1]->win->w, v[2]->win->w};
     triangle_plane(z, ooa, fdx01, fdy01, fdx20, fdy20, prim.z);
     triangle_plane(oow, ooa, fdx01, fdy01, fdx20, fdy20, prim.oow);
     for (int k = 0; k < 3; ++k) {
-        const float bw[3] = {v[0]->bary[k] * oow[0], v[1]->bary[k] * oow[1], v[2]->bary[k] * oow[2]};
+        const float bw[3] = {(*v[0]->bary)[k] * oow[0], (*v[1]->bary)[k] * oow[1], (*v[2]->bary)[k] * oow[2]};
         triangle_plane(bw, ooa, fdx01, fdy01, fdx20, fdy20, prim.bw[k]);
     }
     return Setup::drawn;
