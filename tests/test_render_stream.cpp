@@ -286,6 +286,37 @@ TEST(RenderStream, ProvenanceMatchesTheWholeSurface) {
     }
 }
 
+// RenderOptions::provenance off leaves patch_id, tess_coord and level empty and changes no
+// other buffer, streamed or whole, filled or with lines; pixel_provenance then refuses.
+TEST(RenderStream, WithoutProvenanceTheOtherBuffersAreTheSame) {
+    for (const char* name : {"thesis-all-10.toml", "jacksboro.toml", "pn-triangles.toml", "terrain-pom.toml"}) {
+        for (const tessref::RenderMode mode :
+             {tessref::RenderMode::fill, tessref::RenderMode::fill_with_wireframe, tessref::RenderMode::wireframe}) {
+            for (const bool keep : {false, true}) {
+                SCOPED_TRACE(std::string(name) + " mode " + std::to_string(static_cast<int>(mode)) + " keep " +
+                             std::to_string(keep));
+                const tessref::Scene scene = tessref::load_scene((kScenes / name).string());
+                tessref::RenderOptions options;
+                options.size = {160, 100};
+                options.mode = mode;
+                options.keep_surface = keep;
+                const tessref::RenderResult with = tessref::render_scene(scene, options);
+                options.provenance = false;
+                const tessref::RenderResult without = tessref::render_scene(scene, options);
+                EXPECT_EQ(with.patch_id.size(), 160u * 100u);
+                EXPECT_TRUE(without.patch_id.empty() && without.tess_coord.empty() && without.level.empty());
+                EXPECT_GT(with.stats.covered_pixels, 0u);
+                EXPECT_TRUE(same_bytes(with.colour, without.colour)) << "colour";
+                EXPECT_TRUE(same_bytes(with.depth, without.depth)) << "depth";
+                EXPECT_TRUE(same_bytes(with.triangle_id, without.triangle_id)) << "triangle_id";
+                EXPECT_TRUE(same_bytes(with.barycentric, without.barycentric)) << "barycentric";
+                EXPECT_EQ(with.stats.covered_pixels, without.stats.covered_pixels);
+                EXPECT_THROW(tessref::pixel_provenance(without, 80, 50), tessref::Error);
+            }
+        }
+    }
+}
+
 // PatchStream::emit with VertexNormals::later writes everything but the vertex normals, and
 // evaluate_points gives each vertex the normal emit() writes with VertexNormals::now: the
 // streamed render relies on both to compute normals only where a triangle wins a pixel.

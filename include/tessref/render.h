@@ -91,6 +91,13 @@ struct RenderOptions {
     // result keeps the levels only. The image and every per-pixel buffer are the same
     // either way (tests/test_render_stream.cpp).
     bool keep_surface = false;
+    // Fill RenderResult's provenance buffers patch_id, tess_coord and level. Off, they stay
+    // empty and the image, depth, triangle ids and weights are the same: the resolve then
+    // reads only what the fragment stage needs of each triangle (a PNG needs no more; on the
+    // 64 x 64-patch level-16 bench terrain the provenance reads were a third of the
+    // resolve's time, mostly cache misses into the patches' tess coords and ids).
+    // pixel_provenance needs them.
+    bool provenance = true;
     // Called from the calling thread with a stage name and the fraction of it done; may be
     // empty.
     std::function<void(std::string_view stage, double fraction)> progress;

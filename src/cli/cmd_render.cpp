@@ -66,6 +66,8 @@ int run_render(const RenderCommandOptions& options) {
     render_options.camera_relative = options.camera_relative;
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.precision = precision;
+    // The provenance buffers only for the channels that write them.
+    render_options.provenance = aovs.patch || aovs.tesscoord || aovs.level;
     render_options.mode = options.wireframe           ? RenderMode::wireframe
                           : options.overlay_wireframe ? RenderMode::fill_with_wireframe
                                                       : RenderMode::fill;

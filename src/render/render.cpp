@@ -24,14 +24,16 @@ using render_detail::window_depth;
 
 namespace render_detail {
 
-void allocate(RenderResult& r, int width, int height, bool visibility) {
+void allocate(RenderResult& r, int width, int height, bool visibility, bool provenance) {
     r.width = width;
     r.height = height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     r.colour.assign(n, r.shading.background);
-    r.patch_id.assign(n, kNoPixelId);
-    r.tess_coord.assign(n, glm::vec3(0.0f));
-    r.level.assign(n, std::numeric_limits<float>::quiet_NaN());
+    if (provenance) {
+        r.patch_id.assign(n, kNoPixelId);
+        r.tess_coord.assign(n, glm::vec3(0.0f));
+        r.level.assign(n, std::numeric_limits<float>::quiet_NaN());
+    }
     if (!visibility) return;
     r.depth.assign(n, 1.0f);
     r.triangle_id.assign(n, kNoPixelId);
@@ -197,7 +199,7 @@ float level_of(const SurfaceMesh& mesh, const std::vector<TessLevels>& levels, D
 // derivatives and level.
 template <typename Owns>
 void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<TessLevels>& levels, Domain domain,
-             const FragmentNeeds& needs, bool derivatives, bool line_derivatives, int quad_row_begin,
+             const FragmentNeeds& needs, bool derivatives, bool line_derivatives, bool provenance, int quad_row_begin,
              int quad_row_end, const Owns& owns, int x_begin = 0, int x_end = -1) {
     const int width = result.width, height = result.height;
     if (x_end < 0) x_end = width;
@@ -217,20 +219,22 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                     if (!view_of) continue;
                     const SurfaceView& view = *view_of;
                     const glm::vec3 b = fb.barycentric[i];
-                    const auto& t = view.mesh.triangles[tri];
-                    result.patch_id[i] = view.mesh.patch_ids[t[0]];
-                    result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] + b[1] * view.mesh.tess_coords[t[1]] +
-                                           b[2] * view.mesh.tess_coords[t[2]];
+                    if (provenance) {
+                        const auto& t = view.mesh.triangles[tri];
+                        result.patch_id[i] = view.mesh.patch_ids[t[0]];
+                        result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] +
+                                               b[1] * view.mesh.tess_coords[t[1]] + b[2] * view.mesh.tess_coords[t[2]];
+                    }
                     int k = 0;
                     while (k < cached_count && cached_triangle[k] != id) ++k;
                     if (k == cached_count) {
                         cached_triangle[k] = id;
-                        cached_level[k] = level_of(view.mesh, levels, domain, tri);
+                        if (provenance) cached_level[k] = level_of(view.mesh, levels, domain, tri);
                         if (derivatives && !line_derivatives)
                             cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
                         ++cached_count;
                     }
-                    result.level[i] = cached_level[k];
+                    if (provenance) result.level[i] = cached_level[k];
                     FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
                     if (line_derivatives) {
                         // Per pixel: two edges of one triangle in a quad are two lines.
@@ -333,7 +337,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
 
     const auto buffers_start = Clock::now();
     // The framebuffer's depth, ids and weights become the result's at the end.
-    render_detail::allocate(result, width, height, false);
+    render_detail::allocate(result, width, height, false, options.provenance);
     RasterSettings settings;
     settings.depth_func = DepthFunc::less;
     Framebuffer fb = Framebuffer::create_visibility(width, height);
@@ -470,7 +474,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         }
         tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
             const Rasterizer::Rect& rect = drawn[r];
-            resolve(result, fb, pipe->levels, domain, needs, derivatives, false, rect.row / 2,
+            resolve(result, fb, pipe->levels, domain, needs, derivatives, false, options.provenance, rect.row / 2,
                     (rect.row + rect.height + 1) / 2,
                     [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
                         const auto [k, tri] = chunk_of(id);
@@ -587,12 +591,13 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     // ---- resolve and shade every pixel -----------------------------------------------------
     start = Clock::now();
     progress("shading", 0.0);
-    render_detail::allocate(result, width, height, false);  // fb's visibility at the end
+    render_detail::allocate(result, width, height, false, options.provenance);  // fb's visibility at the end
     const SurfaceView view{mesh, pipe.face_normals, clip, face_normals};  // world positions
     const Domain domain = scene.generator.domain;
     result.domain = domain;
     tessref::parallel_for(tbb::blocked_range<int>(0, (height + 1) / 2), [&](const tbb::blocked_range<int>& rows) {
-        resolve(result, fb, pipe.levels, domain, needs, derivatives, line_derivatives, rows.begin(), rows.end(),
+        resolve(result, fb, pipe.levels, domain, needs, derivatives, line_derivatives, options.provenance, rows.begin(),
+                rows.end(),
                 [&view](std::uint32_t id) { return std::pair{&view, id}; });
     });
 
@@ -660,6 +665,9 @@ PixelProvenance pixel_provenance(const RenderResult& result, int x, int y) {
         throw Error("pixel " + std::to_string(x) + "," + std::to_string(y) + " is outside the " +
                         std::to_string(result.width) + "x" + std::to_string(result.height) + " image",
                     Where::at_key("pixel"));
+    if (result.patch_id.size() != result.colour.size())
+        throw Error("the image was rendered without its provenance buffers (RenderOptions::provenance)",
+                    Where::at_key("provenance"));
     PixelProvenance p;
     p.x = x;
     p.y = y;

@@ -64,8 +64,9 @@ inline QuadPixels quad_of(int x, int row) { return {x & ~1, row & ~1}; }
 // Resizes and clears the per-pixel buffers of `result` for a width x height image; without
 // `visibility`, all but depth, triangle_id and barycentric, which the rasterizing renderer
 // takes from its framebuffer when done (take_visibility: the same values, moved, not
-// allocated and copied a second time).
-void allocate(RenderResult& result, int width, int height, bool visibility = true);
+// allocated and copied a second time); without `provenance`, not patch_id, tess_coord and
+// level (RenderOptions::provenance).
+void allocate(RenderResult& result, int width, int height, bool visibility = true, bool provenance = true);
 void take_visibility(RenderResult& result, Framebuffer& fb);
 
 // The camera with the image size applied (RenderOptions::size), and the size checked.
