@@ -137,8 +137,8 @@ TEST(RenderStream, DeferredVertexNormalsMatchTheWholeSurfacePass) {
     }
 }
 
-// A surface large enough for several batches (2.0 M triangles at level 63: two batches of
-// 2^20) at the camera's full size.
+// A surface large enough for many batches (2.0 M triangles at level 63: about 31 batches
+// of 2^16) at the camera's full size.
 TEST(RenderStream, ManyBatchesMatchAtFullSize) {
     const tessref::Scene scene = tessref::load_scene((kScenes / "thesis-constant-64.toml").string());
     compare_paths(scene, {});
