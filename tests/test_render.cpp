@@ -20,6 +20,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -258,6 +259,34 @@ TEST(RenderLevel, HeatColoursFollowLog2Level) {
     const glm::vec3 l2 = tessref::level_heat_colour(2.0f);              // t = 1/6: 2/3 of blue -> cyan
     EXPECT_NEAR(l2.g, 2.0f / 3.0f, 1e-6f);
     EXPECT_EQ(tessref::level_heat_colour(std::nanf("")), glm::vec3(0.0f));
+}
+
+// to_rgba8 is GL's unorm8 conversion of a colour: NaN as 0, clamped to [0, 1], times 255 in
+// float, rounded to nearest (ties to even, as lrint does under the default rounding mode).
+// Every code's neighbourhood: k/255 and the midpoints (k + 0.5)/255 a float step either side.
+TEST(RenderImage, Rgba8IsTheUnorm8ConversionOfEveryChannel) {
+    std::vector<float> values = {std::nanf(""), -std::numeric_limits<float>::infinity(),
+                                 std::numeric_limits<float>::infinity(), -0.0f, -1e-30f, 1.0f + 1e-7f, 2.0f, 1e30f};
+    for (int k = 0; k <= 255; ++k) {
+        for (const float centre : {static_cast<float>(k) / 255.0f, (static_cast<float>(k) + 0.5f) / 255.0f}) {
+            float v = centre;
+            for (int step = 0; step < 3; ++step) v = std::nextafter(v, -1.0f);
+            for (int step = 0; step < 7; ++step, v = std::nextafter(v, 2.0f)) values.push_back(v);
+        }
+    }
+    while (values.size() % 4 != 0) values.push_back(0.5f);
+    tessref::RenderResult image;
+    image.width = static_cast<int>(values.size() / 4);
+    image.height = 1;
+    for (std::size_t i = 0; i < values.size(); i += 4)
+        image.colour.emplace_back(values[i], values[i + 1], values[i + 2], values[i + 3]);
+    const std::vector<std::uint8_t> codes = tessref::to_rgba8(image);
+    ASSERT_EQ(codes.size(), values.size());
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        const float v = values[i];
+        const float clamped = std::isnan(v) ? 0.0f : std::min(std::max(v, 0.0f), 1.0f);
+        EXPECT_EQ(codes[i], static_cast<std::uint8_t>(std::lrint(clamped * 255.0f))) << "value " << v;
+    }
 }
 
 // ---- the flat height field: an analytic plane --------------------------------------------

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "common/unorm8.h"
 #include "image/image_io.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
@@ -69,10 +70,7 @@ void write_float_image(const FloatImage& picture, const std::string& path) {
     }
     // round(v * 255) of v clamped to [0, 1], as GL's unorm8 conversion (render.h to_rgba8).
     std::vector<std::uint8_t> codes(picture.samples.size());
-    for (std::size_t i = 0; i < codes.size(); ++i) {
-        const float v = picture.samples[i];
-        codes[i] = static_cast<std::uint8_t>(std::lrint((std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f)) * 255.0f));
-    }
+    for (std::size_t i = 0; i < codes.size(); ++i) codes[i] = unorm8(picture.samples[i]);
     view.type = image::SampleType::uint8;
     view.samples = codes.data();
     image::write_image(path, view, options);

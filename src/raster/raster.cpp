@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "common/parallel.h"
+#include "common/unorm8.h"
 
 #include "raster/raster_internal.h"
 #include "tessref/error.h"
@@ -93,11 +94,7 @@ std::int32_t snap_subpixel(float window_coordinate) {
 std::vector<std::uint8_t> to_rgba8(const Framebuffer& fb) {
     std::vector<std::uint8_t> out(fb.color.size() * 4);
     for (std::size_t i = 0; i < fb.color.size(); ++i) {
-        for (int c = 0; c < 4; ++c) {
-            float v = fb.color[i][c];
-            v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-            out[i * 4 + static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::lrint(v * 255.0f));
-        }
+        for (int c = 0; c < 4; ++c) out[i * 4 + static_cast<std::size_t>(c)] = unorm8(fb.color[i][c]);
     }
     return out;
 }

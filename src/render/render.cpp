@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "common/parallel.h"
+#include "common/unorm8.h"
 
 #include "render/render_internal.h"
 #include "tessref/compare.h"
@@ -732,14 +733,9 @@ std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
     // In parallel: it sits between the render and the image write, where nothing else runs.
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, result.colour.size(), 65536),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                                  for (int c = 0; c < 4; ++c) {
-                                      float v = result.colour[i][c];
-                                      v = std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f);
-                                      out[i * 4 + static_cast<std::size_t>(c)] =
-                                          static_cast<std::uint8_t>(std::lrint(v * 255.0f));
-                                  }
-                              }
+                              for (std::size_t i = r.begin(); i < r.end(); ++i)
+                                  for (int c = 0; c < 4; ++c)
+                                      out[i * 4 + static_cast<std::size_t>(c)] = unorm8(result.colour[i][c]);
                           });
     return out;
 }

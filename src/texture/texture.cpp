@@ -13,14 +13,11 @@
 
 #include <algorithm>
 #include <cmath>
-
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
 #include <cstdint>
 #include <string>
 #include <utility>
 
+#include "common/unorm8.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
 #include "tessref/texture.h"
@@ -65,14 +62,6 @@ inline float min_of(float u, float hi) { return u < hi ? u : hi; }
 inline float floor_small(float u) {
     const float t = static_cast<float>(static_cast<int>(u));
     return t > u ? t - 1.0f : t;
-}
-// static_cast<int>(std::nearbyint(x)) under the default rounding mode, for |x| < 2^31.
-inline int round_even(float x) {
-#if defined(__SSE2__)
-    return _mm_cvtss_si32(_mm_set_ss(x));
-#else
-    return static_cast<int>(std::nearbyint(x));
-#endif
 }
 
 struct AxisF {
