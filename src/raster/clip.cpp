@@ -37,35 +37,7 @@ Viewport make_viewport(int width, int height) {
     return vp;
 }
 
-glm::vec4 window_position(const glm::vec4& clip, const Viewport& vp, bool fused) {
-    const float oow = 1.0f / clip.w;
-    glm::vec4 win;
-    if (fused) {
-        // draw_llvm.c generate_viewport: out * (1/w), then lp_build_fmuladd(out, scale, trans),
-        // which LLVM fuses on a host with FMA.
-        for (int k = 0; k < 3; ++k) win[k] = std::fma(clip[k] * oow, vp.scale[k], vp.translate[k]);
-    } else {
-        // draw_cliptest_tmp.h / draw_pipe_clip.c interp(), C compiled without FMA:
-        // w = 1.0f / pos[3]; pos * w * scale + trans.
-        win.x = clip.x * oow * vp.scale[0] + vp.translate[0];
-        win.y = clip.y * oow * vp.scale[1] + vp.translate[1];
-        win.z = clip.z * oow * vp.scale[2] + vp.translate[2];
-    }
-    win.w = oow;
-    return win;
-}
 
-unsigned compute_clipmask(const glm::vec4& p) {
-    // draw_cliptest_tmp.h with DO_CLIP_XY | DO_CLIP_FULL_Z (GL's -1..1 depth).
-    unsigned mask = 0;
-    if (-p.x + p.w < 0) mask |= 1u << 0;
-    if (p.x + p.w < 0) mask |= 1u << 1;
-    if (-p.y + p.w < 0) mask |= 1u << 2;
-    if (p.y + p.w < 0) mask |= 1u << 3;
-    if (p.z + p.w < 0) mask |= 1u << 4;
-    if (-p.z + p.w < 0) mask |= 1u << 5;
-    return mask;
-}
 
 namespace {
 

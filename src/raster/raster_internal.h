@@ -7,7 +7,13 @@
 #pragma once
 
 #include <algorithm>
+#include <climits>
+#include <cmath>
 #include <cstdint>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include <glm/glm.hpp>
 
@@ -35,9 +41,37 @@ struct ClipVertex {
 // Window position as draw computes it: (p * (1/w)) * scale + translate, 1/w in .w; fused:
 // the last multiply-add as one fma (llvmpipe's vertex-shader JIT), else C's two roundings
 // (draw's post-shader path behind tessellation/geometry shaders, and the clipper).
-glm::vec4 window_position(const glm::vec4& clip, const Viewport& viewport, bool fused);
+// Inline, as the next two and cvt_rne: the rasterizer runs them on every vertex.
+inline glm::vec4 window_position(const glm::vec4& clip, const Viewport& vp, bool fused) {
+    const float oow = 1.0f / clip.w;
+    glm::vec4 win;
+    if (fused) {
+        // draw_llvm.c generate_viewport: out * (1/w), then lp_build_fmuladd(out, scale, trans),
+        // which LLVM fuses on a host with FMA.
+        for (int k = 0; k < 3; ++k) win[k] = std::fma(clip[k] * oow, vp.scale[k], vp.translate[k]);
+    } else {
+        // draw_cliptest_tmp.h / draw_pipe_clip.c interp(), C compiled without FMA:
+        // w = 1.0f / pos[3]; pos * w * scale + trans.
+        win.x = clip.x * oow * vp.scale[0] + vp.translate[0];
+        win.y = clip.y * oow * vp.scale[1] + vp.translate[1];
+        win.z = clip.z * oow * vp.scale[2] + vp.translate[2];
+    }
+    win.w = oow;
+    return win;
+}
 // draw's cliptest bits: 0 x>w, 1 x<-w, 2 y>w, 3 y<-w, 4 z<-w, 5 z>w.
-unsigned compute_clipmask(const glm::vec4& clip);
+inline unsigned compute_clipmask(const glm::vec4& p) {
+    // draw_cliptest_tmp.h with DO_CLIP_XY | DO_CLIP_FULL_Z (GL's -1..1 depth).
+    unsigned mask = 0;
+    if (-p.x + p.w < 0) mask |= 1u << 0;
+    if (p.x + p.w < 0) mask |= 1u << 1;
+    if (-p.y + p.w < 0) mask |= 1u << 2;
+    if (p.y + p.w < 0) mask |= 1u << 3;
+    if (p.z + p.w < 0) mask |= 1u << 4;
+    if (-p.z + p.w < 0) mask |= 1u << 5;
+    return mask;
+}
+
 
 // Largest polygon the clipper can produce (Mesa's MAX_CLIPPED_VERTICES with no user planes
 // is larger; 3 + 6 planes is what a convex clip of a triangle can reach, plus slack for
@@ -131,7 +165,16 @@ inline bool fixed_bbox_has_pixels(const std::int32_t (&x)[3], const std::int32_t
 
 // Round-to-nearest-even as SSE's cvtps2dq (out of range: INT32_MIN), and Mesa's util_iround
 // on x86-64 ((int)(f + 0.5f), in float).
-std::int32_t cvt_rne(float v);
+inline std::int32_t cvt_rne(float v) {
+#if defined(__SSE2__)
+    // The instruction itself (round to nearest even under the default MXCSR; out of range
+    // and NaN give INT32_MIN), without a libm call per vertex.
+    return _mm_cvtss_si32(_mm_set_ss(v));
+#else
+    if (!(std::fabs(v) < 2147483648.0f)) return INT32_MIN;  // SSE "integer indefinite"
+    return static_cast<std::int32_t>(std::nearbyint(v));
+#endif
+}
 std::int32_t util_iround(float f);
 
 // A window coordinate in llvmpipe's 8-bit sub-pixel fixed point (calc_fixed_position:

@@ -6,10 +6,6 @@
 #include <cmath>
 #include <utility>
 
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
-
 #include "raster/raster_internal.h"
 
 namespace tessref::raster {
@@ -56,16 +52,6 @@ void triangle_plane(const float a[3], float ooa, float dx01, float dy01, float d
 
 }  // namespace
 
-std::int32_t cvt_rne(float v) {
-#if defined(__SSE2__)
-    // The instruction itself (round to nearest even under the default MXCSR; out of range
-    // and NaN give INT32_MIN), without a libm call per vertex.
-    return _mm_cvtss_si32(_mm_set_ss(v));
-#else
-    if (!(std::fabs(v) < 2147483648.0f)) return INT32_MIN;  // SSE "integer indefinite"
-    return static_cast<std::int32_t>(std::nearbyint(v));
-#endif
-}
 
 std::int32_t util_iround(float f) {
     if (f >= 0.0f) {
