@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 
 #include <OpenImageIO/imageio.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <bit>
@@ -897,6 +898,50 @@ TEST(BadInput, NanSampleIsMissingInEveryFloatFormat) {
     write_image(half, 3, 2, 1, OIIO::TypeDesc::HALF, std::vector<std::uint16_t>{0x3400, 0x3400, 0x3400, 0x3400,
                                                                                0x3400, 0x7e00}.data());
     expect_error([&] { tessref::load_height_field(half); }, half, "texel (2, 1) is NaN");
+}
+
+// The mip pyramid and the thesis normal map are built rows in parallel: every level, every
+// format and both mipmap rules hold the same texels, codes and doubles with one thread as
+// with all of them (odd and non-power-of-two sizes, a random height field).
+TEST(TextureBuild, OneThreadBuildsTheSamePyramidAndNormalMap) {
+    const int w = 173, h = 94;
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> code(0, 65535);
+    std::vector<std::uint16_t> c16(static_cast<std::size_t>(w) * h);
+    for (auto& c : c16) c = static_cast<std::uint16_t>(code(rng));
+    std::vector<std::uint8_t> c8(c16.size() * 3);
+    for (auto& c : c8) c = static_cast<std::uint8_t>(code(rng) & 0xFF);
+    std::vector<float> f(c16.size() * 2);
+    for (auto& v : f) v = static_cast<float>(code(rng)) / 65535.0f;
+    auto build_all = [&] {
+        std::vector<Texture> out;
+        for (const MipmapRule rule : {MipmapRule::llvmpipe_blit, MipmapRule::mesa_software_box}) {
+            out.push_back(Texture::from_unorm16(w, h, 1, c16, rule));
+            out.push_back(Texture::from_unorm8(w, h, 3, c8, rule));
+            out.push_back(Texture::from_float(w, h, 2, f, rule));
+            out.push_back(tessref::thesis_normal_map(out.front(), 0.7, 13.0, rule));
+        }
+        return out;
+    };
+    const std::vector<Texture> many = build_all();
+    std::vector<Texture> one;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = build_all();
+    }
+    ASSERT_EQ(one.size(), many.size());
+    for (std::size_t t = 0; t < one.size(); ++t) {
+        SCOPED_TRACE("texture " + std::to_string(t));
+        ASSERT_EQ(one[t].level_count(), many[t].level_count());
+        ASSERT_GT(one[t].level_count(), 7);
+        for (int lod = 0; lod < one[t].level_count(); ++lod) {
+            const tessref::TextureLevel& a = one[t].level(lod);
+            const tessref::TextureLevel& b = many[t].level(lod);
+            EXPECT_TRUE(a.texels == b.texels) << "lod " << lod;  // NaN-free: == is bitwise here
+            EXPECT_TRUE(a.unorm8 == b.unorm8) << "lod " << lod;
+            EXPECT_TRUE(a.exact == b.exact) << "lod " << lod;
+        }
+    }
 }
 
 // ---- normals ------------------------------------------------------------------------------

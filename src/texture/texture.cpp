@@ -17,6 +17,7 @@
 #include <string>
 #include <utility>
 
+#include "common/parallel.h"
 #include "common/unorm8.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -319,7 +320,8 @@ TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format
     dst.exact.resize(count);
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
     const BlitSetup setup(dst_width, dst_height);
-    for (int j = 0; j < dst_height; ++j) {
+    // Rows in parallel: each destination texel is a function of the source level alone.
+    tessref::parallel_for(0, dst_height, [&](int j) {
         for (int i = 0; i < dst_width; ++i) {
             const glm::vec2 st = setup.coordinate(i, j);
             const std::size_t base = index_of(dst, channels, i, j, 0);
@@ -348,7 +350,7 @@ TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format
             bilinear_exact(src, format, src_lod, channels, ideal, exact);
             for (int c = 0; c < channels; ++c) dst.exact[base + c] = exact[c];
         }
-    }
+    });
     return dst;
 }
 
@@ -369,7 +371,7 @@ TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelForma
     const int col_stride = src.width == dst_width ? 1 : 2;
     const int row_b0 = src.height == dst_height ? 0 : 1;
     const int row_stride = src.height == dst_height ? 1 : 2;
-    for (int row = 0; row < dst_height; ++row) {
+    tessref::parallel_for(0, dst_height, [&](int row) {  // rows in parallel, as blit_level
         const int ya = row * row_stride;
         const int yb = ya + row_b0;
         for (int i = 0; i < dst_width; ++i) {
@@ -400,7 +402,7 @@ TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelForma
                 dst.exact[d] = 0.5 * (top + bottom);
             }
         }
-    }
+    });
     return dst;
 }
 
