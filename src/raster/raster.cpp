@@ -681,12 +681,18 @@ void Rasterizer::draw(std::span<const RasterChunk> chunks) {
         vertices.resize(chunk.positions.size());
         for (std::size_t i = 0; i < chunk.positions.size(); ++i)
             vertices[i] = prepare_vertex(chunk.positions[i], s.ctx.viewport, s.fused);
-        for (const auto& tri : chunk.triangles)
-            for (const std::uint32_t v : tri)
-                if (v >= chunk.positions.size())
-                    throw Error("vertex index " + std::to_string(v) + " out of range (" +
-                                    std::to_string(chunk.positions.size()) + " vertices in the chunk)",
-                                Where::at_key("triangles"));
+        // The largest index first (a loop without an exit, which the compiler vectorizes),
+        // then the first one out of range only when there is one.
+        std::uint32_t largest = 0;
+        for (const auto& tri : chunk.triangles) largest = std::max({largest, tri[0], tri[1], tri[2]});
+        if (!chunk.triangles.empty() && largest >= chunk.positions.size()) {
+            for (const auto& tri : chunk.triangles)
+                for (const std::uint32_t v : tri)
+                    if (v >= chunk.positions.size())
+                        throw Error("vertex index " + std::to_string(v) + " out of range (" +
+                                        std::to_string(chunk.positions.size()) + " vertices in the chunk)",
+                                    Where::at_key("triangles"));
+        }
         setup_chunk(s.ctx, vertices, chunk.triangles, 0, chunk.triangles.size(), chunk.first_id,
                     s.chunks[used + c]);
     });

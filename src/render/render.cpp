@@ -401,13 +401,15 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
                             normals_mode);
             if (defer_normals) c.wins.assign(vertices, 0);
             c.clip.resize(vertices);
-            c.finite = true;
+            bool finite = true;
             for (std::size_t v = 0; v < vertices; ++v) {
                 const glm::dvec3& q = m.positions[v];
-                c.finite = c.finite && std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+                // No short circuit: a loop without branches.
+                finite &= std::isfinite(q.x) & std::isfinite(q.y) & std::isfinite(q.z);
                 // The renderer's gl_Position of the evaluation's float position.
                 c.clip[v] = gl_position(mvp, glm::vec3(q));
             }
+            c.finite = finite;
         });
         for (std::size_t k = 0; k < used; ++k) {
             if (!chunks[k].finite) {
