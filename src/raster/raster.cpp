@@ -111,6 +111,7 @@ struct PreparedVertex {
     glm::vec4 clip;
     glm::vec4 win;
     std::int32_t fixed_x, fixed_y;  // the window position snapped as setup snaps it
+    raster::VertexPixelBounds bounds;  // of (fixed_x, fixed_y)
     unsigned clipmask;
     bool finite;
 };
@@ -188,6 +189,7 @@ PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, b
     v.win = raster::window_position(clip, viewport, fused);
     v.fixed_x = raster::snap_fixed(v.win.x);
     v.fixed_y = raster::snap_fixed(v.win.y);
+    v.bounds = raster::vertex_pixel_bounds(v.fixed_x, v.fixed_y);
     return v;
 }
 
@@ -282,9 +284,7 @@ void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
             // Most triangles of a finely tessellated surface hold no pixel centre: the
             // snapped bounding box (setup's own test, on positions snapped once per vertex)
             // rejects them before any setup. The same triangles setup_triangle culls.
-            const std::int32_t x[3] = {p0.fixed_x, p1.fixed_x, p2.fixed_x};
-            const std::int32_t y[3] = {p0.fixed_y, p1.fixed_y, p2.fixed_y};
-            if (!raster::fixed_bbox_has_pixels(x, y, ctx.viewport)) {
+            if (!raster::bounds_have_pixels(p0.bounds, p1.bounds, p2.bounds, ctx.viewport)) {
                 ++chunk.stats.primitives;
                 ++chunk.stats.primitives_culled;
                 continue;

@@ -155,13 +155,33 @@ inline bool clamp_bbox(Primitive& prim, const Viewport& vp) {
     return prim.x0 <= prim.x1 && prim.y0 <= prim.y1;
 }
 
-// Whether the box of three snapped vertices holds a pixel of the viewport: a triangle whose
-// box holds none covers no pixel (setup culls it).
-inline bool fixed_bbox_has_pixels(const std::int32_t (&x)[3], const std::int32_t (&y)[3], const Viewport& viewport) {
-    Primitive prim;
-    triangle_bbox(x, y, prim);
-    return clamp_bbox(prim, viewport);
+// triangle_bbox's four bounds are each a non-decreasing function of one coordinate of one
+// vertex (min_x, max_x, min_y or max_y), so the box of a triangle is the min (x0, y0) and
+// max (x1, y1) of its vertices' own bounds: the rasterizer computes them once per vertex
+// rather than once per triangle (about two triangles a vertex). In 64 bits: the bounds of
+// an out-of-range snap (INT32_MIN) stay defined.
+struct VertexPixelBounds {
+    std::int32_t x0, x1, y0, y1;
+};
+inline VertexPixelBounds vertex_pixel_bounds(std::int32_t x, std::int32_t y) {
+    const std::int64_t X = x, Y = y, one = kFixedOne;
+    const int adj = 1;
+    return {static_cast<std::int32_t>(std::max(X >> kFixedOrder, (X + one - 1) >> kFixedOrder)),
+            static_cast<std::int32_t>((X - 1) >> kFixedOrder),
+            static_cast<std::int32_t>(std::max((Y + adj) >> kFixedOrder, (Y + one) >> kFixedOrder)),
+            static_cast<std::int32_t>((Y - 1 + adj) >> kFixedOrder)};
 }
+// Whether the box of a triangle with these vertices' bounds holds a pixel of the viewport:
+// a triangle whose box holds none covers no pixel (setup culls it).
+inline bool bounds_have_pixels(const VertexPixelBounds& a, const VertexPixelBounds& b, const VertexPixelBounds& c,
+                               const Viewport& viewport) {
+    const std::int32_t x0 = std::max(std::min(std::min(a.x0, b.x0), c.x0), 0);
+    const std::int32_t x1 = std::min(std::max(std::max(a.x1, b.x1), c.x1), viewport.width - 1);
+    const std::int32_t y0 = std::max(std::min(std::min(a.y0, b.y0), c.y0), 0);
+    const std::int32_t y1 = std::min(std::max(std::max(a.y1, b.y1), c.y1), viewport.height - 1);
+    return x0 <= x1 && y0 <= y1;
+}
+
 
 // Round-to-nearest-even as SSE's cvtps2dq (out of range: INT32_MIN), and Mesa's util_iround
 // on x86-64 ((int)(f + 0.5f), in float).
