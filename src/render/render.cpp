@@ -644,12 +644,14 @@ std::uint64_t estimate_render_memory(glm::ivec2 size, RenderMode mode, bool rayt
     // surface (wireframe, smooth normals, a geomipmapped terrain, keep_surface) keeps a full
     // Framebuffer, 57 bytes a pixel, and the RenderResult, 56, while shading; the streamed
     // fill render holds only a visibility framebuffer (depth, id, weights: 20 bytes) that
-    // becomes part of the 56-byte result. The estimate takes the larger and errs high for
+    // becomes part of the 56-byte result (36 without the provenance buffers a PNG does not
+    // need, RenderOptions::provenance). The estimate takes the larger and errs high for
     // the streamed render. Measured peaks, `/usr/bin/time -f %M tessref render SCENE --size S
     // -o x.png --threads 1` (maximum resident set), 2048x2048 and 4096x4096:
-    // data/scenes/thesis-map-4.toml (streamed) 269 and 990 MiB, 60 bytes/pixel above a base
-    // of about 29 MiB; data/scenes/jacksboro-geomipmap.toml (materialized) 429 and 1594 MiB,
-    // 97 bytes/pixel above about 41 MiB. Before the streamed render (same command,
+    // data/scenes/thesis-map-4.toml (streamed) 189 and 670 MiB, 40 bytes/pixel above a base
+    // of about 29 MiB; data/scenes/jacksboro-geomipmap.toml (materialized) 349 and 1275 MiB,
+    // 77 bytes/pixel above about 40 MiB (60 and 97 bytes/pixel with the provenance buffers,
+    // as an EXR with their channels still takes). Before the streamed render (same command,
     // thesis-map-4): 117 bytes/pixel; .exr with every AOV 117.4 bytes/pixel (the write phase,
     // RenderResult + 14 float channels, stays under the render phase); --overlay-wireframe
     // +57 bytes/pixel (the lines' Framebuffer); --wireframe of a textured scene +24
