@@ -21,6 +21,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/blocked_range2d.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
@@ -198,6 +199,14 @@ void execute(tbb::task_arena& arena, const Function& f) {
 #else
     arena.execute(f);
 #endif
+}
+
+// The threads a parallel call here may use: the calling arena's, under the process's
+// limit (tbb::global_control, as `--threads` sets it). For sizing work, never for results.
+inline int worker_threads() {
+    const auto limit = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+    const int arena = tbb::this_task_arena::max_concurrency();
+    return std::max(1, static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(arena), limit)));
 }
 
 }  // namespace tessref

@@ -283,13 +283,15 @@ struct PatchChunk {
 
 // Triangles per chunk (a chunk is one setup task) and per batch (what is evaluated and
 // held at once: about 100 bytes a vertex, half a vertex per triangle, so 2^16 triangles
-// hold about 4 MB). The resolve reads the batch's vertices in pixel order, not in the
+// hold about 4 MB), at least kStreamBatchTriangles and 2^15 a worker thread, so that every
+// worker has chunks (and its own L2 cache's worth) in each of the batch's parallel steps. The resolve reads the batch's vertices in pixel order, not in the
 // order they were written: a batch near the size of a core's L2 cache (2 MB here) keeps
 // those reads out of memory. Measured on the bench terrain (bench/scenes), median CPU time
 // of `tessref render --threads 1`: level 16 507 ms at 2^18, 455 ms at 2^16; level 63
 // 2356 -> 1817 ms; 2^15 was no better than 2^16 at level 16 and worse at 63.
 constexpr std::size_t kStreamChunkTriangles = 8192;
 constexpr std::size_t kStreamBatchTriangles = std::size_t{1} << 16;
+constexpr std::size_t kStreamBatchTrianglesPerThread = std::size_t{1} << 15;
 // Vertex normals are deferred to the vertices of winning triangles above this many
 // triangles a pixel (render_streamed).
 constexpr std::uint64_t kDeferNormalsTrianglesPerPixel = 8;
@@ -367,12 +369,14 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
     std::vector<PatchChunk> chunks;
     std::vector<RasterChunk> views;
+    const std::size_t batch_size =
+        std::max(kStreamBatchTriangles, kStreamBatchTrianglesPerThread * static_cast<std::size_t>(worker_threads()));
     std::size_t next_patch = 0;
     while (next_patch < n) {
         // The next batch's chunk boundaries, in patch order.
         chunks.reserve(64);
         std::size_t used = 0, batch_triangles = 0;
-        while (next_patch < n && batch_triangles < kStreamBatchTriangles) {
+        while (next_patch < n && batch_triangles < batch_size) {
             if (chunks.size() <= used) chunks.emplace_back();
             PatchChunk& c = chunks[used++];
             c.first_patch = next_patch;
