@@ -54,6 +54,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -99,7 +100,8 @@ void validate(const SurfaceMesh& mesh);
 
 struct WeldedMesh {
     SurfaceMesh mesh;                        // welded vertices, triangles re-indexed
-    std::vector<std::uint32_t> vertex_map;   // emitted vertex -> welded vertex
+    std::vector<std::uint32_t> vertex_map;   // emitted vertex -> welded vertex (not from SurfaceWelder)
+    std::size_t emitted_vertices = 0;        // vertices before welding
     std::size_t degenerate_triangles = 0;    // dropped: corners welded into < 3 vertices
 };
 
@@ -108,6 +110,31 @@ struct WeldedMesh {
 // vertices are numbered in order of their first emitted copy; triangles keep their order
 // and orientation. Validates `mesh` first.
 WeldedMesh weld_bitwise(const SurfaceMesh& mesh);
+
+// weld_bitwise() of a surface that arrives in pieces (pipeline.h, stream_surface), so that
+// the unwelded surface is never held whole: add() the pieces in order, each a SurfaceMesh
+// whose triangles index its own vertices, then take() the result once. It is bit for bit
+// weld_bitwise() of the pieces concatenated (their triangles shifted to the concatenated
+// vertices), except that vertex_map stays empty (4 bytes an emitted vertex). Memory: the
+// welded mesh, and a hash table of 16 to 32 bytes per expected (at least per welded)
+// vertex. add() validates each piece, and throws tessref::Error when a piece's attributes
+// (which of normals, uvs, patch_ids, tess_coords it has) differ from the first piece's.
+class SurfaceWelder {
+public:
+    // The expected counts (upper bounds are best: the emitted ones) size the hash table and
+    // reserve the welded arrays' address space; more is welded correctly, just slower.
+    explicit SurfaceWelder(std::size_t expected_vertices = 0, std::size_t expected_triangles = 0);
+    ~SurfaceWelder();
+    SurfaceWelder(SurfaceWelder&&) noexcept;
+    SurfaceWelder& operator=(SurfaceWelder&&) noexcept;
+
+    void add(const SurfaceMesh& piece);
+    WeldedMesh take();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 // ---------------------------------------------------------------------------------------
 // Writing
@@ -158,5 +185,8 @@ struct MeshWriteReport {
 // `tessref mesh` does (cli::AtomicOutput).
 MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
                            const MeshWriteOptions& options);
+// The same for a mesh already welded (weld_bitwise, SurfaceWelder): the bytes and report
+// that write_mesh() of the unwelded surface gives (options.weld must be true).
+MeshWriteReport write_mesh(const WeldedMesh& welded, std::ostream& out, const MeshWriteOptions& options);
 
 }  // namespace tessref
