@@ -18,6 +18,7 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
+#include "common/huge_pages.h"
 #include "mesh/openmesh.h"
 #include "tessref/error.h"
 
@@ -152,6 +153,8 @@ public:
     explicit PositionTable(std::size_t expected) {
         std::size_t capacity = 16;
         while (capacity < 2 * expected) capacity *= 2;
+        slots_.reserve(capacity);
+        advise_huge_pages(slots_);
         slots_.assign(capacity, empty);
     }
 
@@ -187,7 +190,10 @@ private:
 
     template <typename PositionOf>
     void grow(const PositionOf& position_of) {
-        std::vector<std::uint64_t> old(2 * slots_.size(), empty);
+        std::vector<std::uint64_t> old;
+        old.reserve(2 * slots_.size());
+        advise_huge_pages(old);
+        old.assign(2 * slots_.size(), empty);
         old.swap(slots_);
         for (const std::uint64_t s : old) {
             if (s == empty) continue;
@@ -274,6 +280,7 @@ struct SurfaceWelder::Impl {
     PositionTable table;
     WeldedMesh welded;
     std::vector<std::uint32_t> piece_map;  // the current piece's vertex -> welded vertex
+    std::vector<std::uint64_t> hashes;     // the current piece's positions' hashes
     bool shaped = false;                   // a piece with vertices has set which attributes there are
 };
 
@@ -284,6 +291,8 @@ SurfaceWelder::SurfaceWelder(std::size_t expected_vertices, std::size_t expected
     SurfaceMesh& out = impl_->welded.mesh;
     out.positions.reserve(expected_vertices);
     out.triangles.reserve(expected_triangles);
+    advise_huge_pages(out.positions);
+    advise_huge_pages(out.triangles);
 }
 SurfaceWelder::~SurfaceWelder() = default;
 SurfaceWelder::SurfaceWelder(SurfaceWelder&&) noexcept = default;
@@ -298,10 +307,15 @@ void SurfaceWelder::add(const SurfaceMesh& piece) {
     if (!s.shaped) {
         // The first piece with vertices decides which attributes the welded mesh has.
         const std::size_t capacity = out.positions.capacity();
-        if (!piece.normals.empty()) out.normals.reserve(capacity);
-        if (!piece.uvs.empty()) out.uvs.reserve(capacity);
-        if (!piece.patch_ids.empty()) out.patch_ids.reserve(capacity);
-        if (!piece.tess_coords.empty()) out.tess_coords.reserve(capacity);
+        const auto reserve = [capacity](auto& attribute, bool present) {
+            if (!present) return;
+            attribute.reserve(capacity);
+            advise_huge_pages(attribute);
+        };
+        reserve(out.normals, !piece.normals.empty());
+        reserve(out.uvs, !piece.uvs.empty());
+        reserve(out.patch_ids, !piece.patch_ids.empty());
+        reserve(out.tess_coords, !piece.tess_coords.empty());
         s.shaped = true;
     } else {
         const auto check = [&](bool piece_has, bool welded_has, const char* name) {
@@ -331,11 +345,14 @@ void SurfaceWelder::add(const SurfaceMesh& piece) {
     };
     const auto position_of = [&out](std::uint32_t welded) -> const glm::dvec3& { return out.positions[welded]; };
     s.piece_map.resize(n);
+    // Every hash first, in one pass over the positions: each is computed once, and the
+    // slots can be prefetched as far ahead as wanted.
+    s.hashes.resize(n);
+    for (std::size_t i = 0; i < n; ++i) s.hashes[i] = PositionTable::hash(piece.positions[i]);
     for (std::size_t i = 0; i < n; ++i) {
-        if (i + kPrefetchAhead < n) s.table.prefetch(PositionTable::hash(piece.positions[i + kPrefetchAhead]));
+        if (i + kPrefetchAhead < n) s.table.prefetch(s.hashes[i + kPrefetchAhead]);
         const auto next = static_cast<std::uint32_t>(out.positions.size());
-        const std::uint32_t welded =
-            s.table.find_or_insert(piece.positions[i], PositionTable::hash(piece.positions[i]), next, position_of);
+        const std::uint32_t welded = s.table.find_or_insert(piece.positions[i], s.hashes[i], next, position_of);
         if (welded == next) {
             out.positions.push_back(piece.positions[i]);
             if (normals) out.normals.push_back(piece.normals[i]);
