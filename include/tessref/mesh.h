@@ -20,7 +20,8 @@
 //  3. Write: PLY through tessref's own writer, which writes byte for byte what OpenMesh's
 //     PLY writer writes for the same mesh and options (tests/test_mesh.cpp compares the two;
 //     src/mesh/openmesh.h keeps OpenMesh's as the reference) straight from the welded
-//     arrays, in large buffered writes; OBJ, OFF and STL through OpenMesh's writers
+//     arrays, blocks of records formatted in parallel and written in order; OBJ, OFF and
+//     STL through OpenMesh's writers
 //     (OpenMesh::IO::IOManager, on a stream, fed by an exporter; see below). What each
 //     format carries:
 //       ply  positions, vertex normals (nx ny nz), uv (u v), and the provenance of every
@@ -177,8 +178,8 @@ struct MeshWriteReport {
 // Welds `mesh` and writes it to `out` (opened in binary mode for a binary format), PLY with
 // tessref's writer, the other formats through OpenMesh. Besides `mesh`, the memory it takes
 // is the weld's (while welding, a hash table of 16 to 32 bytes and a map of 4 bytes per
-// emitted vertex; then 4 bytes per welded vertex and 12 per triangle), and for OBJ, OFF and
-// STL OpenMesh's copy of the welded vertices. Throws tessref::Error when the mesh is inconsistent, a position is not finite
+// emitted vertex; then 4 bytes per welded vertex and 12 per triangle), for PLY a few MiB of
+// formatted records, and for OBJ, OFF and STL OpenMesh's copy of the welded vertices. Throws tessref::Error when the mesh is inconsistent, a position is not finite
 // or beyond the float range (files store floats; the error names the vertex, its patch and
 // tess coord), the options ask for what the format cannot do, or the stream fails. `out` may then hold part of a file: a caller
 // writing a file writes a temporary file next to it and renames it only on success, as
