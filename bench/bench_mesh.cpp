@@ -3,8 +3,11 @@
 //
 //  - BM_MeshJacksboro: data/scenes/jacksboro.toml (the Jacksboro fault DEM, 24 x 24 patches,
 //    thesis pipeline) with its control stage replaced by a uniform level 64, in gpu (float)
-//    and exact (double) precision: the whole command (pipeline + binary PLY written to
-//    memory), and the pipeline alone. The scene is loaded once, outside the timing.
+//    and exact (double) precision: the pipeline alone (export = 0); the pipeline's whole
+//    surface welded and written as binary PLY to memory (export = 1, what `tessref mesh`
+//    does with --capture or --solid); the surface welded as it is evaluated
+//    (run_pipeline_welded) and written (export = 2, what `tessref mesh` does otherwise).
+//    The scene is loaded once, outside the timing.
 //    Counters: patches/s and triangles/s, per second of process CPU time (all threads).
 //  - BM_ExportSynthetic / BM_WeldSynthetic: the export alone on a synthetic terrain; for
 //    PLY also through OpenMesh's PLY writer (writer = 0, the reference tessref's own PLY
@@ -60,24 +63,31 @@ const tessref::Scene& jacksboro_level_64() {
     return scene;
 }
 
-// range(0): precision (0 gpu, 1 exact); range(1): 1 = the whole command (pipeline and
-// export), 0 = the pipeline alone.
+// range(0): precision (0 gpu, 1 exact); range(1): 0 = the pipeline alone, 1 = the whole
+// surface and its export, 2 = streamed into the weld and exported.
 void BM_MeshJacksboro(benchmark::State& state) {
     const tessref::Scene& scene = jacksboro_level_64();
     tessref::PipelineOptions pipeline_options;
     pipeline_options.precision = static_cast<tessref::Precision>(state.range(0));
-    const bool export_mesh = state.range(1) != 0;
+    const int mode = static_cast<int>(state.range(1));
     tessref::MeshWriteOptions write_options;
     write_options.format = tessref::MeshFormat::ply;
     write_options.binary = true;
     std::size_t patches = 0, triangles = 0;
     for (auto _ : state) {
-        tessref::PipelineResult result = tessref::run_pipeline(scene, pipeline_options);
         patches += scene.patch_count();
+        CountingBuffer buffer;
+        std::ostream out(&buffer);
+        if (mode == 2) {
+            const tessref::WeldedMesh welded = tessref::run_pipeline_welded(scene, pipeline_options);
+            const tessref::MeshWriteReport report = tessref::write_mesh(welded, out, write_options);
+            triangles += report.triangles + report.degenerate_triangles;  // the pipeline's count
+            benchmark::DoNotOptimize(buffer.bytes());
+            continue;
+        }
+        tessref::PipelineResult result = tessref::run_pipeline(scene, pipeline_options);
         triangles += result.mesh.triangles.size();
-        if (export_mesh) {
-            CountingBuffer buffer;
-            std::ostream out(&buffer);
+        if (mode == 1) {
             const tessref::MeshWriteReport report = tessref::write_mesh(result.mesh, out, write_options);
             benchmark::DoNotOptimize(report.triangles);
             benchmark::DoNotOptimize(buffer.bytes());
@@ -89,11 +99,13 @@ void BM_MeshJacksboro(benchmark::State& state) {
     state.counters["triangles"] = benchmark::Counter(
         static_cast<double>(triangles) / static_cast<double>(std::max<benchmark::IterationCount>(state.iterations(), 1)));
     state.SetLabel(std::string(tessref::to_string(pipeline_options.precision)) +
-                   (export_mesh ? " pipeline+export(ply binary)" : " pipeline only"));
+                   (mode == 2   ? " streamed weld+export(ply binary)"
+                    : mode == 1 ? " pipeline+export(ply binary)"
+                                : " pipeline only"));
 }
 
 BENCHMARK(BM_MeshJacksboro)
-    ->ArgsProduct({{0, 1}, {1, 0}})
+    ->ArgsProduct({{0, 1}, {2, 1, 0}})
     ->ArgNames({"exact", "export"})
     ->Unit(benchmark::kMillisecond)
     // CPU time of the whole process (the pipeline runs on TBB workers): the rates are per

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -601,6 +602,207 @@ TEST(PlyWriter, WritesWhatOpenMeshWritesForShippedScenes) {
     }
 }
 
+TEST(PlyWriter, WritesWhatOpenMeshWritesForAMeshOfManyBlocks) {
+    // The writer formats blocks of records in parallel, several rounds of them here (over
+    // 200,000 records): the bytes must still be OpenMesh's serial ones.
+    SurfaceMesh mesh = grid_terrain(std::vector<std::vector<int>>(8, std::vector<int>(8, 32)));
+    for (const glm::dvec3& p : mesh.positions) {
+        mesh.normals.push_back(glm::normalize(glm::dvec3(-p.y, 0.5 * p.x, 1.0 + p.z)));
+        mesh.uvs.emplace_back(p.x / 8.0 + 1.0 / 3.0, p.y / 8.0);
+    }
+    for (const bool binary : {false, true}) {
+        for (const bool weld : {true, false}) {
+            MeshWriteOptions options;
+            options.binary = binary;
+            options.weld = weld;
+            expect_ply_as_openmesh_writes_it(mesh, options, "8 x 8 patches at level 32");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The streamed export of `tessref mesh`: SurfaceWelder and run_pipeline_welded give what
+// weld_bitwise gives for the whole surface, and the same file
+
+// `mesh` cut into pieces of `patches` whole patches each (the patches' vertices and
+// triangles are contiguous, as the pipeline emits them), triangles indexing each piece.
+std::vector<SurfaceMesh> cut_into_pieces(const SurfaceMesh& mesh, std::size_t patches) {
+    std::vector<SurfaceMesh> pieces;
+    std::size_t first = 0, t = 0;
+    while (first < mesh.positions.size()) {
+        std::size_t last = first + 1, seen = 1;
+        for (; last < mesh.positions.size(); ++last)
+            if (mesh.patch_ids[last] != mesh.patch_ids[last - 1] && ++seen > patches) break;
+        SurfaceMesh piece;
+        const auto slice = [&](const auto& from, auto& to) {
+            if (!from.empty()) to.assign(from.begin() + first, from.begin() + last);
+        };
+        slice(mesh.positions, piece.positions);
+        slice(mesh.normals, piece.normals);
+        slice(mesh.uvs, piece.uvs);
+        slice(mesh.patch_ids, piece.patch_ids);
+        slice(mesh.tess_coords, piece.tess_coords);
+        for (; t < mesh.triangles.size() && mesh.triangles[t][0] < last; ++t) {
+            const auto& tri = mesh.triangles[t];
+            piece.triangles.push_back({static_cast<std::uint32_t>(tri[0] - first),
+                                       static_cast<std::uint32_t>(tri[1] - first),
+                                       static_cast<std::uint32_t>(tri[2] - first)});
+        }
+        pieces.push_back(std::move(piece));
+        first = last;
+    }
+    return pieces;
+}
+
+template <typename T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+void expect_same_welded_mesh(const tessref::WeldedMesh& a, const tessref::WeldedMesh& b, const std::string& what) {
+    EXPECT_TRUE(same_bits(a.mesh.positions, b.mesh.positions)) << what;
+    EXPECT_TRUE(same_bits(a.mesh.normals, b.mesh.normals)) << what;
+    EXPECT_TRUE(same_bits(a.mesh.uvs, b.mesh.uvs)) << what;
+    EXPECT_TRUE(same_bits(a.mesh.patch_ids, b.mesh.patch_ids)) << what;
+    EXPECT_TRUE(same_bits(a.mesh.tess_coords, b.mesh.tess_coords)) << what;
+    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << what;
+    EXPECT_EQ(a.emitted_vertices, b.emitted_vertices) << what;
+    EXPECT_EQ(a.degenerate_triangles, b.degenerate_triangles) << what;
+}
+
+TEST(SurfaceWelder, WeldsPiecesAsWeldBitwiseWeldsTheWhole) {
+    SurfaceMesh grid = grid_terrain({{2, 4, 2}, {4, 2, 4}, {2, 2, 2}});
+    SurfaceMesh odd = two_patch_mesh();
+    odd.positions[6] = {0.0, -0.0, odd.positions[6].z};  // a zero of either sign welds
+    odd.positions[9] = {-0.0, 0.0, odd.positions[9].z};
+    odd.positions[6].z = odd.positions[9].z;
+    odd.triangles.insert(odd.triangles.begin(), {0, 0, 1});  // degenerate: left out and counted
+    // Patch ids falling along the emission: a later piece's copy has the lower id and wins.
+    SurfaceMesh falling = grid;
+    for (std::uint32_t& id : falling.patch_ids) id = 100 - id;
+    SurfaceMesh no_ids = grid;
+    no_ids.patch_ids.clear();
+    for (const auto& [mesh, what] : {std::pair{grid, "grid"}, std::pair{odd, "two patches, signed zeros"},
+                                     std::pair{falling, "falling patch ids"}}) {
+        const tessref::WeldedMesh whole = tessref::weld_bitwise(mesh);
+        for (const std::size_t patches : {1, 2, 5, 100}) {
+            for (const std::size_t expected : {std::size_t{0}, mesh.positions.size()}) {
+                tessref::SurfaceWelder welder(expected, expected);
+                welder.add(SurfaceMesh{});  // an empty piece changes nothing
+                for (const SurfaceMesh& piece : cut_into_pieces(mesh, patches)) welder.add(piece);
+                const tessref::WeldedMesh pieces = welder.take();
+                EXPECT_TRUE(pieces.vertex_map.empty());
+                expect_same_welded_mesh(pieces, whole,
+                                        std::string(what) + ", " + std::to_string(patches) + " patches a piece, " +
+                                            std::to_string(expected) + " expected");
+            }
+        }
+    }
+    // Without patch ids (cut where the grid's patches end).
+    tessref::SurfaceWelder welder;
+    for (const SurfaceMesh& piece : cut_into_pieces(grid, 2)) {
+        SurfaceMesh copy = piece;
+        copy.patch_ids.clear();
+        welder.add(copy);
+    }
+    expect_same_welded_mesh(welder.take(), tessref::weld_bitwise(no_ids), "no patch ids");
+}
+
+TEST(SurfaceWelder, RefusesInconsistentPieces) {
+    const std::vector<SurfaceMesh> pieces = cut_into_pieces(two_patch_mesh(), 1);
+    ASSERT_EQ(pieces.size(), 2u);
+    for (int dropped = 0; dropped < 4; ++dropped) {
+        SurfaceMesh second = pieces[1];
+        if (dropped == 0) second.normals.clear();
+        if (dropped == 1) second.uvs.clear();
+        if (dropped == 2) second.patch_ids.clear();
+        if (dropped == 3) second.tess_coords.clear();
+        tessref::SurfaceWelder welder;
+        welder.add(pieces[0]);
+        EXPECT_THROW(welder.add(second), tessref::Error) << dropped;
+    }
+    SurfaceMesh bad = pieces[0];
+    bad.triangles.push_back({0, 1, 9});  // names a vertex the piece does not have
+    tessref::SurfaceWelder welder;
+    EXPECT_THROW(welder.add(bad), tessref::Error);
+}
+
+TEST(StreamedExport, RunPipelineWeldedIsTheWeldOfRunPipeline) {
+    // Terrains of every model, the PN mesh, a geomipmapped terrain and smooth normals (both
+    // welded whole), in both precisions and camera-relative; then the file from either is
+    // the same.
+    struct Case {
+        const char* name;
+        bool smooth = false;
+    };
+    for (const Case c : {Case{"thesis-map-4"}, Case{"jacksboro"}, Case{"pn-triangles"}, Case{"cosc422"},
+                         Case{"lab4-canyon"}, Case{"terrain-pom"}, Case{"jacksboro-geomipmap"},
+                         Case{"thesis-constant-1", true}}) {
+        const fs::path path = fs::path(TESSREF_DATA_DIR) / "scenes" / (std::string(c.name) + ".toml");
+        tessref::Scene scene = tessref::load_scene(path.string());
+        if (c.smooth) {
+            scene.geometry = scene.geometry.value_or(tessref::GeometryStage{});
+            scene.geometry->normals = tessref::GeometryNormals::smooth;
+            EXPECT_FALSE(tessref::surface_streams(scene));
+        }
+        for (const tessref::Precision precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
+            for (const bool relative : {false, true}) {
+                const std::string what = std::string(c.name) + (c.smooth ? " smooth" : "") + " " +
+                                         std::string(tessref::to_string(precision)) + (relative ? " relative" : "");
+                tessref::PipelineOptions options;
+                options.precision = precision;
+                options.camera_relative = relative;
+                const tessref::PipelineResult result = tessref::run_pipeline(scene, options);
+                std::size_t last_progress = 0;
+                options.progress = [&](std::size_t done, std::size_t total) {
+                    EXPECT_GE(done, last_progress);
+                    EXPECT_LE(done, total);
+                    last_progress = done;
+                };
+                const tessref::WeldedMesh streamed = tessref::run_pipeline_welded(scene, options);
+                EXPECT_EQ(last_progress, scene.patch_count()) << what;
+                expect_same_welded_mesh(streamed, tessref::weld_bitwise(result.mesh), what);
+                for (const MeshFormat format : {MeshFormat::ply, MeshFormat::obj}) {
+                    for (const bool binary : {false, true}) {
+                        if (binary && format == MeshFormat::obj) continue;
+                        MeshWriteOptions write_options;
+                        write_options.format = format;
+                        write_options.binary = binary;
+                        std::ostringstream whole, pieces;
+                        const tessref::MeshWriteReport a = tessref::write_mesh(result.mesh, whole, write_options);
+                        const tessref::MeshWriteReport b = tessref::write_mesh(streamed, pieces, write_options);
+                        EXPECT_TRUE(whole.str() == pieces.str()) << what << " " << tessref::to_string(format);
+                        EXPECT_EQ(a.emitted_vertices, b.emitted_vertices) << what;
+                        EXPECT_EQ(a.vertices, b.vertices) << what;
+                        EXPECT_EQ(a.triangles, b.triangles) << what;
+                        EXPECT_EQ(a.float_distinct_vertices, b.float_distinct_vertices) << what;
+                    }
+                }
+            }
+        }
+    }
+}
+
+TEST(StreamedExport, NonFiniteVertexIsTheSameErrorAsRunPipelines) {
+    // tests/data/heightfield/huge_sample.toml: one texel that scale_z carries past the float range.
+    const tessref::Scene scene =
+        tessref::load_scene((fs::path(TESSREF_SOURCE_DIR) / "tests" / "data" / "heightfield" / "huge_sample.toml").string());
+    ASSERT_TRUE(tessref::surface_streams(scene));
+    std::string expected;
+    try {
+        tessref::run_pipeline(scene);
+    } catch (const tessref::Error& e) {
+        expected = e.what();
+    }
+    ASSERT_FALSE(expected.empty());
+    try {
+        tessref::run_pipeline_welded(scene);
+        ADD_FAILURE() << "no error";
+    } catch (const tessref::Error& e) {
+        EXPECT_EQ(std::string(e.what()), expected);
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Round trips through OpenMesh's readers
 
@@ -1063,6 +1265,27 @@ TEST_F(MeshCommand, NonFiniteHeightIsAnErrorNamingPatchTessCoordAndTexel) {
     } catch (const tessref::Error& e) {
         EXPECT_GE(e.where().patch_id, 0);
         EXPECT_EQ(e.where().key, "domain.heightmap");
+    }
+}
+
+TEST_F(MeshCommand, StreamedAndWholeSurfaceFilesAreTheSame) {
+    // Without --capture the surface is welded as it is evaluated (run_pipeline_welded); with
+    // it, the pipeline's whole surface is kept for the capture and welded at export.
+    for (const char* name : {"jacksboro", "pn-triangles"}) {
+        for (const bool binary : {false, true}) {
+            std::vector<std::string> streamed{scene(name), "-o", path("s.ply").string()};
+            std::vector<std::string> whole{scene(name), "-o", path("w.ply").string(), "--capture",
+                                           path("c.txt").string()};
+            if (binary) streamed.push_back("--binary"), whole.push_back("--binary");
+            const RunResult a = run(streamed), b = run(whole);
+            ASSERT_EQ(a.status, 0) << a.err;
+            ASSERT_EQ(b.status, 0) << b.err;
+            const std::string s = read_text(path("s.ply"));
+            EXPECT_FALSE(s.empty());
+            EXPECT_TRUE(s == read_text(path("w.ply"))) << name << (binary ? " binary" : " ascii");
+            EXPECT_EQ(files(), (std::set<std::string>{"c.txt", "s.ply", "w.ply"}));
+            for (const char* file : {"s.ply", "w.ply", "c.txt"}) fs::remove(path(file));
+        }
     }
 }
 

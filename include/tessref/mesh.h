@@ -20,7 +20,8 @@
 //  3. Write: PLY through tessref's own writer, which writes byte for byte what OpenMesh's
 //     PLY writer writes for the same mesh and options (tests/test_mesh.cpp compares the two;
 //     src/mesh/openmesh.h keeps OpenMesh's as the reference) straight from the welded
-//     arrays, in large buffered writes; OBJ, OFF and STL through OpenMesh's writers
+//     arrays, blocks of records formatted in parallel and written in order; OBJ, OFF and
+//     STL through OpenMesh's writers
 //     (OpenMesh::IO::IOManager, on a stream, fed by an exporter; see below). What each
 //     format carries:
 //       ply  positions, vertex normals (nx ny nz), uv (u v), and the provenance of every
@@ -54,6 +55,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -99,7 +101,8 @@ void validate(const SurfaceMesh& mesh);
 
 struct WeldedMesh {
     SurfaceMesh mesh;                        // welded vertices, triangles re-indexed
-    std::vector<std::uint32_t> vertex_map;   // emitted vertex -> welded vertex
+    std::vector<std::uint32_t> vertex_map;   // emitted vertex -> welded vertex (not from SurfaceWelder)
+    std::size_t emitted_vertices = 0;        // vertices before welding
     std::size_t degenerate_triangles = 0;    // dropped: corners welded into < 3 vertices
 };
 
@@ -108,6 +111,31 @@ struct WeldedMesh {
 // vertices are numbered in order of their first emitted copy; triangles keep their order
 // and orientation. Validates `mesh` first.
 WeldedMesh weld_bitwise(const SurfaceMesh& mesh);
+
+// weld_bitwise() of a surface that arrives in pieces (pipeline.h, stream_surface), so that
+// the unwelded surface is never held whole: add() the pieces in order, each a SurfaceMesh
+// whose triangles index its own vertices, then take() the result once. It is bit for bit
+// weld_bitwise() of the pieces concatenated (their triangles shifted to the concatenated
+// vertices), except that vertex_map stays empty (4 bytes an emitted vertex). Memory: the
+// welded mesh, and a hash table of 16 to 32 bytes per expected (at least per welded)
+// vertex. add() validates each piece, and throws tessref::Error when a piece's attributes
+// (which of normals, uvs, patch_ids, tess_coords it has) differ from the first piece's.
+class SurfaceWelder {
+public:
+    // The expected counts (upper bounds are best: the emitted ones) size the hash table and
+    // reserve the welded arrays' address space; more is welded correctly, just slower.
+    explicit SurfaceWelder(std::size_t expected_vertices = 0, std::size_t expected_triangles = 0);
+    ~SurfaceWelder();
+    SurfaceWelder(SurfaceWelder&&) noexcept;
+    SurfaceWelder& operator=(SurfaceWelder&&) noexcept;
+
+    void add(const SurfaceMesh& piece);
+    WeldedMesh take();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 // ---------------------------------------------------------------------------------------
 // Writing
@@ -150,13 +178,16 @@ struct MeshWriteReport {
 // Welds `mesh` and writes it to `out` (opened in binary mode for a binary format), PLY with
 // tessref's writer, the other formats through OpenMesh. Besides `mesh`, the memory it takes
 // is the weld's (while welding, a hash table of 16 to 32 bytes and a map of 4 bytes per
-// emitted vertex; then 4 bytes per welded vertex and 12 per triangle), and for OBJ, OFF and
-// STL OpenMesh's copy of the welded vertices. Throws tessref::Error when the mesh is inconsistent, a position is not finite
+// emitted vertex; then 4 bytes per welded vertex and 12 per triangle), for PLY a few MiB of
+// formatted records, and for OBJ, OFF and STL OpenMesh's copy of the welded vertices. Throws tessref::Error when the mesh is inconsistent, a position is not finite
 // or beyond the float range (files store floats; the error names the vertex, its patch and
 // tess coord), the options ask for what the format cannot do, or the stream fails. `out` may then hold part of a file: a caller
 // writing a file writes a temporary file next to it and renames it only on success, as
 // `tessref mesh` does (cli::AtomicOutput).
 MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
                            const MeshWriteOptions& options);
+// The same for a mesh already welded (weld_bitwise, SurfaceWelder): the bytes and report
+// that write_mesh() of the unwelded surface gives (options.weld must be true).
+MeshWriteReport write_mesh(const WeldedMesh& welded, std::ostream& out, const MeshWriteOptions& options);
 
 }  // namespace tessref

@@ -196,6 +196,18 @@ private:
 // height texel).
 PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options = {});
 
+// weld_bitwise(run_pipeline(scene, options).mesh), bit for bit, without holding the unwelded
+// surface where surface_streams(scene): the patches are evaluated a few hundred thousand
+// triangles at a time, in parallel, and welded in patch order as they come (SurfaceWelder),
+// so the memory is the welded mesh's, not the emitted one's as well. vertex_map is left
+// empty. Throws what run_pipeline() throws (the non-finite vertex error for the same first
+// vertex). options.progress is called from the calling thread; options.timings is not filled.
+WeldedMesh run_pipeline_welded(const Scene& scene, const PipelineOptions& options = {});
+// Whether run_pipeline_welded() streams the scene: PatchStream::streams(scene), and no
+// smooth normals (geometry.h sums those over the whole surface). Elsewhere it welds
+// run_pipeline()'s mesh, holding both.
+bool surface_streams(const Scene& scene);
+
 // A geomipmapped scene's height samples (mip 0, exactly) and their world placement, as
 // run_pipeline() builds its terrain from them (and `tessref pvs` its PVS). Throws
 // tessref::Error for a scene without a terrain grid.

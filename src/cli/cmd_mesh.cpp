@@ -48,6 +48,39 @@ struct MeshCommandOptions {
     bool camera_relative = false;
 };
 
+// Writes the mesh file through `write` into the output's temporary file, with progress.
+template <typename Write>
+MeshWriteReport write_mesh_file(const Write& write, const AtomicOutput& output, const std::string& name,
+                                MeshWriteOptions write_options) {
+    StageProgress stage_progress;
+    write_options.progress = [&stage_progress](std::string_view stage, double fraction) {
+        stage_progress(stage, fraction);
+    };
+    std::ofstream file(output.temp_path(), std::ios::binary | std::ios::trunc);
+    if (!file) throw Error("cannot write output file", Where::in_file(name));
+    const MeshWriteReport report = write(file, write_options);
+    file.close();
+    if (!file) throw Error("cannot write output file", Where::in_file(name));
+    return report;
+}
+
+// The warnings, and the line saying what was written (`captured`: triangles captured, when
+// --capture wrote them).
+void print_mesh_summary(const MeshCommandOptions& options, const Scene& scene, Precision precision,
+                        MeshFormat format, const MeshWriteReport& report, const std::size_t* captured) {
+    if (report.degenerate_triangles > 0) {
+        std::cerr << "tessref: warning: " << report.degenerate_triangles
+                  << " triangles whose corners weld together (zero area) were left out\n";
+    }
+    if (const std::string lost = report.precision_warning(); !lost.empty())
+        std::cerr << "tessref: warning: " << lost << "\n";
+    std::cout << options.output << ": " << to_string(format) << (options.binary ? " binary" : " ascii") << ", "
+              << to_string(precision) << " precision, " << scene.patch_count() << " patches, " << report.triangles
+              << " triangles, " << report.vertices << " vertices (welded from " << report.emitted_vertices << ")";
+    if (captured) std::cout << ", " << *captured << " triangles captured to " << options.capture;
+    std::cout << "\n";
+}
+
 int run_mesh(const MeshCommandOptions& options) {
     // Everything about the output is checked before the (possibly long) pipeline runs.
     if (options.output.empty() && options.capture.empty())
@@ -83,12 +116,29 @@ int run_mesh(const MeshCommandOptions& options) {
     if (options.solid && !scene.grid)
         throw Error("--solid closes a terrain; this scene has no [domain] grid", Where::in_file(options.scene));
 
+    PipelineOptions pipeline_options;
+    pipeline_options.precision = precision;
+    pipeline_options.camera_relative = options.camera_relative;
+    // The surface is welded as it is evaluated, never held unwelded, unless --capture or
+    // --solid needs the pipeline's whole surface (or the scene cannot stream it).
+    if (output && !capture_output && !options.solid && surface_streams(scene)) {
+        WeldedMesh welded;
+        {
+            Progress progress("tessellating patches", scene.patch_count());
+            pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
+            welded = run_pipeline_welded(scene, pipeline_options);
+        }
+        const MeshWriteReport report = write_mesh_file(
+            [&](std::ostream& file, const MeshWriteOptions& o) { return write_mesh(welded, file, o); }, *output,
+            options.output, write_options);
+        output->commit();
+        print_mesh_summary(options, scene, precision, write_options.format, report, nullptr);
+        return 0;
+    }
+
     PipelineResult result;
     {
         Progress progress("tessellating patches", scene.patch_count());
-        PipelineOptions pipeline_options;
-        pipeline_options.precision = precision;
-        pipeline_options.camera_relative = options.camera_relative;
         pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
         result = run_pipeline(scene, pipeline_options);
     }
@@ -137,34 +187,13 @@ int run_mesh(const MeshCommandOptions& options) {
         result.mesh = close_terrain_into_solid(result.mesh, base, up_axis);
     }
 
-    MeshWriteReport report;
-    {
-        StageProgress stage_progress;
-        write_options.progress = [&stage_progress](std::string_view stage, double fraction) {
-            stage_progress(stage, fraction);
-        };
-        std::ofstream file(output->temp_path(), std::ios::binary | std::ios::trunc);
-        if (!file) throw Error("cannot write output file", Where::in_file(options.output));
-        report = write_mesh(result.mesh, file, write_options);
-        file.close();
-        if (!file) throw Error("cannot write output file", Where::in_file(options.output));
-    }
+    const MeshWriteReport report = write_mesh_file(
+        [&](std::ostream& file, const MeshWriteOptions& o) { return write_mesh(result.mesh, file, o); }, *output,
+        options.output, write_options);
     if (capture_output) capture_output->commit();
     output->commit();
-
-    if (report.degenerate_triangles > 0) {
-        std::cerr << "tessref: warning: " << report.degenerate_triangles
-                  << " triangles whose corners weld together (zero area) were left out\n";
-    }
-    if (const std::string lost = report.precision_warning(); !lost.empty())
-        std::cerr << "tessref: warning: " << lost << "\n";
-    std::cout << options.output << ": " << to_string(write_options.format)
-              << (options.binary ? " binary" : " ascii") << ", " << to_string(precision)
-              << " precision, " << scene.patch_count() << " patches, " << report.triangles
-              << " triangles, " << report.vertices << " vertices (welded from "
-              << report.emitted_vertices << ")";
-    if (capture_output) std::cout << ", " << captured << " triangles captured to " << options.capture;
-    std::cout << "\n";
+    print_mesh_summary(options, scene, precision, write_options.format, report,
+                       capture_output ? &captured : nullptr);
     return 0;
 }
 

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <mutex>
 #include <span>
 #include <string>
@@ -356,6 +357,107 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
 }
 
 }  // namespace
+
+namespace {
+
+// Pieces of about kPieceTriangles triangles (whole patches), evaluated kPiecesAtOnce at a
+// time: small enough (about 80 bytes a vertex, half a vertex a triangle) that the weld
+// finds a batch still in the caches, large enough to keep the threads busy.
+constexpr std::size_t kPieceTriangles = std::size_t{1} << 13;
+constexpr std::size_t kPiecesAtOnce = 4;
+
+struct Piece {
+    std::size_t first_patch = 0, last_patch = 0;
+    SurfaceMesh mesh;
+    std::vector<glm::dvec3> face_normals;  // emit() sizes them; a mesh file has none
+};
+
+struct Batch {
+    std::vector<Piece> pieces{kPiecesAtOnce};
+    std::size_t used = 0;
+    std::exception_ptr failure;  // of its evaluation, thrown when the batch's turn to be welded comes
+};
+
+// The next pieces of whole patches from next_patch on (none when it is past the last).
+void plan_batch(const PatchStream& stream, std::size_t& next_patch, Batch& batch) {
+    const std::size_t n = stream.patch_count();
+    const auto triangles_of = [&](std::size_t p) { return stream.triangle_base(p + 1) - stream.triangle_base(p); };
+    batch.used = 0;
+    batch.failure = nullptr;
+    for (; batch.used < batch.pieces.size() && next_patch < n; ++batch.used) {
+        Piece& piece = batch.pieces[batch.used];
+        piece.first_patch = next_patch;
+        std::size_t triangles = triangles_of(next_patch++);
+        while (next_patch < n && triangles + triangles_of(next_patch) <= kPieceTriangles)
+            triangles += triangles_of(next_patch++);
+        piece.last_patch = next_patch;
+    }
+}
+
+// Pass 4 for the batch's patches, each piece what run_pipeline()'s mesh holds for its patches.
+void evaluate_batch(const PatchStream& stream, Batch& batch) {
+    const glm::dvec3 origin = stream.origin();
+    try {
+        tessref::parallel_for(std::size_t{0}, batch.used, [&](std::size_t k) {
+            Piece& piece = batch.pieces[k];
+            const std::size_t v0 = stream.vertex_base(piece.first_patch), t0 = stream.triangle_base(piece.first_patch);
+            stream.size(piece.mesh, piece.face_normals, stream.vertex_base(piece.last_patch) - v0,
+                        stream.triangle_base(piece.last_patch) - t0);
+            for (std::size_t p = piece.first_patch; p < piece.last_patch; ++p)
+                stream.emit(p, piece.mesh, stream.vertex_base(p) - v0, stream.triangle_base(p) - t0, nullptr);
+            // World positions, as run() adds the origin back (in double).
+            if (origin != glm::dvec3(0.0))
+                for (glm::dvec3& position : piece.mesh.positions) position += origin;
+        });
+    } catch (...) {
+        batch.failure = std::current_exception();
+    }
+}
+
+}  // namespace
+
+bool surface_streams(const Scene& scene) {
+    return PatchStream::streams(scene) && !(scene.geometry && scene.geometry->normals == GeometryNormals::smooth);
+}
+
+WeldedMesh run_pipeline_welded(const Scene& scene, const PipelineOptions& options) {
+    if (scene.patch_count() == 0) throw Error("the scene has no patches", Where::in_file(scene.file));
+    if (!surface_streams(scene)) {
+        WeldedMesh welded = weld_bitwise(run_pipeline(scene, options).mesh);
+        welded.vertex_map = {};
+        return welded;
+    }
+    PipelineOptions stream_options = options;
+    stream_options.timings = nullptr;
+    stream_options.progress = nullptr;
+    const PatchStream stream(scene, stream_options);
+    const std::size_t n = stream.patch_count();
+    SurfaceWelder welder(stream.vertex_base(n), stream.triangle_base(n));
+    const auto weld_batch = [&](const Batch& batch) {
+        if (batch.failure) std::rethrow_exception(batch.failure);
+        for (std::size_t k = 0; k < batch.used; ++k) {
+            // In patch order: the first non-finite vertex of the surface is the first one met.
+            require_finite_positions(scene, batch.pieces[k].mesh, options.precision);
+            welder.add(batch.pieces[k].mesh);
+        }
+    };
+
+    // The weld is serial: while one thread welds a batch, the others evaluate the next.
+    std::size_t next_patch = 0;
+    Batch current, next;
+    plan_batch(stream, next_patch, current);
+    evaluate_batch(stream, current);
+    while (current.used > 0) {
+        plan_batch(stream, next_patch, next);
+        tessref::parallel_for(0, 2, [&](int task) {
+            if (task == 0) weld_batch(current);
+            else evaluate_batch(stream, next);
+        });
+        if (options.progress) options.progress(current.pieces[current.used - 1].last_patch, n);
+        std::swap(current, next);
+    }
+    return welder.take();
+}
 
 glm::dvec3 camera_relative_origin(const Scene& scene) {
     if (!scene.camera) return glm::dvec3(0.0);
