@@ -591,7 +591,8 @@ void read_ply(Reading& r) {
         for (std::uint64_t i = 0; i < e.count; ++i) {
             const std::size_t record_offset = offset;
             std::size_t first_line = 0;
-            const std::string what = e.name + " " + str(i);
+            // Only for messages: formatting it for every record was a tenth of the reading.
+            const auto what = [&] { return e.name + " " + str(i); };
             for (std::size_t pi = 0; pi < e.properties.size(); ++pi) {
                 const PlyProperty& p = e.properties[pi];
                 const bool indices = is_face && static_cast<int>(pi) == froles.indices;
@@ -601,26 +602,26 @@ void read_ply(Reading& r) {
                     if (pi == 0) first_line = tokens.line();
                     if (!p.list) {
                         const auto v = parse_real(token);
-                        if (!v) throw r.bad_token(token, tokens.line(), "a number (" + what + ", property " + p.name + ")");
+                        if (!v) throw r.bad_token(token, tokens.line(), "a number (" + what() + ", property " + p.name + ")");
                         reals[pi] = *v;
                         continue;
                     }
                     const auto count = parse_integer(token);
                     if (!count || *count < 0)
-                        throw r.bad_token(token, tokens.line(), "a list length (" + what + ", property " + p.name + ")");
+                        throw r.bad_token(token, tokens.line(), "a list length (" + what() + ", property " + p.name + ")");
                     if (static_cast<std::uint64_t>(*count) > tokens.bytes_left() / 2 + 1)
-                        throw r.error("truncated file: " + what + " at line " + str(tokens.line()) + " lists " +
+                        throw r.error("truncated file: " + what() + " at line " + str(tokens.line()) + " lists " +
                                           str(*count) + " values, more than the rest of the file holds",
                                       tokens.line());
                     for (std::int64_t k = 0; k < *count; ++k) {
                         const std::string_view item = tokens.next();
                         if (!indices) {
                             if (!parse_real(item))
-                                throw r.bad_token(item, tokens.line(), "a number (" + what + ", property " + p.name + ")");
+                                throw r.bad_token(item, tokens.line(), "a number (" + what() + ", property " + p.name + ")");
                             continue;
                         }
                         const auto index = parse_integer(item);
-                        if (!index) throw r.bad_token(item, tokens.line(), "a vertex index (" + what + ")");
+                        if (!index) throw r.bad_token(item, tokens.line(), "a vertex index (" + what() + ")");
                         if (*index < 0 || static_cast<std::uint64_t>(*index) >= vertex_count)
                             throw r.error("face " + str(i) + " at line " + str(tokens.line()) + " refers to vertex " +
                                               std::to_string(*index) + ", but the file has " + str(vertex_count) +
@@ -631,7 +632,7 @@ void read_ply(Reading& r) {
                 } else {
                     const std::size_t size = size_of(p.list ? p.count_type : p.type);
                     if (offset + size > r.text.size())
-                        throw r.error("truncated file: " + what + at_byte(offset) + " is cut off (the header declares " +
+                        throw r.error("truncated file: " + what() + at_byte(offset) + " is cut off (the header declares " +
                                       str(e.count) + " " + e.name + " records)");
                     const double v = load_scalar(bytes + offset, p.list ? p.count_type : p.type, big);
                     if (!p.list) {
@@ -639,10 +640,10 @@ void read_ply(Reading& r) {
                         offset += size;
                         continue;
                     }
-                    if (v < 0) throw r.error(what + at_byte(offset) + " has a negative list length (" + Reading::number_text(v) + ")");
+                    if (v < 0) throw r.error(what() + at_byte(offset) + " has a negative list length (" + Reading::number_text(v) + ")");
                     const std::size_t item = size_of(p.type);
                     if (v * item > double(r.text.size() - offset - size))
-                        throw r.error("truncated file: " + what + at_byte(offset) + " lists " + Reading::number_text(v) +
+                        throw r.error("truncated file: " + what() + at_byte(offset) + " lists " + Reading::number_text(v) +
                                       " values, more than the rest of the file holds");
                     const auto count = static_cast<std::uint64_t>(v);
                     offset += size;
