@@ -34,18 +34,9 @@ struct RayHit {
 
 class RayScene {
 public:
-    // How Embree builds its BVH. Which triangles a ray hits does not depend on it (robust
-    // node tests, the same triangle test), but the order in which the BVH is traversed
-    // does, so intersect() may return another of several triangles hit at the same t.
-    //   sah:    surface area heuristic; slower to build, faster to trace.
-    //   morton: Embree's Morton-code builder; several times faster to build, a little
-    //           slower to trace. For callers that cast few rays for the triangle count and
-    //           use only whether and where a ray hits, never which of equal hits it is.
-    enum class Build { sah, morton };
-
     // Throws tessref::Error when Embree cannot build the scene.
     RayScene(std::span<const glm::dvec3> positions,
-             std::span<const std::array<std::uint32_t, 3>> triangles, Build build = Build::sah);
+             std::span<const std::array<std::uint32_t, 3>> triangles);
     ~RayScene();
     RayScene(RayScene&&) noexcept;
     RayScene& operator=(RayScene&&) noexcept;

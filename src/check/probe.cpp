@@ -477,18 +477,7 @@ void run_ray_probe(CheckState& state) {
         return;
     }
     state.progress("ray probe: building the BVH", 0.8);
-    // The probe reads only whether rays hit, and all_hits() sorts its hits, so either BVH
-    // gives the same report. Embree's Morton builder builds a large mesh in about a third
-    // of the SAH build's time but traces slower, which pays where the triangles outnumber
-    // the rays: a terrain casts up to resolution^2 short rays; a closed mesh 3 resolution^2
-    // lines through the whole box with every hit collected, plus escape rays, each costing
-    // about eight terrain rays (measured at probe resolutions 128 to 512: the Morton build
-    // won at 9 triangles a terrain ray and at 12 a line of a 2.4M-triangle solid; it lost at
-    // 3 a line, and at 0.3 a ray on a 90k-triangle terrain).
-    const double resolution = std::max(1, state.options.probe_resolution);
-    const double ray_work = terrain ? resolution * resolution : 24.0 * resolution * resolution;
-    const RayScene::Build build = double(triangles.size()) >= ray_work ? RayScene::Build::morton : RayScene::Build::sah;
-    const RayScene scene(mesh.positions, triangles, build);
+    const RayScene scene(mesh.positions, triangles);
     triangles.clear();
     triangles.shrink_to_fit();
     if (terrain) terrain_probe(state, scene);

@@ -78,7 +78,7 @@ constexpr const char* kDeviceConfig = "verbose=0";
 }  // namespace
 
 RayScene::RayScene(std::span<const glm::dvec3> positions,
-                   std::span<const std::array<std::uint32_t, 3>> triangles, Build build)
+                   std::span<const std::array<std::uint32_t, 3>> triangles)
     : impl_(std::make_unique<Impl>()) {
     impl_->triangles = triangles.size();
     impl_->device = rtcNewDevice(kDeviceConfig);
@@ -105,9 +105,6 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
         geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), positions.size()));
     auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
         geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles.size()));
-    // A low-quality scene is a two-level BVH whose geometries are built at their own
-    // quality (Embree's default for a geometry, medium, is the SAH builder).
-    if (build == Build::morton) rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
     if ((!vertices && !positions.empty()) || (!indices && !triangles.empty())) {
         rtcReleaseGeometry(geometry);
         embree_failure(impl_->device, "cannot allocate geometry buffers");
