@@ -253,6 +253,64 @@ TEST(MeshReaders, PrecisionLostOnReadingIsNoted) {
     EXPECT_TRUE(contains(stl.reader_notes[0], "STL corners")) << stl.reader_notes[0];
 }
 
+// Text coordinates read as the float nearest the text (as OpenMesh reads them), not as the
+// float nearest the double nearest it: ties between two floats go to the even one, values
+// a double holds exactly that are floats (whole numbers, binary fractions, subnormals),
+// and those just off a tie either way.
+TEST(MeshReaders, CoordinatesReadAsTheFloatNearestTheirText) {
+    const std::vector<std::string> tokens = {
+        "16777217", "16777219", "-16777217", "0.1", "-0", "2.5", "1e-45", "1e-40", "3.4028235e38",
+        "1.0000000596046447753906250", "1.00000005960464477539062500000001", "1.0000000596046447753906249999",
+        "0.30000001192092896", "123456.789", "+7", "0x10", "1e-320"};
+    // Three tokens a vertex line, one face.
+    const auto off = [](std::vector<std::string> xyz) {
+        while (xyz.size() % 3) xyz.push_back("0");
+        std::string text = "OFF\n" + std::to_string(xyz.size() / 3) + " 1 0\n";
+        for (std::size_t i = 0; i < xyz.size(); i += 3) text += xyz[i] + " " + xyz[i + 1] + " " + xyz[i + 2] + "\n";
+        return text + "3 0 1 2\n";
+    };
+    // Hexadecimal is no number here: refused, naming the line (vertex 5 is line 8).
+    expect_refused(scratch("hex_coordinate.off", off(tokens)), "bad token '0x10' at line 8", 8);
+    std::vector<std::string> padded = tokens;
+    padded[15] = "16";
+    while (padded.size() % 3) padded.push_back("0");
+    const std::string text = off(padded);
+    const IndexedMesh mesh = tessref::read_mesh_for_check(scratch("nearest_float.off", text).string());
+    ASSERT_EQ(mesh.vertex_count() * 3, padded.size());
+    for (std::size_t i = 0; i < padded.size(); ++i) {
+        SCOPED_TRACE(padded[i]);
+        const float nearest = std::strtof(padded[i].c_str(), nullptr);
+        const double read = mesh.positions[i / 3][static_cast<int>(i % 3)];
+        EXPECT_EQ(read, double(nearest));
+        EXPECT_EQ(std::signbit(read), std::signbit(nearest));
+    }
+    EXPECT_EQ(mesh.positions[0][0], 16777216.0);
+    EXPECT_EQ(mesh.positions[0][1], 16777220.0);
+    EXPECT_EQ(mesh.positions[3][0], 1.0);                              // a tie: even
+    EXPECT_EQ(mesh.positions[3][1], double(std::nextafter(1.0f, 2.0f)));  // just above it
+    EXPECT_EQ(mesh.positions[3][2], 1.0);                              // just below it
+}
+
+// The rounding note counts every coordinate whose float an earlier coordinate of another
+// value in the file already has (on any axis), and names the first such coordinate in the
+// file and the value of the first coordinate of its float; -0 and 0 are one value.
+TEST(MeshReaders, RoundingNoteNamesTheFirstMergedCoordinate) {
+    const IndexedMesh mesh = tessref::read_mesh_for_check(
+        scratch("merged.off", "OFF\n5 2 0\n"
+                              "0.1 5 0\n"
+                              "-0 0.1000000001 7\n"
+                              "0.10000000002 0 0.1\n"
+                              "5.0000000001 1 7\n"
+                              "0 1 7.000000000000001\n"
+                              "3 0 1 2\n3 2 3 4\n")
+            .string());
+    ASSERT_EQ(mesh.reader_notes.size(), 1u);
+    EXPECT_EQ(mesh.reader_notes[0],
+              "coordinates are read as float and lose precision: 4 vertex coordinates become equal to a different "
+              "value of the file (vertex 1 y = 0.1000000001 reads as 0.10000000149011612, the same float as 0.1); "
+              "faces may read as degenerate");
+}
+
 // 12: messages say what the file said.
 TEST(MeshReaders, MessagesSayWhatTheFileSaid) {
     // The index as written (999, not 998), and its line.

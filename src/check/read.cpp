@@ -96,6 +96,13 @@ std::optional<Real> parse_real(std::string_view token) {
     const auto [p, ec] = std::from_chars(t.data(), end, r.exact);
     if (p != end || ec == std::errc::invalid_argument) return std::nullopt;
     if (ec == std::errc::result_out_of_range) r.exact = std::strtod(std::string(t).c_str(), nullptr);
+    // A double that is a float is also the float nearest the text: a nearer float would be
+    // a nearer double. Such tokens (whole and binary-fraction coordinates) skip the second
+    // parse; the rest are rounded from the text, not from the double (no double rounding).
+    if (ec == std::errc() && double(static_cast<float>(r.exact)) == r.exact) {
+        r.value = static_cast<float>(r.exact);
+        return r;
+    }
     if (std::from_chars(t.data(), end, r.value).ec == std::errc::result_out_of_range)
         r.value = std::abs(r.exact) < 1.0 ? static_cast<float>(r.exact)
                                           : std::copysign(std::numeric_limits<float>::infinity(), float(r.exact));
