@@ -426,6 +426,57 @@ TEST(MeshReaders, PlyBigEndianExtraPropertiesListsAndElements) {
     expect_refused(scratch("be_cut.ply", s.substr(0, s.size() - 1)), "truncated file");
 }
 
+// Binary vertex records without lists are read whole: each property the mesh takes from
+// its offset in the record, in either byte order, whatever the types around it, with and
+// without the attributes and provenance asked for.
+TEST(MeshReaders, PlyBinaryFixedRecordsOfMixedTypes) {
+    for (const bool big : {false, true}) {
+        SCOPED_TRACE(big ? "big endian" : "little endian");
+        const auto order = [big](std::string bytes) { return big ? be(bytes) : bytes; };
+        const auto i16 = [&](int v) {
+            const auto x = static_cast<std::int16_t>(v);
+            return order(std::string(reinterpret_cast<const char*>(&x), 2));
+        };
+        std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+                        " 1.0\nelement vertex 3\nproperty uchar flag\nproperty double x\nproperty float nx\n"
+                        "property short y\nproperty float ny\nproperty float nz\nproperty float z\nproperty int patch_id\n"
+                        "property float tess_u\nproperty float tess_v\nproperty float tess_w\nproperty float u\n"
+                        "property float v\nelement marker 2\nproperty double m\n"
+                        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+        const double xyz[3][3] = {{0.5, 0, 0}, {2, 0, 1.25}, {-1e8 - 8, -3, 7}};
+        for (int i = 0; i < 3; ++i) {
+            const double* p = xyz[i];
+            s += char(i) + order(f64(p[0])) + order(f32(0.0f)) + i16(int(p[1])) + order(f32(0.6f)) + order(f32(0.8f)) +
+                 order(f32(float(p[2]))) + order(le32(40u + i)) + order(f32(0.25f * i)) + order(f32(0.5f)) +
+                 order(f32(0.125f)) + order(f32(1.0f / (i + 1))) + order(f32(-2.0f));
+        }
+        s += order(f64(1.0)) + order(f64(2.0));
+        s += std::string(1, '\3') + order(le32(0)) + order(le32(1)) + order(le32(2));
+        const fs::path path = scratch(big ? "fixed_be.ply" : "fixed_le.ply", s);
+        tessref::MeshFileOptions all;
+        all.vertex_attributes = true;
+        all.provenance = true;
+        for (const bool everything : {false, true}) {
+            const IndexedMesh mesh = tessref::read_mesh_file(path.string(), everything ? all : tessref::MeshFileOptions{});
+            ASSERT_EQ(mesh.vertex_count(), 3u);
+            for (int i = 0; i < 3; ++i)
+                EXPECT_EQ(mesh.positions[i], glm::dvec3(float(xyz[i][0]), xyz[i][1], xyz[i][2])) << i;
+            EXPECT_EQ(mesh.face_vertices, (std::vector<std::uint32_t>{0, 1, 2}));
+            if (!everything) {
+                EXPECT_TRUE(mesh.normals.empty() && mesh.uvs.empty() && mesh.patch_ids.empty());
+                continue;
+            }
+            ASSERT_EQ(mesh.normals.size(), 3u);
+            EXPECT_EQ(mesh.normals[2], glm::vec3(0.0f, 0.6f, 0.8f));
+            EXPECT_EQ(mesh.uvs[2], glm::vec2(1.0f / 3, -2.0f));
+            EXPECT_EQ(mesh.patch_ids, (std::vector<std::uint32_t>{40, 41, 42}));
+            EXPECT_EQ(mesh.tess_coords[2], glm::vec3(0.5f, 0.5f, 0.125f));
+        }
+        // One byte short: refused before any record is read.
+        expect_refused(scratch("fixed_cut.ply", s.substr(0, s.size() - 1)), "truncated file");
+    }
+}
+
 TEST(MeshReaders, ObjCornerFormsNegativeIndicesAndOtherStatements) {
     const IndexedMesh mesh = tessref::read_mesh_for_check(
         scratch("forms.obj", "# comment\nmtllib x.mtl\no thing\nv 0 0 0\nv 1 0 0 1\nv 0 1 0 0.5 0.5 0.5\nvt 0 0\n"

@@ -624,12 +624,34 @@ void read_ply(Reading& r) {
     for (const PlyElement& e : h.elements) {
         const bool is_vertex = &e == vertex_element, is_face = &e == face_element;
         reals.assign(e.properties.size(), Real{});
+        // Binary records without lists have one size: where a whole record is in the file,
+        // the properties the mesh takes are loaded straight from their offsets in it, the
+        // rest skipped (the property-by-property loop below gives what a cut record says).
+        std::size_t record_size = 0;
+        std::vector<std::pair<int, std::size_t>> wanted;  // (property, offset in the record)
+        if (!ascii && std::none_of(e.properties.begin(), e.properties.end(), [](const PlyProperty& p) { return p.list; })) {
+            std::vector<std::size_t> at;
+            for (const PlyProperty& p : e.properties) {
+                at.push_back(record_size);
+                record_size += size_of(p.type);
+            }
+            if (is_vertex)
+                for (int role : {vroles.x, vroles.y, vroles.z, vroles.nx, vroles.ny, vroles.nz, vroles.u, vroles.v,
+                                 vroles.patch_id, vroles.tess_u, vroles.tess_v, vroles.tess_w})
+                    if (role >= 0) wanted.emplace_back(role, at[role]);
+        }
         for (std::uint64_t i = 0; i < e.count; ++i) {
             const std::size_t record_offset = offset;
             std::size_t first_line = 0;
             // Only for messages: formatting it for every record was a tenth of the reading.
             const auto what = [&] { return e.name + " " + str(i); };
-            for (std::size_t pi = 0; pi < e.properties.size(); ++pi) {
+            const bool whole_record = record_size > 0 && r.text.size() - offset >= record_size;
+            if (whole_record) {
+                for (const auto& [pi, at] : wanted)
+                    reals[pi] = real_from_binary(load_scalar(bytes + offset + at, e.properties[pi].type, big));
+                offset += record_size;
+            }
+            for (std::size_t pi = 0; !whole_record && pi < e.properties.size(); ++pi) {
                 const PlyProperty& p = e.properties[pi];
                 const bool indices = is_face && static_cast<int>(pi) == froles.indices;
                 if (indices) ids.clear();
