@@ -29,6 +29,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <optional>
 #include <regex>
 #include <set>
@@ -448,6 +449,70 @@ TEST(CheckCorpus, NonManifoldVertexJoiningTwoFans) {
     }
 }
 
+// Fans around a vertex with few faces and with many (the fan search sorts a vertex's
+// neighbours by insertion up to 32 entries, two a face, and by std::sort above): two cones
+// of `faces` triangles each meeting at their tips are one non-manifold vertex of two fans,
+// whose faces are listed in face order (the first 32); one cone alone is one fan.
+TEST(CheckCorpus, PinchedVertexOfFewOrManyFaces) {
+    for (std::uint32_t faces : {3u, 8u, 16u, 17u, 40u}) {
+        SCOPED_TRACE(faces);
+        IndexedMesh mesh;
+        mesh.positions.push_back({0, 0, 0});  // the shared tip
+        for (int cone = 0; cone < 2; ++cone) {
+            const double dz = cone == 0 ? 1.0 : -1.0;
+            const auto first = static_cast<std::uint32_t>(mesh.positions.size());
+            for (std::uint32_t k = 0; k < faces; ++k) {
+                const double a = 2.0 * M_PI * k / faces;
+                mesh.positions.push_back({std::cos(a), std::sin(a), dz});
+            }
+            for (std::uint32_t k = 0; k < faces; ++k) {
+                const std::uint32_t b = first + k, c = first + (k + 1) % faces;
+                if (cone == 0) mesh.add_triangle(0, c, b);
+                else mesh.add_triangle(0, b, c);
+            }
+        }
+        const CheckReport both = tessref::check_mesh(mesh, quick());
+        ASSERT_EQ(both.count(DefectClass::non_manifold_vertex), 1u);
+        const auto& d = both.of(DefectClass::non_manifold_vertex).locations[0];
+        EXPECT_EQ(d.vertices, std::vector<std::uint32_t>{0});
+        EXPECT_EQ(d.measure, 2.0);
+        std::vector<std::uint32_t> listed(std::min<std::uint32_t>(2 * faces, 32));
+        std::iota(listed.begin(), listed.end(), 0u);
+        EXPECT_EQ(d.faces, listed);
+        // The first cone alone: one fan, a boundary loop around its base.
+        IndexedMesh cone;
+        cone.positions.assign(mesh.positions.begin(), mesh.positions.begin() + 1 + faces);
+        for (std::size_t f = 0; f < faces; ++f) cone.add_face(mesh.face(f));
+        const CheckReport one = tessref::check_mesh(cone, quick());
+        EXPECT_EQ(one.count(DefectClass::non_manifold_vertex), 0u);
+        EXPECT_EQ(one.boundary_loop_count, 1u);
+    }
+}
+
+// Duplicate faces are the faces over an earlier face's vertex set, in any corner order;
+// a triangle sharing two of its vertices (an edge) with another, or a quad holding all
+// three, is no duplicate.
+TEST(CheckCorpus, DuplicateTrianglesInAnyCornerOrderOnly) {
+    IndexedMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, -1, 0}, {0.5, 0.5, 1}};
+    mesh.add_triangle(0, 1, 2);          // 0: the original
+    mesh.add_triangle(1, 0, 4);          // 1: shares edge 0-1 only
+    mesh.add_triangle(2, 0, 1);          // 2: a rotation of 0
+    mesh.add_triangle(1, 0, 2);          // 3: 0 reversed
+    const std::uint32_t quad[] = {0, 1, 3, 2};
+    mesh.add_face(quad);                 // 4: holds 0, 1, 2 and 3
+    mesh.add_triangle(0, 1, 5);          // 5: shares edge 0-1 again
+    mesh.add_triangle(4, 1, 0);          // 6: a rotation of 1
+    const CheckReport r = tessref::check_mesh(mesh, quick(Expect::open));
+    ASSERT_EQ(r.count(DefectClass::duplicate_face), 3u);
+    const auto& found = r.of(DefectClass::duplicate_face).locations;
+    EXPECT_EQ(found[0].faces, (std::vector<std::uint32_t>{0, 2}));
+    EXPECT_EQ(found[1].faces, (std::vector<std::uint32_t>{0, 3}));
+    EXPECT_EQ(found[2].faces, (std::vector<std::uint32_t>{1, 6}));
+    EXPECT_EQ(found[0].detail, "face 2 repeats face 0 (same vertices, other order)");
+    EXPECT_EQ(r.topology_excluded_faces, 3u);
+}
+
 TEST(CheckCorpus, TJunctionOnTheCube) {
     for (const char* name : {"t_junction.off", "t_junction.stl"}) {
         SCOPED_TRACE(name);
@@ -698,6 +763,49 @@ TEST(CheckReport, SameReportWhateverTheThreadCount) {
         one = tessref::report_json(tessref::check_mesh(broken, quick()));
     }
     EXPECT_EQ(one, tessref::report_json(tessref::check_mesh(broken, quick())));
+}
+
+// Every corpus file and a terrain with holes, flipped and repeated faces, shuffled: the
+// same report, defects in the same order, on one thread and on two.
+TEST(CheckReport, SameDefectsInTheSameOrderOnOneThreadAndTwo) {
+    std::vector<IndexedMesh> meshes;
+    for (const auto& entry : fs::directory_iterator(corpus_dir)) {
+        const std::string ext = entry.path().extension().string();
+        if (ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl")
+            meshes.push_back(tessref::read_mesh_for_check(entry.path().string()));
+    }
+    const IndexedMesh terrain = tessref::indexed_mesh_from(grid_terrain(6, 12, hills));
+    IndexedMesh broken;
+    broken.positions = terrain.positions;
+    std::uint64_t random = 99;
+    const auto next = [&random](std::uint64_t n) {
+        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<std::size_t>((random >> 33) % n);
+    };
+    std::vector<std::size_t> order;
+    for (std::size_t f = 0; f < terrain.face_count(); ++f)
+        if (next(50) != 0) order.push_back(f);  // holes
+    for (int k = 0; k < 20; ++k) order.push_back(order[next(order.size())]);  // duplicates
+    for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[next(i)]);
+    for (std::size_t f : order) {
+        std::vector<std::uint32_t> face(terrain.face(f).begin(), terrain.face(f).end());
+        if (next(40) == 0) std::reverse(face.begin(), face.end());  // flipped
+        broken.add_face(face);
+    }
+    meshes.push_back(std::move(broken));
+    for (const IndexedMesh& mesh : meshes) {
+        SCOPED_TRACE(mesh.source.empty() ? "broken terrain" : mesh.source);
+        std::string reports[2];
+        for (int threads : {1, 2}) {
+            tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+            reports[threads - 1] = tessref::report_json(tessref::check_mesh(mesh, quick()));
+        }
+        EXPECT_EQ(reports[0], reports[1]);
+    }
+    const CheckReport r = tessref::check_mesh(meshes.back(), quick());
+    EXPECT_GT(r.count(DefectClass::boundary_loop), 0u);
+    EXPECT_GT(r.count(DefectClass::duplicate_face), 0u);
+    EXPECT_GT(r.count(DefectClass::inconsistent_orientation), 0u);
 }
 
 // read_and_check_mesh() (the command's path, OpenMesh's import skipped where the topology

@@ -253,6 +253,64 @@ TEST(MeshReaders, PrecisionLostOnReadingIsNoted) {
     EXPECT_TRUE(contains(stl.reader_notes[0], "STL corners")) << stl.reader_notes[0];
 }
 
+// Text coordinates read as the float nearest the text (as OpenMesh reads them), not as the
+// float nearest the double nearest it: ties between two floats go to the even one, values
+// a double holds exactly that are floats (whole numbers, binary fractions, subnormals),
+// and those just off a tie either way.
+TEST(MeshReaders, CoordinatesReadAsTheFloatNearestTheirText) {
+    const std::vector<std::string> tokens = {
+        "16777217", "16777219", "-16777217", "0.1", "-0", "2.5", "1e-45", "1e-40", "3.4028235e38",
+        "1.0000000596046447753906250", "1.00000005960464477539062500000001", "1.0000000596046447753906249999",
+        "0.30000001192092896", "123456.789", "+7", "0x10", "1e-320"};
+    // Three tokens a vertex line, one face.
+    const auto off = [](std::vector<std::string> xyz) {
+        while (xyz.size() % 3) xyz.push_back("0");
+        std::string text = "OFF\n" + std::to_string(xyz.size() / 3) + " 1 0\n";
+        for (std::size_t i = 0; i < xyz.size(); i += 3) text += xyz[i] + " " + xyz[i + 1] + " " + xyz[i + 2] + "\n";
+        return text + "3 0 1 2\n";
+    };
+    // Hexadecimal is no number here: refused, naming the line (vertex 5 is line 8).
+    expect_refused(scratch("hex_coordinate.off", off(tokens)), "bad token '0x10' at line 8", 8);
+    std::vector<std::string> padded = tokens;
+    padded[15] = "16";
+    while (padded.size() % 3) padded.push_back("0");
+    const std::string text = off(padded);
+    const IndexedMesh mesh = tessref::read_mesh_for_check(scratch("nearest_float.off", text).string());
+    ASSERT_EQ(mesh.vertex_count() * 3, padded.size());
+    for (std::size_t i = 0; i < padded.size(); ++i) {
+        SCOPED_TRACE(padded[i]);
+        const float nearest = std::strtof(padded[i].c_str(), nullptr);
+        const double read = mesh.positions[i / 3][static_cast<int>(i % 3)];
+        EXPECT_EQ(read, double(nearest));
+        EXPECT_EQ(std::signbit(read), std::signbit(nearest));
+    }
+    EXPECT_EQ(mesh.positions[0][0], 16777216.0);
+    EXPECT_EQ(mesh.positions[0][1], 16777220.0);
+    EXPECT_EQ(mesh.positions[3][0], 1.0);                              // a tie: even
+    EXPECT_EQ(mesh.positions[3][1], double(std::nextafter(1.0f, 2.0f)));  // just above it
+    EXPECT_EQ(mesh.positions[3][2], 1.0);                              // just below it
+}
+
+// The rounding note counts every coordinate whose float an earlier coordinate of another
+// value in the file already has (on any axis), and names the first such coordinate in the
+// file and the value of the first coordinate of its float; -0 and 0 are one value.
+TEST(MeshReaders, RoundingNoteNamesTheFirstMergedCoordinate) {
+    const IndexedMesh mesh = tessref::read_mesh_for_check(
+        scratch("merged.off", "OFF\n5 2 0\n"
+                              "0.1 5 0\n"
+                              "-0 0.1000000001 7\n"
+                              "0.10000000002 0 0.1\n"
+                              "5.0000000001 1 7\n"
+                              "0 1 7.000000000000001\n"
+                              "3 0 1 2\n3 2 3 4\n")
+            .string());
+    ASSERT_EQ(mesh.reader_notes.size(), 1u);
+    EXPECT_EQ(mesh.reader_notes[0],
+              "coordinates are read as float and lose precision: 4 vertex coordinates become equal to a different "
+              "value of the file (vertex 1 y = 0.1000000001 reads as 0.10000000149011612, the same float as 0.1); "
+              "faces may read as degenerate");
+}
+
 // 12: messages say what the file said.
 TEST(MeshReaders, MessagesSayWhatTheFileSaid) {
     // The index as written (999, not 998), and its line.
@@ -366,6 +424,57 @@ TEST(MeshReaders, PlyBigEndianExtraPropertiesListsAndElements) {
     EXPECT_EQ(mesh.face_vertices, (std::vector<std::uint32_t>{0, 1, 2}));
     // The same file one byte short is truncated.
     expect_refused(scratch("be_cut.ply", s.substr(0, s.size() - 1)), "truncated file");
+}
+
+// Binary vertex records without lists are read whole: each property the mesh takes from
+// its offset in the record, in either byte order, whatever the types around it, with and
+// without the attributes and provenance asked for.
+TEST(MeshReaders, PlyBinaryFixedRecordsOfMixedTypes) {
+    for (const bool big : {false, true}) {
+        SCOPED_TRACE(big ? "big endian" : "little endian");
+        const auto order = [big](std::string bytes) { return big ? be(bytes) : bytes; };
+        const auto i16 = [&](int v) {
+            const auto x = static_cast<std::int16_t>(v);
+            return order(std::string(reinterpret_cast<const char*>(&x), 2));
+        };
+        std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+                        " 1.0\nelement vertex 3\nproperty uchar flag\nproperty double x\nproperty float nx\n"
+                        "property short y\nproperty float ny\nproperty float nz\nproperty float z\nproperty int patch_id\n"
+                        "property float tess_u\nproperty float tess_v\nproperty float tess_w\nproperty float u\n"
+                        "property float v\nelement marker 2\nproperty double m\n"
+                        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+        const double xyz[3][3] = {{0.5, 0, 0}, {2, 0, 1.25}, {-1e8 - 8, -3, 7}};
+        for (int i = 0; i < 3; ++i) {
+            const double* p = xyz[i];
+            s += char(i) + order(f64(p[0])) + order(f32(0.0f)) + i16(int(p[1])) + order(f32(0.6f)) + order(f32(0.8f)) +
+                 order(f32(float(p[2]))) + order(le32(40u + i)) + order(f32(0.25f * i)) + order(f32(0.5f)) +
+                 order(f32(0.125f)) + order(f32(1.0f / (i + 1))) + order(f32(-2.0f));
+        }
+        s += order(f64(1.0)) + order(f64(2.0));
+        s += std::string(1, '\3') + order(le32(0)) + order(le32(1)) + order(le32(2));
+        const fs::path path = scratch(big ? "fixed_be.ply" : "fixed_le.ply", s);
+        tessref::MeshFileOptions all;
+        all.vertex_attributes = true;
+        all.provenance = true;
+        for (const bool everything : {false, true}) {
+            const IndexedMesh mesh = tessref::read_mesh_file(path.string(), everything ? all : tessref::MeshFileOptions{});
+            ASSERT_EQ(mesh.vertex_count(), 3u);
+            for (int i = 0; i < 3; ++i)
+                EXPECT_EQ(mesh.positions[i], glm::dvec3(float(xyz[i][0]), xyz[i][1], xyz[i][2])) << i;
+            EXPECT_EQ(mesh.face_vertices, (std::vector<std::uint32_t>{0, 1, 2}));
+            if (!everything) {
+                EXPECT_TRUE(mesh.normals.empty() && mesh.uvs.empty() && mesh.patch_ids.empty());
+                continue;
+            }
+            ASSERT_EQ(mesh.normals.size(), 3u);
+            EXPECT_EQ(mesh.normals[2], glm::vec3(0.0f, 0.6f, 0.8f));
+            EXPECT_EQ(mesh.uvs[2], glm::vec2(1.0f / 3, -2.0f));
+            EXPECT_EQ(mesh.patch_ids, (std::vector<std::uint32_t>{40, 41, 42}));
+            EXPECT_EQ(mesh.tess_coords[2], glm::vec3(0.5f, 0.5f, 0.125f));
+        }
+        // One byte short: refused before any record is read.
+        expect_refused(scratch("fixed_cut.ply", s.substr(0, s.size() - 1)), "truncated file");
+    }
 }
 
 TEST(MeshReaders, ObjCornerFormsNegativeIndicesAndOtherStatements) {

@@ -131,10 +131,16 @@ void analyse_face_geometry(CheckState& state) {
         std::map<std::uint32_t, ComponentSums> components;
         std::vector<Defect> degenerate;
         std::size_t degenerate_count = 0;
+        // Per axis: whether some face turns away from +axis / from -axis (the terrain test
+        // below, for whichever axis turns out to be up).
+        bool turned_from_plus[3] = {false, false, false}, turned_from_minus[3] = {false, false, false};
     };
     const std::size_t cap = state.options.max_locations;
     const double tolerance = state.tolerance;
     auto results = map_chunks<ChunkResult>(mesh.face_count(), face_chunk, [&](std::size_t f0, std::size_t f1, ChunkResult& out) {
+        // Faces of one component come in runs: look its sums up once a run.
+        std::uint32_t component = none;
+        ComponentSums* sums = nullptr;
         for (std::size_t f = f0; f < f1; ++f) {
             const auto face = mesh.face(f);
             if (face.size() >= 3) out.triangles += face.size() - 2;
@@ -149,11 +155,19 @@ void analyse_face_geometry(CheckState& state) {
             const double sign = have_flips && state.face_flipped[f] ? -1.0 : 1.0;
             out.area += area;
             out.volume_as_listed += volume;
-            out.vector_area += sign * a;
-            ComponentSums& c = out.components[state.vertex_component[face[0]]];
-            c.volume += sign * volume;
-            ++c.faces;
-            c.first_face = std::min(c.first_face, static_cast<std::uint32_t>(f));
+            const glm::dvec3 oriented = sign * a;
+            out.vector_area += oriented;
+            for (int k = 0; k < 3; ++k) {
+                out.turned_from_plus[k] = out.turned_from_plus[k] || oriented[k] < -1e-6 * area;
+                out.turned_from_minus[k] = out.turned_from_minus[k] || -oriented[k] < -1e-6 * area;
+            }
+            if (state.vertex_component[face[0]] != component || !sums) {
+                component = state.vertex_component[face[0]];
+                sums = &out.components[component];  // std::map: the address stays valid
+            }
+            sums->volume += sign * volume;
+            ++sums->faces;
+            sums->first_face = std::min(sums->first_face, static_cast<std::uint32_t>(f));
 
             // Degenerate: the face is thinner than the tolerance across its longest edge.
             double longest = 0.0;
@@ -180,6 +194,7 @@ void analyse_face_geometry(CheckState& state) {
 
     std::vector<ComponentSums> components(report.component_count);
     glm::dvec3 vector_area(0.0);
+    bool turned_from_plus[3] = {false, false, false}, turned_from_minus[3] = {false, false, false};
     auto& degenerate = report.defects[int(DefectClass::degenerate_face)];
     for (ChunkResult& r : results) {
         report.surface_area += r.area;
@@ -191,6 +206,10 @@ void analyse_face_geometry(CheckState& state) {
             c.volume += sums.volume;
             c.faces += sums.faces;
             c.first_face = std::min(c.first_face, sums.first_face);
+        }
+        for (int k = 0; k < 3; ++k) {
+            turned_from_plus[k] = turned_from_plus[k] || r.turned_from_plus[k];
+            turned_from_minus[k] = turned_from_minus[k] || r.turned_from_minus[k];
         }
         degenerate.count += r.degenerate_count;
         for (Defect& d : r.degenerate)
@@ -205,18 +224,11 @@ void analyse_face_geometry(CheckState& state) {
     state.up_sign = vector_area[state.up_axis] < 0.0 ? -1.0 : 1.0;
     report.up_axis = state.up_axis;
 
-    // A terrain: open, and no face turned away from up (vertical walls allowed).
-    if (!report.closed && magnitude[state.up_axis] > 0.0) {
-        std::atomic<bool> facing_down{false};
-        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
-            for (std::size_t f = r.begin(); f != r.end() && !facing_down.load(std::memory_order_relaxed); ++f) {
-                if (state.face_status[f] != face_kept) continue;
-                const glm::dvec3 a = face_vector_area(mesh, f) * (have_flips && state.face_flipped[f] ? -1.0 : 1.0);
-                if (state.up_sign * a[state.up_axis] < -1e-6 * glm::length(a)) facing_down = true;
-            }
-        });
-        report.terrain_like = !facing_down.load();
-    }
+    // A terrain: open, and no face turned away from up (vertical walls allowed): for no
+    // face up_sign * a[up] < -1e-6 |a|, a its oriented vector area (negating is exact, so
+    // the flags above, taken for both signs, decide it exactly).
+    if (!report.closed && magnitude[state.up_axis] > 0.0)
+        report.terrain_like = !(state.up_sign > 0.0 ? turned_from_plus : turned_from_minus)[state.up_axis];
 
     // Closed components must enclose a positive volume (faces pointing outward).
     for (std::uint32_t c = 0; c < components.size(); ++c) {

@@ -26,6 +26,7 @@
 #include <limits>
 #include <optional>
 #include <string_view>
+#include <tuple>
 #include <unordered_map>
 
 #include <fcntl.h>
@@ -34,6 +35,7 @@
 #include <unistd.h>
 
 #include "check/check_internal.h"
+#include "common/parallel.h"
 #include "mesh/openmesh.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
@@ -94,6 +96,13 @@ std::optional<Real> parse_real(std::string_view token) {
     const auto [p, ec] = std::from_chars(t.data(), end, r.exact);
     if (p != end || ec == std::errc::invalid_argument) return std::nullopt;
     if (ec == std::errc::result_out_of_range) r.exact = std::strtod(std::string(t).c_str(), nullptr);
+    // A double that is a float is also the float nearest the text: a nearer float would be
+    // a nearer double. Such tokens (whole and binary-fraction coordinates) skip the second
+    // parse; the rest are rounded from the text, not from the double (no double rounding).
+    if (ec == std::errc() && double(static_cast<float>(r.exact)) == r.exact) {
+        r.value = static_cast<float>(r.exact);
+        return r;
+    }
     if (std::from_chars(t.data(), end, r.value).ec == std::errc::result_out_of_range)
         r.value = std::abs(r.exact) < 1.0 ? static_cast<float>(r.exact)
                                           : std::copysign(std::numeric_limits<float>::infinity(), float(r.exact));
@@ -323,18 +332,45 @@ public:
     // The reader note for coordinates that rounding to float made equal.
     void note_rounding() {
         if (!rounded && merged_corners_ == 0) return;
-        std::unordered_map<std::uint32_t, double> exact_of;  // float bits -> first value of the file
+        // A coordinate is merged when its float holds an earlier coordinate of another value
+        // in the file. Sorted by (float, place in the file), each float's first coordinate
+        // leads its run; the example is the merged coordinate first in the file. (A hash map
+        // of first values, visited in file order, was a sixth of reading an ASCII PLY.)
+        struct Coordinate {
+            std::uint32_t bits;    // FloatPointKey::bits of the float
+            std::uint32_t vertex;
+            std::uint32_t axis;
+            auto operator<=>(const Coordinate&) const = default;
+        };
+        std::vector<Coordinate> coordinates(3 * exact.size());
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, exact.size(), 1 << 14), [&](const auto& r) {
+            for (std::size_t v = r.begin(); v != r.end(); ++v)
+                for (std::uint32_t k = 0; k < 3; ++k)
+                    coordinates[3 * v + k] = {FloatPointKey::bits(static_cast<float>(mesh.positions[v][k])),
+                                              static_cast<std::uint32_t>(v), k};
+        });
+        tessref::parallel_sort(coordinates.begin(), coordinates.end());
         std::uint64_t merged = 0;
-        std::string example;
-        for (std::size_t v = 0; v < exact.size(); ++v)
-            for (int k = 0; k < 3; ++k) {
-                const float f = static_cast<float>(mesh.positions[v][k]);
-                const auto [it, inserted] = exact_of.try_emplace(FloatPointKey::bits(f), exact[v][k]);
-                if (inserted || it->second == exact[v][k]) continue;
-                if (merged++ == 0)
-                    example = "vertex " + str(v) + " " + "xyz"[k] + " = " + number_text(exact[v][k]) + " reads as " +
-                              number_text(f) + ", the same float as " + number_text(it->second);
+        const Coordinate* first_merged = nullptr;
+        const Coordinate* first_of_its_float = nullptr;
+        for (std::size_t i = 0, run = 0; i < coordinates.size(); ++i) {
+            const Coordinate& c = coordinates[i];
+            if (c.bits != coordinates[run].bits) run = i;
+            const Coordinate& first = coordinates[run];
+            if (exact[c.vertex][c.axis] == exact[first.vertex][first.axis]) continue;
+            ++merged;
+            if (!first_merged || std::tie(c.vertex, c.axis) < std::tie(first_merged->vertex, first_merged->axis)) {
+                first_merged = &c;
+                first_of_its_float = &first;
             }
+        }
+        std::string example;
+        if (first_merged) {
+            const std::uint32_t v = first_merged->vertex, k = first_merged->axis;
+            example = "vertex " + str(v) + " " + "xyz"[k] + " = " + number_text(exact[v][k]) + " reads as " +
+                      number_text(static_cast<float>(mesh.positions[v][k])) + ", the same float as " +
+                      number_text(exact[first_of_its_float->vertex][first_of_its_float->axis]);
+        }
         if (merged > 0)
             mesh.reader_notes.push_back("coordinates are read as float and lose precision: " + str(merged) +
                                         " vertex coordinates become equal to a different value of the file (" +
@@ -588,11 +624,34 @@ void read_ply(Reading& r) {
     for (const PlyElement& e : h.elements) {
         const bool is_vertex = &e == vertex_element, is_face = &e == face_element;
         reals.assign(e.properties.size(), Real{});
+        // Binary records without lists have one size: where a whole record is in the file,
+        // the properties the mesh takes are loaded straight from their offsets in it, the
+        // rest skipped (the property-by-property loop below gives what a cut record says).
+        std::size_t record_size = 0;
+        std::vector<std::pair<int, std::size_t>> wanted;  // (property, offset in the record)
+        if (!ascii && std::none_of(e.properties.begin(), e.properties.end(), [](const PlyProperty& p) { return p.list; })) {
+            std::vector<std::size_t> at;
+            for (const PlyProperty& p : e.properties) {
+                at.push_back(record_size);
+                record_size += size_of(p.type);
+            }
+            if (is_vertex)
+                for (int role : {vroles.x, vroles.y, vroles.z, vroles.nx, vroles.ny, vroles.nz, vroles.u, vroles.v,
+                                 vroles.patch_id, vroles.tess_u, vroles.tess_v, vroles.tess_w})
+                    if (role >= 0) wanted.emplace_back(role, at[role]);
+        }
         for (std::uint64_t i = 0; i < e.count; ++i) {
             const std::size_t record_offset = offset;
             std::size_t first_line = 0;
-            const std::string what = e.name + " " + str(i);
-            for (std::size_t pi = 0; pi < e.properties.size(); ++pi) {
+            // Only for messages: formatting it for every record was a tenth of the reading.
+            const auto what = [&] { return e.name + " " + str(i); };
+            const bool whole_record = record_size > 0 && r.text.size() - offset >= record_size;
+            if (whole_record) {
+                for (const auto& [pi, at] : wanted)
+                    reals[pi] = real_from_binary(load_scalar(bytes + offset + at, e.properties[pi].type, big));
+                offset += record_size;
+            }
+            for (std::size_t pi = 0; !whole_record && pi < e.properties.size(); ++pi) {
                 const PlyProperty& p = e.properties[pi];
                 const bool indices = is_face && static_cast<int>(pi) == froles.indices;
                 if (indices) ids.clear();
@@ -601,26 +660,26 @@ void read_ply(Reading& r) {
                     if (pi == 0) first_line = tokens.line();
                     if (!p.list) {
                         const auto v = parse_real(token);
-                        if (!v) throw r.bad_token(token, tokens.line(), "a number (" + what + ", property " + p.name + ")");
+                        if (!v) throw r.bad_token(token, tokens.line(), "a number (" + what() + ", property " + p.name + ")");
                         reals[pi] = *v;
                         continue;
                     }
                     const auto count = parse_integer(token);
                     if (!count || *count < 0)
-                        throw r.bad_token(token, tokens.line(), "a list length (" + what + ", property " + p.name + ")");
+                        throw r.bad_token(token, tokens.line(), "a list length (" + what() + ", property " + p.name + ")");
                     if (static_cast<std::uint64_t>(*count) > tokens.bytes_left() / 2 + 1)
-                        throw r.error("truncated file: " + what + " at line " + str(tokens.line()) + " lists " +
+                        throw r.error("truncated file: " + what() + " at line " + str(tokens.line()) + " lists " +
                                           str(*count) + " values, more than the rest of the file holds",
                                       tokens.line());
                     for (std::int64_t k = 0; k < *count; ++k) {
                         const std::string_view item = tokens.next();
                         if (!indices) {
                             if (!parse_real(item))
-                                throw r.bad_token(item, tokens.line(), "a number (" + what + ", property " + p.name + ")");
+                                throw r.bad_token(item, tokens.line(), "a number (" + what() + ", property " + p.name + ")");
                             continue;
                         }
                         const auto index = parse_integer(item);
-                        if (!index) throw r.bad_token(item, tokens.line(), "a vertex index (" + what + ")");
+                        if (!index) throw r.bad_token(item, tokens.line(), "a vertex index (" + what() + ")");
                         if (*index < 0 || static_cast<std::uint64_t>(*index) >= vertex_count)
                             throw r.error("face " + str(i) + " at line " + str(tokens.line()) + " refers to vertex " +
                                               std::to_string(*index) + ", but the file has " + str(vertex_count) +
@@ -631,7 +690,7 @@ void read_ply(Reading& r) {
                 } else {
                     const std::size_t size = size_of(p.list ? p.count_type : p.type);
                     if (offset + size > r.text.size())
-                        throw r.error("truncated file: " + what + at_byte(offset) + " is cut off (the header declares " +
+                        throw r.error("truncated file: " + what() + at_byte(offset) + " is cut off (the header declares " +
                                       str(e.count) + " " + e.name + " records)");
                     const double v = load_scalar(bytes + offset, p.list ? p.count_type : p.type, big);
                     if (!p.list) {
@@ -639,10 +698,10 @@ void read_ply(Reading& r) {
                         offset += size;
                         continue;
                     }
-                    if (v < 0) throw r.error(what + at_byte(offset) + " has a negative list length (" + Reading::number_text(v) + ")");
+                    if (v < 0) throw r.error(what() + at_byte(offset) + " has a negative list length (" + Reading::number_text(v) + ")");
                     const std::size_t item = size_of(p.type);
                     if (v * item > double(r.text.size() - offset - size))
-                        throw r.error("truncated file: " + what + at_byte(offset) + " lists " + Reading::number_text(v) +
+                        throw r.error("truncated file: " + what() + at_byte(offset) + " lists " + Reading::number_text(v) +
                                       " values, more than the rest of the file holds");
                     const auto count = static_cast<std::uint64_t>(v);
                     offset += size;

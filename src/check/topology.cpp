@@ -114,7 +114,13 @@ void find_duplicate_faces(CheckState& state) {
             for (std::uint32_t i = b; i < e; ++i)
                 for (std::uint32_t j = i + 1; j < e; ++j) {
                     std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
-                    if (f == g || !same_vertex_set(mesh, f, g)) continue;
+                    if (f == g) continue;
+                    const auto x = mesh.face(f), y = mesh.face(g);
+                    // Two triangles on this edge hold both its vertices (a kept face repeats
+                    // none), so their third vertices decide, and so do the xors of all three.
+                    if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
+                                                       : !same_vertex_set(mesh, f, g))
+                        continue;
                     if (f > g) std::swap(f, g);
                     std::atomic_ref<std::uint32_t> slot(duplicate_of[g]);
                     std::uint32_t current = slot.load(std::memory_order_relaxed);
@@ -239,7 +245,9 @@ void find_non_manifold_vertices(CheckState& state) {
     };
     const std::size_t cap = state.options.max_locations;
     auto results = map_chunks<ChunkResult>(vertex_count, vertex_chunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> by_neighbour;  // (neighbour, local face)
+        // neighbour << 32 | local face: one integer compare a step, and a vertex's few
+        // entries sorted by insertion.
+        std::vector<std::uint64_t> by_neighbour;
         std::vector<std::uint32_t> parent;
         for (std::size_t v = v0; v < v1; ++v) {
             const std::uint32_t b = start[v], e = start[v + 1];
@@ -250,10 +258,19 @@ void find_non_manifold_vertices(CheckState& state) {
                 const std::size_t n = face.size();
                 std::size_t k = 0;
                 while (face[k] != v) ++k;
-                by_neighbour.emplace_back(face[(k + n - 1) % n], i - b);
-                by_neighbour.emplace_back(face[(k + 1) % n], i - b);
+                by_neighbour.push_back(std::uint64_t(face[(k + n - 1) % n]) << 32 | (i - b));
+                by_neighbour.push_back(std::uint64_t(face[(k + 1) % n]) << 32 | (i - b));
             }
-            std::sort(by_neighbour.begin(), by_neighbour.end());
+            if (by_neighbour.size() <= 32) {
+                for (std::size_t i = 1; i < by_neighbour.size(); ++i) {
+                    const std::uint64_t x = by_neighbour[i];
+                    std::size_t j = i;
+                    for (; j > 0 && by_neighbour[j - 1] > x; --j) by_neighbour[j] = by_neighbour[j - 1];
+                    by_neighbour[j] = x;
+                }
+            } else {
+                std::sort(by_neighbour.begin(), by_neighbour.end());
+            }
             parent.resize(e - b);
             std::iota(parent.begin(), parent.end(), 0u);
             auto find = [&](std::uint32_t x) {
@@ -262,8 +279,9 @@ void find_non_manifold_vertices(CheckState& state) {
             };
             std::uint32_t fans = e - b;
             for (std::size_t i = 1; i < by_neighbour.size(); ++i) {
-                if (by_neighbour[i].first != by_neighbour[i - 1].first) continue;
-                const std::uint32_t x = find(by_neighbour[i].second), y = find(by_neighbour[i - 1].second);
+                if (by_neighbour[i] >> 32 != by_neighbour[i - 1] >> 32) continue;
+                const std::uint32_t x = find(static_cast<std::uint32_t>(by_neighbour[i])),
+                                    y = find(static_cast<std::uint32_t>(by_neighbour[i - 1]));
                 if (x != y) {
                     parent[std::max(x, y)] = std::min(x, y);
                     --fans;
