@@ -149,6 +149,9 @@ public:
     std::size_t triangle_base(std::size_t patch) const;
     // The patch owning a triangle of run_pipeline()'s mesh.
     std::size_t patch_of_triangle(std::size_t triangle) const;
+    // The end of a run of whole patches from `first` (< patch_count()): the first patch, and
+    // the ones after it while the run holds at most `triangles` triangles.
+    std::size_t run_end(std::size_t first, std::size_t triangles) const;
     bool has_uvs() const;       // emit() writes mesh.uvs
     bool has_normals() const;   // emit() writes mesh.normals (per-vertex geometry normals)
     bool face_normals() const;  // [geometry] normals = "face": emit() writes face normals
@@ -173,6 +176,11 @@ public:
     enum class VertexNormals { now, later };
     void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
               std::vector<glm::dvec3>* face_normals, VertexNormals normals = VertexNormals::now) const;
+    // size() and emit() for the run of patches [first, last) as one mesh: its vertices and
+    // triangles from index 0, the triangles indexing the run's own vertices; face normals
+    // into *face_normals when face_normals() and the pointer is not null.
+    void emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh, std::vector<glm::dvec3>* face_normals,
+                  VertexNormals normals = VertexNormals::now) const;
     // The evaluation at some of a patch's domain points (indices into pattern(patch).points()),
     // written like emit()'s vertices at mesh index first on (normals included); no triangles.
     void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,

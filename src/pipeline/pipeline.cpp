@@ -368,8 +368,7 @@ constexpr std::size_t kPiecesAtOnce = 4;
 
 struct Piece {
     std::size_t first_patch = 0, last_patch = 0;
-    SurfaceMesh mesh;
-    std::vector<glm::dvec3> face_normals;  // emit() sizes them; a mesh file has none
+    SurfaceMesh mesh;  // no face normals: a mesh file has none
 };
 
 struct Batch {
@@ -380,17 +379,12 @@ struct Batch {
 
 // The next pieces of whole patches from next_patch on (none when it is past the last).
 void plan_batch(const PatchStream& stream, std::size_t& next_patch, Batch& batch) {
-    const std::size_t n = stream.patch_count();
-    const auto triangles_of = [&](std::size_t p) { return stream.triangle_base(p + 1) - stream.triangle_base(p); };
     batch.used = 0;
     batch.failure = nullptr;
-    for (; batch.used < batch.pieces.size() && next_patch < n; ++batch.used) {
+    for (; batch.used < batch.pieces.size() && next_patch < stream.patch_count(); ++batch.used) {
         Piece& piece = batch.pieces[batch.used];
         piece.first_patch = next_patch;
-        std::size_t triangles = triangles_of(next_patch++);
-        while (next_patch < n && triangles + triangles_of(next_patch) <= kPieceTriangles)
-            triangles += triangles_of(next_patch++);
-        piece.last_patch = next_patch;
+        next_patch = piece.last_patch = stream.run_end(next_patch, kPieceTriangles);
     }
 }
 
@@ -400,11 +394,7 @@ void evaluate_batch(const PatchStream& stream, Batch& batch) {
     try {
         tessref::parallel_for(std::size_t{0}, batch.used, [&](std::size_t k) {
             Piece& piece = batch.pieces[k];
-            const std::size_t v0 = stream.vertex_base(piece.first_patch), t0 = stream.triangle_base(piece.first_patch);
-            stream.size(piece.mesh, piece.face_normals, stream.vertex_base(piece.last_patch) - v0,
-                        stream.triangle_base(piece.last_patch) - t0);
-            for (std::size_t p = piece.first_patch; p < piece.last_patch; ++p)
-                stream.emit(p, piece.mesh, stream.vertex_base(p) - v0, stream.triangle_base(p) - t0, nullptr);
+            stream.emit_run(piece.first_patch, piece.last_patch, piece.mesh, nullptr);
             // World positions, as run() adds the origin back (in double).
             if (origin != glm::dvec3(0.0))
                 for (glm::dvec3& position : piece.mesh.positions) position += origin;
@@ -502,6 +492,12 @@ std::size_t PatchStream::patch_of_triangle(std::size_t triangle) const {
     const auto it = std::upper_bound(base.begin(), base.end(), triangle);
     return static_cast<std::size_t>(it - base.begin()) - 1;
 }
+std::size_t PatchStream::run_end(std::size_t first, std::size_t triangles) const {
+    const auto& base = impl_->triangle_base;
+    std::size_t last = first + 1;
+    while (last < patch_count() && base.at(last + 1) - base.at(first) <= triangles) ++last;
+    return last;
+}
 bool PatchStream::has_uvs() const { return impl_->has_uvs; }
 bool PatchStream::has_normals() const { return impl_->has_normals; }
 bool PatchStream::face_normals() const { return impl_->face_normals; }
@@ -520,6 +516,14 @@ void PatchStream::size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals,
 void PatchStream::emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
                        std::vector<glm::dvec3>* face_normals, VertexNormals normals) const {
     impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals, normals == VertexNormals::now);
+}
+void PatchStream::emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh,
+                           std::vector<glm::dvec3>* face_normals, VertexNormals normals) const {
+    const std::size_t v0 = vertex_base(first), t0 = triangle_base(first);
+    std::vector<glm::dvec3> none;
+    size(mesh, face_normals ? *face_normals : none, vertex_base(last) - v0, triangle_base(last) - t0);
+    for (std::size_t p = first; p < last; ++p)
+        emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals);
 }
 std::array<std::uint32_t, 3> PatchStream::triangle(std::size_t triangle, SurfaceMesh& out,
                                                   glm::dvec3* face_normal) const {

@@ -381,28 +381,16 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             PatchChunk& c = chunks[used++];
             c.first_patch = next_patch;
             c.first_triangle = static_cast<std::uint32_t>(stream.triangle_base(next_patch));
-            std::size_t triangles = 0;
-            while (next_patch < n && (triangles == 0 || triangles + (stream.triangle_base(next_patch + 1) -
-                                                                     stream.triangle_base(next_patch)) <=
-                                                            kStreamChunkTriangles)) {
-                triangles += stream.triangle_base(next_patch + 1) - stream.triangle_base(next_patch);
-                ++next_patch;
-            }
-            c.last_patch = next_patch;
-            batch_triangles += triangles;
+            next_patch = c.last_patch = stream.run_end(next_patch, kStreamChunkTriangles);
+            batch_triangles += stream.triangle_base(c.last_patch) - c.first_triangle;
         }
         // Evaluate and project the chunks' patches (pass 4 of the pipeline, then gl_Position).
         auto lap = Clock::now();
         tessref::parallel_for(std::size_t{0}, used, [&](std::size_t k) {
             PatchChunk& c = chunks[k];
-            const std::size_t v0 = stream.vertex_base(c.first_patch), t0 = stream.triangle_base(c.first_patch);
-            const std::size_t vertices = stream.vertex_base(c.last_patch) - v0;
-            const std::size_t triangles = stream.triangle_base(c.last_patch) - t0;
             SurfaceMesh& m = c.mesh;
-            stream.size(m, c.face_normals, vertices, triangles);
-            for (std::size_t p = c.first_patch; p < c.last_patch; ++p)
-                stream.emit(p, m, stream.vertex_base(p) - v0, stream.triangle_base(p) - t0, &c.face_normals,
-                            normals_mode);
+            stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode);
+            const std::size_t vertices = m.positions.size();
             if (defer_normals) c.wins.assign(vertices, 0);
             c.clip.resize(vertices);
             bool finite = true;
