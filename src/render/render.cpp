@@ -283,12 +283,13 @@ struct PatchChunk {
 
 // Triangles per chunk (a chunk is one setup task) and per batch (what is evaluated and
 // held at once: about 100 bytes a vertex, half a vertex per triangle, so 2^16 triangles
-// hold about 4 MB), at least kStreamBatchTriangles and 2^15 a worker thread, so that every
-// worker has chunks (and its own L2 cache's worth) in each of the batch's parallel steps. The resolve reads the batch's vertices in pixel order, not in the
+// hold about 4 MB). The resolve reads the batch's vertices in pixel order, not in the
 // order they were written: a batch near the size of a core's L2 cache (2 MB here) keeps
 // those reads out of memory. Measured on the bench terrain (bench/scenes), median CPU time
 // of `tessref render --threads 1`: level 16 507 ms at 2^18, 455 ms at 2^16; level 63
-// 2356 -> 1817 ms; 2^15 was no better than 2^16 at level 16 and worse at 63.
+// 2356 -> 1817 ms; 2^15 was no better than 2^16 at level 16 and worse at 63. A batch holds
+// at least 2^15 triangles a worker thread, so that every worker has chunks (and its own
+// L2 cache's worth) in each of the batch's parallel steps.
 constexpr std::size_t kStreamChunkTriangles = 8192;
 constexpr std::size_t kStreamBatchTriangles = std::size_t{1} << 16;
 constexpr std::size_t kStreamBatchTrianglesPerThread = std::size_t{1} << 15;
