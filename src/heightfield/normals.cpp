@@ -21,35 +21,47 @@ std::vector<std::uint8_t> thesis_normal_map_codes(const Texture& height_map, dou
                     "scale finite");
     const int width = height_map.width();
     const int height = height_map.height();
-    // The position vector of pixel (x, y), neighbours clamped to the edge.
-    auto P = [&](int x, int y) {
-        x = std::clamp(x, 0, width - 1);
-        y = std::clamp(y, 0, height - 1);
-        return glm::dvec3(x * texel_spacing, y * texel_spacing,
-                          height_map.texel_exact(0, x, y, 0) * height_scale);
-    };
     std::vector<std::uint8_t> codes(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
-    tessref::parallel_for(0, height, [&](int y) {  // rows in parallel: each texel on its own
-        for (int x = 0; x < width; ++x) {
-            const glm::dvec3 p = P(x, y);
-            // "the four vectors (one for each neighbour pixel)"
-            const glm::dvec3 right = P(x + 1, y) - p;
-            const glm::dvec3 up = P(x, y + 1) - p;
-            const glm::dvec3 left = P(x - 1, y) - p;
-            const glm::dvec3 down = P(x, y - 1) - p;
-            // "2 by 2 vectors are crossed ... 90 degrees of each other ... four normals for the
-            // current pixel, these are summed together and normalized"
-            const glm::dvec3 sum = glm::cross(right, up) + glm::cross(up, left) +
-                                   glm::cross(left, down) + glm::cross(down, right);
-            const double length = glm::length(sum);
-            // Only a degenerate height map (a single texel) leaves every product zero.
-            const glm::dvec3 normal = length > 0.0 ? sum / length : glm::dvec3(0.0, 0.0, 1.0);
-            // "Negative goes from 0 to 127, positive goes from 127 to 255."
-            const std::size_t base = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-                                      static_cast<std::size_t>(x)) * 3;
-            for (int c = 0; c < 3; ++c) {
-                const double encoded = std::clamp((normal[c] * 0.5 + 0.5) * 255.0, 0.0, 255.0);
-                codes[base + static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(encoded);
+    // Blocks of rows in parallel, each texel on its own. A block first reads the scaled
+    // heights of its rows and the row on either side once: every texel is read by itself and
+    // its four neighbours, and texel_exact checks its arguments each time.
+    tessref::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& rows) {
+        const int first = std::max(rows.begin() - 1, 0), last = std::min(rows.end(), height - 1);
+        std::vector<double> z(static_cast<std::size_t>(last - first + 1) * static_cast<std::size_t>(width));
+        for (int y = first; y <= last; ++y)
+            for (int x = 0; x < width; ++x)
+                z[static_cast<std::size_t>(y - first) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] =
+                    height_map.texel_exact(0, x, y, 0) * height_scale;
+        // The position vector of pixel (x, y), neighbours clamped to the edge.
+        auto P = [&](int x, int y) {
+            x = std::clamp(x, 0, width - 1);
+            y = std::clamp(y, 0, height - 1);
+            return glm::dvec3(x * texel_spacing, y * texel_spacing,
+                              z[static_cast<std::size_t>(y - first) * static_cast<std::size_t>(width) +
+                                static_cast<std::size_t>(x)]);
+        };
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+            for (int x = 0; x < width; ++x) {
+                const glm::dvec3 p = P(x, y);
+                // "the four vectors (one for each neighbour pixel)"
+                const glm::dvec3 right = P(x + 1, y) - p;
+                const glm::dvec3 up = P(x, y + 1) - p;
+                const glm::dvec3 left = P(x - 1, y) - p;
+                const glm::dvec3 down = P(x, y - 1) - p;
+                // "2 by 2 vectors are crossed ... 90 degrees of each other ... four normals for
+                // the current pixel, these are summed together and normalized"
+                const glm::dvec3 sum = glm::cross(right, up) + glm::cross(up, left) +
+                                       glm::cross(left, down) + glm::cross(down, right);
+                const double length = glm::length(sum);
+                // Only a degenerate height map (a single texel) leaves every product zero.
+                const glm::dvec3 normal = length > 0.0 ? sum / length : glm::dvec3(0.0, 0.0, 1.0);
+                // "Negative goes from 0 to 127, positive goes from 127 to 255."
+                const std::size_t base = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                                          static_cast<std::size_t>(x)) * 3;
+                for (int c = 0; c < 3; ++c) {
+                    const double encoded = std::clamp((normal[c] * 0.5 + 0.5) * 255.0, 0.0, 255.0);
+                    codes[base + static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(encoded);
+                }
             }
         }
     });
