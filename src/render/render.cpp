@@ -127,12 +127,22 @@ struct Derivatives {
 };
 Derivatives quad_derivatives(const SurfaceView& s, std::uint32_t triangle, int x0, int row0, int width, int height) {
     const render_detail::PerspectiveWeights weights(s.clip_corners(triangle));
-    auto uv = [&](int px, int prow) {
-        const glm::dvec3 w = weights(pixel_ndc(px, prow, width, height));
-        return s.uv_at(triangle, glm::vec3(w));
+    // perspective_weights at each of the three pixels, with the products shared: a weight is
+    // dot((ndc.x, ndc.y, 1), c) = (ndc.x c.x + ndc.y c.y) + c.z in glm's order, and the
+    // three pixels take their ndc.x from the quad's two columns and ndc.y from its two rows.
+    const glm::dvec2 ndc0 = pixel_ndc(x0, row0, width, height), ndc1 = pixel_ndc(x0 + 1, row0 + 1, width, height);
+    const glm::dvec3 cx(weights.c12.x, weights.c20.x, weights.c01.x), cy(weights.c12.y, weights.c20.y, weights.c01.y),
+        cz(weights.c12.z, weights.c20.z, weights.c01.z);
+    const glm::dvec3 left = ndc0.x * cx, right = ndc1.x * cx, top = ndc0.y * cy, bottom = ndc1.y * cy;
+    const auto& t = s.mesh.triangles[triangle];
+    const glm::vec2 uv0(s.mesh.uvs[t[0]]), uv1(s.mesh.uvs[t[1]]), uv2(s.mesh.uvs[t[2]]);
+    auto uv = [&](const glm::dvec3& column, const glm::dvec3& row) {
+        const glm::dvec3 b = column + row + cz;
+        const glm::vec3 w(b / (b.x + b.y + b.z));
+        return w[0] * uv0 + w[1] * uv1 + w[2] * uv2;  // SurfaceView::uv_at
     };
-    const glm::vec2 top_left = uv(x0, row0);
-    return {uv(x0 + 1, row0) - top_left, top_left - uv(x0, row0 + 1)};
+    const glm::vec2 top_left = uv(left, top);
+    return {uv(right, top) - top_left, top_left - uv(left, bottom)};
 }
 
 // Window depth of the triangle's plane at the centre of pixel (x, row).
@@ -731,8 +741,7 @@ std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, result.colour.size(), 65536),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               for (std::size_t i = r.begin(); i < r.end(); ++i)
-                                  for (int c = 0; c < 4; ++c)
-                                      out[i * 4 + static_cast<std::size_t>(c)] = unorm8(result.colour[i][c]);
+                                  unorm8_rgba(&result.colour[i][0], &out[i * 4]);
                           });
     return out;
 }
