@@ -30,4 +30,15 @@ void advise_huge_pages(const std::vector<T>& v) {
 #endif
 }
 
+// v.assign(n, value) into fresh storage advised as above before it is filled: for the
+// image-sized buffers a render allocates once (a 1280x800 render fills about 36 MB, and its
+// 4 KiB page faults were a tenth of the process's time).
+template <typename T>
+void assign_on_huge_pages(std::vector<T>& v, std::size_t n, const T& value) {
+    std::vector<T>().swap(v);  // reserve then takes new, untouched memory
+    v.reserve(n);
+    advise_huge_pages(v);
+    v.assign(n, value);
+}
+
 }  // namespace tessref

@@ -9,6 +9,7 @@
 #include <string>
 #include <utility>
 
+#include "common/huge_pages.h"
 #include "common/parallel.h"
 #include "common/unorm8.h"
 
@@ -29,16 +30,16 @@ void allocate(RenderResult& r, int width, int height, bool visibility, bool prov
     r.width = width;
     r.height = height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    r.colour.assign(n, r.shading.background);
+    assign_on_huge_pages(r.colour, n, r.shading.background);
     if (provenance) {
-        r.patch_id.assign(n, kNoPixelId);
-        r.tess_coord.assign(n, glm::vec3(0.0f));
-        r.level.assign(n, std::numeric_limits<float>::quiet_NaN());
+        assign_on_huge_pages(r.patch_id, n, kNoPixelId);
+        assign_on_huge_pages(r.tess_coord, n, glm::vec3(0.0f));
+        assign_on_huge_pages(r.level, n, std::numeric_limits<float>::quiet_NaN());
     }
     if (!visibility) return;
-    r.depth.assign(n, 1.0f);
-    r.triangle_id.assign(n, kNoPixelId);
-    r.barycentric.assign(n, glm::vec3(0.0f));
+    assign_on_huge_pages(r.depth, n, 1.0f);
+    assign_on_huge_pages(r.triangle_id, n, kNoPixelId);
+    assign_on_huge_pages(r.barycentric, n, glm::vec3(0.0f));
 }
 
 void take_visibility(RenderResult& r, Framebuffer& fb) {
