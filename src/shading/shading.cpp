@@ -180,8 +180,8 @@ glm::vec4 textureGrad(const Texture* sampler, glm::vec2 P, glm::vec2 dPdx, glm::
 glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& uniforms) {
     const glm::vec3& lightPosition = uniforms.lightPosition;
     // GLSL: thesis_terrain.frag:40 (thesis_terrain_single.frag:27) vec3 h = normalize(
-    // lightPosition + vec3(0, 0, 1)); — computed and never used (the thesis's own line).
-    [[maybe_unused]] const glm::vec3 h = glm::normalize(lightPosition + glm::vec3(0.0f, 0.0f, 1.0f));
+    // lightPosition + vec3(0, 0, 1)); — the thesis's own line computes h and never reads it,
+    // so it is left out here (its normalize cost a square root and a division per fragment).
     // GLSL: thesis_terrain.frag:41 float df = abs(dot(gNormal, lightPosition));
     // Quirk kept: lightPosition is used as a direction, unnormalized, so df scales with its
     // length; abs() lights a normal facing away from the light as one facing it.
