@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   g++ cmake ninja-build pkg-config
-  libglm-dev libpng-dev libopenimageio-dev libopenmesh-dev libembree-dev libosmesa6-dev
+  libglm-dev libpng-dev zlib1g-dev libopenimageio-dev libopenmesh-dev libembree-dev libosmesa6-dev
   libtbb-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   fonts-dejavu-core admesh

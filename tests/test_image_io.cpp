@@ -260,6 +260,48 @@ TEST_F(ImageIo, PngOfEveryKindReadsAsOpenImageIOReadsIt) {
     }
 }
 
+// The writer deflates bands of rows in parallel and joins them into one zlib stream
+// (png.cpp). Every channel count, a single pixel, a single row and column, and images of
+// many bands (noise, which deflate cannot shrink, and smooth ramps, which it does) must read
+// back with their samples through libpng and OpenImageIO alike, which check every chunk's
+// CRC and the stream's Adler-32.
+TEST_F(ImageIo, WrittenPngsReadBackWithEverySample) {
+    struct Size {
+        int width, height;
+    };
+    const Size sizes[] = {{1, 1}, {1, 300}, {700, 1}, {3, 2}, {640, 500}, {1001, 777}};
+    std::uint32_t state = 12345;
+    auto noise = [&state] {
+        state = state * 1664525u + 1013904223u;
+        return static_cast<std::uint8_t>(state >> 24);
+    };
+    int written = 0;
+    for (const Size size : sizes) {
+        for (int channels = 1; channels <= 4; ++channels) {
+            for (const bool smooth : {false, true}) {
+                const std::size_t n = static_cast<std::size_t>(size.width) * size.height * channels;
+                std::vector<std::uint8_t> samples(n);
+                for (std::size_t i = 0; i < n; ++i)
+                    samples[i] = smooth ? static_cast<std::uint8_t>((i / channels) % size.width + i % channels * 40) : noise();
+                const fs::path path = dir() / ("w" + std::to_string(size.width) + "x" + std::to_string(size.height) + "c" +
+                                               std::to_string(channels) + (smooth ? "s" : "n") + ".png");
+                tessref::image::WriteOptions options;
+                options.software_tag = written % 2 == 0;
+                tessref::image::write_image(path.string(), {size.width, size.height, channels, SampleType::uint8, samples.data()},
+                                            options);
+                ++written;
+                SCOPED_TRACE(path.filename().string());
+                const Image back = tessref::image::read_image(path.string());
+                ASSERT_EQ(back.header.width, size.width);
+                ASSERT_EQ(back.header.height, size.height);
+                ASSERT_EQ(back.header.channels, channels);
+                EXPECT_TRUE(back.u8 == samples) << "the samples read back differ from those written";
+                expect_same_as_oiio(path);
+            }
+        }
+    }
+}
+
 TEST_F(ImageIo, EveryPngAndPnmOfTheRepositoryReadsAsOpenImageIOReadsIt) {
     int compared = 0;
     for (const char* root : {"data", "tests/data", "golden"}) {

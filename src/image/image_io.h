@@ -1,6 +1,6 @@
 // src/image/image_io.h — every image file tessref reads or writes goes through here.
 //
-// PNG through libpng (src/image/png.cpp) and the PNM family (P1-P6, PFM; src/image/pnm.cpp)
+// PNG (src/image/png.cpp: libpng reads, zlib compresses) and the PNM family (P1-P6, PFM; src/image/pnm.cpp)
 // are read and written in the library itself; every other format (EXR, TIFF, JPEG, HDR, ...)
 // and the drawing of lines and text into pictures go through OpenImageIO in the module
 // tessref_oiio.so, loaded on first use (src/image/oiio_module.h). A render that reads PGM
@@ -76,7 +76,7 @@ struct WriteOptions {
     bool software_tag = false;     // write Software = "tessref <version>"
 };
 
-// Writes `image` to `path` in the format its extension names: .png through libpng (8-bit,
+// Writes `image` to `path` in the format its extension names: .png by tessref with zlib (8-bit,
 // float samples rounded as OpenImageIO converts them), anything else through the
 // OpenImageIO module. Never a time stamp. Writes `path` itself: callers give
 // a temporary name and rename it into place (cli_util.h AtomicOutput).

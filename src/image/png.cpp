@@ -1,12 +1,13 @@
-// PNG through libpng. Read as OpenImageIO 2.4.7 read it (the values tessref has always
+// PNG read through libpng, as OpenImageIO 2.4.7 read it (the values tessref has always
 // used): png_set_expand (palette to RGB, grey below 8 bits to 8, tRNS to an alpha channel),
 // 16-bit samples as such, no gamma, no premultiplication. Written 8-bit, a Software text
-// chunk when asked, no time; for speed (kCompressionLevel).
+// chunk when asked, no time, compressed by zlib in parallel (see "writing" below).
 //
 // libpng reports errors by longjmp: every libpng call runs inside a small function that
 // sets the jump point and holds no C++ object, and the structures are freed by one owner
 // whatever happens, so an error leaks nothing and unwinds no C++ frame.
 #include <png.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -19,6 +20,7 @@
 #include <system_error>
 #include <vector>
 
+#include "common/parallel.h"
 #include "image/codecs.h"
 #include "tessref/error.h"
 
@@ -33,10 +35,9 @@ constexpr png_alloc_size_t kChunkMallocMax = 64u << 20;
 // pixels' memory is checked by the caller (ReadOptions::check_header) before any is taken.
 constexpr png_uint_32 kMaxSide = 1000000;
 // Writing favours speed: a render's PNG is written on the hot path. For a 1280 x 800 render
-// (bench/scenes/jacksboro-grid-16.toml) zlib level 1 with the Sub filter takes 35 ms and
-// 511 KB, where OpenImageIO's level 6 without filters took 159 ms for 365 KB.
+// (bench/scenes/jacksboro-grid-16.toml) zlib level 1 with the Sub filter took 35 ms and
+// 511 KB on one thread, where OpenImageIO's level 6 without filters took 159 ms for 365 KB.
 constexpr int kCompressionLevel = 1;
-constexpr int kFilters = PNG_FILTER_SUB;
 
 struct ErrorText {
     char text[256] = "";
@@ -130,31 +131,117 @@ void check_chunks(const std::string& path, const std::string& kind) {
 }
 
 // ---- writing ------------------------------------------------------------------------
+//
+// libpng compresses on one thread, and a render's PNG is written after the render, where
+// nothing else runs. So the file is put together here and zlib does the compression, cut
+// into bands as pigz cuts a gzip stream: every row is filtered (Sub: each byte less the
+// byte one pixel to its left), the filtered rows are split into bands of about kBandBytes,
+// and the bands are deflated in parallel, each primed with the 32 KiB of filtered data
+// before it (deflateSetDictionary) so that a cut costs almost no compression. Every band
+// but the last ends on a byte boundary (Z_SYNC_FLUSH), so the bands' raw deflate data
+// concatenate into one deflate stream; the zlib stream around them (RFC 1950) takes the
+// Adler-32 combined from the bands' (adler32_combine). Each band is one IDAT chunk.
 
-struct Writer {
-    std::FILE* file = nullptr;
-    png_structp png = nullptr;
-    png_infop info = nullptr;
-    ErrorText error;
+constexpr std::size_t kBandBytes = std::size_t{256} << 10;
+constexpr std::size_t kDeflateWindow = std::size_t{32} << 10;
 
-    ~Writer() {
-        if (png != nullptr) png_destroy_write_struct(&png, info ? &info : nullptr);
-        if (file != nullptr) std::fclose(file);
+void put32(std::vector<std::uint8_t>& out, std::uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
+}
+
+// One chunk: length, type, data, CRC-32 of type and data (PNG 1.2, section 5.3).
+void put_chunk(std::vector<std::uint8_t>& out, const char (&type)[5], const std::uint8_t* data, std::size_t size) {
+    put32(out, static_cast<std::uint32_t>(size));
+    const auto* type_bytes = reinterpret_cast<const std::uint8_t*>(type);
+    out.insert(out.end(), type_bytes, type_bytes + 4);
+    if (size > 0) out.insert(out.end(), data, data + size);
+    uLong crc = crc32_z(0, type_bytes, 4);
+    if (size > 0) crc = crc32_z(crc, data, size);
+    put32(out, static_cast<std::uint32_t>(crc));
+}
+
+// The raw deflate data of filtered[begin, end), primed with what precedes it; the last band
+// finishes the stream. Empty on a zlib failure.
+std::vector<std::uint8_t> deflate_band(const std::vector<std::uint8_t>& filtered, std::size_t begin, std::size_t end,
+                                       bool last) {
+    z_stream z{};
+    if (deflateInit2(&z, kCompressionLevel, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY) != Z_OK) return {};
+    std::vector<std::uint8_t> out;
+    bool ok = true;
+    const std::size_t primer = std::min(begin, kDeflateWindow);
+    if (primer > 0)
+        ok = deflateSetDictionary(&z, filtered.data() + begin - primer, static_cast<uInt>(primer)) == Z_OK;
+    if (ok) {
+        // deflateBound covers a finished stream; a sync flush adds an empty stored block.
+        out.resize(deflateBound(&z, static_cast<uLong>(end - begin)) + 16);
+        z.next_in = const_cast<Bytef*>(filtered.data() + begin);
+        z.avail_in = static_cast<uInt>(end - begin);
+        z.next_out = out.data();
+        z.avail_out = static_cast<uInt>(out.size());
+        const int rc = deflate(&z, last ? Z_FINISH : Z_SYNC_FLUSH);
+        ok = rc == (last ? Z_STREAM_END : Z_OK) && z.avail_in == 0 && z.avail_out > 0;
+        out.resize(z.total_out);
     }
-};
+    deflateEnd(&z);
+    return ok ? out : std::vector<std::uint8_t>{};
+}
 
-bool write_all(Writer& w, png_uint_32 width, png_uint_32 height, int color_type, png_textp text, int text_count,
-               png_bytepp rows) {
-    if (setjmp(png_jmpbuf(w.png))) return false;
-    png_init_io(w.png, w.file);
-    png_set_compression_level(w.png, kCompressionLevel);
-    png_set_filter(w.png, 0, kFilters);
-    png_set_IHDR(w.png, w.info, width, height, 8, color_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-                 PNG_FILTER_TYPE_DEFAULT);
-    if (text_count > 0) png_set_text(w.png, w.info, text, text_count);
-    png_write_info(w.png, w.info);
-    png_write_image(w.png, rows);
-    png_write_end(w.png, w.info);
+// The whole file: signature, IHDR, the Software tEXt when given, the IDATs, IEND. False on a
+// zlib failure.
+bool encode_png(const std::uint8_t* samples, int width, int height, int channels, std::uint8_t color_type,
+                const std::string* software, std::vector<std::uint8_t>& file) {
+    const std::size_t pixel = static_cast<std::size_t>(channels);
+    const std::size_t row = static_cast<std::size_t>(width) * pixel;
+    const std::size_t stride = row + 1;  // a filter-type byte, then the filtered row
+    std::vector<std::uint8_t> filtered(stride * static_cast<std::size_t>(height));
+    tessref::parallel_for(0, height, [&](int y) {
+        const std::uint8_t* in = samples + static_cast<std::size_t>(y) * row;
+        std::uint8_t* out = filtered.data() + static_cast<std::size_t>(y) * stride;
+        out[0] = 1;  // Sub
+        for (std::size_t i = 0; i < row; ++i)
+            out[1 + i] = static_cast<std::uint8_t>(in[i] - (i >= pixel ? in[i - pixel] : 0));
+    });
+    const std::size_t band_rows = std::max<std::size_t>(1, kBandBytes / stride);
+    const std::size_t bands = (static_cast<std::size_t>(height) + band_rows - 1) / band_rows;
+    std::vector<std::vector<std::uint8_t>> deflated(bands);
+    std::vector<uLong> adler(bands);
+    tessref::parallel_for(std::size_t{0}, bands, [&](std::size_t b) {
+        const std::size_t begin = b * band_rows * stride;
+        const std::size_t end = std::min(filtered.size(), begin + band_rows * stride);
+        deflated[b] = deflate_band(filtered, begin, end, b + 1 == bands);
+        adler[b] = adler32_z(1, filtered.data() + begin, end - begin);
+    });
+    uLong checksum = adler[0];
+    for (std::size_t b = 0; b < bands; ++b) {
+        if (deflated[b].empty()) return false;
+        if (b > 0) {
+            const std::size_t length = std::min(filtered.size() - b * band_rows * stride, band_rows * stride);
+            checksum = adler32_combine(checksum, adler[b], static_cast<z_off_t>(length));
+        }
+    }
+
+    static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    file.assign(kSignature, kSignature + 8);
+    std::vector<std::uint8_t> data;
+    put32(data, static_cast<std::uint32_t>(width));
+    put32(data, static_cast<std::uint32_t>(height));
+    for (const std::uint8_t b : {std::uint8_t{8}, color_type, std::uint8_t{0}, std::uint8_t{0}, std::uint8_t{0}})
+        data.push_back(b);  // bit depth, colour type, deflate, adaptive filtering, no interlace
+    put_chunk(file, "IHDR", data.data(), data.size());
+    if (software != nullptr) {
+        static constexpr char kKey[] = "Software";
+        data.assign(kKey, kKey + sizeof kKey);  // the key and its NUL
+        data.insert(data.end(), software->begin(), software->end());
+        put_chunk(file, "tEXt", data.data(), data.size());
+    }
+    for (std::size_t b = 0; b < bands; ++b) {
+        data.clear();
+        if (b == 0) data = {0x78, 0x01};  // zlib header: deflate, 32 KiB window, fastest level
+        data.insert(data.end(), deflated[b].begin(), deflated[b].end());
+        if (b + 1 == bands) put32(data, static_cast<std::uint32_t>(checksum));
+        put_chunk(file, "IDAT", data.data(), data.size());
+    }
+    put_chunk(file, "IEND", nullptr, 0);
     return true;
 }
 
@@ -245,46 +332,24 @@ void write_png(const std::string& path, const ImageView& image, const WriteOptio
         for (std::size_t i = 0; i < codes.size(); ++i) codes[i] = float_to_code8(f[i]);
         base = codes.data();
     }
-    std::vector<png_bytep> rows(static_cast<std::size_t>(image.height));
-    for (std::size_t y = 0; y < rows.size(); ++y) rows[y] = const_cast<png_bytep>(base + y * row_samples);
-
-    std::string software = "tessref " TESSREF_VERSION;
-    char key[] = "Software";
-    png_text text{};
-    text.compression = PNG_TEXT_COMPRESSION_NONE;
-    text.key = key;
-    text.text = software.data();
-    text.text_length = software.size();
-
-    bool ok = false;
+    const std::string software = "tessref " TESSREF_VERSION;
+    std::vector<std::uint8_t> file;
+    if (!encode_png(base, image.width, image.height, image.channels, static_cast<std::uint8_t>(color_type),
+                    options.software_tag ? &software : nullptr, file))
+        fail(path, "cannot write the image: zlib cannot compress it");
     std::string reason;
-    {
-        Writer w;
-        w.file = std::fopen(path.c_str(), "wb");
-        if (w.file == nullptr) fail(path, std::string("cannot write the image: ") + std::strerror(errno));
-        w.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &w.error, on_error, on_warning);
-        if (w.png != nullptr) w.info = png_create_info_struct(w.png);
-        if (w.png != nullptr && w.info != nullptr) {
-            ok = write_all(w, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height), color_type,
-                           &text, options.software_tag ? 1 : 0, rows.data());
-            reason = w.error.text;
-        } else {
-            reason = "libpng cannot start";
-        }
-        if (ok && std::fflush(w.file) != 0) {
-            ok = false;
-            reason = std::strerror(errno);
-        }
-        if (std::fclose(w.file) != 0 && ok) {
-            ok = false;
-            reason = std::strerror(errno);
-        }
-        w.file = nullptr;
+    std::FILE* out = std::fopen(path.c_str(), "wb");
+    if (out == nullptr) fail(path, std::string("cannot write the image: ") + std::strerror(errno));
+    bool ok = std::fwrite(file.data(), 1, file.size(), out) == file.size() && std::fflush(out) == 0;
+    if (!ok) reason = std::strerror(errno);
+    if (std::fclose(out) != 0 && ok) {
+        ok = false;
+        reason = std::strerror(errno);
     }
     if (!ok) {
         std::error_code ec;
         std::filesystem::remove(path, ec);  // never a partial file
-        fail(path, "cannot write the image: " + (reason.empty() ? std::string("unknown error") : reason));
+        fail(path, "cannot write the image: " + reason);
     }
 }
 
