@@ -197,9 +197,9 @@ bool encode_png(const std::uint8_t* samples, int width, int height, int channels
     tessref::parallel_for(0, height, [&](int y) {
         const std::uint8_t* in = samples + static_cast<std::size_t>(y) * row;
         std::uint8_t* out = filtered.data() + static_cast<std::size_t>(y) * stride;
-        out[0] = 1;  // Sub
-        for (std::size_t i = 0; i < row; ++i)
-            out[1 + i] = static_cast<std::uint8_t>(in[i] - (i >= pixel ? in[i - pixel] : 0));
+        out[0] = 1;  // Sub; the first pixel has nothing to its left
+        std::memcpy(out + 1, in, std::min(pixel, row));
+        for (std::size_t i = pixel; i < row; ++i) out[1 + i] = static_cast<std::uint8_t>(in[i] - in[i - pixel]);
     });
     const std::size_t band_rows = std::max<std::size_t>(1, kBandBytes / stride);
     const std::size_t bands = (static_cast<std::size_t>(height) + band_rows - 1) / band_rows;
