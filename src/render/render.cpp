@@ -209,15 +209,27 @@ float level_of(const SurfaceMesh& mesh, const std::vector<TessLevels>& levels, D
 // owns(id) returns, with the triangle's index in it (null: not this pass's). Quad by quad (2x2 pixels,
 // as llvmpipe shades): the pixels of a quad that show the same triangle share its
 // derivatives and level.
+// The triangle ids [first, first + count) a pass drew: the others are skipped on the id
+// alone, a quad at a time (a streamed batch's pass visits whole drawn tiles, where most
+// pixels show other batches' triangles).
+struct IdRange {
+    std::uint32_t first = 0, count = 0;
+    bool holds(std::uint32_t id) const { return id - first < count; }  // unsigned: below first wraps
+};
+
 template <typename Owns>
 void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<TessLevels>& levels, Domain domain,
              const FragmentNeeds& needs, bool derivatives, bool line_derivatives, bool provenance, int quad_row_begin,
-             int quad_row_end, const Owns& owns, int x_begin = 0, int x_end = -1) {
+             int quad_row_end, IdRange ids, const Owns& owns, int x_begin = 0, int x_end = -1) {
     const int width = result.width, height = result.height;
     if (x_end < 0) x_end = width;
     for (int quad_row = quad_row_begin; quad_row < quad_row_end; ++quad_row) {
         const int row0 = 2 * quad_row;
+        const std::uint32_t* top = &fb.triangle_id[result.index(0, row0)];
+        const std::uint32_t* bottom = row0 + 1 < height ? top + width : top;  // a last odd row: itself again
         for (int x0 = x_begin; x0 < x_end; x0 += 2) {
+            const int x1 = std::min(x0 + 1, width - 1);  // a last odd column: itself again
+            if (!(ids.holds(top[x0]) | ids.holds(top[x1]) | ids.holds(bottom[x0]) | ids.holds(bottom[x1]))) continue;
             std::uint32_t cached_triangle[4];
             Derivatives cached[4];
             float cached_level[4];
@@ -226,7 +238,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                 for (int x = x0; x < std::min(x0 + 2, width); ++x) {
                     const std::size_t i = result.index(x, row);  // the framebuffer's layout too
                     const std::uint32_t id = fb.triangle_id[i];
-                    if (id == kNoTriangle) continue;
+                    if (!ids.holds(id)) continue;
                     const auto [view_of, tri] = owns(id);
                     if (!view_of) continue;
                     const SurfaceView& view = *view_of;
@@ -487,7 +499,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
             const Rasterizer::Rect& rect = drawn[r];
             resolve(result, fb, pipe->levels, domain, needs, derivatives, false, options.provenance, rect.row / 2,
-                    (rect.row + rect.height + 1) / 2,
+                    (rect.row + rect.height + 1) / 2, IdRange{batch_first, batch_end - batch_first},
                     [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
                         const auto [k, tri] = chunk_of(id);
                         if (k == used) return {nullptr, 0};
@@ -609,7 +621,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     result.domain = domain;
     tessref::parallel_for(tbb::blocked_range<int>(0, (height + 1) / 2), [&](const tbb::blocked_range<int>& rows) {
         resolve(result, fb, pipe.levels, domain, needs, derivatives, line_derivatives, options.provenance, rows.begin(),
-                rows.end(),
+                rows.end(), IdRange{0, static_cast<std::uint32_t>(mesh.triangles.size())},
                 [&view](std::uint32_t id) { return std::pair{&view, id}; });
     });
 
