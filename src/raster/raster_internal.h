@@ -103,12 +103,26 @@ struct Primitive {
     float bw[3][3];
     std::uint32_t source;  // index of the input triangle
     bool front;
+    // A triangle whose box holds at most four pixels: bit (py - y0) * (x1 - x0 + 1) + (px - x0)
+    // set for each pixel (px, py) that passes the edge functions; kLargeBox for a larger box
+    // (or a line), which the tiles test pixel by pixel.
+    int small_coverage;
 };
+inline constexpr int kLargeBox = -1;
+
+// Whether pixel (px, py) passes every edge function of the primitive (llvmpipe's coverage
+// test, exact in 64-bit integers).
+inline bool covered(const Primitive& p, int px, int py) {
+    bool inside = true;
+    for (int k = 0; k < p.plane_count; ++k) inside = inside && p.c[k] + p.dcdy[k] * py - p.dcdx[k] * px > 0;
+    return inside;
+}
 
 // llvmpipe's triangle setup (calc_fixed_position + do_triangle_ccw): culled (zero area,
 // culled face, or empty bounding box, as llvmpipe culls), empty (set up, but a box of at most
 // four pixels none of whose centres passes the edge functions: it would draw nothing, so its
-// attribute planes are not computed and prim holds only its box and edges), or drawn.
+// attribute planes are not computed and prim holds only its box and edges), or drawn (with
+// small_coverage: which pixels of a box of at most four it covers).
 enum class Face { both, front_only, back_only };
 enum class Setup { culled, empty, drawn };
 // A corner as setup reads it: its window position, its weights of the source triangle's

@@ -66,20 +66,20 @@ std::int32_t util_iround(float f) {
 
 namespace {
 
-// Whether a pixel centre of the primitive's box passes all its edge functions, decided for
-// boxes of at most four pixels (larger ones: true, the tiles decide). The test is the
-// tiles' own, E = c + dcdy * py - dcdx * px > 0 in 64-bit integers, so it agrees with them
-// pixel for pixel. Most triangles of a finely tessellated surface that survive the box test
-// are slivers between pixel centres: this spares them the float planes and the binning.
-bool small_box_has_coverage(const Primitive& p) {
-    if ((p.x1 - p.x0 + 1) * (p.y1 - p.y0 + 1) > 4) return true;
-    for (int py = p.y0; py <= p.y1; ++py)
-        for (int px = p.x0; px <= p.x1; ++px) {
-            bool inside = true;
-            for (int k = 0; k < p.plane_count; ++k) inside = inside && p.c[k] + p.dcdy[k] * py - p.dcdx[k] * px > 0;
-            if (inside) return true;
-        }
-    return false;
+// Which pixel centres of the primitive's box pass all its edge functions, for boxes of at
+// most four pixels (bit (py - y0) * width + (px - x0)); kLargeBox for larger ones, which
+// the tiles decide. The test is the tiles' own, E = c + dcdy * py - dcdx * px > 0 in 64-bit
+// integers (covered()), so it agrees with them pixel for pixel. Most triangles of a finely
+// tessellated surface that survive the box test are slivers between pixel centres: this
+// spares them the float planes and the binning, and the rasterizer writes the pixels of the
+// others without testing them again.
+int small_box_coverage(const Primitive& p) {
+    const int width = p.x1 - p.x0 + 1;
+    if (width * (p.y1 - p.y0 + 1) > 4) return kLargeBox;
+    int mask = 0;
+    for (int py = p.y0, bit = 0; py <= p.y1; ++py)
+        for (int px = p.x0; px <= p.x1; ++px, ++bit) mask |= covered(p, px, py) << bit;
+    return mask;
 }
 
 }  // namespace
@@ -105,7 +105,8 @@ Setup setup_triangle(const SetupCorner& in0, const SetupCorner& in1, const Setup
     triangle_bbox(x, y, prim);
     if (!clamp_bbox(prim, vp)) return Setup::culled;
     make_planes(x, y, 3, prim);
-    if (!small_box_has_coverage(prim)) return Setup::empty;
+    prim.small_coverage = small_box_coverage(prim);
+    if (prim.small_coverage == 0) return Setup::empty;
 
     // Attribute planes from the unsnapped window positions (like lp_setup's coefficients).
     const float fdx01 = v[0]->win->x - v[1]->win->x, fdy01 = v[0]->win->y - v[1]->win->y;
@@ -274,6 +275,7 @@ bool setup_line(const ClipVertex& in1, const ClipVertex& in2, const Viewport& vp
     prim.y1 = ((std::max({y[0], y[1], y[2], y[3]}) + (kFixedOne - 1) + adj) >> kFixedOrder) - 1;
     if (!clamp_bbox(prim, vp)) return false;
     make_planes(x, y, 4, prim);
+    prim.small_coverage = kLargeBox;
 
     // Attributes along the major axis from the ORIGINAL first vertex, like llvmpipe's
     // linear_coef with its "wide-lines formula" (dadx = (a1 - a2) / dx for x-major lines).
