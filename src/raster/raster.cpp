@@ -111,16 +111,28 @@ struct PreparedVertex {
     glm::vec4 clip;
     glm::vec4 win;
     std::int32_t fixed_x, fixed_y;  // the window position snapped as setup snaps it
-    // Of (fixed_x, fixed_y); unbounded (kAnywhere) unless `inside`: the triangles of a vertex
-    // that needs the clipper (or has no finite window position) always pass the box test.
-    raster::VertexPixelBounds bounds;
     unsigned clipmask;
     bool finite;  // of clip
     bool inside;  // finite clip and window positions, inside every clip plane
 };
 constexpr raster::VertexPixelBounds kAnywhere = {INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX};
 
-PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, bool fused);
+// The prepared vertices of a draw in two arrays: the box test, which every triangle takes,
+// reads only the pixel bounds (16 bytes a vertex: a quarter of the cache lines), and setup,
+// which a triangle in two reaches, the rest.
+struct PreparedVertices {
+    std::vector<PreparedVertex> vertices;
+    // Of (fixed_x, fixed_y); unbounded (kAnywhere) unless the vertex is `inside`: the
+    // triangles of a vertex that needs the clipper (or has no finite window position)
+    // always pass the box test.
+    std::vector<raster::VertexPixelBounds> bounds;
+
+    void resize(std::size_t n) {
+        vertices.resize(n);
+        bounds.resize(n);
+    }
+    void prepare(std::size_t i, const glm::vec4& clip, const Viewport& viewport, bool fused);
+};
 
 // A covered pixel of a primitive whose box holds at most four pixels, with its depth and
 // weights computed at setup (as the tiles would compute them, fragment_depth and
@@ -151,7 +163,7 @@ struct Chunk {
 // Working memory of one rasterize() call, kept in a small pool and reused: allocating tens of
 // megabytes per call costs more in page faults (serialized in the kernel) than the work.
 struct Scratch {
-    std::vector<PreparedVertex> vertices;
+    PreparedVertices vertices;
     std::vector<std::uint32_t> source;  // per pixel: input triangle written by this pass
     std::vector<Chunk> chunks;
 };
@@ -204,8 +216,10 @@ bool finite4(const glm::vec4& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
 }
 
-PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, bool fused) {
-    PreparedVertex v;
+// Inline: the loops over a chunk's vertices run it on every vertex.
+[[gnu::always_inline]] inline void PreparedVertices::prepare(std::size_t i, const glm::vec4& clip,
+                                                             const Viewport& viewport, bool fused) {
+    PreparedVertex& v = vertices[i];
     v.clip = clip;
     v.finite = finite4(clip);
     v.clipmask = raster::compute_clipmask(clip);
@@ -213,8 +227,7 @@ PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, b
     v.fixed_x = raster::snap_fixed(v.win.x);
     v.fixed_y = raster::snap_fixed(v.win.y);
     v.inside = v.finite && v.clipmask == 0 && finite4(v.win);
-    v.bounds = v.inside ? raster::vertex_pixel_bounds(v.fixed_x, v.fixed_y) : kAnywhere;
-    return v;
+    bounds[i] = v.inside ? raster::vertex_pixel_bounds(v.fixed_x, v.fixed_y) : kAnywhere;
 }
 
 inline float eval(const float plane[3], float fx, float fy) {
@@ -328,7 +341,7 @@ const glm::vec3 kUnitWeights[3] = {glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(0.0f, 
 
 // Sets up triangles [first, last) of tris, whose ids start at first_id (the chunk's first
 // triangle is first_id + 0), with their vertices prepared in `vertices`.
-void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
+void setup_chunk(const Context& ctx, const PreparedVertices& prepared,
                  std::span<const std::array<std::uint32_t, 3>> tris, std::size_t first, std::size_t last,
                  std::uint32_t first_id, Chunk& chunk) {
     chunk.prims.clear();
@@ -340,6 +353,8 @@ void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
     chunk.stats = {};
     chunk.stats.triangles_in = last - first;
     const bool filled = ctx.settings.polygon_mode == PolygonMode::fill;
+    const std::span<const PreparedVertex> vertices = prepared.vertices;
+    const std::span<const raster::VertexPixelBounds> bounds = prepared.bounds;
 
     // Most triangles of a finely tessellated surface hold no pixel centre: the snapped
     // bounding box (setup's own test, on positions snapped once per vertex) rejects them
@@ -354,8 +369,7 @@ void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
         for (std::size_t t = first; t < last; ++t) {
             const auto& tri = tris[t];
             candidates[count] = static_cast<std::uint32_t>(t);
-            count += raster::bounds_have_pixels(vertices[tri[0]].bounds, vertices[tri[1]].bounds,
-                                                vertices[tri[2]].bounds, ctx.viewport);
+            count += raster::bounds_have_pixels(bounds[tri[0]], bounds[tri[1]], bounds[tri[2]], ctx.viewport);
         }
         const std::size_t rejected = (last - first) - count;
         chunk.stats.primitives += rejected;
@@ -700,12 +714,12 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
     Rasterizer::State state(fb, settings, scratch->source.data());
     state.chunks = std::move(scratch->chunks);
 
-    std::vector<PreparedVertex>& vertices = scratch->vertices;
+    PreparedVertices& vertices = scratch->vertices;
     vertices.resize(input.positions.size());
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               for (std::size_t i = r.begin(); i < r.end(); ++i)
-                                  vertices[i] = prepare_vertex(input.positions[i], state.ctx.viewport, state.fused);
+                                  vertices.prepare(i, input.positions[i], state.ctx.viewport, state.fused);
                           });
 
     // Set up chunks in parallel waves and rasterize the tiles once enough primitives have
@@ -766,10 +780,10 @@ void Rasterizer::draw(std::span<const RasterChunk> chunks) {
     if (s.chunks.size() < used + chunks.size()) s.chunks.resize(used + chunks.size());
     tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t c) {
         const RasterChunk& chunk = chunks[c];
-        thread_local std::vector<PreparedVertex> vertices;
+        thread_local PreparedVertices vertices;
         vertices.resize(chunk.positions.size());
         for (std::size_t i = 0; i < chunk.positions.size(); ++i)
-            vertices[i] = prepare_vertex(chunk.positions[i], s.ctx.viewport, s.fused);
+            vertices.prepare(i, chunk.positions[i], s.ctx.viewport, s.fused);
         // The largest index first (a loop without an exit, which the compiler vectorizes),
         // then the first one out of range only when there is one.
         std::uint32_t largest = 0;
