@@ -366,6 +366,56 @@ TEST(RasterSubPixel, ABoxHoldingACentreOutsideTheTriangleIsSetUpNotCulledAndDraw
     EXPECT_EQ(rasterizer.stats().fragments, 0u);
 }
 
+TEST(RasterSubPixel, SmallBoxFragmentsMatchTheTilesRasterizationOfTheirPlanes) {
+    // A triangle whose box holds at most four pixels has its covered pixels' depth and weights
+    // computed at setup, unless quad derivatives are asked for (they need its planes at the
+    // tiles): the same pixels, depths, weights, ids and facing either way, byte for byte.
+    // Random small triangles, overlapping (depth LESS decides between them), in both
+    // windings, with perspective w, vertices on the 1/256 snapping grid (often exactly on a
+    // pixel centre, an edge or a half-way point, where the fill rule decides), over tile
+    // borders (64 pixels), and larger ones between them.
+    constexpr int W = 160, H = 100;
+    std::mt19937 rng(20261127);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    auto coordinate = [&](float centre) {
+        const float r = unit(rng);
+        if (r < 0.15f) return std::floor(centre) + 0.5f;  // a pixel centre
+        if (r < 0.25f) return std::floor(centre);         // half-way between two
+        return std::round((centre + (unit(rng) * 2.4f - 1.2f)) * 256.0f) / 256.0f;
+    };
+    Mesh m;
+    for (int t = 0; t < 4000; ++t) {
+        const float cx = unit(rng) * W, cy = unit(rng) * H;
+        const float size = t % 20 == 0 ? 6.0f : 1.0f;  // some larger boxes among the small
+        for (int k = 0; k < 3; ++k) {
+            const float w = 0.5f + 1.5f * unit(rng);
+            const glm::vec4 p = at_window(coordinate(cx) + (size - 1.0f) * unit(rng),
+                                          coordinate(cy) + (size - 1.0f) * unit(rng), W, H,
+                                          unit(rng) * 2.0f - 1.0f);
+            m.add({p.x * w, p.y * w, p.z * w, w});
+        }
+        m.triangles.push_back({3u * t, 3u * t + 1, 3u * t + 2});
+    }
+    RasterSettings planes;
+    planes.quad_derivatives = true;
+    Framebuffer fast = Framebuffer::create(W, H), tiles = Framebuffer::create(W, H);
+    const RasterStats a = tessref::rasterize(fast, m.input(), RasterSettings{});
+    const RasterStats b = tessref::rasterize(tiles, m.input(), planes);
+    ASSERT_GT(a.fragments, 1000u);
+    EXPECT_GT(a.fragments, a.fragments_passed);  // the depth test decided some
+    EXPECT_EQ(a.fragments, b.fragments);
+    EXPECT_EQ(a.fragments_passed, b.fragments_passed);
+    auto same = [](const auto& x, const auto& y) {
+        return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0;
+    };
+    EXPECT_TRUE(same(fast.depth, tiles.depth));
+    EXPECT_TRUE(same(fast.triangle_id, tiles.triangle_id));
+    EXPECT_TRUE(same(fast.barycentric, tiles.barycentric));
+    EXPECT_TRUE(same(fast.fragment_count, tiles.fragment_count));
+    EXPECT_TRUE(same(fast.front_facing, tiles.front_facing));
+    EXPECT_TRUE(same(fast.color, tiles.color));
+}
+
 TEST(RasterCulling, ZeroAreaTrianglesAreCulled) {
     constexpr int W = 16, H = 16;
     Mesh m;

@@ -107,28 +107,63 @@ constexpr std::size_t kChunksPerWave = 32;          // chunks set up in parallel
 constexpr std::size_t kBatchPrimitives = 1u << 18;  // primitives kept before rasterizing (~50 MB)
 constexpr std::size_t kMaxChunksPerBatch = 1024;
 
-struct PreparedVertex {
-    glm::vec4 clip;
+// What setup reads of a vertex: half a cache line (the clipper's path reads the clip
+// position from the draw's own array).
+struct alignas(32) PreparedVertex {
     glm::vec4 win;
     std::int32_t fixed_x, fixed_y;  // the window position snapped as setup snaps it
-    raster::VertexPixelBounds bounds;  // of (fixed_x, fixed_y)
     unsigned clipmask;
-    bool finite;
+    bool inside;  // finite clip and window positions, inside every clip plane
+};
+constexpr raster::VertexPixelBounds kAnywhere = {INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX};
+
+// The prepared vertices of a draw in two arrays: the box test, which every triangle takes,
+// reads only the pixel bounds (16 bytes a vertex: a quarter of the cache lines), and setup,
+// which a triangle in two reaches, the rest.
+struct PreparedVertices {
+    std::vector<PreparedVertex> vertices;
+    // Of (fixed_x, fixed_y); unbounded (kAnywhere) unless the vertex is `inside`: the
+    // triangles of a vertex that needs the clipper (or has no finite window position)
+    // always pass the box test.
+    std::vector<raster::VertexPixelBounds> bounds;
+
+    void resize(std::size_t n) {
+        vertices.resize(n);
+        bounds.resize(n);
+    }
+    void prepare(std::size_t i, const glm::vec4& clip, const Viewport& viewport, bool fused);
 };
 
-PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, bool fused);
+// A covered pixel of a primitive whose box holds at most four pixels, with its depth and
+// weights computed at setup (as the tiles would compute them, fragment_depth and
+// fragment_weights): the tiles only test its depth and write it. A seventh of a Primitive's
+// memory, one tile to bin it in, and no edge functions to evaluate again.
+struct Fragment {
+    std::uint16_t x, y;
+    float z;
+    glm::vec3 weights;
+    std::uint32_t source;
+    bool front;
+};
+
+// The chunk's primitives and fragments in submission order (items), each item an index into
+// prims, or into frags with kFragmentItem set.
+constexpr std::uint32_t kFragmentItem = 1u << 31;
 
 struct Chunk {
     std::vector<Primitive> prims;
-    std::vector<std::uint32_t> tile_start;  // tile t's primitives: tile_prims[start[t]..start[t+1])
-    std::vector<std::uint32_t> tile_prims;
+    std::vector<Fragment> frags;
+    std::vector<std::uint32_t> items;
+    std::vector<std::uint32_t> tile_start;  // tile t's items: tile_items[start[t]..start[t+1])
+    std::vector<std::uint32_t> tile_items;
+    std::vector<std::uint32_t> candidates, fill;  // setup's working memory
     RasterStats stats;
 };
 
 // Working memory of one rasterize() call, kept in a small pool and reused: allocating tens of
 // megabytes per call costs more in page faults (serialized in the kernel) than the work.
 struct Scratch {
-    std::vector<PreparedVertex> vertices;
+    PreparedVertices vertices;
     std::vector<std::uint32_t> source;  // per pixel: input triangle written by this pass
     std::vector<Chunk> chunks;
 };
@@ -181,21 +216,47 @@ bool finite4(const glm::vec4& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
 }
 
-PreparedVertex prepare_vertex(const glm::vec4& clip, const Viewport& viewport, bool fused) {
-    PreparedVertex v;
-    v.clip = clip;
-    v.finite = finite4(clip);
+// Inline: the loops over a chunk's vertices run it on every vertex.
+[[gnu::always_inline]] inline void PreparedVertices::prepare(std::size_t i, const glm::vec4& clip,
+                                                             const Viewport& viewport, bool fused) {
+    PreparedVertex& v = vertices[i];
     v.clipmask = raster::compute_clipmask(clip);
     v.win = raster::window_position(clip, viewport, fused);
     v.fixed_x = raster::snap_fixed(v.win.x);
     v.fixed_y = raster::snap_fixed(v.win.y);
-    v.bounds = raster::vertex_pixel_bounds(v.fixed_x, v.fixed_y);
-    return v;
+    v.inside = finite4(clip) && v.clipmask == 0 && finite4(v.win);
+    bounds[i] = v.inside ? raster::vertex_pixel_bounds(v.fixed_x, v.fixed_y) : kAnywhere;
 }
 
-// One triangle that left the clipper (or never needed it), with draw's edge flags
-// (bit 0: v0->v1, bit 1: v1->v2, bit 2: v2->v0), into primitives.
-// A filled triangle into a primitive (or none).
+inline float eval(const float plane[3], float fx, float fy) {
+    return plane[0] + plane[1] * fx + plane[2] * fy;
+}
+
+// A fragment's position relative to the primitive's attribute origin.
+inline float offset_x(const Primitive& p, int px) { return static_cast<float>(px) - p.ox; }
+inline float offset_y(const Primitive& p, int py) { return static_cast<float>(py) - p.oy; }
+
+// Depth at a pixel centre, clamped to the depth range.
+inline float fragment_depth(const Primitive& p, float fx, float fy) {
+    const float z = eval(p.z, fx, fy);
+    return std::isnan(z) ? 1.0f : std::clamp(z, 0.0f, 1.0f);
+}
+
+// The perspective-correct weights at (wx, wy) relative to the origin.
+inline glm::vec3 fragment_weights(const Primitive& p, float wx, float wy) {
+    const float oow = eval(p.oow, wx, wy);
+    glm::vec3 b;
+    for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], wx, wy) / oow;
+    return b;
+}
+
+void push_primitive(const Primitive& prim, Chunk& chunk) {
+    chunk.items.push_back(static_cast<std::uint32_t>(chunk.prims.size()));
+    chunk.prims.push_back(prim);
+}
+
+// A filled triangle into a primitive, or the fragments of its box of at most four pixels
+// (without quad derivatives, which need the planes at the tiles), or nothing.
 void emit_filled(const Context& ctx, const raster::SetupCorner& a, const raster::SetupCorner& b,
                  const raster::SetupCorner& c, std::uint32_t source, Chunk& chunk) {
     raster::Face face = raster::Face::both;
@@ -208,7 +269,20 @@ void emit_filled(const Context& ctx, const raster::SetupCorner& a, const raster:
         case raster::Setup::empty: break;  // set up, no pixel to draw
         case raster::Setup::drawn:
             prim.source = source;
-            chunk.prims.push_back(prim);
+            if (prim.small_coverage == raster::kLargeBox || ctx.settings.quad_derivatives) {
+                push_primitive(prim, chunk);
+                break;
+            }
+            // The covered pixels in row order, as raster_primitive visits them.
+            for (int py = prim.y0, bit = 0; py <= prim.y1; ++py)
+                for (int px = prim.x0; px <= prim.x1; ++px, ++bit) {
+                    if (!(prim.small_coverage & (1 << bit))) continue;
+                    const float fx = offset_x(prim, px), fy = offset_y(prim, py);
+                    chunk.items.push_back(static_cast<std::uint32_t>(chunk.frags.size()) | kFragmentItem);
+                    chunk.frags.push_back({static_cast<std::uint16_t>(px), static_cast<std::uint16_t>(py),
+                                           fragment_depth(prim, fx, fy), fragment_weights(prim, fx, fy), source,
+                                           prim.front});
+                }
             break;
     }
 }
@@ -250,7 +324,7 @@ void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
         if (raster::setup_line(p, q, ctx.viewport, prim)) {
             prim.source = source;
             prim.front = front;
-            chunk.prims.push_back(prim);
+            push_primitive(prim, chunk);
         } else {
             ++chunk.stats.primitives_culled;
         }
@@ -264,36 +338,52 @@ void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
 const glm::vec3 kUnitWeights[3] = {glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.0f, 0.0f, 1.0f)};
 
 // Sets up triangles [first, last) of tris, whose ids start at first_id (the chunk's first
-// triangle is first_id + 0), with their vertices prepared in `vertices`.
-void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
+// triangle is first_id + 0), with their vertices at `positions`, prepared in `prepared`.
+void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const PreparedVertices& prepared,
                  std::span<const std::array<std::uint32_t, 3>> tris, std::size_t first, std::size_t last,
                  std::uint32_t first_id, Chunk& chunk) {
     chunk.prims.clear();
+    chunk.frags.clear();
+    chunk.items.clear();
     // At most one primitive a triangle unless clipped: no reallocation (and copy into fresh
     // pages) as the chunk fills; pages are only touched as primitives are written.
     chunk.prims.reserve(last - first);
     chunk.stats = {};
+    chunk.stats.triangles_in = last - first;
     const bool filled = ctx.settings.polygon_mode == PolygonMode::fill;
-    for (std::size_t t = first; t < last; ++t) {
-        ++chunk.stats.triangles_in;
+    const std::span<const PreparedVertex> vertices = prepared.vertices;
+    const std::span<const raster::VertexPixelBounds> bounds = prepared.bounds;
+
+    // Most triangles of a finely tessellated surface hold no pixel centre: the snapped
+    // bounding box (setup's own test, on positions snapped once per vertex) rejects them
+    // before any setup, the same triangles setup_triangle culls. A first pass keeps the
+    // others' indices, in order, without a branch per triangle (about half of them pass,
+    // at random: a branch would mispredict every other time). A triangle with a vertex
+    // that is not inside (kAnywhere) always passes, to the clipper's path below.
+    std::vector<std::uint32_t>& candidates = chunk.candidates;
+    candidates.resize(last - first);
+    std::size_t count = 0;
+    if (filled) {
+        for (std::size_t t = first; t < last; ++t) {
+            const auto& tri = tris[t];
+            candidates[count] = static_cast<std::uint32_t>(t);
+            count += raster::bounds_have_pixels(bounds[tri[0]], bounds[tri[1]], bounds[tri[2]], ctx.viewport);
+        }
+        const std::size_t rejected = (last - first) - count;
+        chunk.stats.primitives += rejected;
+        chunk.stats.primitives_culled += rejected;
+    } else {
+        for (std::size_t t = first; t < last; ++t) candidates[count++] = static_cast<std::uint32_t>(t);
+    }
+
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t t = candidates[i];
         const auto& tri = tris[t];
         const PreparedVertex& p0 = vertices[tri[0]];
         const PreparedVertex& p1 = vertices[tri[1]];
         const PreparedVertex& p2 = vertices[tri[2]];
-        if (filled && (p0.clipmask | p1.clipmask | p2.clipmask) == 0 && p0.finite && p1.finite && p2.finite) {
-            // Most triangles of a finely tessellated surface hold no pixel centre: the
-            // snapped bounding box (setup's own test, on positions snapped once per vertex)
-            // rejects them before any setup. The same triangles setup_triangle culls.
-            if (!raster::bounds_have_pixels(p0.bounds, p1.bounds, p2.bounds, ctx.viewport)) {
-                ++chunk.stats.primitives;
-                ++chunk.stats.primitives_culled;
-                continue;
-            }
+        if (filled && p0.inside && p1.inside && p2.inside) {
             // Unclipped: emit_triangle's path with the vertices themselves as corners.
-            if (!finite4(p0.win) || !finite4(p1.win) || !finite4(p2.win)) {
-                ++chunk.stats.primitives_culled;
-                continue;
-            }
             emit_filled(ctx, {&p0.win, &kUnitWeights[0], p0.fixed_x, p0.fixed_y},
                         {&p1.win, &kUnitWeights[1], p1.fixed_x, p1.fixed_y},
                         {&p2.win, &kUnitWeights[2], p2.fixed_x, p2.fixed_y},
@@ -304,13 +394,13 @@ void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
         bool finite = true;
         for (int k = 0; k < 3; ++k) {
             const PreparedVertex& pv = vertices[tri[static_cast<std::size_t>(k)]];
-            cv[k].clip = pv.clip;
+            cv[k].clip = positions[tri[static_cast<std::size_t>(k)]];
             cv[k].win = pv.win;
             cv[k].clipmask = pv.clipmask;
             cv[k].bary = glm::vec3(0.0f);
             cv[k].bary[k] = 1.0f;
             cv[k].edgeflag = true;
-            finite = finite && pv.finite;
+            finite = finite && finite4(cv[k].clip);
         }
         const unsigned mask_or = cv[0].clipmask | cv[1].clipmask | cv[2].clipmask;
         const unsigned mask_and = cv[0].clipmask & cv[1].clipmask & cv[2].clipmask;
@@ -340,29 +430,29 @@ void setup_chunk(const Context& ctx, std::span<const PreparedVertex> vertices,
         }
     }
 
-    // Bin the chunk's primitives by tile (a stable counting sort).
+    // Bin the chunk's items by tile (a stable counting sort): a fragment in its pixel's
+    // tile, a primitive in every tile its box overlaps.
     const int tile_count = ctx.tiles_x * ctx.tiles_y;
     chunk.tile_start.assign(static_cast<std::size_t>(tile_count) + 1, 0u);
-    for (const Primitive& p : chunk.prims) {
+    auto for_each_tile = [&](std::uint32_t item, auto&& f) {
+        if (item & kFragmentItem) {
+            const Fragment& g = chunk.frags[item & ~kFragmentItem];
+            f(static_cast<std::size_t>((g.y / kTileSize) * ctx.tiles_x + g.x / kTileSize));
+            return;
+        }
+        const Primitive& p = chunk.prims[item];
         for (int ty = p.y0 / kTileSize; ty <= p.y1 / kTileSize; ++ty)
             for (int tx = p.x0 / kTileSize; tx <= p.x1 / kTileSize; ++tx)
-                ++chunk.tile_start[static_cast<std::size_t>(ty * ctx.tiles_x + tx) + 1];
-    }
+                f(static_cast<std::size_t>(ty * ctx.tiles_x + tx));
+    };
+    for (const std::uint32_t item : chunk.items)
+        for_each_tile(item, [&](std::size_t tile) { ++chunk.tile_start[tile + 1]; });
     for (int t = 0; t < tile_count; ++t)
         chunk.tile_start[static_cast<std::size_t>(t) + 1] += chunk.tile_start[static_cast<std::size_t>(t)];
-    chunk.tile_prims.resize(chunk.tile_start.back());
-    std::vector<std::uint32_t> fill(chunk.tile_start.begin(), chunk.tile_start.end() - 1);
-    for (std::size_t i = 0; i < chunk.prims.size(); ++i) {
-        const Primitive& p = chunk.prims[i];
-        for (int ty = p.y0 / kTileSize; ty <= p.y1 / kTileSize; ++ty)
-            for (int tx = p.x0 / kTileSize; tx <= p.x1 / kTileSize; ++tx)
-                chunk.tile_prims[fill[static_cast<std::size_t>(ty * ctx.tiles_x + tx)]++] =
-                    static_cast<std::uint32_t>(i);
-    }
-}
-
-inline float eval(const float plane[3], float fx, float fy) {
-    return plane[0] + plane[1] * fx + plane[2] * fy;
+    chunk.tile_items.resize(chunk.tile_start.back());
+    chunk.fill.assign(chunk.tile_start.begin(), chunk.tile_start.end() - 1);
+    for (const std::uint32_t item : chunk.items)
+        for_each_tile(item, [&](std::size_t tile) { chunk.tile_items[chunk.fill[tile]++] = item; });
 }
 
 // floor(n / d) for d > 0.
@@ -370,43 +460,48 @@ inline std::int64_t floor_div(std::int64_t n, std::int64_t d) {
     return n >= 0 ? n / d : -((-n + d - 1) / d);
 }
 
-// One covered pixel sample: depth test, then the visible surface's data.
-inline void fragment(Context& ctx, const Primitive& p, int px, int py, RasterStats& stats) {
+// One covered pixel sample at depth z: the depth test, then the visible surface's data,
+// with weights() (the perspective-correct weights) asked for only when it passes. Whether
+// it passed.
+template <class Weights>
+inline bool fragment(Context& ctx, int px, int py, float z, std::uint32_t source, bool front, Weights&& weights,
+                     RasterStats& stats) {
     Framebuffer& fb = ctx.fb;
     const RasterSettings& s = ctx.settings;
     const std::size_t idx = static_cast<std::size_t>(py) * static_cast<std::size_t>(fb.width) +
                             static_cast<std::size_t>(px);
     if (ctx.all_buffers) ++fb.fragment_count[idx];
     ++stats.fragments;
-    const float fx = static_cast<float>(px) - p.ox;
-    const float fy = static_cast<float>(py) - p.oy;
-    float z = eval(p.z, fx, fy);
-    z = std::isnan(z) ? 1.0f : std::clamp(z, 0.0f, 1.0f);  // depth clamp to the range
     bool pass = true;
     if (s.depth_func == DepthFunc::less) pass = z < fb.depth[idx];
     else if (s.depth_func == DepthFunc::lequal) pass = z <= fb.depth[idx];
-    if (!pass) return;
+    if (!pass) return false;
     ++stats.fragments_passed;
     if (s.depth_write) fb.depth[idx] = z;
-    auto weights = [&p](float wx, float wy) {
-        const float oow = eval(p.oow, wx, wy);
-        glm::vec3 b;
-        for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], wx, wy) / oow;
-        return b;
-    };
-    fb.barycentric[idx] = weights(fx, fy);
-    if (s.quad_derivatives) {
-        const float qx = static_cast<float>(px & ~1) - p.ox;
-        const float qy = static_cast<float>(py & ~1) - p.oy;
-        const glm::vec3 top_left = weights(qx, qy);
-        fb.barycentric_dx[idx] = weights(qx + 1.0f, qy) - top_left;
-        fb.barycentric_dy[idx] = top_left - weights(qx, qy + 1.0f);
-    }
+    fb.barycentric[idx] = weights();
     if (ctx.all_buffers) {
         fb.color[idx] = s.color;
-        fb.front_facing[idx] = p.front ? 1 : 0;
+        fb.front_facing[idx] = front ? 1 : 0;
     }
-    ctx.source[idx] = p.source;
+    ctx.source[idx] = source;
+    return true;
+}
+
+// A covered pixel of a primitive, its depth and weights from the primitive's planes.
+inline void fragment(Context& ctx, const Primitive& p, int px, int py, RasterStats& stats) {
+    const float fx = offset_x(p, px), fy = offset_y(p, py);
+    if (!fragment(ctx, px, py, fragment_depth(p, fx, fy), p.source, p.front,
+                  [&] { return fragment_weights(p, fx, fy); }, stats))
+        return;
+    if (ctx.settings.quad_derivatives) {
+        const std::size_t idx = static_cast<std::size_t>(py) * static_cast<std::size_t>(ctx.fb.width) +
+                                static_cast<std::size_t>(px);
+        const float qx = static_cast<float>(px & ~1) - p.ox;
+        const float qy = static_cast<float>(py & ~1) - p.oy;
+        const glm::vec3 top_left = fragment_weights(p, qx, qy);
+        ctx.fb.barycentric_dx[idx] = fragment_weights(p, qx + 1.0f, qy) - top_left;
+        ctx.fb.barycentric_dy[idx] = top_left - fragment_weights(p, qx, qy + 1.0f);
+    }
 }
 
 // Every pixel (px, py) of the primitive's box within the tile with all edge functions
@@ -457,7 +552,13 @@ void raster_tile(Context& ctx, int tile, const std::vector<Chunk>& chunks, std::
     for (std::size_t c = 0; c < chunk_count; ++c) {
         const Chunk& chunk = chunks[c];
         for (std::uint32_t i = chunk.tile_start[t]; i < chunk.tile_start[t + 1]; ++i) {
-            const Primitive& p = chunk.prims[chunk.tile_prims[i]];
+            const std::uint32_t item = chunk.tile_items[i];
+            if (item & kFragmentItem) {
+                const Fragment& g = chunk.frags[item & ~kFragmentItem];
+                fragment(ctx, g.x, g.y, g.z, g.source, g.front, [&] { return g.weights; }, stats);
+                continue;
+            }
+            const Primitive& p = chunk.prims[item];
             if (p.plane_count == 3) raster_primitive<3>(ctx, p, x0, y0, x1, y1, stats);
             else raster_primitive<4>(ctx, p, x0, y0, x1, y1, stats);
         }
@@ -611,12 +712,12 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
     Rasterizer::State state(fb, settings, scratch->source.data());
     state.chunks = std::move(scratch->chunks);
 
-    std::vector<PreparedVertex>& vertices = scratch->vertices;
+    PreparedVertices& vertices = scratch->vertices;
     vertices.resize(input.positions.size());
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               for (std::size_t i = r.begin(); i < r.end(); ++i)
-                                  vertices[i] = prepare_vertex(input.positions[i], state.ctx.viewport, state.fused);
+                                  vertices.prepare(i, input.positions[i], state.ctx.viewport, state.fused);
                           });
 
     // Set up chunks in parallel waves and rasterize the tiles once enough primitives have
@@ -631,10 +732,10 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
         if (state.chunks.size() < used + wave) state.chunks.resize(used + wave);
         tessref::parallel_for(std::size_t{0}, wave, [&](std::size_t c) {
             const std::size_t first = wave_first + c * kChunkTriangles;
-            setup_chunk(state.ctx, vertices, input.triangles, first, std::min(wave_last, first + kChunkTriangles),
+            setup_chunk(state.ctx, input.positions, vertices, input.triangles, first, std::min(wave_last, first + kChunkTriangles),
                         static_cast<std::uint32_t>(first), state.chunks[used + c]);
         });
-        for (std::size_t c = 0; c < wave; ++c) batch_prims += state.chunks[used + c].prims.size();
+        for (std::size_t c = 0; c < wave; ++c) batch_prims += state.chunks[used + c].items.size();
         state.used += wave;
         if (batch_prims >= kBatchPrimitives || state.used >= kMaxChunksPerBatch) {
             state.flush();
@@ -677,10 +778,10 @@ void Rasterizer::draw(std::span<const RasterChunk> chunks) {
     if (s.chunks.size() < used + chunks.size()) s.chunks.resize(used + chunks.size());
     tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t c) {
         const RasterChunk& chunk = chunks[c];
-        thread_local std::vector<PreparedVertex> vertices;
+        thread_local PreparedVertices vertices;
         vertices.resize(chunk.positions.size());
         for (std::size_t i = 0; i < chunk.positions.size(); ++i)
-            vertices[i] = prepare_vertex(chunk.positions[i], s.ctx.viewport, s.fused);
+            vertices.prepare(i, chunk.positions[i], s.ctx.viewport, s.fused);
         // The largest index first (a loop without an exit, which the compiler vectorizes),
         // then the first one out of range only when there is one.
         std::uint32_t largest = 0;
@@ -693,7 +794,7 @@ void Rasterizer::draw(std::span<const RasterChunk> chunks) {
                                         std::to_string(chunk.positions.size()) + " vertices in the chunk)",
                                     Where::at_key("triangles"));
         }
-        setup_chunk(s.ctx, vertices, chunk.triangles, 0, chunk.triangles.size(), chunk.first_id,
+        setup_chunk(s.ctx, chunk.positions, vertices, chunk.triangles, 0, chunk.triangles.size(), chunk.first_id,
                     s.chunks[used + c]);
     });
     s.used += chunks.size();

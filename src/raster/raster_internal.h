@@ -103,12 +103,27 @@ struct Primitive {
     float bw[3][3];
     std::uint32_t source;  // index of the input triangle
     bool front;
+    // A triangle whose box holds at most four pixels: bit (py - y0) * (x1 - x0 + 1) + (px - x0)
+    // set for each pixel (px, py) that passes the edge functions; kLargeBox for a larger box
+    // (or a line), which the tiles test pixel by pixel.
+    int small_coverage;
 };
+inline constexpr int kLargeBox = -1;
+
+// Whether pixel (px, py) passes every edge function of the primitive (llvmpipe's coverage
+// test, exact in 64-bit integers). All of them evaluated, without a branch: whether a tiny
+// triangle covers a pixel centre is a coin toss a branch would mispredict.
+inline bool covered(const Primitive& p, int px, int py) {
+    bool inside = true;
+    for (int k = 0; k < p.plane_count; ++k) inside &= p.c[k] + p.dcdy[k] * py - p.dcdx[k] * px > 0;
+    return inside;
+}
 
 // llvmpipe's triangle setup (calc_fixed_position + do_triangle_ccw): culled (zero area,
 // culled face, or empty bounding box, as llvmpipe culls), empty (set up, but a box of at most
 // four pixels none of whose centres passes the edge functions: it would draw nothing, so its
-// attribute planes are not computed and prim holds only its box and edges), or drawn.
+// attribute planes are not computed and prim holds only its box and edges), or drawn (with
+// small_coverage: which pixels of a box of at most four it covers).
 enum class Face { both, front_only, back_only };
 enum class Setup { culled, empty, drawn };
 // A corner as setup reads it: its window position, its weights of the source triangle's
@@ -120,8 +135,8 @@ struct SetupCorner {
     const glm::vec3* bary;
     std::int32_t x, y;
 };
-Setup setup_triangle(const SetupCorner& v0, const SetupCorner& v1, const SetupCorner& v2, Face face,
-                     const Viewport& viewport, Primitive& prim);
+inline Setup setup_triangle(const SetupCorner& v0, const SetupCorner& v1, const SetupCorner& v2, Face face,
+                            const Viewport& viewport, Primitive& prim);
 
 // llvmpipe's one-pixel-wide line setup (try_setup_line, diamond-exit rule, non-rectangular).
 bool setup_line(const ClipVertex& v1, const ClipVertex& v2, const Viewport& viewport,
@@ -153,6 +168,83 @@ inline bool clamp_bbox(Primitive& prim, const Viewport& vp) {
     prim.x1 = std::min(prim.x1, vp.width - 1);
     prim.y1 = std::min(prim.y1, vp.height - 1);
     return prim.x0 <= prim.x1 && prim.y0 <= prim.y1;
+}
+
+// Edge planes of a convex ccw polygon (in llvmpipe's sense: positive fixed-point area) with
+// the bottom-left fill convention that Mesa selects for a window-system framebuffer
+// (bottom_edge_rule = 1: in raster coordinates, y down, bottom edges are included; in GL
+// window coordinates, y up, that is the bottom-left rule).
+inline void make_planes(const std::int32_t* x, const std::int32_t* y, int count, Primitive& prim) {
+    prim.plane_count = count;
+    for (int i = 0; i < count; ++i) {
+        const int j = (i + 1) % count;
+        const std::int32_t dcdy = x[i] - x[j];
+        const std::int32_t dcdx = y[i] - y[j];
+        std::int64_t c = static_cast<std::int64_t>(dcdx) * x[i] - static_cast<std::int64_t>(dcdy) * y[i];
+        if (dcdx < 0) {
+            ++c;  // left edges: both fill conventions
+        } else if (dcdx == 0 && dcdy < 0) {
+            ++c;  // bottom-left convention for horizontal edges
+        }
+        prim.c[i] = c;
+        prim.dcdx[i] = static_cast<std::int64_t>(dcdx) * kFixedOne;
+        prim.dcdy[i] = static_cast<std::int64_t>(dcdy) * kFixedOne;
+    }
+}
+
+
+// Which pixel centres of the primitive's box pass all its edge functions, for boxes of at
+// most four pixels (bit (py - y0) * width + (px - x0)); kLargeBox for larger ones, which
+// the tiles decide. The test is the tiles' own, E = c + dcdy * py - dcdx * px > 0 in 64-bit
+// integers (covered()), so it agrees with them pixel for pixel. Most triangles of a finely
+// tessellated surface that survive the box test are slivers between pixel centres: this
+// spares them the float planes and the binning, and the rasterizer writes the pixels of the
+// others without testing them again.
+inline int small_box_coverage(const Primitive& p) {
+    const int width = p.x1 - p.x0 + 1;
+    if (width * (p.y1 - p.y0 + 1) > 4) return kLargeBox;
+    int mask = 0;
+    for (int py = p.y0, bit = 0; py <= p.y1; ++py)
+        for (int px = p.x0; px <= p.x1; ++px, ++bit) mask |= covered(p, px, py) << bit;
+    return mask;
+}
+
+// setup_triangle in two halves. The integer one, inline (the rasterizer runs it on every
+// triangle that passes the box test, and half of them end here): orientation, culling,
+// box and edge functions, which pixels of a small box are covered; v in setup's vertex
+// order on return (the first two swapped for a clockwise triangle).
+[[gnu::always_inline]] inline Setup setup_coverage(const SetupCorner* (&v)[3], Face face, const Viewport& vp,
+                                                   Primitive& prim) {
+    std::int32_t x[3] = {v[0]->x, v[1]->x, v[2]->x}, y[3] = {v[0]->y, v[1]->y, v[2]->y};
+    const std::int32_t dx01 = x[0] - x[1], dy01 = y[0] - y[1];
+    const std::int32_t dx20 = x[2] - x[0], dy20 = y[2] - y[0];
+    const std::int64_t area = static_cast<std::int64_t>(dx01) * dy20 - static_cast<std::int64_t>(dx20) * dy01;
+    if (area == 0) return Setup::culled;
+    // Positive area is counter-clockwise in GL window coordinates: front-facing.
+    const bool front = area > 0;
+    if ((face == Face::front_only && !front) || (face == Face::back_only && front)) return Setup::culled;
+    if (area < 0) {  // rotate_fixed_position_01 (provoking vertex last)
+        std::swap(v[0], v[1]);
+        std::swap(x[0], x[1]);
+        std::swap(y[0], y[1]);
+    }
+    prim.front = front;
+
+    triangle_bbox(x, y, prim);
+    if (!clamp_bbox(prim, vp)) return Setup::culled;
+    make_planes(x, y, 3, prim);
+    prim.small_coverage = small_box_coverage(prim);
+    return prim.small_coverage == 0 ? Setup::empty : Setup::drawn;
+}
+// The float one, for a drawn triangle: the attribute planes (depth, 1/w, weights).
+void setup_attributes(const SetupCorner* const (&v)[3], Primitive& prim);
+
+inline Setup setup_triangle(const SetupCorner& v0, const SetupCorner& v1, const SetupCorner& v2, Face face,
+                            const Viewport& viewport, Primitive& prim) {
+    const SetupCorner* v[3] = {&v0, &v1, &v2};
+    const Setup result = setup_coverage(v, face, viewport, prim);
+    if (result == Setup::drawn) setup_attributes(v, prim);
+    return result;
 }
 
 // triangle_bbox's four bounds are each a non-decreasing function of one coordinate of one

@@ -14,29 +14,6 @@ namespace {
 
 constexpr float kPixelOffset = 0.5f;  // half_pixel_center
 
-// Edge planes of a convex ccw polygon (in llvmpipe's sense: positive fixed-point area) with
-// the bottom-left fill convention that Mesa selects for a window-system framebuffer
-// (bottom_edge_rule = 1: in raster coordinates, y down, bottom edges are included; in GL
-// window coordinates, y up, that is the bottom-left rule).
-void make_planes(const std::int32_t* x, const std::int32_t* y, int count, Primitive& prim) {
-    prim.plane_count = count;
-    for (int i = 0; i < count; ++i) {
-        const int j = (i + 1) % count;
-        const std::int32_t dcdy = x[i] - x[j];
-        const std::int32_t dcdx = y[i] - y[j];
-        std::int64_t c = static_cast<std::int64_t>(dcdx) * x[i] - static_cast<std::int64_t>(dcdy) * y[i];
-        if (dcdx < 0) {
-            ++c;  // left edges: both fill conventions
-        } else if (dcdx == 0 && dcdy < 0) {
-            ++c;  // bottom-left convention for horizontal edges
-        }
-        prim.c[i] = c;
-        prim.dcdx[i] = static_cast<std::int64_t>(dcdx) * kFixedOne;
-        prim.dcdy[i] = static_cast<std::int64_t>(dcdy) * kFixedOne;
-    }
-}
-
-
 // Plane through three (x, y, a) points, evaluated at pixel centres relative to vertex 0.
 void triangle_plane(const float a[3], float ooa, float dx01, float dy01, float dx20, float dy20,
                     float out[3]) {
@@ -64,49 +41,7 @@ std::int32_t util_iround(float f) {
     return static_cast<std::int32_t>(g);
 }
 
-namespace {
-
-// Whether a pixel centre of the primitive's box passes all its edge functions, decided for
-// boxes of at most four pixels (larger ones: true, the tiles decide). The test is the
-// tiles' own, E = c + dcdy * py - dcdx * px > 0 in 64-bit integers, so it agrees with them
-// pixel for pixel. Most triangles of a finely tessellated surface that survive the box test
-// are slivers between pixel centres: this spares them the float planes and the binning.
-bool small_box_has_coverage(const Primitive& p) {
-    if ((p.x1 - p.x0 + 1) * (p.y1 - p.y0 + 1) > 4) return true;
-    for (int py = p.y0; py <= p.y1; ++py)
-        for (int px = p.x0; px <= p.x1; ++px) {
-            bool inside = true;
-            for (int k = 0; k < p.plane_count; ++k) inside = inside && p.c[k] + p.dcdy[k] * py - p.dcdx[k] * px > 0;
-            if (inside) return true;
-        }
-    return false;
-}
-
-}  // namespace
-
-Setup setup_triangle(const SetupCorner& in0, const SetupCorner& in1, const SetupCorner& in2, Face face,
-                     const Viewport& vp, Primitive& prim) {
-    const SetupCorner* v[3] = {&in0, &in1, &in2};
-    std::int32_t x[3] = {in0.x, in1.x, in2.x}, y[3] = {in0.y, in1.y, in2.y};
-    const std::int32_t dx01 = x[0] - x[1], dy01 = y[0] - y[1];
-    const std::int32_t dx20 = x[2] - x[0], dy20 = y[2] - y[0];
-    const std::int64_t area = static_cast<std::int64_t>(dx01) * dy20 - static_cast<std::int64_t>(dx20) * dy01;
-    if (area == 0) return Setup::culled;
-    // Positive area is counter-clockwise in GL window coordinates: front-facing.
-    const bool front = area > 0;
-    if ((face == Face::front_only && !front) || (face == Face::back_only && front)) return Setup::culled;
-    if (area < 0) {  // rotate_fixed_position_01 (provoking vertex last)
-        std::swap(v[0], v[1]);
-        std::swap(x[0], x[1]);
-        std::swap(y[0], y[1]);
-    }
-    prim.front = front;
-
-    triangle_bbox(x, y, prim);
-    if (!clamp_bbox(prim, vp)) return Setup::culled;
-    make_planes(x, y, 3, prim);
-    if (!small_box_has_coverage(prim)) return Setup::empty;
-
+void setup_attributes(const SetupCorner* const (&v)[3], Primitive& prim) {
     // Attribute planes from the unsnapped window positions (like lp_setup's coefficients).
     const float fdx01 = v[0]->win->x - v[1]->win->x, fdy01 = v[0]->win->y - v[1]->win->y;
     const float fdx20 = v[2]->win->x - v[0]->win->x, fdy20 = v[2]->win->y - v[0]->win->y;
@@ -121,7 +56,6 @@ Setup setup_triangle(const SetupCorner& in0, const SetupCorner& in1, const Setup
         const float bw[3] = {(*v[0]->bary)[k] * oow[0], (*v[1]->bary)[k] * oow[1], (*v[2]->bary)[k] * oow[2]};
         triangle_plane(bw, ooa, fdx01, fdy01, fdx20, fdy20, prim.bw[k]);
     }
-    return Setup::drawn;
 }
 
 namespace {
@@ -274,6 +208,7 @@ bool setup_line(const ClipVertex& in1, const ClipVertex& in2, const Viewport& vp
     prim.y1 = ((std::max({y[0], y[1], y[2], y[3]}) + (kFixedOne - 1) + adj) >> kFixedOrder) - 1;
     if (!clamp_bbox(prim, vp)) return false;
     make_planes(x, y, 4, prim);
+    prim.small_coverage = kLargeBox;
 
     // Attributes along the major axis from the ORIGINAL first vertex, like llvmpipe's
     // linear_coef with its "wide-lines formula" (dadx = (a1 - a2) / dx for x-major lines).
