@@ -210,7 +210,24 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
         for (std::size_t k = 0; k < 2 + c % 2 && c < chunk_first.size(); ++k, ++c)
             draw.push_back({chunk_positions[c], chunk_triangles[c], chunk_first[c]});
         rasterizer.draw(draw);
+        const tessref::Framebuffer before = visible;
         visible_rasterizer.draw(draw);
+        // drawn(): whole 2x2 quads inside the image, no pixel in two, and every pixel whose
+        // depth, triangle or weights the draw changed inside one.
+        std::vector<int> owner(visible.depth.size(), 0);
+        for (const tessref::Rasterizer::Rect& r : visible_rasterizer.drawn()) {
+            EXPECT_TRUE(r.x % 2 == 0 && r.row % 2 == 0 && r.width > 0 && r.height > 0);
+            EXPECT_TRUE((r.width % 2 == 0 || r.x + r.width == 173) && (r.height % 2 == 0 || r.row + r.height == 97));
+            ASSERT_TRUE(r.x + r.width <= 173 && r.row + r.height <= 97);
+            for (int y = r.row; y < r.row + r.height; ++y)
+                for (int x = r.x; x < r.x + r.width; ++x) ++owner[static_cast<std::size_t>(y) * 173 + static_cast<std::size_t>(x)];
+        }
+        for (std::size_t i = 0; i < owner.size(); ++i) {
+            EXPECT_LE(owner[i], 1) << "pixel " << i << " in two rectangles";
+            const bool changed = visible.triangle_id[i] != before.triangle_id[i] || visible.depth[i] != before.depth[i] ||
+                                 visible.barycentric[i] != before.barycentric[i];
+            if (changed) EXPECT_EQ(owner[i], 1) << "pixel " << i << " changed outside drawn()";
+        }
     }
     const tessref::RasterStats many = rasterizer.stats();
     EXPECT_GT(one.fragments_passed, 1000u);
@@ -241,6 +258,29 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     EXPECT_EQ(lean.primitives_culled, one.primitives_culled);
     EXPECT_EQ(lean.fragments, one.fragments);
     EXPECT_EQ(lean.fragments_passed, one.fragments_passed);
+}
+
+// A draw of one small triangle reports the quads around it, not its whole tile: the
+// streamed render resolves only what drawn() names.
+TEST(Rasterizer, DrawnIsTheQuadsAroundWhatWasDrawn) {
+    tessref::Framebuffer fb = tessref::Framebuffer::create_visibility(173, 97);
+    tessref::Rasterizer rasterizer(fb, {});
+    // About three pixels wide, around NDC (0.2, 0): window (103.8, 48.5), inside tile (1, 0).
+    const std::vector<glm::vec4> positions{{0.18f, -0.03f, 0.0f, 1.0f}, {0.23f, -0.03f, 0.0f, 1.0f}, {0.2f, 0.03f, 0.0f, 1.0f}};
+    const std::vector<std::array<std::uint32_t, 3>> triangles{{0, 1, 2}};
+    rasterizer.draw(std::vector<tessref::RasterChunk>{{positions, triangles, 0}});
+    ASSERT_GT(rasterizer.stats().fragments_passed, 0u);
+    const std::vector<tessref::Rasterizer::Rect> drawn = rasterizer.drawn();
+    ASSERT_EQ(drawn.size(), 1u);
+    EXPECT_LE(drawn[0].width, 6);
+    EXPECT_LE(drawn[0].height, 6);
+    for (int y = 0; y < 97; ++y)
+        for (int x = 0; x < 173; ++x)
+            if (fb.triangle_id[static_cast<std::size_t>(y) * 173 + static_cast<std::size_t>(x)] != tessref::kNoTriangle) {
+                EXPECT_TRUE(x >= drawn[0].x && x < drawn[0].x + drawn[0].width && y >= drawn[0].row &&
+                            y < drawn[0].row + drawn[0].height)
+                    << x << ", " << y;
+            }
 }
 
 TEST(Rasterizer, VertexIndexOutsideTheChunkIsAnError) {

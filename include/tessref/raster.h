@@ -185,8 +185,9 @@ public:
     void draw(std::span<const RasterChunk> chunks);
     RasterStats stats() const;  // of every draw so far
     // The parts of the image the last draw changed: rectangles (x, row from the top, width,
-    // height; even-aligned, so no 2x2 quad straddles two) outside which no pixel's depth,
-    // triangle or weights changed.
+    // height; whole 2x2 quads, so no quad straddles two), one per tile where a fragment passed,
+    // around the boxes of the triangles drawn there, outside which no pixel's depth, triangle
+    // or weights changed.
     struct Rect {
         int x, row, width, height;
     };

@@ -8,6 +8,7 @@
 #include "tessref/raster.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -542,8 +543,20 @@ void raster_primitive(Context& ctx, const Primitive& p, int tx0, int ty0, int tx
     }
 }
 
+// The pixels (inclusive bounds) a tile's items of one flush can touch: the union of their
+// boxes within the tile. Empty while x1 < x0.
+struct PixelBox {
+    int x0 = INT_MAX, y0 = INT_MAX, x1 = -1, y1 = -1;
+    void add(int ax0, int ay0, int ax1, int ay1) {
+        x0 = std::min(x0, ax0);
+        y0 = std::min(y0, ay0);
+        x1 = std::max(x1, ax1);
+        y1 = std::max(y1, ay1);
+    }
+};
+
 void raster_tile(Context& ctx, int tile, const std::vector<Chunk>& chunks, std::size_t chunk_count,
-                 RasterStats& stats) {
+                 RasterStats& stats, PixelBox& touched) {
     const int tx = tile % ctx.tiles_x, ty = tile / ctx.tiles_x;
     const int x0 = tx * kTileSize, y0 = ty * kTileSize;
     const int x1 = std::min(x0 + kTileSize, ctx.fb.width) - 1;
@@ -555,10 +568,12 @@ void raster_tile(Context& ctx, int tile, const std::vector<Chunk>& chunks, std::
             const std::uint32_t item = chunk.tile_items[i];
             if (item & kFragmentItem) {
                 const Fragment& g = chunk.frags[item & ~kFragmentItem];
+                touched.add(g.x, g.y, g.x, g.y);
                 fragment(ctx, g.x, g.y, g.z, g.source, g.front, [&] { return g.weights; }, stats);
                 continue;
             }
             const Primitive& p = chunk.prims[item];
+            touched.add(std::max(p.x0, x0), std::max(p.y0, y0), std::min(p.x1, x1), std::min(p.y1, y1));
             if (p.plane_count == 3) raster_primitive<3>(ctx, p, x0, y0, x1, y1, stats);
             else raster_primitive<4>(ctx, p, x0, y0, x1, y1, stats);
         }
@@ -667,12 +682,13 @@ struct Rasterizer::State {
     void flush() {
         if (used == 0) return;
         const int tile_count = ctx.tiles_x * ctx.tiles_y;
-        drawn.assign(static_cast<std::size_t>(tile_count), 0);
+        drawn.assign(static_cast<std::size_t>(tile_count), PixelBox{});
         tessref::parallel_for(0, tile_count, [&](int tile) {
             RasterStats& stats = tile_stats[static_cast<std::size_t>(tile)];
             const std::uint64_t passed = stats.fragments_passed;
-            raster_tile(ctx, tile, chunks, used, stats);
-            drawn[static_cast<std::size_t>(tile)] = stats.fragments_passed != passed ? 1 : 0;
+            PixelBox touched;
+            raster_tile(ctx, tile, chunks, used, stats, touched);
+            if (stats.fragments_passed != passed) drawn[static_cast<std::size_t>(tile)] = touched;
         });
         for (std::size_t c = 0; c < used; ++c) {
             const RasterStats& s = chunks[c].stats;
@@ -701,7 +717,8 @@ struct Rasterizer::State {
     std::size_t used = 0;
     RasterStats total;
     std::vector<RasterStats> tile_stats;
-    std::vector<std::uint8_t> drawn;  // per tile: a fragment passed in the last flush
+    // Per tile: where the last flush's items lie, if a fragment of theirs passed (else empty).
+    std::vector<PixelBox> drawn;
 };
 
 namespace {
@@ -806,11 +823,12 @@ RasterStats Rasterizer::stats() const { return state_->stats(); }
 std::vector<Rasterizer::Rect> Rasterizer::drawn() const {
     const State& s = *state_;
     std::vector<Rect> out;
-    for (std::size_t t = 0; t < s.drawn.size(); ++t) {
-        if (!s.drawn[t]) continue;
-        const int tx = static_cast<int>(t) % s.ctx.tiles_x, ty = static_cast<int>(t) / s.ctx.tiles_x;
-        out.push_back({tx * kTileSize, ty * kTileSize, std::min(kTileSize, s.ctx.fb.width - tx * kTileSize),
-                       std::min(kTileSize, s.ctx.fb.height - ty * kTileSize)});
+    for (const PixelBox& box : s.drawn) {
+        if (box.x1 < box.x0) continue;
+        // Whole 2x2 quads: tiles start on even pixels, so the quads stay inside the tile.
+        const int x = box.x0 & ~1, row = box.y0 & ~1;
+        const int x_end = std::min((box.x1 | 1) + 1, s.ctx.fb.width), row_end = std::min((box.y1 | 1) + 1, s.ctx.fb.height);
+        out.push_back({x, row, x_end - x, row_end - row});
     }
     return out;
 }
