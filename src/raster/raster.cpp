@@ -15,6 +15,7 @@
 #include <string>
 #include <utility>
 
+#include "common/huge_pages.h"
 #include "common/parallel.h"
 #include "common/unorm8.h"
 
@@ -68,9 +69,9 @@ Framebuffer Framebuffer::create_visibility(int width, int height) {
     fb.width = width;
     fb.height = height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    fb.depth.assign(n, 1.0f);
-    fb.triangle_id.assign(n, kNoTriangle);
-    fb.barycentric.assign(n, glm::vec3(0.0f));
+    assign_on_huge_pages(fb.depth, n, 1.0f);
+    assign_on_huge_pages(fb.triangle_id, n, kNoTriangle);
+    assign_on_huge_pages(fb.barycentric, n, glm::vec3(0.0f));
     return fb;
 }
 
@@ -95,7 +96,7 @@ std::int32_t snap_subpixel(float window_coordinate) {
 std::vector<std::uint8_t> to_rgba8(const Framebuffer& fb) {
     std::vector<std::uint8_t> out(fb.color.size() * 4);
     for (std::size_t i = 0; i < fb.color.size(); ++i) {
-        for (int c = 0; c < 4; ++c) out[i * 4 + static_cast<std::size_t>(c)] = unorm8(fb.color[i][c]);
+        unorm8_rgba(&fb.color[i][0], &out[i * 4]);
     }
     return out;
 }
