@@ -17,6 +17,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -27,6 +28,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -234,6 +236,53 @@ TEST(TextureSampling, MissingChannelsReadAsGlFillsThem) {
     const Texture rgb = Texture::from_unorm8(1, 1, 3, {255, 0, 51});
     EXPECT_EQ(rgb.texture(glm::vec2(0.5f)), glm::vec4(1.0f, 0.0f, 51.0f * (1.0f / 255.0f), 1.0f));
     EXPECT_EQ(rgb.texture(glm::dvec2(0.5)), glm::dvec4(1.0, 0.0, 0.2, 1.0));
+}
+
+// The batched texture() is the scalar one at every coordinate, bit for bit, for every format,
+// channel count and wrap mode, and both are textureLod(st, 0) (a separate code path): random
+// coordinates in and well outside [0, 1], texel centres and edges, NaN and infinities.
+TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
+    std::mt19937 rng(20261127);
+    std::uniform_real_distribution<float> coordinate(-0.6f, 1.6f);
+    std::uniform_int_distribution<int> code(0, 255);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const auto bits = [](const glm::vec4& v) {
+        return std::array<std::uint32_t, 4>{std::bit_cast<std::uint32_t>(v.x), std::bit_cast<std::uint32_t>(v.y),
+                                            std::bit_cast<std::uint32_t>(v.z), std::bit_cast<std::uint32_t>(v.w)};
+    };
+    for (const TexelFormat format : {TexelFormat::unorm8, TexelFormat::unorm16, TexelFormat::float32}) {
+        for (int channels = 1; channels <= 4; ++channels) {
+            const int width = 7, height = 5;
+            const std::size_t n = static_cast<std::size_t>(width * height * channels);
+            std::vector<std::uint8_t> codes8(n);
+            std::vector<std::uint16_t> codes16(n);
+            std::vector<float> values(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                codes8[i] = static_cast<std::uint8_t>(code(rng));
+                codes16[i] = static_cast<std::uint16_t>(codes8[i] * 257 + code(rng));
+                values[i] = static_cast<float>(code(rng)) / 37.0f - 3.0f;
+            }
+            Texture texture = format == TexelFormat::unorm8    ? Texture::from_unorm8(width, height, channels, codes8)
+                              : format == TexelFormat::unorm16 ? Texture::from_unorm16(width, height, channels, codes16)
+                                                               : Texture::from_float(width, height, channels, values);
+            for (const tessref::Wrap wrap : {tessref::Wrap::clamp_to_edge, tessref::Wrap::repeat}) {
+                texture.set_wrap(wrap);
+                std::vector<glm::vec2> st = {glm::vec2(0.0f), glm::vec2(1.0f), glm::vec2(0.5f / width, 1.5f / height),
+                                             glm::vec2(nan, 0.5f), glm::vec2(0.5f, -inf), glm::vec2(inf, nan),
+                                             glm::vec2(-1e30f, 1e30f)};
+                while (st.size() < 300) st.emplace_back(coordinate(rng), coordinate(rng));
+                std::vector<glm::vec4> out(st.size());
+                texture.texture(std::span<const glm::vec2>(st), std::span<glm::vec4>(out));
+                for (std::size_t k = 0; k < st.size(); ++k) {
+                    SCOPED_TRACE(std::string(tessref::to_string(format)) + " channels " + std::to_string(channels) +
+                                 " coordinate " + std::to_string(k));
+                    EXPECT_EQ(bits(out[k]), bits(texture.texture(st[k])));
+                    EXPECT_EQ(bits(out[k]), bits(texture.textureLod(st[k], 0.0f)));
+                }
+            }
+        }
+    }
 }
 
 // ---- mip pyramid --------------------------------------------------------------------------

@@ -74,6 +74,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -143,6 +144,10 @@ public:
     // is 0 and this is exactly textureLod(st, 0).
     glm::vec4 texture(glm::vec2 st) const;
     glm::dvec4 texture(glm::dvec2 st) const;
+    // texture() at many coordinates: out[k] = texture(st[k]), bit for bit, the format and the
+    // channel count dispatched once for all of them. st and out have the same size.
+    void texture(std::span<const glm::vec2> st, std::span<glm::vec4> out) const;
+    void texture(std::span<const glm::dvec2> st, std::span<glm::dvec4> out) const;
     // GLSL textureLod(sampler, st, lod): lod clamped to [0, max_level()] (a NaN lod reads as
     // 0), linear between levels floor(lod) and floor(lod) + 1. A NaN coordinate reads as a
     // coordinate below 0 (the edge texel): GL leaves it undefined, tessref keeps it defined.

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -158,20 +159,20 @@ inline std::size_t index_of(const TextureLevel& level, int channels, int x, int 
            static_cast<std::size_t>(c);
 }
 
-// Float filter on a float32/unorm16 level: out[c] for c < channels. Built twice on x86-64,
-// with and without FMA instructions, and chosen at load: std::fma is then one instruction
-// instead of a libm call (fma is exactly rounded either way: the same values).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("fma", "default")))
-#endif
-void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4], bool repeat = false) {
+// The two filters below are templates on the channel count: the texel offsets and the
+// channel loop are then known at compile time (a runtime count left a loop and an index
+// multiply around every fetch). The functions after them dispatch on the count once.
+
+// Float filter on a float32/unorm16 level: out[c] for c < C.
+template <int C>
+[[gnu::always_inline]] inline void bilinear_gpu_n(const TextureLevel& level, glm::vec2 st, float out[4], bool repeat) {
     const AxisF ax = axis_gpu(st.x, level.width, repeat);
     const AxisF ay = axis_gpu(st.y, level.height, repeat);
-    for (int c = 0; c < channels; ++c) {
-        const float t00 = level.texels[index_of(level, channels, ax.i0, ay.i0, c)];
-        const float t10 = level.texels[index_of(level, channels, ax.i1, ay.i0, c)];
-        const float t01 = level.texels[index_of(level, channels, ax.i0, ay.i1, c)];
-        const float t11 = level.texels[index_of(level, channels, ax.i1, ay.i1, c)];
+    for (int c = 0; c < C; ++c) {
+        const float t00 = level.texels[index_of(level, C, ax.i0, ay.i0, c)];
+        const float t10 = level.texels[index_of(level, C, ax.i1, ay.i0, c)];
+        const float t01 = level.texels[index_of(level, C, ax.i0, ay.i1, c)];
+        const float t11 = level.texels[index_of(level, C, ax.i1, ay.i1, c)];
         // lp_build_lerp_2d: along s in both rows, then along t.
         out[c] = lerp_gpu(lerp_gpu(t00, t10, ax.weight), lerp_gpu(t01, t11, ax.weight),
                           ay.weight);
@@ -179,16 +180,81 @@ void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float o
 }
 
 // 8-bit filter on a unorm8 level: 8-bit codes.
-void bilinear_unorm8(const TextureLevel& level, int channels, glm::vec2 st, int out[4], bool repeat = false) {
+template <int C>
+[[gnu::always_inline]] inline void bilinear_unorm8_n(const TextureLevel& level, glm::vec2 st, int out[4], bool repeat) {
     const AxisU8 ax = axis_unorm8(st.x, level.width, repeat);
     const AxisU8 ay = axis_unorm8(st.y, level.height, repeat);
-    for (int c = 0; c < channels; ++c) {
-        const int t00 = level.unorm8[index_of(level, channels, ax.i0, ay.i0, c)];
-        const int t10 = level.unorm8[index_of(level, channels, ax.i1, ay.i0, c)];
-        const int t01 = level.unorm8[index_of(level, channels, ax.i0, ay.i1, c)];
-        const int t11 = level.unorm8[index_of(level, channels, ax.i1, ay.i1, c)];
+    for (int c = 0; c < C; ++c) {
+        const int t00 = level.unorm8[index_of(level, C, ax.i0, ay.i0, c)];
+        const int t10 = level.unorm8[index_of(level, C, ax.i1, ay.i0, c)];
+        const int t01 = level.unorm8[index_of(level, C, ax.i0, ay.i1, c)];
+        const int t11 = level.unorm8[index_of(level, C, ax.i1, ay.i1, c)];
         out[c] = lerp_unorm8(lerp_unorm8(t00, t10, ax.weight), lerp_unorm8(t01, t11, ax.weight),
                              ay.weight);
+    }
+}
+
+// The functions that reach lerp_gpu (std::fma) are built twice on x86-64, with and without
+// FMA instructions, and chosen at load: std::fma is then one instruction instead of a libm
+// call (fma is exactly rounded either way: the same values). What they inline is compiled
+// for each clone's target.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define TESSREF_FMA_CLONES __attribute__((target_clones("fma", "default")))
+#else
+#define TESSREF_FMA_CLONES
+#endif
+
+TESSREF_FMA_CLONES
+void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4], bool repeat = false) {
+    switch (channels) {
+        case 1: return bilinear_gpu_n<1>(level, st, out, repeat);
+        case 2: return bilinear_gpu_n<2>(level, st, out, repeat);
+        case 3: return bilinear_gpu_n<3>(level, st, out, repeat);
+        default: return bilinear_gpu_n<4>(level, st, out, repeat);
+    }
+}
+
+void bilinear_unorm8(const TextureLevel& level, int channels, glm::vec2 st, int out[4], bool repeat = false) {
+    switch (channels) {
+        case 1: return bilinear_unorm8_n<1>(level, st, out, repeat);
+        case 2: return bilinear_unorm8_n<2>(level, st, out, repeat);
+        case 3: return bilinear_unorm8_n<3>(level, st, out, repeat);
+        default: return bilinear_unorm8_n<4>(level, st, out, repeat);
+    }
+}
+
+// texture(sampler, st[k]) on level 0 for k < count: the texture's C channels, the others as
+// GL fills them (g = b = 0, a = 1); unorm8 codes read as code * (1/255).
+template <int C, bool Unorm8>
+[[gnu::always_inline]] inline void texture_level0_n(const TextureLevel& level, const glm::vec2* st, glm::vec4* out,
+                                                    std::size_t count, bool repeat) {
+    for (std::size_t k = 0; k < count; ++k) {
+        glm::vec4 sample(0.0f, 0.0f, 0.0f, 1.0f);
+        if constexpr (Unorm8) {
+            int codes[4];
+            bilinear_unorm8_n<C>(level, st[k], codes, repeat);
+            for (int c = 0; c < C; ++c) sample[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+        } else {
+            float values[4];
+            bilinear_gpu_n<C>(level, st[k], values, repeat);
+            for (int c = 0; c < C; ++c) sample[c] = values[c];
+        }
+        out[k] = sample;
+    }
+}
+
+TESSREF_FMA_CLONES
+void texture_level0(const TextureLevel& level, int channels, bool unorm8, const glm::vec2* st, glm::vec4* out,
+                    std::size_t count, bool repeat) {
+    switch (channels * 2 + (unorm8 ? 1 : 0)) {
+        case 2: return texture_level0_n<1, false>(level, st, out, count, repeat);
+        case 3: return texture_level0_n<1, true>(level, st, out, count, repeat);
+        case 4: return texture_level0_n<2, false>(level, st, out, count, repeat);
+        case 5: return texture_level0_n<2, true>(level, st, out, count, repeat);
+        case 6: return texture_level0_n<3, false>(level, st, out, count, repeat);
+        case 7: return texture_level0_n<3, true>(level, st, out, count, repeat);
+        case 8: return texture_level0_n<4, false>(level, st, out, count, repeat);
+        default: return texture_level0_n<4, true>(level, st, out, count, repeat);
     }
 }
 
@@ -552,30 +618,33 @@ double Texture::texel_exact(int lod, int x, int y, int channel) const {
 }
 
 glm::vec4 Texture::texture(glm::vec2 st) const {
-    // textureLod(st, 0) without the level selection: lod 0 is level 0 with no blend.
-    if (empty()) throw Error("texture on an empty texture");
-    glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
-    if (format_ == TexelFormat::unorm8) {
-        int codes[4];
-        bilinear_unorm8(levels_[0], channels_, st, codes, wrap_ == Wrap::repeat);
-        for (int c = 0; c < channels_; ++c) out[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
-        return out;
-    }
-    float values[4];
-    bilinear_gpu(levels_[0], channels_, st, values, wrap_ == Wrap::repeat);
-    for (int c = 0; c < channels_; ++c) out[c] = values[c];
+    glm::vec4 out;
+    texture(std::span<const glm::vec2>(&st, 1), std::span<glm::vec4>(&out, 1));
     return out;
 }
+void Texture::texture(std::span<const glm::vec2> st, std::span<glm::vec4> out) const {
+    // textureLod(st, 0) without the level selection: lod 0 is level 0 with no blend.
+    if (empty()) throw Error("texture on an empty texture");
+    if (st.size() != out.size()) throw Error("Texture::texture: as many samples as coordinates");
+    texture_level0(levels_[0], channels_, format_ == TexelFormat::unorm8, st.data(), out.data(), st.size(),
+                   wrap_ == Wrap::repeat);
+}
 glm::dvec4 Texture::texture(glm::dvec2 st) const { return textureLod(st, 0.0); }
+void Texture::texture(std::span<const glm::dvec2> st, std::span<glm::dvec4> out) const {
+    if (st.size() != out.size()) throw Error("Texture::texture: as many samples as coordinates");
+    for (std::size_t k = 0; k < st.size(); ++k) out[k] = texture(st[k]);
+}
 
 glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
     if (empty()) throw Error("textureLod on an empty texture");
     // GL_LINEAR ignores the pyramid; otherwise lod is clamped to [0, max_level] (a negative
     // lod selects the magnification filter, GL_LINEAR on level 0: the same sample).
+    // (max_or and min_of are fmax and fmin here: a NaN lod reads as 0; floor_small is floor
+    // on [0, max_level]. A -0 lod may come out +0 where fmax kept it: the level and the
+    // fraction, +0, are the same.)
     const float max_lod = static_cast<float>(max_level());
-    const float clamped = min_filter_ == MinFilter::linear ? 0.0f
-                                                           : std::fmin(std::fmax(lod, 0.0f), max_lod);
-    const float floor_lod = std::floor(clamped);
+    const float clamped = min_filter_ == MinFilter::linear ? 0.0f : min_of(max_or(lod, 0.0f), max_lod);
+    const float floor_lod = floor_small(clamped);
     const int level0 = static_cast<int>(floor_lod);
     const float fraction = clamped - floor_lod;
     const int level1 = std::min(level0 + 1, max_level());
