@@ -12,10 +12,12 @@
 #endif
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "common/parallel.h"
@@ -163,11 +165,11 @@ inline std::size_t index_of(const TextureLevel& level, int channels, int x, int 
 // channel loop are then known at compile time (a runtime count left a loop and an index
 // multiply around every fetch). The functions after them dispatch on the count once.
 
-// Float filter on a float32/unorm16 level: out[c] for c < C.
+// Float filter on a float32/unorm16 level: out[c] for c < C, from the axes of s and t
+// (axis_gpu on the level's width and height).
 template <int C>
-[[gnu::always_inline]] inline void bilinear_gpu_n(const TextureLevel& level, glm::vec2 st, float out[4], bool repeat) {
-    const AxisF ax = axis_gpu(st.x, level.width, repeat);
-    const AxisF ay = axis_gpu(st.y, level.height, repeat);
+[[gnu::always_inline]] inline void bilinear_gpu_n(const TextureLevel& level, const AxisF& ax, const AxisF& ay,
+                                                  float out[4]) {
     for (int c = 0; c < C; ++c) {
         const float t00 = level.texels[index_of(level, C, ax.i0, ay.i0, c)];
         const float t10 = level.texels[index_of(level, C, ax.i1, ay.i0, c)];
@@ -179,11 +181,10 @@ template <int C>
     }
 }
 
-// 8-bit filter on a unorm8 level: 8-bit codes.
+// 8-bit filter on a unorm8 level: 8-bit codes, from the axes of s and t (axis_unorm8).
 template <int C>
-[[gnu::always_inline]] inline void bilinear_unorm8_n(const TextureLevel& level, glm::vec2 st, int out[4], bool repeat) {
-    const AxisU8 ax = axis_unorm8(st.x, level.width, repeat);
-    const AxisU8 ay = axis_unorm8(st.y, level.height, repeat);
+[[gnu::always_inline]] inline void bilinear_unorm8_n(const TextureLevel& level, const AxisU8& ax, const AxisU8& ay,
+                                                     int out[4]) {
     for (int c = 0; c < C; ++c) {
         const int t00 = level.unorm8[index_of(level, C, ax.i0, ay.i0, c)];
         const int t10 = level.unorm8[index_of(level, C, ax.i1, ay.i0, c)];
@@ -206,37 +207,65 @@ template <int C>
 
 TESSREF_FMA_CLONES
 void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4], bool repeat = false) {
+    const AxisF ax = axis_gpu(st.x, level.width, repeat);
+    const AxisF ay = axis_gpu(st.y, level.height, repeat);
     switch (channels) {
-        case 1: return bilinear_gpu_n<1>(level, st, out, repeat);
-        case 2: return bilinear_gpu_n<2>(level, st, out, repeat);
-        case 3: return bilinear_gpu_n<3>(level, st, out, repeat);
-        default: return bilinear_gpu_n<4>(level, st, out, repeat);
+        case 1: return bilinear_gpu_n<1>(level, ax, ay, out);
+        case 2: return bilinear_gpu_n<2>(level, ax, ay, out);
+        case 3: return bilinear_gpu_n<3>(level, ax, ay, out);
+        default: return bilinear_gpu_n<4>(level, ax, ay, out);
     }
 }
 
 void bilinear_unorm8(const TextureLevel& level, int channels, glm::vec2 st, int out[4], bool repeat = false) {
+    const AxisU8 ax = axis_unorm8(st.x, level.width, repeat);
+    const AxisU8 ay = axis_unorm8(st.y, level.height, repeat);
     switch (channels) {
-        case 1: return bilinear_unorm8_n<1>(level, st, out, repeat);
-        case 2: return bilinear_unorm8_n<2>(level, st, out, repeat);
-        case 3: return bilinear_unorm8_n<3>(level, st, out, repeat);
-        default: return bilinear_unorm8_n<4>(level, st, out, repeat);
+        case 1: return bilinear_unorm8_n<1>(level, ax, ay, out);
+        case 2: return bilinear_unorm8_n<2>(level, ax, ay, out);
+        case 3: return bilinear_unorm8_n<3>(level, ax, ay, out);
+        default: return bilinear_unorm8_n<4>(level, ax, ay, out);
     }
 }
+
+// The axis of the last coordinate asked for, reused while the coordinate keeps its bits:
+// consecutive points of a patch share one coordinate along most of a ring of the
+// generator's output (the axis is a function of the coordinate's bits alone).
+template <bool Unorm8>
+struct LastAxis {
+    using Axis = std::conditional_t<Unorm8, AxisU8, AxisF>;
+    Axis axis;
+    std::uint32_t bits = 0;
+    bool valid = false;
+    [[gnu::always_inline]] const Axis& operator()(float s, int size, bool repeat) {
+        const std::uint32_t b = std::bit_cast<std::uint32_t>(s);
+        if (!valid || b != bits) {
+            if constexpr (Unorm8) axis = axis_unorm8(s, size, repeat);
+            else axis = axis_gpu(s, size, repeat);
+            bits = b;
+            valid = true;
+        }
+        return axis;
+    }
+};
 
 // texture(sampler, st[k]) on level 0 for k < count: the texture's C channels, the others as
 // GL fills them (g = b = 0, a = 1); unorm8 codes read as code * (1/255).
 template <int C, bool Unorm8>
 [[gnu::always_inline]] inline void texture_level0_n(const TextureLevel& level, const glm::vec2* st, glm::vec4* out,
                                                     std::size_t count, bool repeat) {
+    LastAxis<Unorm8> s_axis, t_axis;
     for (std::size_t k = 0; k < count; ++k) {
+        const auto& ax = s_axis(st[k].x, level.width, repeat);
+        const auto& ay = t_axis(st[k].y, level.height, repeat);
         glm::vec4 sample(0.0f, 0.0f, 0.0f, 1.0f);
         if constexpr (Unorm8) {
             int codes[4];
-            bilinear_unorm8_n<C>(level, st[k], codes, repeat);
+            bilinear_unorm8_n<C>(level, ax, ay, codes);
             for (int c = 0; c < C; ++c) sample[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
         } else {
             float values[4];
-            bilinear_gpu_n<C>(level, st[k], values, repeat);
+            bilinear_gpu_n<C>(level, ax, ay, values);
             for (int c = 0; c < C; ++c) sample[c] = values[c];
         }
         out[k] = sample;
