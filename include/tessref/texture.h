@@ -74,6 +74,8 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <span>
 #include <vector>
 
@@ -101,11 +103,13 @@ struct TextureLevel {
     int height = 0;
     std::vector<float> texels;          // GPU path: the stored values, as the sampler reads them
     std::vector<std::uint8_t> unorm8;   // unorm8 textures only: the stored 8-bit codes
-    std::vector<double> exact;          // double path (levels >= 1; level 0 is derived exactly)
+    // (The double path's values: Texture::texel_exact.)
 };
 
 // A 2D texture with its complete mip pyramid, built once at construction (immutable
-// afterwards, so concurrent sampling from many threads is safe).
+// afterwards, so concurrent sampling from many threads is safe). The double path's levels
+// above 0 are computed on its first read (texel_exact, the double texture / textureLod),
+// once, whichever thread reads first: a gpu-precision run never needs them.
 class Texture {
 public:
     Texture() = default;  // empty; sampling an empty texture throws
@@ -157,7 +161,15 @@ public:
 private:
     static Texture build(int width, int height, int channels, TexelFormat format,
                          MipmapRule rule, TextureLevel level0);
+    // The double path's levels >= 1 (exact[lod], exact[0] empty: level 0 is derived from
+    // its texels), computed on first use; shared by copies, which hold the same levels.
+    struct ExactPyramid {
+        std::once_flag once;
+        std::vector<std::vector<double>> exact;
+    };
+    const std::vector<std::vector<double>>& exact_levels() const;
     std::vector<TextureLevel> levels_;
+    std::shared_ptr<ExactPyramid> exact_;
     int channels_ = 0;
     TexelFormat format_ = TexelFormat::float32;
     MipmapRule rule_ = MipmapRule::llvmpipe_blit;

@@ -291,25 +291,26 @@ double unorm_max(TexelFormat format) {
     return format == TexelFormat::unorm8 ? 255.0 : format == TexelFormat::unorm16 ? 65535.0 : 1.0;
 }
 
-// Level 0's exact value is derived from the stored float (exact: for unorm the code is
-// recovered by rounding, for float32 the float itself); levels >= 1 hold their own doubles.
-inline double exact_value(const TextureLevel& level, TexelFormat format, int lod, std::size_t i) {
-    if (lod > 0) return level.exact[i];
+// The double path's value of a level's sample i: levels >= 1 have their own doubles
+// (`exact`, Texture::exact_levels); level 0's (exact null) is derived from the stored float
+// (exact: for unorm the code is recovered by rounding, for float32 the float itself).
+inline double exact_value(const TextureLevel& level, const double* exact, TexelFormat format, std::size_t i) {
+    if (exact) return exact[i];
     const double v = static_cast<double>(level.texels[i]);
     if (format == TexelFormat::float32) return v;
     const double max = unorm_max(format);
     return std::nearbyint(v * max) / max;
 }
 
-void bilinear_exact(const TextureLevel& level, TexelFormat format, int lod, int channels,
+void bilinear_exact(const TextureLevel& level, const double* exact, TexelFormat format, int channels,
                     glm::dvec2 st, double out[4], bool repeat = false) {
     const AxisD ax = axis_exact(st.x, level.width, repeat);
     const AxisD ay = axis_exact(st.y, level.height, repeat);
     for (int c = 0; c < channels; ++c) {
-        const double t00 = exact_value(level, format, lod, index_of(level, channels, ax.i0, ay.i0, c));
-        const double t10 = exact_value(level, format, lod, index_of(level, channels, ax.i1, ay.i0, c));
-        const double t01 = exact_value(level, format, lod, index_of(level, channels, ax.i0, ay.i1, c));
-        const double t11 = exact_value(level, format, lod, index_of(level, channels, ax.i1, ay.i1, c));
+        const double t00 = exact_value(level, exact, format, index_of(level, channels, ax.i0, ay.i0, c));
+        const double t10 = exact_value(level, exact, format, index_of(level, channels, ax.i1, ay.i0, c));
+        const double t01 = exact_value(level, exact, format, index_of(level, channels, ax.i0, ay.i1, c));
+        const double t11 = exact_value(level, exact, format, index_of(level, channels, ax.i1, ay.i1, c));
         out[c] = mix_exact(mix_exact(t00, t10, ax.weight), mix_exact(t01, t11, ax.weight),
                            ay.weight);
     }
@@ -403,8 +404,7 @@ std::uint16_t float_to_unorm16(float v) {
     return static_cast<std::uint16_t>(std::nearbyint(clamped * 65535.0f));
 }
 
-TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format, int channels,
-                        int dst_width, int dst_height) {
+TextureLevel blit_level(const TextureLevel& src, TexelFormat format, int channels, int dst_width, int dst_height) {
     TextureLevel dst;
     dst.width = dst_width;
     dst.height = dst_height;
@@ -412,7 +412,6 @@ TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format
                               static_cast<std::size_t>(dst_height) *
                               static_cast<std::size_t>(channels);
     dst.texels.resize(count);
-    dst.exact.resize(count);
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
     const BlitSetup setup(dst_width, dst_height);
     // Rows in parallel: each destination texel is a function of the source level alone.
@@ -439,19 +438,14 @@ TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format
                     }
                 }
             }
-            // Double path: the ideal sample point, no storage quantization.
-            const glm::dvec2 ideal((i + 0.5) / dst_width, (j + 0.5) / dst_height);
-            double exact[4];
-            bilinear_exact(src, format, src_lod, channels, ideal, exact);
-            for (int c = 0; c < channels; ++c) dst.exact[base + c] = exact[c];
         }
     });
     return dst;
 }
 
 // Mesa main/mipmap.c, make_2d_mipmap + do_row.
-TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelFormat format,
-                                int channels, int dst_width, int dst_height) {
+TextureLevel software_box_level(const TextureLevel& src, TexelFormat format, int channels, int dst_width,
+                                int dst_height) {
     TextureLevel dst;
     dst.width = dst_width;
     dst.height = dst_height;
@@ -459,7 +453,6 @@ TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelForma
                               static_cast<std::size_t>(dst_height) *
                               static_cast<std::size_t>(channels);
     dst.texels.resize(count);
-    dst.exact.resize(count);
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
     // do_row: k0 = (srcWidth == dstWidth) ? 0 : 1, colStride = (srcWidth == dstWidth) ? 1 : 2.
     const int col_k0 = src.width == dst_width ? 0 : 1;
@@ -491,14 +484,57 @@ TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelForma
                 } else {
                     dst.texels[d] = (src.texels[aj] + src.texels[ak] + src.texels[bj] + src.texels[bk]) * 0.25f;
                 }
-                // The mean of two means: exact for equal values (a constant stays constant).
-                const double top = 0.5 * (exact_value(src, format, src_lod, aj) + exact_value(src, format, src_lod, ak));
-                const double bottom = 0.5 * (exact_value(src, format, src_lod, bj) + exact_value(src, format, src_lod, bk));
-                dst.exact[d] = 0.5 * (top + bottom);
             }
         }
     });
     return dst;
+}
+
+// The double path's level above src (dst: its size; out: its doubles) from src's doubles
+// (src_exact, null for level 0), by the rule's footprint: llvmpipe_blit samples src
+// bilinearly at the ideal sample points, mesa_software_box takes the mean of two means of
+// the box's texels; no storage quantization. Serial: it runs under the texture's once flag
+// (Texture::exact_levels), where a parallel loop's thread could take up a task that waits
+// on that same flag.
+void exact_level(const TextureLevel& src, const double* src_exact, TexelFormat format, MipmapRule rule,
+                 int channels, const TextureLevel& dst, std::vector<double>& out) {
+    const int dst_width = dst.width, dst_height = dst.height;
+    out.resize(dst.texels.size());
+    if (rule == MipmapRule::llvmpipe_blit) {
+        for (int j = 0; j < dst_height; ++j) {
+            for (int i = 0; i < dst_width; ++i) {
+                const glm::dvec2 ideal((i + 0.5) / dst_width, (j + 0.5) / dst_height);
+                double exact[4];
+                bilinear_exact(src, src_exact, format, channels, ideal, exact);
+                for (int c = 0; c < channels; ++c) out[index_of(dst, channels, i, j, c)] = exact[c];
+            }
+        }
+        return;
+    }
+    // do_row's footprint, as software_box_level.
+    const int col_k0 = src.width == dst_width ? 0 : 1;
+    const int col_stride = src.width == dst_width ? 1 : 2;
+    const int row_b0 = src.height == dst_height ? 0 : 1;
+    const int row_stride = src.height == dst_height ? 1 : 2;
+    const auto value = [&](std::size_t i) { return exact_value(src, src_exact, format, i); };
+    for (int row = 0; row < dst_height; ++row) {
+        const int ya = row * row_stride;
+        const int yb = ya + row_b0;
+        for (int i = 0; i < dst_width; ++i) {
+            const int xj = i * col_stride;
+            const int xk = xj + col_k0;
+            for (int c = 0; c < channels; ++c) {
+                const std::size_t aj = index_of(src, channels, xj, ya, c);
+                const std::size_t ak = index_of(src, channels, xk, ya, c);
+                const std::size_t bj = index_of(src, channels, xj, yb, c);
+                const std::size_t bk = index_of(src, channels, xk, yb, c);
+                // The mean of two means: exact for equal values (a constant stays constant).
+                const double top = 0.5 * (value(aj) + value(ak));
+                const double bottom = 0.5 * (value(bj) + value(bk));
+                out[index_of(dst, channels, i, row, c)] = 0.5 * (top + bottom);
+            }
+        }
+    }
 }
 
 }  // namespace
@@ -546,22 +582,31 @@ Texture Texture::build(int width, int height, int channels, TexelFormat format, 
     texture.format_ = format;
     texture.rule_ = rule;
     texture.levels_.push_back(std::move(level0));
+    texture.exact_ = std::make_shared<ExactPyramid>();
     int w = width;
     int h = height;
-    int lod = 0;
     while (w > 1 || h > 1) {
         const int dw = std::max(1, w / 2);
         const int dh = std::max(1, h / 2);
         const TextureLevel& src = texture.levels_.back();
-        TextureLevel next = rule == MipmapRule::llvmpipe_blit
-                                ? blit_level(src, lod, format, channels, dw, dh)
-                                : software_box_level(src, lod, format, channels, dw, dh);
+        TextureLevel next = rule == MipmapRule::llvmpipe_blit ? blit_level(src, format, channels, dw, dh)
+                                                              : software_box_level(src, format, channels, dw, dh);
         texture.levels_.push_back(std::move(next));
         w = dw;
         h = dh;
-        ++lod;
     }
     return texture;
+}
+
+const std::vector<std::vector<double>>& Texture::exact_levels() const {
+    std::call_once(exact_->once, [this] {
+        std::vector<std::vector<double>>& exact = exact_->exact;
+        exact.resize(levels_.size());
+        for (std::size_t lod = 1; lod < levels_.size(); ++lod)
+            exact_level(levels_[lod - 1], lod == 1 ? nullptr : exact[lod - 1].data(), format_, rule_, channels_,
+                        levels_[lod], exact[lod]);
+    });
+    return exact_->exact;
 }
 
 namespace {
@@ -643,7 +688,8 @@ float Texture::texel(int lod, int x, int y, int channel) const {
 double Texture::texel_exact(int lod, int x, int y, int channel) const {
     const TextureLevel& l = level(lod);
     check_texel(l, channels_, lod, x, y, channel);
-    return exact_value(l, format_, lod, index_of(l, channels_, x, y, channel));
+    const double* exact = lod == 0 ? nullptr : exact_levels()[static_cast<std::size_t>(lod)].data();
+    return exact_value(l, exact, format_, index_of(l, channels_, x, y, channel));
 }
 
 glm::vec4 Texture::texture(glm::vec2 st) const {
@@ -713,11 +759,14 @@ glm::dvec4 Texture::textureLod(glm::dvec2 st, double lod) const {
     const double fraction = clamped - floor_lod;
     const int level1 = std::min(level0 + 1, max_level());
     const bool repeat = wrap_ == Wrap::repeat;
+    // Level 0's doubles come from its texels: only a blend with a level above asks for the
+    // computed ones.
+    const auto exact = [&](int lod) { return lod == 0 ? nullptr : exact_levels()[static_cast<std::size_t>(lod)].data(); };
     double values[4];
-    bilinear_exact(levels_[level0], format_, level0, channels_, st, values, repeat);
+    bilinear_exact(levels_[level0], exact(level0), format_, channels_, st, values, repeat);
     if (fraction > 0.0 && level1 != level0) {
         double values1[4];
-        bilinear_exact(levels_[level1], format_, level1, channels_, st, values1, repeat);
+        bilinear_exact(levels_[level1], exact(level1), format_, channels_, st, values1, repeat);
         for (int c = 0; c < channels_; ++c) values[c] = mix_exact(values[c], values1[c], fraction);
     }
     glm::dvec4 out(0.0, 0.0, 0.0, 1.0);
