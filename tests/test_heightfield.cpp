@@ -286,6 +286,19 @@ TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
     }
 }
 
+// The double path reads a unorm texel as its code over the format's maximum, exactly,
+// for every 8- and 16-bit code (recovered from the stored float by rounding).
+TEST(TextureSampling, TexelExactOfEveryUnormCodeIsTheCodeOverItsMaximum) {
+    std::vector<std::uint16_t> codes16(65536);
+    for (int c = 0; c < 65536; ++c) codes16[static_cast<std::size_t>(c)] = static_cast<std::uint16_t>(c);
+    const Texture t16 = Texture::from_unorm16(256, 256, 1, codes16);
+    for (int c = 0; c < 65536; ++c) ASSERT_EQ(t16.texel_exact(0, c % 256, c / 256), c / 65535.0) << c;
+    std::vector<std::uint8_t> codes8(256);
+    for (int c = 0; c < 256; ++c) codes8[static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(c);
+    const Texture t8 = Texture::from_unorm8(16, 16, 1, codes8);
+    for (int c = 0; c < 256; ++c) ASSERT_EQ(t8.texel_exact(0, c % 16, c / 16), c / 255.0) << c;
+}
+
 // ---- mip pyramid --------------------------------------------------------------------------
 
 TEST(Mipmaps, LevelSizesHalveDownToOneByOne) {

@@ -299,7 +299,11 @@ inline double exact_value(const TextureLevel& level, const double* exact, TexelF
     const double v = static_cast<double>(level.texels[i]);
     if (format == TexelFormat::float32) return v;
     const double max = unorm_max(format);
-    return std::nearbyint(v * max) / max;
+    // std::nearbyint(v * max) without a libm call: v * max is in [0, 65535] (a unorm texel
+    // times its maximum code), where adding and subtracting 2^52 rounds to the nearest
+    // integer, ties to even, as nearbyint does (the sum has no fraction bits left).
+    const double code = (v * max + 0x1p52) - 0x1p52;
+    return code / max;
 }
 
 void bilinear_exact(const TextureLevel& level, const double* exact, TexelFormat format, int channels,
