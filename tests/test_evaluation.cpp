@@ -16,7 +16,9 @@
 #include <map>
 #include <random>
 #include <set>
+#include <span>
 #include <tuple>
+#include <type_traits>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -104,6 +106,50 @@ TEST(Thesis, MvpTransformsTheDisplacedPosition) {
     EXPECT_EQ(vertex.position, glm::dvec3(15, 25, 2));
     EXPECT_EQ(vertex.glPosition, glm::dvec4(16, 27, 5, 1));
 }
+
+// thesis_evaluate_batch is thesis_evaluate at every point, bit for bit (position and
+// texture coordinate), on the real generator's points of a patch with more points than one
+// block of height samples, and reads the height map only through the batched sampler.
+template <typename T>
+void thesis_batch_is_the_scalar_evaluation() {
+    ThesisEvaluation<T> evaluation;
+    evaluation.heightMap = [](vec2_t<T> uv) { return bumps<T>(uv); };
+    evaluation.scaleXY = T(40);
+    evaluation.scaleZ = T(12.5);
+    std::size_t calls = 0, sampled = 0;
+    const Sampler2DBatch<T> heightMap = [&](std::span<const vec2_t<T>> uv, std::span<vec4_t<T>> out) {
+        ++calls;
+        sampled += uv.size();
+        EXPECT_EQ(uv.size(), out.size());
+        for (std::size_t k = 0; k < uv.size(); ++k) out[k] = bumps<T>(uv[k]);
+    };
+    const Precision precision = std::is_same_v<T, float> ? Precision::gpu : Precision::exact;
+    const Pattern pattern = tessellate(TessSettings{Domain::quads, Spacing::fractional_odd},
+                                       TessLevels{{5.3f, 7, 2.2f, 9}, {13, 11.5f}}, precision);
+    std::vector<DomainPoint<T>> points;
+    if constexpr (std::is_same_v<T, float>)
+        points.assign(pattern.points().begin(), pattern.points().end());
+    else
+        points.assign(pattern.points_exact().begin(), pattern.points_exact().end());
+    ASSERT_GT(points.size(), 130u);
+    // Corners not on a common grid, so that the mixes round.
+    const std::array<vec4_t<T>, 4> corners{vec4_t<T>(10.1, 20.3, 7, 1), vec4_t<T>(9.7, 31.1, 8, 1),
+                                           vec4_t<T>(20.9, 30.2, 9, 1), vec4_t<T>(21.3, 19.9, 6, 1)};
+    std::vector<vec3_t<T>> position(points.size());
+    std::vector<vec2_t<T>> textureCoordinate(points.size());
+    thesis_evaluate_batch<T>(corners, points, heightMap, evaluation.scaleXY, evaluation.scaleZ, position,
+                             textureCoordinate);
+    EXPECT_EQ(sampled, points.size());
+    EXPECT_LT(calls, points.size());
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const EvaluatedVertex<T> vertex = thesis_evaluate(corners, points[k], evaluation);
+        EXPECT_EQ(bits3(position[k]), bits3(vertex.position)) << k;
+        EXPECT_EQ(bits3(vec3_t<T>(textureCoordinate[k], T(0))), bits3(vec3_t<T>(vertex.textureCoordinate, T(0)))) << k;
+    }
+}
+
+TEST(Thesis, BatchIsTheScalarEvaluationFloat) { thesis_batch_is_the_scalar_evaluation<float>(); }
+TEST(Thesis, BatchIsTheScalarEvaluationDouble) { thesis_batch_is_the_scalar_evaluation<double>(); }
 
 // Two neighbouring patches tessellated by the real generator with different inner levels
 // and the same level on their shared edge: every vertex one emits on that edge, the other

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -44,6 +45,27 @@ TEST(ThesisGeometry, NormalFromTextureWithNormalMatrix) {
     EXPECT_NEAR(n.x, 0.0, 1e-15);
     EXPECT_NEAR(n.y, 0.8, 1e-15);
     EXPECT_NEAR(n.z, 0.6, 1e-15);
+}
+
+// The batch is the scalar function at every texel, bit for bit (alpha ignored), with a
+// normal matrix that is not the identity: every unorm8 code triple of a coarse lattice, the
+// zero vector (NaN) and values outside [0, 1].
+TEST(ThesisGeometry, BatchedNormalsAreTheScalarOnesBitForBit) {
+    std::vector<glm::vec4> texels;
+    for (int r = 0; r < 256; r += 15)
+        for (int g = 0; g < 256; g += 17)
+            for (int b = 0; b < 256; b += 13)
+                texels.emplace_back(r / 255.0f, g / 255.0f, b / 255.0f, (r + g) / 511.0f);
+    texels.emplace_back(0.5f, 0.5f, 0.5f, 1.0f);
+    texels.emplace_back(-3.0f, 7.5f, 1e-20f, 0.0f);
+    const glm::mat3 normalMatrix(glm::vec3(0.8f, 0.1f, -0.3f), glm::vec3(-0.2f, 0.9f, 0.05f), glm::vec3(0.3f, 0.0f, 1.1f));
+    std::vector<glm::vec3> normals(texels.size());
+    thesis_normals_from_texture<float>(texels, normalMatrix, normals);
+    for (std::size_t k = 0; k < texels.size(); ++k) {
+        const glm::vec3 expected = thesis_normal_from_texture(glm::vec3(texels[k]), normalMatrix);
+        for (int c = 0; c < 3; ++c)
+            EXPECT_EQ(std::bit_cast<std::uint32_t>(normals[k][c]), std::bit_cast<std::uint32_t>(expected[c])) << k;
+    }
 }
 
 TEST(ThesisGeometry, OneNormalPerVertexFromTheMap) {

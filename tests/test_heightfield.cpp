@@ -15,8 +15,10 @@
 
 #include <OpenImageIO/imageio.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -27,6 +29,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -236,6 +239,66 @@ TEST(TextureSampling, MissingChannelsReadAsGlFillsThem) {
     EXPECT_EQ(rgb.texture(glm::dvec2(0.5)), glm::dvec4(1.0, 0.0, 0.2, 1.0));
 }
 
+// The batched texture() is the scalar one at every coordinate, bit for bit, for every format,
+// channel count and wrap mode, and both are textureLod(st, 0) (a separate code path): random
+// coordinates in and well outside [0, 1], texel centres and edges, NaN and infinities.
+TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
+    std::mt19937 rng(20261127);
+    std::uniform_real_distribution<float> coordinate(-0.6f, 1.6f);
+    std::uniform_int_distribution<int> code(0, 255);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const auto bits = [](const glm::vec4& v) {
+        return std::array<std::uint32_t, 4>{std::bit_cast<std::uint32_t>(v.x), std::bit_cast<std::uint32_t>(v.y),
+                                            std::bit_cast<std::uint32_t>(v.z), std::bit_cast<std::uint32_t>(v.w)};
+    };
+    for (const TexelFormat format : {TexelFormat::unorm8, TexelFormat::unorm16, TexelFormat::float32}) {
+        for (int channels = 1; channels <= 4; ++channels) {
+            const int width = 7, height = 5;
+            const std::size_t n = static_cast<std::size_t>(width * height * channels);
+            std::vector<std::uint8_t> codes8(n);
+            std::vector<std::uint16_t> codes16(n);
+            std::vector<float> values(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                codes8[i] = static_cast<std::uint8_t>(code(rng));
+                codes16[i] = static_cast<std::uint16_t>(codes8[i] * 257 + code(rng));
+                values[i] = static_cast<float>(code(rng)) / 37.0f - 3.0f;
+            }
+            Texture texture = format == TexelFormat::unorm8    ? Texture::from_unorm8(width, height, channels, codes8)
+                              : format == TexelFormat::unorm16 ? Texture::from_unorm16(width, height, channels, codes16)
+                                                               : Texture::from_float(width, height, channels, values);
+            for (const tessref::Wrap wrap : {tessref::Wrap::clamp_to_edge, tessref::Wrap::repeat}) {
+                texture.set_wrap(wrap);
+                std::vector<glm::vec2> st = {glm::vec2(0.0f), glm::vec2(1.0f), glm::vec2(0.5f / width, 1.5f / height),
+                                             glm::vec2(nan, 0.5f), glm::vec2(0.5f, -inf), glm::vec2(inf, nan),
+                                             glm::vec2(-1e30f, 1e30f)};
+                while (st.size() < 300) st.emplace_back(coordinate(rng), coordinate(rng));
+                std::vector<glm::vec4> out(st.size());
+                texture.texture(std::span<const glm::vec2>(st), std::span<glm::vec4>(out));
+                for (std::size_t k = 0; k < st.size(); ++k) {
+                    SCOPED_TRACE(std::string(tessref::to_string(format)) + " channels " + std::to_string(channels) +
+                                 " coordinate " + std::to_string(k));
+                    EXPECT_EQ(bits(out[k]), bits(texture.texture(st[k])));
+                    EXPECT_EQ(bits(out[k]), bits(texture.textureLod(st[k], 0.0f)));
+                }
+            }
+        }
+    }
+}
+
+// The double path reads a unorm texel as its code over the format's maximum, exactly,
+// for every 8- and 16-bit code (recovered from the stored float by rounding).
+TEST(TextureSampling, TexelExactOfEveryUnormCodeIsTheCodeOverItsMaximum) {
+    std::vector<std::uint16_t> codes16(65536);
+    for (int c = 0; c < 65536; ++c) codes16[static_cast<std::size_t>(c)] = static_cast<std::uint16_t>(c);
+    const Texture t16 = Texture::from_unorm16(256, 256, 1, codes16);
+    for (int c = 0; c < 65536; ++c) ASSERT_EQ(t16.texel_exact(0, c % 256, c / 256), c / 65535.0) << c;
+    std::vector<std::uint8_t> codes8(256);
+    for (int c = 0; c < 256; ++c) codes8[static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(c);
+    const Texture t8 = Texture::from_unorm8(16, 16, 1, codes8);
+    for (int c = 0; c < 256; ++c) ASSERT_EQ(t8.texel_exact(0, c % 16, c / 16), c / 255.0) << c;
+}
+
 // ---- mip pyramid --------------------------------------------------------------------------
 
 TEST(Mipmaps, LevelSizesHalveDownToOneByOne) {
@@ -262,7 +325,10 @@ TEST(Mipmaps, ConstantImageGivesConstantLevels) {
                 for (int k = 1; k < tex->level_count(); ++k) {
                     const auto& level = tex->level(k);
                     for (float v : level.texels) ASSERT_EQ(v, level.texels[0]) << to_string(rule);
-                    for (double v : level.exact) ASSERT_EQ(v, tex->texel_exact(0, 0, 0));
+                    for (int y = 0; y < level.height; ++y)
+                        for (int x = 0; x < level.width; ++x)
+                            for (int c = 0; c < tex->channels(); ++c)
+                                ASSERT_EQ(tex->texel_exact(k, x, y, c), tex->texel_exact(0, 0, 0));
                 }
                 const float last = tex->texel(tex->max_level(), 0, 0);
                 if (rule == MipmapRule::llvmpipe_blit || tex->format() != TexelFormat::float32) {
@@ -273,6 +339,35 @@ TEST(Mipmaps, ConstantImageGivesConstantLevels) {
                 }
             }
         }
+    }
+}
+
+// The double path's levels above 0 are computed on their first read, once: many threads
+// reading a fresh texture at once (textureLod between two levels, texel_exact above level 0)
+// read what one thread reads from another fresh texture of the same image, and a copy made
+// before that first read reads the same.
+TEST(Mipmaps, DoublePathLevelsComputedOnFirstReadAgreeAcrossThreads) {
+    const int w = 61, h = 37;
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> code(0, 255);
+    std::vector<std::uint8_t> codes(static_cast<std::size_t>(w) * h * 3);
+    for (auto& c : codes) c = static_cast<std::uint8_t>(code(rng));
+    for (const MipmapRule rule : kRules) {
+        const Texture serial = Texture::from_unorm8(w, h, 3, codes, rule);
+        const Texture shared = Texture::from_unorm8(w, h, 3, codes, rule);
+        const Texture copy = shared;  // before any double read
+        std::vector<glm::dvec2> st(2000);
+        std::uniform_real_distribution<double> coordinate(-0.2, 1.2);
+        for (auto& p : st) p = glm::dvec2(coordinate(rng), coordinate(rng));
+        std::vector<glm::dvec4> expected(st.size()), got(st.size());
+        for (std::size_t k = 0; k < st.size(); ++k) expected[k] = serial.textureLod(st[k], 0.25 + (k % 17) * 0.375);
+        tbb::parallel_for(std::size_t{0}, st.size(), [&](std::size_t k) {
+            got[k] = shared.textureLod(st[k], 0.25 + (k % 17) * 0.375);
+        });
+        for (std::size_t k = 0; k < st.size(); ++k) ASSERT_EQ(got[k], expected[k]) << to_string(rule) << " " << k;
+        for (int lod = 1; lod < serial.level_count(); ++lod)
+            EXPECT_EQ(copy.texel_exact(lod, 0, serial.level(lod).height - 1, 2),
+                      serial.texel_exact(lod, 0, serial.level(lod).height - 1, 2));
     }
 }
 
@@ -939,7 +1034,13 @@ TEST(TextureBuild, OneThreadBuildsTheSamePyramidAndNormalMap) {
             const tessref::TextureLevel& b = many[t].level(lod);
             EXPECT_TRUE(a.texels == b.texels) << "lod " << lod;  // NaN-free: == is bitwise here
             EXPECT_TRUE(a.unorm8 == b.unorm8) << "lod " << lod;
-            EXPECT_TRUE(a.exact == b.exact) << "lod " << lod;
+            // The double path (levels >= 1 computed on this first read).
+            bool same_exact = true;
+            for (int y = 0; y < a.height; ++y)
+                for (int x = 0; x < a.width; ++x)
+                    for (int c = 0; c < one[t].channels(); ++c)
+                        same_exact = same_exact && one[t].texel_exact(lod, x, y, c) == many[t].texel_exact(lod, x, y, c);
+            EXPECT_TRUE(same_exact) << "lod " << lod;
         }
     }
 }

@@ -71,6 +71,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 
 #include <glm/glm.hpp>
 
@@ -99,6 +100,11 @@ using mat4_t = glm::mat<4, 4, T, glm::defaultp>;
 // analytic functions.
 template <typename T>
 using Sampler2D = std::function<vec4_t<T>(vec2_t<T> uv)>;
+// Sampler2D at many coordinates in one call: out[k] = texture(sampler, uv[k]) for every k
+// (uv and out have the same size). The evaluation reads the height and normal maps of a
+// block of points through it, one call per block instead of one per point.
+template <typename T>
+using Sampler2DBatch = std::function<void(std::span<const vec2_t<T>> uv, std::span<vec4_t<T>> out)>;
 // GLSL's textureLod(sampler, uv, lod).
 template <typename T>
 using Sampler2DLod = std::function<vec4_t<T>(vec2_t<T> uv, T lod)>;

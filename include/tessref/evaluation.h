@@ -26,6 +26,7 @@
 #pragma once
 
 #include <array>
+#include <span>
 
 #include <glm/glm.hpp>
 
@@ -65,6 +66,16 @@ template <typename T>
 EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
                                    const DomainPoint<T>& glTessCoord,
                                    const ThesisEvaluation<T>& evaluation);
+// thesis_evaluate at many domain points of one patch, for the mesh: position[k] and
+// textureCoordinate[k] are thesis_evaluate(tcPosition, glTessCoord[k], evaluation)'s bit for
+// bit, where evaluation samples through `heightMap` (one call per block of points instead of
+// one per point); gl_Position, which the pipeline does not keep, is not computed. The three
+// spans have the same size.
+template <typename T>
+void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
+                           std::span<const DomainPoint<T>> glTessCoord, const Sampler2DBatch<T>& heightMap,
+                           T scaleXY, T scaleZ, std::span<vec3_t<T>> position,
+                           std::span<vec2_t<T>> textureCoordinate);
 
 // ---------------------------------------------------------------------------------------
 // COSC422, cosc422_terrain.tese (y up). posn = the same bilinear mix of gl_in[0..3];

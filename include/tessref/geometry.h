@@ -32,6 +32,13 @@ vec3_t<T> face_normal(const vec3_t<T>& p0, const vec3_t<T>& p1, const vec3_t<T>&
 // non-unit normal, as the shader hands it to the fragment shader.
 template <typename T>
 vec3_t<T> thesis_normal_from_texture(const vec3_t<T>& rgb, const mat3_t<T>& normalMatrix);
+// thesis_normal_from_texture at many texels: normal[k] = thesis_normal_from_texture(
+// vec3(texel[k]), normalMatrix), bit for bit (texel: a normal-map sample, alpha ignored).
+// One tight loop, so that the square roots and divisions of neighbouring vertices overlap.
+// The spans have the same size.
+template <typename T>
+void thesis_normals_from_texture(std::span<const vec4_t<T>> texel, const mat3_t<T>& normalMatrix,
+                                 std::span<vec3_t<T>> normal);
 
 // The thesis's geometry shader for one triangle: gNormal[i] = NormalFromTexture(
 // texture(normalMap, textureCoordinate[i]).rgb), positions and texture coordinates pass

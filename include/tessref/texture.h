@@ -74,6 +74,9 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -100,11 +103,13 @@ struct TextureLevel {
     int height = 0;
     std::vector<float> texels;          // GPU path: the stored values, as the sampler reads them
     std::vector<std::uint8_t> unorm8;   // unorm8 textures only: the stored 8-bit codes
-    std::vector<double> exact;          // double path (levels >= 1; level 0 is derived exactly)
+    // (The double path's values: Texture::texel_exact.)
 };
 
 // A 2D texture with its complete mip pyramid, built once at construction (immutable
-// afterwards, so concurrent sampling from many threads is safe).
+// afterwards, so concurrent sampling from many threads is safe). The double path's levels
+// above 0 are computed on its first read (texel_exact, the double texture / textureLod),
+// once, whichever thread reads first: a gpu-precision run never needs them.
 class Texture {
 public:
     Texture() = default;  // empty; sampling an empty texture throws
@@ -143,6 +148,10 @@ public:
     // is 0 and this is exactly textureLod(st, 0).
     glm::vec4 texture(glm::vec2 st) const;
     glm::dvec4 texture(glm::dvec2 st) const;
+    // texture() at many coordinates: out[k] = texture(st[k]), bit for bit, the format and the
+    // channel count dispatched once for all of them. st and out have the same size.
+    void texture(std::span<const glm::vec2> st, std::span<glm::vec4> out) const;
+    void texture(std::span<const glm::dvec2> st, std::span<glm::dvec4> out) const;
     // GLSL textureLod(sampler, st, lod): lod clamped to [0, max_level()] (a NaN lod reads as
     // 0), linear between levels floor(lod) and floor(lod) + 1. A NaN coordinate reads as a
     // coordinate below 0 (the edge texel): GL leaves it undefined, tessref keeps it defined.
@@ -152,7 +161,15 @@ public:
 private:
     static Texture build(int width, int height, int channels, TexelFormat format,
                          MipmapRule rule, TextureLevel level0);
+    // The double path's levels >= 1 (exact[lod], exact[0] empty: level 0 is derived from
+    // its texels), computed on first use; shared by copies, which hold the same levels.
+    struct ExactPyramid {
+        std::once_flag once;
+        std::vector<std::vector<double>> exact;
+    };
+    const std::vector<std::vector<double>>& exact_levels() const;
     std::vector<TextureLevel> levels_;
+    std::shared_ptr<ExactPyramid> exact_;
     int channels_ = 0;
     TexelFormat format_ = TexelFormat::float32;
     MipmapRule rule_ = MipmapRule::llvmpipe_blit;

@@ -3,6 +3,8 @@
 // names are the shaders', so the two read side by side.
 #include "tessref/evaluation.h"
 
+#include <algorithm>
+
 namespace tessref {
 
 namespace {
@@ -30,30 +32,68 @@ template <typename T, int N>
 
 }  // namespace
 
+namespace {
+
+// thesis_terrain.tese up to the height's texture coordinate, shared by thesis_evaluate and
+// its batch: the corners' bilinear mix (position.xy) and textureCoordinate.
 template <typename T>
-EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
-                                   const DomainPoint<T>& glTessCoord,
-                                   const ThesisEvaluation<T>& evaluation) {
+struct ThesisGround {
+    vec2_t<T> position;
+    vec2_t<T> textureCoordinate;
+};
+template <typename T>
+[[gnu::always_inline]] inline ThesisGround<T> thesis_ground(const std::array<vec4_t<T>, 4>& tcPosition,
+                                                           const DomainPoint<T>& glTessCoord, T scaleXY) {
     // GLSL: thesis_terrain.tese:24 adPosition
     const vec4_t<T> adPosition = mix_gpu(tcPosition[0], tcPosition[3], glTessCoord.u);
     const vec4_t<T> bcPosition = mix_gpu(tcPosition[1], tcPosition[2], glTessCoord.u);
     // GLSL: thesis_terrain.tese:28 position
     const vec4_t<T> position = mix_gpu(adPosition, bcPosition, glTessCoord.v);
-
-    EvaluatedVertex<T> out;
+    const vec2_t<T> xy(position.x, position.y);
     // GLSL: thesis_terrain.tese:31 textureCoordinate
-    // (A local, passed on in registers: read back from `out`, the two separately stored
-    // halves stalled every vertex on a failed store-to-load forward.)
-    const vec2_t<T> textureCoordinate = vec2_t<T>(position.x, position.y) / evaluation.scaleXY;
-    out.textureCoordinate = textureCoordinate;
+    return {xy, xy / scaleXY};
+}
+
+}  // namespace
+
+template <typename T>
+EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
+                                   const DomainPoint<T>& glTessCoord,
+                                   const ThesisEvaluation<T>& evaluation) {
+    // (The texture coordinate is a local, passed on in registers: read back from `out`, the
+    // two separately stored halves stalled every vertex on a failed store-to-load forward.)
+    const ThesisGround<T> ground = thesis_ground(tcPosition, glTessCoord, evaluation.scaleXY);
+    EvaluatedVertex<T> out;
+    out.textureCoordinate = ground.textureCoordinate;
     // GLSL: thesis_terrain.tese:34 height
-    const T height = evaluation.heightMap(textureCoordinate).r * evaluation.scaleZ;
+    const T height = evaluation.heightMap(ground.textureCoordinate).r * evaluation.scaleZ;
     // GLSL: thesis_terrain.tese:36 positionWithHeight
-    const vec4_t<T> positionWithHeight(position.x, position.y, height, T(1));
+    const vec4_t<T> positionWithHeight(ground.position.x, ground.position.y, height, T(1));
     out.position = vec3_t<T>(positionWithHeight);
     // GLSL: thesis_terrain.tese:38 gl_Position
     out.glPosition = evaluation.mvp * positionWithHeight;
     return out;
+}
+
+template <typename T>
+void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
+                           std::span<const DomainPoint<T>> glTessCoord, const Sampler2DBatch<T>& heightMap,
+                           T scaleXY, T scaleZ, std::span<vec3_t<T>> position,
+                           std::span<vec2_t<T>> textureCoordinate) {
+    // Blocks whose height samples fit on the stack: the points' coordinates, their samples
+    // in one call, then the heights.
+    std::array<vec4_t<T>, 64> texel;
+    for (std::size_t k0 = 0; k0 < glTessCoord.size(); k0 += texel.size()) {
+        const std::size_t count = std::min(texel.size(), glTessCoord.size() - k0);
+        for (std::size_t k = 0; k < count; ++k) {
+            const ThesisGround<T> ground = thesis_ground(tcPosition, glTessCoord[k0 + k], scaleXY);
+            position[k0 + k] = vec3_t<T>(ground.position, T(0));
+            textureCoordinate[k0 + k] = ground.textureCoordinate;
+        }
+        heightMap(textureCoordinate.subspan(k0, count), std::span<vec4_t<T>>(texel.data(), count));
+        // GLSL: thesis_terrain.tese:34 height
+        for (std::size_t k = 0; k < count; ++k) position[k0 + k].z = texel[k].r * scaleZ;
+    }
 }
 
 template <typename T>
@@ -260,6 +300,9 @@ EvaluatedVertex<T> pn_evaluate(const PnPatch<T>& patch, const DomainPoint<T>& gl
     template vec3_t<T> lab4_vertex_normal(T, T, const Lab4NormalSampling<T>&);                   \
     template EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>&,                  \
                                                 const DomainPoint<T>&, const ThesisEvaluation<T>&); \
+    template void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>&, std::span<const DomainPoint<T>>,     \
+                                        const Sampler2DBatch<T>&, T, T, std::span<vec3_t<T>>,             \
+                                        std::span<vec2_t<T>>);                                            \
     template EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>&,                 \
                                                  const DomainPoint<T>&,                           \
                                                  const Cosc422Evaluation<T>&);                    \

@@ -28,6 +28,14 @@ vec3_t<T> thesis_normal_from_texture(const vec3_t<T>& rgb, const mat3_t<T>& norm
 }
 
 template <typename T>
+void thesis_normals_from_texture(std::span<const vec4_t<T>> texel, const mat3_t<T>& normalMatrix,
+                                 std::span<vec3_t<T>> normal) {
+    const mat3_t<T> matrix = normalMatrix;  // a local: the loop need not reload it after each store
+    for (std::size_t k = 0; k < texel.size(); ++k)
+        normal[k] = thesis_normal_from_texture(vec3_t<T>(texel[k]), matrix);
+}
+
+template <typename T>
 std::array<vec3_t<T>, 3> thesis_geometry(const std::array<vec2_t<T>, 3>& textureCoordinate,
                                          const Sampler2D<T>& normalMap,
                                          const mat3_t<T>& normalMatrix) {
@@ -89,6 +97,8 @@ std::vector<vec3_t<T>> smooth_vertex_normals(std::span<const vec3_t<T>> position
 #define TESSREF_INSTANTIATE(T)                                                                   \
     template vec3_t<T> face_normal(const vec3_t<T>&, const vec3_t<T>&, const vec3_t<T>&);        \
     template vec3_t<T> thesis_normal_from_texture(const vec3_t<T>&, const mat3_t<T>&);           \
+    template void thesis_normals_from_texture(std::span<const vec4_t<T>>, const mat3_t<T>&,       \
+                                              std::span<vec3_t<T>>);                              \
     template std::array<vec3_t<T>, 3> thesis_geometry(const std::array<vec2_t<T>, 3>&,           \
                                                       const Sampler2D<T>&, const mat3_t<T>&);    \
     template std::vector<vec3_t<T>> smooth_vertex_normals(                                       \

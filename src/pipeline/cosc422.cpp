@@ -23,8 +23,11 @@ public:
     }
 
 private:
-    EvaluatedVertex<T> evaluate_point(std::size_t p, const DomainPoint<T>& tc) const override {
-        return cosc422_evaluate<T>(this->tcPosition[p], tc, evaluation);
+    void evaluate_block(std::size_t p, std::span<const DomainPoint<T>> tc, std::span<vec3_t<T>> position,
+                        std::span<vec2_t<T>> textureCoordinate) const override {
+        this->evaluate_each(tc, position, textureCoordinate, [&](const DomainPoint<T>& c) {
+            return cosc422_evaluate<T>(this->tcPosition[p], c, evaluation);
+        });
     }
 
     Cosc422Evaluation<T> evaluation{};

@@ -24,8 +24,11 @@ public:
     }
 
 private:
-    EvaluatedVertex<T> evaluate_point(std::size_t p, const DomainPoint<T>& tc) const override {
-        return lab4_evaluate<T>(this->tcPosition[p], tc, this->lab4Lod[p], evaluation);
+    void evaluate_block(std::size_t p, std::span<const DomainPoint<T>> tc, std::span<vec3_t<T>> position,
+                        std::span<vec2_t<T>> textureCoordinate) const override {
+        this->evaluate_each(tc, position, textureCoordinate, [&](const DomainPoint<T>& c) {
+            return lab4_evaluate<T>(this->tcPosition[p], c, this->lab4Lod[p], evaluation);
+        });
     }
     T vertex_lod(std::size_t p, const DomainPoint<T>& tc) const override {
         return this->lab4Lod[p].maxLogTessellationLevel - lab4_vertex_log_level<T>(tc, this->lab4Lod[p]);

@@ -217,15 +217,24 @@ struct StreamImpl final : PatchStream::Impl {
         const Pattern& pattern = *patterns[p];
         program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals);
         write_coords(p, pattern.points(), mesh, first_vertex);
-        for (std::size_t t = 0; t < pattern.primitive_count(); ++t) {
-            const auto prim = pattern.primitive(t);
-            std::array<std::uint32_t, 3> tri{static_cast<std::uint32_t>(first_vertex + prim[0]),
-                                             static_cast<std::uint32_t>(first_vertex + prim[1]),
-                                             static_cast<std::uint32_t>(first_vertex + prim[2])};
-            if (program->flip) std::swap(tri[1], tri[2]);
-            mesh.triangles[first_triangle + t] = tri;
-            if (face_normals && normals_out) {
+        // The pattern's triangles (a scene's domain makes triangles: three indices each) moved
+        // to the patch's vertices, reversed (1 <-> 2) where the program flips them: a loop per
+        // orientation, with nothing else in it.
+        const std::uint32_t* indices = pattern.indices().data();
+        const std::size_t count = pattern.primitive_count();
+        const auto base = static_cast<std::uint32_t>(first_vertex);
+        const auto move = [&]<bool flip>() {
+            for (std::size_t t = 0; t < count; ++t) {
+                const std::uint32_t* prim = indices + 3 * t;
+                mesh.triangles[first_triangle + t] = {base + prim[0], base + prim[flip ? 2 : 1], base + prim[flip ? 1 : 2]};
+            }
+        };
+        if (program->flip) move.template operator()<true>();
+        else move.template operator()<false>();
+        if (face_normals && normals_out) {
+            for (std::size_t t = 0; t < count; ++t) {
                 // The geometry shader's face normal, from the vertices as the evaluation wrote them.
+                const std::array<std::uint32_t, 3>& tri = mesh.triangles[first_triangle + t];
                 const vec3_t<T> p0(mesh.positions[tri[0]]), p1(mesh.positions[tri[1]]), p2(mesh.positions[tri[2]]);
                 (*normals_out)[first_triangle + t] = glm::dvec3(face_normal<T>(p0, p1, p2));
             }

@@ -13,6 +13,7 @@
 // make_program() is the one place that looks at the scene's model names.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <span>
@@ -85,6 +86,14 @@ template <typename T>
 Sampler2D<T> sampler(const std::shared_ptr<const Texture>& texture) {
     if (!texture) return [](vec2_t<T>) { return vec4_t<T>(T(0)); };
     return [texture](vec2_t<T> st) { return texture->texture(st); };
+}
+template <typename T>
+Sampler2DBatch<T> sampler_batch(const std::shared_ptr<const Texture>& texture) {
+    if (!texture)
+        return [](std::span<const vec2_t<T>>, std::span<vec4_t<T>> out) {
+            std::fill(out.begin(), out.end(), vec4_t<T>(T(0)));
+        };
+    return [texture](std::span<const vec2_t<T>> st, std::span<vec4_t<T>> out) { texture->texture(st, out); };
 }
 template <typename T>
 Sampler2DLod<T> sampler_lod(const std::shared_ptr<const Texture>& texture) {

@@ -2,6 +2,7 @@
 // geometry normals, shared by the thesis, cosc422 and lab4 programs.
 #include "pipeline/terrain.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "tessref/geometry.h"
@@ -20,7 +21,9 @@ TerrainProgram<T>::TerrainProgram(const Scene& s, const glm::dvec3& o)
     height_texture = std::shared_ptr<const Texture>(g.heightmap, &g.heightmap->texture);
     heightMap = sampler<T>(height_texture);
     heightMapLod = sampler_lod<T>(height_texture);
+    heightMapBatch = sampler_batch<T>(height_texture);
     if (g.normal_map) normalMap = sampler<T>(g.normal_map);
+    normalMapBatch = sampler_batch<T>(g.normal_map);
     for (double u : g.u_coords) u_coords.push_back(static_cast<T>(u));
     for (double v : g.v_coords) v_coords.push_back(static_cast<T>(v));
     if (relative) {
@@ -104,22 +107,40 @@ template <typename T>
 void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                                  std::size_t first_vertex, bool normals) const {
     const bool write_normals = geometry_vertex_normals && normals;
-    for (std::size_t k = 0; k < points.size(); ++k) {
-        const EvaluatedVertex<T> ev = evaluate_point(p, points[k]);
-        const std::size_t v = first_vertex + k;
-        mesh.positions[v] = glm::dvec3(ev.position);
-        mesh.uvs[v] = glm::dvec2(ev.textureCoordinate);
-        if (write_normals) mesh.normals[v] = glm::dvec3(vertex_normal(ev, vertex_lod(p, points[k])));
+    std::array<vec3_t<T>, kBlock> position;
+    std::array<vec2_t<T>, kBlock> textureCoordinate;
+    std::array<vec3_t<T>, kBlock> normal;
+    for (std::size_t k0 = 0; k0 < points.size(); k0 += kBlock) {
+        const std::size_t count = std::min(kBlock, points.size() - k0);
+        const auto tc = points.subspan(k0, count);
+        const std::span<vec3_t<T>> positions(position.data(), count);
+        const std::span<vec2_t<T>> coordinates(textureCoordinate.data(), count);
+        evaluate_block(p, tc, positions, coordinates);
+        if (write_normals) vertex_normals(p, tc, positions, coordinates, std::span<vec3_t<T>>(normal.data(), count));
+        // The mesh in double, written in order.
+        const std::size_t v = first_vertex + k0;
+        for (std::size_t k = 0; k < count; ++k) mesh.positions[v + k] = glm::dvec3(position[k]);
+        for (std::size_t k = 0; k < count; ++k) mesh.uvs[v + k] = glm::dvec2(textureCoordinate[k]);
+        if (write_normals)
+            for (std::size_t k = 0; k < count; ++k) mesh.normals[v + k] = glm::dvec3(normal[k]);
     }
 }
 
 template <typename T>
-vec3_t<T> TerrainProgram<T>::vertex_normal(const EvaluatedVertex<T>& ev, T lod) const {
+void TerrainProgram<T>::vertex_normals(std::size_t p, std::span<const DomainPoint<T>> tc,
+                                       std::span<const vec3_t<T>> position,
+                                       std::span<const vec2_t<T>> textureCoordinate,
+                                       std::span<vec3_t<T>> normal) const {
     if (scene.geometry->normals == GeometryNormals::normal_map) {
         // thesis_terrain.geom: gNormal = NormalFromTexture(texture(normalMap, textureCoordinate).rgb)
-        return thesis_normal_from_texture<T>(vec3_t<T>(normalMap(ev.textureCoordinate)), normalMatrix);
+        std::array<vec4_t<T>, kBlock> texel;
+        const std::span<vec4_t<T>> texels(texel.data(), tc.size());
+        normalMapBatch(textureCoordinate, texels);
+        thesis_normals_from_texture<T>(texels, normalMatrix, normal);
+        return;
     }
-    return height_field_normal<T>(scene, ev.position, lod, origin);
+    for (std::size_t k = 0; k < tc.size(); ++k)
+        normal[k] = height_field_normal<T>(scene, position[k], vertex_lod(p, tc[k]), origin);
 }
 
 template <typename T>

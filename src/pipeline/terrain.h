@@ -37,13 +37,31 @@ protected:
     // the corner is relative to origin (the evaluation's corners), else in world coordinates
     // (the control stage's).
     virtual vec4_t<T> vertex(const vec3_t<T>& ground, bool /*relative*/) const { return vec4_t<T>(ground, T(1)); }
-    // The model's evaluation shader at one domain point of a patch whose control stage ran.
-    virtual EvaluatedVertex<T> evaluate_point(std::size_t patch, const DomainPoint<T>& tc) const = 0;
+    // evaluate() works on blocks of at most this many points: what it keeps of each (position,
+    // texture coordinate, normal-map sample, normal) lives on the stack, and the samplers
+    // and the normals run once per block.
+    static constexpr std::size_t kBlock = 64;
+    // The model's evaluation shader at a block of domain points (at most kBlock) of a patch
+    // whose control stage ran: each point's position and texture coordinate (the mesh's;
+    // gl_Position is not kept). The spans have the same size.
+    virtual void evaluate_block(std::size_t patch, std::span<const DomainPoint<T>> tc, std::span<vec3_t<T>> position,
+                                std::span<vec2_t<T>> textureCoordinate) const = 0;
+    // evaluate_block of a model that evaluates a point at a time: shader(tc) -> EvaluatedVertex.
+    template <typename Shader>
+    static void evaluate_each(std::span<const DomainPoint<T>> tc, std::span<vec3_t<T>> position,
+                              std::span<vec2_t<T>> textureCoordinate, const Shader& shader) {
+        for (std::size_t k = 0; k < tc.size(); ++k) {
+            const EvaluatedVertex<T> vertex = shader(tc[k]);
+            position[k] = vertex.position;
+            textureCoordinate[k] = vertex.textureCoordinate;
+        }
+    }
     // The mip level the evaluation sampled the height at (lab 4), for height-field normals.
     virtual T vertex_lod(std::size_t /*patch*/, const DomainPoint<T>& /*tc*/) const { return T(0); }
-    // The geometry stage's per-vertex normal ([geometry] normals = "normal_map" or
-    // "height_field").
-    vec3_t<T> vertex_normal(const EvaluatedVertex<T>& vertex, T lod) const;
+    // The geometry stage's per-vertex normals ([geometry] normals = "normal_map" or
+    // "height_field") of a block that evaluate_block wrote; the spans have the same size.
+    void vertex_normals(std::size_t patch, std::span<const DomainPoint<T>> tc, std::span<const vec3_t<T>> position,
+                        std::span<const vec2_t<T>> textureCoordinate, std::span<vec3_t<T>> normal) const;
 
     const Scene& scene;
     const TerrainGrid& grid;
@@ -56,6 +74,8 @@ protected:
     Sampler2D<T> heightMap;
     Sampler2DLod<T> heightMapLod;
     Sampler2D<T> normalMap;                      // unbound unless the scene has a normal map
+    Sampler2DBatch<T> heightMapBatch;            // heightMap, many coordinates at a time
+    Sampler2DBatch<T> normalMapBatch;            // normalMap, likewise
     mat3_t<T> normalMatrix{T(1)};                // the thesis's normalMatrix: model is the identity
     std::vector<std::array<vec4_t<T>, 4>> tcPosition;  // per patch: the control stage's output corners
 

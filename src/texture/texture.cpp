@@ -12,9 +12,12 @@
 #endif
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "common/parallel.h"
@@ -158,37 +161,129 @@ inline std::size_t index_of(const TextureLevel& level, int channels, int x, int 
            static_cast<std::size_t>(c);
 }
 
-// Float filter on a float32/unorm16 level: out[c] for c < channels. Built twice on x86-64,
-// with and without FMA instructions, and chosen at load: std::fma is then one instruction
-// instead of a libm call (fma is exactly rounded either way: the same values).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("fma", "default")))
-#endif
-void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4], bool repeat = false) {
-    const AxisF ax = axis_gpu(st.x, level.width, repeat);
-    const AxisF ay = axis_gpu(st.y, level.height, repeat);
-    for (int c = 0; c < channels; ++c) {
-        const float t00 = level.texels[index_of(level, channels, ax.i0, ay.i0, c)];
-        const float t10 = level.texels[index_of(level, channels, ax.i1, ay.i0, c)];
-        const float t01 = level.texels[index_of(level, channels, ax.i0, ay.i1, c)];
-        const float t11 = level.texels[index_of(level, channels, ax.i1, ay.i1, c)];
+// The two filters below are templates on the channel count: the texel offsets and the
+// channel loop are then known at compile time (a runtime count left a loop and an index
+// multiply around every fetch). The functions after them dispatch on the count once.
+
+// Float filter on a float32/unorm16 level: out[c] for c < C, from the axes of s and t
+// (axis_gpu on the level's width and height).
+template <int C>
+[[gnu::always_inline]] inline void bilinear_gpu_n(const TextureLevel& level, const AxisF& ax, const AxisF& ay,
+                                                  float out[4]) {
+    for (int c = 0; c < C; ++c) {
+        const float t00 = level.texels[index_of(level, C, ax.i0, ay.i0, c)];
+        const float t10 = level.texels[index_of(level, C, ax.i1, ay.i0, c)];
+        const float t01 = level.texels[index_of(level, C, ax.i0, ay.i1, c)];
+        const float t11 = level.texels[index_of(level, C, ax.i1, ay.i1, c)];
         // lp_build_lerp_2d: along s in both rows, then along t.
         out[c] = lerp_gpu(lerp_gpu(t00, t10, ax.weight), lerp_gpu(t01, t11, ax.weight),
                           ay.weight);
     }
 }
 
-// 8-bit filter on a unorm8 level: 8-bit codes.
+// 8-bit filter on a unorm8 level: 8-bit codes, from the axes of s and t (axis_unorm8).
+template <int C>
+[[gnu::always_inline]] inline void bilinear_unorm8_n(const TextureLevel& level, const AxisU8& ax, const AxisU8& ay,
+                                                     int out[4]) {
+    for (int c = 0; c < C; ++c) {
+        const int t00 = level.unorm8[index_of(level, C, ax.i0, ay.i0, c)];
+        const int t10 = level.unorm8[index_of(level, C, ax.i1, ay.i0, c)];
+        const int t01 = level.unorm8[index_of(level, C, ax.i0, ay.i1, c)];
+        const int t11 = level.unorm8[index_of(level, C, ax.i1, ay.i1, c)];
+        out[c] = lerp_unorm8(lerp_unorm8(t00, t10, ax.weight), lerp_unorm8(t01, t11, ax.weight),
+                             ay.weight);
+    }
+}
+
+// The functions that reach lerp_gpu (std::fma) are built twice on x86-64, with and without
+// FMA instructions, and chosen at load: std::fma is then one instruction instead of a libm
+// call (fma is exactly rounded either way: the same values). What they inline is compiled
+// for each clone's target.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define TESSREF_FMA_CLONES __attribute__((target_clones("fma", "default")))
+#else
+#define TESSREF_FMA_CLONES
+#endif
+
+TESSREF_FMA_CLONES
+void bilinear_gpu(const TextureLevel& level, int channels, glm::vec2 st, float out[4], bool repeat = false) {
+    const AxisF ax = axis_gpu(st.x, level.width, repeat);
+    const AxisF ay = axis_gpu(st.y, level.height, repeat);
+    switch (channels) {
+        case 1: return bilinear_gpu_n<1>(level, ax, ay, out);
+        case 2: return bilinear_gpu_n<2>(level, ax, ay, out);
+        case 3: return bilinear_gpu_n<3>(level, ax, ay, out);
+        default: return bilinear_gpu_n<4>(level, ax, ay, out);
+    }
+}
+
 void bilinear_unorm8(const TextureLevel& level, int channels, glm::vec2 st, int out[4], bool repeat = false) {
     const AxisU8 ax = axis_unorm8(st.x, level.width, repeat);
     const AxisU8 ay = axis_unorm8(st.y, level.height, repeat);
-    for (int c = 0; c < channels; ++c) {
-        const int t00 = level.unorm8[index_of(level, channels, ax.i0, ay.i0, c)];
-        const int t10 = level.unorm8[index_of(level, channels, ax.i1, ay.i0, c)];
-        const int t01 = level.unorm8[index_of(level, channels, ax.i0, ay.i1, c)];
-        const int t11 = level.unorm8[index_of(level, channels, ax.i1, ay.i1, c)];
-        out[c] = lerp_unorm8(lerp_unorm8(t00, t10, ax.weight), lerp_unorm8(t01, t11, ax.weight),
-                             ay.weight);
+    switch (channels) {
+        case 1: return bilinear_unorm8_n<1>(level, ax, ay, out);
+        case 2: return bilinear_unorm8_n<2>(level, ax, ay, out);
+        case 3: return bilinear_unorm8_n<3>(level, ax, ay, out);
+        default: return bilinear_unorm8_n<4>(level, ax, ay, out);
+    }
+}
+
+// The axis of the last coordinate asked for, reused while the coordinate keeps its bits:
+// consecutive points of a patch share one coordinate along most of a ring of the
+// generator's output (the axis is a function of the coordinate's bits alone).
+template <bool Unorm8>
+struct LastAxis {
+    using Axis = std::conditional_t<Unorm8, AxisU8, AxisF>;
+    Axis axis;
+    std::uint32_t bits = 0;
+    bool valid = false;
+    [[gnu::always_inline]] const Axis& operator()(float s, int size, bool repeat) {
+        const std::uint32_t b = std::bit_cast<std::uint32_t>(s);
+        if (!valid || b != bits) {
+            if constexpr (Unorm8) axis = axis_unorm8(s, size, repeat);
+            else axis = axis_gpu(s, size, repeat);
+            bits = b;
+            valid = true;
+        }
+        return axis;
+    }
+};
+
+// texture(sampler, st[k]) on level 0 for k < count: the texture's C channels, the others as
+// GL fills them (g = b = 0, a = 1); unorm8 codes read as code * (1/255).
+template <int C, bool Unorm8>
+[[gnu::always_inline]] inline void texture_level0_n(const TextureLevel& level, const glm::vec2* st, glm::vec4* out,
+                                                    std::size_t count, bool repeat) {
+    LastAxis<Unorm8> s_axis, t_axis;
+    for (std::size_t k = 0; k < count; ++k) {
+        const auto& ax = s_axis(st[k].x, level.width, repeat);
+        const auto& ay = t_axis(st[k].y, level.height, repeat);
+        glm::vec4 sample(0.0f, 0.0f, 0.0f, 1.0f);
+        if constexpr (Unorm8) {
+            int codes[4];
+            bilinear_unorm8_n<C>(level, ax, ay, codes);
+            for (int c = 0; c < C; ++c) sample[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+        } else {
+            float values[4];
+            bilinear_gpu_n<C>(level, ax, ay, values);
+            for (int c = 0; c < C; ++c) sample[c] = values[c];
+        }
+        out[k] = sample;
+    }
+}
+
+TESSREF_FMA_CLONES
+void texture_level0(const TextureLevel& level, int channels, bool unorm8, const glm::vec2* st, glm::vec4* out,
+                    std::size_t count, bool repeat) {
+    switch (channels * 2 + (unorm8 ? 1 : 0)) {
+        case 2: return texture_level0_n<1, false>(level, st, out, count, repeat);
+        case 3: return texture_level0_n<1, true>(level, st, out, count, repeat);
+        case 4: return texture_level0_n<2, false>(level, st, out, count, repeat);
+        case 5: return texture_level0_n<2, true>(level, st, out, count, repeat);
+        case 6: return texture_level0_n<3, false>(level, st, out, count, repeat);
+        case 7: return texture_level0_n<3, true>(level, st, out, count, repeat);
+        case 8: return texture_level0_n<4, false>(level, st, out, count, repeat);
+        default: return texture_level0_n<4, true>(level, st, out, count, repeat);
     }
 }
 
@@ -196,25 +291,30 @@ double unorm_max(TexelFormat format) {
     return format == TexelFormat::unorm8 ? 255.0 : format == TexelFormat::unorm16 ? 65535.0 : 1.0;
 }
 
-// Level 0's exact value is derived from the stored float (exact: for unorm the code is
-// recovered by rounding, for float32 the float itself); levels >= 1 hold their own doubles.
-inline double exact_value(const TextureLevel& level, TexelFormat format, int lod, std::size_t i) {
-    if (lod > 0) return level.exact[i];
+// The double path's value of a level's sample i: levels >= 1 have their own doubles
+// (`exact`, Texture::exact_levels); level 0's (exact null) is derived from the stored float
+// (exact: for unorm the code is recovered by rounding, for float32 the float itself).
+inline double exact_value(const TextureLevel& level, const double* exact, TexelFormat format, std::size_t i) {
+    if (exact) return exact[i];
     const double v = static_cast<double>(level.texels[i]);
     if (format == TexelFormat::float32) return v;
     const double max = unorm_max(format);
-    return std::nearbyint(v * max) / max;
+    // std::nearbyint(v * max) without a libm call: v * max is in [0, 65535] (a unorm texel
+    // times its maximum code), where adding and subtracting 2^52 rounds to the nearest
+    // integer, ties to even, as nearbyint does (the sum has no fraction bits left).
+    const double code = (v * max + 0x1p52) - 0x1p52;
+    return code / max;
 }
 
-void bilinear_exact(const TextureLevel& level, TexelFormat format, int lod, int channels,
+void bilinear_exact(const TextureLevel& level, const double* exact, TexelFormat format, int channels,
                     glm::dvec2 st, double out[4], bool repeat = false) {
     const AxisD ax = axis_exact(st.x, level.width, repeat);
     const AxisD ay = axis_exact(st.y, level.height, repeat);
     for (int c = 0; c < channels; ++c) {
-        const double t00 = exact_value(level, format, lod, index_of(level, channels, ax.i0, ay.i0, c));
-        const double t10 = exact_value(level, format, lod, index_of(level, channels, ax.i1, ay.i0, c));
-        const double t01 = exact_value(level, format, lod, index_of(level, channels, ax.i0, ay.i1, c));
-        const double t11 = exact_value(level, format, lod, index_of(level, channels, ax.i1, ay.i1, c));
+        const double t00 = exact_value(level, exact, format, index_of(level, channels, ax.i0, ay.i0, c));
+        const double t10 = exact_value(level, exact, format, index_of(level, channels, ax.i1, ay.i0, c));
+        const double t01 = exact_value(level, exact, format, index_of(level, channels, ax.i0, ay.i1, c));
+        const double t11 = exact_value(level, exact, format, index_of(level, channels, ax.i1, ay.i1, c));
         out[c] = mix_exact(mix_exact(t00, t10, ax.weight), mix_exact(t01, t11, ax.weight),
                            ay.weight);
     }
@@ -308,8 +408,7 @@ std::uint16_t float_to_unorm16(float v) {
     return static_cast<std::uint16_t>(std::nearbyint(clamped * 65535.0f));
 }
 
-TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format, int channels,
-                        int dst_width, int dst_height) {
+TextureLevel blit_level(const TextureLevel& src, TexelFormat format, int channels, int dst_width, int dst_height) {
     TextureLevel dst;
     dst.width = dst_width;
     dst.height = dst_height;
@@ -317,7 +416,6 @@ TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format
                               static_cast<std::size_t>(dst_height) *
                               static_cast<std::size_t>(channels);
     dst.texels.resize(count);
-    dst.exact.resize(count);
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
     const BlitSetup setup(dst_width, dst_height);
     // Rows in parallel: each destination texel is a function of the source level alone.
@@ -344,19 +442,14 @@ TextureLevel blit_level(const TextureLevel& src, int src_lod, TexelFormat format
                     }
                 }
             }
-            // Double path: the ideal sample point, no storage quantization.
-            const glm::dvec2 ideal((i + 0.5) / dst_width, (j + 0.5) / dst_height);
-            double exact[4];
-            bilinear_exact(src, format, src_lod, channels, ideal, exact);
-            for (int c = 0; c < channels; ++c) dst.exact[base + c] = exact[c];
         }
     });
     return dst;
 }
 
 // Mesa main/mipmap.c, make_2d_mipmap + do_row.
-TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelFormat format,
-                                int channels, int dst_width, int dst_height) {
+TextureLevel software_box_level(const TextureLevel& src, TexelFormat format, int channels, int dst_width,
+                                int dst_height) {
     TextureLevel dst;
     dst.width = dst_width;
     dst.height = dst_height;
@@ -364,7 +457,6 @@ TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelForma
                               static_cast<std::size_t>(dst_height) *
                               static_cast<std::size_t>(channels);
     dst.texels.resize(count);
-    dst.exact.resize(count);
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
     // do_row: k0 = (srcWidth == dstWidth) ? 0 : 1, colStride = (srcWidth == dstWidth) ? 1 : 2.
     const int col_k0 = src.width == dst_width ? 0 : 1;
@@ -396,14 +488,57 @@ TextureLevel software_box_level(const TextureLevel& src, int src_lod, TexelForma
                 } else {
                     dst.texels[d] = (src.texels[aj] + src.texels[ak] + src.texels[bj] + src.texels[bk]) * 0.25f;
                 }
-                // The mean of two means: exact for equal values (a constant stays constant).
-                const double top = 0.5 * (exact_value(src, format, src_lod, aj) + exact_value(src, format, src_lod, ak));
-                const double bottom = 0.5 * (exact_value(src, format, src_lod, bj) + exact_value(src, format, src_lod, bk));
-                dst.exact[d] = 0.5 * (top + bottom);
             }
         }
     });
     return dst;
+}
+
+// The double path's level above src (dst: its size; out: its doubles) from src's doubles
+// (src_exact, null for level 0), by the rule's footprint: llvmpipe_blit samples src
+// bilinearly at the ideal sample points, mesa_software_box takes the mean of two means of
+// the box's texels; no storage quantization. Serial: it runs under the texture's once flag
+// (Texture::exact_levels), where a parallel loop's thread could take up a task that waits
+// on that same flag.
+void exact_level(const TextureLevel& src, const double* src_exact, TexelFormat format, MipmapRule rule,
+                 int channels, const TextureLevel& dst, std::vector<double>& out) {
+    const int dst_width = dst.width, dst_height = dst.height;
+    out.resize(dst.texels.size());
+    if (rule == MipmapRule::llvmpipe_blit) {
+        for (int j = 0; j < dst_height; ++j) {
+            for (int i = 0; i < dst_width; ++i) {
+                const glm::dvec2 ideal((i + 0.5) / dst_width, (j + 0.5) / dst_height);
+                double exact[4];
+                bilinear_exact(src, src_exact, format, channels, ideal, exact);
+                for (int c = 0; c < channels; ++c) out[index_of(dst, channels, i, j, c)] = exact[c];
+            }
+        }
+        return;
+    }
+    // do_row's footprint, as software_box_level.
+    const int col_k0 = src.width == dst_width ? 0 : 1;
+    const int col_stride = src.width == dst_width ? 1 : 2;
+    const int row_b0 = src.height == dst_height ? 0 : 1;
+    const int row_stride = src.height == dst_height ? 1 : 2;
+    const auto value = [&](std::size_t i) { return exact_value(src, src_exact, format, i); };
+    for (int row = 0; row < dst_height; ++row) {
+        const int ya = row * row_stride;
+        const int yb = ya + row_b0;
+        for (int i = 0; i < dst_width; ++i) {
+            const int xj = i * col_stride;
+            const int xk = xj + col_k0;
+            for (int c = 0; c < channels; ++c) {
+                const std::size_t aj = index_of(src, channels, xj, ya, c);
+                const std::size_t ak = index_of(src, channels, xk, ya, c);
+                const std::size_t bj = index_of(src, channels, xj, yb, c);
+                const std::size_t bk = index_of(src, channels, xk, yb, c);
+                // The mean of two means: exact for equal values (a constant stays constant).
+                const double top = 0.5 * (value(aj) + value(ak));
+                const double bottom = 0.5 * (value(bj) + value(bk));
+                out[index_of(dst, channels, i, row, c)] = 0.5 * (top + bottom);
+            }
+        }
+    }
 }
 
 }  // namespace
@@ -451,22 +586,31 @@ Texture Texture::build(int width, int height, int channels, TexelFormat format, 
     texture.format_ = format;
     texture.rule_ = rule;
     texture.levels_.push_back(std::move(level0));
+    texture.exact_ = std::make_shared<ExactPyramid>();
     int w = width;
     int h = height;
-    int lod = 0;
     while (w > 1 || h > 1) {
         const int dw = std::max(1, w / 2);
         const int dh = std::max(1, h / 2);
         const TextureLevel& src = texture.levels_.back();
-        TextureLevel next = rule == MipmapRule::llvmpipe_blit
-                                ? blit_level(src, lod, format, channels, dw, dh)
-                                : software_box_level(src, lod, format, channels, dw, dh);
+        TextureLevel next = rule == MipmapRule::llvmpipe_blit ? blit_level(src, format, channels, dw, dh)
+                                                              : software_box_level(src, format, channels, dw, dh);
         texture.levels_.push_back(std::move(next));
         w = dw;
         h = dh;
-        ++lod;
     }
     return texture;
+}
+
+const std::vector<std::vector<double>>& Texture::exact_levels() const {
+    std::call_once(exact_->once, [this] {
+        std::vector<std::vector<double>>& exact = exact_->exact;
+        exact.resize(levels_.size());
+        for (std::size_t lod = 1; lod < levels_.size(); ++lod)
+            exact_level(levels_[lod - 1], lod == 1 ? nullptr : exact[lod - 1].data(), format_, rule_, channels_,
+                        levels_[lod], exact[lod]);
+    });
+    return exact_->exact;
 }
 
 namespace {
@@ -548,34 +692,38 @@ float Texture::texel(int lod, int x, int y, int channel) const {
 double Texture::texel_exact(int lod, int x, int y, int channel) const {
     const TextureLevel& l = level(lod);
     check_texel(l, channels_, lod, x, y, channel);
-    return exact_value(l, format_, lod, index_of(l, channels_, x, y, channel));
+    const double* exact = lod == 0 ? nullptr : exact_levels()[static_cast<std::size_t>(lod)].data();
+    return exact_value(l, exact, format_, index_of(l, channels_, x, y, channel));
 }
 
 glm::vec4 Texture::texture(glm::vec2 st) const {
-    // textureLod(st, 0) without the level selection: lod 0 is level 0 with no blend.
-    if (empty()) throw Error("texture on an empty texture");
-    glm::vec4 out(0.0f, 0.0f, 0.0f, 1.0f);
-    if (format_ == TexelFormat::unorm8) {
-        int codes[4];
-        bilinear_unorm8(levels_[0], channels_, st, codes, wrap_ == Wrap::repeat);
-        for (int c = 0; c < channels_; ++c) out[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
-        return out;
-    }
-    float values[4];
-    bilinear_gpu(levels_[0], channels_, st, values, wrap_ == Wrap::repeat);
-    for (int c = 0; c < channels_; ++c) out[c] = values[c];
+    glm::vec4 out;
+    texture(std::span<const glm::vec2>(&st, 1), std::span<glm::vec4>(&out, 1));
     return out;
 }
+void Texture::texture(std::span<const glm::vec2> st, std::span<glm::vec4> out) const {
+    // textureLod(st, 0) without the level selection: lod 0 is level 0 with no blend.
+    if (empty()) throw Error("texture on an empty texture");
+    if (st.size() != out.size()) throw Error("Texture::texture: as many samples as coordinates");
+    texture_level0(levels_[0], channels_, format_ == TexelFormat::unorm8, st.data(), out.data(), st.size(),
+                   wrap_ == Wrap::repeat);
+}
 glm::dvec4 Texture::texture(glm::dvec2 st) const { return textureLod(st, 0.0); }
+void Texture::texture(std::span<const glm::dvec2> st, std::span<glm::dvec4> out) const {
+    if (st.size() != out.size()) throw Error("Texture::texture: as many samples as coordinates");
+    for (std::size_t k = 0; k < st.size(); ++k) out[k] = texture(st[k]);
+}
 
 glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
     if (empty()) throw Error("textureLod on an empty texture");
     // GL_LINEAR ignores the pyramid; otherwise lod is clamped to [0, max_level] (a negative
     // lod selects the magnification filter, GL_LINEAR on level 0: the same sample).
+    // (max_or and min_of are fmax and fmin here: a NaN lod reads as 0; floor_small is floor
+    // on [0, max_level]. A -0 lod may come out +0 where fmax kept it: the level and the
+    // fraction, +0, are the same.)
     const float max_lod = static_cast<float>(max_level());
-    const float clamped = min_filter_ == MinFilter::linear ? 0.0f
-                                                           : std::fmin(std::fmax(lod, 0.0f), max_lod);
-    const float floor_lod = std::floor(clamped);
+    const float clamped = min_filter_ == MinFilter::linear ? 0.0f : min_of(max_or(lod, 0.0f), max_lod);
+    const float floor_lod = floor_small(clamped);
     const int level0 = static_cast<int>(floor_lod);
     const float fraction = clamped - floor_lod;
     const int level1 = std::min(level0 + 1, max_level());
@@ -615,11 +763,14 @@ glm::dvec4 Texture::textureLod(glm::dvec2 st, double lod) const {
     const double fraction = clamped - floor_lod;
     const int level1 = std::min(level0 + 1, max_level());
     const bool repeat = wrap_ == Wrap::repeat;
+    // Level 0's doubles come from its texels: only a blend with a level above asks for the
+    // computed ones.
+    const auto exact = [&](int lod) { return lod == 0 ? nullptr : exact_levels()[static_cast<std::size_t>(lod)].data(); };
     double values[4];
-    bilinear_exact(levels_[level0], format_, level0, channels_, st, values, repeat);
+    bilinear_exact(levels_[level0], exact(level0), format_, channels_, st, values, repeat);
     if (fraction > 0.0 && level1 != level0) {
         double values1[4];
-        bilinear_exact(levels_[level1], format_, level1, channels_, st, values1, repeat);
+        bilinear_exact(levels_[level1], exact(level1), format_, channels_, st, values1, repeat);
         for (int c = 0; c < channels_; ++c) values[c] = mix_exact(values[c], values1[c], fraction);
     }
     glm::dvec4 out(0.0, 0.0, 0.0, 1.0);
