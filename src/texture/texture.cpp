@@ -12,6 +12,7 @@
 #endif
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -447,6 +448,26 @@ TextureLevel blit_level(const TextureLevel& src, TexelFormat format, int channel
     return dst;
 }
 
+// The four source texels that Mesa's do_row (main/mipmap.c) averages into destination texel
+// (i, row), channel c: rows a and b, columns j and k of the level below. Along an axis
+// where the level keeps its size, the two are the same texel.
+struct BoxFootprint {
+    int col_k0, col_stride, row_b0, row_stride;
+    // do_row: k0 = (srcWidth == dstWidth) ? 0 : 1, colStride = (srcWidth == dstWidth) ? 1 : 2.
+    BoxFootprint(const TextureLevel& src, int dst_width, int dst_height)
+        : col_k0(src.width == dst_width ? 0 : 1),
+          col_stride(src.width == dst_width ? 1 : 2),
+          row_b0(src.height == dst_height ? 0 : 1),
+          row_stride(src.height == dst_height ? 1 : 2) {}
+    // aj, ak, bj, bk
+    std::array<std::size_t, 4> texels(const TextureLevel& src, int channels, int i, int row, int c) const {
+        const int ya = row * row_stride, yb = ya + row_b0;
+        const int xj = i * col_stride, xk = xj + col_k0;
+        return {index_of(src, channels, xj, ya, c), index_of(src, channels, xk, ya, c),
+                index_of(src, channels, xj, yb, c), index_of(src, channels, xk, yb, c)};
+    }
+};
+
 // Mesa main/mipmap.c, make_2d_mipmap + do_row.
 TextureLevel software_box_level(const TextureLevel& src, TexelFormat format, int channels, int dst_width,
                                 int dst_height) {
@@ -458,22 +479,11 @@ TextureLevel software_box_level(const TextureLevel& src, TexelFormat format, int
                               static_cast<std::size_t>(channels);
     dst.texels.resize(count);
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
-    // do_row: k0 = (srcWidth == dstWidth) ? 0 : 1, colStride = (srcWidth == dstWidth) ? 1 : 2.
-    const int col_k0 = src.width == dst_width ? 0 : 1;
-    const int col_stride = src.width == dst_width ? 1 : 2;
-    const int row_b0 = src.height == dst_height ? 0 : 1;
-    const int row_stride = src.height == dst_height ? 1 : 2;
+    const BoxFootprint box(src, dst_width, dst_height);
     tessref::parallel_for(0, dst_height, [&](int row) {  // rows in parallel, as blit_level
-        const int ya = row * row_stride;
-        const int yb = ya + row_b0;
         for (int i = 0; i < dst_width; ++i) {
-            const int xj = i * col_stride;
-            const int xk = xj + col_k0;
             for (int c = 0; c < channels; ++c) {
-                const std::size_t aj = index_of(src, channels, xj, ya, c);
-                const std::size_t ak = index_of(src, channels, xk, ya, c);
-                const std::size_t bj = index_of(src, channels, xj, yb, c);
-                const std::size_t bk = index_of(src, channels, xk, yb, c);
+                const auto [aj, ak, bj, bk] = box.texels(src, channels, i, row, c);
                 const std::size_t d = index_of(dst, channels, i, row, c);
                 if (format == TexelFormat::unorm8) {
                     const int sum = src.unorm8[aj] + src.unorm8[ak] + src.unorm8[bj] + src.unorm8[bk];
@@ -516,22 +526,12 @@ void exact_level(const TextureLevel& src, const double* src_exact, TexelFormat f
         return;
     }
     // do_row's footprint, as software_box_level.
-    const int col_k0 = src.width == dst_width ? 0 : 1;
-    const int col_stride = src.width == dst_width ? 1 : 2;
-    const int row_b0 = src.height == dst_height ? 0 : 1;
-    const int row_stride = src.height == dst_height ? 1 : 2;
+    const BoxFootprint box(src, dst_width, dst_height);
     const auto value = [&](std::size_t i) { return exact_value(src, src_exact, format, i); };
     for (int row = 0; row < dst_height; ++row) {
-        const int ya = row * row_stride;
-        const int yb = ya + row_b0;
         for (int i = 0; i < dst_width; ++i) {
-            const int xj = i * col_stride;
-            const int xk = xj + col_k0;
             for (int c = 0; c < channels; ++c) {
-                const std::size_t aj = index_of(src, channels, xj, ya, c);
-                const std::size_t ak = index_of(src, channels, xk, ya, c);
-                const std::size_t bj = index_of(src, channels, xj, yb, c);
-                const std::size_t bk = index_of(src, channels, xk, yb, c);
+                const auto [aj, ak, bj, bk] = box.texels(src, channels, i, row, c);
                 // The mean of two means: exact for equal values (a constant stays constant).
                 const double top = 0.5 * (value(aj) + value(ak));
                 const double bottom = 0.5 * (value(bj) + value(bk));
