@@ -204,19 +204,19 @@ float level_of(const SurfaceMesh& mesh, const std::vector<TessLevels>& levels, D
 }
 
 
-// The visible-surface buffers of RenderResult and the fragment stage's colour, for the pixels of
-// quad rows [quad_row_begin, quad_row_end) and columns [x_begin, x_end) (even) whose visible triangle (id) is in a view that
-// owns(id) returns, with the triangle's index in it (null: not this pass's). Quad by quad (2x2 pixels,
-// as llvmpipe shades): the pixels of a quad that show the same triangle share its
-// derivatives and level.
-// The triangle ids [first, first + count) a pass drew: the others are skipped on the id
-// alone, a quad at a time (a streamed batch's pass visits whole drawn tiles, where most
-// pixels show other batches' triangles).
+// The triangle ids [first, first + count) a pass drew. The resolve skips the others on the
+// id alone, a quad at a time: a streamed batch's drawn rectangles hold pixels of other
+// batches too.
 struct IdRange {
     std::uint32_t first = 0, count = 0;
     bool holds(std::uint32_t id) const { return id - first < count; }  // unsigned: below first wraps
 };
 
+// The visible-surface buffers of RenderResult and the fragment stage's colour, for the pixels of
+// quad rows [quad_row_begin, quad_row_end) and columns [x_begin, x_end) (even) whose visible triangle (id) is in a view that
+// owns(id) returns, with the triangle's index in it (null: not this pass's). Quad by quad (2x2 pixels,
+// as llvmpipe shades): the pixels of a quad that show the same triangle share its
+// derivatives and level.
 template <typename Owns>
 void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<TessLevels>& levels, Domain domain,
              const FragmentNeeds& needs, bool derivatives, bool line_derivatives, bool provenance, int quad_row_begin,
@@ -453,8 +453,9 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             chunk_first.push_back(chunks[k].first_triangle);
         }
         // A triangle id of this batch: its chunk and its index there; used = none.
+        const IdRange batch{batch_first, batch_end - batch_first};
         auto chunk_of = [&](std::uint32_t id) -> std::pair<std::size_t, std::uint32_t> {
-            if (id < batch_first || id >= batch_end) return {used, 0};
+            if (!batch.holds(id)) return {used, 0};
             const std::size_t k = static_cast<std::size_t>(
                 std::upper_bound(chunk_first.begin(), chunk_first.end(), id) - chunk_first.begin() - 1);
             return {k, id - chunk_first[k]};
@@ -499,7 +500,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
             const Rasterizer::Rect& rect = drawn[r];
             resolve(result, fb, pipe->levels, domain, needs, derivatives, false, options.provenance, rect.row / 2,
-                    (rect.row + rect.height + 1) / 2, IdRange{batch_first, batch_end - batch_first},
+                    (rect.row + rect.height + 1) / 2, batch,
                     [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
                         const auto [k, tri] = chunk_of(id);
                         if (k == used) return {nullptr, 0};
