@@ -203,21 +203,18 @@ bool encode_png(const std::uint8_t* samples, int width, int height, int channels
     });
     const std::size_t band_rows = std::max<std::size_t>(1, kBandBytes / stride);
     const std::size_t bands = (static_cast<std::size_t>(height) + band_rows - 1) / band_rows;
+    // Band b is filtered[begin(b), begin(b + 1)).
+    const auto begin = [&](std::size_t b) { return std::min(filtered.size(), b * band_rows * stride); };
     std::vector<std::vector<std::uint8_t>> deflated(bands);
     std::vector<uLong> adler(bands);
     tessref::parallel_for(std::size_t{0}, bands, [&](std::size_t b) {
-        const std::size_t begin = b * band_rows * stride;
-        const std::size_t end = std::min(filtered.size(), begin + band_rows * stride);
-        deflated[b] = deflate_band(filtered, begin, end, b + 1 == bands);
-        adler[b] = adler32_z(1, filtered.data() + begin, end - begin);
+        deflated[b] = deflate_band(filtered, begin(b), begin(b + 1), b + 1 == bands);
+        adler[b] = adler32_z(1, filtered.data() + begin(b), begin(b + 1) - begin(b));
     });
     uLong checksum = adler[0];
     for (std::size_t b = 0; b < bands; ++b) {
         if (deflated[b].empty()) return false;
-        if (b > 0) {
-            const std::size_t length = std::min(filtered.size() - b * band_rows * stride, band_rows * stride);
-            checksum = adler32_combine(checksum, adler[b], static_cast<z_off_t>(length));
-        }
+        if (b > 0) checksum = adler32_combine(checksum, adler[b], static_cast<z_off_t>(begin(b + 1) - begin(b)));
     }
 
     static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
