@@ -239,6 +239,69 @@ TEST(TextureSampling, MissingChannelsReadAsGlFillsThem) {
     EXPECT_EQ(rgb.texture(glm::dvec2(0.5)), glm::dvec4(1.0, 0.0, 0.2, 1.0));
 }
 
+// A luminance texture (one channel, Swizzle::luminance) samples exactly as a three-channel
+// copy of its image, (r, r, r, 1), on every path: every format, both wraps, lods across the
+// pyramid and between levels (odd sizes, so that levels blend unequal texels), the float and
+// double textureLod, the scalar and batched texture(); NaN and infinite coordinates too.
+// The copy is the image repeated channel by channel here, independently of the sampler.
+TEST(TextureSampling, LuminanceSamplesAsItsThreeChannelCopy) {
+    std::mt19937 rng(20261128);
+    std::uniform_real_distribution<float> coordinate(-0.3f, 1.3f);
+    std::uniform_real_distribution<float> lod(-1.0f, 6.0f);
+    std::uniform_int_distribution<int> code(0, 65535);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const int width = 37, height = 23;
+    const std::size_t n = static_cast<std::size_t>(width * height);
+    const auto three = [](const auto& one) {
+        std::decay_t<decltype(one)> rgb(one.size() * 3);
+        for (std::size_t i = 0; i < one.size(); ++i) rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = one[i];
+        return rgb;
+    };
+    std::vector<std::uint8_t> codes8(n);
+    std::vector<std::uint16_t> codes16(n);
+    std::vector<float> values(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        codes16[i] = static_cast<std::uint16_t>(code(rng));
+        codes8[i] = static_cast<std::uint8_t>(codes16[i] >> 8);
+        values[i] = static_cast<float>(codes16[i]) / 977.0f - 20.0f;
+    }
+    for (const TexelFormat format : {TexelFormat::unorm8, TexelFormat::unorm16, TexelFormat::float32}) {
+        auto make = [&](int channels) {
+            const bool rgb = channels == 3;
+            return format == TexelFormat::unorm8    ? Texture::from_unorm8(width, height, channels, rgb ? three(codes8) : codes8)
+                   : format == TexelFormat::unorm16 ? Texture::from_unorm16(width, height, channels, rgb ? three(codes16) : codes16)
+                                                    : Texture::from_float(width, height, channels, rgb ? three(values) : values);
+        };
+        Texture luminance = make(1), copy = make(3);
+        luminance.set_swizzle(tessref::Swizzle::luminance);
+        for (const tessref::Wrap wrap : {tessref::Wrap::clamp_to_edge, tessref::Wrap::repeat}) {
+            luminance.set_wrap(wrap);
+            copy.set_wrap(wrap);
+            std::vector<glm::vec2> st = {glm::vec2(0.0f), glm::vec2(1.0f), glm::vec2(nan, 0.5f), glm::vec2(0.5f, -inf),
+                                         glm::vec2(inf, nan)};
+            while (st.size() < 400) st.emplace_back(coordinate(rng), coordinate(rng));
+            std::vector<glm::vec4> batch(st.size());
+            luminance.texture(std::span<const glm::vec2>(st), std::span<glm::vec4>(batch));
+            for (std::size_t k = 0; k < st.size(); ++k) {
+                SCOPED_TRACE(std::string(tessref::to_string(format)) + " coordinate " + std::to_string(k));
+                const float l = k < 5 ? static_cast<float>(k) * 1.3f : lod(rng);
+                const glm::vec4 expected = copy.textureLod(st[k], l);
+                ASSERT_EQ(expected.g, expected.r);  // the copy's own channels agree
+                EXPECT_EQ(luminance.textureLod(st[k], l), expected);
+                EXPECT_EQ(batch[k], copy.texture(st[k]));
+                EXPECT_EQ(luminance.texture(st[k]), copy.texture(st[k]));
+                const glm::dvec2 sd(st[k]);
+                EXPECT_EQ(luminance.textureLod(sd, static_cast<double>(l)), copy.textureLod(sd, static_cast<double>(l)));
+                EXPECT_EQ(luminance.texture(sd), copy.texture(sd));
+            }
+        }
+    }
+    // Only a one-channel texture reads as luminance.
+    Texture rgb = Texture::from_float(1, 1, 3, {0.1f, 0.2f, 0.3f});
+    EXPECT_THROW(rgb.set_swizzle(tessref::Swizzle::luminance), tessref::Error);
+}
+
 // The batched texture() is the scalar one at every coordinate, bit for bit, for every format,
 // channel count and wrap mode, and both are textureLod(st, 0) (a separate code path): random
 // coordinates in and well outside [0, 1], texel centres and edges, NaN and infinities.

@@ -168,7 +168,8 @@ TEST(RenderShading, ShippedScenesNameTheirShaders) {
     const tessref::Scene terrain = tessref::load_scene(scene_path("jacksboro").string());
     const auto diffuse = terrain.shading.model.textures.diffuse;
     ASSERT_TRUE(diffuse);
-    EXPECT_EQ(diffuse->channels(), 3);
+    EXPECT_EQ(diffuse->channels(), 1);
+    EXPECT_EQ(diffuse->swizzle(), tessref::Swizzle::luminance);
     const glm::vec4 texel = diffuse->textureLod(glm::vec2(0.37f, 0.61f), 0.0f);
     const glm::vec4 grey = terrain.grid->heightmap->texture.textureLod(glm::vec2(0.37f, 0.61f), 0.0f);
     EXPECT_EQ(texel, glm::vec4(grey.r, grey.r, grey.r, 1.0f));

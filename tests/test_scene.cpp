@@ -592,7 +592,8 @@ TEST_F(BadScene, ShadingTableIsReadWithTheScene) {
     EXPECT_EQ(scene.shading.model.thesis.shininess, 8.0f);
     EXPECT_EQ(scene.shading.model.thesis.lightPosition, ThesisLight{}.lightPosition);  // not given: the default
     ASSERT_TRUE(scene.shading.model.textures.diffuse);
-    EXPECT_EQ(scene.shading.model.textures.diffuse->channels(), 3);  // luminance: (r, r, r, 1)
+    EXPECT_EQ(scene.shading.model.textures.diffuse->channels(), 1);  // luminance: read as (r, r, r, 1)
+    EXPECT_EQ(scene.shading.model.textures.diffuse->swizzle(), Swizzle::luminance);
 
     // Without [shading]: depth, linear mapping (no camera here: its default planes).
     const Scene plain = load_scene(dir_->write("plain.toml", terrain_scene("h.pgm")));

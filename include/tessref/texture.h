@@ -93,6 +93,12 @@ enum class MinFilter : std::uint8_t { linear_mipmap_linear, linear };
 // seam to the opposite edge as GL_REPEAT does (GL 4.5 8.14.2: i mod size). Not measured
 // against llvmpipe: no scene with a GLSL twin uses it.
 enum class Wrap : std::uint8_t { clamp_to_edge, repeat };
+// What a sample returns of the stored channels (GL_TEXTURE_SWIZZLE_RGBA, the two settings
+// tessref needs). luminance: a one-channel texture read as (r, r, r, 1), as GL 2's
+// GL_LUMINANCE was. The red channel is filtered once and copied to green and blue: every
+// channel filters on its own with the same weights, so this is exactly what a three-channel
+// copy of the image returns, at a third of the filtering and of the memory.
+enum class Swizzle : std::uint8_t { rgba, luminance };
 
 const char* to_string(TexelFormat format);
 const char* to_string(MipmapRule rule);
@@ -134,8 +140,8 @@ public:
     int max_level() const { return level_count() - 1; }
     const TextureLevel& level(int lod) const;
 
-    // The stored texel (GPU path) and its double-path value. Coordinates are not clamped:
-    // out of range throws tessref::Error.
+    // The stored texel (GPU path) and its double-path value, before any swizzle. Coordinates
+    // are not clamped: out of range throws tessref::Error.
     float texel(int lod, int x, int y, int channel = 0) const;
     double texel_exact(int lod, int x, int y, int channel = 0) const;
 
@@ -143,6 +149,9 @@ public:
     void set_min_filter(MinFilter filter) { min_filter_ = filter; }
     Wrap wrap() const { return wrap_; }
     void set_wrap(Wrap wrap) { wrap_ = wrap; }
+    Swizzle swizzle() const { return swizzle_; }
+    // Throws tessref::Error for luminance on a texture of other than one channel.
+    void set_swizzle(Swizzle swizzle);
 
     // GLSL texture(sampler, st) in a TCS/TES/GS: no derivatives there, so the implicit lod
     // is 0 and this is exactly textureLod(st, 0).
@@ -175,6 +184,7 @@ private:
     MipmapRule rule_ = MipmapRule::llvmpipe_blit;
     MinFilter min_filter_ = MinFilter::linear_mipmap_linear;
     Wrap wrap_ = Wrap::clamp_to_edge;
+    Swizzle swizzle_ = Swizzle::rgba;
 };
 
 // Bytes a Texture of this size and format holds, its whole mip pyramid included (saturating

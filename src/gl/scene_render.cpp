@@ -644,6 +644,16 @@ void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const Ren
 
 // ---- textures: the Texture objects the CPU samples, uploaded as they were loaded ---------
 
+// Level 0's texels as uploaded: `stored` itself, or for a luminance texture each texel
+// repeated in three channels (a copy, in `rgb`).
+template <class T>
+const T* uploaded_texels(const std::vector<T>& stored, bool luminance, std::vector<T>& rgb) {
+    if (!luminance) return stored.data();
+    rgb.resize(stored.size() * 3);
+    for (std::size_t i = 0; i < stored.size(); ++i) rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = stored[i];
+    return rgb.data();
+}
+
 GLuint upload(Context::Impl& c, const Texture& t, const std::string& what) {
     auto& gl = c.gl;
     static const GLenum base[4] = {GL_RED, GL_RG, GL_RGB, GL_RGBA};
@@ -651,30 +661,37 @@ GLuint upload(Context::Impl& c, const Texture& t, const std::string& what) {
     static const GLenum i16[4] = {GL_R16, GL_RG16, GL_RGB16, GL_RGBA16};
     static const GLenum f32[4] = {GL_R32F, GL_RG32F, GL_RGB32F, GL_RGBA32F};
     if (t.empty()) throw Error("tessref gl: the texture " + what + " is empty");
-    const int k = t.channels() - 1;
+    // A luminance texture goes up as three equal channels (RGB), the texture the shaders have
+    // always sampled; the CPU reads its one channel and copies it (Swizzle), the same values.
+    const bool luminance = t.swizzle() == Swizzle::luminance;
+    const int k = luminance ? 2 : t.channels() - 1;
     const TextureLevel& level0 = t.level(0);
     GLuint name = 0;
     gl.GenTextures(1, &name);
     gl.BindTexture(GL_TEXTURE_2D, name);
     gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
     switch (t.format()) {
-        case TexelFormat::unorm8:
+        case TexelFormat::unorm8: {
+            std::vector<std::uint8_t> rgb;
             gl.TexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(i8[k]), level0.width, level0.height, 0, base[k],
-                          GL_UNSIGNED_BYTE, level0.unorm8.data());
+                          GL_UNSIGNED_BYTE, uploaded_texels(level0.unorm8, luminance, rgb));
             break;
+        }
         case TexelFormat::unorm16: {
             // Stored as code * (1/65535) in float: rounding recovers the code exactly.
-            std::vector<std::uint16_t> codes(level0.texels.size());
+            std::vector<std::uint16_t> codes(level0.texels.size()), rgb;
             for (std::size_t i = 0; i < codes.size(); ++i)
                 codes[i] = static_cast<std::uint16_t>(std::lround(static_cast<double>(level0.texels[i]) * 65535.0));
             gl.TexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(i16[k]), level0.width, level0.height, 0, base[k],
-                          GL_UNSIGNED_SHORT, codes.data());
+                          GL_UNSIGNED_SHORT, uploaded_texels(codes, luminance, rgb));
             break;
         }
-        case TexelFormat::float32:
+        case TexelFormat::float32: {
+            std::vector<float> rgb;
             gl.TexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(f32[k]), level0.width, level0.height, 0, base[k],
-                          GL_FLOAT, level0.texels.data());
+                          GL_FLOAT, uploaded_texels(level0.texels, luminance, rgb));
             break;
+        }
     }
     gl.GenerateMipmap(GL_TEXTURE_2D);  // heightfield.h: llvmpipe_blit models exactly this
     gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER,

@@ -135,35 +135,6 @@ void read_model(TableReader& t, ShadingModel& m) {
     }
 }
 
-// A one-channel texture read as (r, r, r, 1): the same stored values in three channels, so
-// that each channel filters exactly as the red one does.
-Texture luminance_texture(const Texture& source) {
-    const TextureLevel& level0 = source.level(0);
-    const std::size_t n = static_cast<std::size_t>(level0.width) * static_cast<std::size_t>(level0.height);
-    switch (source.format()) {
-        case TexelFormat::unorm8: {
-            std::vector<std::uint8_t> codes(n * 3);
-            for (std::size_t i = 0; i < n; ++i) codes[3 * i] = codes[3 * i + 1] = codes[3 * i + 2] = level0.unorm8[i];
-            return Texture::from_unorm8(level0.width, level0.height, 3, std::move(codes), source.mipmap_rule());
-        }
-        case TexelFormat::unorm16: {
-            std::vector<std::uint16_t> codes(n * 3);
-            for (std::size_t i = 0; i < n; ++i) {
-                // Stored as code * (1/65535) in float: rounding recovers the code exactly.
-                const auto code = static_cast<std::uint16_t>(std::lround(static_cast<double>(level0.texels[i]) * 65535.0));
-                codes[3 * i] = codes[3 * i + 1] = codes[3 * i + 2] = code;
-            }
-            return Texture::from_unorm16(level0.width, level0.height, 3, std::move(codes), source.mipmap_rule());
-        }
-        case TexelFormat::float32: {
-            std::vector<float> texels(n * 3);
-            for (std::size_t i = 0; i < n; ++i) texels[3 * i] = texels[3 * i + 1] = texels[3 * i + 2] = level0.texels[i];
-            return Texture::from_float(level0.width, level0.height, 3, std::move(texels), source.mipmap_rule());
-        }
-    }
-    return source;
-}
-
 // One entry of shading.textures: "path", { path = "...", luminance = true } or a colour.
 std::shared_ptr<const Texture> read_texture(TableReader& textures, const std::string& sampler, const Resolve& resolve) {
     const toml::node& n = *textures.node(sampler);
@@ -201,7 +172,7 @@ std::shared_ptr<const Texture> read_texture(TableReader& textures, const std::st
             throw Error(luminance->key + " = true needs a one-channel image; " + file + " has " +
                             std::to_string(texture.channels()),
                         *luminance);
-        texture = luminance_texture(texture);
+        texture.set_swizzle(Swizzle::luminance);
     }
     return std::make_shared<const Texture>(std::move(texture));
 }

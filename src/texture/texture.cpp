@@ -696,6 +696,20 @@ double Texture::texel_exact(int lod, int x, int y, int channel) const {
     return exact_value(l, exact, format_, index_of(l, channels_, x, y, channel));
 }
 
+void Texture::set_swizzle(Swizzle swizzle) {
+    if (swizzle == Swizzle::luminance && channels_ != 1)
+        throw Error("a luminance texture reads one channel; this one has " + std::to_string(channels_));
+    swizzle_ = swizzle;
+}
+
+namespace {
+// A sample's channels as the swizzle returns them.
+template <class Vec4>
+inline void apply_swizzle(Swizzle swizzle, Vec4& sample) {
+    if (swizzle == Swizzle::luminance) sample.g = sample.b = sample.r;
+}
+}  // namespace
+
 glm::vec4 Texture::texture(glm::vec2 st) const {
     glm::vec4 out;
     texture(std::span<const glm::vec2>(&st, 1), std::span<glm::vec4>(&out, 1));
@@ -707,6 +721,8 @@ void Texture::texture(std::span<const glm::vec2> st, std::span<glm::vec4> out) c
     if (st.size() != out.size()) throw Error("Texture::texture: as many samples as coordinates");
     texture_level0(levels_[0], channels_, format_ == TexelFormat::unorm8, st.data(), out.data(), st.size(),
                    wrap_ == Wrap::repeat);
+    if (swizzle_ != Swizzle::rgba)
+        for (glm::vec4& sample : out) apply_swizzle(swizzle_, sample);
 }
 glm::dvec4 Texture::texture(glm::dvec2 st) const { return textureLod(st, 0.0); }
 void Texture::texture(std::span<const glm::dvec2> st, std::span<glm::dvec4> out) const {
@@ -740,6 +756,7 @@ glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
             for (int c = 0; c < channels_; ++c) codes[c] = lerp_unorm8(codes[c], codes1[c], weight);
         }
         for (int c = 0; c < channels_; ++c) out[c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+        apply_swizzle(swizzle_, out);
         return out;
     }
     float values[4];
@@ -750,6 +767,7 @@ glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
         for (int c = 0; c < channels_; ++c) values[c] = lerp_gpu(values[c], values1[c], fraction);
     }
     for (int c = 0; c < channels_; ++c) out[c] = values[c];
+    apply_swizzle(swizzle_, out);
     return out;
 }
 
@@ -775,6 +793,7 @@ glm::dvec4 Texture::textureLod(glm::dvec2 st, double lod) const {
     }
     glm::dvec4 out(0.0, 0.0, 0.0, 1.0);
     for (int c = 0; c < channels_; ++c) out[c] = values[c];
+    apply_swizzle(swizzle_, out);
     return out;
 }
 
