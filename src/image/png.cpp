@@ -20,6 +20,10 @@
 #include <system_error>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "common/parallel.h"
 #include "image/codecs.h"
 #include "tessref/error.h"
@@ -160,6 +164,22 @@ void put_chunk(std::vector<std::uint8_t>& out, const char (&type)[5], const std:
     put32(out, static_cast<std::uint32_t>(crc));
 }
 
+// One row's Sub filter (PNG 1.2, section 6.3): each byte less the byte one pixel (`pixel`
+// bytes) to its left, modulo 256; the first pixel's bytes as they are. Sixteen bytes at a
+// time with SSE2, whose byte subtraction wraps as the filter's does.
+void sub_filter(const std::uint8_t* in, std::uint8_t* out, std::size_t row, std::size_t pixel) {
+    std::memcpy(out, in, std::min(pixel, row));
+    std::size_t i = pixel;
+#if defined(__SSE2__)
+    for (; i + 16 <= row; i += 16) {
+        const __m128i here = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
+        const __m128i left = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i - pixel));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), _mm_sub_epi8(here, left));
+    }
+#endif
+    for (; i < row; ++i) out[i] = static_cast<std::uint8_t>(in[i] - in[i - pixel]);
+}
+
 // The raw deflate data of filtered[begin, end), primed with what precedes it; the last band
 // finishes the stream. Empty on a zlib failure.
 std::vector<std::uint8_t> deflate_band(const std::vector<std::uint8_t>& filtered, std::size_t begin, std::size_t end,
@@ -197,9 +217,8 @@ bool encode_png(const std::uint8_t* samples, int width, int height, int channels
     tessref::parallel_for(0, height, [&](int y) {
         const std::uint8_t* in = samples + static_cast<std::size_t>(y) * row;
         std::uint8_t* out = filtered.data() + static_cast<std::size_t>(y) * stride;
-        out[0] = 1;  // Sub; the first pixel has nothing to its left
-        std::memcpy(out + 1, in, std::min(pixel, row));
-        for (std::size_t i = pixel; i < row; ++i) out[1 + i] = static_cast<std::uint8_t>(in[i] - in[i - pixel]);
+        out[0] = 1;  // the filter type: Sub
+        sub_filter(in, out + 1, row, pixel);
     });
     const std::size_t band_rows = std::max<std::size_t>(1, kBandBytes / stride);
     const std::size_t bands = (static_cast<std::size_t>(height) + band_rows - 1) / band_rows;
