@@ -101,7 +101,7 @@ void validate(const SurfaceMesh& mesh);
 
 struct WeldedMesh {
     SurfaceMesh mesh;                        // welded vertices, triangles re-indexed
-    std::vector<std::uint32_t> vertex_map;   // emitted vertex -> welded vertex (not from SurfaceWelder)
+    std::vector<std::uint32_t> vertex_map;   // emitted vertex -> welded vertex (weld_bitwise only)
     std::size_t emitted_vertices = 0;        // vertices before welding
     std::size_t degenerate_triangles = 0;    // dropped: corners welded into < 3 vertices
 };
@@ -116,7 +116,8 @@ WeldedMesh weld_bitwise(const SurfaceMesh& mesh);
 // the unwelded surface is never held whole: add() the pieces in order, each a SurfaceMesh
 // whose triangles index its own vertices, then take() the result once. It is bit for bit
 // weld_bitwise() of the pieces concatenated (their triangles shifted to the concatenated
-// vertices), except that vertex_map stays empty (4 bytes an emitted vertex). Memory: the
+// vertices), except that vertex_map stays empty (4 bytes an emitted vertex); weld_bitwise()
+// is one add() of the whole surface. Memory: the
 // welded mesh, and a hash table of 16 to 32 bytes per expected (at least per welded)
 // vertex. add() validates each piece, and throws tessref::Error when a piece's attributes
 // (which of normals, uvs, patch_ids, tess_coords it has) differ from the first piece's.
@@ -129,7 +130,8 @@ public:
     SurfaceWelder(SurfaceWelder&&) noexcept;
     SurfaceWelder& operator=(SurfaceWelder&&) noexcept;
 
-    void add(const SurfaceMesh& piece);
+    // vertex_map, when given, receives the piece's vertex -> welded vertex.
+    void add(const SurfaceMesh& piece, std::vector<std::uint32_t>* vertex_map = nullptr);
     WeldedMesh take();
 
 private:

@@ -211,16 +211,6 @@ private:
 // How far ahead of the vertex being welded its table slot is prefetched.
 constexpr std::size_t kPrefetchAhead = 8;
 
-// What welding decides, without copying any attribute: the emitted copy each welded vertex
-// takes its attributes from (`source`, in welded order), emitted vertex -> welded vertex,
-// and the welded triangles (degenerate ones left out and counted). Validates `mesh` first.
-struct WeldIndex {
-    std::vector<std::uint32_t> source;
-    std::vector<std::uint32_t> vertex_map;
-    std::vector<std::array<std::uint32_t, 3>> triangles;
-    std::size_t degenerate_triangles = 0;
-};
-
 // Appends `triangles` (corners mapped by `vertex_map`) to `out`, leaving out those whose
 // corners weld into fewer than three vertices; returns how many it left out.
 std::size_t append_welded_triangles(const std::vector<std::array<std::uint32_t, 3>>& triangles,
@@ -239,41 +229,6 @@ std::size_t append_welded_triangles(const std::vector<std::array<std::uint32_t, 
     return degenerate;
 }
 
-WeldIndex weld_index(const SurfaceMesh& mesh) {
-    validate(mesh);
-    const std::size_t n = mesh.positions.size();
-    WeldIndex result;
-    result.vertex_map.resize(n);
-    std::vector<std::uint32_t>& source = result.source;
-    {
-        source.reserve(n);
-        PositionTable table(n);
-        const bool has_patch_ids = !mesh.patch_ids.empty();
-        // A welded vertex's position is its source copy's: every copy has the same key.
-        const auto position_of = [&](std::uint32_t welded) -> const glm::dvec3& {
-            return mesh.positions[source[welded]];
-        };
-        for (std::uint32_t i = 0; i < n; ++i) {
-            if (i + kPrefetchAhead < n) table.prefetch(PositionTable::hash(mesh.positions[i + kPrefetchAhead]));
-            const auto next = static_cast<std::uint32_t>(source.size());
-            const std::uint32_t welded =
-                table.find_or_insert(mesh.positions[i], PositionTable::hash(mesh.positions[i]), next, position_of);
-            if (welded == next) {
-                source.push_back(i);
-            } else if (has_patch_ids && mesh.patch_ids[i] < mesh.patch_ids[source[welded]]) {
-                // Lowest patch id wins; on a tie the earlier copy (already there) stays.
-                source[welded] = i;
-            }
-            result.vertex_map[i] = welded;
-        }
-    }
-    source.shrink_to_fit();
-
-    result.triangles.reserve(mesh.triangles.size());
-    result.degenerate_triangles = append_welded_triangles(mesh.triangles, result.vertex_map, result.triangles);
-    return result;
-}
-
 }  // namespace
 
 struct SurfaceWelder::Impl {
@@ -282,6 +237,10 @@ struct SurfaceWelder::Impl {
     WeldedMesh welded;
     std::vector<std::uint32_t> piece_map;  // the current piece's vertex -> welded vertex
     std::vector<std::uint64_t> hashes;     // the current piece's positions' hashes
+    // The current piece's welded vertices' source copies: source[k] for the piece's k-th new
+    // welded vertex, replaced for older ones that a copy of this piece takes over.
+    std::vector<std::uint32_t> source;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> replaced;  // (welded vertex, copy)
     bool shaped = false;                   // a piece with vertices has set which attributes there are
 };
 
@@ -299,7 +258,7 @@ SurfaceWelder::~SurfaceWelder() = default;
 SurfaceWelder::SurfaceWelder(SurfaceWelder&&) noexcept = default;
 SurfaceWelder& SurfaceWelder::operator=(SurfaceWelder&&) noexcept = default;
 
-void SurfaceWelder::add(const SurfaceMesh& piece) {
+void SurfaceWelder::add(const SurfaceMesh& piece, std::vector<std::uint32_t>* vertex_map) {
     validate(piece);
     const std::size_t n = piece.positions.size();
     if (n == 0) return;  // then it has no triangles either (validated)
@@ -335,38 +294,55 @@ void SurfaceWelder::add(const SurfaceMesh& piece) {
 
     const bool normals = !piece.normals.empty(), uvs = !piece.uvs.empty();
     const bool patch_ids = !piece.patch_ids.empty(), tess_coords = !piece.tess_coords.empty();
-    // Every attribute from one copy: the one with the lowest patch id, then the earliest
-    // (weld_bitwise's rule; an earlier piece's copy is an earlier one).
-    const auto take_copy = [&](std::size_t i, std::uint32_t welded) {
-        out.positions[welded] = piece.positions[i];
-        if (normals) out.normals[welded] = piece.normals[i];
-        if (uvs) out.uvs[welded] = piece.uvs[i];
-        if (patch_ids) out.patch_ids[welded] = piece.patch_ids[i];
-        if (tess_coords) out.tess_coords[welded] = piece.tess_coords[i];
-    };
     const auto position_of = [&out](std::uint32_t welded) -> const glm::dvec3& { return out.positions[welded]; };
+    const std::size_t base = out.positions.size();  // the welded vertices of the pieces before
     s.piece_map.resize(n);
     // Every hash first, in one pass over the positions: each is computed once, and the
     // slots can be prefetched as far ahead as wanted.
     s.hashes.resize(n);
     for (std::size_t i = 0; i < n; ++i) s.hashes[i] = PositionTable::hash(piece.positions[i]);
+    // The decisions, in emission order: which welded vertex each copy is, and which copy each
+    // welded vertex takes ALL its attributes from, the one with the lowest patch id, then the
+    // earliest (an earlier piece's copy is an earlier one). Only what the decisions read is
+    // written here: the positions (the table's keys; any copy's will do, they compare equal)
+    // and the patch ids. The other attributes are copied afterwards, in parallel.
+    s.source.clear();
+    s.replaced.clear();
     for (std::size_t i = 0; i < n; ++i) {
         if (i + kPrefetchAhead < n) s.table.prefetch(s.hashes[i + kPrefetchAhead]);
         const auto next = static_cast<std::uint32_t>(out.positions.size());
         const std::uint32_t welded = s.table.find_or_insert(piece.positions[i], s.hashes[i], next, position_of);
+        const auto copy = static_cast<std::uint32_t>(i);
         if (welded == next) {
             out.positions.push_back(piece.positions[i]);
-            if (normals) out.normals.push_back(piece.normals[i]);
-            if (uvs) out.uvs.push_back(piece.uvs[i]);
             if (patch_ids) out.patch_ids.push_back(piece.patch_ids[i]);
-            if (tess_coords) out.tess_coords.push_back(piece.tess_coords[i]);
+            s.source.push_back(copy);
         } else if (patch_ids && piece.patch_ids[i] < out.patch_ids[welded]) {
-            take_copy(i, welded);
+            out.patch_ids[welded] = piece.patch_ids[i];
+            if (welded >= base) s.source[welded - base] = copy;
+            else s.replaced.emplace_back(welded, copy);
         }
         s.piece_map[i] = welded;
     }
+    // Every attribute from the chosen copy (the position too: the sign of its zeros).
+    const auto take_copy = [&](std::size_t welded, std::size_t i) {
+        out.positions[welded] = piece.positions[i];
+        if (normals) out.normals[welded] = piece.normals[i];
+        if (uvs) out.uvs[welded] = piece.uvs[i];
+        if (tess_coords) out.tess_coords[welded] = piece.tess_coords[i];
+    };
+    const std::size_t welded_count = out.positions.size();
+    if (normals) out.normals.resize(welded_count);
+    if (uvs) out.uvs.resize(welded_count);
+    if (tess_coords) out.tess_coords.resize(welded_count);
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(base, welded_count, 4096), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v < r.end(); ++v) take_copy(v, s.source[v - base]);
+    });
+    // In order: a later entry for the same vertex has a lower patch id.
+    for (const auto& [welded, i] : s.replaced) take_copy(welded, i);
     s.welded.emitted_vertices += n;
     s.welded.degenerate_triangles += append_welded_triangles(piece.triangles, s.piece_map, out.triangles);
+    if (vertex_map) *vertex_map = s.piece_map;
 }
 
 WeldedMesh SurfaceWelder::take() {
@@ -376,26 +352,11 @@ WeldedMesh SurfaceWelder::take() {
 }
 
 WeldedMesh weld_bitwise(const SurfaceMesh& mesh) {
-    WeldIndex index = weld_index(mesh);
-    WeldedMesh result;
-    SurfaceMesh& out = result.mesh;
-    const std::vector<std::uint32_t>& source = index.source;
-    const std::size_t m = source.size();
-    out.positions.resize(m);
-    for (std::size_t v = 0; v < m; ++v) out.positions[v] = mesh.positions[source[v]];
-    const auto gather = [&source, m](const auto& from, auto& to) {
-        if (from.empty()) return;
-        to.resize(m);
-        for (std::size_t v = 0; v < m; ++v) to[v] = from[source[v]];
-    };
-    gather(mesh.normals, out.normals);
-    gather(mesh.uvs, out.uvs);
-    gather(mesh.patch_ids, out.patch_ids);
-    gather(mesh.tess_coords, out.tess_coords);
-    out.triangles = std::move(index.triangles);
-    result.vertex_map = std::move(index.vertex_map);
-    result.emitted_vertices = mesh.positions.size();
-    result.degenerate_triangles = index.degenerate_triangles;
+    SurfaceWelder welder(mesh.positions.size(), mesh.triangles.size());
+    std::vector<std::uint32_t> vertex_map;
+    welder.add(mesh, &vertex_map);
+    WeldedMesh result = welder.take();
+    result.vertex_map = std::move(vertex_map);
     return result;
 }
 
@@ -453,50 +414,36 @@ std::string number(double x) {
     return buffer;
 }
 
-// The welded surface as the writers read it, without a copy of its attributes: written
-// vertex v is emitted vertex at(v) of `mesh` (every emitted vertex, in order, when
-// `source` is null: an unwelded export), and `triangles` index the written vertices.
-struct WeldedView {
-    const SurfaceMesh* mesh = nullptr;
-    const std::vector<std::uint32_t>* source = nullptr;
-    const std::vector<std::array<std::uint32_t, 3>>* triangles = nullptr;
-
-    std::size_t vertex_count() const { return source ? source->size() : mesh->positions.size(); }
-    std::uint32_t at(std::size_t v) const { return source ? (*source)[v] : static_cast<std::uint32_t>(v); }
-    const glm::dvec3& position(std::size_t v) const { return mesh->positions[at(v)]; }
-};
 
 // The file stores floats: a position beyond the float range would be written as inf, and
 // a non-finite one as inf or nan. Neither is geometry; the export stops, naming the vertex.
-void require_finite_floats(const WeldedView& w) {
-    const SurfaceMesh& mesh = *w.mesh;
-    for (std::size_t v = 0; v < w.vertex_count(); ++v) {
-        const std::uint32_t e = w.at(v);
-        const glm::dvec3& p = mesh.positions[e];
+void require_finite_floats(const SurfaceMesh& mesh) {
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        const glm::dvec3& p = mesh.positions[v];
         const OpenMesh::Vec3f f = to_float(p);
         if (std::isfinite(f[0]) && std::isfinite(f[1]) && std::isfinite(f[2])) continue;
         const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
         std::string what = "vertex (" + number(p.x) + ", " + number(p.y) + ", " + number(p.z) + ")";
         if (!mesh.tess_coords.empty()) {
-            const glm::vec3 tc = mesh.tess_coords[e];
+            const glm::vec3 tc = mesh.tess_coords[v];
             what += " at tess coord (" + number(tc.x) + ", " + number(tc.y) + ", " + number(tc.z) + ")";
         }
         what += finite ? " is beyond the 32-bit float range (largest " +
                              number(std::numeric_limits<float>::max()) + ") that mesh files store"
                        : " is not finite";
-        throw Error(what, mesh.patch_ids.empty() ? Where{} : Where::at_patch(mesh.patch_ids[e]));
+        throw Error(what, mesh.patch_ids.empty() ? Where{} : Where::at_patch(mesh.patch_ids[v]));
     }
 }
 
 // What storing positions as float loses of a double computation: distinct vertices that
 // round to one float point, and triangles with area whose float corners have none.
 // Nothing when every position is already a float (gpu precision).
-void measure_float_storage(const WeldedView& w, MeshWriteReport& report) {
-    const std::size_t n = w.vertex_count();
+void measure_float_storage(const SurfaceMesh& mesh, MeshWriteReport& report) {
+    const std::size_t n = mesh.positions.size();
     double largest = 0.0;
     bool all_floats = true;
     for (std::size_t v = 0; v < n; ++v) {
-        const glm::dvec3& p = w.position(v);
+        const glm::dvec3& p = mesh.positions[v];
         for (int c = 0; c < 3; ++c) {
             largest = std::max(largest, std::abs(p[c]));
             all_floats = all_floats && static_cast<double>(static_cast<float>(p[c])) == p[c];
@@ -509,10 +456,10 @@ void measure_float_storage(const WeldedView& w, MeshWriteReport& report) {
     report.float_distinct_vertices = n;
     if (all_floats) return;
 
-    const auto stored = [&w](std::uint32_t v) { return glm::dvec3(glm::vec3(w.position(v))); };
+    const auto stored = [&mesh](std::uint32_t v) { return glm::dvec3(glm::vec3(mesh.positions[v])); };
     std::vector<std::array<std::uint32_t, 3>> keys(n);
     for (std::uint32_t v = 0; v < keys.size(); ++v) {
-        const glm::vec3 f(w.position(v));
+        const glm::vec3 f(mesh.positions[v]);
         for (int c = 0; c < 3; ++c) keys[v][c] = std::bit_cast<std::uint32_t>(f[c] == 0.0f ? 0.0f : f[c]);
     }
     std::sort(keys.begin(), keys.end());
@@ -524,9 +471,9 @@ void measure_float_storage(const WeldedView& w, MeshWriteReport& report) {
     const auto zero_area = [](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
         return glm::cross(b - a, c - a) == glm::dvec3(0.0);
     };
-    for (const auto& t : *w.triangles) {
+    for (const auto& t : mesh.triangles) {
         if (zero_area(stored(t[0]), stored(t[1]), stored(t[2])) &&
-            !zero_area(w.position(t[0]), w.position(t[1]), w.position(t[2])))
+            !zero_area(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]))
             ++report.float_degenerate_triangles;
     }
 }
@@ -540,11 +487,10 @@ using Progress = std::function<void(std::string_view, double)>;
 
 // Through OpenMesh's writer (every format; PLY's reference): the vertices copied into an
 // OpenMesh kernel, the triangles served from the list.
-void write_through_openmesh(const WeldedView& w, const WrittenAttributes& written, const MeshWriteOptions& options,
+void write_through_openmesh(const SurfaceMesh& mesh, const WrittenAttributes& written, const MeshWriteOptions& options,
                             std::ostream& out, const Progress& progress) {
     const MeshFormat format = options.format;
-    const SurfaceMesh& mesh = *w.mesh;
-    const std::size_t n = w.vertex_count();
+    const std::size_t n = mesh.positions.size();
     ExportMesh om;
     om.reserve(n, 0, 0);
     if (written.normals) om.request_vertex_normals();
@@ -569,22 +515,21 @@ void write_through_openmesh(const WeldedView& w, const WrittenAttributes& writte
     constexpr std::size_t progress_step = std::size_t{1} << 16;
     for (std::size_t v = 0; v < n; ++v) {
         if (v % progress_step == 0) progress("collecting", static_cast<double>(v) / static_cast<double>(n));
-        const std::uint32_t e = w.at(v);
-        const ExportMesh::VertexHandle vh = om.add_vertex(to_float(mesh.positions[e]));
-        if (written.normals) om.set_normal(vh, to_float(mesh.normals[e]));
+        const ExportMesh::VertexHandle vh = om.add_vertex(to_float(mesh.positions[v]));
+        if (written.normals) om.set_normal(vh, to_float(mesh.normals[v]));
         if (written.uvs) {
-            om.set_texcoord2D(vh, ExportMesh::TexCoord2D(static_cast<float>(mesh.uvs[e].x),
-                                                         static_cast<float>(mesh.uvs[e].y)));
+            om.set_texcoord2D(vh, ExportMesh::TexCoord2D(static_cast<float>(mesh.uvs[v].x),
+                                                         static_cast<float>(mesh.uvs[v].y)));
         }
         if (written.patch_ids) {
             // PLY's `int`: patch ids beyond 2^31 - 1 would need more patches than any
             // triangle budget allows.
-            om.property(patch_id_property, vh) = static_cast<int>(mesh.patch_ids[e]);
+            om.property(patch_id_property, vh) = static_cast<int>(mesh.patch_ids[v]);
         }
         if (written.tess_coords) {
-            om.property(tess_u_property, vh) = mesh.tess_coords[e].x;
-            om.property(tess_v_property, vh) = mesh.tess_coords[e].y;
-            om.property(tess_w_property, vh) = mesh.tess_coords[e].z;
+            om.property(tess_u_property, vh) = mesh.tess_coords[v].x;
+            om.property(tess_v_property, vh) = mesh.tess_coords[v].y;
+            om.property(tess_w_property, vh) = mesh.tess_coords[v].z;
         }
     }
     progress("collecting", 1.0);
@@ -604,7 +549,7 @@ void write_through_openmesh(const WeldedView& w, const WrittenAttributes& writte
         // OpenMesh's writers chat about every file they write.
         const mesh_detail::QuietStream quiet_log(::omlog());
         const mesh_detail::QuietStream quiet_out(::omout());
-        TriangleListExporter exporter(om, *w.triangles);
+        TriangleListExporter exporter(om, mesh.triangles);
         ok = OpenMesh::IO::IOManager().write(out, "." + std::string(to_string(format)), exporter, io_options,
                                              options.ascii_digits);
     }
@@ -639,12 +584,11 @@ constexpr std::size_t kBlocksAtOnce = 8;
 
 // PLY, written here: byte for byte what OpenMesh 9's PLY writer writes for the same mesh,
 // options and properties (tests/test_mesh.cpp compares the two on every attribute
-// combination, ascii and binary), straight from the welded view, without the kernel copy.
-void write_ply(const WeldedView& w, const WrittenAttributes& written, const MeshWriteOptions& options,
+// combination, ascii and binary), straight from the welded mesh, without the kernel copy.
+void write_ply(const SurfaceMesh& mesh, const WrittenAttributes& written, const MeshWriteOptions& options,
                std::ostream& out, const Progress& progress) {
-    const SurfaceMesh& mesh = *w.mesh;
-    const std::size_t n = w.vertex_count();
-    const std::vector<std::array<std::uint32_t, 3>>& triangles = *w.triangles;
+    const std::size_t n = mesh.positions.size();
+    const std::vector<std::array<std::uint32_t, 3>>& triangles = mesh.triangles;
     const bool binary = options.binary;
     const int digits = options.ascii_digits;
 
@@ -665,26 +609,25 @@ void write_ply(const WeldedView& w, const WrittenAttributes& written, const Mesh
 
     // One record (a vertex or a triangle) at q; returns its end. At most kRecordLimit bytes.
     const auto vertex_record = [&](std::size_t v, char* q) {
-        const std::uint32_t e = w.at(v);
         float values[8];
         int count = 0;
-        const glm::dvec3& p = mesh.positions[e];
+        const glm::dvec3& p = mesh.positions[v];
         values[count++] = static_cast<float>(p.x);
         values[count++] = static_cast<float>(p.y);
         values[count++] = static_cast<float>(p.z);
         if (written.normals) {
-            const glm::dvec3& normal = mesh.normals[e];
+            const glm::dvec3& normal = mesh.normals[v];
             values[count++] = static_cast<float>(normal.x);
             values[count++] = static_cast<float>(normal.y);
             values[count++] = static_cast<float>(normal.z);
         }
         if (written.uvs) {
-            values[count++] = static_cast<float>(mesh.uvs[e].x);
-            values[count++] = static_cast<float>(mesh.uvs[e].y);
+            values[count++] = static_cast<float>(mesh.uvs[v].x);
+            values[count++] = static_cast<float>(mesh.uvs[v].y);
         }
         // PLY's `int` (see write_through_openmesh).
-        const std::int32_t patch_id = written.patch_ids ? static_cast<std::int32_t>(mesh.patch_ids[e]) : 0;
-        const glm::vec3 tess = written.tess_coords ? mesh.tess_coords[e] : glm::vec3(0.0f);
+        const std::int32_t patch_id = written.patch_ids ? static_cast<std::int32_t>(mesh.patch_ids[v]) : 0;
+        const glm::vec3 tess = written.tess_coords ? mesh.tess_coords[v] : glm::vec3(0.0f);
         if (binary) {
             for (int i = 0; i < count; ++i) q = store_le(q, values[i]);
             if (written.patch_ids) q = store_le(q, patch_id);
@@ -787,26 +730,26 @@ void check_write_options(const MeshWriteOptions& options) {
     }
 }
 
-// Writes the welded view `w`; `emitted` and `degenerate` are the weld's counts for the report.
-MeshWriteReport write_view(const WeldedView& w, std::size_t emitted, std::size_t degenerate, std::ostream& out,
+// Writes `mesh` as it is (welded, or an unwelded export); `emitted` and `degenerate` are the
+// weld's counts for the report.
+MeshWriteReport write_view(const SurfaceMesh& mesh, std::size_t emitted, std::size_t degenerate, std::ostream& out,
                            const MeshWriteOptions& options, bool openmesh_ply_writer) {
     const MeshFormat format = options.format;
-    const SurfaceMesh& mesh = *w.mesh;
     const auto progress = [&options](std::string_view stage, double fraction) {
         if (options.progress) options.progress(stage, fraction);
     };
-    if (w.vertex_count() > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
-        w.triangles->size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
-        throw Error("mesh too large for OpenMesh's 32-bit handles: " + std::to_string(w.vertex_count()) +
-                    " vertices, " + std::to_string(w.triangles->size()) + " triangles");
+    if (mesh.positions.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
+        mesh.triangles.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+        throw Error("mesh too large for OpenMesh's 32-bit handles: " + std::to_string(mesh.positions.size()) +
+                    " vertices, " + std::to_string(mesh.triangles.size()) + " triangles");
     }
     MeshWriteReport report;
     report.emitted_vertices = emitted;
-    report.vertices = w.vertex_count();
-    report.triangles = w.triangles->size();
+    report.vertices = mesh.positions.size();
+    report.triangles = mesh.triangles.size();
     report.degenerate_triangles = degenerate;
-    require_finite_floats(w);
-    measure_float_storage(w, report);
+    require_finite_floats(mesh);
+    measure_float_storage(mesh, report);
 
     // What the format can carry, and what the mesh has.
     WrittenAttributes written;
@@ -815,8 +758,8 @@ MeshWriteReport write_view(const WeldedView& w, std::size_t emitted, std::size_t
     written.patch_ids = format == MeshFormat::ply && !mesh.patch_ids.empty();
     written.tess_coords = format == MeshFormat::ply && !mesh.tess_coords.empty();
 
-    if (format == MeshFormat::ply && !openmesh_ply_writer) write_ply(w, written, options, out, progress);
-    else write_through_openmesh(w, written, options, out, progress);
+    if (format == MeshFormat::ply && !openmesh_ply_writer) write_ply(mesh, written, options, out, progress);
+    else write_through_openmesh(mesh, written, options, out, progress);
     if (!out) throw Error("cannot write the mesh: output stream failed");
     progress("writing", 1.0);
     return report;
@@ -828,20 +771,16 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out, const Mes
     const auto progress = [&options](std::string_view stage, double fraction) {
         if (options.progress) options.progress(stage, fraction);
     };
-    progress("welding", 0.0);
-    WeldIndex index;
-    WeldedView w{&mesh, nullptr, &mesh.triangles};
-    if (options.weld) {
-        index = weld_index(mesh);
-        w.source = &index.source;
-        w.triangles = &index.triangles;
-        // Only the writer reads the emitted vertex -> welded vertex map.
-        index.vertex_map = {};
-    } else {
+    if (!options.weld) {
         validate(mesh);
+        return write_view(mesh, mesh.positions.size(), 0, out, options,
+                          openmesh_ply_writer);
     }
+    progress("welding", 0.0);
+    const WeldedMesh welded = weld_bitwise(mesh);
     progress("welding", 1.0);
-    return write_view(w, mesh.positions.size(), index.degenerate_triangles, out, options, openmesh_ply_writer);
+    return write_view(welded.mesh, mesh.positions.size(),
+                      welded.degenerate_triangles, out, options, openmesh_ply_writer);
 }
 
 }  // namespace
@@ -854,8 +793,7 @@ MeshWriteReport write_mesh(const WeldedMesh& welded, std::ostream& out, const Me
     check_write_options(options);
     if (!options.weld) throw Error("a welded mesh cannot be written unwelded");
     validate(welded.mesh);
-    const WeldedView w{&welded.mesh, nullptr, &welded.mesh.triangles};
-    return write_view(w, welded.emitted_vertices, welded.degenerate_triangles, out, options, false);
+    return write_view(welded.mesh, welded.emitted_vertices, welded.degenerate_triangles, out, options, false);
 }
 
 MeshWriteReport mesh_detail::write_mesh_through_openmesh(const SurfaceMesh& mesh, std::ostream& out,
