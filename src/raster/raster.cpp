@@ -102,7 +102,7 @@ struct ClipBlock {
 }
 
 // Blocks of four from first to last (a multiple of four apart); window_position's unfused
-// path: (x * (1/w)) * scale + translate, two roundings.
+// path: (x * (1/w)) * scale + translate, two roundings, lane by lane.
 void prepare_blocks(const glm::vec4* positions, std::size_t first, std::size_t last, const Viewport& vp,
                     glm::vec4* win, FixedXY* fixed, BoxBounds* bounds) {
     const __m128 sx = _mm_set1_ps(vp.scale[0]), sy = _mm_set1_ps(vp.scale[1]), sz = _mm_set1_ps(vp.scale[2]);
@@ -117,25 +117,6 @@ void prepare_blocks(const glm::vec4* positions, std::size_t first, std::size_t l
     }
 }
 
-#if defined(__x86_64__) || defined(__i386__)
-#define TESSREF_RASTER_FMA_BLOCKS 1
-// The fused path: fma(x * (1/w), scale, translate), one rounding, as std::fma. Only called
-// where the host has FMA.
-__attribute__((target("fma"))) void prepare_blocks_fused(const glm::vec4* positions, std::size_t first,
-                                                          std::size_t last, const Viewport& vp, glm::vec4* win,
-                                                          FixedXY* fixed, BoxBounds* bounds) {
-    const __m128 sx = _mm_set1_ps(vp.scale[0]), sy = _mm_set1_ps(vp.scale[1]), sz = _mm_set1_ps(vp.scale[2]);
-    const __m128 tx = _mm_set1_ps(vp.translate[0]), ty = _mm_set1_ps(vp.translate[1]), tz = _mm_set1_ps(vp.translate[2]);
-    for (std::size_t i = first; i < last; i += 4) {
-        const ClipBlock c = load_block(positions + i);
-        const __m128 oow = _mm_div_ps(_mm_set1_ps(1.0f), c.w);
-        const __m128 wx = _mm_fmadd_ps(_mm_mul_ps(c.x, oow), sx, tx);
-        const __m128 wy = _mm_fmadd_ps(_mm_mul_ps(c.y, oow), sy, ty);
-        const __m128 wz = _mm_fmadd_ps(_mm_mul_ps(c.z, oow), sz, tz);
-        finish_block(c, wx, wy, wz, oow, vp, win + i, fixed + i, bounds + i);
-    }
-}
-#endif
 
 }  // namespace
 #endif
@@ -145,17 +126,10 @@ void prepare_vertices(const glm::vec4* positions, std::size_t first, std::size_t
     static_assert(sizeof(glm::vec4) == 16 && sizeof(FixedXY) == 8 && sizeof(BoxBounds) == 8);
     std::size_t i = first;
 #if defined(__SSE2__)
-    const std::size_t blocks_end = first + (last - first) / 4 * 4;
-#if defined(TESSREF_RASTER_FMA_BLOCKS)
-    static const bool host_fma = __builtin_cpu_supports("fma");
-    if (fused && host_fma) {
-        prepare_blocks_fused(positions, first, blocks_end, vp, win, fixed, bounds);
-        i = blocks_end;
-    }
-#endif
+    // The fused path (llvmpipe's vertex shader on an FMA host) vertex by vertex: std::fma.
     if (!fused) {
-        prepare_blocks(positions, first, blocks_end, vp, win, fixed, bounds);
-        i = blocks_end;
+        i = first + (last - first) / 4 * 4;
+        prepare_blocks(positions, first, i, vp, win, fixed, bounds);
     }
 #endif
     for (; i < last; ++i) prepare_vertex(positions[i], vp, fused, win[i], fixed[i], bounds[i]);

@@ -175,18 +175,17 @@ inline bool clamp_bbox(Primitive& prim, const Viewport& vp) {
 // the bottom-left fill convention that Mesa selects for a window-system framebuffer
 // (bottom_edge_rule = 1: in raster coordinates, y down, bottom edges are included; in GL
 // window coordinates, y up, that is the bottom-left rule).
+// The fill-rule bias of an edge: 1 for left edges (both fill conventions) and, by the
+// bottom-left convention, for horizontal edges with dcdy < 0.
+inline int edge_bias(std::int64_t dcdx, std::int64_t dcdy) { return (dcdx < 0) | ((dcdx == 0) & (dcdy < 0)); }
 inline void make_planes(const std::int32_t* x, const std::int32_t* y, int count, Primitive& prim) {
     prim.plane_count = count;
     for (int i = 0; i < count; ++i) {
         const int j = (i + 1) % count;
         const std::int32_t dcdy = x[i] - x[j];
         const std::int32_t dcdx = y[i] - y[j];
-        std::int64_t c = static_cast<std::int64_t>(dcdx) * x[i] - static_cast<std::int64_t>(dcdy) * y[i];
-        if (dcdx < 0) {
-            ++c;  // left edges: both fill conventions
-        } else if (dcdx == 0 && dcdy < 0) {
-            ++c;  // bottom-left convention for horizontal edges
-        }
+        const std::int64_t c = static_cast<std::int64_t>(dcdx) * x[i] - static_cast<std::int64_t>(dcdy) * y[i] +
+                               edge_bias(dcdx, dcdy);
         prim.c[i] = c;
         prim.dcdx[i] = static_cast<std::int64_t>(dcdx) * kFixedOne;
         prim.dcdy[i] = static_cast<std::int64_t>(dcdy) * kFixedOne;
@@ -328,9 +327,9 @@ inline bool one_pixel_box(const BoxBounds& box) {
     const bool inside = finite4(clip) && compute_clipmask(clip) == 0 && finite4(win);
     bounds = inside ? box_bounds(fixed.x, fixed.y, vp) : kAnywhereBox;
 }
-// prepare_vertex of positions[first, last) into win[], fixed[] and bounds[] (same indices),
-// four at a time with SSE2 where there is SSE2: the same bits as prepare_vertex (the same IEEE
-// operations lane by lane; the fused path with FMA instructions, which `fused` implies).
+// prepare_vertex of positions[first, last) into win[], fixed[] and bounds[] (same indices):
+// the unfused window transform four vertices at a time with SSE2 where there is SSE2, the
+// same bits as prepare_vertex (the same IEEE operations lane by lane).
 void prepare_vertices(const glm::vec4* positions, std::size_t first, std::size_t last, const Viewport& vp,
                       bool fused, glm::vec4* win, FixedXY* fixed, BoxBounds* bounds);
 
@@ -387,9 +386,7 @@ struct OnePixelFragment {
     const std::int64_t bx = b.x - ox, by = b.y - oy;
     const std::int64_t cx = v2.x - ox, cy = v2.y - oy;
     auto edge = [](std::int64_t xi, std::int64_t yi, std::int64_t xj, std::int64_t yj) {
-        const std::int64_t dcdx = yi - yj, dcdy = xi - xj;
-        const std::int64_t bias = (dcdx < 0) | ((dcdx == 0) & (dcdy < 0));
-        return xj * yi - xi * yj + bias > 0;
+        return xj * yi - xi * yj + edge_bias(yi - yj, xi - xj) > 0;
     };
     return edge(ax, ay, bx, by) & edge(bx, by, cx, cy) & edge(cx, cy, ax, ay);
 }
