@@ -14,7 +14,10 @@
 //  * depth LESS / LEQUAL order semantics; provenance (ids, patch, tess coord) resolve;
 //  * byte-identical buffers for 1, 2 and 4 threads;
 //  * one-pixel lines of glPolygonMode(GL_LINE) on axis-aligned and diagonal edges through
-//    pixel centres, derived from GL's diamond-exit rule.
+//    pixel centres, derived from GL's diamond-exit rule;
+//  * the fast paths against their references, bit for bit: vertices prepared four at a time
+//    (SSE2) against prepare_vertex, the box test on per-vertex bounds against setup's box, and
+//    the setup of a one-pixel box against setup_triangle and its planes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -28,6 +31,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <tbb/global_control.h>
 
+#include "raster/raster_internal.h"
 #include "tessref/error.h"
 #include "tessref/raster.h"
 
@@ -414,6 +418,176 @@ TEST(RasterSubPixel, SmallBoxFragmentsMatchTheTilesRasterizationOfTheirPlanes) {
     EXPECT_TRUE(same(fast.fragment_count, tiles.fragment_count));
     EXPECT_TRUE(same(fast.front_facing, tiles.front_facing));
     EXPECT_TRUE(same(fast.color, tiles.color));
+}
+
+// Clip positions that exercise the vertex preparation: inside and outside the view volume, on
+// its planes, behind the eye, and non-finite, zero, tiny and huge components.
+std::vector<glm::vec4> awkward_clip_positions(std::mt19937& rng, std::size_t count) {
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const float specials[] = {0.0f, -0.0f, 1.0f, -1.0f, 1e-40f, -1e-40f, 1e-30f, 1e30f, -1e30f, 3e38f,
+                              -3e38f, INFINITY, -INFINITY, NAN, 0.5f, 2.0f};
+    std::vector<glm::vec4> out;
+    for (std::size_t i = 0; i < count; ++i) {
+        const float w = 0.25f + 2.0f * unit(rng);
+        glm::vec4 p(w * (unit(rng) * 2.4f - 1.2f), w * (unit(rng) * 2.4f - 1.2f), w * (unit(rng) * 2.4f - 1.2f), w);
+        const float r = unit(rng);
+        if (r < 0.1f) {  // on a clip plane
+            p[static_cast<int>(unit(rng) * 2.99f)] = unit(rng) < 0.5f ? p.w : -p.w;
+        } else if (r < 0.3f) {  // one special component
+            p[static_cast<int>(unit(rng) * 3.99f)] = specials[static_cast<int>(unit(rng) * 15.99f)];
+        } else if (r < 0.35f) {  // behind the eye
+            p.w = -p.w;
+        }
+        out.push_back(p);
+    }
+    return out;
+}
+
+// Equal bits, or both NaN: a NaN window position belongs to a vertex that is not inside, which
+// setup never reads, and which NaN an operation propagates is the compiler's operand order.
+bool same_float(float a, float b) {
+    return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+TEST(RasterFastPaths, VerticesPreparedFourAtATimeMatchPrepareVertexBitForBit) {
+    std::mt19937 rng(20261127);
+    const std::vector<glm::vec4> clip = awkward_clip_positions(rng, 40003);
+    namespace r = tessref::raster;
+    std::size_t inside = 0, outside = 0;
+    for (const auto& [width, height] : {std::pair{1280, 800}, std::pair{1, 1}, std::pair{7, 13}, std::pair{16384, 16384}}) {
+        const r::Viewport vp = r::make_viewport(width, height);
+        for (const bool fused : {false, true}) {
+            // From vertex 1: blocks of four that start off the arrays' alignment, and a tail.
+            std::vector<glm::vec4> win(clip.size());
+            std::vector<r::FixedXY> fixed(clip.size());
+            std::vector<r::BoxBounds> bounds(clip.size());
+            r::prepare_vertices(clip.data(), 1, clip.size(), vp, fused, win.data(), fixed.data(), bounds.data());
+            for (std::size_t i = 1; i < clip.size(); ++i) {
+                glm::vec4 w;
+                r::FixedXY f;
+                r::BoxBounds b;
+                r::prepare_vertex(clip[i], vp, fused, w, f, b);
+                const bool same = same_float(win[i].x, w.x) && same_float(win[i].y, w.y) && same_float(win[i].z, w.z) &&
+                                  same_float(win[i].w, w.w) && fixed[i].x == f.x && fixed[i].y == f.y &&
+                                  std::memcmp(&bounds[i], &b, sizeof b) == 0;
+                ASSERT_TRUE(same) << "vertex " << i << " (" << clip[i].x << ", " << clip[i].y << ", " << clip[i].z
+                                  << ", " << clip[i].w << ") in " << width << "x" << height << (fused ? " fused" : "");
+                ++(b.x0 >= 0 ? inside : outside);
+            }
+        }
+    }
+    EXPECT_GT(inside, 50000u);
+    EXPECT_GT(outside, 50000u);
+}
+
+TEST(RasterFastPaths, BoxTestOnVertexBoundsMatchesSetupsBox) {
+    // A triangle passes the box test iff a vertex is not inside (the clipper decides) or setup's
+    // clamped box (triangle_bbox, clamp_bbox) holds a pixel, and then the box is setup's box.
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> pick(0, 5999);
+    namespace r = tessref::raster;
+    const std::vector<glm::vec4> clip = awkward_clip_positions(rng, 6000);
+    std::size_t passed = 0, rejected = 0;
+    for (const auto& [width, height] : {std::pair{40, 24}, std::pair{3, 2}}) {
+        const r::Viewport vp = r::make_viewport(width, height);
+        std::vector<glm::vec4> win(clip.size());
+        std::vector<r::FixedXY> fixed(clip.size());
+        std::vector<r::BoxBounds> bounds(clip.size());
+        r::prepare_vertices(clip.data(), 0, clip.size(), vp, false, win.data(), fixed.data(), bounds.data());
+        for (int t = 0; t < 200000; ++t) {
+            const int v[3] = {pick(rng), pick(rng), pick(rng)};
+            const r::BoxBounds box = r::triangle_box(bounds[v[0]], bounds[v[1]], bounds[v[2]]);
+            const bool all_inside = bounds[v[0]].x0 >= 0 && bounds[v[1]].x0 >= 0 && bounds[v[2]].x0 >= 0;
+            ASSERT_EQ(box.x0 >= 0, all_inside);
+            if (!all_inside) {
+                ASSERT_TRUE(r::box_has_pixels(box));
+                continue;
+            }
+            const std::int32_t x[3] = {fixed[v[0]].x, fixed[v[1]].x, fixed[v[2]].x};
+            const std::int32_t y[3] = {fixed[v[0]].y, fixed[v[1]].y, fixed[v[2]].y};
+            r::Primitive prim;
+            r::triangle_bbox(x, y, prim);
+            const bool pixels = r::clamp_bbox(prim, vp);
+            ASSERT_EQ(r::box_has_pixels(box), pixels);
+            ++(pixels ? passed : rejected);
+            if (pixels) {
+                ASSERT_EQ(box.x0, prim.x0);
+                ASSERT_EQ(box.y0, prim.y0);
+                ASSERT_EQ(-box.neg_x1, prim.x1);
+                ASSERT_EQ(-box.neg_y1, prim.y1);
+            }
+        }
+    }
+    EXPECT_GT(passed, 1000u);
+    EXPECT_GT(rejected, 1000u);
+}
+
+TEST(RasterFastPaths, OnePixelSetupMatchesSetupTriangleAndItsPlanes) {
+    // Triangles of inside vertices around pixel (5, 3), often on pixel centres, half-way points
+    // or each other (centres on edges, where the fill rule decides; zero area), with
+    // perspective w, in every face mode: setup_one_pixel's outcome, depth, weights and facing
+    // are setup_triangle's and those its planes give at the pixel (fragment_depth,
+    // fragment_weights), bit for bit.
+    constexpr int W = 12, H = 8;
+    namespace r = tessref::raster;
+    const r::Viewport vp = r::make_viewport(W, H);
+    std::mt19937 rng(20261128);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    auto coordinate = [&](float centre) {
+        const float u = unit(rng);
+        if (u < 0.2f) return std::floor(centre) + 0.5f;  // a pixel centre
+        if (u < 0.3f) return std::floor(centre);         // half-way between two
+        return std::round((centre + (unit(rng) * 2.0f - 1.0f)) * 256.0f) / 256.0f;
+    };
+    const glm::vec3 unit_weights[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    std::size_t outcomes[3] = {}, on_edge = 0;
+    for (int t = 0; t < 300000; ++t) {
+        glm::vec4 win[3];
+        r::FixedXY fixed[3];
+        r::BoxBounds bounds[3];
+        for (int k = 0; k < 3; ++k) {
+            const float w = 0.5f + 1.5f * unit(rng);
+            // at_window's GL coordinates: raster row 3 is GL y = H - 3 - 0.5.
+            const glm::vec4 p = at_window(coordinate(5.5f), coordinate(H - 3.5f), W, H, unit(rng) * 2.0f - 1.0f);
+            r::prepare_vertex(p * w, vp, false, win[k], fixed[k], bounds[k]);
+        }
+        const r::BoxBounds box = r::triangle_box(bounds[0], bounds[1], bounds[2]);
+        if (!r::one_pixel_box(box)) continue;
+        for (const r::Face face : {r::Face::both, r::Face::front_only, r::Face::back_only}) {
+            r::OnePixelFragment f;
+            const r::Setup fast = r::setup_one_pixel(fixed[0], fixed[1], fixed[2], win[0], win[1], win[2], box.x0,
+                                                     box.y0, face, f);
+            r::Primitive prim;
+            const r::Setup reference =
+                r::setup_triangle({&win[0], &unit_weights[0], fixed[0].x, fixed[0].y},
+                                  {&win[1], &unit_weights[1], fixed[1].x, fixed[1].y},
+                                  {&win[2], &unit_weights[2], fixed[2].x, fixed[2].y}, face, vp, prim);
+            ASSERT_EQ(static_cast<int>(fast), static_cast<int>(reference)) << "triangle " << t;
+            ++outcomes[static_cast<int>(fast)];
+            if (reference == r::Setup::culled) continue;
+            ASSERT_EQ(prim.x0, box.x0);
+            ASSERT_EQ(prim.y0, box.y0);
+            ASSERT_EQ(prim.x1, box.x0);
+            ASSERT_EQ(prim.y1, box.y0);
+            if (face == r::Face::both) {
+                for (int k = 0; k < 3; ++k) on_edge += prim.c[k] + prim.dcdy[k] * box.y0 - prim.dcdx[k] * box.x0 == 1;
+            }
+            if (reference == r::Setup::empty) continue;
+            const float fx = static_cast<float>(box.x0) - prim.ox, fy = static_cast<float>(box.y0) - prim.oy;
+            const float z = r::depth_value(r::eval_plane(prim.z, fx, fy));
+            const float oow = r::eval_plane(prim.oow, fx, fy);
+            ASSERT_EQ(f.front, prim.front);
+            ASSERT_TRUE(std::memcmp(&f.z, &z, sizeof z) == 0) << "triangle " << t;
+            for (int k = 0; k < 3; ++k) {
+                const float weight = r::eval_plane(prim.bw[k], fx, fy) / oow;
+                ASSERT_TRUE(std::memcmp(&f.weights[k], &weight, sizeof weight) == 0) << "triangle " << t << " weight " << k;
+            }
+        }
+    }
+    EXPECT_GT(outcomes[static_cast<int>(r::Setup::culled)], 1000u);
+    EXPECT_GT(outcomes[static_cast<int>(r::Setup::empty)], 1000u);
+    EXPECT_GT(outcomes[static_cast<int>(r::Setup::drawn)], 1000u);
+    EXPECT_GT(on_edge, 1000u);  // the edge function 1: a biased centre on an edge line
 }
 
 TEST(RasterCulling, ZeroAreaTrianglesAreCulled) {

@@ -8,8 +8,10 @@
 #include "tessref/raster.h"
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
+#include <cstddef>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -24,7 +26,119 @@
 
 namespace tessref {
 
+namespace raster {
+
+#if defined(__SSE2__)
+namespace {
+
+// Four clip positions, transposed: x, y, z and w of each.
+struct ClipBlock {
+    __m128 x, y, z, w;
+};
+[[gnu::always_inline]] inline ClipBlock load_block(const glm::vec4* p) {
+    __m128 r0 = _mm_loadu_ps(reinterpret_cast<const float*>(p + 0));
+    __m128 r1 = _mm_loadu_ps(reinterpret_cast<const float*>(p + 1));
+    __m128 r2 = _mm_loadu_ps(reinterpret_cast<const float*>(p + 2));
+    __m128 r3 = _mm_loadu_ps(reinterpret_cast<const float*>(p + 3));
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+    return {r0, r1, r2, r3};
+}
+
+// prepare_vertex of four vertices from their window positions (wx, wy, wz, 1/w).
+//
+// `inside` without the clip mask itself: the six sums of draw's cliptest (-x + w is w - x,
+// the same IEEE sum) compared >= 0 in the ordered sense (false for NaN), w < infinity and
+// |1/w| < infinity. That is finite4(clip) && clipmask == 0 && finite4(win): a NaN anywhere
+// in the clip position makes a sum NaN; w >= |x|, |y|, |z| with w finite makes them finite;
+// 1/w finite (w not 0, not too small) makes x * (1/w) at most about 1 in magnitude and the
+// window position finite; conversely finite positions give sums that are not NaN.
+[[gnu::always_inline]] inline void finish_block(const ClipBlock& c, __m128 wx, __m128 wy, __m128 wz, __m128 oow,
+                                                const Viewport& vp, glm::vec4* win, FixedXY* fixed,
+                                                BoxBounds* bounds) {
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 infinity = _mm_set1_ps(INFINITY);
+    __m128 inside = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(_mm_sub_ps(c.w, c.x), zero), _mm_cmpge_ps(_mm_add_ps(c.x, c.w), zero)),
+                               _mm_and_ps(_mm_cmpge_ps(_mm_sub_ps(c.w, c.y), zero), _mm_cmpge_ps(_mm_add_ps(c.y, c.w), zero)));
+    inside = _mm_and_ps(inside, _mm_and_ps(_mm_cmpge_ps(_mm_add_ps(c.z, c.w), zero), _mm_cmpge_ps(_mm_sub_ps(c.w, c.z), zero)));
+    inside = _mm_and_ps(inside, _mm_and_ps(_mm_cmplt_ps(c.w, infinity), _mm_cmplt_ps(_mm_and_ps(oow, magnitude), infinity)));
+
+    // snap_fixed: cvtps2dq itself.
+    const __m128 half = _mm_set1_ps(0.5f), one = _mm_set1_ps(static_cast<float>(kFixedOne));
+    const __m128i fixed_x = _mm_cvtps_epi32(_mm_mul_ps(_mm_sub_ps(wx, half), one));
+    const __m128i fixed_y = _mm_cvtps_epi32(_mm_mul_ps(_mm_sub_ps(wy, half), one));
+
+    // The window positions, transposed back, and the snapped ones.
+    __m128 w0 = wx, w1 = wy, w2 = wz, w3 = oow;
+    _MM_TRANSPOSE4_PS(w0, w1, w2, w3);
+    _mm_storeu_ps(reinterpret_cast<float*>(win + 0), w0);
+    _mm_storeu_ps(reinterpret_cast<float*>(win + 1), w1);
+    _mm_storeu_ps(reinterpret_cast<float*>(win + 2), w2);
+    _mm_storeu_ps(reinterpret_cast<float*>(win + 3), w3);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(fixed + 0), _mm_unpacklo_epi32(fixed_x, fixed_y));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(fixed + 2), _mm_unpackhi_epi32(fixed_x, fixed_y));
+
+    // box_bounds, in 32 bits, then saturated to 16 (an inside vertex's are small), then -1 in
+    // every lane of a vertex that is not inside (kAnywhereBox).
+    const __m128i x0 = _mm_srai_epi32(_mm_add_epi32(fixed_x, _mm_set1_epi32(kFixedOne - 1)), kFixedOrder);
+    const __m128i y0 = _mm_srai_epi32(_mm_add_epi32(fixed_y, _mm_set1_epi32(kFixedOne)), kFixedOrder);
+    const __m128i neg_x1 = _mm_srai_epi32(_mm_sub_epi32(_mm_set1_epi32(kFixedOne), fixed_x), kFixedOrder);
+    const __m128i neg_y1 = _mm_srai_epi32(_mm_sub_epi32(_mm_set1_epi32(kFixedOne - 1), fixed_y), kFixedOrder);
+    const auto w = static_cast<short>(vp.width), h = static_cast<short>(vp.height);
+    const __m128i not_inside = _mm_xor_si128(_mm_castps_si128(inside), _mm_set1_epi32(-1));
+    const __m128i not_inside16 = _mm_packs_epi32(not_inside, not_inside);
+    __m128i lower = _mm_max_epi16(_mm_packs_epi32(x0, y0), _mm_setzero_si128());
+    __m128i upper = _mm_max_epi16(_mm_packs_epi32(neg_x1, neg_y1),
+                                  _mm_set_epi16(static_cast<short>(1 - h), static_cast<short>(1 - h),
+                                                static_cast<short>(1 - h), static_cast<short>(1 - h),
+                                                static_cast<short>(1 - w), static_cast<short>(1 - w),
+                                                static_cast<short>(1 - w), static_cast<short>(1 - w)));
+    lower = _mm_or_si128(lower, not_inside16);
+    upper = _mm_or_si128(upper, not_inside16);
+    lower = _mm_unpacklo_epi16(lower, _mm_srli_si128(lower, 8));  // x0, y0 of vertex 0, 1, 2, 3
+    upper = _mm_unpacklo_epi16(upper, _mm_srli_si128(upper, 8));  // -x1, -y1 of each
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(bounds + 0), _mm_unpacklo_epi32(lower, upper));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(bounds + 2), _mm_unpackhi_epi32(lower, upper));
+}
+
+// Blocks of four from first to last (a multiple of four apart); window_position's unfused
+// path: (x * (1/w)) * scale + translate, two roundings, lane by lane.
+void prepare_blocks(const glm::vec4* positions, std::size_t first, std::size_t last, const Viewport& vp,
+                    glm::vec4* win, FixedXY* fixed, BoxBounds* bounds) {
+    const __m128 sx = _mm_set1_ps(vp.scale[0]), sy = _mm_set1_ps(vp.scale[1]), sz = _mm_set1_ps(vp.scale[2]);
+    const __m128 tx = _mm_set1_ps(vp.translate[0]), ty = _mm_set1_ps(vp.translate[1]), tz = _mm_set1_ps(vp.translate[2]);
+    for (std::size_t i = first; i < last; i += 4) {
+        const ClipBlock c = load_block(positions + i);
+        const __m128 oow = _mm_div_ps(_mm_set1_ps(1.0f), c.w);
+        const __m128 wx = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(c.x, oow), sx), tx);
+        const __m128 wy = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(c.y, oow), sy), ty);
+        const __m128 wz = _mm_add_ps(_mm_mul_ps(_mm_mul_ps(c.z, oow), sz), tz);
+        finish_block(c, wx, wy, wz, oow, vp, win + i, fixed + i, bounds + i);
+    }
+}
+
+
+}  // namespace
+#endif
+
+void prepare_vertices(const glm::vec4* positions, std::size_t first, std::size_t last, const Viewport& vp,
+                      bool fused, glm::vec4* win, FixedXY* fixed, BoxBounds* bounds) {
+    static_assert(sizeof(glm::vec4) == 16 && sizeof(FixedXY) == 8 && sizeof(BoxBounds) == 8);
+    std::size_t i = first;
+#if defined(__SSE2__)
+    // The fused path (llvmpipe's vertex shader on an FMA host) vertex by vertex: std::fma.
+    if (!fused) {
+        i = first + (last - first) / 4 * 4;
+        prepare_blocks(positions, first, i, vp, win, fixed, bounds);
+    }
+#endif
+    for (; i < last; ++i) prepare_vertex(positions[i], vp, fused, win[i], fixed[i], bounds[i]);
+}
+
+}  // namespace raster
+
 using raster::ClipVertex;
+using raster::finite4;
 using raster::Primitive;
 using raster::Viewport;
 
@@ -109,31 +223,26 @@ constexpr std::size_t kChunksPerWave = 32;          // chunks set up in parallel
 constexpr std::size_t kBatchPrimitives = 1u << 18;  // primitives kept before rasterizing (~50 MB)
 constexpr std::size_t kMaxChunksPerBatch = 1024;
 
-// What setup reads of a vertex: half a cache line (the clipper's path reads the clip
-// position from the draw's own array).
-struct alignas(32) PreparedVertex {
-    glm::vec4 win;
-    std::int32_t fixed_x, fixed_y;  // the window position snapped as setup snaps it
-    unsigned clipmask;
-    bool inside;  // finite clip and window positions, inside every clip plane
-};
-constexpr raster::VertexPixelBounds kAnywhere = {INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX};
-
-// The prepared vertices of a draw in two arrays: the box test, which every triangle takes,
-// reads only the pixel bounds (16 bytes a vertex: a quarter of the cache lines), and setup,
-// which a triangle in two reaches, the rest.
+// The prepared vertices of a draw in three arrays: the box test, which every triangle takes,
+// reads only the bounds (8 bytes a vertex), setup, which a triangle in two reaches, the
+// snapped positions (8 bytes), and the attribute planes of a triangle that covers a pixel the
+// window positions.
 struct PreparedVertices {
-    std::vector<PreparedVertex> vertices;
-    // Of (fixed_x, fixed_y); unbounded (kAnywhere) unless the vertex is `inside`: the
-    // triangles of a vertex that needs the clipper (or has no finite window position)
-    // always pass the box test.
-    std::vector<raster::VertexPixelBounds> bounds;
+    std::vector<glm::vec4> win;
+    std::vector<raster::FixedXY> fixed;
+    std::vector<raster::BoxBounds> bounds;  // kAnywhereBox where not inside
 
     void resize(std::size_t n) {
-        vertices.resize(n);
+        win.resize(n);
+        fixed.resize(n);
         bounds.resize(n);
     }
-    void prepare(std::size_t i, const glm::vec4& clip, const Viewport& viewport, bool fused);
+    // Vertices [first, last) of positions.
+    void prepare(std::span<const glm::vec4> positions, std::size_t first, std::size_t last, const Viewport& viewport,
+                 bool fused) {
+        raster::prepare_vertices(positions.data(), first, last, viewport, fused, win.data(), fixed.data(),
+                                 bounds.data());
+    }
 };
 
 // A covered pixel of a primitive whose box holds at most four pixels, with its depth and
@@ -148,17 +257,52 @@ struct Fragment {
     bool front;
 };
 
+// A growable array of trivially copyable values whose push_back stays inline (std::vector's,
+// called out of line from setup's large loop, cost a call per fragment) and whose growth
+// leaves the new elements uninitialized.
+template <class T>
+class Buffer {
+public:
+    std::size_t size() const { return size_; }
+    T* data() { return data_.get(); }
+    const T* data() const { return data_.get(); }
+    T& operator[](std::size_t i) { return data_[i]; }
+    const T& operator[](std::size_t i) const { return data_[i]; }
+    void clear() { size_ = 0; }
+    void reserve(std::size_t n) {
+        if (n > capacity_) reallocate(n);
+    }
+    [[gnu::always_inline]] void push_back(const T& value) {
+        if (size_ == capacity_) [[unlikely]]
+            reallocate(std::max<std::size_t>(64, 2 * capacity_));
+        data_[size_++] = value;
+    }
+
+private:
+    [[gnu::noinline]] void reallocate(std::size_t n) {
+        std::unique_ptr<T[]> fresh = std::make_unique_for_overwrite<T[]>(n);
+        std::copy_n(data_.get(), size_, fresh.get());
+        data_ = std::move(fresh);
+        capacity_ = n;
+    }
+    std::unique_ptr<T[]> data_;
+    std::size_t size_ = 0, capacity_ = 0;
+};
+
 // The chunk's primitives and fragments in submission order (items), each item an index into
 // prims, or into frags with kFragmentItem set.
 constexpr std::uint32_t kFragmentItem = 1u << 31;
+constexpr std::uint32_t kBoxTiles = UINT32_MAX;
 
 struct Chunk {
     std::vector<Primitive> prims;
-    std::vector<Fragment> frags;
-    std::vector<std::uint32_t> items;
+    Buffer<Fragment> frags;
+    Buffer<std::uint32_t> items;
+    Buffer<std::uint32_t> item_tiles;  // per item: its tile, or kBoxTiles (every tile its box overlaps)
     std::vector<std::uint32_t> tile_start;  // tile t's items: tile_items[start[t]..start[t+1])
     std::vector<std::uint32_t> tile_items;
     std::vector<std::uint32_t> candidates, fill;  // setup's working memory
+    std::vector<raster::BoxBounds> boxes;         // of the candidates
     RasterStats stats;
 };
 
@@ -214,35 +358,39 @@ bool host_has_fma() {
 #endif
 }
 
-bool finite4(const glm::vec4& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+// Whether a triangle names a vertex at or past n, without an exit per index (SSE2: unsigned
+// compares as signed ones with the top bit flipped).
+bool any_index_at_least(std::span<const std::array<std::uint32_t, 3>> triangles, std::size_t n) {
+    static_assert(sizeof(std::array<std::uint32_t, 3>) == 3 * sizeof(std::uint32_t));
+    if (triangles.empty()) return false;
+    if (n == 0 || n > UINT32_MAX) return n == 0;
+    const std::uint32_t* index = triangles.data()->data();
+    const std::size_t count = triangles.size() * 3;
+    const auto limit = static_cast<std::uint32_t>(n - 1);  // the largest index in range
+    std::size_t i = 0;
+    bool beyond = false;
+#if defined(__SSE2__)
+    const __m128i flip = _mm_set1_epi32(INT32_MIN);
+    const __m128i largest = _mm_xor_si128(_mm_set1_epi32(static_cast<int>(limit)), flip);
+    __m128i any = _mm_setzero_si128();
+    for (; i + 4 <= count; i += 4) {
+        const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(index + i));
+        any = _mm_or_si128(any, _mm_cmpgt_epi32(_mm_xor_si128(v, flip), largest));
+    }
+    beyond = _mm_movemask_epi8(any) != 0;
+#endif
+    for (; i < count; ++i) beyond |= index[i] > limit;
+    return beyond;
 }
 
-// Inline: the loops over a chunk's vertices run it on every vertex.
-[[gnu::always_inline]] inline void PreparedVertices::prepare(std::size_t i, const glm::vec4& clip,
-                                                             const Viewport& viewport, bool fused) {
-    PreparedVertex& v = vertices[i];
-    v.clipmask = raster::compute_clipmask(clip);
-    v.win = raster::window_position(clip, viewport, fused);
-    v.fixed_x = raster::snap_fixed(v.win.x);
-    v.fixed_y = raster::snap_fixed(v.win.y);
-    v.inside = finite4(clip) && v.clipmask == 0 && finite4(v.win);
-    bounds[i] = v.inside ? raster::vertex_pixel_bounds(v.fixed_x, v.fixed_y) : kAnywhere;
-}
-
-inline float eval(const float plane[3], float fx, float fy) {
-    return plane[0] + plane[1] * fx + plane[2] * fy;
-}
+inline float eval(const float plane[3], float fx, float fy) { return raster::eval_plane(plane, fx, fy); }
 
 // A fragment's position relative to the primitive's attribute origin.
 inline float offset_x(const Primitive& p, int px) { return static_cast<float>(px) - p.ox; }
 inline float offset_y(const Primitive& p, int py) { return static_cast<float>(py) - p.oy; }
 
 // Depth at a pixel centre, clamped to the depth range.
-inline float fragment_depth(const Primitive& p, float fx, float fy) {
-    const float z = eval(p.z, fx, fy);
-    return std::isnan(z) ? 1.0f : std::clamp(z, 0.0f, 1.0f);
-}
+inline float fragment_depth(const Primitive& p, float fx, float fy) { return raster::depth_value(eval(p.z, fx, fy)); }
 
 // The perspective-correct weights at (wx, wy) relative to the origin.
 inline glm::vec3 fragment_weights(const Primitive& p, float wx, float wy) {
@@ -254,16 +402,28 @@ inline glm::vec3 fragment_weights(const Primitive& p, float wx, float wy) {
 
 void push_primitive(const Primitive& prim, Chunk& chunk) {
     chunk.items.push_back(static_cast<std::uint32_t>(chunk.prims.size()));
+    chunk.item_tiles.push_back(kBoxTiles);
     chunk.prims.push_back(prim);
+}
+
+[[gnu::always_inline]] inline void push_fragment(const Context& ctx, const Fragment& fragment, Chunk& chunk) {
+    chunk.items.push_back(static_cast<std::uint32_t>(chunk.frags.size()) | kFragmentItem);
+    chunk.item_tiles.push_back(static_cast<std::uint32_t>((fragment.y / kTileSize) * ctx.tiles_x + fragment.x / kTileSize));
+    chunk.frags.push_back(fragment);
+}
+
+raster::Face face_of(const RasterSettings& s) {
+    if (s.cull == CullMode::back) return raster::Face::front_only;
+    if (s.cull == CullMode::front) return raster::Face::back_only;
+    return raster::Face::both;
 }
 
 // A filled triangle into a primitive, or the fragments of its box of at most four pixels
 // (without quad derivatives, which need the planes at the tiles), or nothing.
+
 void emit_filled(const Context& ctx, const raster::SetupCorner& a, const raster::SetupCorner& b,
                  const raster::SetupCorner& c, std::uint32_t source, Chunk& chunk) {
-    raster::Face face = raster::Face::both;
-    if (ctx.settings.cull == CullMode::back) face = raster::Face::front_only;
-    if (ctx.settings.cull == CullMode::front) face = raster::Face::back_only;
+    const raster::Face face = face_of(ctx.settings);
     Primitive prim;
     ++chunk.stats.primitives;
     switch (raster::setup_triangle(a, b, c, face, ctx.viewport, prim)) {
@@ -280,10 +440,10 @@ void emit_filled(const Context& ctx, const raster::SetupCorner& a, const raster:
                 for (int px = prim.x0; px <= prim.x1; ++px, ++bit) {
                     if (!(prim.small_coverage & (1 << bit))) continue;
                     const float fx = offset_x(prim, px), fy = offset_y(prim, py);
-                    chunk.items.push_back(static_cast<std::uint32_t>(chunk.frags.size()) | kFragmentItem);
-                    chunk.frags.push_back({static_cast<std::uint16_t>(px), static_cast<std::uint16_t>(py),
-                                           fragment_depth(prim, fx, fy), fragment_weights(prim, fx, fy), source,
-                                           prim.front});
+                    push_fragment(ctx,
+                                  {static_cast<std::uint16_t>(px), static_cast<std::uint16_t>(py),
+                                   fragment_depth(prim, fx, fy), fragment_weights(prim, fx, fy), source, prim.front},
+                                  chunk);
                 }
             break;
     }
@@ -339,6 +499,62 @@ void emit_triangle(const Context& ctx, const ClipVertex& a, const ClipVertex& b,
 // An unclipped triangle's corners weigh its own vertices.
 const glm::vec3 kUnitWeights[3] = {glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.0f, 0.0f, 1.0f)};
 
+// setup_chunk's path for a triangle other than an unclipped one whose box is one pixel: setup
+// of a larger box, the clipper, the lines of glPolygonMode(GL_LINE). Apart: the common path's
+// loop keeps its registers.
+[[gnu::noinline]] void setup_other(const Context& ctx, std::span<const glm::vec4> positions,
+                                   const PreparedVertices& prepared, const std::array<std::uint32_t, 3>& tri,
+                                   bool unclipped, std::uint32_t source, Chunk& chunk) {
+    const glm::vec4* const win = prepared.win.data();
+    const raster::FixedXY* const fixed = prepared.fixed.data();
+    if (unclipped) {
+        // Every vertex inside: emit_triangle's path with the vertices themselves as
+        // corners.
+        auto corner = [&](int k) -> raster::SetupCorner {
+            const std::uint32_t v = tri[static_cast<std::size_t>(k)];
+            return {&win[v], &kUnitWeights[k], fixed[v].x, fixed[v].y};
+        };
+        emit_filled(ctx, corner(0), corner(1), corner(2), source, chunk);
+        return;
+    }
+    ClipVertex cv[3];
+    bool finite = true;
+    for (int k = 0; k < 3; ++k) {
+        cv[k].clip = positions[tri[static_cast<std::size_t>(k)]];
+        cv[k].win = win[tri[static_cast<std::size_t>(k)]];
+        cv[k].clipmask = raster::compute_clipmask(cv[k].clip);
+        cv[k].bary = glm::vec3(0.0f);
+        cv[k].bary[k] = 1.0f;
+        cv[k].edgeflag = true;
+        finite = finite && finite4(cv[k].clip);
+    }
+    const unsigned mask_or = cv[0].clipmask | cv[1].clipmask | cv[2].clipmask;
+    const unsigned mask_and = cv[0].clipmask & cv[1].clipmask & cv[2].clipmask;
+    if (!finite || mask_and != 0) {
+        ++chunk.stats.triangles_rejected;
+        return;
+    }
+    if (mask_or == 0) {
+        emit_triangle(ctx, cv[0], cv[1], cv[2], 7u, source, chunk);
+        return;
+    }
+    ++chunk.stats.triangles_clipped;
+    ClipVertex poly[raster::kMaxClipVertices];
+    bool edges[raster::kMaxClipVertices];
+    const int n = raster::clip_polygon(cv, mask_or, ctx.viewport, poly, edges);
+    if (n < 3) return;
+    // draw_pipe_clip.c emit_poly() with the provoking vertex last: the fan
+    // (i-1, i, 0), edge flags FLAG_2 first, FLAG_0 middle, FLAG_1 last.
+    unsigned edge_first = edges[0] ? 4u : 0u;
+    const unsigned edge_middle = 1u, edge_last = 2u;
+    unsigned flags = edge_first | edge_middle;
+    for (int i = 2; i < n; ++i, flags = edge_middle) {
+        if (!edges[i - 1]) flags &= ~edge_middle;
+        if (i == n - 1 && edges[i]) flags |= edge_last;
+        emit_triangle(ctx, poly[i - 1], poly[i], poly[0], flags, source, chunk);
+    }
+}
+
 // Sets up triangles [first, last) of tris, whose ids start at first_id (the chunk's first
 // triangle is first_id + 0), with their vertices at `positions`, prepared in `prepared`.
 void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const PreparedVertices& prepared,
@@ -347,14 +563,16 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
     chunk.prims.clear();
     chunk.frags.clear();
     chunk.items.clear();
+    chunk.item_tiles.clear();
     // At most one primitive a triangle unless clipped: no reallocation (and copy into fresh
     // pages) as the chunk fills; pages are only touched as primitives are written.
     chunk.prims.reserve(last - first);
     chunk.stats = {};
     chunk.stats.triangles_in = last - first;
     const bool filled = ctx.settings.polygon_mode == PolygonMode::fill;
-    const std::span<const PreparedVertex> vertices = prepared.vertices;
-    const std::span<const raster::VertexPixelBounds> bounds = prepared.bounds;
+    const glm::vec4* const win = prepared.win.data();
+    const raster::FixedXY* const fixed = prepared.fixed.data();
+    const raster::BoxBounds* const bounds = prepared.bounds.data();
 
     // Most triangles of a finely tessellated surface hold no pixel centre: the snapped
     // bounding box (setup's own test, on positions snapped once per vertex) rejects them
@@ -362,14 +580,45 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
     // others' indices, in order, without a branch per triangle (about half of them pass,
     // at random: a branch would mispredict every other time). A triangle with a vertex
     // that is not inside (kAnywhere) always passes, to the clipper's path below.
-    std::vector<std::uint32_t>& candidates = chunk.candidates;
-    candidates.resize(last - first);
+    // The box of a candidate goes with it: the one-pixel boxes (half the triangles of a
+    // surface tessellated to about a triangle a pixel, all that survive at finer levels) are
+    // set up from it directly.
+    chunk.candidates.resize(last - first);
+    std::uint32_t* const candidates = chunk.candidates.data();
     std::size_t count = 0;
     if (filled) {
-        for (std::size_t t = first; t < last; ++t) {
-            const auto& tri = tris[t];
+        chunk.boxes.resize(last - first);
+        const raster::BoxBounds* b = bounds;
+        raster::BoxBounds* box_out = chunk.boxes.data();
+        std::size_t t = first;
+#if defined(__SSE2__)
+        // Two triangles a step, one in each half of the registers: the box is the lane-wise
+        // min of the vertices' bounds; lanes 0 and 1 of each half of box + (its halves'
+        // 32-bit pairs swapped) are x0 + (-x1) and y0 + (-y1).
+        for (; t + 2 <= last; t += 2) {
+            const auto& p = tris[t];
+            const auto& q = tris[t + 1];
+            auto load = [&](std::uint32_t u, std::uint32_t v) {
+                const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b + u)));
+                return _mm_castps_si128(_mm_loadh_pi(low, reinterpret_cast<const __m64*>(b + v)));
+            };
+            const __m128i box = _mm_min_epi16(_mm_min_epi16(load(p[0], q[0]), load(p[1], q[1])), load(p[2], q[2]));
+            const __m128i ends = _mm_add_epi16(box, _mm_shuffle_epi32(box, _MM_SHUFFLE(2, 3, 0, 1)));
+            const int empty = _mm_movemask_epi8(_mm_cmpgt_epi16(ends, _mm_setzero_si128()));
             candidates[count] = static_cast<std::uint32_t>(t);
-            count += raster::bounds_have_pixels(bounds[tri[0]], bounds[tri[1]], bounds[tri[2]], ctx.viewport);
+            _mm_storel_epi64(reinterpret_cast<__m128i*>(box_out + count), box);
+            count += (empty & 0xF) == 0;
+            candidates[count] = static_cast<std::uint32_t>(t + 1);
+            _mm_storeh_pi(reinterpret_cast<__m64*>(box_out + count), _mm_castsi128_ps(box));
+            count += (empty & 0xF00) == 0;
+        }
+#endif
+        for (; t < last; ++t) {
+            const auto& tri = tris[t];
+            const raster::BoxBounds box = raster::triangle_box(b[tri[0]], b[tri[1]], b[tri[2]]);
+            candidates[count] = static_cast<std::uint32_t>(t);
+            box_out[count] = box;
+            count += raster::box_has_pixels(box);
         }
         const std::size_t rejected = (last - first) - count;
         chunk.stats.primitives += rejected;
@@ -378,83 +627,68 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
         for (std::size_t t = first; t < last; ++t) candidates[count++] = static_cast<std::uint32_t>(t);
     }
 
+    // At most one fragment a candidate unless its box is larger or it is clipped.
+    chunk.frags.reserve(count);
+    chunk.items.reserve(count);
+    chunk.item_tiles.reserve(count);
+    const bool one_pixel_fragments = filled && !ctx.settings.quad_derivatives;
+    const raster::Face face = face_of(ctx.settings);
+    const raster::BoxBounds* const boxes = chunk.boxes.data();
+    std::uint64_t one_pixel = 0, one_pixel_culled = 0;
     for (std::size_t i = 0; i < count; ++i) {
         const std::size_t t = candidates[i];
         const auto& tri = tris[t];
-        const PreparedVertex& p0 = vertices[tri[0]];
-        const PreparedVertex& p1 = vertices[tri[1]];
-        const PreparedVertex& p2 = vertices[tri[2]];
-        if (filled && p0.inside && p1.inside && p2.inside) {
-            // Unclipped: emit_triangle's path with the vertices themselves as corners.
-            emit_filled(ctx, {&p0.win, &kUnitWeights[0], p0.fixed_x, p0.fixed_y},
-                        {&p1.win, &kUnitWeights[1], p1.fixed_x, p1.fixed_y},
-                        {&p2.win, &kUnitWeights[2], p2.fixed_x, p2.fixed_y},
-                        static_cast<std::uint32_t>(first_id + (t - first)), chunk);
+        if (one_pixel_fragments && raster::one_pixel_box(boxes[i])) {
+            // emit_filled's path for an unclipped triangle whose box is one pixel.
+            const raster::BoxBounds box = boxes[i];
+            raster::OnePixelFragment f;
+            ++one_pixel;
+            switch (raster::setup_one_pixel(fixed[tri[0]], fixed[tri[1]], fixed[tri[2]], win[tri[0]], win[tri[1]],
+                                            win[tri[2]], box.x0, box.y0, face, f)) {
+                case raster::Setup::culled: ++one_pixel_culled; break;
+                case raster::Setup::empty: break;
+                case raster::Setup::drawn:
+                    push_fragment(ctx,
+                                  {static_cast<std::uint16_t>(box.x0), static_cast<std::uint16_t>(box.y0), f.z,
+                                   glm::vec3(f.weights[0], f.weights[1], f.weights[2]),
+                                   static_cast<std::uint32_t>(first_id + (t - first)), f.front},
+                                  chunk);
+                    break;
+            }
             continue;
         }
-        ClipVertex cv[3];
-        bool finite = true;
-        for (int k = 0; k < 3; ++k) {
-            const PreparedVertex& pv = vertices[tri[static_cast<std::size_t>(k)]];
-            cv[k].clip = positions[tri[static_cast<std::size_t>(k)]];
-            cv[k].win = pv.win;
-            cv[k].clipmask = pv.clipmask;
-            cv[k].bary = glm::vec3(0.0f);
-            cv[k].bary[k] = 1.0f;
-            cv[k].edgeflag = true;
-            finite = finite && finite4(cv[k].clip);
-        }
-        const unsigned mask_or = cv[0].clipmask | cv[1].clipmask | cv[2].clipmask;
-        const unsigned mask_and = cv[0].clipmask & cv[1].clipmask & cv[2].clipmask;
-        if (!finite || mask_and != 0) {
-            ++chunk.stats.triangles_rejected;
-            continue;
-        }
-        const auto source = static_cast<std::uint32_t>(first_id + (t - first));
-        if (mask_or == 0) {
-            emit_triangle(ctx, cv[0], cv[1], cv[2], 7u, source, chunk);
-            continue;
-        }
-        ++chunk.stats.triangles_clipped;
-        ClipVertex poly[raster::kMaxClipVertices];
-        bool edges[raster::kMaxClipVertices];
-        const int n = raster::clip_polygon(cv, mask_or, ctx.viewport, poly, edges);
-        if (n < 3) continue;
-        // draw_pipe_clip.c emit_poly() with the provoking vertex last: the fan
-        // (i-1, i, 0), edge flags FLAG_2 first, FLAG_0 middle, FLAG_1 last.
-        unsigned edge_first = edges[0] ? 4u : 0u;
-        const unsigned edge_middle = 1u, edge_last = 2u;
-        unsigned flags = edge_first | edge_middle;
-        for (int i = 2; i < n; ++i, flags = edge_middle) {
-            if (!edges[i - 1]) flags &= ~edge_middle;
-            if (i == n - 1 && edges[i]) flags |= edge_last;
-            emit_triangle(ctx, poly[i - 1], poly[i], poly[0], flags, source, chunk);
-        }
+        setup_other(ctx, positions, prepared, tri, filled && boxes[i].x0 >= 0,
+                    static_cast<std::uint32_t>(first_id + (t - first)), chunk);
     }
+    chunk.stats.primitives += one_pixel;
+    chunk.stats.primitives_culled += one_pixel_culled;
 
     // Bin the chunk's items by tile (a stable counting sort): a fragment in its pixel's
     // tile, a primitive in every tile its box overlaps.
     const int tile_count = ctx.tiles_x * ctx.tiles_y;
     chunk.tile_start.assign(static_cast<std::size_t>(tile_count) + 1, 0u);
-    auto for_each_tile = [&](std::uint32_t item, auto&& f) {
-        if (item & kFragmentItem) {
-            const Fragment& g = chunk.frags[item & ~kFragmentItem];
-            f(static_cast<std::size_t>((g.y / kTileSize) * ctx.tiles_x + g.x / kTileSize));
+    const std::size_t item_count = chunk.items.size();
+    const std::uint32_t* items = chunk.items.data();
+    const std::uint32_t* item_tiles = chunk.item_tiles.data();
+    auto for_each_tile = [&](std::size_t i, auto&& f) {
+        if (item_tiles[i] != kBoxTiles) {
+            f(item_tiles[i]);
             return;
         }
-        const Primitive& p = chunk.prims[item];
+        const Primitive& p = chunk.prims[items[i]];
         for (int ty = p.y0 / kTileSize; ty <= p.y1 / kTileSize; ++ty)
             for (int tx = p.x0 / kTileSize; tx <= p.x1 / kTileSize; ++tx)
                 f(static_cast<std::size_t>(ty * ctx.tiles_x + tx));
     };
-    for (const std::uint32_t item : chunk.items)
-        for_each_tile(item, [&](std::size_t tile) { ++chunk.tile_start[tile + 1]; });
-    for (int t = 0; t < tile_count; ++t)
-        chunk.tile_start[static_cast<std::size_t>(t) + 1] += chunk.tile_start[static_cast<std::size_t>(t)];
-    chunk.tile_items.resize(chunk.tile_start.back());
-    chunk.fill.assign(chunk.tile_start.begin(), chunk.tile_start.end() - 1);
-    for (const std::uint32_t item : chunk.items)
-        for_each_tile(item, [&](std::size_t tile) { chunk.tile_items[chunk.fill[tile]++] = item; });
+    std::uint32_t* start = chunk.tile_start.data();
+    for (std::size_t i = 0; i < item_count; ++i) for_each_tile(i, [&](std::size_t tile) { ++start[tile + 1]; });
+    for (int t = 0; t < tile_count; ++t) start[t + 1] += start[t];
+    chunk.tile_items.resize(start[tile_count]);
+    chunk.fill.assign(start, start + tile_count);
+    std::uint32_t* fill = chunk.fill.data();
+    std::uint32_t* tile_items = chunk.tile_items.data();
+    for (std::size_t i = 0; i < item_count; ++i)
+        for_each_tile(i, [&](std::size_t tile) { tile_items[fill[tile]++] = items[i]; });
 }
 
 // floor(n / d) for d > 0.
@@ -734,8 +968,7 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
     vertices.resize(input.positions.size());
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, input.positions.size(), 4096),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t i = r.begin(); i < r.end(); ++i)
-                                  vertices.prepare(i, input.positions[i], state.ctx.viewport, state.fused);
+                              vertices.prepare(input.positions, r.begin(), r.end(), state.ctx.viewport, state.fused);
                           });
 
     // Set up chunks in parallel waves and rasterize the tiles once enough primitives have
@@ -798,13 +1031,10 @@ void Rasterizer::draw(std::span<const RasterChunk> chunks) {
         const RasterChunk& chunk = chunks[c];
         thread_local PreparedVertices vertices;
         vertices.resize(chunk.positions.size());
-        for (std::size_t i = 0; i < chunk.positions.size(); ++i)
-            vertices.prepare(i, chunk.positions[i], s.ctx.viewport, s.fused);
-        // The largest index first (a loop without an exit, which the compiler vectorizes),
-        // then the first one out of range only when there is one.
-        std::uint32_t largest = 0;
-        for (const auto& tri : chunk.triangles) largest = std::max({largest, tri[0], tri[1], tri[2]});
-        if (!chunk.triangles.empty() && largest >= chunk.positions.size()) {
+        vertices.prepare(chunk.positions, 0, chunk.positions.size(), s.ctx.viewport, s.fused);
+        // Whether an index is out of range first (a loop without an exit), then the first one
+        // only when there is one.
+        if (any_index_at_least(chunk.triangles, chunk.positions.size())) {
             for (const auto& tri : chunk.triangles)
                 for (const std::uint32_t v : tri)
                     if (v >= chunk.positions.size())

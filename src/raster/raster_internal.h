@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #if defined(__SSE2__)
@@ -174,18 +175,17 @@ inline bool clamp_bbox(Primitive& prim, const Viewport& vp) {
 // the bottom-left fill convention that Mesa selects for a window-system framebuffer
 // (bottom_edge_rule = 1: in raster coordinates, y down, bottom edges are included; in GL
 // window coordinates, y up, that is the bottom-left rule).
+// The fill-rule bias of an edge: 1 for left edges (both fill conventions) and, by the
+// bottom-left convention, for horizontal edges with dcdy < 0.
+inline int edge_bias(std::int64_t dcdx, std::int64_t dcdy) { return (dcdx < 0) | ((dcdx == 0) & (dcdy < 0)); }
 inline void make_planes(const std::int32_t* x, const std::int32_t* y, int count, Primitive& prim) {
     prim.plane_count = count;
     for (int i = 0; i < count; ++i) {
         const int j = (i + 1) % count;
         const std::int32_t dcdy = x[i] - x[j];
         const std::int32_t dcdx = y[i] - y[j];
-        std::int64_t c = static_cast<std::int64_t>(dcdx) * x[i] - static_cast<std::int64_t>(dcdy) * y[i];
-        if (dcdx < 0) {
-            ++c;  // left edges: both fill conventions
-        } else if (dcdx == 0 && dcdy < 0) {
-            ++c;  // bottom-left convention for horizontal edges
-        }
+        const std::int64_t c = static_cast<std::int64_t>(dcdx) * x[i] - static_cast<std::int64_t>(dcdy) * y[i] +
+                               edge_bias(dcdx, dcdy);
         prim.c[i] = c;
         prim.dcdx[i] = static_cast<std::int64_t>(dcdx) * kFixedOne;
         prim.dcdy[i] = static_cast<std::int64_t>(dcdy) * kFixedOne;
@@ -247,34 +247,6 @@ inline Setup setup_triangle(const SetupCorner& v0, const SetupCorner& v1, const 
     return result;
 }
 
-// triangle_bbox's four bounds are each a non-decreasing function of one coordinate of one
-// vertex (min_x, max_x, min_y or max_y), so the box of a triangle is the min (x0, y0) and
-// max (x1, y1) of its vertices' own bounds: the rasterizer computes them once per vertex
-// rather than once per triangle (about two triangles a vertex). In 64 bits: the bounds of
-// an out-of-range snap (INT32_MIN) stay defined.
-struct VertexPixelBounds {
-    std::int32_t x0, x1, y0, y1;
-};
-inline VertexPixelBounds vertex_pixel_bounds(std::int32_t x, std::int32_t y) {
-    const std::int64_t X = x, Y = y, one = kFixedOne;
-    const int adj = 1;
-    return {static_cast<std::int32_t>(std::max(X >> kFixedOrder, (X + one - 1) >> kFixedOrder)),
-            static_cast<std::int32_t>((X - 1) >> kFixedOrder),
-            static_cast<std::int32_t>(std::max((Y + adj) >> kFixedOrder, (Y + one) >> kFixedOrder)),
-            static_cast<std::int32_t>((Y - 1 + adj) >> kFixedOrder)};
-}
-// Whether the box of a triangle with these vertices' bounds holds a pixel of the viewport:
-// a triangle whose box holds none covers no pixel (setup culls it).
-inline bool bounds_have_pixels(const VertexPixelBounds& a, const VertexPixelBounds& b, const VertexPixelBounds& c,
-                               const Viewport& viewport) {
-    const std::int32_t x0 = std::max(std::min(std::min(a.x0, b.x0), c.x0), 0);
-    const std::int32_t x1 = std::min(std::max(std::max(a.x1, b.x1), c.x1), viewport.width - 1);
-    const std::int32_t y0 = std::max(std::min(std::min(a.y0, b.y0), c.y0), 0);
-    const std::int32_t y1 = std::min(std::max(std::max(a.y1, b.y1), c.y1), viewport.height - 1);
-    return x0 <= x1 && y0 <= y1;
-}
-
-
 // Round-to-nearest-even as SSE's cvtps2dq (out of range: INT32_MIN), and Mesa's util_iround
 // on x86-64 ((int)(f + 0.5f), in float).
 inline std::int32_t cvt_rne(float v) {
@@ -293,6 +265,201 @@ std::int32_t util_iround(float f);
 // (v - 0.5) * 256 rounded to nearest even, as cvtps2dq).
 inline std::int32_t snap_fixed(float window_coordinate) {
     return cvt_rne((window_coordinate - 0.5f) * static_cast<float>(kFixedOne));
+}
+
+
+inline bool finite4(const glm::vec4& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+}
+
+// A window position snapped as setup snaps it (snap_fixed of x and y).
+struct FixedXY {
+    std::int32_t x, y;
+};
+
+// A vertex's share of the box test, 8 bytes. triangle_bbox's four bounds are each a
+// non-decreasing function of one coordinate of one vertex (min_x, max_x, min_y or max_y), and
+// so is clamp_bbox's clamp: the clamped box of a triangle is the min (x0, y0) and max (x1, y1)
+// of its vertices' clamped bounds, computed once per vertex rather than once per triangle
+// (about two triangles a vertex). Kept as (x0, y0, -x1, -y1) in 16 bits, x0 and y0 at least 0,
+// x1 at most width - 1 and y1 at most height - 1: a triangle's box is then the lane-wise min
+// of its three vertices' (triangle_box), and holds a pixel iff x0 + (-x1) <= 0 and
+// y0 + (-y1) <= 0 (box_has_pixels). The snapped position of an inside vertex lies within a
+// pixel of the viewport (|x|, |y| <= w), so its bounds and their sums fit 16 bits.
+struct BoxBounds {
+    std::int16_t x0, y0, neg_x1, neg_y1;
+};
+// The bounds of a vertex that is not inside (outside a clip plane, or without a finite clip
+// or window position): a triangle with it always passes the box test (x0 + (-x1) <= -2), to
+// the clipper's path, and its box's x0 < 0 says so: a triangle's box has x0 >= 0 iff its
+// three vertices are inside.
+inline constexpr BoxBounds kAnywhereBox = {-1, -1, -1, -1};
+
+// An inside vertex's bounds (triangle_bbox of one vertex, adj = 1, clamped): in 32 bits, each
+// max of triangle_bbox is its second term; -((x - 1) >> 8) is (256 - x) >> 8, and
+// -(y >> 8) is (255 - y) >> 8.
+inline BoxBounds box_bounds(std::int32_t x, std::int32_t y, const Viewport& vp) {
+    return {static_cast<std::int16_t>(std::max((x + kFixedOne - 1) >> kFixedOrder, 0)),
+            static_cast<std::int16_t>(std::max((y + kFixedOne) >> kFixedOrder, 0)),
+            static_cast<std::int16_t>(std::max((kFixedOne - x) >> kFixedOrder, 1 - vp.width)),
+            static_cast<std::int16_t>(std::max((kFixedOne - 1 - y) >> kFixedOrder, 1 - vp.height))};
+}
+inline BoxBounds triangle_box(const BoxBounds& a, const BoxBounds& b, const BoxBounds& c) {
+    auto min3 = [](std::int16_t p, std::int16_t q, std::int16_t r) { return std::min(std::min(p, q), r); };
+    return {min3(a.x0, b.x0, c.x0), min3(a.y0, b.y0, c.y0), min3(a.neg_x1, b.neg_x1, c.neg_x1),
+            min3(a.neg_y1, b.neg_y1, c.neg_y1)};
+}
+// Whether a triangle's box holds a pixel of the viewport: one whose box holds none covers no
+// pixel (setup culls it).
+inline bool box_has_pixels(const BoxBounds& box) { return box.x0 + box.neg_x1 <= 0 && box.y0 + box.neg_y1 <= 0; }
+// Whether the box is the one pixel (x0, y0) and every vertex inside.
+inline bool one_pixel_box(const BoxBounds& box) {
+    return box.x0 >= 0 && box.x0 + box.neg_x1 == 0 && box.y0 + box.neg_y1 == 0;
+}
+
+// A vertex as setup and the box test read it, from its clip position: the window position,
+// the snap, and the bounds, kAnywhereBox unless the vertex is inside: finite clip and window
+// positions inside every clip plane (draw's cliptest), where setup needs no clipper.
+[[gnu::always_inline]] inline void prepare_vertex(const glm::vec4& clip, const Viewport& vp, bool fused,
+                                                  glm::vec4& win, FixedXY& fixed, BoxBounds& bounds) {
+    win = window_position(clip, vp, fused);
+    fixed = {snap_fixed(win.x), snap_fixed(win.y)};
+    const bool inside = finite4(clip) && compute_clipmask(clip) == 0 && finite4(win);
+    bounds = inside ? box_bounds(fixed.x, fixed.y, vp) : kAnywhereBox;
+}
+// prepare_vertex of positions[first, last) into win[], fixed[] and bounds[] (same indices):
+// the unfused window transform four vertices at a time with SSE2 where there is SSE2, the
+// same bits as prepare_vertex (the same IEEE operations lane by lane).
+void prepare_vertices(const glm::vec4* positions, std::size_t first, std::size_t last, const Viewport& vp,
+                      bool fused, glm::vec4* win, FixedXY* fixed, BoxBounds* bounds);
+
+// Plane through three (x, y, a) points, evaluated at pixel centres relative to vertex 0
+// (setup_attributes; zero gradients where they are not finite).
+inline void triangle_plane(const float a[3], float ooa, float dx01, float dy01, float dx20, float dy20,
+                           float out[3]) {
+    const float da01 = a[0] - a[1];
+    const float da20 = a[2] - a[0];
+    float dadx = (da01 * dy20 - dy01 * da20) * ooa;
+    float dady = (dx01 * da20 - da01 * dx20) * ooa;
+    if (!std::isfinite(dadx) || !std::isfinite(dady)) dadx = dady = 0.0f;
+    out[0] = a[0];
+    out[1] = dadx;
+    out[2] = dady;
+}
+// An attribute plane at (fx, fy) relative to its origin.
+inline float eval_plane(const float plane[3], float fx, float fy) { return plane[0] + plane[1] * fx + plane[2] * fy; }
+// An interpolated depth, clamped to the depth range.
+inline float depth_value(float z) { return std::isnan(z) ? 1.0f : std::clamp(z, 0.0f, 1.0f); }
+
+// The fragment of a drawn triangle whose box is one pixel.
+struct OnePixelFragment {
+    float z;
+    float weights[3];
+    bool front;
+};
+// setup_triangle of an unclipped triangle (three `inside` vertices, unit weights) whose box is
+// the one pixel (px, py), then the fragment the tiles would compute from its planes
+// (fragment_depth, fragment_weights): the same integers and the same float operations in the
+// same order, so the same outcome, depth and weights bit for bit, without the planes kept.
+//
+// Coverage: with the positions taken relative to the pixel (x - 256 px, y - 256 py), the edge
+// function of make_planes at the pixel, c + dcdy * py - dcdx * px, is the same integer as
+// x_j * y_i - x_i * y_j + bias (bias 0 or 1), and do_triangle_ccw's area the sum of the three
+// x_j * y_i - x_i * y_j. A clockwise triangle is set up as (v1, v0, v2), which reverses each
+// edge and the sign of its product. So where no product is 0 (the centre on no edge line),
+// the pixel is covered iff the three have one sign; where one is 0, its bias decides, as
+// setup computes it.
+//
+// The attribute planes: depth in float; 1/w and the three weights times 1/w as the lanes of
+// one SSE2 vector (a weight is 1/w at its own vertex's lane, +0 at the others: 1/w of an
+// inside vertex is positive and finite).
+// Whether the pixel centre passes the three edge functions with their bias, in setup's vertex
+// order (rotate_fixed_position_01: (v1, v0, v2) for a clockwise triangle); setup_one_pixel's
+// case of a centre on an edge line. Apart: it is rare, and its values would crowd the
+// registers of the common case.
+[[gnu::noinline]] inline bool one_pixel_covered_on_edge(const FixedXY& v0, const FixedXY& v1, const FixedXY& v2,
+                                                        int px, int py, bool cw) {
+    const std::int64_t ox = px * kFixedOne, oy = py * kFixedOne;
+    const FixedXY& a = cw ? v1 : v0;
+    const FixedXY& b = cw ? v0 : v1;
+    const std::int64_t ax = a.x - ox, ay = a.y - oy;
+    const std::int64_t bx = b.x - ox, by = b.y - oy;
+    const std::int64_t cx = v2.x - ox, cy = v2.y - oy;
+    auto edge = [](std::int64_t xi, std::int64_t yi, std::int64_t xj, std::int64_t yj) {
+        return xj * yi - xi * yj + edge_bias(yi - yj, xi - xj) > 0;
+    };
+    return edge(ax, ay, bx, by) & edge(bx, by, cx, cy) & edge(cx, cy, ax, ay);
+}
+
+[[gnu::always_inline]] inline Setup setup_one_pixel(const FixedXY& v0, const FixedXY& v1, const FixedXY& v2,
+                                                    const glm::vec4& win0, const glm::vec4& win1,
+                                                    const glm::vec4& win2, int px, int py, Face face,
+                                                    OnePixelFragment& out) {
+    const std::int64_t ox = px * kFixedOne, oy = py * kFixedOne;
+    const std::int64_t x0 = v0.x - ox, x1 = v1.x - ox, x2 = v2.x - ox;
+    const std::int64_t y0 = v0.y - oy, y1 = v1.y - oy, y2 = v2.y - oy;
+    const std::int64_t e01 = x1 * y0 - x0 * y1, e12 = x2 * y1 - x1 * y2, e20 = x0 * y2 - x2 * y0;
+    const std::int64_t area = e01 + e12 + e20;
+    if (area == 0) return Setup::culled;
+    const bool front = area > 0;
+    if ((face == Face::front_only && !front) || (face == Face::back_only && front)) return Setup::culled;
+    const bool cw = area < 0;
+    if ((e01 == 0) | (e12 == 0) | (e20 == 0)) {
+        if (!one_pixel_covered_on_edge(v0, v1, v2, px, py, cw)) return Setup::empty;
+    } else if (((e01 ^ e12) | (e12 ^ e20)) < 0) {
+        return Setup::empty;
+    }
+
+    // setup_attributes' vertex order, selected without a branch (the winding is a coin toss).
+    const glm::vec4* const first_two[2] = {&win0, &win1};
+    const glm::vec4& a = *first_two[cw];
+    const glm::vec4& b = *first_two[!cw];
+    const glm::vec4& c = win2;
+    const float fdx01 = a.x - b.x, fdy01 = a.y - b.y;
+    const float fdx20 = c.x - a.x, fdy20 = c.y - a.y;
+    const float ooa = 1.0f / (fdx01 * fdy20 - fdx20 * fdy01);
+    const float fx = static_cast<float>(px) - (a.x - 0.5f);
+    const float fy = static_cast<float>(py) - (a.y - 0.5f);
+    const float z[3] = {a.z, b.z, c.z};
+    float zp[3];
+    triangle_plane(z, ooa, fdx01, fdy01, fdx20, fdy20, zp);
+    out.z = depth_value(eval_plane(zp, fx, fy));
+    out.front = front;
+#if defined(__SSE2__)
+    // Lanes 0-2: weight k times 1/w; lane 3: 1/w.
+    alignas(16) static constexpr std::uint32_t kLanes[3][4] = {
+        {~0u, 0u, 0u, ~0u}, {0u, ~0u, 0u, ~0u}, {0u, 0u, ~0u, ~0u}};
+    auto attributes = [](const glm::vec4& v, int k) {
+        return _mm_and_ps(_mm_set1_ps(v.w), _mm_load_ps(reinterpret_cast<const float*>(kLanes[k])));
+    };
+    const __m128 a0 = attributes(a, cw), a1 = attributes(b, !cw), a2 = attributes(c, 2);
+    const __m128 da01 = _mm_sub_ps(a0, a1), da20 = _mm_sub_ps(a2, a0);
+    const __m128 vooa = _mm_set1_ps(ooa);
+    __m128 dadx = _mm_mul_ps(_mm_sub_ps(_mm_mul_ps(da01, _mm_set1_ps(fdy20)), _mm_mul_ps(_mm_set1_ps(fdy01), da20)), vooa);
+    __m128 dady = _mm_mul_ps(_mm_sub_ps(_mm_mul_ps(_mm_set1_ps(fdx01), da20), _mm_mul_ps(da01, _mm_set1_ps(fdx20))), vooa);
+    const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 infinity = _mm_set1_ps(INFINITY);
+    const __m128 finite = _mm_and_ps(_mm_cmplt_ps(_mm_and_ps(dadx, magnitude), infinity),
+                                     _mm_cmplt_ps(_mm_and_ps(dady, magnitude), infinity));
+    dadx = _mm_and_ps(dadx, finite);
+    dady = _mm_and_ps(dady, finite);
+    const __m128 e = _mm_add_ps(_mm_add_ps(a0, _mm_mul_ps(dadx, _mm_set1_ps(fx))), _mm_mul_ps(dady, _mm_set1_ps(fy)));
+    alignas(16) float w[4];
+    _mm_store_ps(w, _mm_div_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 3, 3, 3))));
+    for (int k = 0; k < 3; ++k) out.weights[k] = w[k];
+#else
+    const float oow[3] = {a.w, b.w, c.w};
+    float plane[3];
+    triangle_plane(oow, ooa, fdx01, fdy01, fdx20, fdy20, plane);
+    const float oow_at = eval_plane(plane, fx, fy);
+    const int slot[3] = {cw ? 1 : 0, cw ? 0 : 1, 2};
+    for (int k = 0; k < 3; ++k) {
+        const float bw[3] = {slot[0] == k ? oow[0] : 0.0f, slot[1] == k ? oow[1] : 0.0f, slot[2] == k ? oow[2] : 0.0f};
+        triangle_plane(bw, ooa, fdx01, fdy01, fdx20, fdy20, plane);
+        out.weights[k] = eval_plane(plane, fx, fy) / oow_at;
+    }
+#endif
+    return Setup::drawn;
 }
 
 }  // namespace tessref::raster

@@ -14,19 +14,6 @@ namespace {
 
 constexpr float kPixelOffset = 0.5f;  // half_pixel_center
 
-// Plane through three (x, y, a) points, evaluated at pixel centres relative to vertex 0.
-void triangle_plane(const float a[3], float ooa, float dx01, float dy01, float dx20, float dy20,
-                    float out[3]) {
-    const float da01 = a[0] - a[1];
-    const float da20 = a[2] - a[0];
-    float dadx = (da01 * dy20 - dy01 * da20) * ooa;
-    float dady = (dx01 * da20 - da01 * dx20) * ooa;
-    if (!std::isfinite(dadx) || !std::isfinite(dady)) dadx = dady = 0.0f;
-    out[0] = a[0];
-    out[1] = dadx;
-    out[2] = dady;
-}
-
 }  // namespace
 
 
