@@ -286,10 +286,10 @@ TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
     }
 }
 
-// The same at the edges of the unorm8 batch (four coordinates at a time with SSE2, each axis's
-// texel pair kept adjacent): levels from 1 x 1 up, coordinates on and next to every texel
-// boundary, the two edges and beyond them, the special values, and batches of every length up
-// to 9 (the remainders of groups of four).
+// The same at the edges of the batches (four coordinates at a time with SSE2; the unorm8 one
+// keeps each axis's texel pair adjacent): levels from 1 x 1 up, coordinates on and next to
+// every texel boundary, the two edges and beyond them, the special values, and batches of
+// every length up to 9 (the remainders of groups of four).
 TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
     std::mt19937 rng(20260611);
     std::uniform_int_distribution<int> code(0, 255);
@@ -320,10 +320,11 @@ TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
                     s.push_back((static_cast<float>(i) + f / 256.0f) / static_cast<float>(size));
         return s;
     };
-    // (32764: the largest side the unorm8 batch takes; 32765 goes the scalar way.)
-    const std::array<std::array<int, 2>, 15> sizes = {{{1, 1}, {1, 2}, {2, 1}, {2, 2}, {3, 2}, {2, 3}, {1, 5}, {6, 1},
+    // (32764 and 32766: the largest sides the unorm8 and float batches take; beyond, the
+    // scalar loop.)
+    const std::array<std::array<int, 2>, 17> sizes = {{{1, 1}, {1, 2}, {2, 1}, {2, 2}, {3, 2}, {2, 3}, {1, 5}, {6, 1},
                                                        {5, 7}, {64, 3}, {3, 64}, {257, 2}, {32764, 2}, {2, 32764},
-                                                       {32765, 3}}};
+                                                       {32765, 3}, {32766, 2}, {2, 32767}}};
     for (const TexelFormat format : {TexelFormat::unorm8, TexelFormat::unorm16, TexelFormat::float32}) {
         for (int channels = 1; channels <= 4; ++channels) {
             for (const auto& [width, height] : sizes) {

@@ -423,6 +423,70 @@ template <int C>
 inline bool unorm8_x4_fits(const TextureLevel& level) {
     return level.width >= 2 && level.height >= 2 && level.width <= 32764 && level.height <= 32764;
 }
+
+// ---- the float filter of a one-channel level: the axes four coordinates at a time --------
+//
+// axis_gpu's operations lane by lane, in the same order (multiply, subtract, max_or, min_of,
+// floor_small, the clamped indices); the fetches and the lerps (lerp_gpu, an fma) stay
+// bilinear_gpu_n<1>'s, point by point. For GL_CLAMP_TO_EDGE on a level of at most
+// 32766 x 32766 texels: the index i = floor(u) is in [-1, size] and i + 1 fits 16 bits, where
+// the signed 16-bit max and min on a 32-bit lane are the 32-bit ones.
+struct AxesFx4 {
+    alignas(16) std::int32_t i0[4];
+    alignas(16) std::int32_t i1[4];
+    alignas(16) float weight[4];
+};
+
+[[gnu::always_inline]] inline void axes_gpu_x4(__m128 s, __m128 size_f, __m128i last, AxesFx4& axes) {
+    __m128 u = _mm_mul_ps(s, size_f);
+    u = _mm_sub_ps(u, _mm_set1_ps(0.5f));
+    u = _mm_min_ps(_mm_max_ps(u, _mm_set1_ps(-1.0f)), size_f);
+    // floor_small: t = float(int(u)), minus 1 where t > u (the mask, -1 as an integer).
+    const __m128i truncated = _mm_cvttps_epi32(u);
+    const __m128 t = _mm_cvtepi32_ps(truncated);
+    const __m128 above = _mm_cmpgt_ps(t, u);
+    const __m128 fl = _mm_sub_ps(t, _mm_and_ps(above, _mm_set1_ps(1.0f)));
+    const __m128i i = _mm_add_epi32(truncated, _mm_castps_si128(above));
+    const __m128i zero = _mm_setzero_si128();
+    _mm_store_ps(axes.weight, _mm_sub_ps(u, fl));
+    _mm_store_si128(reinterpret_cast<__m128i*>(axes.i0), _mm_min_epi16(_mm_max_epi16(i, zero), last));
+    const __m128i next = _mm_add_epi32(i, _mm_set1_epi32(1));
+    _mm_store_si128(reinterpret_cast<__m128i*>(axes.i1), _mm_min_epi16(_mm_max_epi16(next, zero), last));
+}
+
+// texture_level0_n<1, false>'s clamp-to-edge case for a level of at most 32766 x 32766.
+[[gnu::always_inline]] inline void texture_level0_float1_x4(const TextureLevel& level, const glm::vec2* st,
+                                                            glm::vec4* out, std::size_t count) {
+    const __m128 width_f = _mm_set1_ps(static_cast<float>(level.width));
+    const __m128 height_f = _mm_set1_ps(static_cast<float>(level.height));
+    const __m128i last_s = _mm_set1_epi32(level.width - 1);
+    const __m128i last_t = _mm_set1_epi32(level.height - 1);
+    for (std::size_t k0 = 0; k0 < count; k0 += 4) {
+        // The last one to three points padded with copies of the last.
+        glm::vec2 tail[4];
+        const glm::vec2* p = st + k0;
+        const std::size_t n = std::min<std::size_t>(4, count - k0);
+        if (n < 4) {
+            for (std::size_t j = 0; j < 4; ++j) tail[j] = st[k0 + std::min(j, n - 1)];
+            p = tail;
+        }
+        const __m128 st01 = _mm_loadu_ps(&p[0].x);
+        const __m128 st23 = _mm_loadu_ps(&p[2].x);
+        AxesFx4 ax, ay;
+        axes_gpu_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(2, 0, 2, 0)), width_f, last_s, ax);
+        axes_gpu_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(3, 1, 3, 1)), height_f, last_t, ay);
+        for (std::size_t j = 0; j < n; ++j) {
+            const AxisF x{ax.i0[j], ax.i1[j], ax.weight[j]};
+            const AxisF y{ay.i0[j], ay.i1[j], ay.weight[j]};
+            float value[4];
+            bilinear_gpu_n<1>(level, x, y, value);
+            out[k0 + j] = glm::vec4(value[0], 0.0f, 0.0f, 1.0f);
+        }
+    }
+}
+
+// The levels texture_level0_float1_x4 takes.
+inline bool float1_x4_fits(const TextureLevel& level) { return level.width <= 32766 && level.height <= 32766; }
 #endif
 
 
@@ -435,6 +499,8 @@ template <int C, bool Unorm8>
     if constexpr (Unorm8) {
         if (!repeat && unorm8_x4_fits(level))
             return texture_level0_unorm8_x4<C>(level, st, out, count);
+    } else if constexpr (C == 1) {
+        if (!repeat && float1_x4_fits(level)) return texture_level0_float1_x4(level, st, out, count);
     }
 #endif
     LastAxis<Unorm8> s_axis, t_axis;
