@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -135,6 +136,13 @@ void thesis_batch_is_the_scalar_evaluation() {
     // Corners not on a common grid, so that the mixes round.
     const std::array<vec4_t<T>, 4> corners{vec4_t<T>(10.1, 20.3, 7, 1), vec4_t<T>(9.7, 31.1, 8, 1),
                                            vec4_t<T>(20.9, 30.2, 9, 1), vec4_t<T>(21.3, 19.9, 6, 1)};
+    // Points off the generator's grid too (the float batch takes four at a time): signed zeros,
+    // a denormal, a coordinate just below 1 and ones outside [0, 1].
+    const T tiny = std::numeric_limits<T>::denorm_min();
+    const T below_one = std::nextafter(T(1), T(0));
+    points.insert(points.begin(), {DomainPoint<T>{T(-0.0), T(0.5), T(0.5)}, DomainPoint<T>{T(0.25), T(-0.0), T(0.75)},
+                                   DomainPoint<T>{tiny, below_one, T(0)}, DomainPoint<T>{below_one, tiny, T(0)},
+                                   DomainPoint<T>{T(-0.5), T(1.5), T(0)}, DomainPoint<T>{T(3), T(-2), T(0)}});
     std::vector<vec3_t<T>> position(points.size());
     std::vector<vec2_t<T>> textureCoordinate(points.size());
     thesis_evaluate_batch<T>(corners, points, heightMap, evaluation.scaleXY, evaluation.scaleZ, position,
@@ -145,6 +153,18 @@ void thesis_batch_is_the_scalar_evaluation() {
         const EvaluatedVertex<T> vertex = thesis_evaluate(corners, points[k], evaluation);
         EXPECT_EQ(bits3(position[k]), bits3(vertex.position)) << k;
         EXPECT_EQ(bits3(vec3_t<T>(textureCoordinate[k], T(0))), bits3(vec3_t<T>(vertex.textureCoordinate, T(0)))) << k;
+    }
+    // Every batch length up to 9 and around a block of 64 gives the same bits as the whole.
+    for (const std::size_t count : {1, 2, 3, 4, 5, 6, 7, 8, 9, 63, 64, 65, 67, 131}) {
+        std::vector<vec3_t<T>> part_position(count);
+        std::vector<vec2_t<T>> part_coordinate(count);
+        thesis_evaluate_batch<T>(corners, std::span<const DomainPoint<T>>(points).first(count), heightMap,
+                                 evaluation.scaleXY, evaluation.scaleZ, part_position, part_coordinate);
+        for (std::size_t k = 0; k < count; ++k) {
+            EXPECT_EQ(bits3(part_position[k]), bits3(position[k])) << count << " " << k;
+            EXPECT_EQ(bits3(vec3_t<T>(part_coordinate[k], T(0))), bits3(vec3_t<T>(textureCoordinate[k], T(0))))
+                << count << " " << k;
+        }
     }
 }
 

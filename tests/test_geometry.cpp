@@ -7,6 +7,8 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <span>
 #include <vector>
 
 #include "tessref/geometry.h"
@@ -58,13 +60,25 @@ TEST(ThesisGeometry, BatchedNormalsAreTheScalarOnesBitForBit) {
                 texels.emplace_back(r / 255.0f, g / 255.0f, b / 255.0f, (r + g) / 511.0f);
     texels.emplace_back(0.5f, 0.5f, 0.5f, 1.0f);
     texels.emplace_back(-3.0f, 7.5f, 1e-20f, 0.0f);
+    // The same specials among the first (the batch takes four texels at a time, the last one
+    // to three alone): a zero vector (0 * inf), infinities, underflowing squares, a huge one.
+    const float inf = std::numeric_limits<float>::infinity();
+    texels.insert(texels.begin(), {glm::vec4(0.5f, 0.5f, 0.5f, 1.0f), glm::vec4(-3.0f, 7.5f, 1e-20f, 0.0f),
+                                   glm::vec4(inf, 0.5f, 0.25f, 0.0f), glm::vec4(0.5f, 0.5f + 1e-7f, 0.5f, 1.0f),
+                                   glm::vec4(1e30f, -1e30f, 0.0f, 0.0f), glm::vec4(-inf, inf, 0.5f, 0.0f),
+                                   glm::vec4(0.5f, 0.5f, 0.5f - 6e-8f, 1.0f)});
     const glm::mat3 normalMatrix(glm::vec3(0.8f, 0.1f, -0.3f), glm::vec3(-0.2f, 0.9f, 0.05f), glm::vec3(0.3f, 0.0f, 1.1f));
-    std::vector<glm::vec3> normals(texels.size());
-    thesis_normals_from_texture<float>(texels, normalMatrix, normals);
-    for (std::size_t k = 0; k < texels.size(); ++k) {
-        const glm::vec3 expected = thesis_normal_from_texture(glm::vec3(texels[k]), normalMatrix);
-        for (int c = 0; c < 3; ++c)
-            EXPECT_EQ(std::bit_cast<std::uint32_t>(normals[k][c]), std::bit_cast<std::uint32_t>(expected[c])) << k;
+    for (const glm::mat3& matrix : {normalMatrix, glm::mat3(1.0f)}) {
+        for (const std::size_t count : std::array<std::size_t, 6>{texels.size(), 0, 1, 3, 4, 7}) {
+            std::vector<glm::vec3> normals(count);
+            thesis_normals_from_texture<float>(std::span<const glm::vec4>(texels).first(count), matrix, normals);
+            for (std::size_t k = 0; k < count; ++k) {
+                const glm::vec3 expected = thesis_normal_from_texture(glm::vec3(texels[k]), matrix);
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(normals[k][c]), std::bit_cast<std::uint32_t>(expected[c]))
+                        << k;
+            }
+        }
     }
 }
 

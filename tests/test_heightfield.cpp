@@ -349,6 +349,98 @@ TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
     }
 }
 
+// The same at the edges of the batches (four coordinates at a time with SSE2; the unorm8 one
+// keeps each axis's texel pair adjacent): levels from 1 x 1 up, coordinates on and next to
+// every texel boundary, the two edges and beyond them, the special values, and batches of
+// every length up to 9 (the remainders of groups of four).
+TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
+    std::mt19937 rng(20260611);
+    std::uniform_int_distribution<int> code(0, 255);
+    std::uniform_real_distribution<float> coordinate(-0.6f, 1.6f);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const auto bits = [](const glm::vec4& v) {
+        return std::array<std::uint32_t, 4>{std::bit_cast<std::uint32_t>(v.x), std::bit_cast<std::uint32_t>(v.y),
+                                            std::bit_cast<std::uint32_t>(v.z), std::bit_cast<std::uint32_t>(v.w)};
+    };
+    // Coordinates along an axis of `size` texels: every half texel and its float neighbours,
+    // the 8-bit path's rounding boundaries (x.5 / 256 of a texel) next to each texel edge,
+    // and the special values.
+    const auto along = [&](int size) {
+        std::vector<float> s = {nan, -nan, inf, -inf, 0.0f, -0.0f, 1.0f, 1e30f, -1e30f, 3e9f, -3e9f,
+                                std::numeric_limits<float>::denorm_min(), std::nextafter(1.0f, 0.0f),
+                                std::nextafter(1.0f, 2.0f), 2.0f, -1.0f};
+        // (Of a long axis only the texels near its ends.)
+        const auto near_end = [size](int i) { return i < 12 || i > size - 12; };
+        for (int k = -4; k <= 2 * size + 4; ++k) {
+            if (!near_end(k / 2)) continue;
+            const float c = static_cast<float>(k) / static_cast<float>(2 * size);
+            s.insert(s.end(), {c, std::nextafter(c, -inf), std::nextafter(c, inf)});
+        }
+        for (int i = -2; i <= size + 2; ++i)
+            for (const float f : {-1.5f, -0.5f, 0.5f, 1.5f, 127.5f, 128.5f, 254.5f, 255.5f})
+                if (near_end(i))
+                    s.push_back((static_cast<float>(i) + f / 256.0f) / static_cast<float>(size));
+        return s;
+    };
+    // (32764 and 32766: the largest sides the unorm8 and float batches take; beyond, the
+    // scalar loop.)
+    const std::array<std::array<int, 2>, 17> sizes = {{{1, 1}, {1, 2}, {2, 1}, {2, 2}, {3, 2}, {2, 3}, {1, 5}, {6, 1},
+                                                       {5, 7}, {64, 3}, {3, 64}, {257, 2}, {32764, 2}, {2, 32764},
+                                                       {32765, 3}, {32766, 2}, {2, 32767}}};
+    for (const TexelFormat format : {TexelFormat::unorm8, TexelFormat::unorm16, TexelFormat::float32}) {
+        for (int channels = 1; channels <= 4; ++channels) {
+            for (const auto& [width, height] : sizes) {
+                const std::size_t n = static_cast<std::size_t>(width * height * channels);
+                std::vector<std::uint8_t> codes8(n);
+                std::vector<std::uint16_t> codes16(n);
+                std::vector<float> values(n);
+                for (std::size_t i = 0; i < n; ++i) {
+                    codes8[i] = static_cast<std::uint8_t>(code(rng));
+                    codes16[i] = static_cast<std::uint16_t>(codes8[i] * 257 + code(rng));
+                    values[i] = static_cast<float>(code(rng)) / 37.0f - 3.0f;
+                }
+                // Extremes next to each other (the lerps' largest differences).
+                for (std::size_t i = 0; i < n; i += 2) {
+                    codes8[i] = 255;
+                    codes16[i] = 65535;
+                }
+                if (n > 1) codes8[1] = codes16[1] = 0;
+                Texture texture =
+                    format == TexelFormat::unorm8    ? Texture::from_unorm8(width, height, channels, codes8)
+                    : format == TexelFormat::unorm16 ? Texture::from_unorm16(width, height, channels, codes16)
+                                                     : Texture::from_float(width, height, channels, values);
+                const std::vector<float> s = along(width), t = along(height);
+                std::vector<glm::vec2> st;
+                for (std::size_t i = 0; i < std::max(s.size(), t.size()); ++i) {
+                    st.emplace_back(s[i % s.size()], t[(i * 7) % t.size()]);
+                    st.emplace_back(s[i % s.size()], coordinate(rng));
+                    st.emplace_back(coordinate(rng), t[i % t.size()]);
+                }
+                for (const tessref::Wrap wrap : {tessref::Wrap::clamp_to_edge, tessref::Wrap::repeat}) {
+                    texture.set_wrap(wrap);
+                    std::vector<glm::vec4> out(st.size());
+                    texture.texture(std::span<const glm::vec2>(st), std::span<glm::vec4>(out));
+                    for (std::size_t k = 0; k < st.size(); ++k) {
+                        SCOPED_TRACE(std::string(tessref::to_string(format)) + " " + std::to_string(width) + "x" +
+                                     std::to_string(height) + "x" + std::to_string(channels) + " coordinate (" +
+                                     std::to_string(st[k].x) + ", " + std::to_string(st[k].y) + ")");
+                        ASSERT_EQ(bits(out[k]), bits(texture.textureLod(st[k], 0.0f)));
+                    }
+                    // Every batch length up to 9, from every start up to 4.
+                    for (std::size_t first = 0; first < 4; ++first)
+                        for (std::size_t count = 1; count <= 9; ++count) {
+                            std::vector<glm::vec4> part(count, glm::vec4(-7.0f));
+                            texture.texture(std::span<const glm::vec2>(st).subspan(first, count),
+                                            std::span<glm::vec4>(part));
+                            for (std::size_t k = 0; k < count; ++k) ASSERT_EQ(bits(part[k]), bits(out[first + k]));
+                        }
+                }
+            }
+        }
+    }
+}
+
 // The double path reads a unorm texel as its code over the format's maximum, exactly,
 // for every 8- and 16-bit code (recovered from the stored float by rounding).
 TEST(TextureSampling, TexelExactOfEveryUnormCodeIsTheCodeOverItsMaximum) {

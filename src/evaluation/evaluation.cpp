@@ -4,6 +4,11 @@
 #include "tessref/evaluation.h"
 
 #include <algorithm>
+#include <type_traits>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 namespace tessref {
 
@@ -75,6 +80,78 @@ EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
     return out;
 }
 
+#if defined(__SSE2__)
+namespace {
+
+// thesis_evaluate_batch in float, four points at a time: thesis_ground's operations lane by
+// lane (mix_gpu's y - x of two corners is the same for every point, so computed once).
+struct ThesisGroundX4 {
+    __m128 c0x, c0y, c1x, c1y;      // tcPosition[0].xy, tcPosition[1].xy
+    __m128 d03x, d03y, d12x, d12y;  // tcPosition[3] - tcPosition[0], tcPosition[2] - tcPosition[1] (xy)
+    __m128 scaleXY;
+    ThesisGroundX4(const std::array<glm::vec4, 4>& c, float scale)
+        : c0x(_mm_set1_ps(c[0].x)), c0y(_mm_set1_ps(c[0].y)), c1x(_mm_set1_ps(c[1].x)), c1y(_mm_set1_ps(c[1].y)),
+          d03x(_mm_set1_ps(c[3].x - c[0].x)), d03y(_mm_set1_ps(c[3].y - c[0].y)),
+          d12x(_mm_set1_ps(c[2].x - c[1].x)), d12y(_mm_set1_ps(c[2].y - c[1].y)), scaleXY(_mm_set1_ps(scale)) {}
+};
+
+// Points tc[0..3]: their ground position (x, y) to px, py and their texture coordinates.
+inline void thesis_ground_x4(const ThesisGroundX4& g, const DomainPoint<float>* tc, float* px, float* py,
+                             glm::vec2* textureCoordinate) {
+    static_assert(sizeof(DomainPoint<float>) == 12 && sizeof(glm::vec2) == 8);
+    // (u, v, w) x 4 in three loads: u0 v0 w0 u1 | v1 w1 u2 v2 | w2 u3 v3 w3.
+    const float* p = &tc[0].u;
+    const __m128 l0 = _mm_loadu_ps(p);
+    const __m128 l1 = _mm_loadu_ps(p + 4);
+    const __m128 l2 = _mm_loadu_ps(p + 8);
+    const __m128 u23 = _mm_shuffle_ps(l1, l2, _MM_SHUFFLE(1, 1, 2, 2));                   // u2 u2 u3 u3
+    const __m128 u = _mm_shuffle_ps(l0, u23, _MM_SHUFFLE(2, 0, 3, 0));                    // u0 u1 u2 u3
+    const __m128 v01 = _mm_shuffle_ps(l0, l1, _MM_SHUFFLE(0, 0, 1, 1));                   // v0 v0 v1 v1
+    const __m128 v23 = _mm_shuffle_ps(l1, l2, _MM_SHUFFLE(2, 2, 3, 3));                   // v2 v2 v3 v3
+    const __m128 v = _mm_shuffle_ps(v01, v23, _MM_SHUFFLE(2, 0, 2, 0));                   // v0 v1 v2 v3
+    // mix_gpu (x + a * (y - x)) of the corners' x and y:
+    // GLSL: thesis_terrain.tese:24 adPosition
+    // GLSL: thesis_terrain.tese:25 bcPosition
+    const __m128 adx = _mm_add_ps(g.c0x, _mm_mul_ps(u, g.d03x));
+    const __m128 ady = _mm_add_ps(g.c0y, _mm_mul_ps(u, g.d03y));
+    const __m128 bcx = _mm_add_ps(g.c1x, _mm_mul_ps(u, g.d12x));
+    const __m128 bcy = _mm_add_ps(g.c1y, _mm_mul_ps(u, g.d12y));
+    // GLSL: thesis_terrain.tese:28 position
+    const __m128 x = _mm_add_ps(adx, _mm_mul_ps(v, _mm_sub_ps(bcx, adx)));
+    const __m128 y = _mm_add_ps(ady, _mm_mul_ps(v, _mm_sub_ps(bcy, ady)));
+    _mm_storeu_ps(px, x);
+    _mm_storeu_ps(py, y);
+    // GLSL: thesis_terrain.tese:31 textureCoordinate
+    const __m128 s = _mm_div_ps(x, g.scaleXY);
+    const __m128 t = _mm_div_ps(y, g.scaleXY);
+    _mm_storeu_ps(&textureCoordinate[0].x, _mm_unpacklo_ps(s, t));
+    _mm_storeu_ps(&textureCoordinate[2].x, _mm_unpackhi_ps(s, t));
+}
+
+// Four positions (px, py, texel.r * scaleZ) in 48 bytes: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+inline void thesis_positions_x4(const float* px, const float* py, const glm::vec4* texel, __m128 scaleZ,
+                                glm::vec3* position) {
+    static_assert(sizeof(glm::vec3) == 12 && sizeof(glm::vec4) == 16);
+    const __m128 x = _mm_loadu_ps(px);
+    const __m128 y = _mm_loadu_ps(py);
+    const __m128 r01 = _mm_unpacklo_ps(_mm_loadu_ps(&texel[0].x), _mm_loadu_ps(&texel[1].x));  // r0 r1 g0 g1
+    const __m128 r23 = _mm_unpacklo_ps(_mm_loadu_ps(&texel[2].x), _mm_loadu_ps(&texel[3].x));  // r2 r3 g2 g3
+    // GLSL: thesis_terrain.tese:34 height
+    const __m128 z = _mm_mul_ps(_mm_movelh_ps(r01, r23), scaleZ);
+    const __m128 xy01 = _mm_unpacklo_ps(x, y);                                 // x0 y0 x1 y1
+    const __m128 xy23 = _mm_unpackhi_ps(x, y);                                 // x2 y2 x3 y3
+    const __m128 z0x1 = _mm_shuffle_ps(z, x, _MM_SHUFFLE(1, 1, 0, 0));        // z0 z0 x1 x1
+    const __m128 y1z1 = _mm_shuffle_ps(y, z, _MM_SHUFFLE(1, 1, 1, 1));        // y1 y1 z1 z1
+    const __m128 z2z3 = _mm_shuffle_ps(z, xy23, _MM_SHUFFLE(3, 2, 3, 2));     // z2 z3 x3 y3
+    float* dst = &position[0].x;
+    _mm_storeu_ps(dst, _mm_shuffle_ps(xy01, z0x1, _MM_SHUFFLE(2, 0, 1, 0)));
+    _mm_storeu_ps(dst + 4, _mm_shuffle_ps(y1z1, xy23, _MM_SHUFFLE(1, 0, 2, 0)));
+    _mm_storeu_ps(dst + 8, _mm_shuffle_ps(z2z3, z2z3, _MM_SHUFFLE(1, 3, 2, 0)));
+}
+
+}  // namespace
+#endif
+
 template <typename T>
 void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
                            std::span<const DomainPoint<T>> glTessCoord, const Sampler2DBatch<T>& heightMap,
@@ -83,10 +160,39 @@ void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
     // Blocks whose height samples fit on the stack: the points' coordinates, their samples
     // in one call, then the heights.
     std::array<vec4_t<T>, 64> texel;
+    // The corners as a local: the loop need not reload them (nor recompute their differences)
+    // after each store.
+    const std::array<vec4_t<T>, 4> corners = tcPosition;
+#if defined(__SSE2__)
+    if constexpr (std::is_same_v<T, float>) {
+        // Four points at a time, the ground positions kept aside (px, py) until the heights.
+        const ThesisGroundX4 ground(corners, scaleXY);
+        const __m128 scaleZ4 = _mm_set1_ps(scaleZ);
+        alignas(16) std::array<float, 64> px, py;
+        for (std::size_t k0 = 0; k0 < glTessCoord.size(); k0 += texel.size()) {
+            const std::size_t count = std::min(texel.size(), glTessCoord.size() - k0);
+            const std::size_t whole = count & ~std::size_t{3};
+            for (std::size_t k = 0; k < whole; k += 4)
+                thesis_ground_x4(ground, &glTessCoord[k0 + k], &px[k], &py[k], &textureCoordinate[k0 + k]);
+            for (std::size_t k = whole; k < count; ++k) {
+                const ThesisGround<T> g = thesis_ground(corners, glTessCoord[k0 + k], scaleXY);
+                px[k] = g.position.x;
+                py[k] = g.position.y;
+                textureCoordinate[k0 + k] = g.textureCoordinate;
+            }
+            heightMap(textureCoordinate.subspan(k0, count), std::span<vec4_t<T>>(texel.data(), count));
+            for (std::size_t k = 0; k < whole; k += 4)
+                thesis_positions_x4(&px[k], &py[k], &texel[k], scaleZ4, &position[k0 + k]);
+            // GLSL: thesis_terrain.tese:34 height
+            for (std::size_t k = whole; k < count; ++k) position[k0 + k] = vec3_t<T>(px[k], py[k], texel[k].r * scaleZ);
+        }
+        return;
+    }
+#endif
     for (std::size_t k0 = 0; k0 < glTessCoord.size(); k0 += texel.size()) {
         const std::size_t count = std::min(texel.size(), glTessCoord.size() - k0);
         for (std::size_t k = 0; k < count; ++k) {
-            const ThesisGround<T> ground = thesis_ground(tcPosition, glTessCoord[k0 + k], scaleXY);
+            const ThesisGround<T> ground = thesis_ground(corners, glTessCoord[k0 + k], scaleXY);
             position[k0 + k] = vec3_t<T>(ground.position, T(0));
             textureCoordinate[k0 + k] = ground.textureCoordinate;
         }

@@ -8,6 +8,10 @@
 #include <tuple>
 #include <type_traits>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 namespace tessref {
 
 template <typename T>
@@ -27,12 +31,69 @@ vec3_t<T> thesis_normal_from_texture(const vec3_t<T>& rgb, const mat3_t<T>& norm
     return normal;
 }
 
+#if defined(__SSE2__)
+namespace {
+
+// thesis_normal_from_texture at four float texels, lane by lane the same operations in the
+// same order: rgb - 0.5; normalize as glm does it, v * (1 / sqrt((x*x + y*y) + z*z)); then
+// glm's mat3 * vec3, row r = (m[0][r] * x + m[1][r] * y) + m[2][r] * z. (IEEE's correctly
+// rounded sqrt and division give the scalar bits; a NaN that the arithmetic makes is the
+// same default NaN either way.)
+struct NormalMatrixX4 {
+    __m128 m[3][3];  // m[c][r]: normalMatrix[c][r] in every lane
+    explicit NormalMatrixX4(const glm::mat3& matrix) {
+        for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r) m[c][r] = _mm_set1_ps(matrix[c][r]);
+    }
+};
+
+inline void thesis_normals_from_texture_x4(const glm::vec4* texel, const NormalMatrixX4& matrix, glm::vec3* out) {
+    __m128 r = _mm_loadu_ps(&texel[0].x);
+    __m128 g = _mm_loadu_ps(&texel[1].x);
+    __m128 b = _mm_loadu_ps(&texel[2].x);
+    __m128 a = _mm_loadu_ps(&texel[3].x);
+    _MM_TRANSPOSE4_PS(r, g, b, a);
+    const __m128 half = _mm_set1_ps(0.5f);
+    const __m128 x = _mm_sub_ps(r, half);
+    const __m128 y = _mm_sub_ps(g, half);
+    const __m128 z = _mm_sub_ps(b, half);
+    const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, x), _mm_mul_ps(y, y)), _mm_mul_ps(z, z));
+    const __m128 scale = _mm_div_ps(_mm_set1_ps(1.0f), _mm_sqrt_ps(dot));
+    const __m128 nx = _mm_mul_ps(x, scale);
+    const __m128 ny = _mm_mul_ps(y, scale);
+    const __m128 nz = _mm_mul_ps(z, scale);
+    __m128 o[3];
+    for (int row = 0; row < 3; ++row)
+        o[row] = _mm_add_ps(_mm_add_ps(_mm_mul_ps(matrix.m[0][row], nx), _mm_mul_ps(matrix.m[1][row], ny)),
+                            _mm_mul_ps(matrix.m[2][row], nz));
+    // Four (x, y, z) in 48 bytes: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+    const __m128 xy01 = _mm_unpacklo_ps(o[0], o[1]);  // x0 y0 x1 y1
+    const __m128 xy23 = _mm_unpackhi_ps(o[0], o[1]);  // x2 y2 x3 y3
+    const __m128 z0x1 = _mm_shuffle_ps(o[2], o[0], _MM_SHUFFLE(1, 1, 0, 0));   // z0 z0 x1 x1
+    const __m128 y1z1 = _mm_shuffle_ps(o[1], o[2], _MM_SHUFFLE(1, 1, 1, 1));   // y1 y1 z1 z1
+    const __m128 z2z3 = _mm_shuffle_ps(o[2], xy23, _MM_SHUFFLE(3, 2, 3, 2));   // z2 z3 x3 y3
+    float* dst = &out[0].x;
+    _mm_storeu_ps(dst, _mm_shuffle_ps(xy01, z0x1, _MM_SHUFFLE(2, 0, 1, 0)));
+    _mm_storeu_ps(dst + 4, _mm_shuffle_ps(y1z1, xy23, _MM_SHUFFLE(1, 0, 2, 0)));
+    _mm_storeu_ps(dst + 8, _mm_shuffle_ps(z2z3, z2z3, _MM_SHUFFLE(1, 3, 2, 0)));
+}
+
+}  // namespace
+#endif
+
 template <typename T>
 void thesis_normals_from_texture(std::span<const vec4_t<T>> texel, const mat3_t<T>& normalMatrix,
                                  std::span<vec3_t<T>> normal) {
     const mat3_t<T> matrix = normalMatrix;  // a local: the loop need not reload it after each store
-    for (std::size_t k = 0; k < texel.size(); ++k)
-        normal[k] = thesis_normal_from_texture(vec3_t<T>(texel[k]), matrix);
+    std::size_t k = 0;
+#if defined(__SSE2__)
+    if constexpr (std::is_same_v<T, float>) {
+        static_assert(sizeof(glm::vec3) == 3 * sizeof(float) && sizeof(glm::vec4) == 4 * sizeof(float));
+        const NormalMatrixX4 matrix4(matrix);
+        for (; k + 4 <= texel.size(); k += 4) thesis_normals_from_texture_x4(&texel[k], matrix4, &normal[k]);
+    }
+#endif
+    for (; k < texel.size(); ++k) normal[k] = thesis_normal_from_texture(vec3_t<T>(texel[k]), matrix);
 }
 
 template <typename T>

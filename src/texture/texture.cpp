@@ -16,10 +16,15 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <string>
 #include <type_traits>
 #include <utility>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include "common/parallel.h"
 #include "common/unorm8.h"
@@ -250,11 +255,254 @@ struct LastAxis {
     }
 };
 
+#if defined(__SSE2__)
+// ---- the 8-bit filter, four coordinates at a time (SSE2) ------------------------------------
+//
+// The same integers as axis_unorm8 and bilinear_unorm8_n, for GL_CLAMP_TO_EDGE on a level of
+// 2 x 2 to 32764 x 32764 texels. Each axis keeps its two texels adjacent: the pair (first,
+// first + 1) with first = clamp(i, 0, size - 2), and the weight 0 where i < 0 (the lerp is then
+// v0: texel 0, which both clamped indices read) and 256 where i > size - 2 (the lerp
+// v0 + ((256 * (v1 - v0) + 128) >> 8) is then v1: texel size - 1, again what both clamped
+// indices read). A row's two texels are then 2C consecutive bytes.
+//
+// The lerps run on 16-bit lanes. Their results are codes (0..255), so they are wanted only
+// modulo 256, and v0 + ((w * d + 128) >> 8) modulo 256 needs only bits 8..15 of w * d + 128:
+// the low 16 bits of the product (pmullw), a logical shift and a 16-bit add, masked to 8 bits
+// (d in [-255, 255], w in [0, 256]).
+
+// What the axes of one level need, set up once per batch.
+struct AxisU8Setup {
+    __m128 scale;      // float(size * 256)
+    __m128 low;        // -1024
+    __m128 high;       // float(size * 256) + 1024, as axis_unorm8 rounds it
+    __m128i last;      // size - 2
+    explicit AxisU8Setup(int size) {
+        const float scaled_size = static_cast<float>(size * 256);
+        scale = _mm_set1_ps(scaled_size);
+        low = _mm_set1_ps(-1024.0f);
+        high = _mm_set1_ps(scaled_size + 1024.0f);
+        last = _mm_set1_epi32(size - 2);
+    }
+};
+
+// axis_unorm8 of four coordinates (clamp to edge) as (first, weight), the weight in both
+// 16-bit halves of its lane (a pshufd then spreads one point's weight over four or eight lanes).
+struct AxesU8x4 {
+    __m128i first;
+    __m128i weight;
+};
+
+[[gnu::always_inline]] inline AxesU8x4 axes_unorm8_x4(__m128 s, const AxisU8Setup& setup) {
+    // maxps/minps are max_or/min_of lane by lane (a NaN first operand gives the second);
+    // cvtps2dq rounds by MXCSR, as round_even's cvtss2si.
+    const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(s, setup.scale), setup.low), setup.high);
+    const __m128i fixed = _mm_sub_epi32(_mm_cvtps_epi32(x), _mm_set1_epi32(128));
+    // i = fixed >> 8 is in [-5, size + 3] and fixed - 256 * first in [-1152, 1535]: both fit
+    // 16 bits, where the signed 16-bit max and min on a 32-bit lane (high half the sign) are
+    // the 32-bit ones. The weight clamped to [0, 256] is 0 for i < 0, 256 for i > size - 2,
+    // fixed & 255 between.
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i first = _mm_min_epi16(_mm_max_epi16(_mm_srai_epi32(fixed, 8), zero), setup.last);
+    const __m128i rest = _mm_sub_epi32(fixed, _mm_slli_epi32(first, 8));
+    const __m128i weight = _mm_min_epi16(_mm_max_epi16(rest, zero), _mm_set1_epi32(256));
+    return {first, _mm_or_si128(weight, _mm_slli_epi32(weight, 16))};
+}
+
+[[gnu::always_inline]] inline __m128i load_bytes4(const std::uint8_t* p) {
+    std::uint32_t v;
+    std::memcpy(&v, p, 4);
+    return _mm_cvtsi32_si128(static_cast<int>(v));
+}
+[[gnu::always_inline]] inline __m128i load_bytes2(const std::uint8_t* p) {
+    std::uint16_t v;
+    std::memcpy(&v, p, 2);
+    return _mm_cvtsi32_si128(v);
+}
+
+// v0 + ((w * (v1 - v0) + 128) >> 8) on 16-bit lanes holding codes, modulo 256 (see above):
+// the low 8 bits of each lane are the code, and `mask` keeps them.
+[[gnu::always_inline]] inline __m128i lerp_unorm8_x8(__m128i v0, __m128i v1, __m128i weight, __m128i mask) {
+    const __m128i product = _mm_mullo_epi16(_mm_sub_epi16(v1, v0), weight);
+    const __m128i step = _mm_srli_epi16(_mm_add_epi16(product, _mm_set1_epi16(128)), 8);
+    return _mm_and_si128(_mm_add_epi16(v0, step), mask);
+}
+
+// One point's two rows lerped along s: lanes 0..C-1 row 0's channels, lanes 4..4+C-1 row 1's.
+// row0: texel (first_s, first_t); the next row stride bytes on; wx: the s weight in all lanes.
+template <int C>
+[[gnu::always_inline]] inline __m128i rows_unorm8(const std::uint8_t* row0, std::size_t stride, __m128i wx) {
+    const std::uint8_t* row1 = row0 + stride;
+    const __m128i zero = _mm_setzero_si128();
+    // v0: lanes 0..3 row 0's texel first_s, lanes 4..7 row 1's; v1 the same for first_s + 1.
+    __m128i v0, v1;
+    if constexpr (C <= 2) {
+        // A row's two texels in one load of 2C bytes; v1 is v0 a texel on.
+        const __m128i a = C == 1 ? load_bytes2(row0) : load_bytes4(row0);
+        const __m128i b = C == 1 ? load_bytes2(row1) : load_bytes4(row1);
+        v0 = _mm_unpacklo_epi8(_mm_unpacklo_epi32(a, b), zero);
+        v1 = _mm_srli_si128(v0, 2 * C);
+    } else {
+        // The first texel from the 4 bytes at the pair's start, the second from the 4 bytes
+        // that end the pair (for C = 3 one byte before it: a lane's shift puts it in place).
+        v0 = _mm_unpacklo_epi8(_mm_unpacklo_epi32(load_bytes4(row0), load_bytes4(row1)), zero);
+        v1 = _mm_unpacklo_epi8(_mm_unpacklo_epi32(load_bytes4(row0 + 2 * C - 4), load_bytes4(row1 + 2 * C - 4)),
+                               zero);
+        if constexpr (C == 3) v1 = _mm_srli_si128(v1, 2);
+    }
+    return lerp_unorm8_x8(v0, v1, wx, _mm_set1_epi16(255));
+}
+
+// Two points' samples from their rows_unorm8 (a, b) and t weights (wy: a's in lanes 0..3, b's
+// in lanes 4..7): lp_build_lerp_2d's lerp along t, then (r, g, b, a) as texture_level0_n's
+// scalar loop writes it.
+template <int C>
+[[gnu::always_inline]] inline void samples_unorm8_x2(__m128i a, __m128i b, __m128i wy, glm::vec4* out_a,
+                                                     glm::vec4* out_b) {
+    // The lanes of missing channels: g = b = 0 and a = 1 (code 255: 255 * (1/255) is 1.0f).
+    const __m128i keep = _mm_set_epi16(C > 3 ? 255 : 0, C > 2 ? 255 : 0, C > 1 ? 255 : 0, 255, C > 3 ? 255 : 0,
+                                       C > 2 ? 255 : 0, C > 1 ? 255 : 0, 255);
+    __m128i codes = lerp_unorm8_x8(_mm_unpacklo_epi64(a, b), _mm_unpackhi_epi64(a, b), wy, keep);
+    if constexpr (C < 4) codes = _mm_or_si128(codes, _mm_set_epi16(255, 0, 0, 0, 255, 0, 0, 0));
+    const __m128i zero = _mm_setzero_si128();
+    const __m128 scale = _mm_set1_ps(kUnorm8Scale);
+    _mm_storeu_ps(&out_a->x, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(codes, zero)), scale));
+    _mm_storeu_ps(&out_b->x, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(codes, zero)), scale));
+}
+
+// Four points: st[0..3] -> out[0..3].
+template <int C>
+[[gnu::always_inline]] inline void texture_unorm8_x4(const std::uint8_t* texels, std::size_t stride,
+                                                     const AxisU8Setup& s_setup, const AxisU8Setup& t_setup,
+                                                     const glm::vec2* st, glm::vec4* out) {
+    const __m128 st01 = _mm_loadu_ps(&st[0].x);
+    const __m128 st23 = _mm_loadu_ps(&st[2].x);
+    const AxesU8x4 ax = axes_unorm8_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(2, 0, 2, 0)), s_setup);
+    const AxesU8x4 ay = axes_unorm8_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(3, 1, 3, 1)), t_setup);
+    // Byte offsets first_t * stride + first_s * C, in 64 bits: points 0 and 2 from the even
+    // lanes, 1 and 3 from the odd ones (pmuludq multiplies the low halves of 64-bit lanes).
+    __m128i xc = ax.first;
+    if constexpr (C == 2) xc = _mm_slli_epi32(xc, 1);
+    if constexpr (C == 3) xc = _mm_add_epi32(xc, _mm_slli_epi32(xc, 1));
+    if constexpr (C == 4) xc = _mm_slli_epi32(xc, 2);
+    const __m128i stride_v = _mm_set1_epi32(static_cast<int>(stride));
+    const __m128i even = _mm_add_epi64(_mm_mul_epu32(ay.first, stride_v),
+                                       _mm_and_si128(xc, _mm_set_epi32(0, -1, 0, -1)));
+    const __m128i odd = _mm_add_epi64(_mm_mul_epu32(_mm_srli_epi64(ay.first, 32), stride_v), _mm_srli_epi64(xc, 32));
+    alignas(16) std::uint64_t offset_even[2], offset_odd[2];
+    _mm_store_si128(reinterpret_cast<__m128i*>(offset_even), even);
+    _mm_store_si128(reinterpret_cast<__m128i*>(offset_odd), odd);
+    const __m128i w = ax.weight;
+    const __m128i r0 = rows_unorm8<C>(texels + offset_even[0], stride, _mm_shuffle_epi32(w, _MM_SHUFFLE(0, 0, 0, 0)));
+    const __m128i r1 = rows_unorm8<C>(texels + offset_odd[0], stride, _mm_shuffle_epi32(w, _MM_SHUFFLE(1, 1, 1, 1)));
+    const __m128i r2 = rows_unorm8<C>(texels + offset_even[1], stride, _mm_shuffle_epi32(w, _MM_SHUFFLE(2, 2, 2, 2)));
+    const __m128i r3 = rows_unorm8<C>(texels + offset_odd[1], stride, _mm_shuffle_epi32(w, _MM_SHUFFLE(3, 3, 3, 3)));
+    samples_unorm8_x2<C>(r0, r1, _mm_shuffle_epi32(ay.weight, _MM_SHUFFLE(1, 1, 0, 0)), out + 0, out + 1);
+    samples_unorm8_x2<C>(r2, r3, _mm_shuffle_epi32(ay.weight, _MM_SHUFFLE(3, 3, 2, 2)), out + 2, out + 3);
+}
+
+// texture_level0_n's unorm8 clamp-to-edge case for a level of 2 x 2 to 32764 x 32764.
+template <int C>
+[[gnu::always_inline]] inline void texture_level0_unorm8_x4(const TextureLevel& level, const glm::vec2* st,
+                                                            glm::vec4* out, std::size_t count) {
+    const std::uint8_t* texels = level.unorm8.data();
+    const std::size_t stride = static_cast<std::size_t>(level.width) * C;
+    const AxisU8Setup s_setup(level.width), t_setup(level.height);
+    std::size_t k = 0;
+    for (; k + 4 <= count; k += 4) texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, st + k, out + k);
+    if (k < count) {
+        // The last one to three points, padded with copies of the last.
+        glm::vec2 tail_st[4];
+        glm::vec4 tail_out[4];
+        for (std::size_t j = 0; j < 4; ++j) tail_st[j] = st[std::min(k + j, count - 1)];
+        texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, tail_st, tail_out);
+        for (std::size_t j = 0; k + j < count; ++j) out[k + j] = tail_out[j];
+    }
+}
+
+// The levels texture_level0_unorm8_x4 takes.
+inline bool unorm8_x4_fits(const TextureLevel& level) {
+    return level.width >= 2 && level.height >= 2 && level.width <= 32764 && level.height <= 32764;
+}
+
+// ---- the float filter of a one-channel level: the axes four coordinates at a time --------
+//
+// axis_gpu's operations lane by lane, in the same order (multiply, subtract, max_or, min_of,
+// floor_small, the clamped indices); the fetches and the lerps (lerp_gpu, an fma) stay
+// bilinear_gpu_n<1>'s, point by point. For GL_CLAMP_TO_EDGE on a level of at most
+// 32766 x 32766 texels: the index i = floor(u) is in [-1, size] and i + 1 fits 16 bits, where
+// the signed 16-bit max and min on a 32-bit lane are the 32-bit ones.
+struct AxesFx4 {
+    alignas(16) std::int32_t i0[4];
+    alignas(16) std::int32_t i1[4];
+    alignas(16) float weight[4];
+};
+
+[[gnu::always_inline]] inline void axes_gpu_x4(__m128 s, __m128 size_f, __m128i last, AxesFx4& axes) {
+    __m128 u = _mm_mul_ps(s, size_f);
+    u = _mm_sub_ps(u, _mm_set1_ps(0.5f));
+    u = _mm_min_ps(_mm_max_ps(u, _mm_set1_ps(-1.0f)), size_f);
+    // floor_small: t = float(int(u)), minus 1 where t > u (the mask, -1 as an integer).
+    const __m128i truncated = _mm_cvttps_epi32(u);
+    const __m128 t = _mm_cvtepi32_ps(truncated);
+    const __m128 above = _mm_cmpgt_ps(t, u);
+    const __m128 fl = _mm_sub_ps(t, _mm_and_ps(above, _mm_set1_ps(1.0f)));
+    const __m128i i = _mm_add_epi32(truncated, _mm_castps_si128(above));
+    const __m128i zero = _mm_setzero_si128();
+    _mm_store_ps(axes.weight, _mm_sub_ps(u, fl));
+    _mm_store_si128(reinterpret_cast<__m128i*>(axes.i0), _mm_min_epi16(_mm_max_epi16(i, zero), last));
+    const __m128i next = _mm_add_epi32(i, _mm_set1_epi32(1));
+    _mm_store_si128(reinterpret_cast<__m128i*>(axes.i1), _mm_min_epi16(_mm_max_epi16(next, zero), last));
+}
+
+// texture_level0_n<1, false>'s clamp-to-edge case for a level of at most 32766 x 32766.
+[[gnu::always_inline]] inline void texture_level0_float1_x4(const TextureLevel& level, const glm::vec2* st,
+                                                            glm::vec4* out, std::size_t count) {
+    const __m128 width_f = _mm_set1_ps(static_cast<float>(level.width));
+    const __m128 height_f = _mm_set1_ps(static_cast<float>(level.height));
+    const __m128i last_s = _mm_set1_epi32(level.width - 1);
+    const __m128i last_t = _mm_set1_epi32(level.height - 1);
+    for (std::size_t k0 = 0; k0 < count; k0 += 4) {
+        // The last one to three points padded with copies of the last.
+        glm::vec2 tail[4];
+        const glm::vec2* p = st + k0;
+        const std::size_t n = std::min<std::size_t>(4, count - k0);
+        if (n < 4) {
+            for (std::size_t j = 0; j < 4; ++j) tail[j] = st[k0 + std::min(j, n - 1)];
+            p = tail;
+        }
+        const __m128 st01 = _mm_loadu_ps(&p[0].x);
+        const __m128 st23 = _mm_loadu_ps(&p[2].x);
+        AxesFx4 ax, ay;
+        axes_gpu_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(2, 0, 2, 0)), width_f, last_s, ax);
+        axes_gpu_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(3, 1, 3, 1)), height_f, last_t, ay);
+        for (std::size_t j = 0; j < n; ++j) {
+            const AxisF x{ax.i0[j], ax.i1[j], ax.weight[j]};
+            const AxisF y{ay.i0[j], ay.i1[j], ay.weight[j]};
+            float value[4];
+            bilinear_gpu_n<1>(level, x, y, value);
+            out[k0 + j] = glm::vec4(value[0], 0.0f, 0.0f, 1.0f);
+        }
+    }
+}
+
+// The levels texture_level0_float1_x4 takes.
+inline bool float1_x4_fits(const TextureLevel& level) { return level.width <= 32766 && level.height <= 32766; }
+#endif
+
+
 // texture(sampler, st[k]) on level 0 for k < count: the texture's C channels, the others as
 // GL fills them (g = b = 0, a = 1); unorm8 codes read as code * (1/255).
 template <int C, bool Unorm8>
 [[gnu::always_inline]] inline void texture_level0_n(const TextureLevel& level, const glm::vec2* st, glm::vec4* out,
                                                     std::size_t count, bool repeat) {
+#if defined(__SSE2__)
+    if constexpr (Unorm8) {
+        if (!repeat && unorm8_x4_fits(level))
+            return texture_level0_unorm8_x4<C>(level, st, out, count);
+    } else if constexpr (C == 1) {
+        if (!repeat && float1_x4_fits(level)) return texture_level0_float1_x4(level, st, out, count);
+    }
+#endif
     LastAxis<Unorm8> s_axis, t_axis;
     for (std::size_t k = 0; k < count; ++k) {
         const auto& ax = s_axis(st[k].x, level.width, repeat);
