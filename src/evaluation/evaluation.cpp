@@ -10,6 +10,8 @@
 #include <immintrin.h>
 #endif
 
+#include "common/xyz4.h"
+
 namespace tessref {
 
 namespace {
@@ -128,7 +130,7 @@ inline void thesis_ground_x4(const ThesisGroundX4& g, const DomainPoint<float>* 
     _mm_storeu_ps(&textureCoordinate[2].x, _mm_unpackhi_ps(s, t));
 }
 
-// Four positions (px, py, texel.r * scaleZ) in 48 bytes: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+// Four positions (px, py, texel.r * scaleZ), stored as four glm::vec3 (store_xyz4).
 inline void thesis_positions_x4(const float* px, const float* py, const glm::vec4* texel, __m128 scaleZ,
                                 glm::vec3* position) {
     static_assert(sizeof(glm::vec3) == 12 && sizeof(glm::vec4) == 16);
@@ -138,15 +140,7 @@ inline void thesis_positions_x4(const float* px, const float* py, const glm::vec
     const __m128 r23 = _mm_unpacklo_ps(_mm_loadu_ps(&texel[2].x), _mm_loadu_ps(&texel[3].x));  // r2 r3 g2 g3
     // GLSL: thesis_terrain.tese:34 height
     const __m128 z = _mm_mul_ps(_mm_movelh_ps(r01, r23), scaleZ);
-    const __m128 xy01 = _mm_unpacklo_ps(x, y);                                 // x0 y0 x1 y1
-    const __m128 xy23 = _mm_unpackhi_ps(x, y);                                 // x2 y2 x3 y3
-    const __m128 z0x1 = _mm_shuffle_ps(z, x, _MM_SHUFFLE(1, 1, 0, 0));        // z0 z0 x1 x1
-    const __m128 y1z1 = _mm_shuffle_ps(y, z, _MM_SHUFFLE(1, 1, 1, 1));        // y1 y1 z1 z1
-    const __m128 z2z3 = _mm_shuffle_ps(z, xy23, _MM_SHUFFLE(3, 2, 3, 2));     // z2 z3 x3 y3
-    float* dst = &position[0].x;
-    _mm_storeu_ps(dst, _mm_shuffle_ps(xy01, z0x1, _MM_SHUFFLE(2, 0, 1, 0)));
-    _mm_storeu_ps(dst + 4, _mm_shuffle_ps(y1z1, xy23, _MM_SHUFFLE(1, 0, 2, 0)));
-    _mm_storeu_ps(dst + 8, _mm_shuffle_ps(z2z3, z2z3, _MM_SHUFFLE(1, 3, 2, 0)));
+    store_xyz4(&position[0].x, x, y, z);
 }
 
 }  // namespace

@@ -12,6 +12,8 @@
 #include <immintrin.h>
 #endif
 
+#include "common/xyz4.h"
+
 namespace tessref {
 
 template <typename T>
@@ -66,16 +68,7 @@ inline void thesis_normals_from_texture_x4(const glm::vec4* texel, const NormalM
     for (int row = 0; row < 3; ++row)
         o[row] = _mm_add_ps(_mm_add_ps(_mm_mul_ps(matrix.m[0][row], nx), _mm_mul_ps(matrix.m[1][row], ny)),
                             _mm_mul_ps(matrix.m[2][row], nz));
-    // Four (x, y, z) in 48 bytes: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
-    const __m128 xy01 = _mm_unpacklo_ps(o[0], o[1]);  // x0 y0 x1 y1
-    const __m128 xy23 = _mm_unpackhi_ps(o[0], o[1]);  // x2 y2 x3 y3
-    const __m128 z0x1 = _mm_shuffle_ps(o[2], o[0], _MM_SHUFFLE(1, 1, 0, 0));   // z0 z0 x1 x1
-    const __m128 y1z1 = _mm_shuffle_ps(o[1], o[2], _MM_SHUFFLE(1, 1, 1, 1));   // y1 y1 z1 z1
-    const __m128 z2z3 = _mm_shuffle_ps(o[2], xy23, _MM_SHUFFLE(3, 2, 3, 2));   // z2 z3 x3 y3
-    float* dst = &out[0].x;
-    _mm_storeu_ps(dst, _mm_shuffle_ps(xy01, z0x1, _MM_SHUFFLE(2, 0, 1, 0)));
-    _mm_storeu_ps(dst + 4, _mm_shuffle_ps(y1z1, xy23, _MM_SHUFFLE(1, 0, 2, 0)));
-    _mm_storeu_ps(dst + 8, _mm_shuffle_ps(z2z3, z2z3, _MM_SHUFFLE(1, 3, 2, 0)));
+    store_xyz4(&out[0].x, o[0], o[1], o[2]);
 }
 
 }  // namespace
