@@ -302,34 +302,46 @@ TEST(TextureSampling, LuminanceSamplesAsItsThreeChannelCopy) {
     EXPECT_THROW(rgb.set_swizzle(tessref::Swizzle::luminance), tessref::Error);
 }
 
+// A sample's bits (equal samples compare equal, NaNs by their bits).
+std::array<std::uint32_t, 4> bits(const glm::vec4& v) {
+    return {std::bit_cast<std::uint32_t>(v.x), std::bit_cast<std::uint32_t>(v.y), std::bit_cast<std::uint32_t>(v.z),
+            std::bit_cast<std::uint32_t>(v.w)};
+}
+
+// Random texels of one image in every format (8- and 16-bit codes, floats), and the texture
+// of one of them.
+struct RandomTexels {
+    std::vector<std::uint8_t> codes8;
+    std::vector<std::uint16_t> codes16;
+    std::vector<float> values;
+    RandomTexels(std::size_t n, std::mt19937& rng) : codes8(n), codes16(n), values(n) {
+        std::uniform_int_distribution<int> code(0, 255);
+        for (std::size_t i = 0; i < n; ++i) {
+            codes8[i] = static_cast<std::uint8_t>(code(rng));
+            codes16[i] = static_cast<std::uint16_t>(codes8[i] * 257 + code(rng));
+            values[i] = static_cast<float>(code(rng)) / 37.0f - 3.0f;
+        }
+    }
+    Texture texture(TexelFormat format, int width, int height, int channels) const {
+        return format == TexelFormat::unorm8    ? Texture::from_unorm8(width, height, channels, codes8)
+               : format == TexelFormat::unorm16 ? Texture::from_unorm16(width, height, channels, codes16)
+                                                : Texture::from_float(width, height, channels, values);
+    }
+};
+
 // The batched texture() is the scalar one at every coordinate, bit for bit, for every format,
 // channel count and wrap mode, and both are textureLod(st, 0) (a separate code path): random
 // coordinates in and well outside [0, 1], texel centres and edges, NaN and infinities.
 TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
     std::mt19937 rng(20261127);
     std::uniform_real_distribution<float> coordinate(-0.6f, 1.6f);
-    std::uniform_int_distribution<int> code(0, 255);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();
-    const auto bits = [](const glm::vec4& v) {
-        return std::array<std::uint32_t, 4>{std::bit_cast<std::uint32_t>(v.x), std::bit_cast<std::uint32_t>(v.y),
-                                            std::bit_cast<std::uint32_t>(v.z), std::bit_cast<std::uint32_t>(v.w)};
-    };
     for (const TexelFormat format : {TexelFormat::unorm8, TexelFormat::unorm16, TexelFormat::float32}) {
         for (int channels = 1; channels <= 4; ++channels) {
             const int width = 7, height = 5;
-            const std::size_t n = static_cast<std::size_t>(width * height * channels);
-            std::vector<std::uint8_t> codes8(n);
-            std::vector<std::uint16_t> codes16(n);
-            std::vector<float> values(n);
-            for (std::size_t i = 0; i < n; ++i) {
-                codes8[i] = static_cast<std::uint8_t>(code(rng));
-                codes16[i] = static_cast<std::uint16_t>(codes8[i] * 257 + code(rng));
-                values[i] = static_cast<float>(code(rng)) / 37.0f - 3.0f;
-            }
-            Texture texture = format == TexelFormat::unorm8    ? Texture::from_unorm8(width, height, channels, codes8)
-                              : format == TexelFormat::unorm16 ? Texture::from_unorm16(width, height, channels, codes16)
-                                                               : Texture::from_float(width, height, channels, values);
+            Texture texture = RandomTexels(static_cast<std::size_t>(width * height * channels), rng)
+                                  .texture(format, width, height, channels);
             for (const tessref::Wrap wrap : {tessref::Wrap::clamp_to_edge, tessref::Wrap::repeat}) {
                 texture.set_wrap(wrap);
                 std::vector<glm::vec2> st = {glm::vec2(0.0f), glm::vec2(1.0f), glm::vec2(0.5f / width, 1.5f / height),
@@ -355,14 +367,9 @@ TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
 // every length up to 9 (the remainders of groups of four).
 TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
     std::mt19937 rng(20260611);
-    std::uniform_int_distribution<int> code(0, 255);
     std::uniform_real_distribution<float> coordinate(-0.6f, 1.6f);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();
-    const auto bits = [](const glm::vec4& v) {
-        return std::array<std::uint32_t, 4>{std::bit_cast<std::uint32_t>(v.x), std::bit_cast<std::uint32_t>(v.y),
-                                            std::bit_cast<std::uint32_t>(v.z), std::bit_cast<std::uint32_t>(v.w)};
-    };
     // Coordinates along an axis of `size` texels: every half texel and its float neighbours,
     // the 8-bit path's rounding boundaries (x.5 / 256 of a texel) next to each texel edge,
     // and the special values.
@@ -392,24 +399,14 @@ TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
         for (int channels = 1; channels <= 4; ++channels) {
             for (const auto& [width, height] : sizes) {
                 const std::size_t n = static_cast<std::size_t>(width * height * channels);
-                std::vector<std::uint8_t> codes8(n);
-                std::vector<std::uint16_t> codes16(n);
-                std::vector<float> values(n);
-                for (std::size_t i = 0; i < n; ++i) {
-                    codes8[i] = static_cast<std::uint8_t>(code(rng));
-                    codes16[i] = static_cast<std::uint16_t>(codes8[i] * 257 + code(rng));
-                    values[i] = static_cast<float>(code(rng)) / 37.0f - 3.0f;
-                }
+                RandomTexels texels(n, rng);
                 // Extremes next to each other (the lerps' largest differences).
                 for (std::size_t i = 0; i < n; i += 2) {
-                    codes8[i] = 255;
-                    codes16[i] = 65535;
+                    texels.codes8[i] = 255;
+                    texels.codes16[i] = 65535;
                 }
-                if (n > 1) codes8[1] = codes16[1] = 0;
-                Texture texture =
-                    format == TexelFormat::unorm8    ? Texture::from_unorm8(width, height, channels, codes8)
-                    : format == TexelFormat::unorm16 ? Texture::from_unorm16(width, height, channels, codes16)
-                                                     : Texture::from_float(width, height, channels, values);
+                if (n > 1) texels.codes8[1] = texels.codes16[1] = 0;
+                Texture texture = texels.texture(format, width, height, channels);
                 const std::vector<float> s = along(width), t = along(height);
                 std::vector<glm::vec2> st;
                 for (std::size_t i = 0; i < std::max(s.size(), t.size()); ++i) {
