@@ -72,6 +72,17 @@ glm::vec4 at_window(float x, float y, int width, int height, float z = 0.0f) {
             1.0f};
 }
 
+// A window coordinate near `centre` for triangles that put the fill rule to work: with
+// probability p_centre exactly a pixel centre, then up to p_half half-way between two, else a
+// point of the 1/256 snapping grid within `spread` of centre.
+float snapped_near(std::mt19937& rng, float centre, float p_centre, float p_half, float spread) {
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const float r = unit(rng);
+    if (r < p_centre) return std::floor(centre) + 0.5f;
+    if (r < p_half) return std::floor(centre);
+    return std::round((centre + (unit(rng) * 2.0f * spread - spread)) * 256.0f) / 256.0f;
+}
+
 // One triangle a, b, c in GL window coordinates of a width x height viewport (w = 1, z = 0).
 Mesh window_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, int width, int height) {
     Mesh m;
@@ -381,12 +392,7 @@ TEST(RasterSubPixel, SmallBoxFragmentsMatchTheTilesRasterizationOfTheirPlanes) {
     constexpr int W = 160, H = 100;
     std::mt19937 rng(20261127);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    auto coordinate = [&](float centre) {
-        const float r = unit(rng);
-        if (r < 0.15f) return std::floor(centre) + 0.5f;  // a pixel centre
-        if (r < 0.25f) return std::floor(centre);         // half-way between two
-        return std::round((centre + (unit(rng) * 2.4f - 1.2f)) * 256.0f) / 256.0f;
-    };
+    auto coordinate = [&](float centre) { return snapped_near(rng, centre, 0.15f, 0.25f, 1.2f); };
     Mesh m;
     for (int t = 0; t < 4000; ++t) {
         const float cx = unit(rng) * W, cy = unit(rng) * H;
@@ -533,12 +539,7 @@ TEST(RasterFastPaths, OnePixelSetupMatchesSetupTriangleAndItsPlanes) {
     const r::Viewport vp = r::make_viewport(W, H);
     std::mt19937 rng(20261128);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    auto coordinate = [&](float centre) {
-        const float u = unit(rng);
-        if (u < 0.2f) return std::floor(centre) + 0.5f;  // a pixel centre
-        if (u < 0.3f) return std::floor(centre);         // half-way between two
-        return std::round((centre + (unit(rng) * 2.0f - 1.0f)) * 256.0f) / 256.0f;
-    };
+    auto coordinate = [&](float centre) { return snapped_near(rng, centre, 0.2f, 0.3f, 1.0f); };
     const glm::vec3 unit_weights[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     std::size_t outcomes[3] = {}, on_edge = 0;
     for (int t = 0; t < 300000; ++t) {
