@@ -383,20 +383,18 @@ bool any_index_at_least(std::span<const std::array<std::uint32_t, 3>> triangles,
     return beyond;
 }
 
-inline float eval(const float plane[3], float fx, float fy) { return raster::eval_plane(plane, fx, fy); }
-
 // A fragment's position relative to the primitive's attribute origin.
 inline float offset_x(const Primitive& p, int px) { return static_cast<float>(px) - p.ox; }
 inline float offset_y(const Primitive& p, int py) { return static_cast<float>(py) - p.oy; }
 
 // Depth at a pixel centre, clamped to the depth range.
-inline float fragment_depth(const Primitive& p, float fx, float fy) { return raster::depth_value(eval(p.z, fx, fy)); }
+inline float fragment_depth(const Primitive& p, float fx, float fy) { return raster::depth_value(raster::eval_plane(p.z, fx, fy)); }
 
 // The perspective-correct weights at (wx, wy) relative to the origin.
 inline glm::vec3 fragment_weights(const Primitive& p, float wx, float wy) {
-    const float oow = eval(p.oow, wx, wy);
+    const float oow = raster::eval_plane(p.oow, wx, wy);
     glm::vec3 b;
-    for (int k = 0; k < 3; ++k) b[k] = eval(p.bw[k], wx, wy) / oow;
+    for (int k = 0; k < 3; ++k) b[k] = raster::eval_plane(p.bw[k], wx, wy) / oow;
     return b;
 }
 
