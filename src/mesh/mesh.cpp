@@ -342,7 +342,7 @@ void SurfaceWelder::add(const SurfaceMesh& piece, std::vector<std::uint32_t>* ve
     for (const auto& [welded, i] : s.replaced) take_copy(welded, i);
     s.welded.emitted_vertices += n;
     s.welded.degenerate_triangles += append_welded_triangles(piece.triangles, s.piece_map, out.triangles);
-    if (vertex_map) *vertex_map = s.piece_map;
+    if (vertex_map) vertex_map->swap(s.piece_map);  // the next piece resizes its own
 }
 
 WeldedMesh SurfaceWelder::take() {
