@@ -8,6 +8,7 @@
 //
 // Every flag and the output name are checked before the scene is loaded; the image goes to a
 // temporary file next to OUT and is renamed over it only when complete.
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -27,6 +28,9 @@
 namespace tessref::cli {
 
 namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 struct RenderCommandOptions {
     std::string scene;
@@ -73,7 +77,9 @@ int run_render(const RenderCommandOptions& options) {
                                                       : RenderMode::fill;
     AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
 
+    const auto load_start = Clock::now();
     const Scene scene = load_scene(options.scene);
+    const double seconds_load = seconds_since(load_start);
     if (scene.camera) {
         // Refused here, before the pipeline, rather than after it as an "out of memory".
         const glm::ivec2 size = options.size.empty() ? scene.camera->viewport : render_options.size;
@@ -88,8 +94,10 @@ int run_render(const RenderCommandOptions& options) {
     RaytraceStats raytrace_stats;
     const RenderResult result = options.raytrace ? raytrace_scene(scene, render_options, &raytrace_stats)
                                                  : render_scene(scene, render_options);
+    const auto write_start = Clock::now();
     write_image(result, output.temp_path().string(), format, aovs);
     output.commit();
+    const double seconds_write = seconds_since(write_start);
     if (aovs.triangle && result.stats.triangles > (1u << 24))
         std::cerr << "tessref: warning: " << result.stats.triangles
                   << " triangles: ids above 16777216 are not exact in the float channel triangle_id\n";
@@ -112,9 +120,10 @@ int run_render(const RenderCommandOptions& options) {
         std::cout << ")";
     }
     if (!options.raytrace) {
-        char times[160];
-        std::snprintf(times, sizeof times, " (pipeline %.3f s, raster %.3f s, shading %.3f s)",
-                      result.stats.seconds_pipeline, result.stats.seconds_raster, result.stats.seconds_shade);
+        char times[200];
+        std::snprintf(times, sizeof times, " (load %.3f s, pipeline %.3f s, raster %.3f s, shading %.3f s, write %.3f s)",
+                      seconds_load, result.stats.seconds_pipeline, result.stats.seconds_raster,
+                      result.stats.seconds_shade, seconds_write);
         std::cout << times;
     }
     std::cout << "\n";
