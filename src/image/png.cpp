@@ -141,7 +141,10 @@ void check_chunks(const std::string& path, const std::string& kind) {
 // into bands as pigz cuts a gzip stream: every row is filtered (Sub: each byte less the
 // byte one pixel to its left), the filtered rows are split into bands of about kBandBytes,
 // and the bands are deflated in parallel, each primed with the 32 KiB of filtered data
-// before it (deflateSetDictionary) so that a cut costs almost no compression. Every band
+// before it (deflateSetDictionary) so that a cut costs almost no compression. A band filters
+// its own rows, and again the rows before it that the primer reads, into a buffer of its
+// own: no image-sized buffer of filtered rows is cleared and faulted in on one thread, and
+// the rows are still in cache when zlib reads them. Every band
 // but the last ends on a byte boundary (Z_SYNC_FLUSH), so the bands' raw deflate data
 // concatenate into one deflate stream; the zlib stream around them (RFC 1950) takes the
 // Adler-32 combined from the bands' (adler32_combine). Each band is one IDAT chunk.
@@ -180,6 +183,16 @@ void sub_filter(const std::uint8_t* in, std::uint8_t* out, std::size_t row, std:
     for (; i < row; ++i) out[i] = static_cast<std::uint8_t>(in[i] - in[i - pixel]);
 }
 
+// Rows [first, end) of the image, filtered, one after the other: each row's filter-type
+// byte, then the filtered row (`row` bytes of `pixel`-byte pixels).
+void filter_rows(const std::uint8_t* samples, std::size_t row, std::size_t pixel, std::size_t first, std::size_t end,
+                 std::uint8_t* out) {
+    for (std::size_t y = first; y < end; ++y, out += row + 1) {
+        out[0] = 1;  // the filter type: Sub
+        sub_filter(samples + y * row, out + 1, row, pixel);
+    }
+}
+
 // The raw deflate data of filtered[begin, end), primed with what precedes it; the last band
 // finishes the stream. Empty on a zlib failure.
 std::vector<std::uint8_t> deflate_band(const std::vector<std::uint8_t>& filtered, std::size_t begin, std::size_t end,
@@ -213,27 +226,29 @@ bool encode_png(const std::uint8_t* samples, int width, int height, int channels
     const std::size_t pixel = static_cast<std::size_t>(channels);
     const std::size_t row = static_cast<std::size_t>(width) * pixel;
     const std::size_t stride = row + 1;  // a filter-type byte, then the filtered row
-    std::vector<std::uint8_t> filtered(stride * static_cast<std::size_t>(height));
-    tessref::parallel_for(0, height, [&](int y) {
-        const std::uint8_t* in = samples + static_cast<std::size_t>(y) * row;
-        std::uint8_t* out = filtered.data() + static_cast<std::size_t>(y) * stride;
-        out[0] = 1;  // the filter type: Sub
-        sub_filter(in, out + 1, row, pixel);
-    });
+    const std::size_t rows = static_cast<std::size_t>(height);
     const std::size_t band_rows = std::max<std::size_t>(1, kBandBytes / stride);
-    const std::size_t bands = (static_cast<std::size_t>(height) + band_rows - 1) / band_rows;
-    // Band b is filtered[begin(b), begin(b + 1)).
-    const auto begin = [&](std::size_t b) { return std::min(filtered.size(), b * band_rows * stride); };
+    const std::size_t bands = (rows + band_rows - 1) / band_rows;
+    // Band b is rows [first_row(b), first_row(b + 1)); its primer, the rows before it that
+    // hold the last kDeflateWindow filtered bytes.
+    const auto first_row = [&](std::size_t b) { return std::min(rows, b * band_rows); };
+    const std::size_t primer_rows = (kDeflateWindow + stride - 1) / stride;
     std::vector<std::vector<std::uint8_t>> deflated(bands);
     std::vector<uLong> adler(bands);
     tessref::parallel_for(std::size_t{0}, bands, [&](std::size_t b) {
-        deflated[b] = deflate_band(filtered, begin(b), begin(b + 1), b + 1 == bands);
-        adler[b] = adler32_z(1, filtered.data() + begin(b), begin(b + 1) - begin(b));
+        const std::size_t first = first_row(b), end = first_row(b + 1);
+        const std::size_t primed = first - std::min(first, primer_rows);
+        std::vector<std::uint8_t> filtered((end - primed) * stride);
+        filter_rows(samples, row, pixel, primed, end, filtered.data());
+        const std::size_t begin = (first - primed) * stride;
+        deflated[b] = deflate_band(filtered, begin, filtered.size(), b + 1 == bands);
+        adler[b] = adler32_z(1, filtered.data() + begin, filtered.size() - begin);
     });
     uLong checksum = adler[0];
     for (std::size_t b = 0; b < bands; ++b) {
         if (deflated[b].empty()) return false;
-        if (b > 0) checksum = adler32_combine(checksum, adler[b], static_cast<z_off_t>(begin(b + 1) - begin(b)));
+        const std::size_t band_bytes = (first_row(b + 1) - first_row(b)) * stride;
+        if (b > 0) checksum = adler32_combine(checksum, adler[b], static_cast<z_off_t>(band_bytes));
     }
 
     static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
