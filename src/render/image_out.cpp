@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -63,9 +64,11 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
     image::WriteOptions options;
     options.software_tag = true;  // and no time stamp: the same render gives the same bytes
     if (format != ImageFormat::exr) {
-        const std::vector<std::uint8_t> pixels = to_rgba8(result);
+        // Not cleared first: every byte is written by to_rgba8, on every thread.
+        const auto pixels = std::make_unique_for_overwrite<std::uint8_t[]>(n * 4);
+        render_detail::to_rgba8(result, pixels.get());
         if (format == ImageFormat::tiff) options.compression = "zip";
-        image::write_image(path, {width, height, 4, image::SampleType::uint8, pixels.data()}, options);
+        image::write_image(path, {width, height, 4, image::SampleType::uint8, pixels.get()}, options);
         return;
     }
 

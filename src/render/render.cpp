@@ -756,14 +756,18 @@ glm::vec3 level_heat_colour(float level) {
     return glm::mix(stops[k], stops[k + 1], s - static_cast<float>(k));
 }
 
-std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
-    std::vector<std::uint8_t> out(result.colour.size() * 4);
+void render_detail::to_rgba8(const RenderResult& result, std::uint8_t* out) {
     // In parallel: it sits between the render and the image write, where nothing else runs.
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, result.colour.size(), 65536),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               for (std::size_t i = r.begin(); i < r.end(); ++i)
                                   unorm8_rgba(&result.colour[i][0], &out[i * 4]);
                           });
+}
+
+std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
+    std::vector<std::uint8_t> out(result.colour.size() * 4);
+    render_detail::to_rgba8(result, out.data());
     return out;
 }
 

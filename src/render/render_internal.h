@@ -69,6 +69,10 @@ inline QuadPixels quad_of(int x, int row) { return {x & ~1, row & ~1}; }
 void allocate(RenderResult& result, int width, int height, bool visibility = true, bool provenance = true);
 void take_visibility(RenderResult& result, Framebuffer& fb);
 
+// to_rgba8 into `out` (4 bytes a pixel), in parallel: for a caller whose buffer is not
+// cleared first, so that its pages are first touched on every thread, not one.
+void to_rgba8(const RenderResult& result, std::uint8_t* out);
+
 // The camera with the image size applied (RenderOptions::size), and the size checked.
 SceneCamera camera_for(const Scene& scene, const RenderOptions& options);
 
