@@ -303,6 +303,7 @@ struct Chunk {
     std::vector<std::uint32_t> tile_items;
     std::vector<std::uint32_t> candidates, fill;  // setup's working memory
     std::vector<raster::BoxBounds> boxes;         // of the candidates
+    std::vector<std::uint8_t> kinds;              // of the candidates setup keeps: one pixel (and facing) or other
     RasterStats stats;
 };
 
@@ -622,41 +623,60 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
         chunk.stats.primitives += rejected;
         chunk.stats.primitives_culled += rejected;
     } else {
+        chunk.boxes.assign(last - first, raster::kAnywhereBox);  // unread, but the candidates carry one
         for (std::size_t t = first; t < last; ++t) candidates[count++] = static_cast<std::uint32_t>(t);
     }
 
-    // At most one fragment a candidate unless its box is larger or it is clipped.
-    chunk.frags.reserve(count);
-    chunk.items.reserve(count);
-    chunk.item_tiles.reserve(count);
+    // emit_filled's path for an unclipped triangle whose box is one pixel, in two passes (see
+    // one_pixel_coverage): first every such candidate's outcome, keeping the drawn ones and the
+    // others in order (in place: a candidate is written at or before its own slot); then the
+    // fragments of the drawn ones and setup_other for the others, in the candidates' order.
     const bool one_pixel_fragments = filled && !ctx.settings.quad_derivatives;
     const raster::Face face = face_of(ctx.settings);
-    const raster::BoxBounds* const boxes = chunk.boxes.data();
+    raster::BoxBounds* const boxes = chunk.boxes.data();
+    chunk.kinds.resize(count);
+    std::uint8_t* const kinds = chunk.kinds.data();
+    constexpr std::uint8_t kOther = 0, kOnePixel = 1, kClockwise = 2, kFront = 4;
     std::uint64_t one_pixel = 0, one_pixel_culled = 0;
+    std::size_t kept = 0;
     for (std::size_t i = 0; i < count; ++i) {
+        const std::uint32_t t = candidates[i];
+        const raster::BoxBounds box = boxes[i];
+        candidates[kept] = t;
+        boxes[kept] = box;
+        if (one_pixel_fragments & (box.x0 >= 0) & (box.x0 + box.neg_x1 == 0) & (box.y0 + box.neg_y1 == 0)) {
+            // raster::one_pixel_box, without a branch per condition
+            const auto& tri = tris[t];
+            const raster::OnePixelCoverage c =
+                raster::one_pixel_coverage(fixed[tri[0]], fixed[tri[1]], fixed[tri[2]], box.x0, box.y0, face);
+            ++one_pixel;
+            one_pixel_culled += c.setup == raster::Setup::culled;
+            kinds[kept] = static_cast<std::uint8_t>(kOnePixel | (c.cw << 1) | (c.front << 2));
+            kept += c.setup == raster::Setup::drawn;
+        } else {
+            kinds[kept++] = kOther;
+        }
+    }
+    // At most one fragment a candidate unless its box is larger or it is clipped.
+    chunk.frags.reserve(kept);
+    chunk.items.reserve(kept);
+    chunk.item_tiles.reserve(kept);
+    for (std::size_t i = 0; i < kept; ++i) {
         const std::size_t t = candidates[i];
         const auto& tri = tris[t];
-        if (one_pixel_fragments && raster::one_pixel_box(boxes[i])) {
-            // emit_filled's path for an unclipped triangle whose box is one pixel.
-            const raster::BoxBounds box = boxes[i];
-            raster::OnePixelFragment f;
-            ++one_pixel;
-            switch (raster::setup_one_pixel(fixed[tri[0]], fixed[tri[1]], fixed[tri[2]], win[tri[0]], win[tri[1]],
-                                            win[tri[2]], box.x0, box.y0, face, f)) {
-                case raster::Setup::culled: ++one_pixel_culled; break;
-                case raster::Setup::empty: break;
-                case raster::Setup::drawn:
-                    push_fragment(ctx,
-                                  {static_cast<std::uint16_t>(box.x0), static_cast<std::uint16_t>(box.y0), f.z,
-                                   glm::vec3(f.weights[0], f.weights[1], f.weights[2]),
-                                   static_cast<std::uint32_t>(first_id + (t - first)), f.front},
-                                  chunk);
-                    break;
-            }
+        const auto id = static_cast<std::uint32_t>(first_id + (t - first));
+        if (kinds[i] == kOther) {
+            setup_other(ctx, positions, prepared, tri, filled && boxes[i].x0 >= 0, id, chunk);
             continue;
         }
-        setup_other(ctx, positions, prepared, tri, filled && boxes[i].x0 >= 0,
-                    static_cast<std::uint32_t>(first_id + (t - first)), chunk);
+        const raster::BoxBounds box = boxes[i];
+        raster::OnePixelFragment f;
+        raster::one_pixel_fragment(win[tri[0]], win[tri[1]], win[tri[2]], (kinds[i] & kClockwise) != 0,
+                                   (kinds[i] & kFront) != 0, box.x0, box.y0, f);
+        push_fragment(ctx,
+                      {static_cast<std::uint16_t>(box.x0), static_cast<std::uint16_t>(box.y0), f.z,
+                       glm::vec3(f.weights[0], f.weights[1], f.weights[2]), id, f.front},
+                      chunk);
     }
     chunk.stats.primitives += one_pixel;
     chunk.stats.primitives_culled += one_pixel_culled;

@@ -391,25 +391,36 @@ struct OnePixelFragment {
     return edge(ax, ay, bx, by) & edge(bx, by, cx, cy) & edge(cx, cy, ax, ay);
 }
 
-[[gnu::always_inline]] inline Setup setup_one_pixel(const FixedXY& v0, const FixedXY& v1, const FixedXY& v2,
-                                                    const glm::vec4& win0, const glm::vec4& win1,
-                                                    const glm::vec4& win2, int px, int py, Face face,
-                                                    OnePixelFragment& out) {
+// setup_one_pixel in two halves: the outcome (and the winding and facing of a triangle not
+// culled), then the fragment of a drawn one. The outcome has no branch but on a centre on an
+// edge line (rare): at about a triangle a pixel, whether a one-pixel triangle covers its pixel
+// is a coin toss, which a branch mispredicts every other time. So setup_chunk decides every
+// candidate first and computes the drawn ones' fragments after, in a loop whose divisions
+// overlap from one triangle to the next.
+struct OnePixelCoverage {
+    Setup setup;
+    bool cw;     // set up as (v1, v0, v2)
+    bool front;  // front-facing
+};
+[[gnu::always_inline]] inline OnePixelCoverage one_pixel_coverage(const FixedXY& v0, const FixedXY& v1,
+                                                                  const FixedXY& v2, int px, int py, Face face) {
     const std::int64_t ox = px * kFixedOne, oy = py * kFixedOne;
     const std::int64_t x0 = v0.x - ox, x1 = v1.x - ox, x2 = v2.x - ox;
     const std::int64_t y0 = v0.y - oy, y1 = v1.y - oy, y2 = v2.y - oy;
     const std::int64_t e01 = x1 * y0 - x0 * y1, e12 = x2 * y1 - x1 * y2, e20 = x0 * y2 - x2 * y0;
     const std::int64_t area = e01 + e12 + e20;
-    if (area == 0) return Setup::culled;
-    const bool front = area > 0;
-    if ((face == Face::front_only && !front) || (face == Face::back_only && front)) return Setup::culled;
-    const bool cw = area < 0;
-    if ((e01 == 0) | (e12 == 0) | (e20 == 0)) {
-        if (!one_pixel_covered_on_edge(v0, v1, v2, px, py, cw)) return Setup::empty;
-    } else if (((e01 ^ e12) | (e12 ^ e20)) < 0) {
-        return Setup::empty;
-    }
+    const bool front = area > 0, cw = area < 0;
+    const bool culled = (area == 0) | ((face == Face::front_only) & !front) | ((face == Face::back_only) & front);
+    bool covered = ((e01 ^ e12) | (e12 ^ e20)) >= 0;  // one sign, where no product is 0
+    if (((e01 == 0) | (e12 == 0) | (e20 == 0)) & !culled) [[unlikely]]
+        covered = one_pixel_covered_on_edge(v0, v1, v2, px, py, cw);
+    return {culled ? Setup::culled : covered ? Setup::drawn : Setup::empty, cw, front};
+}
 
+// The fragment of a triangle that one_pixel_coverage drew.
+[[gnu::always_inline]] inline void one_pixel_fragment(const glm::vec4& win0, const glm::vec4& win1,
+                                                      const glm::vec4& win2, bool cw, bool front, int px, int py,
+                                                      OnePixelFragment& out) {
     // setup_attributes' vertex order, selected without a branch (the winding is a coin toss).
     const glm::vec4* const first_two[2] = {&win0, &win1};
     const glm::vec4& a = *first_two[cw];
@@ -459,7 +470,15 @@ struct OnePixelFragment {
         out.weights[k] = eval_plane(plane, fx, fy) / oow_at;
     }
 #endif
-    return Setup::drawn;
+}
+
+[[gnu::always_inline]] inline Setup setup_one_pixel(const FixedXY& v0, const FixedXY& v1, const FixedXY& v2,
+                                                    const glm::vec4& win0, const glm::vec4& win1,
+                                                    const glm::vec4& win2, int px, int py, Face face,
+                                                    OnePixelFragment& out) {
+    const OnePixelCoverage c = one_pixel_coverage(v0, v1, v2, px, py, face);
+    if (c.setup == Setup::drawn) one_pixel_fragment(win0, win1, win2, c.cw, c.front, px, py, out);
+    return c.setup;
 }
 
 }  // namespace tessref::raster
