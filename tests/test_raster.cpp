@@ -591,6 +591,75 @@ TEST(RasterFastPaths, OnePixelSetupMatchesSetupTriangleAndItsPlanes) {
     EXPECT_GT(on_edge, 1000u);  // the edge function 1: a biased centre on an edge line
 }
 
+#if defined(__SSE2__)
+TEST(RasterFastPaths, FourAtATimeCoverageIsOnePixelCoverageLaneByLane) {
+    // Triangles of inside vertices near pixel centres all over a small viewport (its border
+    // rows and columns too, where the box bounds clamp), often on centres, half-way points or
+    // each other (centres on edges, zero areas), four at a time, with triangles of larger
+    // boxes or outside vertices among them: every lane whose box is one pixel has
+    // one_pixel_coverage's outcome, winding and facing, in every face mode.
+    constexpr int W = 12, H = 8;
+    namespace r = tessref::raster;
+    const r::Viewport vp = r::make_viewport(W, H);
+    std::mt19937 rng(20261127);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    std::uniform_int_distribution<int> column(0, W - 1), row(0, H - 1);
+    std::vector<r::FixedXY> fixed;
+    std::vector<std::array<std::uint32_t, 3>> tris;
+    std::vector<r::BoxBounds> boxes;
+    for (std::uint32_t t = 0; t < 200000; ++t) {
+        const float cx = static_cast<float>(column(rng)) + 0.5f, cy = static_cast<float>(row(rng)) + 0.5f;
+        const float spread = unit(rng) < 0.8f ? 1.0f : 2.5f;
+        r::BoxBounds bounds[3];
+        for (int k = 0; k < 3; ++k) {
+            const float w = 0.5f + 1.5f * unit(rng);
+            const glm::vec4 p = at_window(snapped_near(rng, cx, 0.2f, 0.3f, spread),
+                                          snapped_near(rng, cy, 0.2f, 0.3f, spread), W, H, unit(rng) * 2.0f - 1.0f);
+            glm::vec4 win;
+            r::FixedXY f;
+            r::prepare_vertex(p * w, vp, false, win, f, bounds[k]);
+            fixed.push_back(f);
+        }
+        tris.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+        boxes.push_back(r::triangle_box(bounds[0], bounds[1], bounds[2]));
+    }
+    std::size_t outcomes[3] = {}, on_edge = 0, others = 0;
+    std::int32_t farthest = 0;  // a one-pixel box's vertex from its pixel, in 1/256 pixel
+    for (std::uint32_t first = 0; first + 4 <= tris.size(); first += 4) {
+        const std::uint32_t t[4] = {first, first + 1, first + 2, first + 3};
+        for (const r::Face face : {r::Face::both, r::Face::front_only, r::Face::back_only}) {
+            const r::OnePixelCoverage4 c4 = r::one_pixel_coverage4(fixed.data(), tris.data(), t, &boxes[first], face);
+            for (int l = 0; l < 4; ++l) {
+                const r::BoxBounds& box = boxes[first + l];
+                if (!r::one_pixel_box(box)) {
+                    others += face == r::Face::both;
+                    continue;
+                }
+                const auto& tri = tris[first + l];
+                const r::FixedXY &v0 = fixed[tri[0]], &v1 = fixed[tri[1]], &v2 = fixed[tri[2]];
+                const r::OnePixelCoverage scalar = r::one_pixel_coverage(v0, v1, v2, box.x0, box.y0, face);
+                const r::OnePixelCoverage lane = c4.lane(l, v0, v1, v2, box.x0, box.y0);
+                ASSERT_EQ(static_cast<int>(lane.setup), static_cast<int>(scalar.setup)) << "triangle " << first + l;
+                ASSERT_EQ(lane.cw, scalar.cw) << "triangle " << first + l;
+                ASSERT_EQ(lane.front, scalar.front) << "triangle " << first + l;
+                ++outcomes[static_cast<int>(scalar.setup)];
+                on_edge += (c4.on_edge >> l) & 1;
+                for (const r::FixedXY* v : {&v0, &v1, &v2})
+                    farthest = std::max({farthest, std::abs(v->x - box.x0 * r::kFixedOne),
+                                         std::abs(v->y - box.y0 * r::kFixedOne)});
+            }
+        }
+    }
+    EXPECT_GT(outcomes[static_cast<int>(r::Setup::culled)], 1000u);
+    EXPECT_GT(outcomes[static_cast<int>(r::Setup::empty)], 1000u);
+    EXPECT_GT(outcomes[static_cast<int>(r::Setup::drawn)], 1000u);
+    EXPECT_GT(on_edge, 1000u);   // a centre on an edge line, left to one_pixel_covered_on_edge
+    EXPECT_GT(others, 10000u);  // lanes whose box is not one pixel, among the others
+    EXPECT_LE(farthest, 256);   // the bound that makes 16 bits enough
+    EXPECT_GT(farthest, 200);   // and the triangles went near it
+}
+#endif
+
 TEST(RasterCulling, ZeroAreaTrianglesAreCulled) {
     constexpr int W = 16, H = 16;
     Mesh m;

@@ -639,16 +639,14 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
     constexpr std::uint8_t kOther = 0, kOnePixel = 1, kClockwise = 2, kFront = 4;
     std::uint64_t one_pixel = 0, one_pixel_culled = 0;
     std::size_t kept = 0;
-    for (std::size_t i = 0; i < count; ++i) {
-        const std::uint32_t t = candidates[i];
-        const raster::BoxBounds box = boxes[i];
+    // Candidate t with its box, its one-pixel outcome from coverage() if its box is one pixel.
+    auto keep = [&](std::uint32_t t, raster::BoxBounds box, auto&& coverage) {
         candidates[kept] = t;
         boxes[kept] = box;
         if (one_pixel_fragments & (box.x0 >= 0) & (box.x0 + box.neg_x1 == 0) & (box.y0 + box.neg_y1 == 0)) {
             // raster::one_pixel_box, without a branch per condition
             const auto& tri = tris[t];
-            const raster::OnePixelCoverage c =
-                raster::one_pixel_coverage(fixed[tri[0]], fixed[tri[1]], fixed[tri[2]], box.x0, box.y0, face);
+            const raster::OnePixelCoverage c = coverage(fixed[tri[0]], fixed[tri[1]], fixed[tri[2]], box.x0, box.y0);
             ++one_pixel;
             one_pixel_culled += c.setup == raster::Setup::culled;
             kinds[kept] = static_cast<std::uint8_t>(kOnePixel | (c.cw << 1) | (c.front << 2));
@@ -656,6 +654,26 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
         } else {
             kinds[kept++] = kOther;
         }
+    };
+    std::size_t i = 0;
+#if defined(__SSE2__)
+    if (one_pixel_fragments) {
+        for (; i + 4 <= count; i += 4) {
+            // Read before the writes at kept <= i.
+            const std::uint32_t t[4] = {candidates[i], candidates[i + 1], candidates[i + 2], candidates[i + 3]};
+            const raster::BoxBounds box[4] = {boxes[i], boxes[i + 1], boxes[i + 2], boxes[i + 3]};
+            const raster::OnePixelCoverage4 c4 = raster::one_pixel_coverage4(fixed, tris.data(), t, box, face);
+            for (int l = 0; l < 4; ++l)
+                keep(t[l], box[l], [&](const raster::FixedXY& v0, const raster::FixedXY& v1, const raster::FixedXY& v2,
+                                       int px, int py) { return c4.lane(l, v0, v1, v2, px, py); });
+        }
+    }
+#endif
+    for (; i < count; ++i) {
+        keep(candidates[i], boxes[i],
+             [&](const raster::FixedXY& v0, const raster::FixedXY& v1, const raster::FixedXY& v2, int px, int py) {
+                 return raster::one_pixel_coverage(v0, v1, v2, px, py, face);
+             });
     }
     // At most one fragment a candidate unless its box is larger or it is clipped.
     chunk.frags.reserve(kept);

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
 #include <cstddef>
@@ -416,6 +417,77 @@ struct OnePixelCoverage {
         covered = one_pixel_covered_on_edge(v0, v1, v2, px, py, cw);
     return {culled ? Setup::culled : covered ? Setup::drawn : Setup::empty, cw, front};
 }
+
+#if defined(__SSE2__)
+// one_pixel_coverage of four triangles at once: lane l is triangle tris[t[l]] with the box
+// box[l], and bit l of each mask is its outcome. Only the lanes whose box is one pixel mean
+// anything (the others compute values nobody reads). Relative to its pixel, a vertex of a
+// one-pixel box lies within 256 (a pixel in fixed point) in x and y: box_bounds' rounding
+// puts x in [256 px - 255, 256 px + 256] and y in [256 py - 256, 256 py + 255]. So every
+// coordinate fits 16 bits and each edge function x_j y_i - x_i y_j, whose products are at
+// most 2^16, is one pmaddwd of the pairs (x_j, -x_i) and (y_i, y_j), exact in 32 bits like
+// the 64-bit scalar. A lane with a centre on an edge line (a product 0) is left to lane(),
+// which asks one_pixel_covered_on_edge as the scalar does.
+struct OnePixelCoverage4 {
+    int culled, drawn, on_edge, cw, front;  // lane masks
+
+    OnePixelCoverage lane(int l, const FixedXY& v0, const FixedXY& v1, const FixedXY& v2, int px, int py) const {
+        const bool is_cw = (cw >> l) & 1;
+        bool is_drawn = (drawn >> l) & 1;
+        if ((on_edge >> l) & 1) [[unlikely]]
+            is_drawn = one_pixel_covered_on_edge(v0, v1, v2, px, py, is_cw);
+        // culled, empty or drawn without a branch: setup_chunk keeps or drops the triangle on it.
+        static_assert(static_cast<int>(Setup::culled) == 0 && static_cast<int>(Setup::empty) == 1 &&
+                      static_cast<int>(Setup::drawn) == 2);
+        const int not_culled = ((culled >> l) & 1) ^ 1;
+        return {static_cast<Setup>((1 + is_drawn) * not_culled), is_cw, static_cast<bool>((front >> l) & 1)};
+    }
+};
+
+[[gnu::always_inline]] inline OnePixelCoverage4 one_pixel_coverage4(const FixedXY* fixed,
+                                                                    const std::array<std::uint32_t, 3>* tris,
+                                                                    const std::uint32_t t[4], const BoxBounds box[4],
+                                                                    Face face) {
+    // The vertices' x and y, lane by lane: vertex k of the four triangles.
+    __m128i x[3], y[3];
+    for (int k = 0; k < 3; ++k) {
+        auto xy = [&](int l) { return _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&fixed[tris[t[l]][k]])); };
+        const __m128 lo = _mm_castsi128_ps(_mm_unpacklo_epi64(xy(0), xy(1)));
+        const __m128 hi = _mm_castsi128_ps(_mm_unpacklo_epi64(xy(2), xy(3)));
+        x[k] = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0)));
+        y[k] = _mm_castps_si128(_mm_shuffle_ps(lo, hi, _MM_SHUFFLE(3, 1, 3, 1)));
+    }
+    const __m128i ox = _mm_slli_epi32(_mm_set_epi32(box[3].x0, box[2].x0, box[1].x0, box[0].x0), kFixedOrder);
+    const __m128i oy = _mm_slli_epi32(_mm_set_epi32(box[3].y0, box[2].y0, box[1].y0, box[0].y0), kFixedOrder);
+    __m128i px16[3], nx16[3], py16[3];  // x, -x and y relative to the pixel, in 16 bits
+    for (int k = 0; k < 3; ++k) {
+        const __m128i dx = _mm_sub_epi32(x[k], ox);
+        px16[k] = _mm_packs_epi32(dx, dx);
+        const __m128i neg = _mm_sub_epi32(_mm_setzero_si128(), dx);
+        nx16[k] = _mm_packs_epi32(neg, neg);
+        const __m128i dy = _mm_sub_epi32(y[k], oy);
+        py16[k] = _mm_packs_epi32(dy, dy);
+    }
+    // e_ij = x_j y_i - x_i y_j (one_pixel_coverage's e01, e12, e20)
+    auto edge = [&](int i, int j) {
+        return _mm_madd_epi16(_mm_unpacklo_epi16(px16[j], nx16[i]), _mm_unpacklo_epi16(py16[i], py16[j]));
+    };
+    const __m128i e01 = edge(0, 1), e12 = edge(1, 2), e20 = edge(2, 0);
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i area = _mm_add_epi32(_mm_add_epi32(e01, e12), e20);
+    const __m128i front = _mm_cmpgt_epi32(area, zero), cw = _mm_cmplt_epi32(area, zero);
+    const __m128i cull_front = _mm_set1_epi32(face == Face::back_only ? -1 : 0);
+    const __m128i cull_back = _mm_set1_epi32(face == Face::front_only ? -1 : 0);
+    const __m128i culled = _mm_or_si128(_mm_cmpeq_epi32(area, zero),
+                                        _mm_or_si128(_mm_and_si128(front, cull_front), _mm_and_si128(cw, cull_back)));
+    const __m128i any_zero = _mm_or_si128(_mm_or_si128(_mm_cmpeq_epi32(e01, zero), _mm_cmpeq_epi32(e12, zero)),
+                                          _mm_cmpeq_epi32(e20, zero));
+    const __m128i mixed = _mm_srai_epi32(_mm_or_si128(_mm_xor_si128(e01, e12), _mm_xor_si128(e12, e20)), 31);
+    auto mask = [](__m128i m) { return _mm_movemask_ps(_mm_castsi128_ps(m)); };
+    return {mask(culled), ~mask(_mm_or_si128(culled, _mm_or_si128(any_zero, mixed))) & 0xF,
+            mask(_mm_andnot_si128(culled, any_zero)), mask(cw), mask(front)};
+}
+#endif
 
 // The fragment of a triangle that one_pixel_coverage drew.
 [[gnu::always_inline]] inline void one_pixel_fragment(const glm::vec4& win0, const glm::vec4& win1,
