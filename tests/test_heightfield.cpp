@@ -451,6 +451,42 @@ TEST(TextureSampling, TexelExactOfEveryUnormCodeIsTheCodeOverItsMaximum) {
     for (int c = 0; c < 256; ++c) ASSERT_EQ(t8.texel_exact(0, c % 16, c / 16), c / 255.0) << c;
 }
 
+// row_exact reads a whole row of level 0 as texel_exact reads each of its texels, for every
+// format, channel count and channel, and refuses what texel_exact refuses.
+TEST(TextureSampling, RowExactIsTexelExactAlongTheRow) {
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> code(0, 65535);
+    for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}}) {
+        for (int channels = 1; channels <= 4; ++channels) {
+            const std::size_t n = static_cast<std::size_t>(w) * h * channels;
+            std::vector<std::uint16_t> c16(n);
+            std::vector<std::uint8_t> c8(n);
+            std::vector<float> f(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                c16[i] = static_cast<std::uint16_t>(code(rng));
+                c8[i] = static_cast<std::uint8_t>(code(rng) & 0xFF);
+                f[i] = static_cast<float>(code(rng) - 30000) / 77.0f;
+            }
+            for (const Texture& t : {Texture::from_unorm16(w, h, channels, c16), Texture::from_unorm8(w, h, channels, c8),
+                                     Texture::from_float(w, h, channels, f)}) {
+                SCOPED_TRACE(std::string(to_string(t.format())) + " " + std::to_string(w) + "x" + std::to_string(h) +
+                             "x" + std::to_string(channels));
+                std::vector<double> row(static_cast<std::size_t>(w));
+                for (int y = 0; y < h; ++y)
+                    for (int c = 0; c < channels; ++c) {
+                        t.row_exact(y, c, row);
+                        for (int x = 0; x < w; ++x) ASSERT_EQ(row[static_cast<std::size_t>(x)], t.texel_exact(0, x, y, c));
+                    }
+                EXPECT_THROW(t.row_exact(h, 0, row), tessref::Error);
+                EXPECT_THROW(t.row_exact(-1, 0, row), tessref::Error);
+                EXPECT_THROW(t.row_exact(0, channels, row), tessref::Error);
+                std::vector<double> longer(static_cast<std::size_t>(w) + 1);
+                EXPECT_THROW(t.row_exact(0, 0, longer), tessref::Error);
+            }
+        }
+    }
+}
+
 // ---- mip pyramid --------------------------------------------------------------------------
 
 TEST(Mipmaps, LevelSizesHalveDownToOneByOne) {

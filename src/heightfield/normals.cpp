@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -24,14 +25,16 @@ std::vector<std::uint8_t> thesis_normal_map_codes(const Texture& height_map, dou
     std::vector<std::uint8_t> codes(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
     // Blocks of rows in parallel, each texel on its own. A block first reads the scaled
     // heights of its rows and the row on either side once: every texel is read by itself and
-    // its four neighbours, and texel_exact checks its arguments each time.
+    // its four neighbours.
     tessref::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& rows) {
         const int first = std::max(rows.begin() - 1, 0), last = std::min(rows.end(), height - 1);
         std::vector<double> z(static_cast<std::size_t>(last - first + 1) * static_cast<std::size_t>(width));
-        for (int y = first; y <= last; ++y)
-            for (int x = 0; x < width; ++x)
-                z[static_cast<std::size_t>(y - first) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] =
-                    height_map.texel_exact(0, x, y, 0) * height_scale;
+        for (int y = first; y <= last; ++y) {
+            const std::span<double> row(z.data() + static_cast<std::size_t>(y - first) * static_cast<std::size_t>(width),
+                                        static_cast<std::size_t>(width));
+            height_map.row_exact(y, 0, row);
+            for (double& v : row) v *= height_scale;
+        }
         // The position vector of pixel (x, y), neighbours clamped to the edge.
         auto P = [&](int x, int y) {
             x = std::clamp(x, 0, width - 1);

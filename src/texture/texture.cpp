@@ -944,6 +944,17 @@ double Texture::texel_exact(int lod, int x, int y, int channel) const {
     return exact_value(l, exact, format_, index_of(l, channels_, x, y, channel));
 }
 
+void Texture::row_exact(int y, int channel, std::span<double> out) const {
+    const TextureLevel& l = level(0);
+    check_texel(l, channels_, 0, 0, y, channel);
+    if (out.size() != static_cast<std::size_t>(l.width))
+        throw Error("row_exact: " + std::to_string(out.size()) + " values for a row of " + std::to_string(l.width) +
+                    " texels");
+    const std::size_t first = index_of(l, channels_, 0, y, channel);
+    for (std::size_t x = 0; x < out.size(); ++x)
+        out[x] = exact_value(l, nullptr, format_, first + x * static_cast<std::size_t>(channels_));
+}
+
 void Texture::set_swizzle(Swizzle swizzle) {
     if (swizzle == Swizzle::luminance && channels_ != 1)
         throw Error("a luminance texture reads one channel; this one has " + std::to_string(channels_));
