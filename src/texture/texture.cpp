@@ -653,8 +653,46 @@ struct BlitSetup {
 
 std::uint16_t float_to_unorm16(float v) {
     // llvmpipe's store: clamp to [0, 1], scale by 65535 in float, round half to even.
-    const float clamped = std::fmin(std::fmax(v, 0.0f), 1.0f);  // NaN -> 0
-    return static_cast<std::uint16_t>(std::nearbyint(clamped * 65535.0f));
+    const float clamped = min_of(max_or(v, 0.0f), 1.0f);  // NaN -> 0
+    return static_cast<std::uint16_t>(round_even(clamped * 65535.0f));
+}
+
+// Destination row j of the blit of src, C channels. The filters are inlined rather than
+// called through bilinear_gpu / bilinear_unorm8: the channel count is dispatched once a row
+// and the coordinate's fmas are instructions in the FMA clone of blit_row.
+template <int C>
+[[gnu::always_inline]] inline void blit_row_n(const TextureLevel& src, TexelFormat format, const BlitSetup& setup,
+                                              int j, TextureLevel& dst) {
+    for (int i = 0; i < dst.width; ++i) {
+        const glm::vec2 st = setup.coordinate(i, j);
+        const std::size_t base = index_of(dst, C, i, j, 0);
+        if (format == TexelFormat::unorm8) {
+            int codes[4];
+            bilinear_unorm8_n<C>(src, axis_unorm8(st.x, src.width), axis_unorm8(st.y, src.height), codes);
+            for (int c = 0; c < C; ++c) {
+                dst.unorm8[base + c] = static_cast<std::uint8_t>(codes[c]);
+                dst.texels[base + c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+            }
+        } else {
+            float values[4];
+            bilinear_gpu_n<C>(src, axis_gpu(st.x, src.width), axis_gpu(st.y, src.height), values);
+            for (int c = 0; c < C; ++c)
+                dst.texels[base + c] = format == TexelFormat::unorm16
+                                           ? static_cast<float>(float_to_unorm16(values[c])) * kUnorm16Scale
+                                           : values[c];
+        }
+    }
+}
+
+TESSREF_FMA_CLONES
+void blit_row(const TextureLevel& src, TexelFormat format, int channels, const BlitSetup& setup, int j,
+              TextureLevel& dst) {
+    switch (channels) {
+        case 1: return blit_row_n<1>(src, format, setup, j, dst);
+        case 2: return blit_row_n<2>(src, format, setup, j, dst);
+        case 3: return blit_row_n<3>(src, format, setup, j, dst);
+        default: return blit_row_n<4>(src, format, setup, j, dst);
+    }
 }
 
 TextureLevel blit_level(const TextureLevel& src, TexelFormat format, int channels, int dst_width, int dst_height) {
@@ -668,31 +706,7 @@ TextureLevel blit_level(const TextureLevel& src, TexelFormat format, int channel
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
     const BlitSetup setup(dst_width, dst_height);
     // Rows in parallel: each destination texel is a function of the source level alone.
-    tessref::parallel_for(0, dst_height, [&](int j) {
-        for (int i = 0; i < dst_width; ++i) {
-            const glm::vec2 st = setup.coordinate(i, j);
-            const std::size_t base = index_of(dst, channels, i, j, 0);
-            if (format == TexelFormat::unorm8) {
-                int codes[4];
-                bilinear_unorm8(src, channels, st, codes);
-                for (int c = 0; c < channels; ++c) {
-                    dst.unorm8[base + c] = static_cast<std::uint8_t>(codes[c]);
-                    dst.texels[base + c] = static_cast<float>(codes[c]) * kUnorm8Scale;
-                }
-            } else {
-                float values[4];
-                bilinear_gpu(src, channels, st, values);
-                for (int c = 0; c < channels; ++c) {
-                    if (format == TexelFormat::unorm16) {
-                        dst.texels[base + c] =
-                            static_cast<float>(float_to_unorm16(values[c])) * kUnorm16Scale;
-                    } else {
-                        dst.texels[base + c] = values[c];
-                    }
-                }
-            }
-        }
-    });
+    tessref::parallel_for(0, dst_height, [&](int j) { blit_row(src, format, channels, setup, j, dst); });
     return dst;
 }
 
