@@ -1494,7 +1494,8 @@ TEST_F(GlPeer, MipmapsAndSamplesMatchLlvmpipeBitForBit) {
         {TexelFormat::float32, 37, 23, 1}, {TexelFormat::float32, 64, 32, 1}, {TexelFormat::float32, 13, 7, 4},
         {TexelFormat::float32, 111, 111, 1}, {TexelFormat::unorm16, 37, 23, 1}, {TexelFormat::unorm16, 5, 300, 1},
         {TexelFormat::unorm8, 37, 23, 1},  {TexelFormat::unorm8, 19, 13, 2},  {TexelFormat::unorm8, 21, 17, 3},
-        {TexelFormat::unorm8, 64, 48, 4},
+        {TexelFormat::unorm8, 64, 48, 4},   {TexelFormat::unorm16, 1, 37, 1},  {TexelFormat::unorm8, 45, 1, 3},
+        {TexelFormat::float32, 3, 1, 2},
     };
     unsigned seed = 100;
     for (const Case& c : cases) {
