@@ -1270,6 +1270,70 @@ TEST(Normals, ThesisNormalMapOfAPlaneIsTheAnalyticNormal) {
     EXPECT_EQ(codes[14], 255);
 }
 
+// The normal map is the thesis's loop, texel by texel as written (section 4.7.4, the
+// positions P of the texel and its four edge-clamped neighbours, four cross products summed
+// and normalized, each component encoded), code for code: for every size from 1 x 1 up
+// (edge columns and rows, odd and even widths), every format, rough and smooth heights.
+TEST(Normals, ThesisNormalMapIsTheThesisLoopTexelByTexel) {
+    auto reference = [](const Texture& map, double d, double k) {
+        const int w = map.width(), h = map.height();
+        std::vector<std::uint8_t> codes(static_cast<std::size_t>(w) * h * 3);
+        auto P = [&](int x, int y) {
+            x = std::clamp(x, 0, w - 1);
+            y = std::clamp(y, 0, h - 1);
+            return glm::dvec3(x * d, y * d, map.texel_exact(0, x, y) * k);
+        };
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const glm::dvec3 p = P(x, y);
+                const glm::dvec3 right = P(x + 1, y) - p, up = P(x, y + 1) - p, left = P(x - 1, y) - p,
+                                 down = P(x, y - 1) - p;
+                const glm::dvec3 sum =
+                    glm::cross(right, up) + glm::cross(up, left) + glm::cross(left, down) + glm::cross(down, right);
+                const double length = glm::length(sum);
+                const glm::dvec3 n = length > 0.0 ? sum / length : glm::dvec3(0.0, 0.0, 1.0);
+                for (int c = 0; c < 3; ++c)
+                    codes[(static_cast<std::size_t>(y) * w + x) * 3 + c] =
+                        static_cast<std::uint8_t>(std::clamp((n[c] * 0.5 + 0.5) * 255.0, 0.0, 255.0));
+            }
+        return codes;
+    };
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> code(0, 65535);
+    const std::pair<int, int> sizes[] = {{1, 1}, {1, 6}, {6, 1}, {2, 2}, {3, 3}, {4, 4}, {5, 3},
+                                         {7, 2}, {8, 9}, {37, 23}, {64, 40}, {403, 37}};
+    for (const auto& [w, h] : sizes) {
+        for (const bool smooth : {false, true}) {
+            const std::size_t n = static_cast<std::size_t>(w) * h;
+            std::vector<std::uint16_t> c16(n);
+            std::vector<std::uint8_t> c8(n);
+            std::vector<float> f(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+                const int v = smooth ? (x * 37 + y * 91 + (x * y) % 7) % 65536 : code(rng);
+                c16[i] = static_cast<std::uint16_t>(v);
+                c8[i] = static_cast<std::uint8_t>(smooth ? v / 257 : v & 0xFF);
+                f[i] = (static_cast<float>(v) - 20000.0f) * 3.7f;
+            }
+            for (const Texture& map : {Texture::from_unorm16(w, h, 1, c16), Texture::from_unorm8(w, h, 1, c8),
+                                       Texture::from_float(w, h, 1, f)}) {
+                for (const auto& [d, k] : {std::pair{0.7, 13.0}, std::pair{310.0 / 403, 16.8}, std::pair{2.0, -0.01}}) {
+                    SCOPED_TRACE(std::string(to_string(map.format())) + " " + std::to_string(w) + "x" +
+                                 std::to_string(h) + (smooth ? " smooth" : " rough") + " d " + std::to_string(d) +
+                                 " k " + std::to_string(k));
+                    const std::vector<std::uint8_t> got = tessref::thesis_normal_map_codes(map, d, k);
+                    const std::vector<std::uint8_t> want = reference(map, d, k);
+                    ASSERT_EQ(got.size(), want.size());
+                    std::size_t differ = 0, first = 0;
+                    for (std::size_t i = got.size(); i-- > 0;)
+                        if (got[i] != want[i]) ++differ, first = i;
+                    EXPECT_EQ(differ, 0u) << "first at texel " << first / 3 << " channel " << first % 3;
+                }
+            }
+        }
+    }
+}
+
 // ---- the independent peer: Mesa llvmpipe through OSMesa -----------------------------------
 
 bool cpu_has_fma() {
