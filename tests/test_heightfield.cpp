@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <random>
 #include <span>
 #include <string>
@@ -764,6 +765,67 @@ TEST(Loading, FirstStoredRowIsTZeroExceptPfmWhichIsStoredBottomUp) {
     EXPECT_EQ(field.texture.texel(0, 1, 0), 4.0f);
     EXPECT_EQ(field.texture.texel(0, 0, 1), 1.0f);
     EXPECT_EQ(field.texture.texel(0, 1, 1), 2.0f);
+}
+
+// Where texture_of_height_field gives a texture it is load_texture's of the same file,
+// level for level; where they would differ (a filled texel, channels the height field
+// drops, another mipmap rule, a smaller size limit) it gives none and the file is read.
+TEST(Loading, TextureOfAHeightFieldIsTheFilesTextureOrNone) {
+    auto expect_same = [](const Texture& a, const Texture& b) {
+        ASSERT_EQ(a.format(), b.format());
+        ASSERT_EQ(a.channels(), b.channels());
+        ASSERT_EQ(a.mipmap_rule(), b.mipmap_rule());
+        EXPECT_EQ(a.swizzle(), b.swizzle());
+        EXPECT_EQ(a.wrap(), b.wrap());
+        EXPECT_EQ(a.min_filter(), b.min_filter());
+        ASSERT_EQ(a.level_count(), b.level_count());
+        for (int lod = 0; lod < a.level_count(); ++lod) {
+            EXPECT_EQ(a.level(lod).width, b.level(lod).width);
+            EXPECT_EQ(a.level(lod).height, b.level(lod).height);
+            EXPECT_TRUE(a.level(lod).texels == b.level(lod).texels) << "lod " << lod;
+            EXPECT_TRUE(a.level(lod).unorm8 == b.level(lod).unorm8) << "lod " << lod;
+        }
+    };
+    TempDir dir;
+    // uint8, uint16 (PGM), float (TIFF through OpenImageIO).
+    for (const std::string path : {std::string(TESSREF_DATA_DIR) + "/heightmaps/thesis-island.pgm",
+                                   std::string(TESSREF_DATA_DIR) + "/jacksboro_fault_dem.pgm",
+                                   std::string(TESSREF_DATA_DIR) + "/olinda_dem_utm25s.tif"}) {
+        SCOPED_TRACE(path);
+        const tessref::HeightField field = tessref::load_height_field(path);
+        const std::optional<Texture> same = tessref::texture_of_height_field(field);
+        ASSERT_TRUE(same.has_value());
+        expect_same(*same, tessref::load_texture(path));
+        tessref::TextureLoadOptions box;
+        box.mipmap_rule = MipmapRule::mesa_software_box;
+        EXPECT_FALSE(tessref::texture_of_height_field(field, box).has_value());
+        HeightFieldOptions box_field;
+        box_field.mipmap_rule = MipmapRule::mesa_software_box;
+        const std::optional<Texture> box_same =
+            tessref::texture_of_height_field(tessref::load_height_field(path, box_field), box);
+        ASSERT_TRUE(box_same.has_value());
+        expect_same(*box_same, tessref::load_texture(path, box));
+        tessref::TextureLoadOptions small;
+        small.max_dimension = std::max(field.info.width, field.info.height) - 1;
+        EXPECT_FALSE(tessref::texture_of_height_field(field, small).has_value());
+        EXPECT_THROW(tessref::load_texture(path, small), tessref::Error);
+    }
+    // Colour: the height field keeps the first of three channels.
+    const std::string rgb = dir.file("rgb.ppm");
+    write_bytes(rgb, std::string("P6\n2 2\n255\n") + std::string("\x01\x02\x03\x04\x05\x06\x07\x08\x09\x0a\x0b\x0c", 12));
+    EXPECT_FALSE(tessref::texture_of_height_field(tessref::load_height_field(rgb)).has_value());
+    // A nodata texel filled: the height field's texel is not the file's.
+    const std::string holes = dir.file("holes.pgm");
+    write_bytes(holes, std::string("P5\n3 2\n255\n") + std::string("\x0a\x00\x1e\x28\x32\x3c", 6));
+    HeightFieldOptions fill;
+    fill.nodata_value = 0.0;
+    fill.nodata_policy = NodataPolicy::fill_neighbour_mean;
+    const tessref::HeightField filled = tessref::load_height_field(holes, fill);
+    ASSERT_EQ(filled.info.missing_texels, 1u);
+    EXPECT_FALSE(tessref::texture_of_height_field(filled).has_value());
+    const std::optional<Texture> unfilled = tessref::texture_of_height_field(tessref::load_height_field(holes));
+    ASSERT_TRUE(unfilled.has_value());
+    expect_same(*unfilled, tessref::load_texture(holes));
 }
 
 TEST(Loading, HeightUsesTheFirstChannelAndColourTexturesKeepTheirChannels) {

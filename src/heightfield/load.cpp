@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -235,6 +236,17 @@ Texture load_texture(const std::string& path, const TextureLoadOptions& options)
     const int max_channels = std::clamp(options.max_channels, 1, 4);
     RawImage raw = read_raw(path, options.max_dimension, max_channels, "texture", 0);
     return make_texture(raw, options.mipmap_rule);
+}
+
+std::optional<Texture> texture_of_height_field(const HeightField& field, const TextureLoadOptions& options) {
+    // Both loaders read the file through read_raw and make_texture. A one-channel file keeps
+    // its channel in both; with nothing filled, the height field's texture holds the file's
+    // samples, and its header passed a memory check that asked for more than load_texture's.
+    const HeightFieldInfo& info = field.info;
+    if (info.missing_texels != 0 || info.file_channels != 1 || field.texture.mipmap_rule() != options.mipmap_rule ||
+        info.width > options.max_dimension || info.height > options.max_dimension)
+        return std::nullopt;
+    return field.texture;
 }
 
 }  // namespace tessref
