@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -65,12 +66,17 @@ inline void normal_codes_x2(const double* z, const double* up_z, const double* d
     auto normal = [&](__m128d v, double otherwise) {
         return _mm_or_pd(_mm_and_pd(some, _mm_div_pd(v, length)), _mm_andnot_pd(some, _mm_set1_pd(otherwise)));
     };
-    alignas(16) double n[3][2];
-    _mm_store_pd(n[0], normal(sum.x, 0.0));
-    _mm_store_pd(n[1], normal(sum.y, 0.0));
-    _mm_store_pd(n[2], normal(sum.z, 1.0));
-    for (int lane = 0; lane < 2; ++lane)
-        for (int c = 0; c < 3; ++c) out[lane * 3 + c] = normal_code(n[c][lane]);
+    // normal_code lane by lane: maxpd and minpd clamp as std::clamp does (a NaN, from infinite
+    // heights, becomes 0, what the scalar conversion of a NaN gives on x86), cvttpd2dq truncates.
+    auto code = [&](__m128d n) {
+        const __m128d encoded = _mm_mul_pd(_mm_add_pd(_mm_mul_pd(n, _mm_set1_pd(0.5)), _mm_set1_pd(0.5)), _mm_set1_pd(255.0));
+        return _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(encoded, _mm_setzero_pd()), _mm_set1_pd(255.0)));
+    };
+    const __m128i c[3] = {code(normal(sum.x, 0.0)), code(normal(sum.y, 0.0)), code(normal(sum.z, 1.0))};
+    for (int k = 0; k < 3; ++k) {
+        out[k] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(c[k]));
+        out[3 + k] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(_mm_srli_si128(c[k], 4)));
+    }
 }
 #endif
 
@@ -90,9 +96,10 @@ std::vector<std::uint8_t> thesis_normal_map_codes(const Texture& height_map, dou
     // its four neighbours.
     tessref::parallel_for(tbb::blocked_range<int>(0, height, 16), [&](const tbb::blocked_range<int>& rows) {
         const int first = std::max(rows.begin() - 1, 0), last = std::min(rows.end(), height - 1);
-        std::vector<double> z(static_cast<std::size_t>(last - first + 1) * static_cast<std::size_t>(width));
+        // Not zeroed first: row_exact writes every value.
+        const std::unique_ptr<double[]> z(new double[static_cast<std::size_t>(last - first + 1) * static_cast<std::size_t>(width)]);
         auto heights = [&](int y) {
-            return z.data() + static_cast<std::size_t>(y - first) * static_cast<std::size_t>(width);
+            return z.get() + static_cast<std::size_t>(y - first) * static_cast<std::size_t>(width);
         };
         for (int y = first; y <= last; ++y) {
             const std::span<double> row(heights(y), static_cast<std::size_t>(width));
