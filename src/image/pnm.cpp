@@ -17,6 +17,10 @@
 #include <string>
 #include <system_error>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "image/codecs.h"
 #include "tessref/error.h"
 
@@ -206,11 +210,20 @@ Image read_pnm(const std::string& path, const ReadOptions& options) {
         if (m == full && keep == header.channels) {
             // Every sample kept, as stored: a maxval of 255 or 65535 scales by 1, and no
             // sample exceeds it.
-            if (sample_bytes == 1)
+            if (sample_bytes == 1) {
                 std::memcpy(image.u8.data(), p, count);
-            else
-                for (std::size_t i = 0; i < count; ++i)
-                    image.u16[i] = static_cast<std::uint16_t>(p[2 * i] << 8 | p[2 * i + 1]);
+            } else {
+                std::size_t i = 0;
+#if defined(__SSE2__)
+                // Eight big-endian samples at a time, their bytes swapped.
+                for (; i + 8 <= count; i += 8) {
+                    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 2 * i));
+                    _mm_storeu_si128(reinterpret_cast<__m128i*>(image.u16.data() + i),
+                                     _mm_or_si128(_mm_slli_epi16(v, 8), _mm_srli_epi16(v, 8)));
+                }
+#endif
+                for (; i < count; ++i) image.u16[i] = static_cast<std::uint16_t>(p[2 * i] << 8 | p[2 * i + 1]);
+            }
         } else {
             for (std::size_t i = 0; i < count; ++i) {
                 const std::uint64_t v = sample_bytes == 1 ? p[i] : (std::uint64_t{p[2 * i]} << 8 | p[2 * i + 1]);
