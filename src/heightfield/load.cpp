@@ -146,7 +146,9 @@ HeightField load_height_field(const std::string& path, const HeightFieldOptions&
     };
     std::vector<std::uint8_t> missing(count, 0);
     std::size_t missing_count = 0;
-    for (std::size_t i = 0; i < count; ++i) {
+    // Integer codes are finite: without a nodata value none of them is missing.
+    const bool may_miss = raw.format == TexelFormat::float32 || options.nodata_value.has_value();
+    for (std::size_t i = 0; may_miss && i < count; ++i) {
         if (!is_missing(i)) continue;
         if (options.nodata_policy == NodataPolicy::error) {
             const int x = static_cast<int>(i % static_cast<std::size_t>(width));
