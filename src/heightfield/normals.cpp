@@ -44,20 +44,24 @@ inline Vec3x2 cross(const Vec3x2& a, const Vec3x2& b) {
             _mm_sub_pd(_mm_mul_pd(a.x, b.y), _mm_mul_pd(b.x, a.y))};
 }
 
+// What the pairs of one row share: the scaled heights of the row (z) and of its clamped
+// neighbour rows, and the rows' positions y * spacing.
+struct PairRow {
+    const double* z;
+    const double* up_z;
+    const double* down_z;
+    __m128d y, y_up, y_down;
+};
+
 // The codes of texels x and x + 1 of a row, neither on the left or right edge, into out[0..5]:
-// the scalar loop's doubles (the same operations in the same order, lane by lane). z: the
-// scaled heights of the row, up and down: of its clamped neighbour rows; y, y_up, y_down:
-// those rows' indices.
-inline void normal_codes_x2(const double* z, const double* up_z, const double* down_z, int x, int y, int y_up,
-                            int y_down, double spacing, std::uint8_t* out) {
-    const __m128d d = _mm_set1_pd(spacing);
-    auto column = [&](int i) { return _mm_mul_pd(_mm_set_pd(static_cast<double>(i + 1), static_cast<double>(i)), d); };
-    auto row = [&](int j) { return _mm_set1_pd(static_cast<double>(j) * spacing); };
-    const Vec3x2 p{column(x), row(y), _mm_loadu_pd(z + x)};
-    const Vec3x2 right = Vec3x2{column(x + 1), p.y, _mm_loadu_pd(z + x + 1)} - p;
-    const Vec3x2 up = Vec3x2{p.x, row(y_up), _mm_loadu_pd(up_z + x)} - p;
-    const Vec3x2 left = Vec3x2{column(x - 1), p.y, _mm_loadu_pd(z + x - 1)} - p;
-    const Vec3x2 down = Vec3x2{p.x, row(y_down), _mm_loadu_pd(down_z + x)} - p;
+// the scalar loop's doubles (the same operations in the same order, lane by lane). xs: every
+// column's position x * spacing.
+inline void normal_codes_x2(const PairRow& row, const double* xs, int x, std::uint8_t* out) {
+    const Vec3x2 p{_mm_loadu_pd(xs + x), row.y, _mm_loadu_pd(row.z + x)};
+    const Vec3x2 right = Vec3x2{_mm_loadu_pd(xs + x + 1), p.y, _mm_loadu_pd(row.z + x + 1)} - p;
+    const Vec3x2 up = Vec3x2{p.x, row.y_up, _mm_loadu_pd(row.up_z + x)} - p;
+    const Vec3x2 left = Vec3x2{_mm_loadu_pd(xs + x - 1), p.y, _mm_loadu_pd(row.z + x - 1)} - p;
+    const Vec3x2 down = Vec3x2{p.x, row.y_down, _mm_loadu_pd(row.down_z + x)} - p;
     const Vec3x2 sum = cross(right, up) + cross(up, left) + cross(left, down) + cross(down, right);
     const __m128d length = _mm_sqrt_pd(
         _mm_add_pd(_mm_add_pd(_mm_mul_pd(sum.x, sum.x), _mm_mul_pd(sum.y, sum.y)), _mm_mul_pd(sum.z, sum.z)));
@@ -72,11 +76,13 @@ inline void normal_codes_x2(const double* z, const double* up_z, const double* d
         const __m128d encoded = _mm_mul_pd(_mm_add_pd(_mm_mul_pd(n, _mm_set1_pd(0.5)), _mm_set1_pd(0.5)), _mm_set1_pd(255.0));
         return _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(encoded, _mm_setzero_pd()), _mm_set1_pd(255.0)));
     };
-    const __m128i c[3] = {code(normal(sum.x, 0.0)), code(normal(sum.y, 0.0)), code(normal(sum.z, 1.0))};
-    for (int k = 0; k < 3; ++k) {
-        out[k] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(c[k]));
-        out[3 + k] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(_mm_srli_si128(c[k], 4)));
-    }
+    const __m128i cx = code(normal(sum.x, 0.0)), cy = code(normal(sum.y, 0.0)), cz = code(normal(sum.z, 1.0));
+    out[0] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(cx));
+    out[1] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(cy));
+    out[2] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(cz));
+    out[3] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(_mm_srli_si128(cx, 4)));
+    out[4] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(_mm_srli_si128(cy, 4)));
+    out[5] = static_cast<std::uint8_t>(_mm_cvtsi128_si32(_mm_srli_si128(cz, 4)));
 }
 #endif
 
@@ -106,6 +112,10 @@ std::vector<std::uint8_t> thesis_normal_map_codes(const Texture& height_map, dou
             height_map.row_exact(y, 0, row);
             for (double& v : row) v *= height_scale;
         }
+#if defined(__SSE2__)
+        const std::unique_ptr<double[]> xs(new double[static_cast<std::size_t>(width)]);
+        for (int x = 0; x < width; ++x) xs[static_cast<std::size_t>(x)] = x * texel_spacing;
+#endif
         // The position vector of pixel (x, y), neighbours clamped to the edge.
         auto P = [&](int x, int y) {
             x = std::clamp(x, 0, width - 1);
@@ -139,10 +149,15 @@ std::vector<std::uint8_t> thesis_normal_map_codes(const Texture& height_map, dou
             // Between the edge columns, whose neighbours clamp, two texels at a time.
             if (width >= 4) {
                 const int y_up = std::min(y + 1, height - 1), y_down = std::max(y - 1, 0);
+                const PairRow row{heights(y),
+                                  heights(y_up),
+                                  heights(y_down),
+                                  _mm_set1_pd(y * texel_spacing),
+                                  _mm_set1_pd(y_up * texel_spacing),
+                                  _mm_set1_pd(y_down * texel_spacing)};
                 texel(0, y);
-                for (x = 1; x + 2 < width; x += 2)
-                    normal_codes_x2(heights(y), heights(y_up), heights(y_down), x, y, y_up, y_down, texel_spacing,
-                                    codes_of(x, y));
+                std::uint8_t* out = codes_of(1, y);
+                for (x = 1; x + 2 < width; x += 2, out += 6) normal_codes_x2(row, xs.get(), x, out);
             }
 #endif
             for (; x < width; ++x) texel(x, y);
