@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <random>
 #include <span>
 #include <string>
@@ -451,6 +452,42 @@ TEST(TextureSampling, TexelExactOfEveryUnormCodeIsTheCodeOverItsMaximum) {
     for (int c = 0; c < 256; ++c) ASSERT_EQ(t8.texel_exact(0, c % 16, c / 16), c / 255.0) << c;
 }
 
+// row_exact reads a whole row of level 0 as texel_exact reads each of its texels, for every
+// format, channel count and channel, and refuses what texel_exact refuses.
+TEST(TextureSampling, RowExactIsTexelExactAlongTheRow) {
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<int> code(0, 65535);
+    for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}}) {
+        for (int channels = 1; channels <= 4; ++channels) {
+            const std::size_t n = static_cast<std::size_t>(w) * h * channels;
+            std::vector<std::uint16_t> c16(n);
+            std::vector<std::uint8_t> c8(n);
+            std::vector<float> f(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                c16[i] = static_cast<std::uint16_t>(code(rng));
+                c8[i] = static_cast<std::uint8_t>(code(rng) & 0xFF);
+                f[i] = static_cast<float>(code(rng) - 30000) / 77.0f;
+            }
+            for (const Texture& t : {Texture::from_unorm16(w, h, channels, c16), Texture::from_unorm8(w, h, channels, c8),
+                                     Texture::from_float(w, h, channels, f)}) {
+                SCOPED_TRACE(std::string(to_string(t.format())) + " " + std::to_string(w) + "x" + std::to_string(h) +
+                             "x" + std::to_string(channels));
+                std::vector<double> row(static_cast<std::size_t>(w));
+                for (int y = 0; y < h; ++y)
+                    for (int c = 0; c < channels; ++c) {
+                        t.row_exact(y, c, row);
+                        for (int x = 0; x < w; ++x) ASSERT_EQ(row[static_cast<std::size_t>(x)], t.texel_exact(0, x, y, c));
+                    }
+                EXPECT_THROW(t.row_exact(h, 0, row), tessref::Error);
+                EXPECT_THROW(t.row_exact(-1, 0, row), tessref::Error);
+                EXPECT_THROW(t.row_exact(0, channels, row), tessref::Error);
+                std::vector<double> longer(static_cast<std::size_t>(w) + 1);
+                EXPECT_THROW(t.row_exact(0, 0, longer), tessref::Error);
+            }
+        }
+    }
+}
+
 // ---- mip pyramid --------------------------------------------------------------------------
 
 TEST(Mipmaps, LevelSizesHalveDownToOneByOne) {
@@ -728,6 +765,67 @@ TEST(Loading, FirstStoredRowIsTZeroExceptPfmWhichIsStoredBottomUp) {
     EXPECT_EQ(field.texture.texel(0, 1, 0), 4.0f);
     EXPECT_EQ(field.texture.texel(0, 0, 1), 1.0f);
     EXPECT_EQ(field.texture.texel(0, 1, 1), 2.0f);
+}
+
+// Where texture_of_height_field gives a texture it is load_texture's of the same file,
+// level for level; where they would differ (a filled texel, channels the height field
+// drops, another mipmap rule, a smaller size limit) it gives none and the file is read.
+TEST(Loading, TextureOfAHeightFieldIsTheFilesTextureOrNone) {
+    auto expect_same = [](const Texture& a, const Texture& b) {
+        ASSERT_EQ(a.format(), b.format());
+        ASSERT_EQ(a.channels(), b.channels());
+        ASSERT_EQ(a.mipmap_rule(), b.mipmap_rule());
+        EXPECT_EQ(a.swizzle(), b.swizzle());
+        EXPECT_EQ(a.wrap(), b.wrap());
+        EXPECT_EQ(a.min_filter(), b.min_filter());
+        ASSERT_EQ(a.level_count(), b.level_count());
+        for (int lod = 0; lod < a.level_count(); ++lod) {
+            EXPECT_EQ(a.level(lod).width, b.level(lod).width);
+            EXPECT_EQ(a.level(lod).height, b.level(lod).height);
+            EXPECT_TRUE(a.level(lod).texels == b.level(lod).texels) << "lod " << lod;
+            EXPECT_TRUE(a.level(lod).unorm8 == b.level(lod).unorm8) << "lod " << lod;
+        }
+    };
+    TempDir dir;
+    // uint8, uint16 (PGM), float (TIFF through OpenImageIO).
+    for (const std::string path : {std::string(TESSREF_DATA_DIR) + "/heightmaps/thesis-island.pgm",
+                                   std::string(TESSREF_DATA_DIR) + "/jacksboro_fault_dem.pgm",
+                                   std::string(TESSREF_DATA_DIR) + "/olinda_dem_utm25s.tif"}) {
+        SCOPED_TRACE(path);
+        const tessref::HeightField field = tessref::load_height_field(path);
+        const std::optional<Texture> same = tessref::texture_of_height_field(field);
+        ASSERT_TRUE(same.has_value());
+        expect_same(*same, tessref::load_texture(path));
+        tessref::TextureLoadOptions box;
+        box.mipmap_rule = MipmapRule::mesa_software_box;
+        EXPECT_FALSE(tessref::texture_of_height_field(field, box).has_value());
+        HeightFieldOptions box_field;
+        box_field.mipmap_rule = MipmapRule::mesa_software_box;
+        const std::optional<Texture> box_same =
+            tessref::texture_of_height_field(tessref::load_height_field(path, box_field), box);
+        ASSERT_TRUE(box_same.has_value());
+        expect_same(*box_same, tessref::load_texture(path, box));
+        tessref::TextureLoadOptions small;
+        small.max_dimension = std::max(field.info.width, field.info.height) - 1;
+        EXPECT_FALSE(tessref::texture_of_height_field(field, small).has_value());
+        EXPECT_THROW(tessref::load_texture(path, small), tessref::Error);
+    }
+    // Colour: the height field keeps the first of three channels.
+    const std::string rgb = dir.file("rgb.ppm");
+    write_bytes(rgb, std::string("P6\n2 2\n255\n") + std::string("\x01\x02\x03\x04\x05\x06\x07\x08\x09\x0a\x0b\x0c", 12));
+    EXPECT_FALSE(tessref::texture_of_height_field(tessref::load_height_field(rgb)).has_value());
+    // A nodata texel filled: the height field's texel is not the file's.
+    const std::string holes = dir.file("holes.pgm");
+    write_bytes(holes, std::string("P5\n3 2\n255\n") + std::string("\x0a\x00\x1e\x28\x32\x3c", 6));
+    HeightFieldOptions fill;
+    fill.nodata_value = 0.0;
+    fill.nodata_policy = NodataPolicy::fill_neighbour_mean;
+    const tessref::HeightField filled = tessref::load_height_field(holes, fill);
+    ASSERT_EQ(filled.info.missing_texels, 1u);
+    EXPECT_FALSE(tessref::texture_of_height_field(filled).has_value());
+    const std::optional<Texture> unfilled = tessref::texture_of_height_field(tessref::load_height_field(holes));
+    ASSERT_TRUE(unfilled.has_value());
+    expect_same(*unfilled, tessref::load_texture(holes));
 }
 
 TEST(Loading, HeightUsesTheFirstChannelAndColourTexturesKeepTheirChannels) {
@@ -1234,6 +1332,70 @@ TEST(Normals, ThesisNormalMapOfAPlaneIsTheAnalyticNormal) {
     EXPECT_EQ(codes[14], 255);
 }
 
+// The normal map is the thesis's loop, texel by texel as written (section 4.7.4, the
+// positions P of the texel and its four edge-clamped neighbours, four cross products summed
+// and normalized, each component encoded), code for code: for every size from 1 x 1 up
+// (edge columns and rows, odd and even widths), every format, rough and smooth heights.
+TEST(Normals, ThesisNormalMapIsTheThesisLoopTexelByTexel) {
+    auto reference = [](const Texture& map, double d, double k) {
+        const int w = map.width(), h = map.height();
+        std::vector<std::uint8_t> codes(static_cast<std::size_t>(w) * h * 3);
+        auto P = [&](int x, int y) {
+            x = std::clamp(x, 0, w - 1);
+            y = std::clamp(y, 0, h - 1);
+            return glm::dvec3(x * d, y * d, map.texel_exact(0, x, y) * k);
+        };
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const glm::dvec3 p = P(x, y);
+                const glm::dvec3 right = P(x + 1, y) - p, up = P(x, y + 1) - p, left = P(x - 1, y) - p,
+                                 down = P(x, y - 1) - p;
+                const glm::dvec3 sum =
+                    glm::cross(right, up) + glm::cross(up, left) + glm::cross(left, down) + glm::cross(down, right);
+                const double length = glm::length(sum);
+                const glm::dvec3 n = length > 0.0 ? sum / length : glm::dvec3(0.0, 0.0, 1.0);
+                for (int c = 0; c < 3; ++c)
+                    codes[(static_cast<std::size_t>(y) * w + x) * 3 + c] =
+                        static_cast<std::uint8_t>(std::clamp((n[c] * 0.5 + 0.5) * 255.0, 0.0, 255.0));
+            }
+        return codes;
+    };
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> code(0, 65535);
+    const std::pair<int, int> sizes[] = {{1, 1}, {1, 6}, {6, 1}, {2, 2}, {3, 3}, {4, 4}, {5, 3},
+                                         {7, 2}, {8, 9}, {37, 23}, {64, 40}, {403, 37}};
+    for (const auto& [w, h] : sizes) {
+        for (const bool smooth : {false, true}) {
+            const std::size_t n = static_cast<std::size_t>(w) * h;
+            std::vector<std::uint16_t> c16(n);
+            std::vector<std::uint8_t> c8(n);
+            std::vector<float> f(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+                const int v = smooth ? (x * 37 + y * 91 + (x * y) % 7) % 65536 : code(rng);
+                c16[i] = static_cast<std::uint16_t>(v);
+                c8[i] = static_cast<std::uint8_t>(smooth ? v / 257 : v & 0xFF);
+                f[i] = (static_cast<float>(v) - 20000.0f) * 3.7f;
+            }
+            for (const Texture& map : {Texture::from_unorm16(w, h, 1, c16), Texture::from_unorm8(w, h, 1, c8),
+                                       Texture::from_float(w, h, 1, f)}) {
+                for (const auto& [d, k] : {std::pair{0.7, 13.0}, std::pair{310.0 / 403, 16.8}, std::pair{2.0, -0.01}}) {
+                    SCOPED_TRACE(std::string(to_string(map.format())) + " " + std::to_string(w) + "x" +
+                                 std::to_string(h) + (smooth ? " smooth" : " rough") + " d " + std::to_string(d) +
+                                 " k " + std::to_string(k));
+                    const std::vector<std::uint8_t> got = tessref::thesis_normal_map_codes(map, d, k);
+                    const std::vector<std::uint8_t> want = reference(map, d, k);
+                    ASSERT_EQ(got.size(), want.size());
+                    std::size_t differ = 0, first = 0;
+                    for (std::size_t i = got.size(); i-- > 0;)
+                        if (got[i] != want[i]) ++differ, first = i;
+                    EXPECT_EQ(differ, 0u) << "first at texel " << first / 3 << " channel " << first % 3;
+                }
+            }
+        }
+    }
+}
+
 // ---- the independent peer: Mesa llvmpipe through OSMesa -----------------------------------
 
 bool cpu_has_fma() {
@@ -1458,7 +1620,8 @@ TEST_F(GlPeer, MipmapsAndSamplesMatchLlvmpipeBitForBit) {
         {TexelFormat::float32, 37, 23, 1}, {TexelFormat::float32, 64, 32, 1}, {TexelFormat::float32, 13, 7, 4},
         {TexelFormat::float32, 111, 111, 1}, {TexelFormat::unorm16, 37, 23, 1}, {TexelFormat::unorm16, 5, 300, 1},
         {TexelFormat::unorm8, 37, 23, 1},  {TexelFormat::unorm8, 19, 13, 2},  {TexelFormat::unorm8, 21, 17, 3},
-        {TexelFormat::unorm8, 64, 48, 4},
+        {TexelFormat::unorm8, 64, 48, 4},   {TexelFormat::unorm16, 1, 37, 1},  {TexelFormat::unorm8, 45, 1, 3},
+        {TexelFormat::float32, 3, 1, 2},
     };
     unsigned seed = 100;
     for (const Case& c : cases) {

@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -325,6 +326,78 @@ TEST_F(ImageIo, EveryPngAndPnmOfTheRepositoryReadsAsOpenImageIOReadsIt) {
         }
     }
     EXPECT_GE(compared, 20);
+}
+
+// The binary PNM samples as the format defines them (pnm.cpp): a sample v of maxval m is
+// min(v, m) * 255 / m (m up to 255) or min(v, m) * 65535 / m (above), truncated, for every
+// maxval kind (1, the full 255 and 65535, others, 16-bit values above 32768) and for all or
+// only the first channels kept; the same file cut short anywhere is the error naming the
+// file that it always was.
+TEST_F(ImageIo, BinaryPnmSamplesAreTheirCodesScaledToTheFullRange) {
+    std::uint32_t state = 12345;
+    auto next = [&] { return state = state * 1664525u + 1013904223u; };
+    int files = 0;
+    for (const char magic : {'5', '6'}) {
+        const int channels = magic == '5' ? 1 : 3;
+        for (const int maxval : {1, 7, 200, 255, 256, 1000, 40000, 65535}) {
+            for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 6}, std::pair{9, 1}, std::pair{17, 5}}) {
+                const bool wide = maxval > 255;
+                const std::uint64_t full = wide ? 65535 : 255;
+                std::vector<std::uint32_t> values(static_cast<std::size_t>(w) * h * channels);
+                std::string bytes = "P" + std::string(1, magic) + "\n# a comment\n" + std::to_string(w) + " " +
+                                    std::to_string(h) + "\n" + std::to_string(maxval) + "\n";
+                const std::size_t header = bytes.size();
+                for (std::uint32_t& v : values) {
+                    // Mostly within maxval, sometimes above it (clamped to it) up to the type's top.
+                    v = next() % 8 == 0 ? static_cast<std::uint32_t>(full - next() % 3)
+                                        : next() % (static_cast<std::uint32_t>(maxval) + 1);
+                    if (wide) bytes += static_cast<char>(v >> 8);
+                    bytes += static_cast<char>(v & 0xFF);
+                }
+                const fs::path path = dir() / ("p" + std::string(1, magic) + "m" + std::to_string(maxval) + "w" +
+                                               std::to_string(w) + "h" + std::to_string(h) + ".pnm");
+                tessref::test::write_file(path, bytes);
+                ++files;
+                SCOPED_TRACE(path.filename().string());
+                for (int keep = 1; keep <= channels; ++keep) {
+                    tessref::image::ReadOptions options;
+                    options.max_channels = keep;
+                    const Image image = tessref::image::read_image(path.string(), options);
+                    ASSERT_EQ(image.header.type, wide ? SampleType::uint16 : SampleType::uint8);
+                    ASSERT_EQ(image.channels, keep);
+                    const std::size_t n = static_cast<std::size_t>(w) * h * keep;
+                    ASSERT_EQ(wide ? image.u16.size() : image.u8.size(), n);
+                    for (std::size_t i = 0; i < n; ++i) {
+                        const std::size_t texel = i / keep, c = i % keep;
+                        const std::uint64_t v = values[texel * channels + c];
+                        const std::uint64_t expected = std::min<std::uint64_t>(v, maxval) * full / maxval;
+                        ASSERT_EQ(wide ? image.u16[i] : image.u8[i], expected) << "sample " << i << " keeping " << keep;
+                    }
+                }
+                for (const std::size_t cut : {std::size_t{2}, header - 1, header, bytes.size() - 1}) {
+                    const fs::path short_path = dir() / ("cut" + std::to_string(cut) + path.filename().string());
+                    tessref::test::write_file(short_path, bytes.substr(0, cut));
+                    try {
+                        tessref::image::read_image(short_path.string());
+                        ADD_FAILURE() << "a file cut at byte " << cut << " of " << bytes.size() << " was read";
+                    } catch (const tessref::Error& e) {
+                        EXPECT_EQ(e.where().file, short_path.string());
+                        const std::string what = e.what();
+                        if (cut >= header)
+                            EXPECT_EQ(what, "image is truncated or corrupt: its " + std::to_string(w) + " x " +
+                                                std::to_string(h) + " pixels cannot be read (its " +
+                                                (wide ? "16" : "8") + "-bit samples end early)");
+                        else if (cut == header - 1)
+                            EXPECT_EQ(what, std::string("cannot read image: its ") + (magic == '5' ? "PGM" : "PPM") +
+                                                " header ends without the whitespace before the samples");
+                        else
+                            EXPECT_NE(what.find("cannot read image: its "), std::string::npos) << what;
+                    }
+                }
+            }
+        }
+    }
+    EXPECT_EQ(files, 64);
 }
 
 // ---- without the module ------------------------------------------------------------------

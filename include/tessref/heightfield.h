@@ -100,6 +100,13 @@ struct TextureLoadOptions {
 // truncation). NaN samples are kept (a colour texture has no nodata policy).
 Texture load_texture(const std::string& path, const TextureLoadOptions& options = {});
 
+// What load_texture(field.info.source_path, options) returns, taken from the height field as
+// load_height_field returned it instead of decoding the file again (a terrain shaded by its
+// own height map), where the two are certain to be the same: no texel was missing, the file
+// has one channel, the same mipmap rule, within options.max_dimension. Otherwise nullopt:
+// the file must be read.
+std::optional<Texture> texture_of_height_field(const HeightField& field, const TextureLoadOptions& options = {});
+
 // ---- Normals from a height field -------------------------------------------------------
 
 // The thesis's normal map (section 4.7.4): "A for-loop goes through every pixel from the

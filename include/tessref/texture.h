@@ -144,6 +144,9 @@ public:
     // are not clamped: out of range throws tessref::Error.
     float texel(int lod, int x, int y, int channel = 0) const;
     double texel_exact(int lod, int x, int y, int channel = 0) const;
+    // texel_exact(0, x, y, channel) for every x of row y, into out (width() values): for
+    // loops over a whole level, which need not check every texel's coordinates.
+    void row_exact(int y, int channel, std::span<double> out) const;
 
     MinFilter min_filter() const { return min_filter_; }
     void set_min_filter(MinFilter filter) { min_filter_ = filter; }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -145,7 +146,9 @@ HeightField load_height_field(const std::string& path, const HeightFieldOptions&
     };
     std::vector<std::uint8_t> missing(count, 0);
     std::size_t missing_count = 0;
-    for (std::size_t i = 0; i < count; ++i) {
+    // Integer codes are finite: without a nodata value none of them is missing.
+    const bool may_miss = raw.format == TexelFormat::float32 || options.nodata_value.has_value();
+    for (std::size_t i = 0; may_miss && i < count; ++i) {
         if (!is_missing(i)) continue;
         if (options.nodata_policy == NodataPolicy::error) {
             const int x = static_cast<int>(i % static_cast<std::size_t>(width));
@@ -235,6 +238,17 @@ Texture load_texture(const std::string& path, const TextureLoadOptions& options)
     const int max_channels = std::clamp(options.max_channels, 1, 4);
     RawImage raw = read_raw(path, options.max_dimension, max_channels, "texture", 0);
     return make_texture(raw, options.mipmap_rule);
+}
+
+std::optional<Texture> texture_of_height_field(const HeightField& field, const TextureLoadOptions& options) {
+    // Both loaders read the file through read_raw and make_texture. A one-channel file keeps
+    // its channel in both; with nothing filled, the height field's texture holds the file's
+    // samples, and its header passed a memory check that asked for more than load_texture's.
+    const HeightFieldInfo& info = field.info;
+    if (info.missing_texels != 0 || info.file_channels != 1 || field.texture.mipmap_rule() != options.mipmap_rule ||
+        info.width > options.max_dimension || info.height > options.max_dimension)
+        return std::nullopt;
+    return field.texture;
 }
 
 }  // namespace tessref

@@ -334,7 +334,7 @@ struct Loader {
                        "normal_map_spacing / normal_map_height_scale generate a normal map; not used with domain.normal_map");
             const std::string path = resolve(*normal_map_file);
             auto texture = load_file(t, "normal_map", "cannot load normal map", [&] {
-                return std::make_shared<const Texture>(load_texture(path));
+                return std::make_shared<const Texture>(scene_detail::load_scene_texture(path, scene));
             });
             if (texture->channels() < 3)
                 t.fail("normal_map", "normal map " + path + " has " + std::to_string(texture->channels()) +
@@ -506,7 +506,7 @@ struct Loader {
                 c.tessellation_map_path = resolve(t.string("tessellation_map"));
                 const std::string path = c.tessellation_map_path;
                 c.tessellation_map = load_file(t, "tessellation_map", "cannot load tessellation map", [&] {
-                    return std::make_shared<const Texture>(load_texture(path));
+                    return std::make_shared<const Texture>(scene_detail::load_scene_texture(path, scene));
                 });
             } else if (map_needed) {
                 t.missing("tessellation_map", c.thesis.factor == ThesisFactor::all

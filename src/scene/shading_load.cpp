@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "scene/toml_reader.h"
@@ -136,7 +137,8 @@ void read_model(TableReader& t, ShadingModel& m) {
 }
 
 // One entry of shading.textures: "path", { path = "...", luminance = true } or a colour.
-std::shared_ptr<const Texture> read_texture(TableReader& textures, const std::string& sampler, const Resolve& resolve) {
+std::shared_ptr<const Texture> read_texture(TableReader& textures, const std::string& sampler, const Scene& scene,
+                                            const Resolve& resolve) {
     const toml::node& n = *textures.node(sampler);
     if (n.is_array()) {
         const glm::vec4 c(*textures.colour_opt(sampler));
@@ -161,7 +163,7 @@ std::shared_ptr<const Texture> read_texture(TableReader& textures, const std::st
     const std::string file = resolve(path);
     Texture texture;
     try {
-        texture = load_texture(file);
+        texture = load_scene_texture(file, scene);
     } catch (const Error& e) {
         throw Error("cannot load texture: " + e.message(), where);
     } catch (const std::exception& e) {
@@ -178,13 +180,14 @@ std::shared_ptr<const Texture> read_texture(TableReader& textures, const std::st
 }
 
 // An image named by key `k` of table `t`, loaded (an error names the key and the file).
-std::shared_ptr<const Texture> read_image(TableReader& t, const std::string& k, const Resolve& resolve, Wrap wrap) {
+std::shared_ptr<const Texture> read_image(TableReader& t, const std::string& k, const Scene& scene, const Resolve& resolve,
+                                          Wrap wrap) {
     const std::string path = t.string(k, "an image");
     if (path.empty()) t.fail(k, t.key(k) + " must name an image");
     const std::string file = resolve(path);
     Texture texture;
     try {
-        texture = load_texture(file);
+        texture = load_scene_texture(file, scene);
     } catch (const Error& e) {
         throw Error("cannot load texture " + file + ": " + e.message(), t.where(k));
     } catch (const std::exception& e) {
@@ -233,13 +236,13 @@ void read_geomip_lightmap(TableReader& t, const Scene& scene, GeomipLightmapShad
                         where_at(t.file(), e.source(), name));
         TableReader m(t.file(), *tbl, name, {"texture", "repeat", "alpha"});
         GeomipMaterial material;
-        material.texture = read_image(m, "texture", resolve, Wrap::repeat);
+        material.texture = read_image(m, "texture", scene, resolve, Wrap::repeat);
         material.repeat = static_cast<float>(m.real_or("repeat", 1.0, 0.0, 1e6, true));
         if (i == 0) {
             if (m.has("alpha"))
                 m.fail("alpha", m.key("alpha") + ": the base pass has no alpha map (nothing is drawn before it)");
         } else {
-            material.alpha = read_image(m, "alpha", resolve, Wrap::clamp_to_edge);
+            material.alpha = read_image(m, "alpha", scene, resolve, Wrap::clamp_to_edge);
             if (material.alpha->width() != w || material.alpha->height() != h)
                 m.fail("alpha", m.key("alpha") + ": the alpha map is " + std::to_string(material.alpha->width()) + "x" +
                                     std::to_string(material.alpha->height()) + ", the height map " + std::to_string(w) +
@@ -252,7 +255,7 @@ void read_geomip_lightmap(TableReader& t, const Scene& scene, GeomipLightmapShad
     // The clouds: { texture, repeat, velocity }, scrolled to velocity * time.
     if (const toml::table* c = t.table_opt("clouds")) {
         TableReader ct(t.file(), *c, t.key("clouds"), {"texture", "repeat", "velocity"});
-        g.clouds = read_image(ct, "texture", resolve, Wrap::repeat);
+        g.clouds = read_image(ct, "texture", scene, resolve, Wrap::repeat);
         g.cloudRepeat = static_cast<float>(ct.real_or("repeat", 1.0, 0.0, 1e6, true));
         const glm::dvec2 velocity = ct.vec2_opt("velocity").value_or(glm::dvec2(0.0));
         const double time = t.real_or("time", 0.0, -1e12, 1e12);
@@ -273,6 +276,12 @@ std::string joined(const std::vector<std::string>& names) {
 }
 
 }  // namespace
+
+Texture load_scene_texture(const std::string& file, const Scene& scene) {
+    if (scene.grid && scene.grid->heightmap && file == scene.grid->heightmap_path)
+        if (std::optional<Texture> same = texture_of_height_field(*scene.grid->heightmap)) return std::move(*same);
+    return load_texture(file);
+}
 
 RenderShading read_shading(const std::string& file, const toml::table* table, const Scene& scene,
                            const Resolve& resolve) {
@@ -319,7 +328,7 @@ RenderShading read_shading(const std::string& file, const toml::table* table, co
         }
         TableReader textures(file, *n->as_table(), "shading.textures", samplers);
         for (const std::string& name : samplers)
-            if (textures.has(name)) *sampler_slot(m.textures, name) = read_texture(textures, name, resolve);
+            if (textures.has(name)) *sampler_slot(m.textures, name) = read_texture(textures, name, scene, resolve);
         textures.finish();
     }
     // COSC422's fragment shader samples the terrain's own height map.

@@ -638,11 +638,13 @@ struct BlitSetup {
         lower = make(2, 3, 0);
     }
 
-    // The interpolated texture coordinate at the centre of destination pixel (i, j).
-    glm::vec2 coordinate(int i, int j) const {
-        const long long lhs = static_cast<long long>(2 * i + 1) * height;
-        const long long rhs = static_cast<long long>(2 * j + 1) * width;
-        const BlitTriangle& tri = lhs < rhs ? lower : upper;
+    // Whether destination pixel (i, j) is in the lower triangle (else the upper).
+    bool in_lower(int i, int j) const {
+        return static_cast<long long>(2 * i + 1) * height < static_cast<long long>(2 * j + 1) * width;
+    }
+
+    // The interpolated texture coordinate at the centre of destination pixel (i, j) in `tri`.
+    static glm::vec2 coordinate(const BlitTriangle& tri, int i, int j) {
         const float x = static_cast<float>(i);
         const float y = static_cast<float>(j);
         const float s = std::fma(tri.s.dady, y, std::fma(tri.s.dadx, x, tri.s.a0));
@@ -651,10 +653,105 @@ struct BlitSetup {
     }
 };
 
+// The filter axes of a blit, once a column and once a row. In both triangles s is constant
+// along y and t along x: the rectangle's texture coordinates follow its edges, so the setup
+// gives s a dady and t a dadx of exactly zero (the differences it takes are of equal
+// coordinates). coordinate()'s fma with that zero then returns the other term unchanged
+// (only a zero's sign may change, and axis_gpu and axis_unorm8 read -0 as 0), so pixel
+// (i, j) has column i's s axis and row j's t axis of its triangle.
+template <typename Axis>
+struct BlitAxes {
+    std::vector<Axis> s_upper, s_lower;  // by destination column
+    std::vector<Axis> t_upper, t_lower;  // by destination row
+};
+
+struct BlitCoordinates {
+    std::vector<float> s_upper, s_lower, t_upper, t_lower;
+};
+
+TESSREF_FMA_CLONES
+BlitCoordinates blit_coordinates(const BlitSetup& setup) {
+    if (setup.upper.s.dady != 0.0f || setup.lower.s.dady != 0.0f || setup.upper.t.dadx != 0.0f ||
+        setup.lower.t.dadx != 0.0f)
+        throw Error("blit of a " + std::to_string(setup.width) + " x " + std::to_string(setup.height) +
+                    " level: its texture coordinates are not separable");
+    BlitCoordinates out;
+    for (int i = 0; i < setup.width; ++i) {
+        out.s_upper.push_back(BlitSetup::coordinate(setup.upper, i, 0).x);
+        out.s_lower.push_back(BlitSetup::coordinate(setup.lower, i, 0).x);
+    }
+    for (int j = 0; j < setup.height; ++j) {
+        out.t_upper.push_back(BlitSetup::coordinate(setup.upper, 0, j).y);
+        out.t_lower.push_back(BlitSetup::coordinate(setup.lower, 0, j).y);
+    }
+    return out;
+}
+
+template <typename Axis, typename AxisOf>
+BlitAxes<Axis> blit_axes(const BlitSetup& setup, const TextureLevel& src, AxisOf axis_of) {
+    const BlitCoordinates c = blit_coordinates(setup);
+    BlitAxes<Axis> axes;
+    for (const float s : c.s_upper) axes.s_upper.push_back(axis_of(s, src.width));
+    for (const float s : c.s_lower) axes.s_lower.push_back(axis_of(s, src.width));
+    for (const float t : c.t_upper) axes.t_upper.push_back(axis_of(t, src.height));
+    for (const float t : c.t_lower) axes.t_lower.push_back(axis_of(t, src.height));
+    return axes;
+}
+
 std::uint16_t float_to_unorm16(float v) {
     // llvmpipe's store: clamp to [0, 1], scale by 65535 in float, round half to even.
-    const float clamped = std::fmin(std::fmax(v, 0.0f), 1.0f);  // NaN -> 0
-    return static_cast<std::uint16_t>(std::nearbyint(clamped * 65535.0f));
+    const float clamped = min_of(max_or(v, 0.0f), 1.0f);  // NaN -> 0
+    return static_cast<std::uint16_t>(round_even(clamped * 65535.0f));
+}
+
+// Destination row j of the blit of src, C channels, from the axes of its columns and rows.
+// The filters are inlined rather than called through bilinear_gpu / bilinear_unorm8: the
+// channel count is dispatched once a row, and the float lerp's fma is an instruction in the
+// FMA clone of blit_row_float.
+template <int C, typename Axis>
+[[gnu::always_inline]] inline void blit_row_n(const TextureLevel& src, TexelFormat format, const BlitSetup& setup,
+                                              const BlitAxes<Axis>& axes, int j, TextureLevel& dst) {
+    const Axis& t_upper = axes.t_upper[static_cast<std::size_t>(j)];
+    const Axis& t_lower = axes.t_lower[static_cast<std::size_t>(j)];
+    for (int i = 0; i < dst.width; ++i) {
+        const bool lower = setup.in_lower(i, j);
+        const Axis& ax = lower ? axes.s_lower[static_cast<std::size_t>(i)] : axes.s_upper[static_cast<std::size_t>(i)];
+        const Axis& ay = lower ? t_lower : t_upper;
+        const std::size_t base = index_of(dst, C, i, j, 0);
+        if constexpr (std::is_same_v<Axis, AxisU8>) {
+            int codes[4];
+            bilinear_unorm8_n<C>(src, ax, ay, codes);
+            for (int c = 0; c < C; ++c) {
+                dst.unorm8[base + c] = static_cast<std::uint8_t>(codes[c]);
+                dst.texels[base + c] = static_cast<float>(codes[c]) * kUnorm8Scale;
+            }
+        } else {
+            float values[4];
+            bilinear_gpu_n<C>(src, ax, ay, values);
+            for (int c = 0; c < C; ++c)
+                dst.texels[base + c] = format == TexelFormat::unorm16
+                                           ? static_cast<float>(float_to_unorm16(values[c])) * kUnorm16Scale
+                                           : values[c];
+        }
+    }
+}
+
+template <typename Axis>
+[[gnu::always_inline]] inline void blit_row(const TextureLevel& src, TexelFormat format, int channels,
+                                            const BlitSetup& setup, const BlitAxes<Axis>& axes, int j,
+                                            TextureLevel& dst) {
+    switch (channels) {
+        case 1: return blit_row_n<1>(src, format, setup, axes, j, dst);
+        case 2: return blit_row_n<2>(src, format, setup, axes, j, dst);
+        case 3: return blit_row_n<3>(src, format, setup, axes, j, dst);
+        default: return blit_row_n<4>(src, format, setup, axes, j, dst);
+    }
+}
+
+TESSREF_FMA_CLONES
+void blit_row_float(const TextureLevel& src, TexelFormat format, int channels, const BlitSetup& setup,
+                    const BlitAxes<AxisF>& axes, int j, TextureLevel& dst) {
+    blit_row(src, format, channels, setup, axes, j, dst);
 }
 
 TextureLevel blit_level(const TextureLevel& src, TexelFormat format, int channels, int dst_width, int dst_height) {
@@ -668,31 +765,13 @@ TextureLevel blit_level(const TextureLevel& src, TexelFormat format, int channel
     if (format == TexelFormat::unorm8) dst.unorm8.resize(count);
     const BlitSetup setup(dst_width, dst_height);
     // Rows in parallel: each destination texel is a function of the source level alone.
-    tessref::parallel_for(0, dst_height, [&](int j) {
-        for (int i = 0; i < dst_width; ++i) {
-            const glm::vec2 st = setup.coordinate(i, j);
-            const std::size_t base = index_of(dst, channels, i, j, 0);
-            if (format == TexelFormat::unorm8) {
-                int codes[4];
-                bilinear_unorm8(src, channels, st, codes);
-                for (int c = 0; c < channels; ++c) {
-                    dst.unorm8[base + c] = static_cast<std::uint8_t>(codes[c]);
-                    dst.texels[base + c] = static_cast<float>(codes[c]) * kUnorm8Scale;
-                }
-            } else {
-                float values[4];
-                bilinear_gpu(src, channels, st, values);
-                for (int c = 0; c < channels; ++c) {
-                    if (format == TexelFormat::unorm16) {
-                        dst.texels[base + c] =
-                            static_cast<float>(float_to_unorm16(values[c])) * kUnorm16Scale;
-                    } else {
-                        dst.texels[base + c] = values[c];
-                    }
-                }
-            }
-        }
-    });
+    if (format == TexelFormat::unorm8) {
+        const auto axes = blit_axes<AxisU8>(setup, src, [](float s, int size) { return axis_unorm8(s, size); });
+        tessref::parallel_for(0, dst_height, [&](int j) { blit_row(src, format, channels, setup, axes, j, dst); });
+    } else {
+        const auto axes = blit_axes<AxisF>(setup, src, [](float s, int size) { return axis_gpu(s, size); });
+        tessref::parallel_for(0, dst_height, [&](int j) { blit_row_float(src, format, channels, setup, axes, j, dst); });
+    }
     return dst;
 }
 
@@ -942,6 +1021,17 @@ double Texture::texel_exact(int lod, int x, int y, int channel) const {
     check_texel(l, channels_, lod, x, y, channel);
     const double* exact = lod == 0 ? nullptr : exact_levels()[static_cast<std::size_t>(lod)].data();
     return exact_value(l, exact, format_, index_of(l, channels_, x, y, channel));
+}
+
+void Texture::row_exact(int y, int channel, std::span<double> out) const {
+    const TextureLevel& l = level(0);
+    check_texel(l, channels_, 0, 0, y, channel);
+    if (out.size() != static_cast<std::size_t>(l.width))
+        throw Error("row_exact: " + std::to_string(out.size()) + " values for a row of " + std::to_string(l.width) +
+                    " texels");
+    const std::size_t first = index_of(l, channels_, 0, y, channel);
+    for (std::size_t x = 0; x < out.size(); ++x)
+        out[x] = exact_value(l, nullptr, format_, first + x * static_cast<std::size_t>(channels_));
 }
 
 void Texture::set_swizzle(Swizzle swizzle) {
