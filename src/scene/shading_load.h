@@ -10,15 +10,15 @@
 
 namespace tessref::scene_detail {
 
+// load_texture(file), or the texture of the scene's height map where `file` is that map and
+// texture_of_height_field gives it: a file the scene names twice is decoded once.
+Texture load_scene_texture(const std::string& file, const Scene& scene);
+
 // [shading] (null `table`: the scene has none, depth shading) as Scene::shading, its textures
 // loaded. `scene` has its camera and grid read: the camera gives the camera-dependent
 // uniforms (lab 4 cameraPosition, PN v3CameraPosition, depth near/far), the grid's height
 // map is COSC422's heightMap unless the table binds another. `resolve` makes a path of the
 // scene file openable. Errors as TableReader's (toml_reader.h).
-// load_texture(file), or the texture of the scene's height map where `file` is that map and
-// texture_of_height_field gives it: a file the scene names twice is decoded once.
-Texture load_scene_texture(const std::string& file, const Scene& scene);
-
 RenderShading read_shading(const std::string& file, const toml::table* table, const Scene& scene,
                            const std::function<std::string(const std::string&)>& resolve);
 
