@@ -450,12 +450,23 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             chunk_views.push_back({chunks[k].mesh, chunks[k].face_normals, chunks[k].clip, stream.face_normals(), origin});
             chunk_first.push_back(chunks[k].first_triangle);
         }
-        // A triangle id of this batch: its chunk and its index there; used = none.
+        // A triangle id of this batch: its chunk and its index there; used = none. Asked for
+        // every resolved pixel: per block of 2^10 ids, the chunk that holds the block's first
+        // id, and from there the chunks that start inside the block, in order (chunks hold
+        // about kStreamChunkTriangles, so a block holds one start at most but for small
+        // chunks: a load and a compare instead of a binary search).
         const IdRange batch{batch_first, batch_end - batch_first};
+        constexpr int kIdBlockBits = 10;
+        std::vector<std::uint32_t> block_chunk((std::size_t{batch.count} + (1u << kIdBlockBits) - 1) >> kIdBlockBits);
+        for (std::size_t b = 0, k = 0; b < block_chunk.size(); ++b) {
+            const std::uint32_t first = batch_first + static_cast<std::uint32_t>(b << kIdBlockBits);
+            while (k + 1 < used && chunk_first[k + 1] <= first) ++k;
+            block_chunk[b] = static_cast<std::uint32_t>(k);
+        }
         auto chunk_of = [&](std::uint32_t id) -> std::pair<std::size_t, std::uint32_t> {
             if (!batch.holds(id)) return {used, 0};
-            const std::size_t k = static_cast<std::size_t>(
-                std::upper_bound(chunk_first.begin(), chunk_first.end(), id) - chunk_first.begin() - 1);
+            std::size_t k = block_chunk[(id - batch_first) >> kIdBlockBits];
+            while (k + 1 < used && chunk_first[k + 1] <= id) ++k;
             return {k, id - chunk_first[k]};
         };
         // Only where the draw changed a pixel (the rasterizer's tiles).
