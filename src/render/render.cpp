@@ -98,11 +98,11 @@ struct SurfaceView {
     }
 };
 
-// The fragment inputs of a pixel whose visible triangle and weights are known (the texture
-// coordinate's derivatives are the caller's: quad_derivatives).
-FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs, std::uint32_t triangle,
-                               const glm::vec3& b, float depth) {
-    FragmentInputs f;
+// The fragment inputs of a pixel whose visible triangle and weights are known, written into
+// f where the model needs them (the others keep f's values; the texture coordinate's
+// derivatives are the caller's: quad_derivatives).
+void fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs, std::uint32_t triangle, const glm::vec3& b,
+                     float depth, FragmentInputs& f) {
     const auto& t = s.mesh.triangles[triangle];
     f.depth = depth;
     if (needs.worldPosition) f.worldPosition = b[0] * s.world(t[0]) + b[1] * s.world(t[1]) + b[2] * s.world(t[2]);
@@ -123,7 +123,6 @@ FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs,
         f.dPdu = d.dPdu;
         f.dPdv = d.dPdv;
     }
-    return f;
 }
 
 // Window depth of the triangle's plane at the centre of pixel (x, row).
@@ -247,6 +246,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                                                 {pixel_ndc(x0, row0, width, height),
                                                  pixel_ndc(x0 + 1, row0 + 1, width, height)},
                                                 quad);
+            FragmentInputs fragments[4];  // the inputs a model does not read at their defaults
             for (int p = 0; p < pixel_count; ++p) {
                 const auto [i, view_of, tri, k] = pixels[p];
                 const SurfaceView& view = *view_of;
@@ -258,7 +258,8 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                                            b[2] * view.mesh.tess_coords[t[2]];
                     result.level[i] = triangle_levels[k];
                 }
-                FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
+                FragmentInputs& f = fragments[p];
+                fragment_inputs(view, needs, tri, b, fb.depth[i], f);
                 if (line_derivatives) {
                     // Per pixel: two edges of one triangle in a quad are two lines.
                     // uv_at is linear: the weights' differences give the uv's.
@@ -268,8 +269,13 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                     f.texCoord_dx = quad[k].dx;
                     f.texCoord_dy = quad[k].dy;
                 }
-                result.colour[i] = shade(result.shading.model, f);
             }
+            // The quad's fragments shaded together, as llvmpipe runs a quad's shader.
+            glm::vec4 colours[4];
+            const auto count = static_cast<std::size_t>(pixel_count);
+            shade(result.shading.model, std::span<const FragmentInputs>(fragments, count),
+                  std::span<glm::vec4>(colours, count));
+            for (int p = 0; p < pixel_count; ++p) result.colour[pixels[p].i] = colours[p];
         }
     }
 }
