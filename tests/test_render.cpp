@@ -9,13 +9,19 @@
 //  - determinism: the same render with 1, 2 and 4 threads, compared byte for byte;
 //  - the AOV EXR against `tessref inspect`: two commands that must tell the same story;
 //  - golden images (golden/render/): regression baselines made by tessref itself
-//    (scripts/regenerate-golden.sh), compared exactly; see golden/README.md.
+//    (scripts/regenerate-golden.sh), compared exactly; see golden/README.md;
+//  - the fast paths against their scalar references, bit for bit: the quad derivatives of
+//    two triangles at once (SSE2) against quad_derivatives of each.
 #include <gtest/gtest.h>
 
+#include "render/render_internal.h"
 #include "run_program.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -23,6 +29,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
@@ -443,6 +450,69 @@ TEST(RenderGroundTruth, MeshScenesHaveNoHeightField) {
 }
 
 // ---- determinism --------------------------------------------------------------------------
+
+namespace {
+
+namespace rd = tessref::render_detail;
+
+// The bits of a result: NaNs (edge-on planes) compare too.
+std::array<std::uint32_t, 4> bits_of(const rd::Derivatives& d) {
+    return {std::bit_cast<std::uint32_t>(d.dx.x), std::bit_cast<std::uint32_t>(d.dx.y),
+            std::bit_cast<std::uint32_t>(d.dy.x), std::bit_cast<std::uint32_t>(d.dy.y)};
+}
+
+// Triangles of two kinds: a terrain's (corners in front of the eye, w of either sign and
+// near 0 too, over many magnitudes) and small integers (exact products, so differences of
+// +0 and -0, weights summing to 0: inf and NaN; mostly zero texture coordinates, so that a
+// zero result keeps the sign of zero its weights had). A third of either kind has corners
+// shared by two or three vertices (degenerate planes, cross products of 0).
+rd::QuadTriangle random_quad_triangle(std::mt19937& rng) {
+    std::uniform_int_distribution<int> small(-2, 2), exponent(-30, 30);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    rd::QuadTriangle t;
+    const bool integers = rng() % 2;
+    for (std::size_t i = 0; i < 3; ++i) {
+        if (integers) {
+            t.clip[i] = glm::vec4(small(rng), small(rng), small(rng), small(rng));
+            t.uv[i] = rng() % 4 ? glm::vec2(0.0f) : glm::vec2(small(rng), small(rng));
+        } else {
+            const float scale = std::ldexp(1.0f, exponent(rng));
+            t.clip[i] = glm::vec4(unit(rng), unit(rng), unit(rng), unit(rng) + 1.5f * unit(rng)) * scale;
+            t.uv[i] = glm::vec2(unit(rng), unit(rng)) * std::ldexp(1.0f, exponent(rng) / 3);
+        }
+    }
+    if (rng() % 3 == 0) {
+        t.clip[2] = t.clip[rng() % 2];
+        if (rng() % 2) t.clip[1] = t.clip[0];
+    }
+    return t;
+}
+
+}  // namespace
+
+TEST(RenderQuadDerivatives, TwoAtOnceAreEachTrianglesOwnBitForBit) {
+    std::mt19937 rng(20240611u);
+    std::uniform_int_distribution<int> size(1, 16384);
+    int checked = 0;
+    for (int n = 0; n < 200000; ++n) {
+        const int width = size(rng), height = size(rng);
+        const int x0 = 2 * static_cast<int>(rng() % static_cast<unsigned>((width + 1) / 2));
+        const int row0 = 2 * static_cast<int>(rng() % static_cast<unsigned>((height + 1) / 2));
+        const rd::QuadNdc ndc{rd::pixel_ndc(x0, row0, width, height), rd::pixel_ndc(x0 + 1, row0 + 1, width, height)};
+        // Up to four triangles, as a quad shows: every count's pairs and odd last one.
+        const int count = 1 + n % 4;
+        rd::QuadTriangle triangles[4];
+        for (int k = 0; k < count; ++k) triangles[k] = random_quad_triangle(rng);
+        rd::Derivatives out[4];
+        rd::quad_derivatives(triangles, count, ndc, out);
+        for (int k = 0; k < count; ++k) {
+            const rd::Derivatives expected = rd::quad_derivatives(triangles[k], ndc);
+            ASSERT_EQ(bits_of(out[k]), bits_of(expected)) << "case " << n << " triangle " << k << " of " << count;
+            ++checked;
+        }
+    }
+    EXPECT_EQ(checked, 500000);
+}
 
 TEST(RenderDeterminism, ByteIdenticalWithOneTwoAndFourThreads) {
     struct Case {

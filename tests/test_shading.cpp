@@ -5,6 +5,8 @@
 //   unnormalized light "position", abs() lighting back faces, the fixed +z eye of the
 //   specular), the multi-texture layer order, lab 4's smoothstep boundaries, weights and
 //   per-material Blinn-Phong peak, COSC422, PN, flat and depth modes, the GL lod formula;
+// - the fast paths against their references, bit for bit: shade() of many fragments against
+//   shade() of each, and texture() standing in for textureLod() where reads_level0_only;
 // - a differential check against an independent peer, Mesa llvmpipe through OSMesa: every
 //   fragment shader of data/shaders/ runs on a full-screen quad whose varyings are affine in
 //   the window position, with random textures uploaded and mip-mapped by GL; the CPU twin
@@ -24,6 +26,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -519,6 +522,111 @@ TEST(Determinism, SameInputsSameBitsOnAnyThread) {
         std::size_t differing = 0;
         for (std::size_t i = 0; i < first.size(); ++i) differing += !same_bits(first[i], second[i]);
         EXPECT_EQ(differing, 0u) << to_string(kind);
+    }
+}
+
+// ---- many fragments at once ------------------------------------------------------------------
+
+// Textures of every sampling path: unorm8 and unorm16 (luminance) and float, one to four
+// channels, clamp and repeat, GL_LINEAR minification, a single level, a one-texel-wide level.
+std::vector<std::shared_ptr<Texture>> sampling_textures(std::mt19937& rng) {
+    auto codes = [&](int n, unsigned mask) {
+        std::vector<std::uint16_t> c(static_cast<std::size_t>(n));
+        for (auto& v : c) v = static_cast<std::uint16_t>(rng() & mask);
+        return c;
+    };
+    std::vector<std::shared_ptr<Texture>> textures;
+    for (int channels = 1; channels <= 4; ++channels) {
+        const auto c8 = codes(37 * 23 * channels, 255u);
+        textures.push_back(std::make_shared<Texture>(
+            Texture::from_unorm8(37, 23, channels, std::vector<std::uint8_t>(c8.begin(), c8.end()))));
+    }
+    textures.push_back(std::make_shared<Texture>(Texture::from_unorm16(41, 29, 1, codes(41 * 29, 65535u))));
+    textures.back()->set_swizzle(Swizzle::luminance);
+    std::vector<float> values(19 * 31 * 2);
+    for (float& v : values) v = static_cast<float>(rng() & 65535u) / 4096.0f;
+    textures.push_back(std::make_shared<Texture>(Texture::from_float(19, 31, 2, values)));
+    const auto one = codes(1 * 9, 255u);
+    textures.push_back(
+        std::make_shared<Texture>(Texture::from_unorm8(1, 9, 1, std::vector<std::uint8_t>(one.begin(), one.end()))));
+    textures.push_back(std::make_shared<Texture>(Texture::from_unorm8(1, 1, 1, {200})));  // one level
+    const std::size_t made = textures.size();
+    for (std::size_t k = 0; k < made; ++k) {
+        auto repeat = std::make_shared<Texture>(*textures[k]);
+        repeat->set_wrap(Wrap::repeat);
+        auto linear = std::make_shared<Texture>(*textures[k]);
+        linear->set_min_filter(MinFilter::linear);
+        textures.push_back(repeat);
+        textures.push_back(linear);
+    }
+    return textures;
+}
+
+// Lods on both sides of the clamp at 0, and the ones it treats specially.
+constexpr float kHostileLods[] = {-std::numeric_limits<float>::infinity(), -100.0f, -1.0f, -0.0f, 0.0f,
+                                  std::numeric_limits<float>::denorm_min(), 1e-30f, 0.001f, 0.5f, 1.0f, 3.7f,
+                                  100.0f, std::numeric_limits<float>::infinity(),
+                                  std::numeric_limits<float>::quiet_NaN()};
+
+TEST(TextureLevel0, ReadsLevel0OnlyWhereTextureLodIsTexture) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> coordinate(-0.5f, 1.5f);
+    int level0 = 0, other = 0;
+    for (const auto& texture : sampling_textures(rng)) {
+        for (const float lod : kHostileLods) {
+            (texture->reads_level0_only(lod) ? level0 : other) += 1;
+            if (!texture->reads_level0_only(lod)) continue;
+            for (int n = 0; n < 200; ++n) {
+                glm::vec2 st(coordinate(rng), coordinate(rng));
+                if (n == 0) st = glm::vec2(std::numeric_limits<float>::quiet_NaN());
+                ASSERT_TRUE(same_bits(texture->textureLod(st, lod), texture->texture(st)))
+                    << "lod " << lod << " st " << st.x << " " << st.y << " format " << to_string(texture->format());
+            }
+        }
+    }
+    // Both answers were given (the mipmapped textures minify above lod 0).
+    EXPECT_GT(level0, 0);
+    EXPECT_GT(other, 0);
+}
+
+TEST(ShadeMany, EveryFragmentAsShadedAlone) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    std::uniform_int_distribution<int> exponent(-14, 3);
+    const auto textures = sampling_textures(rng);
+    std::vector<ShadingModel> models;
+    for (ShadingKind kind : {ShadingKind::flat, ShadingKind::depth, ShadingKind::thesis_single,
+                             ShadingKind::thesis_multi, ShadingKind::lab4, ShadingKind::cosc422, ShadingKind::pn})
+        models.push_back(model_of(kind));
+    // The single-texture thesis shader on every sampling path, and with no texture.
+    for (const auto& texture : textures) {
+        models.push_back(model_of(ShadingKind::thesis_single));
+        models.back().textures.diffuse = texture;
+    }
+    models.push_back(model_of(ShadingKind::thesis_single));
+    models.back().textures.diffuse = nullptr;
+    for (const ShadingModel& model : models) {
+        for (std::size_t count = 0; count <= 9; ++count) {
+            std::vector<FragmentInputs> fragments(count);
+            for (FragmentInputs& f : fragments) {
+                f.worldPosition = 50.0f * glm::vec3(unit(rng), unit(rng), unit(rng));
+                f.normal = glm::vec3(unit(rng), unit(rng), unit(rng));
+                f.texCoord = 1.5f * glm::vec2(unit(rng), unit(rng));
+                // Footprints from a sixteenth of a texel to thousands: magnified and minified
+                // fragments side by side; now and then none, or NaN.
+                const float scale = std::ldexp(1.0f, exponent(rng));
+                f.texCoord_dx = scale * glm::vec2(unit(rng), unit(rng));
+                f.texCoord_dy = scale * glm::vec2(unit(rng), unit(rng));
+                if (rng() % 8 == 0) f.texCoord_dx = f.texCoord_dy = glm::vec2(0.0f);
+                if (rng() % 16 == 0) f.texCoord_dx.x = std::numeric_limits<float>::quiet_NaN();
+                f.depth = 0.5f + 0.5f * unit(rng);
+            }
+            std::vector<glm::vec4> many(count);
+            shade(model, fragments, many);
+            for (std::size_t k = 0; k < count; ++k)
+                ASSERT_TRUE(same_bits(many[k], shade(model, fragments[k])))
+                    << to_string(model.kind) << " fragment " << k << " of " << count;
+        }
     }
 }
 

@@ -279,6 +279,11 @@ std::vector<std::string_view> missing_textures(const ShadingModel& model);
 
 // The colour of one fragment: the model's shader run on it.
 glm::vec4 shade(const ShadingModel& model, const FragmentInputs& fragment);
+// The colours of several fragments (a quad's), out[k] = shade(model, fragments[k]) bit for
+// bit: the single-texture thesis shader takes its magnified fragments' texture lookups
+// together (Texture::reads_level0_only); every other model runs fragment by fragment. out is
+// as long as fragments (else tessref::Error).
+void shade(const ShadingModel& model, std::span<const FragmentInputs> fragments, std::span<glm::vec4> out);
 
 // ---- the pieces (each mirrors the shader lines named in src/shading/) ---------------------
 

@@ -169,6 +169,13 @@ public:
     // coordinate below 0 (the edge texel): GL leaves it undefined, tessref keeps it defined.
     glm::vec4 textureLod(glm::vec2 st, float lod) const;
     glm::dvec4 textureLod(glm::dvec2 st, double lod) const;
+    // Whether textureLod(st, lod) reads level 0 alone, and so is texture(st) bit for bit: a
+    // lod the clamp takes to 0 (at most 0, or NaN), one level only, or GL_LINEAR
+    // minification. A magnified fragment's lookups can then go through the many-point
+    // texture().
+    bool reads_level0_only(float lod) const {
+        return min_filter_ == MinFilter::linear || !(lod > 0.0f) || max_level() == 0;
+    }
 
 private:
     static Texture build(int width, int height, int channels, TexelFormat format,

@@ -21,6 +21,7 @@
 
 namespace tessref {
 
+using render_detail::Derivatives;
 using render_detail::perspective_weights;
 using render_detail::pixel_ndc;
 using render_detail::window_depth;
@@ -91,13 +92,18 @@ struct SurfaceView {
         return b[0] * glm::vec2(mesh.uvs[t[0]]) + b[1] * glm::vec2(mesh.uvs[t[1]]) + b[2] * glm::vec2(mesh.uvs[t[2]]);
     }
     glm::vec3 world(std::uint32_t vertex) const { return glm::vec3(mesh.positions[vertex] + origin); }
+    render_detail::QuadTriangle quad_triangle(std::uint32_t triangle) const {
+        const auto& t = mesh.triangles[triangle];
+        return {{clip[t[0]], clip[t[1]], clip[t[2]]},
+                {glm::vec2(mesh.uvs[t[0]]), glm::vec2(mesh.uvs[t[1]]), glm::vec2(mesh.uvs[t[2]])}};
+    }
 };
 
-// The fragment inputs of a pixel whose visible triangle and weights are known (the texture
-// coordinate's derivatives are the caller's: quad_derivatives).
-FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs, std::uint32_t triangle,
-                               const glm::vec3& b, float depth) {
-    FragmentInputs f;
+// The fragment inputs of a pixel whose visible triangle and weights are known, written into
+// f where the model needs them (the others keep f's values; the texture coordinate's
+// derivatives are the caller's: quad_derivatives).
+void fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs, std::uint32_t triangle, const glm::vec3& b,
+                     float depth, FragmentInputs& f) {
     const auto& t = s.mesh.triangles[triangle];
     f.depth = depth;
     if (needs.worldPosition) f.worldPosition = b[0] * s.world(t[0]) + b[1] * s.world(t[1]) + b[2] * s.world(t[2]);
@@ -118,33 +124,6 @@ FragmentInputs fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs,
         f.dPdu = d.dPdu;
         f.dPdv = d.dPdv;
     }
-    return f;
-}
-
-// llvmpipe's per-quad derivatives of the visible primitive's texture coordinate (render.h):
-// the triangle's interpolation at the quad's top-left, top-right and bottom-left pixel
-// centres, inside the triangle or not (helper pixels).
-struct Derivatives {
-    glm::vec2 dx{0.0f}, dy{0.0f};
-};
-Derivatives quad_derivatives(const SurfaceView& s, std::uint32_t triangle, int x0, int row0, int width, int height) {
-    const render_detail::PerspectiveWeights weights(s.clip_corners(triangle));
-    // perspective_weights at each of the three pixels, with the products shared: a weight is
-    // dot((ndc.x, ndc.y, 1), c) = (ndc.x c.x + ndc.y c.y) + c.z in glm's order, and the
-    // three pixels take their ndc.x from the quad's two columns and ndc.y from its two rows.
-    const glm::dvec2 ndc0 = pixel_ndc(x0, row0, width, height), ndc1 = pixel_ndc(x0 + 1, row0 + 1, width, height);
-    const glm::dvec3 cx(weights.c12.x, weights.c20.x, weights.c01.x), cy(weights.c12.y, weights.c20.y, weights.c01.y),
-        cz(weights.c12.z, weights.c20.z, weights.c01.z);
-    const glm::dvec3 left = ndc0.x * cx, right = ndc1.x * cx, top = ndc0.y * cy, bottom = ndc1.y * cy;
-    const auto& t = s.mesh.triangles[triangle];
-    const glm::vec2 uv0(s.mesh.uvs[t[0]]), uv1(s.mesh.uvs[t[1]]), uv2(s.mesh.uvs[t[2]]);
-    auto uv = [&](const glm::dvec3& column, const glm::dvec3& row) {
-        const glm::dvec3 b = column + row + cz;
-        const glm::vec3 w(b / (b.x + b.y + b.z));
-        return w[0] * uv0 + w[1] * uv1 + w[2] * uv2;  // SurfaceView::uv_at
-    };
-    const glm::vec2 top_left = uv(left, top);
-    return {uv(right, top) - top_left, top_left - uv(left, bottom)};
 }
 
 // Window depth of the triangle's plane at the centre of pixel (x, row).
@@ -231,48 +210,73 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
         for (int x0 = x_begin; x0 < x_end; x0 += 2) {
             const int x1 = std::min(x0 + 1, width - 1);  // a last odd column: itself again
             if (!(ids.holds(top[x0]) | ids.holds(top[x1]) | ids.holds(bottom[x0]) | ids.holds(bottom[x1]))) continue;
-            std::uint32_t cached_triangle[4];
-            Derivatives cached[4];
-            float cached_level[4];
-            int cached_count = 0;
+            // The quad's pixels this pass resolves and the distinct triangles they show, first:
+            // the triangles' derivatives are then computed together.
+            struct Pixel {
+                std::size_t i;
+                const SurfaceView* view;
+                std::uint32_t triangle;
+                int k;  // its triangle among the quad's
+            };
+            Pixel pixels[4];
+            std::uint32_t triangle_ids[4];
+            render_detail::QuadTriangle triangles[4];
+            float triangle_levels[4];
+            int pixel_count = 0, triangle_count = 0;
             for (int row = row0; row < std::min(row0 + 2, height); ++row) {
                 for (int x = x0; x < std::min(x0 + 2, width); ++x) {
                     const std::size_t i = result.index(x, row);  // the framebuffer's layout too
                     const std::uint32_t id = fb.triangle_id[i];
                     if (!ids.holds(id)) continue;
-                    const auto [view_of, tri] = owns(id);
-                    if (!view_of) continue;
-                    const SurfaceView& view = *view_of;
-                    const glm::vec3 b = fb.barycentric[i];
-                    if (provenance) {
-                        const auto& t = view.mesh.triangles[tri];
-                        result.patch_id[i] = view.mesh.patch_ids[t[0]];
-                        result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] +
-                                               b[1] * view.mesh.tess_coords[t[1]] + b[2] * view.mesh.tess_coords[t[2]];
-                    }
+                    const auto [view, tri] = owns(id);
+                    if (!view) continue;
                     int k = 0;
-                    while (k < cached_count && cached_triangle[k] != id) ++k;
-                    if (k == cached_count) {
-                        cached_triangle[k] = id;
-                        if (provenance) cached_level[k] = level_of(view.mesh, levels, domain, tri);
-                        if (derivatives && !line_derivatives)
-                            cached[k] = quad_derivatives(view, tri, x0, row0, width, height);
-                        ++cached_count;
+                    while (k < triangle_count && triangle_ids[k] != id) ++k;
+                    if (k == triangle_count) {
+                        triangle_ids[k] = id;
+                        if (provenance) triangle_levels[k] = level_of(view->mesh, levels, domain, tri);
+                        if (derivatives && !line_derivatives) triangles[k] = view->quad_triangle(tri);
+                        ++triangle_count;
                     }
-                    if (provenance) result.level[i] = cached_level[k];
-                    FragmentInputs f = fragment_inputs(view, needs, tri, b, fb.depth[i]);
-                    if (line_derivatives) {
-                        // Per pixel: two edges of one triangle in a quad are two lines.
-                        // uv_at is linear: the weights' differences give the uv's.
-                        f.texCoord_dx = view.uv_at(tri, fb.barycentric_dx[i]);
-                        f.texCoord_dy = view.uv_at(tri, fb.barycentric_dy[i]);
-                    } else {
-                        f.texCoord_dx = cached[k].dx;
-                        f.texCoord_dy = cached[k].dy;
-                    }
-                    result.colour[i] = shade(result.shading.model, f);
+                    pixels[pixel_count++] = {i, view, tri, k};
                 }
             }
+            Derivatives quad[4];
+            if (derivatives && !line_derivatives)
+                render_detail::quad_derivatives(triangles, triangle_count,
+                                                {pixel_ndc(x0, row0, width, height),
+                                                 pixel_ndc(x0 + 1, row0 + 1, width, height)},
+                                                quad);
+            FragmentInputs fragments[4];  // the inputs a model does not read at their defaults
+            for (int p = 0; p < pixel_count; ++p) {
+                const auto [i, view_of, tri, k] = pixels[p];
+                const SurfaceView& view = *view_of;
+                const glm::vec3 b = fb.barycentric[i];
+                if (provenance) {
+                    const auto& t = view.mesh.triangles[tri];
+                    result.patch_id[i] = view.mesh.patch_ids[t[0]];
+                    result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] + b[1] * view.mesh.tess_coords[t[1]] +
+                                           b[2] * view.mesh.tess_coords[t[2]];
+                    result.level[i] = triangle_levels[k];
+                }
+                FragmentInputs& f = fragments[p];
+                fragment_inputs(view, needs, tri, b, fb.depth[i], f);
+                if (line_derivatives) {
+                    // Per pixel: two edges of one triangle in a quad are two lines.
+                    // uv_at is linear: the weights' differences give the uv's.
+                    f.texCoord_dx = view.uv_at(tri, fb.barycentric_dx[i]);
+                    f.texCoord_dy = view.uv_at(tri, fb.barycentric_dy[i]);
+                } else {
+                    f.texCoord_dx = quad[k].dx;
+                    f.texCoord_dy = quad[k].dy;
+                }
+            }
+            // The quad's fragments shaded together, as llvmpipe runs a quad's shader.
+            glm::vec4 colours[4];
+            const auto count = static_cast<std::size_t>(pixel_count);
+            shade(result.shading.model, std::span<const FragmentInputs>(fragments, count),
+                  std::span<glm::vec4>(colours, count));
+            for (int p = 0; p < pixel_count; ++p) result.colour[pixels[p].i] = colours[p];
         }
     }
 }
@@ -467,12 +471,23 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             chunk_views.push_back({chunks[k].mesh, chunks[k].face_normals, chunks[k].clip, stream.face_normals(), origin});
             chunk_first.push_back(chunks[k].first_triangle);
         }
-        // A triangle id of this batch: its chunk and its index there; used = none.
+        // A triangle id of this batch: its chunk and its index there; used = none. Asked for
+        // every resolved pixel: per block of 2^10 ids, the chunk that holds the block's first
+        // id, and from there the chunks that start inside the block, in order (chunks hold
+        // about kStreamChunkTriangles, so a block holds one start at most but for small
+        // chunks: a load and a compare instead of a binary search).
         const IdRange batch{batch_first, batch_end - batch_first};
+        constexpr int kIdBlockBits = 10;
+        std::vector<std::uint32_t> block_chunk((std::size_t{batch.count} + (1u << kIdBlockBits) - 1) >> kIdBlockBits);
+        for (std::size_t b = 0, k = 0; b < block_chunk.size(); ++b) {
+            const std::uint32_t first = batch_first + static_cast<std::uint32_t>(b << kIdBlockBits);
+            while (k + 1 < used && chunk_first[k + 1] <= first) ++k;
+            block_chunk[b] = static_cast<std::uint32_t>(k);
+        }
         auto chunk_of = [&](std::uint32_t id) -> std::pair<std::size_t, std::uint32_t> {
             if (!batch.holds(id)) return {used, 0};
-            const std::size_t k = static_cast<std::size_t>(
-                std::upper_bound(chunk_first.begin(), chunk_first.end(), id) - chunk_first.begin() - 1);
+            std::size_t k = block_chunk[(id - batch_first) >> kIdBlockBits];
+            while (k + 1 < used && chunk_first[k + 1] <= id) ++k;
             return {k, id - chunk_first[k]};
         };
         // Only where the draw changed a pixel (the rasterizer's tiles).

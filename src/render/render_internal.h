@@ -8,6 +8,10 @@
 
 #include <glm/glm.hpp>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "tessref/error.h"
 #include "tessref/raster.h"
 #include "tessref/render.h"
@@ -47,6 +51,110 @@ struct PerspectiveWeights {
 };
 inline glm::dvec3 perspective_weights(const std::array<glm::dvec4, 3>& c, glm::dvec2 p) {
     return PerspectiveWeights(c)(p);
+}
+
+// llvmpipe's per-quad derivatives of the visible primitive's texture coordinate (render.h):
+// the triangle's interpolation at the quad's top-left, top-right and bottom-left pixel
+// centres, inside the triangle or not (helper pixels). What they read of the triangle:
+// its clip-space corners and its texture coordinates as the float varying.
+struct QuadTriangle {
+    std::array<glm::vec4, 3> clip;
+    std::array<glm::vec2, 3> uv;
+};
+// The NDC of the quad's pixel centres: `first` of its left column and top row, `second` of
+// its right column and bottom row (pixel_ndc of its top-left and bottom-right pixels).
+struct QuadNdc {
+    glm::dvec2 first, second;
+};
+struct Derivatives {
+    glm::vec2 dx{0.0f}, dy{0.0f};
+};
+
+inline Derivatives quad_derivatives(const QuadTriangle& t, const QuadNdc& ndc) {
+    const PerspectiveWeights weights(
+        {glm::dvec4(t.clip[0]), glm::dvec4(t.clip[1]), glm::dvec4(t.clip[2])});
+    // perspective_weights at each of the three pixels, with the products shared: a weight is
+    // dot((ndc.x, ndc.y, 1), c) = (ndc.x c.x + ndc.y c.y) + c.z in glm's order, and the
+    // three pixels take their ndc.x from the quad's two columns and ndc.y from its two rows.
+    const glm::dvec3 cx(weights.c12.x, weights.c20.x, weights.c01.x), cy(weights.c12.y, weights.c20.y, weights.c01.y),
+        cz(weights.c12.z, weights.c20.z, weights.c01.z);
+    const glm::dvec3 left = ndc.first.x * cx, right = ndc.second.x * cx, top = ndc.first.y * cy,
+                     bottom = ndc.second.y * cy;
+    auto uv = [&](const glm::dvec3& column, const glm::dvec3& row) {
+        const glm::dvec3 b = column + row + cz;
+        const glm::vec3 w(b / (b.x + b.y + b.z));
+        return w[0] * t.uv[0] + w[1] * t.uv[1] + w[2] * t.uv[2];  // SurfaceView::uv_at
+    };
+    const glm::vec2 top_left = uv(left, top);
+    return {uv(right, top) - top_left, top_left - uv(left, bottom)};
+}
+
+#if defined(__SSE2__)
+// quad_derivatives of two triangles at once, a and b in the two lanes of every double
+// (and in the halves of every float register): each lane's operations are the scalar
+// one's, in its order, so each lane's values are its bits.
+inline void quad_derivatives_x2(const QuadTriangle& a, const QuadTriangle& b, const QuadNdc& ndc, Derivatives out[2]) {
+    // h_i = (x_i, y_i, w_i) of both triangles: (a's, b's) per coordinate.
+    struct H {
+        __m128d x, y, w;
+    };
+    auto corner = [&](int i) {
+        const __m128 pa = _mm_loadu_ps(&a.clip[static_cast<std::size_t>(i)].x);
+        const __m128 pb = _mm_loadu_ps(&b.clip[static_cast<std::size_t>(i)].x);
+        const __m128 xy = _mm_unpacklo_ps(pa, pb), zw = _mm_unpackhi_ps(pa, pb);  // (ax, bx, ay, by), (az, bz, aw, bw)
+        return H{_mm_cvtps_pd(xy), _mm_cvtps_pd(_mm_movehl_ps(xy, xy)), _mm_cvtps_pd(_mm_movehl_ps(zw, zw))};
+    };
+    const H h0 = corner(0), h1 = corner(1), h2 = corner(2);
+    // glm::cross(p, q): (p.y q.z - q.y p.z, p.z q.x - q.z p.x, p.x q.y - q.x p.y), z being w.
+    auto cross = [](const H& p, const H& q) {
+        return H{_mm_sub_pd(_mm_mul_pd(p.y, q.w), _mm_mul_pd(q.y, p.w)),
+                 _mm_sub_pd(_mm_mul_pd(p.w, q.x), _mm_mul_pd(q.w, p.x)),
+                 _mm_sub_pd(_mm_mul_pd(p.x, q.y), _mm_mul_pd(q.x, p.y))};
+    };
+    const H c12 = cross(h1, h2), c20 = cross(h2, h0), c01 = cross(h0, h1);
+    // cx = (c12.x, c20.x, c01.x) and so on: H's x, y, w here stand for the weights 0, 1, 2.
+    const H cx{c12.x, c20.x, c01.x}, cy{c12.y, c20.y, c01.y}, cz{c12.w, c20.w, c01.w};
+    auto times = [](double k, const H& c) {
+        const __m128d kk = _mm_set1_pd(k);
+        return H{_mm_mul_pd(kk, c.x), _mm_mul_pd(kk, c.y), _mm_mul_pd(kk, c.w)};
+    };
+    const H left = times(ndc.first.x, cx), right = times(ndc.second.x, cx), top = times(ndc.first.y, cy),
+            bottom = times(ndc.second.y, cy);
+    // The texture coordinates (a's u, v, b's u, v) per corner.
+    auto uvs = [&](int i) {
+        const glm::vec2 p = a.uv[static_cast<std::size_t>(i)], q = b.uv[static_cast<std::size_t>(i)];
+        return _mm_setr_ps(p.x, p.y, q.x, q.y);
+    };
+    const __m128 uv0 = uvs(0), uv1 = uvs(1), uv2 = uvs(2);
+    auto uv = [&](const H& column, const H& row) {
+        const __m128d b0 = _mm_add_pd(_mm_add_pd(column.x, row.x), cz.x);
+        const __m128d b1 = _mm_add_pd(_mm_add_pd(column.y, row.y), cz.y);
+        const __m128d b2 = _mm_add_pd(_mm_add_pd(column.w, row.w), cz.w);
+        const __m128d sum = _mm_add_pd(_mm_add_pd(b0, b1), b2);
+        // Each weight in float, spread over its triangle's two lanes: (a, a, b, b).
+        auto weight = [&](__m128d bi) {
+            const __m128 w = _mm_cvtpd_ps(_mm_div_pd(bi, sum));
+            return _mm_unpacklo_ps(w, w);
+        };
+        return _mm_add_ps(_mm_add_ps(_mm_mul_ps(weight(b0), uv0), _mm_mul_ps(weight(b1), uv1)),
+                          _mm_mul_ps(weight(b2), uv2));
+    };
+    const __m128 top_left = uv(left, top);
+    alignas(16) float dx[4], dy[4];
+    _mm_store_ps(dx, _mm_sub_ps(uv(right, top), top_left));
+    _mm_store_ps(dy, _mm_sub_ps(top_left, uv(left, bottom)));
+    out[0] = {{dx[0], dx[1]}, {dy[0], dy[1]}};
+    out[1] = {{dx[2], dx[3]}, {dy[2], dy[3]}};
+}
+#endif
+
+// The quad derivatives of count triangles: two at a time where SSE2 allows.
+inline void quad_derivatives(const QuadTriangle* triangles, int count, const QuadNdc& ndc, Derivatives* out) {
+    int k = 0;
+#if defined(__SSE2__)
+    for (; k + 2 <= count; k += 2) quad_derivatives_x2(triangles[k], triangles[k + 1], ndc, out + k);
+#endif
+    for (; k < count; ++k) out[k] = quad_derivatives(triangles[k], ndc);
 }
 
 // Window z (depth range [0, 1]) of a clip-space point.

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "tessref/error.h"
+
 namespace tessref {
 
 namespace {
@@ -175,6 +177,35 @@ glm::vec4 textureGrad(const Texture* sampler, glm::vec2 P, glm::vec2 dPdx, glm::
     return sampler->textureLod(P, fragment_lod(*sampler, dPdx, dPdy));
 }
 
+namespace {
+
+// textureGrad(sampler, texCoord, texCoord_dx, texCoord_dy) of up to four fragments: those
+// whose lod reads level 0 alone sampled in one many-point texture() call, the others one by
+// one.
+void texture_of_fragments(const Texture* sampler, std::span<const FragmentInputs> fragments, glm::vec4* out) {
+    if (sampler == nullptr || sampler->empty()) {
+        for (std::size_t k = 0; k < fragments.size(); ++k) out[k] = textureGrad(sampler, {}, {}, {});
+        return;
+    }
+    glm::vec2 st[4];
+    glm::vec4 sample[4];
+    std::size_t level0[4], count = 0;
+    for (std::size_t k = 0; k < fragments.size(); ++k) {
+        const FragmentInputs& f = fragments[k];
+        const float lod = fragment_lod(*sampler, f.texCoord_dx, f.texCoord_dy);
+        if (sampler->reads_level0_only(lod)) {
+            st[count] = f.texCoord;
+            level0[count++] = k;
+        } else {
+            out[k] = sampler->textureLod(f.texCoord, lod);
+        }
+    }
+    sampler->texture(std::span<const glm::vec2>(st, count), std::span<glm::vec4>(sample, count));
+    for (std::size_t j = 0; j < count; ++j) out[level0[j]] = sample[j];
+}
+
+}  // namespace
+
 // ---- the thesis (Jakobsen 2012): listing 3, appendix A.5 and A.6 ---------------------------
 
 glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& uniforms) {
@@ -196,14 +227,18 @@ glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& 
     return ambient + df * uniforms.diffuseMaterial + sf * uniforms.specularMaterial;
 }
 
+namespace {
+
+// thesis_terrain_single.frag with its texture lookup's value given (shade() of many fragments
+// takes the lookups together).
 glm::vec4 thesis_single_texture(const FragmentInputs& fragment, const ThesisLight& uniforms,
-                                const Texture* diffuse) {
+                                const glm::vec4& diffuseTexture) {
     // GLSL: thesis_terrain_single.frag:25 vec3 gNormal = geometryIn.gNormal;
     const glm::vec3 gNormal = fragment.normal;
     // GLSL: thesis_terrain_single.frag:27-32 (listing 3) vec3 light = ambientMaterial + ...
     const glm::vec3 light = thesis_light(gNormal, uniforms.ambientMaterial, uniforms);
     // GLSL: thesis_terrain_single.frag:34 vec4 diffuseTexture = texture(diffuse, gTextureCoordinate);
-    const glm::vec4 diffuseTexture = textureGrad(diffuse, fragment.texCoord, fragment.texCoord_dx, fragment.texCoord_dy);
+    // (the caller's)
     // GLSL: thesis_terrain_single.frag:36 vec4 fragmentColour = diffuseTexture;
     glm::vec4 fragmentColour = diffuseTexture;
     // GLSL: thesis_terrain_single.frag:38 fragmentColour *= vec4(light, 1);
@@ -211,6 +246,14 @@ glm::vec4 thesis_single_texture(const FragmentInputs& fragment, const ThesisLigh
     // GLSL: thesis_terrain_single.frag:40 fragment = fragmentColour; (lost from the appendix's
     // listing, restored in the shader)
     return fragmentColour;
+}
+
+}  // namespace
+
+glm::vec4 thesis_single_texture(const FragmentInputs& fragment, const ThesisLight& uniforms,
+                                const Texture* diffuse) {
+    return thesis_single_texture(
+        fragment, uniforms, textureGrad(diffuse, fragment.texCoord, fragment.texCoord_dx, fragment.texCoord_dy));
 }
 
 glm::vec4 thesis_multi_texture(const FragmentInputs& fragment, const ThesisLight& uniforms,
@@ -418,6 +461,21 @@ glm::vec4 shade(const ShadingModel& model, const FragmentInputs& fragment) {
         case ShadingKind::pom: return pom_shading(fragment, model.pom, model.textures);
     }
     return flat_colour(model.flat);
+}
+
+void shade(const ShadingModel& model, std::span<const FragmentInputs> fragments, std::span<glm::vec4> out) {
+    if (fragments.size() != out.size()) throw Error("shade: as many colours as fragments");
+    for (std::size_t first = 0; first < fragments.size(); first += 4) {
+        const auto some = fragments.subspan(first, std::min<std::size_t>(4, fragments.size() - first));
+        if (model.kind == ShadingKind::thesis_single) {
+            glm::vec4 diffuseTexture[4];
+            texture_of_fragments(model.textures.diffuse.get(), some, diffuseTexture);
+            for (std::size_t k = 0; k < some.size(); ++k)
+                out[first + k] = thesis_single_texture(some[k], model.thesis, diffuseTexture[k]);
+        } else {
+            for (std::size_t k = 0; k < some.size(); ++k) out[first + k] = shade(model, some[k]);
+        }
+    }
 }
 
 }  // namespace tessref
