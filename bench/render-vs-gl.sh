@@ -70,6 +70,7 @@ for scene in "${scenes[@]}"; do
   details+=("$name: render $(sed -n 's/.*covered pixels //p' "$work/render.0.out"); gl $(sed -n 's/.*predicted), //p' "$work/gl.0.out")")
 done
 echo
-echo "where the time goes (first run of each; the rest of a process's time is loading the scene,"
-echo "its textures and normal map, writing the PNG, and for gl the context and shader compilation):"
+echo "where the time goes (first run of each; render times its load and PNG write too; the rest of a"
+echo "gl process's time is loading the scene, its textures and normal map, writing the PNG, the"
+echo "context and shader compilation):"
 printf '  %s\n' "${details[@]}"
