@@ -400,6 +400,22 @@ template <int C>
     samples_unorm8_x2<C>(r2, r3, _mm_shuffle_epi32(ay.weight, _MM_SHUFFLE(3, 3, 2, 2)), out + 2, out + 3);
 }
 
+// four(st + k, out + k, n) over points [0, count) four at a time: four reads four points and
+// writes the samples of the first n of them (n = 4 but for the last one to three points, which
+// are padded with copies of the last; what four writes beyond n is dropped).
+template <class Four>
+[[gnu::always_inline]] inline void in_fours(const glm::vec2* st, glm::vec4* out, std::size_t count, Four&& four) {
+    std::size_t k = 0;
+    for (; k + 4 <= count; k += 4) four(st + k, out + k, std::size_t{4});
+    if (k < count) {
+        glm::vec2 tail_st[4];
+        glm::vec4 tail_out[4];
+        for (std::size_t j = 0; j < 4; ++j) tail_st[j] = st[std::min(k + j, count - 1)];
+        four(tail_st, tail_out, count - k);
+        for (std::size_t j = 0; k + j < count; ++j) out[k + j] = tail_out[j];
+    }
+}
+
 // texture_level0_n's unorm8 clamp-to-edge case for a level of 2 x 2 to 32764 x 32764.
 template <int C>
 [[gnu::always_inline]] inline void texture_level0_unorm8_x4(const TextureLevel& level, const glm::vec2* st,
@@ -407,16 +423,9 @@ template <int C>
     const std::uint8_t* texels = level.unorm8.data();
     const std::size_t stride = static_cast<std::size_t>(level.width) * C;
     const AxisU8Setup s_setup(level.width), t_setup(level.height);
-    std::size_t k = 0;
-    for (; k + 4 <= count; k += 4) texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, st + k, out + k);
-    if (k < count) {
-        // The last one to three points, padded with copies of the last.
-        glm::vec2 tail_st[4];
-        glm::vec4 tail_out[4];
-        for (std::size_t j = 0; j < 4; ++j) tail_st[j] = st[std::min(k + j, count - 1)];
-        texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, tail_st, tail_out);
-        for (std::size_t j = 0; k + j < count; ++j) out[k + j] = tail_out[j];
-    }
+    in_fours(st, out, count, [&](const glm::vec2* st4, glm::vec4* out4, std::size_t) {
+        texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, st4, out4);
+    });
 }
 
 // The levels texture_level0_unorm8_x4 takes.
@@ -461,17 +470,9 @@ struct AxesFx4 {
     const __m128 height_f = _mm_set1_ps(static_cast<float>(level.height));
     const __m128i last_s = _mm_set1_epi32(level.width - 1);
     const __m128i last_t = _mm_set1_epi32(level.height - 1);
-    for (std::size_t k0 = 0; k0 < count; k0 += 4) {
-        // The last one to three points padded with copies of the last.
-        glm::vec2 tail[4];
-        const glm::vec2* p = st + k0;
-        const std::size_t n = std::min<std::size_t>(4, count - k0);
-        if (n < 4) {
-            for (std::size_t j = 0; j < 4; ++j) tail[j] = st[k0 + std::min(j, n - 1)];
-            p = tail;
-        }
-        const __m128 st01 = _mm_loadu_ps(&p[0].x);
-        const __m128 st23 = _mm_loadu_ps(&p[2].x);
+    in_fours(st, out, count, [&](const glm::vec2* st4, glm::vec4* out4, std::size_t n) {
+        const __m128 st01 = _mm_loadu_ps(&st4[0].x);
+        const __m128 st23 = _mm_loadu_ps(&st4[2].x);
         AxesFx4 ax, ay;
         axes_gpu_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(2, 0, 2, 0)), width_f, last_s, ax);
         axes_gpu_x4(_mm_shuffle_ps(st01, st23, _MM_SHUFFLE(3, 1, 3, 1)), height_f, last_t, ay);
@@ -480,9 +481,9 @@ struct AxesFx4 {
             const AxisF y{ay.i0[j], ay.i1[j], ay.weight[j]};
             float value[4];
             bilinear_gpu_n<1>(level, x, y, value);
-            out[k0 + j] = glm::vec4(value[0], 0.0f, 0.0f, 1.0f);
+            out4[j] = glm::vec4(value[0], 0.0f, 0.0f, 1.0f);
         }
-    }
+    });
 }
 
 // The levels texture_level0_float1_x4 takes.
