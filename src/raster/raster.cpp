@@ -643,8 +643,7 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
     auto keep = [&](std::uint32_t t, raster::BoxBounds box, auto&& coverage) {
         candidates[kept] = t;
         boxes[kept] = box;
-        if (one_pixel_fragments & (box.x0 >= 0) & (box.x0 + box.neg_x1 == 0) & (box.y0 + box.neg_y1 == 0)) {
-            // raster::one_pixel_box, without a branch per condition
+        if (one_pixel_fragments & raster::one_pixel_box(box)) {
             const auto& tri = tris[t];
             const raster::OnePixelCoverage c = coverage(fixed[tri[0]], fixed[tri[1]], fixed[tri[2]], box.x0, box.y0);
             ++one_pixel;

@@ -313,9 +313,10 @@ inline BoxBounds triangle_box(const BoxBounds& a, const BoxBounds& b, const BoxB
 // Whether a triangle's box holds a pixel of the viewport: one whose box holds none covers no
 // pixel (setup culls it).
 inline bool box_has_pixels(const BoxBounds& box) { return box.x0 + box.neg_x1 <= 0 && box.y0 + box.neg_y1 <= 0; }
-// Whether the box is the one pixel (x0, y0) and every vertex inside.
+// Whether the box is the one pixel (x0, y0) and every vertex inside. Without a branch per
+// condition: setup_chunk asks it of every candidate.
 inline bool one_pixel_box(const BoxBounds& box) {
-    return box.x0 >= 0 && box.x0 + box.neg_x1 == 0 && box.y0 + box.neg_y1 == 0;
+    return (box.x0 >= 0) & (box.x0 + box.neg_x1 == 0) & (box.y0 + box.neg_y1 == 0);
 }
 
 // A vertex as setup and the box test read it, from its clip position: the window position,
@@ -403,6 +404,12 @@ struct OnePixelCoverage {
     bool cw;     // set up as (v1, v0, v2)
     bool front;  // front-facing
 };
+// culled, else drawn or empty, without a branch: setup_chunk keeps or drops the triangle on it.
+inline Setup one_pixel_outcome(bool culled, bool covered) {
+    static_assert(static_cast<int>(Setup::culled) == 0 && static_cast<int>(Setup::empty) == 1 &&
+                  static_cast<int>(Setup::drawn) == 2);
+    return static_cast<Setup>((1 + static_cast<int>(covered)) * static_cast<int>(!culled));
+}
 [[gnu::always_inline]] inline OnePixelCoverage one_pixel_coverage(const FixedXY& v0, const FixedXY& v1,
                                                                   const FixedXY& v2, int px, int py, Face face) {
     const std::int64_t ox = px * kFixedOne, oy = py * kFixedOne;
@@ -415,7 +422,7 @@ struct OnePixelCoverage {
     bool covered = ((e01 ^ e12) | (e12 ^ e20)) >= 0;  // one sign, where no product is 0
     if (((e01 == 0) | (e12 == 0) | (e20 == 0)) & !culled) [[unlikely]]
         covered = one_pixel_covered_on_edge(v0, v1, v2, px, py, cw);
-    return {culled ? Setup::culled : covered ? Setup::drawn : Setup::empty, cw, front};
+    return {one_pixel_outcome(culled, covered), cw, front};
 }
 
 #if defined(__SSE2__)
@@ -436,11 +443,7 @@ struct OnePixelCoverage4 {
         bool is_drawn = (drawn >> l) & 1;
         if ((on_edge >> l) & 1) [[unlikely]]
             is_drawn = one_pixel_covered_on_edge(v0, v1, v2, px, py, is_cw);
-        // culled, empty or drawn without a branch: setup_chunk keeps or drops the triangle on it.
-        static_assert(static_cast<int>(Setup::culled) == 0 && static_cast<int>(Setup::empty) == 1 &&
-                      static_cast<int>(Setup::drawn) == 2);
-        const int not_culled = ((culled >> l) & 1) ^ 1;
-        return {static_cast<Setup>((1 + is_drawn) * not_culled), is_cw, static_cast<bool>((front >> l) & 1)};
+        return {one_pixel_outcome((culled >> l) & 1, is_drawn), is_cw, static_cast<bool>((front >> l) & 1)};
     }
 };
 
