@@ -528,6 +528,18 @@ TEST(RasterFastPaths, BoxTestOnVertexBoundsMatchesSetupsBox) {
     EXPECT_GT(rejected, 1000u);
 }
 
+// A vertex of the one-pixel setup tests' triangles: its window position near (cx, cy), in
+// the GL coordinates of a width x height viewport (snapped_near, often on a pixel centre or
+// half-way between two), at a random depth and perspective w, prepared as setup reads it.
+void prepare_near(std::mt19937& rng, float cx, float cy, float spread, const tessref::raster::Viewport& vp, int width,
+                  int height, glm::vec4& win, tessref::raster::FixedXY& fixed, tessref::raster::BoxBounds& bounds) {
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    const float w = 0.5f + 1.5f * unit(rng);
+    const glm::vec4 p = at_window(snapped_near(rng, cx, 0.2f, 0.3f, spread), snapped_near(rng, cy, 0.2f, 0.3f, spread),
+                                  width, height, unit(rng) * 2.0f - 1.0f);
+    tessref::raster::prepare_vertex(p * w, vp, false, win, fixed, bounds);
+}
+
 TEST(RasterFastPaths, OnePixelSetupMatchesSetupTriangleAndItsPlanes) {
     // Triangles of inside vertices around pixel (5, 3), often on pixel centres, half-way points
     // or each other (centres on edges, where the fill rule decides; zero area), with
@@ -538,20 +550,14 @@ TEST(RasterFastPaths, OnePixelSetupMatchesSetupTriangleAndItsPlanes) {
     namespace r = tessref::raster;
     const r::Viewport vp = r::make_viewport(W, H);
     std::mt19937 rng(20261128);
-    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-    auto coordinate = [&](float centre) { return snapped_near(rng, centre, 0.2f, 0.3f, 1.0f); };
     const glm::vec3 unit_weights[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     std::size_t outcomes[3] = {}, on_edge = 0;
     for (int t = 0; t < 300000; ++t) {
         glm::vec4 win[3];
         r::FixedXY fixed[3];
         r::BoxBounds bounds[3];
-        for (int k = 0; k < 3; ++k) {
-            const float w = 0.5f + 1.5f * unit(rng);
-            // at_window's GL coordinates: raster row 3 is GL y = H - 3 - 0.5.
-            const glm::vec4 p = at_window(coordinate(5.5f), coordinate(H - 3.5f), W, H, unit(rng) * 2.0f - 1.0f);
-            r::prepare_vertex(p * w, vp, false, win[k], fixed[k], bounds[k]);
-        }
+        for (int k = 0; k < 3; ++k)  // GL coordinates: raster row 3 is GL y = H - 3 - 0.5
+            prepare_near(rng, 5.5f, H - 3.5f, 1.0f, vp, W, H, win[k], fixed[k], bounds[k]);
         const r::BoxBounds box = r::triangle_box(bounds[0], bounds[1], bounds[2]);
         if (!r::one_pixel_box(box)) continue;
         for (const r::Face face : {r::Face::both, r::Face::front_only, r::Face::back_only}) {
@@ -612,12 +618,9 @@ TEST(RasterFastPaths, FourAtATimeCoverageIsOnePixelCoverageLaneByLane) {
         const float spread = unit(rng) < 0.8f ? 1.0f : 2.5f;
         r::BoxBounds bounds[3];
         for (int k = 0; k < 3; ++k) {
-            const float w = 0.5f + 1.5f * unit(rng);
-            const glm::vec4 p = at_window(snapped_near(rng, cx, 0.2f, 0.3f, spread),
-                                          snapped_near(rng, cy, 0.2f, 0.3f, spread), W, H, unit(rng) * 2.0f - 1.0f);
             glm::vec4 win;
             r::FixedXY f;
-            r::prepare_vertex(p * w, vp, false, win, f, bounds[k]);
+            prepare_near(rng, cx, cy, spread, vp, W, H, win, f, bounds[k]);
             fixed.push_back(f);
         }
         tris.push_back({3 * t, 3 * t + 1, 3 * t + 2});
