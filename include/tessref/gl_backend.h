@@ -171,6 +171,10 @@ struct SceneRenderOptions {
     long long corrupt_prediction_of_batch = -1;
     // User shaders (--shader), each in place of the scene's [shaders] entry of its stage.
     std::vector<StageShader> shaders;
+    // The CPU pipeline of the scene at the image's viewport, when the caller has run it
+    // (render_scene_isolated() runs it in the parent); null: render_scene() runs it.
+    std::shared_ptr<const PipelineResult> pipeline;
+    double pipeline_seconds = 0.0;  // how long that took, for SceneRenderStats
 };
 
 // SceneRender::capture: one CapturedVertex (tessref/capture.h) per vertex of every
@@ -204,5 +208,19 @@ struct SceneRender {
 // stage; Where: the file and, from the log, the line), a user's shader that declares a
 // twin's uniform with another type, or a GL error.
 SceneRender render_scene(Context& context, const Scene& scene, const SceneRenderOptions& options = {});
+
+// render_scene() as `tessref gl` and `tessref golden verify` run it: the CPU pipeline here,
+// the context and every GL call in a child process with its own memory and time limits
+// (src/common/isolated.h: the memory budget of --max-memory / TESSREF_MAX_MEMORY, and
+// TESSREF_GL_TIME_LIMIT seconds, default 300), so that a user's shader that exhausts
+// memory, loops or crashes the driver is an Error naming the shader and the stage, never
+// the end of tessref. SceneRender::pipeline is the pipeline run here.
+struct IsolatedRender {
+    SceneRender render;
+    std::string renderer;  // GL_RENDERER of the child's context
+};
+IsolatedRender render_scene_isolated(const Scene& scene, const SceneRenderOptions& options = {});
+// GL_RENDERER, from a context made in a child process as above.
+std::string renderer_isolated();
 
 }  // namespace tessref::gl

@@ -13,6 +13,7 @@
 #include <system_error>
 #include <unordered_map>
 
+#include "common/input_file.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -358,18 +359,8 @@ Capture read_ply_capture(const std::string& path) {
 Capture read_capture(const std::string& path) {
     const CaptureFormat format = capture_format_from_path(path);
     if (format == CaptureFormat::ply) return read_ply_capture(path);
-    const Where where = Where::in_file(path);
-    std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) throw Error("no such capture file", where);
-    if (!std::filesystem::is_regular_file(path, ec))
-        throw Error("not a regular file (a directory, device, FIFO or socket), not a capture", where);
-    const std::uintmax_t size = std::filesystem::file_size(path, ec);
-    if (ec) throw Error("cannot read the capture: " + ec.message(), where);
-    require_memory(size, "a capture file of " + format_bytes(size), where);
-    std::string text(static_cast<std::size_t>(size), '\0');
-    std::ifstream in(path, std::ios::binary);
-    if (!in || !in.read(text.data(), static_cast<std::streamsize>(size)))
-        throw Error("cannot read the capture", where);
+    // Captures of large terrains are large: held to the memory budget only.
+    const std::string text = read_input_file(path, "capture file", kNoCap);
     return TextReader(path, text).read();
 }
 

@@ -16,6 +16,7 @@
 #include <system_error>
 #include <unistd.h>
 
+#include "common/input_file.h"
 #include "tessref/error.h"
 
 namespace tessref::cli {
@@ -255,6 +256,21 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
         throw Error("cannot write output file: " + errno_text(errno), Where::in_file(given));
     }
 
+    refuse_an_input();
+    // Two outputs of one command that are one file: one of them would be lost.
+    for (const AtomicOutput* other : live_outputs()) {
+        if (other->write_through_ || write_through_) continue;
+        std::error_code error;
+        const bool same = std::filesystem::exists(replaced_, error)
+                              ? std::filesystem::equivalent(replaced_, other->replaced_, error)
+                              : std::filesystem::weakly_canonical(replaced_, error) ==
+                                    std::filesystem::weakly_canonical(other->replaced_, error);
+        if (same)
+            throw Error("'" + given + "' is also the output " + other->target_.string() +
+                            ": one would replace the other",
+                        Where::in_file(given));
+    }
+
     // The temporary file: beside the file a rename replaces (same file system), or in the
     // temp directory for a write-through (no file may be created beside /dev/null).
     std::filesystem::path dir;
@@ -282,6 +298,7 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
             ::close(fd);
             temp_ = candidate;
             temp_slot_ = slot;
+            live_outputs().push_back(this);
             return;
         }
         const int error = errno;
@@ -293,6 +310,25 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
 
 AtomicOutput::~AtomicOutput() {
     if (!committed_) discard();
+    std::vector<const AtomicOutput*>& live = live_outputs();
+    live.erase(std::remove(live.begin(), live.end(), this), live.end());
+}
+
+std::vector<const AtomicOutput*>& AtomicOutput::live_outputs() {
+    static std::vector<const AtomicOutput*> outputs;
+    return outputs;
+}
+
+// The one check that an output is not one of the command's inputs (common/input_file.h):
+// at construction for the inputs read so far, and again at commit() for all of them (most
+// commands read their inputs after naming their output, so that a bad -o fails first).
+void AtomicOutput::refuse_an_input() const {
+    std::string input;
+    if (write_through_fd_ >= 0) input = input_open_as(write_through_fd_);
+    else if (!write_through_) input = input_named_by(replaced_.string());
+    if (!input.empty())
+        throw Error("'" + target_.string() + "' is the input " + input + " of this command: writing it would destroy it",
+                    Where::in_file(target_.string()));
 }
 
 void AtomicOutput::discard() {
@@ -316,6 +352,12 @@ void AtomicOutput::write(std::string_view bytes) {
 
 void AtomicOutput::commit() {
     if (committed_) return;
+    try {
+        refuse_an_input();
+    } catch (const Error&) {
+        discard();
+        throw;
+    }
     if (!write_through_) {
         if (::rename(temp_.c_str(), replaced_.c_str()) != 0) {
             const int error = errno;

@@ -90,6 +90,9 @@ std::string format_double(double x);
 //    replaced; the temporary file then lives in the temp directory, and a failed write
 //    (/dev/full: "No space left on device") is an Error;
 //  - a directory: an Error in the constructor.
+// An output that is one of the command's inputs (by inode: common/input_file.h), or the
+// same file as another live AtomicOutput, is an Error (in the constructor, or in commit()
+// for an input read after it), before anything is replaced.
 class AtomicOutput {
 public:
     // `temp_extension` (e.g. ".png") overrides the extension of the temporary name, for a
@@ -110,6 +113,9 @@ public:
 
 private:
     void discard();
+    void refuse_an_input() const;
+    // The outputs of this process not yet destroyed (one command: one thread makes them).
+    static std::vector<const AtomicOutput*>& live_outputs();
 
     std::filesystem::path target_;    // the name the user gave (for messages)
     std::filesystem::path replaced_;  // the regular file a rename replaces (symlinks followed)

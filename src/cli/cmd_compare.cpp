@@ -19,6 +19,7 @@
 #include "image/image_io.h"
 #include "tessref/capture.h"
 #include "tessref/compare.h"
+#include "common/input_file.h"
 #include "tessref/error.h"
 
 namespace tessref::cli {
@@ -351,13 +352,12 @@ int run_compare(const CompareCommandOptions& options) {
     compare.ignore_alpha = options.ignore_alpha;
     if (!options.diff.empty()) image::require_writable(options.diff, "--diff");
 
-    // A diff written over an input would destroy the golden image it was compared with.
-    for (const std::string* input : {&options.reference, &options.test}) {
-        std::error_code ec;
-        if (!options.diff.empty() && std::filesystem::equivalent(options.diff, *input, ec))
-            throw Error("'" + options.diff + "' is the image " + *input + ": the diff would overwrite it",
-                        Where::in_file("--diff"));
-    }
+    // A diff written over an input would destroy the golden image it was compared with: the
+    // inputs are named before anything is read, so AtomicOutput refuses it at once.
+    note_input(options.reference);
+    note_input(options.test);
+    std::optional<AtomicOutput> output;
+    if (!options.diff.empty()) output.emplace(options.diff);
 
     const FloatImage reference = read_float_image(options.reference);
     const FloatImage test = read_float_image(options.test);
@@ -373,14 +373,13 @@ int run_compare(const CompareCommandOptions& options) {
                     Where::in_file(options.test));
     const CompareResult result = compare_images(reference, test, compare);
 
-    if (!options.diff.empty()) {
-        AtomicOutput output(options.diff);
+    if (output) {
         try {
-            write_float_image(difference_picture(reference, result), output.temp_path().string());
+            write_float_image(difference_picture(reference, result), output->temp_path().string());
         } catch (const Error& error) {
             throw Error(error.what(), Where::in_file(options.diff));  // the name given, not the temporary one
         }
-        output.commit();
+        output->commit();
     }
     std::cout << (options.json ? report_json(options, reference, compare, result)
                                : report_text(options, reference, compare, result))

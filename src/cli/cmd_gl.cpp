@@ -109,8 +109,9 @@ int run_gl(const GlCommandOptions& options) {
                        "an image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
                        Where::in_file(options.size.empty() ? options.scene : "--size " + options.size));
     }
-    gl::Context context = gl::Context::create();
-    const gl::SceneRender r = gl::render_scene(context, scene, render_options);
+    // In a child process with its own limits: a user's shader cannot take tessref down.
+    const gl::IsolatedRender isolated = gl::render_scene_isolated(scene, render_options);
+    const gl::SceneRender& r = isolated.render;
     if (!r.batch_failure.empty()) {
         std::cerr << "tessref: gl: " << r.batch_failure << "; no image written\n";
         return 1;
@@ -124,7 +125,7 @@ int run_gl(const GlCommandOptions& options) {
     if (capture_output) {
         std::ofstream out(capture_output->temp_path(), std::ios::binary);
         try {
-            write_capture(r.capture, out, capture_format, "tessref gl " + options.scene + ": " + context.renderer() +
+            write_capture(r.capture, out, capture_format, "tessref gl " + options.scene + ": " + isolated.renderer +
                                                               ", transform feedback");
         } catch (const Error& error) {
             throw Error(error.what(), Where::in_file(options.capture));  // the name given, not the temporary one
@@ -133,7 +134,7 @@ int run_gl(const GlCommandOptions& options) {
     }
     output.commit();
     std::cout << options.output << ": " << r.width << "x" << r.height << ", " << to_string(r.shading.model.kind)
-              << " shading, " << context.renderer() << ", " << r.stats.triangles << " triangles in "
+              << " shading, " << isolated.renderer << ", " << r.stats.triangles << " triangles in "
               << r.stats.draws << " draws (every count as predicted), " << r.stats.seconds_gl
               << " s GL (CPU pipeline for the predictions " << r.stats.seconds_pipeline << " s)";
     if (capture_output) std::cout << ", " << r.capture.size() / 3 << " triangles captured to " << options.capture;

@@ -43,6 +43,7 @@
 #include <openssl/evp.h>
 
 #include "cli/cli_util.h"
+#include "common/input_file.h"
 #include "cli/commands.h"
 #include "tessref/capture.h"
 #include "tessref/compare.h"
@@ -109,11 +110,10 @@ std::string sha256_hex(std::string_view bytes) {
 }
 
 std::string read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot read the golden file (run `tessref golden update` to make it)", Where::in_file(path.string()));
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
+    std::error_code ec;
+    if (!fs::exists(fs::symlink_status(path, ec)))
+        throw Error("cannot read the golden file (run `tessref golden update` to make it)", Where::in_file(path.string()));
+    return read_input_file(path.string(), "golden file", kTableFileBytes);
 }
 
 // ---- the CPU reference of one scene ----------------------------------------------------
@@ -357,7 +357,7 @@ struct SceneVerdict {
     bool ok() const { return verdict() == "PASS" || verdict() == "CPU-ONLY"; }
 };
 
-SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name, gl::Context& context,
+SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
                           const fs::path& keep) {
     SceneVerdict v;
     v.scene = name;
@@ -418,7 +418,8 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     gl_options.capture = true;
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)  // as `tessref gl`
         gl_options.corrupt_prediction_of_batch = std::atoll(hook);
-    const gl::SceneRender r = gl::render_scene(context, scene, gl_options);
+    // In a child process with its own limits, as `tessref gl` (gl_backend.h).
+    const gl::SceneRender r = gl::render_scene_isolated(scene, gl_options).render;
     v.seconds_gl = r.stats.seconds_gl + r.stats.seconds_capture;
     if (!r.batch_failure.empty()) {
         v.failures.push_back(r.batch_failure);
@@ -511,16 +512,16 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
 int run_verify(const GoldenOptions& options) {
     const std::vector<std::string> names = scene_names(options);
     const fs::path keep = options.keep;
-    gl::Context context = gl::Context::create();
+    const std::string renderer = gl::renderer_isolated();
     std::vector<SceneVerdict> verdicts;
     if (!options.json)
-        std::cout << "golden verify: " << context.renderer() << " against " << options.golden_dir << "/\n"
+        std::cout << "golden verify: " << renderer << " against " << options.golden_dir << "/\n"
                   << std::left << std::setw(20) << "scene" << std::right << std::setw(10) << "triangles"
                   << std::setw(9) << "fail px" << std::setw(8) << "lvl px" << std::setw(9) << "max err" << std::setw(9) << "pos ulp"
                   << std::setw(9) << "nrm ulp" << std::setw(12) << "lvl patches" << std::setw(9) << "lvl ulp" << std::setw(10) << "lvl diff"
                   << std::setw(8) << "GL s" << "  verdict\n";
     for (const std::string& name : names) {
-        verdicts.push_back(verify_scene(options, name, context, keep));
+        verdicts.push_back(verify_scene(options, name, keep));
         const SceneVerdict& v = verdicts.back();
         if (options.json) continue;
         char err[32];
@@ -539,7 +540,7 @@ int run_verify(const GoldenOptions& options) {
     const bool ok = std::all_of(verdicts.begin(), verdicts.end(), [](const SceneVerdict& v) { return v.ok(); });
     if (options.json) {
         nlohmann::json j;
-        j["renderer"] = context.renderer();
+        j["renderer"] = renderer;
         j["passed"] = ok;
         for (const SceneVerdict& v : verdicts)
             j["scenes"].push_back({{"scene", v.scene},

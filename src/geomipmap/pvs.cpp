@@ -11,7 +11,9 @@
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <sstream>
 
+#include "common/input_file.h"
 #include "common/parallel.h"
 #include "tessref/error.h"
 #include "tessref/geomipmap.h"
@@ -305,8 +307,8 @@ void write_pvs(const Pvs& pvs, const std::string& path) {
 }
 
 Pvs read_pvs(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot open the PVS file", Where::in_file(path));
+    // Parsed from memory: the bits are the file's bulk, held to the memory budget on reading.
+    std::istringstream in(read_input_file(path, "PVS file", kNoCap));
     unsigned char header[kHeaderBytes];
     in.read(reinterpret_cast<char*>(header), kHeaderBytes);
     if (in.gcount() != static_cast<std::streamsize>(kHeaderBytes))

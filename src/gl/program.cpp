@@ -9,6 +9,8 @@
 #include <utility>
 
 #include "common/data_dir.h"
+#include "common/input_file.h"
+#include "common/isolated.h"
 
 namespace tessref::gl {
 
@@ -16,15 +18,7 @@ std::string shader_data_dir() { return data_dir(); }
 
 std::string read_shader(const std::string& name) {
     const std::string path = shader_data_dir() + "/shaders/" + name;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        Where where;
-        where.file = path;
-        throw Error("cannot read shader file", where);
-    }
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
+    return read_input_file(path, "shader file", kShaderFileBytes);
 }
 
 const char* stage_name(GLenum stage) {
@@ -89,6 +83,7 @@ GLuint compile(GlFunctions& gl, const StageSource& s) {
     const std::string inserted = s.prefix + "#line " + std::to_string(line + 1) + "\n";
     const std::string tail = s.text.substr(split) + "\n" + s.suffix;
     const GLchar* parts[] = {head.c_str(), inserted.c_str(), tail.c_str()};
+    set_isolated_phase("compiling " + described(s), Where::in_file(shown_path(s)));
     const GLuint shader = gl.CreateShader(s.stage);
     gl.ShaderSource(shader, 3, parts, nullptr);
     gl.CompileShader(shader);
@@ -123,6 +118,11 @@ GLuint link(GlFunctions& gl, const std::vector<StageSource>& stages, const std::
     if (!varyings.empty())
         gl.TransformFeedbackVaryings(program, static_cast<GLsizei>(varyings.size()), varyings.data(),
                                      GL_INTERLEAVED_ATTRIBS);
+    std::string users;  // the user's files among the stages: what the phase names
+    for (const StageSource& s : stages)
+        if (!s.origin.empty()) users += (users.empty() ? "" : ", ") + s.path;
+    set_isolated_phase("linking " + what + (users.empty() ? "" : " (user shaders: " + users + ")"),
+                       users.empty() ? Where() : Where::in_file(users));
     gl.LinkProgram(program);
     for (GLuint shader : shaders) gl.DeleteShader(shader);
     GLint ok = GL_FALSE;

@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/input_file.h"
+#include "common/isolated.h"
 #include "gl/gl_api.h"
 #include "gl/program.h"
 #include "tessref/error.h"
@@ -297,19 +299,23 @@ std::vector<StageShader> user_shaders(const Scene& scene, const SceneRenderOptio
 
 StageSource user_stage(const StageShader& user) {
     const std::string what = std::string("the ") + to_string(user.stage) + " shader " + user.path + " of " + user.origin;
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(user.path, ec);
-    std::ifstream in(user.path, std::ios::binary);
-    if (ec || !in || std::filesystem::is_directory(user.path, ec)) throw Error("cannot read " + what, user.where);
-    require_memory(size, what, user.where);
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw Error("cannot read " + what, user.where);
+    std::string text;
+    try {
+        text = read_input_file(user.path, "shader file", kShaderFileBytes);
+    } catch (const Error& e) {
+        throw Error("cannot read " + what + ": " + e.message(), user.where);
+    }
+    // GL takes the source as C strings: a NUL byte would end the shader there, silently.
+    if (const std::size_t nul = text.find('\0'); nul != std::string::npos)
+        throw Error("the " + std::string(to_string(user.stage)) + " shader " + user.path + " of " + user.origin +
+                        " holds a NUL byte (GL would read the shader only up to it)",
+                    Where::in_file(user.path, static_cast<std::size_t>(std::count(text.begin(), text.begin() +
+                                                                                 static_cast<std::ptrdiff_t>(nul), '\n')) + 1));
     StageSource s;
     s.stage = gl_stage(user.stage);
     s.path = user.path;
     s.origin = user.origin;
-    s.text = text.str();
+    s.text = std::move(text);
     return s;
 }
 
@@ -920,7 +926,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
 
     // The CPU pipeline: the prediction of every draw.
     auto start = Clock::now();
-    result.pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene));
+    result.pipeline = options.pipeline ? options.pipeline : std::make_shared<const PipelineResult>(run_pipeline(scene));
     const PipelineResult& pipe = *result.pipeline;
     std::vector<std::uint64_t> per_patch(scene.patch_count(), 0);
     for (const auto& tri : pipe.mesh.triangles) ++per_patch[pipe.mesh.patch_ids[tri[0]]];
@@ -942,6 +948,13 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
                                 "with no tessellation stages (geomip_terrain.vert)",
                             user.where);
     const std::string user_note = count_note(plan);
+    // The user's files, for the messages of a draw that fails or dies (every stage's).
+    std::string user_files;
+    for (const StageShader& s : result.user_shaders)
+        user_files += (user_files.empty() ? "" : ", ") + std::string(to_string(s.stage)) + " shader " + s.path + " (" +
+                      s.origin + ")";
+    const std::string draw_what = "a scene draw" + (user_files.empty() ? std::string() : " with the user's " + user_files);
+    const Where draw_where = result.user_shaders.empty() ? Where() : result.user_shaders.front().where;
     const std::vector<Batch> batches = make_batches(per_patch, options.max_primitives_per_draw);
 
     Context::Impl& c = context.impl();
@@ -1026,6 +1039,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     gl.DepthFunc(GL_LESS);
     gl.PolygonMode(GL_FRONT_AND_BACK, options.wireframe ? GL_LINE : GL_FILL);
     c.check_error("setting the scene's uniforms and state");
+    set_isolated_phase("drawing the scene" + (user_files.empty() ? std::string() : " with the user's " + user_files),
+                       draw_where);
     for (std::size_t k = 0; k < batches.size(); ++k) {
         const Batch& b = batches[k];
         gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.query);
@@ -1034,7 +1049,11 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         gl.EndQuery(GL_PRIMITIVES_GENERATED);
         GLuint generated = 0;
         gl.GetQueryObjectuiv(objects.query, GL_QUERY_RESULT, &generated);
-        c.check_error("a scene draw");
+        try {
+            c.check_error(draw_what.c_str());
+        } catch (const Error& e) {  // a user's point-mode or isolines layout: GL_INVALID_OPERATION
+            throw Error(e.what(), draw_where);
+        }
         ++result.stats.draws;
         result.stats.triangles += generated;
         if (generated != predicted_of(k)) {
@@ -1058,6 +1077,9 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
 
     // ---- the capture ---------------------------------------------------------------------
     if (!options.capture) return result;
+    set_isolated_phase("capturing the scene by transform feedback" +
+                           (user_files.empty() ? std::string() : " with the user's " + user_files),
+                       draw_where);
     start = Clock::now();
     objects.programs.push_back(link(gl, capture_stages(plan),
                                     {"tessref_cap_tess_coord", "tessref_cap_patch_id", "tessref_cap_position",
@@ -1133,6 +1155,117 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     c.check_error("reading the capture back");
     result.stats.seconds_capture = seconds_since(start);
     return result;
+}
+
+// ---- in a child process ------------------------------------------------------------------
+
+namespace {
+
+// The bytes of a vector of trivially copyable values, and back.
+template <typename T>
+void put_vector(std::string& out, const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const std::uint64_t n = v.size();
+    out.append(reinterpret_cast<const char*>(&n), sizeof n);
+    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+template <typename T>
+void put_value(std::string& out, const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+void put_string(std::string& out, const std::string& s) {
+    put_value(out, static_cast<std::uint64_t>(s.size()));
+    out += s;
+}
+
+struct Reader {
+    const std::string& bytes;
+    std::size_t at = 0;
+    void take(void* to, std::size_t n) {
+        if (n > bytes.size() - at) throw Error("the GL backend's child process answered with too few bytes");
+        std::memcpy(to, bytes.data() + at, n);
+        at += n;
+    }
+    template <typename T>
+    T value() {
+        T v;
+        take(&v, sizeof v);
+        return v;
+    }
+    template <typename T>
+    std::vector<T> vector() {
+        const auto n = value<std::uint64_t>();
+        if (n > (bytes.size() - at) / sizeof(T)) throw Error("the GL backend's child process answered with too few bytes");
+        std::vector<T> v(static_cast<std::size_t>(n));
+        take(v.data(), v.size() * sizeof(T));
+        return v;
+    }
+    std::string string() {
+        const auto n = value<std::uint64_t>();
+        if (n > bytes.size() - at) throw Error("the GL backend's child process answered with too few bytes");
+        std::string s = bytes.substr(at, static_cast<std::size_t>(n));
+        at += static_cast<std::size_t>(n);
+        return s;
+    }
+};
+
+const std::string kIsolatedWhat = "the GL backend (Mesa llvmpipe, in a child process)";
+
+}  // namespace
+
+IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOptions& options_in) {
+    if (!scene_in.camera) throw Error("tessref gl needs a [camera] in the scene", Where::at_key(scene_in.file, "camera"));
+    // The CPU pipeline runs here, on every core (oneTBB is not for the child), at the
+    // image's viewport as render_scene() would run it.
+    Scene scene = scene_in;
+    if (options_in.size != glm::ivec2(0, 0)) scene.camera->viewport = options_in.size;
+    SceneRenderOptions options = options_in;
+    if (!options.pipeline) {
+        const auto start = Clock::now();
+        options.pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene));
+        options.pipeline_seconds = seconds_since(start);
+    }
+    // Every user file is read here, where the input checks apply, and handed to the child
+    // as text; the child reads it again from the same path only after these checks passed.
+    for (const StageShader& s : user_shaders(scene_in, options)) (void)user_stage(s);
+    const std::string answer = run_isolated(kIsolatedWhat, [&] {
+        set_isolated_phase("creating the OSMesa context");
+        Context context = Context::create();
+        SceneRender r = render_scene(context, scene_in, options);
+        set_isolated_phase("sending the picture back");
+        std::string out;
+        put_string(out, context.renderer());
+        put_value(out, r.width);
+        put_value(out, r.height);
+        put_vector(out, r.colour);
+        put_vector(out, r.capture);
+        put_string(out, r.batch_failure);
+        put_value(out, r.stats);
+        return out;
+    });
+    IsolatedRender result;
+    Reader in{answer};
+    result.renderer = in.string();
+    SceneRender& r = result.render;
+    r.width = in.value<int>();
+    r.height = in.value<int>();
+    r.colour = in.vector<glm::vec4>();
+    r.capture = in.vector<CapturedVertex>();
+    r.batch_failure = in.string();
+    r.stats = in.value<SceneRenderStats>();
+    r.stats.seconds_pipeline += options.pipeline_seconds;
+    r.shading = scene_in.shading;
+    r.pipeline = options.pipeline;
+    r.user_shaders = user_shaders(scene_in, options);
+    return result;
+}
+
+std::string renderer_isolated() {
+    return run_isolated(kIsolatedWhat, [] {
+        set_isolated_phase("creating the OSMesa context");
+        return Context::create().renderer();
+    });
 }
 
 }  // namespace tessref::gl

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "image/image_io.h"
 
@@ -22,6 +23,9 @@ void allocate_samples(Image& image);
 // The first 8 bytes are PNG's signature / the first two a PNM magic number (P1-P6, Pf, PF).
 bool is_png(const std::string& head);
 bool is_pnm(const std::string& head);
+// The format OpenImageIO will be asked to read, told by the first 16 bytes (and, for TGA,
+// which has no magic number, by the lower-case extension ".tga"); nullptr for none.
+const char* oiio_format_by_magic(std::string_view head, const std::string& extension);
 
 Image read_png(const std::string& path, const ReadOptions& options);
 Image read_pnm(const std::string& path, const ReadOptions& options);

@@ -8,11 +8,13 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <vector>
 
 #include "image/codecs.h"
 #include "image/oiio_module.h"
+#include "common/input_file.h"
 #include "tessref/error.h"
 
 namespace tessref::image {
@@ -20,6 +22,29 @@ namespace tessref::image {
 namespace fs = std::filesystem;
 
 namespace detail {
+
+const char* oiio_format_by_magic(std::string_view head, const std::string& extension) {
+    auto starts = [&](std::string_view magic) { return head.substr(0, magic.size()) == magic; };
+    using namespace std::string_view_literals;
+    if (starts("\x76\x2f\x31\x01"sv)) return "openexr";
+    if (starts("II*\0"sv) || starts("MM\0*"sv) || starts("II+\0"sv) || starts("MM\0+"sv)) return "tiff";
+    if (starts("\xff\xd8\xff"sv)) return "jpeg";
+    if (starts("#?RADIANCE"sv) || starts("#?RGBE"sv)) return "hdr";
+    if (starts("BM"sv)) return "bmp";
+    if (starts("GIF87a"sv) || starts("GIF89a"sv)) return "gif";
+    if (starts("8BPS"sv)) return "psd";
+    if (starts("SDPX"sv) || starts("XPDS"sv)) return "dpx";
+    if (starts("\x80\x2a\x5f\xd7"sv) || starts("\xd7\x5f\x2a\x80"sv)) return "cineon";
+    if (starts("\0\0\0\x0cjP  \r\n\x87\n"sv) || starts("\xff\x4f\xff\x51"sv)) return "jpeg2000";
+    if (starts("RIFF"sv) && head.size() >= 12 && head.substr(8, 4) == "WEBP"sv) return "webp";
+    // TGA has no magic number: its name, and a header whose image type is one TGA defines
+    // (a file of zeros has type 0, "no image data").
+    if (extension == ".tga" && head.size() >= 3 && static_cast<unsigned char>(head[1]) <= 1) {
+        const unsigned char type = static_cast<unsigned char>(head[2]);
+        if (type == 1 || type == 2 || type == 3 || type == 9 || type == 10 || type == 11) return "targa";
+    }
+    return nullptr;
+}
 
 void fail(const std::string& path, const std::string& what) { throw Error(what, Where::in_file(path)); }
 
@@ -134,25 +159,23 @@ Image read_with_oiio(const std::string& path, const ReadOptions& options) {
 
 Image read_image(const std::string& path, const ReadOptions& options) {
     const std::string& kind = options.kind;
-    std::error_code ec;
-    const fs::path fs_path(path);
-    if (!fs::exists(fs_path, ec)) fail(path, kind + " not found");
-    if (fs::is_directory(fs_path, ec)) fail(path, kind + " is a directory, not an image");
     // A device, FIFO or socket has no end to read to (/dev/zero, /dev/urandom would keep a
-    // reader going forever) and no header to check before reading: only files.
-    if (!fs::is_regular_file(fs_path, ec)) fail(path, kind + " is not a regular file (a device, FIFO or socket), not an image");
-    const auto bytes = fs::file_size(fs_path, ec);
-    if (!ec && bytes == 0) fail(path, kind + " is an empty file (0 bytes)");
-
-    std::string head(8, '\0');
+    // reader going forever) and no header to check before reading: only regular files.
+    std::string head;
     {
-        std::ifstream in(path, std::ios::binary);
-        in.read(head.data(), static_cast<std::streamsize>(head.size()));
-        head.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
+        const InputFile file(path, kind);
+        if (file.size() == 0) fail(path, kind + " is an empty file (0 bytes)");
+        head = file.head(16);
     }
+    // The reader is chosen by the file's first bytes, before anything else is read: a file
+    // that starts as no format tessref reads (a gigabyte of zeros named .png) is refused at
+    // once, where OpenImageIO would have tried every reader it has on the whole file.
     if (detail::is_png(head)) return detail::read_png(path, options);
     if (detail::is_pnm(head)) return detail::read_pnm(path, options);
-    return read_with_oiio(path, options);
+    if (detail::oiio_format_by_magic(head, lower_extension(path)) != nullptr) return read_with_oiio(path, options);
+    fail(path, "cannot read " + kind + ": its first bytes are no image format tessref reads (PNG, PNM, PFM, "
+                                       "OpenEXR, TIFF, JPEG, Radiance HDR, BMP, GIF, Photoshop, DPX, Cineon, "
+                                       "JPEG 2000, WebP, TGA by its .tga name)");
 }
 
 void write_image(const std::string& path, const ImageView& image, const WriteOptions& options) {

@@ -9,6 +9,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <toml++/toml.h>
 
+#include "common/input_file.h"
 #include "mesh/openmesh.h"
 #include "scene/shading_load.h"
 #include "scene/toml_reader.h"
@@ -388,6 +389,7 @@ struct Loader {
             throw Error("cannot read mesh " + path + ": no such file", t.where("path"));
         // The reader `tessref check` uses (it refuses hostile files, naming line or byte).
         IndexedMesh file;
+        note_input(path);  // the mesh readers map the file themselves
         try {
             MeshFileOptions read_options;
             read_options.vertex_attributes = true;
@@ -647,6 +649,7 @@ struct Loader {
     // ---- the whole file -----------------------------------------------------------
     void load(const std::string& text) {
         toml::table root;
+        scene_detail::check_toml_nesting(text, file);
         try {
             root = toml::parse(text, file);
         } catch (const toml::parse_error& e) {
@@ -838,17 +841,7 @@ struct Loader {
     }
 };
 
-std::string read_text_file(const std::string& path) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) throw Error("scene file not found", Where::in_file(path));
-    if (fs::is_directory(path, ec)) throw Error("scene path is a directory", Where::in_file(path));
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot open scene file", Where::in_file(path));
-    std::ostringstream os;
-    os << in.rdbuf();
-    if (in.bad()) throw Error("cannot read scene file", Where::in_file(path));
-    return os.str();
-}
+std::string read_text_file(const std::string& path) { return read_input_file(path, "scene file", kSceneFileBytes); }
 
 }  // namespace
 

@@ -14,6 +14,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -275,5 +276,18 @@ private:
     std::vector<std::string> known_;
     std::set<std::string> used_;
 };
+
+}  // namespace tessref::scene_detail
+
+namespace tessref::scene_detail {
+
+// The deepest TOML a scene may be: tables, dotted keys, inline tables and arrays counted
+// together. The shipped scenes reach 3; toml++ recurses once or more per level and
+// overflowed the stack at some tens of thousands.
+inline constexpr int kMaxTomlNesting = 64;
+
+// Throws an Error at the line and column where `text` first nests deeper than
+// kMaxTomlNesting, before toml++ sees it (src/scene/toml_depth.cpp).
+void check_toml_nesting(std::string_view text, const std::string& file);
 
 }  // namespace tessref::scene_detail

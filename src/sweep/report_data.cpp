@@ -4,11 +4,12 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
+#include <sstream>
 #include <map>
 #include <tuple>
 #include <utility>
 
+#include "common/input_file.h"
 #include "tessref/error.h"
 
 namespace tessref::sweep {
@@ -66,8 +67,7 @@ auto sort_key(const SweepRow& row) {
 }  // namespace
 
 SweepTable read_sweep_csv(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot read the sweep table", Where::in_file(path));
+    std::istringstream in(read_input_file(path, "sweep table", kTableFileBytes));
 
     std::string line;
     if (!std::getline(in, line))

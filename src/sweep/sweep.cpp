@@ -19,6 +19,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/input_file.h"
 #include "sweep/geometric_error.h"
 #include "sweep/report.h"
 #include "tessref/compare.h"
@@ -129,11 +130,7 @@ std::vector<CsvRecord> parse_csv(const std::string& text, const std::string& fil
 }
 
 std::string read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot read the file", Where::in_file(path.string()));
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
+    return read_input_file(path.string(), "sweep file", kTableFileBytes);
 }
 
 void write_text(const fs::path& path, const std::string& bytes) {
@@ -145,8 +142,64 @@ void write_text(const fs::path& path, const std::string& bytes) {
 
 // ---- the output directory ----------------------------------------------------------------
 
+// Why `dir` is not verifiably an earlier sweep's output, or "" when it is: its sweep.json
+// parses as a sweep's (the sweep's parameters and its shard), and it holds nothing but what
+// a sweep writes (sweep.csv, sweep.json, index.html, plots/ of .svg and .png, images/ of
+// one directory per scene of .png), every one a plain file or directory, no link. A user's
+// directory that merely holds a file named sweep.json is not replaced: replacing removes
+// everything in it.
+std::string not_a_sweep_output(const fs::path& dir) {
+    std::error_code ec;
+    if (!fs::is_regular_file(fs::symlink_status(dir / "sweep.json", ec))) return "it holds no sweep.json";
+    try {
+        const nlohmann::ordered_json j = nlohmann::ordered_json::parse(
+            read_input_file((dir / "sweep.json").string(), "sweep file", kTableFileBytes, {}, FileUse::inspection));
+        if (!j.is_object() || !j.contains("sweep") || !j.at("sweep").is_object() || !j.contains("shard") ||
+            !j.at("shard").is_object() || !j.contains("row_indices"))
+            return "its sweep.json is not a sweep's (no sweep, shard and row_indices)";
+    } catch (const nlohmann::json::exception&) {
+        return "its sweep.json is not valid JSON";
+    } catch (const Error& e) {
+        return "its sweep.json cannot be read: " + e.message();
+    }
+    auto plain = [&](const fs::directory_entry& e, bool directory) {
+        const fs::file_status st = fs::symlink_status(e.path(), ec);
+        return directory ? fs::is_directory(st) : fs::is_regular_file(st);
+    };
+    auto files_with = [&](const fs::path& sub, std::initializer_list<const char*> extensions) -> std::string {
+        for (const auto& e : fs::directory_iterator(sub, ec)) {
+            const std::string ext = e.path().extension().string();
+            if (!plain(e, false) || std::none_of(extensions.begin(), extensions.end(), [&](const char* x) { return ext == x; }))
+                return "it holds " + fs::relative(e.path(), dir, ec).string() + ", which a sweep does not write";
+        }
+        return {};
+    };
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        const std::string name = e.path().filename().string();
+        std::string why;
+        if (name == "sweep.json" || name == "sweep.csv" || name == "index.html") {
+            if (!plain(e, false)) why = "its " + name + " is not a plain file";
+        } else if (name == "plots" && plain(e, true)) {
+            why = files_with(e.path(), {".svg", ".png"});
+        } else if (name == "images" && plain(e, true)) {
+            for (const auto& scene : fs::directory_iterator(e.path(), ec)) {
+                if (!plain(scene, true)) {
+                    why = "it holds " + fs::relative(scene.path(), dir, ec).string() + ", which a sweep does not write";
+                    break;
+                }
+                if (!(why = files_with(scene.path(), {".png"})).empty()) break;
+            }
+        } else {
+            why = "it holds " + name + ", which a sweep does not write";
+        }
+        if (!why.empty()) return why;
+    }
+    if (ec) return "it cannot be listed: " + ec.message();
+    return {};
+}
+
 // Whether DIR may receive a sweep: a new name in an existing directory, an empty directory,
-// or an earlier sweep's directory (it holds sweep.json), which is replaced.
+// or an earlier sweep's directory (not_a_sweep_output), which is replaced.
 void check_output_dir(const fs::path& given) {
     if (given.empty()) throw Error("no output directory given", Where::in_file("-o"));
     fs::path dir = fs::absolute(given).lexically_normal();
@@ -156,9 +209,12 @@ void check_output_dir(const fs::path& given) {
     if (fs::exists(status)) {
         if (!fs::is_directory(status))
             throw Error("the output exists and is not a directory", Where::in_file(given.string()));
-        if (!fs::is_empty(dir, ec) && !fs::exists(dir / "sweep.json"))
-            throw Error("the output directory is not empty and holds no sweep (sweep.json); refusing to replace it",
-                        Where::in_file(given.string()));
+        if (!fs::is_empty(dir, ec)) {
+            if (const std::string why = not_a_sweep_output(dir); !why.empty())
+                throw Error("the output directory is not empty and not an earlier sweep's output (" + why +
+                                "); refusing to replace it",
+                            Where::in_file(given.string()));
+        }
     }
     if (!fs::is_directory(dir.parent_path()))
         throw Error("the output's parent directory does not exist", Where::in_file(given.string()));
@@ -187,6 +243,12 @@ public:
     void commit() {
         check_output_dir(target_);
         std::error_code ec;
+        // Nothing the replaced directory holds may be an input of this sweep (`sweep merge a b
+        // -o a`, a scene's texture kept among an earlier sweep's pictures).
+        for (const auto& entry : fs::recursive_directory_iterator(target_, ec))
+            if (const std::string input = input_named_by(entry.path().string()); !input.empty())
+                throw Error("the output directory holds the input " + input + " of this sweep; refusing to replace it",
+                            Where::in_file(target_.string()));
         std::optional<fs::path> old;
         if (fs::exists(fs::symlink_status(target_, ec))) {
             if (fs::is_empty(target_, ec)) {

@@ -1,0 +1,51 @@
+// src/common/isolated.h — running untrusted work in a child process with its own limits.
+//
+// A user's GLSL shader is compiled and run by Mesa inside the process that asks for it,
+// where no limit of tessref's applies: `float a[2147483647]` made llvmpipe grow to 22 GB
+// until the kernel killed the process, a shader looping for minutes hangs it, and a crash in
+// the driver (a segfault in OSMesaCreateContextAttribs under MESA_GLSL_VERSION_OVERRIDE=110)
+// takes tessref down with it, leaving temporary output files behind. run_isolated() runs
+// such work in a fork()ed child (no exec: the parent's scene, pipeline and textures are
+// shared copy-on-write) under
+//  - an address-space limit (RLIMIT_AS): what the parent had mapped at the fork plus the
+//    memory budget (limits.h: --max-memory, TESSREF_MAX_MEMORY, 3/4 of physical memory);
+//  - a wall-clock limit: TESSREF_GL_TIME_LIMIT seconds (default 300), after which the child
+//    is killed;
+//  - no core dump.
+// The child's result comes back through a pipe as bytes; a tessref::Error it throws comes
+// back as the same Error. A child that crashes, is killed by a limit or runs past the time
+// becomes an Error naming what it was doing (set_isolated_phase: "compiling the fragment
+// shader arr.frag of --shader frag=arr.frag") and that file. The parent's outputs are
+// untouched by the child; the parent's AtomicOutputs remove their temporary files as usual.
+//
+// The child must not use oneTBB (its worker threads are not in the child): do the parallel
+// work before run_isolated() and hand it in.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "tessref/error.h"
+
+namespace tessref {
+
+struct IsolationLimits {
+    std::uint64_t memory_bytes = 0;  // added to what the parent maps; 0: the memory budget
+    double seconds = 0.0;            // wall clock; 0: TESSREF_GL_TIME_LIMIT or 300
+};
+
+// The default time limit: TESSREF_GL_TIME_LIMIT when set (seconds, > 0; an invalid value is
+// an Error naming the variable), else 300.
+double isolation_time_limit();
+
+// Runs `work` in a child process under `limits` and returns the bytes it returned. `what`
+// names the work in messages ("the GL backend (llvmpipe)").
+std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
+                         const IsolationLimits& limits = {});
+
+// In the child: what it is doing now, and the file that is about to be used (a shader),
+// for the message if it dies there. Does nothing outside run_isolated().
+void set_isolated_phase(const std::string& doing, const Where& where = {});
+
+}  // namespace tessref
