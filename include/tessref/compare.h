@@ -104,6 +104,11 @@ CompareResult compare_images(const FloatImage& reference, const FloatImage& test
 // would exceed the memory limit (limits.h).
 FloatImage read_float_image(const std::string& path);
 
+// The bytes read_float_image(path) holds at its peak (the file's codes and the floats), from
+// the file's header alone: what a command adds up before it reads anything (limits.h).
+// Throws tessref::Error as read_float_image does for a file it cannot read.
+std::uint64_t float_image_memory(const std::string& path, int* width = nullptr, int* height = nullptr);
+
 // The diff picture: RGB, failing pixels pure red (1, 0, 0), every other pixel the
 // reference dimmed to a quarter: kDiffDim * REF's colour clamped to [0, 1] (channels 0..2;
 // a one- or two-channel REF is grey from channel 0; alpha is not drawn).

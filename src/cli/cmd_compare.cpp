@@ -21,6 +21,7 @@
 #include "tessref/compare.h"
 #include "common/input_file.h"
 #include "tessref/error.h"
+#include "tessref/limits.h"
 
 namespace tessref::cli {
 
@@ -358,6 +359,21 @@ int run_compare(const CompareCommandOptions& options) {
     note_input(options.test);
     std::optional<AtomicOutput> output;
     if (!options.diff.empty()) output.emplace(options.diff);
+
+    // The whole command's memory, from the two headers, before any pixel is read (each
+    // image alone may fit where both, the failing-pixel mask and the diff do not).
+    int width = 0, height = 0;
+    const std::uint64_t inputs = float_image_memory(options.reference, &width, &height);
+    const std::uint64_t pixels = saturating_bytes(static_cast<std::uint64_t>(std::max(width, 0)),
+                                                  static_cast<std::uint64_t>(std::max(height, 0)));
+    const std::uint64_t diff = options.diff.empty() ? 0 : saturating_bytes(pixels, 3 * 4 + 3 + 3);  // floats, codes, PNG rows
+    const std::uint64_t total = std::min<std::uint64_t>(UINT64_MAX / 4, inputs) +
+                                std::min<std::uint64_t>(UINT64_MAX / 4, float_image_memory(options.test)) +
+                                std::min<std::uint64_t>(UINT64_MAX / 4, pixels) + std::min<std::uint64_t>(UINT64_MAX / 4, diff);
+    require_memory(total,
+                   "comparing two images of " + std::to_string(width) + " x " + std::to_string(height) + " pixels" +
+                       (options.diff.empty() ? std::string() : " and writing their diff"),
+                   Where::in_file(options.test));
 
     const FloatImage reference = read_float_image(options.reference);
     const FloatImage test = read_float_image(options.test);

@@ -48,6 +48,7 @@
 #include "tessref/capture.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
+#include "tessref/limits.h"
 #include "tessref/gl_backend.h"
 #include "tessref/mesh.h"
 #include "tessref/render.h"
@@ -364,6 +365,15 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     const fs::path dir = fs::path(options.golden_dir) / name;
     const GoldenCapture golden_capture = read_golden_capture(dir / "capture.txt");
     const glm::ivec2 size = parse_image_size(golden_capture.size, (dir / "capture.txt").string());
+    // The size comes from a file: the whole verification's memory at that size is asked for
+    // before anything is drawn (limits.h). Held at once: the CPU render, the golden, CPU and
+    // GL pictures as floats with their codes (20 bytes a pixel each), the GL colour in the
+    // child, on the pipe and in the parent (16 bytes a pixel each), the failing-pixel mask.
+    const std::uint64_t pixels = static_cast<std::uint64_t>(size.x) * static_cast<std::uint64_t>(size.y);
+    require_memory(estimate_render_memory(size, RenderMode::fill, false, ImageFormat::png, {}) +
+                       saturating_bytes(pixels, 3 * 20 + 3 * 16 + 1),
+                   "verifying a golden image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
+                   Where::in_file((dir / "capture.txt").string()));
     const std::string golden_mesh = read_golden_mesh_sha(dir / "mesh.txt");
     const FloatImage golden_image = read_float_image((dir / "image.png").string());
 

@@ -33,8 +33,13 @@ void remember(const struct stat& st, const std::string& path) {
 
 std::string lookup(const struct stat& st) {
     const std::lock_guard<std::mutex> lock(g_inputs_mutex);
-    for (const KnownInput& k : g_inputs)
-        if (k.device == st.st_dev && k.inode == st.st_ino) return k.path;
+    for (const KnownInput& k : g_inputs) {
+        if (k.device != st.st_dev || k.inode != st.st_ino) continue;
+        // Still that file: an input deleted since (a temporary picture read back) may have
+        // left its inode number to a new file, which is no input.
+        struct stat now {};
+        if (::stat(k.path.c_str(), &now) == 0 && now.st_dev == k.device && now.st_ino == k.inode) return k.path;
+    }
     return {};
 }
 

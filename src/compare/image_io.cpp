@@ -23,20 +23,32 @@ void codes_to_float(const std::vector<Code>& codes, double max, std::vector<floa
     for (std::size_t i = 0; i < codes.size(); ++i) out[i] = static_cast<float>(static_cast<double>(codes[i]) / max);
 }
 
+// The bytes of a float picture read from a file with this header: the floats plus, for an
+// integer file, its codes (at most 2 bytes each) read first.
+std::uint64_t bytes_of(const image::ImageHeader& spec) {
+    const std::uint64_t count = saturating_bytes(
+        saturating_bytes(static_cast<std::uint64_t>(spec.width), static_cast<std::uint64_t>(spec.height)),
+        static_cast<std::uint64_t>(spec.channels));
+    const std::uint64_t code_bytes = spec.type == image::SampleType::uint8    ? 1
+                                     : spec.type == image::SampleType::uint16 ? 2
+                                                                              : 0;
+    return saturating_bytes(count, 4 + code_bytes);
+}
+
 }  // namespace
+
+std::uint64_t float_image_memory(const std::string& path, int* width, int* height) {
+    const image::ImageHeader spec = image::read_image_header(path, "image");
+    if (width) *width = spec.width;
+    if (height) *height = spec.height;
+    return bytes_of(spec);
+}
 
 FloatImage read_float_image(const std::string& path) {
     image::ReadOptions options;
     options.kind = "image";
     options.check_header = [&](const image::ImageHeader& spec) {
-        const std::uint64_t count = saturating_bytes(
-            saturating_bytes(static_cast<std::uint64_t>(spec.width), static_cast<std::uint64_t>(spec.height)),
-            static_cast<std::uint64_t>(spec.channels));
-        // The floats plus, for an integer file, its codes (at most 2 bytes each) read first.
-        const std::uint64_t code_bytes = spec.type == image::SampleType::uint8    ? 1
-                                         : spec.type == image::SampleType::uint16 ? 2
-                                                                                  : 0;
-        require_memory(saturating_bytes(count, 4 + code_bytes),
+        require_memory(bytes_of(spec),
                        "image of " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " pixels, " +
                            std::to_string(spec.channels) + " channels",
                        Where::in_file(path));

@@ -1231,7 +1231,9 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
     for (const StageShader& s : user_shaders(scene_in, options)) (void)user_stage(s);
     const std::string answer = run_isolated(kIsolatedWhat, [&] {
         set_isolated_phase("creating the OSMesa context");
-        Context context = Context::create();
+        // Never destroyed: the child exits when it has answered, and a driver's teardown
+        // is one more place to crash after the work is done.
+        Context& context = *new Context(Context::create());
         SceneRender r = render_scene(context, scene_in, options);
         set_isolated_phase("sending the picture back");
         std::string out;
@@ -1264,7 +1266,7 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
 std::string renderer_isolated() {
     return run_isolated(kIsolatedWhat, [] {
         set_isolated_phase("creating the OSMesa context");
-        return Context::create().renderer();
+        return (new Context(Context::create()))->renderer();  // never destroyed, as above
     });
 }
 

@@ -178,6 +178,22 @@ Image read_image(const std::string& path, const ReadOptions& options) {
                                        "JPEG 2000, WebP, TGA by its .tga name)");
 }
 
+ImageHeader read_image_header(const std::string& path, const std::string& kind) {
+    // read_image() stops at check_header, before any pixel is allocated.
+    struct HeaderOnly {
+        ImageHeader header;
+    };
+    ReadOptions options;
+    options.kind = kind;
+    options.check_header = [](const ImageHeader& header) { throw HeaderOnly{header}; };
+    try {
+        (void)read_image(path, options);
+    } catch (const HeaderOnly& h) {
+        return h.header;
+    }
+    fail(path, "cannot read " + kind + ": no header");
+}
+
 void write_image(const std::string& path, const ImageView& image, const WriteOptions& options) {
     if (lower_extension(path) == ".png") {
         detail::write_png(path, image, options);

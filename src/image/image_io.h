@@ -59,6 +59,10 @@ struct ReadOptions {
 // refused before it is opened, as is an empty file.
 Image read_image(const std::string& path, const ReadOptions& options = {});
 
+// The header alone (the checks of read_image, no pixels read): for a command that adds up
+// what its inputs will cost before it reads any of them.
+ImageHeader read_image_header(const std::string& path, const std::string& kind);
+
 // An image to write: height rows of width * channels samples, top row first.
 struct ImageView {
     int width = 0;
