@@ -626,6 +626,8 @@ TEST_F(GlUserShaders, UniformOfAnotherTypeIsExit2NamingIt) {
     EXPECT_EQ(r.status, 2) << r.out << r.err;
     EXPECT_NE(r.err.find("the uniform shininess is declared with a type other than float"), std::string::npos)
         << r.err;
+    // And the file and line that declare it.
+    EXPECT_NE(r.err.find("wrong_uniform_type.frag:6)"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));
 }
 

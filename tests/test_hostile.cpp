@@ -162,6 +162,20 @@ TEST_F(Hostile, NulByteInAShaderIsRefusedNotTruncated) {
     EXPECT_TRUE(contains(r.err, "nul.frag:4")) << r.err;
 }
 
+// The messages of a user's shader that GL refuses at the draw name the file.
+TEST_F(Hostile, IsolinesEvaluationShaderErrorNamesTheFile) {
+    std::string tese = read_file(std::string(TESSREF_SOURCE_DIR) + "/tests/data/gl/raised.tese");
+    const std::size_t at = tese.find("layout(quads,");
+    ASSERT_NE(at, std::string::npos);
+    tese.replace(at, 13, "layout(isolines,");
+    write_file(dir_ / "lines.tese", tese);
+    const auto r = tessref({"gl", kScene, "-o", "x.png", "--size", "64x40", "--shader", "tese=lines.tese"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_TRUE(contains(r.err, "GL_INVALID_OPERATION")) << r.err;
+    EXPECT_TRUE(contains(r.err, "lines.tese")) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
 // ---- 2. every text input: regular files only, a size cap ---------------------------------
 
 TEST_F(Hostile, FifoAndDeviceAsSceneAreRefusedAtOnce) {

@@ -441,12 +441,26 @@ std::string capture_note(const Plan& plan) {
 struct Uniforms {
     GlFunctions& gl;
     GLuint program;
+    const std::vector<StageSource>* stages = nullptr;  // to name the user's file that declares it
     GLint at(const char* name) const { return gl.GetUniformLocation(program, name); }
     void check(const char* name, const char* type) const {
         if (gl.GetError() != GL_NO_ERROR)
             throw Error(std::string("the uniform ") + name + " is declared with a type other than " + type +
-                        ", the GLSL twins' (the twins' uniform names and types are the contract of a user's "
-                        "shader: README, `gl`)");
+                            ", the GLSL twins' (the twins' uniform names and types are the contract of a user's "
+                            "shader: README, `gl`)",
+                        declared_at(name));
+    }
+    // The user's file (and line) whose text declares `uniform <type> name`, where one does.
+    Where declared_at(const char* name) const {
+        if (!stages) return {};
+        const std::regex declaration("\\buniform\\s+\\w+\\s+" + std::string(name) + "\\b");
+        for (const StageSource& s : *stages) {
+            std::smatch match;
+            if (s.origin.empty() || !std::regex_search(s.text, match, declaration)) continue;
+            const auto line = std::count(s.text.begin(), s.text.begin() + match.position(0), '\n') + 1;
+            return Where::in_file(s.path, static_cast<std::size_t>(line));
+        }
+        return {};
     }
     void i(const char* name, int v) const {
         gl.Uniform1i(at(name), v);
@@ -626,10 +640,10 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
 }
 
 void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const RenderShading& shading,
-                  const Matrices& m, glm::ivec2 viewport) {
+                  const Matrices& m, glm::ivec2 viewport, const std::vector<StageSource>& stages) {
     gl.UseProgram(program);
     if (gl.GetError() != GL_NO_ERROR) throw Error("OpenGL refused to use the scene's program");
-    const Uniforms u{gl, program};
+    const Uniforms u{gl, program, &stages};
     switch (scene.evaluation.model) {
         case EvaluationModel::thesis: thesis_uniforms(u, scene, m); break;
         case EvaluationModel::cosc422: cosc422_uniforms(u, scene, m); break;
@@ -1029,7 +1043,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
 
     // ---- the picture --------------------------------------------------------------------
     start = Clock::now();
-    set_uniforms(gl, program, scene, result.shading, m, size);
+    set_uniforms(gl, program, scene, result.shading, m, size, plan.stages);
     gl.Viewport(0, 0, size.x, size.y);
     const glm::vec4 bg = result.shading.background;
     gl.ClearColor(bg.r, bg.g, bg.b, bg.a);
@@ -1086,7 +1100,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
                                      "tessref_cap_normal", "tessref_cap_outer", "tessref_cap_inner"},
                                     "the --capture program" + capture_note(plan)));
     const GLuint capture_program = objects.programs.back();
-    set_uniforms(gl, capture_program, scene, result.shading, m, size);
+    set_uniforms(gl, capture_program, scene, result.shading, m, size, plan.stages);
     if (plan.identity_mvp_for_capture) Uniforms{gl, capture_program}.m4("mvp", glm::mat4(1.0f));
     std::uint64_t largest = 0;
     for (std::size_t k = 0; k < batches.size(); ++k) largest = std::max<std::uint64_t>(largest, predicted_of(k));
