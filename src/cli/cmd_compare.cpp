@@ -358,7 +358,11 @@ int run_compare(const CompareCommandOptions& options) {
     note_input(options.reference);
     note_input(options.test);
     std::optional<AtomicOutput> output;
-    if (!options.diff.empty()) output.emplace(options.diff);
+    try {
+        if (!options.diff.empty()) output.emplace(options.diff);
+    } catch (const Error& e) {
+        throw Error(e.what(), Where::in_file("--diff"));  // the flag that named it
+    }
 
     // The whole command's memory, from the two headers, before any pixel is read (each
     // image alone may fit where both, the failing-pixel mask and the diff do not).
