@@ -212,7 +212,7 @@ SceneRender render_scene(Context& context, const Scene& scene, const SceneRender
 // render_scene() as `tessref gl` and `tessref golden verify` run it: the CPU pipeline here,
 // the context and every GL call in a child process with its own memory and time limits
 // (src/common/isolated.h: the memory budget of --max-memory / TESSREF_MAX_MEMORY, and
-// TESSREF_GL_TIME_LIMIT seconds, default 300), so that a user's shader that exhausts
+// TESSREF_GL_TIME_LIMIT seconds, default 600), so that a user's shader that exhausts
 // memory, loops or crashes the driver is an Error naming the shader and the stage, never
 // the end of tessref. SceneRender::pipeline is the pipeline run here.
 struct IsolatedRender {

@@ -138,7 +138,7 @@ const char* signal_text(int s) {
 
 double isolation_time_limit() {
     const char* env = std::getenv("TESSREF_GL_TIME_LIMIT");
-    if (!env || !*env) return 300.0;
+    if (!env || !*env) return 600.0;
     char* end = nullptr;
     const double seconds = std::strtod(env, &end);
     if (end == env || *end != '\0' || !std::isfinite(seconds) || seconds <= 0.0 || seconds > 1e6)
