@@ -34,6 +34,7 @@
 #include "tessref/capture.h"
 #include "tessref/gl_backend.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 
 namespace {
 

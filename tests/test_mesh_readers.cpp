@@ -27,6 +27,7 @@
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 namespace fs = std::filesystem;

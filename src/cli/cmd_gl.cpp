@@ -24,6 +24,7 @@
 #include "tessref/gl_backend.h"
 #include "tessref/limits.h"
 #include "tessref/mesh.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 

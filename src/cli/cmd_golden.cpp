@@ -49,6 +49,7 @@
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 #include "tessref/mesh.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/pipeline.h"
 

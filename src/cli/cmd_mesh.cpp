@@ -29,6 +29,7 @@
 #include "tessref/error.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/solid.h"
 #include "tessref/tessellator.h"
 
