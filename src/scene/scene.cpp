@@ -12,7 +12,7 @@
 #include "mesh/openmesh.h"
 #include "scene/shading_load.h"
 #include "scene/toml_reader.h"
-#include "tessref/check.h"
+#include "tessref/mesh_io.h"
 #include "tessref/scene.h"
 
 namespace tessref {
@@ -384,8 +384,8 @@ struct Loader {
     bool read_one_mesh(const TableReader& t, const std::string& path, const glm::dvec3& translate, double scale,
                        TriangleMeshes& out) {
         std::error_code ec;
-        if (!fs::is_regular_file(path, ec))
-            throw Error("cannot read mesh " + path + ": no such file", t.where("path"));
+        // Anything else that is not a mesh file (a directory, a FIFO) the reader names.
+        if (!fs::exists(path, ec)) throw Error("cannot read mesh " + path + ": no such file", t.where("path"));
         // The reader `tessref check` uses (it refuses hostile files, naming line or byte).
         IndexedMesh file;
         try {
