@@ -48,9 +48,10 @@
 #include "tessref/capture.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
+#include "tessref/gl_render.h"
 #include "tessref/limits.h"
-#include "tessref/gl_backend.h"
 #include "tessref/mesh.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/pipeline.h"
 
