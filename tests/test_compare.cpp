@@ -94,10 +94,10 @@ std::vector<std::uint8_t> rule_failing(const FloatImage& ref, const FloatImage& 
     return failing;
 }
 
-// The neighbourhood search (compare.cpp searches sorted rows once the neighbourhood is wide)
-// gives THE RULE's verdict for every pixel: random images of few levels (so that matches
-// near and far both happen), NaN and infinities among them, every deviation from 0 to 20
-// (both sides of the indexed width), thresholds 0, between the levels and on them.
+// compare_images gives THE RULE's verdict for every pixel (a property that any faster search
+// must keep): random images of few levels (so that matches near and far both happen), NaN
+// and infinities among them, every deviation up to the bound, thresholds 0, between the
+// levels, on them and infinite.
 TEST(CompareImages, TheNeighbourhoodSearchGivesTheBruteForceVerdicts) {
     std::uint32_t state = 12345;
     const auto next = [&] { return state = state * 1664525u + 1013904223u; };
@@ -119,7 +119,7 @@ TEST(CompareImages, TheNeighbourhoodSearchGivesTheBruteForceVerdicts) {
                 if (next() % 4 != 0 && x + dx >= 0 && x + dx < width && y + dy >= 0 && y + dy < height)
                     for (int c = 0; c < channels; ++c) b.samples[b.index(x, y, c)] = a.at(x + dx, y + dy, c);
         const double thresholds[] = {0.0, 0.5 / levels, 1.0 / levels, std::numeric_limits<double>::infinity()};
-        const int deviation = static_cast<int>(next() % 21);
+        const int deviation = static_cast<int>(next() % (tessref::kMaxPositionDeviation + 1));
         const double t = thresholds[next() % 4];
         const CompareResult r = compare(a, b, deviation, t);
         ASSERT_EQ(r.failing, rule_failing(a, b, deviation, t))
@@ -129,8 +129,8 @@ TEST(CompareImages, TheNeighbourhoodSearchGivesTheBruteForceVerdicts) {
     EXPECT_EQ(cases, 60);
 }
 
-// The deviation is bounded (compare.h kMaxPositionDeviation): 2^31 - 1 was accepted and
-// cost O(pixels * PX^2).
+// The deviation is bounded (compare.h kMaxPositionDeviation, 16): 2^31 - 1 was accepted and
+// the search costs O(pixels * PX^2).
 TEST(CompareImages, APositionDeviationAboveTheBoundIsRefused) {
     const FloatImage a = filled(4, 4, 1, 0.0f);
     EXPECT_NO_THROW(compare(a, a, tessref::kMaxPositionDeviation));
@@ -518,7 +518,7 @@ TEST_F(CompareFiles, BadFlagsExit2BeforeReading) {
          {std::vector<std::string>{"--threshold", "-0.1"}, std::vector<std::string>{"--threshold", "nan"},
           std::vector<std::string>{"--threshold", "x"}, std::vector<std::string>{"--max-position-deviation", "-1"},
           std::vector<std::string>{"--max-position-deviation", "1.5"},
-          std::vector<std::string>{"--max-position-deviation", "65"},
+          std::vector<std::string>{"--max-position-deviation", "17"},
           std::vector<std::string>{"--max-position-deviation", "2147483647"},
           std::vector<std::string>{"--max-failing-pixels", "-3"}, std::vector<std::string>{"--diff", "diff.nope"}}) {
         const RunResult r = run({"compare", path("none1.png"), path("none2.png"), flag[0], flag[1]});

@@ -408,7 +408,7 @@ Command add_compare_command(CLI::App& parent) {
         ->required();
     app->add_option("test", options->test, "The image or capture to check against it")->required();
     app->add_option("--max-position-deviation", options->max_position_deviation,
-                    "How far, in pixels (x and y), a matching pixel may lie (0..64): the neighbourhood is (2*PX+1)^2 pixels")
+                    "How far, in pixels (x and y), a matching pixel may lie (0..16): the neighbourhood is (2*PX+1)^2 pixels")
         ->type_name("PX")
         ->default_str("0");
     app->add_option("--threshold", options->threshold,

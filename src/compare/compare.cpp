@@ -4,15 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <string>
-#include <utility>
-#include <vector>
 
 #include "common/parallel.h"
 
 #include "tessref/error.h"
-#include "tessref/limits.h"
 
 namespace tessref {
 
@@ -27,123 +23,33 @@ double sample_difference(float a, float b) {
     return std::abs(static_cast<double>(a) - static_cast<double>(b));
 }
 
-bool match(const FloatImage& p_image, int px, int py, const FloatImage& q_image, int qx, int qy,
-           const std::vector<int>& channels, double threshold) {
-    for (const int c : channels)
-        if (!(sample_difference(p_image.at(px, py, c), q_image.at(qx, qy, c)) <= threshold)) return false;
-    return true;
-}
-
-// The pixels of every row of one image sorted by each compared channel's value (NaN last),
-// so that the pixels of a row that can match a given sample in that channel are one run,
-// found by two binary searches. The neighbourhood search then walks, per row of the
-// neighbourhood, the shortest of those runs, or the row's 2*PX+1 pixels when that is
-// shorter: where colours vary (noise, texture) a run holds a few pixels, where they do not
-// (a flat background) the first pixel looked at matches. Brute force costs (2*PX+1)^2
-// matches per failing pixel; this, about (2*PX+1) * (C log W + run), the same verdicts.
-class RowIndex {
-public:
-    struct Entry {
-        float value;
-        std::int32_t x;
-    };
-
-    RowIndex(const FloatImage& image, const std::vector<int>& channels)
-        : width_(image.width), channels_(channels.size()) {
-        entries_.resize(static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * channels_);
-        tessref::parallel_for(tbb::blocked_range<int>(0, image.height), [&](const tbb::blocked_range<int>& range) {
-            for (int y = range.begin(); y < range.end(); ++y)
-                for (std::size_t k = 0; k < channels_; ++k) {
-                    Entry* row = entries_.data() + offset(k, y);
-                    for (int x = 0; x < width_; ++x) row[x] = {image.at(x, y, channels[k]), x};
-                    std::sort(row, row + width_, [](const Entry& a, const Entry& b) {
-                        const bool a_nan = std::isnan(a.value), b_nan = std::isnan(b.value);
-                        if (a_nan != b_nan) return b_nan;
-                        return !a_nan && a.value < b.value;
-                    });
-                }
-        });
-    }
-
-    // The run of row y's pixels whose channel k matches `sample` (sample_difference <= t).
-    std::pair<const Entry*, const Entry*> run(std::size_t k, int y, float sample, double threshold) const {
-        const Entry* first = entries_.data() + offset(k, y);
-        const Entry* numbers_end = std::partition_point(first, first + width_, [](const Entry& e) { return !std::isnan(e.value); });
-        if (std::isnan(sample)) return {numbers_end, first + width_};  // a NaN matches NaN only
-        // Along the sorted numbers, |sample - q| in double (sample_difference) falls and then
-        // rises: "too small" is a prefix and "too large" a suffix, whatever the infinities.
-        const double p = sample;
-        const Entry* lo = std::partition_point(first, numbers_end, [&](const Entry& e) {
-            return e.value < sample && p - static_cast<double>(e.value) > threshold;
-        });
-        const Entry* hi = std::partition_point(lo, numbers_end, [&](const Entry& e) {
-            return !(e.value > sample && static_cast<double>(e.value) - p > threshold);
-        });
-        return {lo, hi};
-    }
-
-private:
-    std::size_t offset(std::size_t k, int y) const {
-        return (static_cast<std::size_t>(y) * channels_ + k) * static_cast<std::size_t>(width_);
-    }
-
-    int width_;
-    std::size_t channels_;
-    std::vector<Entry> entries_;  // per row, per channel: width_ entries
-};
-
-// Below this neighbourhood width a row is scanned directly: the binary searches would cost
-// more than the pixels.
-constexpr int kIndexedWidth = 17;
-
 struct Matcher {
     const FloatImage& reference;
     const FloatImage& test;
     const std::vector<int>& channels;
     double threshold;
     int deviation;
-    const RowIndex* reference_index = nullptr;  // set when 2*deviation+1 >= kIndexedWidth
-    const RowIndex* test_index = nullptr;
+
+    bool match(const FloatImage& p_image, int px, int py, const FloatImage& q_image, int qx, int qy) const {
+        for (const int c : channels)
+            if (!(sample_difference(p_image.at(px, py, c), q_image.at(qx, qy, c)) <= threshold)) return false;
+        return true;
+    }
 
     // Some pixel of `q_image` in N(x, y) matches p_image(x, y).
-    bool found_near(const FloatImage& p_image, const FloatImage& q_image, const RowIndex* q_index, int x, int y) const {
+    bool found_near(const FloatImage& p_image, const FloatImage& q_image, int x, int y) const {
         const int y0 = std::max(0, y - deviation), y1 = std::min(p_image.height - 1, y + deviation);
         const int x0 = std::max(0, x - deviation), x1 = std::min(p_image.width - 1, x + deviation);
-        for (int sy = y0; sy <= y1; ++sy) {
-            if (q_index) {
-                // The shortest run of this row's pixels that match in one channel; an empty
-                // one rules the row out.
-                std::size_t shortest = static_cast<std::size_t>(x1 - x0 + 1);
-                const RowIndex::Entry *first = nullptr, *last = nullptr;
-                bool empty = false;
-                for (std::size_t k = 0; k < channels.size() && !empty; ++k) {
-                    const auto [lo, hi] = q_index->run(k, sy, p_image.at(x, y, channels[k]), threshold);
-                    const auto length = static_cast<std::size_t>(hi - lo);
-                    empty = length == 0;
-                    if (length < shortest) {
-                        shortest = length;
-                        first = lo;
-                        last = hi;
-                    }
-                }
-                if (empty) continue;
-                if (first) {
-                    for (const RowIndex::Entry* e = first; e != last; ++e)
-                        if (e->x >= x0 && e->x <= x1 && match(p_image, x, y, q_image, e->x, sy, channels, threshold))
-                            return true;
-                    continue;
-                }
-            }
+        for (int sy = y0; sy <= y1; ++sy)
             for (int sx = x0; sx <= x1; ++sx)
-                if (match(p_image, x, y, q_image, sx, sy, channels, threshold)) return true;
-        }
+                if (match(p_image, x, y, q_image, sx, sy)) return true;
         return false;
     }
 
     bool passes(int x, int y) const {
-        if (match(reference, x, y, test, x, y, channels, threshold)) return true;
+        if (match(reference, x, y, test, x, y)) return true;
         if (deviation == 0) return false;
-        return found_near(reference, test, test_index, x, y) && found_near(test, reference, reference_index, x, y);
+        return found_near(reference, test, x, y) && found_near(test, reference, x, y);
     }
 };
 
@@ -184,18 +90,7 @@ CompareResult compare_images(const FloatImage& reference, const FloatImage& test
     std::vector<double> row_channel_max(rows * channel_count, 0.0);
     // Past the image's size, a larger deviation only repeats the clamp.
     const int deviation = std::min(options.max_position_deviation, std::max(reference.width, reference.height));
-    Matcher matcher{reference, test, result.compared_channels, options.threshold, deviation};
-    std::optional<RowIndex> reference_index, test_index;
-    if (2 * deviation + 1 >= kIndexedWidth && channel_count > 0) {
-        require_memory(saturating_bytes(saturating_bytes(result.pixels, channel_count), 2 * sizeof(RowIndex::Entry)),
-                       "the position-deviation search of two " + std::to_string(reference.width) + "x" +
-                           std::to_string(reference.height) + " images",
-                       Where::at_key("--max-position-deviation"));
-        reference_index.emplace(reference, result.compared_channels);
-        test_index.emplace(test, result.compared_channels);
-        matcher.reference_index = &*reference_index;
-        matcher.test_index = &*test_index;
-    }
+    const Matcher matcher{reference, test, result.compared_channels, options.threshold, deviation};
 
     tessref::parallel_for(tbb::blocked_range<int>(0, reference.height), [&](const tbb::blocked_range<int>& range) {
         for (int y = range.begin(); y < range.end(); ++y) {
