@@ -102,7 +102,7 @@ GoldenCapture parse_golden_capture(std::string_view text, const std::string& pat
             have_capture = true;
         } else if (w[0] == "patch") {
             if (!have_capture) bad("a `patch` line before the `capture` line");
-            if (w.size() != 14 || w[2] != "levels" || w[9] != "triangles" || w[11] != "sha256")
+            if (w.size() != 13 || w[2] != "levels" || w[9] != "triangles" || w[11] != "sha256")
                 bad("expected `patch ID levels L1 L2 L3 L4 L5 L6 triangles N sha256 H`");
             const auto id = count_of(w[1]), triangles = count_of(w[10]);
             if (!id || *id > std::numeric_limits<std::uint32_t>::max()) bad("the patch id is not a 32-bit whole number");
@@ -111,12 +111,12 @@ GoldenCapture parse_golden_capture(std::string_view text, const std::string& pat
                 if (!level || !std::isfinite(*level)) bad("level " + std::to_string(k - 2) + " is not a finite number");
             }
             if (!triangles) bad("the triangle count is not a whole number");
-            if (!is_hex_digest(w[13], kGoldenPatchDigits))
+            if (!is_hex_digest(w[12], kGoldenPatchDigits))
                 bad("the sha256 is not " + std::to_string(kGoldenPatchDigits) + " lower-case hex digits");
             ++patch_lines;
             patch_triangles += *triangles;
             if (patch_lines > g.patches) bad("more `patch` lines than the `capture` line's " + std::to_string(g.patches));
-            g.patch_sha256[static_cast<std::uint32_t>(*id)] = std::string(w[13]);
+            g.patch_sha256[static_cast<std::uint32_t>(*id)] = std::string(w[12]);
         } else {
             bad("unknown line");
         }
