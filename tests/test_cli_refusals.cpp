@@ -45,7 +45,11 @@ protected:
         fs::remove(err);
         return r;
     }
-    // Two 4x3 RGBA PNGs through `tessref render`, small and quick: the same scene twice.
+    // tessref ARGS run inside the test's directory (relative names are its files).
+    RunResult run(const std::vector<std::string>& args) {
+        return tessref::test::run_program(TESSREF_EXE, args, dir_, dir_);
+    }
+    // Two 8x6 RGBA PNGs through `tessref render`, small and quick: the same scene twice.
     void two_pngs(const std::string& a, const std::string& b) {
         ASSERT_EQ(run({"render", kScene, "-o", path(a), "--size", "8x6"}).status, 0);
         fs::copy_file(path(a), path(b));
