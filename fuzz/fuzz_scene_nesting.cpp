@@ -12,6 +12,7 @@
 #include <string>
 
 #include "fuzz_common.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 #ifndef TESSREF_FUZZ_SCENE_ENV
