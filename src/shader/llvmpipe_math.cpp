@@ -269,6 +269,39 @@ float atan2(float y, float x) {
     return olt(m, 0.0f) ? from_bits(bits(arc) ^ 0x80000000u) : arc;
 }
 
+// NIR's lowering of fdot (nir_lower_alu_width's reduction): the products from the last
+// component down, each added to the sum so far.
+float dot(const glm::vec2& a, const glm::vec2& b) { return add(mul(a.y, b.y), mul(a.x, b.x)); }
+float dot(const glm::vec3& a, const glm::vec3& b) {
+    return add(add(mul(a.z, b.z), mul(a.y, b.y)), mul(a.x, b.x));
+}
+float dot(const glm::vec4& a, const glm::vec4& b) {
+    return add(add(add(mul(a.w, b.w), mul(a.z, b.z)), mul(a.y, b.y)), mul(a.x, b.x));
+}
+// GLSL IR's length and distance: sqrt(dot(v, v)), of p0 - p1 for distance.
+float length(const glm::vec2& v) { return root(dot(v, v)); }
+float length(const glm::vec3& v) { return root(dot(v, v)); }
+float distance(const glm::vec3& a, const glm::vec3& b) {
+    return length(glm::vec3(sub(a.x, b.x), sub(a.y, b.y), sub(a.z, b.z)));
+}
+// GLSL IR's normalize: v * inversesqrt(dot(v, v)), the factor computed once.
+glm::vec3 normalize(const glm::vec3& v) {
+    const float f = inversesqrt(dot(v, v));
+    return glm::vec3(mul(v.x, f), mul(v.y, f), mul(v.z, f));
+}
+
+// GLSL IR's lowering of a matrix product to vector operations: column 0 times v.x, then
+// each further column times its component added in turn.
+glm::vec4 transform(const glm::mat4& m, const glm::vec4& v) {
+    glm::vec4 r;
+    for (int i = 0; i < 4; ++i) {
+        float sum = mul(m[0][i], v.x);
+        for (int c = 1; c < 4; ++c) sum = add(sum, mul(m[c][i], v[c]));
+        r[i] = sum;
+    }
+    return r;
+}
+
 // GLSL IR's hyperbolic functions, each exp and log as above.
 // sinh: 0.5 * (exp(x) - exp(-x)).
 float sinh(float x) { return mul(0.5f, sub(exp(x), exp(-x))); }

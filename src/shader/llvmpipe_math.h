@@ -31,6 +31,8 @@
 // every special value and tens of thousands of sampled floats.
 #pragma once
 
+#include <glm/glm.hpp>
+
 namespace tessref::llvmpipe_math {
 
 // The floating-point environment of llvmpipe's shaders: a denormal becomes a zero of its sign.
@@ -56,6 +58,21 @@ float asin(float x);
 float acos(float x);
 float atan(float y_over_x);
 float atan2(float y, float x);
+
+// The vector built-ins whose order of operations is not the obvious one: NIR splits a dot
+// product into its products and sums them from the last component to the first, so dot of
+// two vec3 is (a.z*b.z + a.y*b.y) + a.x*b.x (glm sums from the first). length is
+// sqrt(dot(v, v)), distance length(a - b), normalize v * inversesqrt(dot(v, v)).
+float dot(const glm::vec2& a, const glm::vec2& b);
+float dot(const glm::vec3& a, const glm::vec3& b);
+float dot(const glm::vec4& a, const glm::vec4& b);
+float length(const glm::vec2& v);
+float length(const glm::vec3& v);
+float distance(const glm::vec3& a, const glm::vec3& b);
+glm::vec3 normalize(const glm::vec3& v);
+// A matrix times a vector: the columns scaled by the vector's components and added from the
+// first, ((m[0] * v.x + m[1] * v.y) + m[2] * v.z) + m[3] * v.w (glm adds the pairs).
+glm::vec4 transform(const glm::mat4& m, const glm::vec4& v);
 
 float sinh(float x);
 float cosh(float x);
