@@ -14,8 +14,9 @@
 #include <vector>
 
 #include "tessref/error.h"
-#include "tessref/gl_backend.h"
+#include "tessref/gl_render.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 namespace {

@@ -5,7 +5,7 @@
 //              [--shader STAGE=FILE]... [--max-primitives-per-draw N]
 //
 // Exit 1 when a draw's GL_PRIMITIVES_GENERATED differs from the CPU primitive generator's
-// count (gl_backend.h): the image and the capture are written all the same, and the patches
+// count (gl_render.h): the image and the capture are written all the same, and the patches
 // whose levels or triangle counts differ are listed. TESSREF_GL_CORRUPT_BATCH=N (a test hook)
 // makes the prediction of draw N one too high.
 #include <cstdio>
@@ -23,9 +23,10 @@
 #include "cli/commands.h"
 #include "tessref/capture.h"
 #include "tessref/error.h"
-#include "tessref/gl_backend.h"
+#include "tessref/gl_render.h"
 #include "tessref/limits.h"
 #include "tessref/mesh.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 

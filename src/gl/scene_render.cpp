@@ -1,4 +1,4 @@
-// A scene through its GLSL twins on llvmpipe (gl_backend.h, render_scene): `tessref gl`.
+// A scene through its GLSL twins on llvmpipe (gl_render.h, render_scene): `tessref gl`.
 //
 // Per draw: the patches' corners (terrain) or triangles (PN) -> the twins -> a float colour
 // buffer with a 24-bit depth buffer, depth LESS, as `tessref render` draws. Every draw's
@@ -19,7 +19,9 @@
 #include "gl/gl_api.h"
 #include "gl/program.h"
 #include "tessref/error.h"
+#include "tessref/gl_render.h"
 #include "tessref/limits.h"
+#include "tessref/pipeline.h"
 
 namespace tessref::gl {
 
