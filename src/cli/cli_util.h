@@ -79,6 +79,12 @@ std::string format_float_short(float x);
 // "%.17g" for doubles, same NaN/inf spelling.
 std::string format_double(double x);
 
+// `text` (a file name, a scene name) as valid UTF-8 for a JSON report: valid sequences as
+// they are, every byte that is not part of one as the four characters "\xNN" (NN its
+// value in hex), as Python's "backslashreplace" spells it. JSON strings must be UTF-8, and
+// a Linux file name is any bytes: nlohmann::json refuses to dump such a name.
+std::string utf8_for_json(std::string_view text);
+
 // ---------------------------------------------------------------------------------------
 // Output
 
@@ -86,7 +92,7 @@ std::string format_double(double x);
 // to the target (same directory, so the final rename never crosses file systems; same
 // extension as the name given, so writers that pick a codec by extension, such as
 // OpenImageIO, still work). Write to temp_path(), then commit() puts it in place. If
-// commit() is never reached (an exception, an early return, SIGINT/SIGTERM/SIGHUP once
+// commit() is never reached (an exception, an early return, a signal once
 // install_signal_cleanup() ran), the temporary file is removed and the target is left
 // exactly as it was.
 //
@@ -127,10 +133,9 @@ private:
     bool committed_ = false;
 };
 
-// Installs handlers for SIGINT, SIGTERM and SIGHUP (unless ignored, as under nohup) that
-// remove every live AtomicOutput temporary file, then die of the same signal with its
-// default action, so the exit status still says "killed by signal".
-void install_signal_cleanup();
+// install_signal_cleanup() (common/temp_cleanup.h) makes SIGINT, SIGTERM, SIGHUP, SIGQUIT
+// and SIGPIPE remove every live AtomicOutput temporary file before the signal kills the
+// process.
 
 // Writes `bytes` to `target` atomically, or to stdout when target is empty or "-".
 void write_output(const std::string& target, std::string_view bytes);
