@@ -1,0 +1,156 @@
+// Every GLSL twin proven against its hand-written C++ model: the twins of data/shaders/ run
+// through the SPIR-V interpreter (tessref/shader.h) with the uniforms and textures the GL
+// backend sets (src/gl/scene_render.cpp), patch by patch, and compared bit for bit with the
+// CPU pipeline's levels and evaluated positions in gpu precision.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tessref/pipeline.h"
+#include "tessref/scene.h"
+#include "tessref/shader.h"
+
+namespace tessref::shader {
+namespace {
+
+std::string scene_path(const std::string& name) { return std::string(TESSREF_DATA_DIR) + "/scenes/" + name + ".toml"; }
+
+Module twin(ShaderStage stage, const std::string& file) {
+    const std::string path = std::string(TESSREF_DATA_DIR) + "/shaders/" + file;
+    std::ifstream in(path);
+    std::ostringstream text;
+    text << in.rdbuf();
+    Source s;
+    s.stage = stage;
+    s.path = path;
+    s.text = text.str();
+    return Module::compile(s);
+}
+
+// thesis_uniforms and thesis_control_uniforms of the GL backend, with mvp the identity (as
+// its capture pass sets it, so that gl_Position.xyz is the world position).
+Bindings thesis_bindings(const Scene& scene) {
+    const TerrainGrid& g = *scene.grid;
+    Bindings b;
+    b.set("scaleXY", static_cast<float>(g.scale_xy));
+    b.set("scaleZ", static_cast<float>(g.scale_z));
+    b.set("mvp", glm::mat4(1.0f));
+    b.bind_texture(0, &g.heightmap->texture);
+    if (g.normal_map) b.bind_texture(2, g.normal_map.get());
+    if (scene.control && scene.control->model == ControlModel::thesis) {
+        const ThesisControlParams<double>& c = scene.control->thesis;
+        b.set("tessellationLevel", static_cast<float>(c.tessellationLevel));
+        b.set("cameraPosition", glm::vec3(scene.camera->eye));
+        b.set("thesisFactor", static_cast<int>(c.factor));
+        b.set("distanceLimit", static_cast<float>(c.distance.limit));
+        b.set("distanceDivisor", static_cast<float>(c.distance.divisor));
+        b.set("normalAngleThreshold", static_cast<float>(c.normalAngleThreshold));
+        b.set("normalTessellationWeight", static_cast<float>(c.weights.normal));
+        b.set("textureTessellationWeight", static_cast<float>(c.weights.texture));
+        b.set("distanceTessellationWeight", static_cast<float>(c.weights.distance));
+        b.set("constantTessellationWeight", static_cast<float>(c.weights.constant));
+        if (scene.control->tessellation_map) b.bind_texture(1, scene.control->tessellation_map.get());
+    }
+    return b;
+}
+
+// A terrain patch's four corners as the GL backend's vertex buffer holds them.
+std::vector<Slot> corners(const TerrainGrid& g, std::size_t p) {
+    const std::size_t i = p % static_cast<std::size_t>(g.patches_u), j = p / static_cast<std::size_t>(g.patches_u);
+    const std::size_t c[4][2] = {{i, j}, {i, j + 1}, {i + 1, j + 1}, {i + 1, j}};
+    std::vector<Slot> out;
+    for (const auto& k : c) {
+        const float u = static_cast<float>(g.u_coords[k[0]]), v = static_cast<float>(g.v_coords[k[1]]);
+        out.push_back(slot(g.plane == GroundPlane::xy ? glm::vec4(u, v, 0.0f, 1.0f) : glm::vec4(u, 0.0f, v, 1.0f)));
+    }
+    return out;
+}
+
+struct Counts {
+    std::size_t patches = 0, level_mismatches = 0, vertices = 0, position_mismatches = 0;
+    std::string first;
+};
+
+// The thesis twins against the thesis program: every patch's levels (when the scene's
+// control model is the thesis's), and the evaluation at every vertex of every
+// `stride`-th patch.
+Counts thesis_against_model(const std::string& name, std::size_t stride) {
+    const Scene scene = load_scene(scene_path(name));
+    const PipelineResult result = run_pipeline(scene);
+    const Bindings b = thesis_bindings(scene);
+    const Executable vert(twin(ShaderStage::vertex, "thesis_terrain.vert"), b, {});
+    const Executable tese(twin(ShaderStage::tess_evaluation, "thesis_terrain.tese"), b, {});
+    const bool thesis_control = scene.control && scene.control->model == ControlModel::thesis;
+    std::optional<Executable> tesc;
+    if (thesis_control) tesc.emplace(twin(ShaderStage::tess_control, "thesis_terrain.tesc"), b, RunOptions{});
+    const TerrainGrid& g = *scene.grid;
+    const SurfaceMesh& mesh = result.mesh;
+    std::vector<std::vector<std::uint32_t>> vertices_of(g.patch_count());
+    for (std::uint32_t v = 0; v < mesh.patch_ids.size(); ++v) vertices_of[mesh.patch_ids[v]].push_back(v);
+    Counts n;
+    for (std::size_t p = 0; p < g.patch_count(); ++p) {
+        const std::vector<Slot> c = corners(g, p);
+        std::vector<ShaderVertex> shaded;
+        for (int k = 0; k < 4; ++k) shaded.push_back(vert.vertex(std::span<const Slot>(&c[static_cast<std::size_t>(k)], 1), k));
+        ShaderPatch patch;
+        if (tesc) {
+            patch = tesc->control(shaded, static_cast<long long>(p));
+            ++n.patches;
+            const TessLevels& l = result.levels[p];
+            const bool same = std::bit_cast<std::array<std::uint32_t, 4>>(patch.outer) ==
+                                  std::bit_cast<std::array<std::uint32_t, 4>>(l.outer) &&
+                              std::bit_cast<std::array<std::uint32_t, 2>>(patch.inner) ==
+                                  std::bit_cast<std::array<std::uint32_t, 2>>(l.inner);
+            if (!same) {
+                ++n.level_mismatches;
+                if (n.first.empty())
+                    n.first = "patch " + std::to_string(p) + " outer[0] interpreter " + std::to_string(patch.outer[0]) +
+                              " model " + std::to_string(l.outer[0]);
+            }
+        } else {
+            patch.vertices = shaded;  // the constant control shader passes the positions through
+        }
+        if (p % stride != 0) continue;
+        for (std::uint32_t v : vertices_of[p]) {
+            const ShaderVertex out = tese.evaluate(patch, mesh.tess_coords[v], static_cast<long long>(p));
+            ++n.vertices;
+            const glm::vec3 model(mesh.positions[v]);
+            if (std::bit_cast<std::array<std::uint32_t, 3>>(glm::vec3(out.position)) !=
+                std::bit_cast<std::array<std::uint32_t, 3>>(model)) {
+                ++n.position_mismatches;
+                if (n.first.empty())
+                    n.first = "patch " + std::to_string(p) + " vertex " + std::to_string(v) + " z interpreter " +
+                              std::to_string(out.position.z) + " model " + std::to_string(model.z);
+            }
+        }
+    }
+    return n;
+}
+
+TEST(ThesisTwins, DistanceFactorLevelsAndEvaluationAreTheModels) {
+    const Counts n = thesis_against_model("thesis-distance-4", 7);
+    EXPECT_GT(n.patches, 0u);
+    EXPECT_GT(n.vertices, 0u);
+    EXPECT_EQ(n.level_mismatches, 0u) << n.first;
+    EXPECT_EQ(n.position_mismatches, 0u) << n.first;
+}
+
+TEST(ThesisTwins, MapFactorLevelsAndEvaluationAreTheModels) {
+    const Counts n = thesis_against_model("thesis-map-4", 7);
+    EXPECT_GT(n.patches, 0u);
+    EXPECT_EQ(n.level_mismatches, 0u) << n.first;
+    EXPECT_EQ(n.position_mismatches, 0u) << n.first;
+}
+
+TEST(ThesisTwins, ConstantLevelEvaluationIsTheModels) {
+    const Counts n = thesis_against_model("thesis-constant-64", 17);
+    EXPECT_GT(n.vertices, 0u);
+    EXPECT_EQ(n.position_mismatches, 0u) << n.first;
+}
+
+}  // namespace
+}  // namespace tessref::shader
