@@ -131,25 +131,45 @@ Counts thesis_against_model(const std::string& name, std::size_t stride) {
     return n;
 }
 
+// Levels: the thesis control shader against thesis_levels on every patch, for the factors
+// that call no GLSL.std.450 function whose exact result the model rounds otherwise
+// (distance: sqrt; map: texture). Evaluation: every vertex of every 7th patch.
 TEST(ThesisTwins, DistanceFactorLevelsAndEvaluationAreTheModels) {
     const Counts n = thesis_against_model("thesis-distance-4", 7);
-    EXPECT_GT(n.patches, 0u);
-    EXPECT_GT(n.vertices, 0u);
+    EXPECT_EQ(n.patches, 256u);
+    EXPECT_GT(n.vertices, 300u);
     EXPECT_EQ(n.level_mismatches, 0u) << n.first;
     EXPECT_EQ(n.position_mismatches, 0u) << n.first;
 }
 
 TEST(ThesisTwins, MapFactorLevelsAndEvaluationAreTheModels) {
-    const Counts n = thesis_against_model("thesis-map-4", 7);
-    EXPECT_GT(n.patches, 0u);
-    EXPECT_EQ(n.level_mismatches, 0u) << n.first;
-    EXPECT_EQ(n.position_mismatches, 0u) << n.first;
+    for (const char* name : {"thesis-map-4", "thesis-map-18"}) {
+        const Counts n = thesis_against_model(name, 7);
+        EXPECT_EQ(n.patches, 256u) << name;
+        EXPECT_GT(n.vertices, 150u) << name;
+        EXPECT_EQ(n.level_mismatches, 0u) << name << ": " << n.first;
+        EXPECT_EQ(n.position_mismatches, 0u) << name << ": " << n.first;
+    }
 }
 
 TEST(ThesisTwins, ConstantLevelEvaluationIsTheModels) {
     const Counts n = thesis_against_model("thesis-constant-64", 17);
-    EXPECT_GT(n.vertices, 0u);
+    EXPECT_GT(n.vertices, 10000u);
     EXPECT_EQ(n.position_mismatches, 0u) << n.first;
+}
+
+// The real height maps, whose extents are not multiples of the patch size: there the form
+// of mix() shows (x * (1 - a) + y * a instead of x + a * (y - x) moves 1379 of these
+// jacksboro vertices). Their control stage uses the normal factor, whose acos and
+// normalize the model computes with the C library's acosf and 1 / sqrt (two roundings),
+// not correctly rounded as the exact mode does: the levels are compared in the llvmpipe
+// mode, not here.
+TEST(ThesisTwins, RealHeightMapEvaluationIsTheModels) {
+    for (const char* name : {"jacksboro", "olinda"}) {
+        const Counts n = thesis_against_model(name, 5);
+        EXPECT_GT(n.vertices, 500u) << name;
+        EXPECT_EQ(n.position_mismatches, 0u) << name << ": " << n.first;
+    }
 }
 
 }  // namespace

@@ -23,6 +23,7 @@
 //   - float -> integer conversion of NaN or of a value out of range: 0 for NaN, else
 //     saturated to the integer type's range;
 //   - an array or vector index out of range is clamped into the range.
+// A sampler whose unit has no texture reads (0, 0, 0, 1), as GL's incomplete texture does.
 // GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it; a matrix times a vector
 // sums the columns' products from the first column on: ((c0 v.x + c1 v.y) + c2 v.z) + c3 v.w.
 //

@@ -584,10 +584,12 @@ Invocation::Status Invocation::run(ExecContext& c) {
             case spv::OpImageSampleExplicitLod: {
                 const std::uint32_t unit = *R(a[2]);
                 const Texture* texture = unit < c.units.size() ? c.units[unit] : nullptr;
-                if (!texture)
-                    throw Error("no texture is bound to unit " + std::to_string(unit) + " (layout(binding = " +
-                                    std::to_string(unit) + "), " + c.who + ")",
-                                m.where(in));
+                std::uint32_t* out = R(a[1]);
+                if (!texture) {  // no texture at the unit: GL's incomplete texture reads (0, 0, 0, 1)
+                    out[0] = out[1] = out[2] = 0;
+                    out[3] = w(1.0f);
+                    break;
+                }
                 const std::uint32_t* st = R(a[3]);
                 const glm::vec2 coordinate(f(st[0]), f(st[1]));
                 float lod = 0.0f;
@@ -600,7 +602,6 @@ Invocation::Status Invocation::run(ExecContext& c) {
                 // texture() outside a fragment shader: no derivatives, the implicit lod is 0.
                 const glm::vec4 v = op == spv::OpImageSampleImplicitLod ? texture->texture(coordinate)
                                                                         : texture->textureLod(coordinate, lod);
-                std::uint32_t* out = R(a[1]);
                 for (int j = 0; j < 4; ++j) out[j] = w(v[j]);
                 break;
             }
