@@ -1,7 +1,8 @@
 // Google Benchmark of the SPIR-V interpreter against the hand-written model it must match:
 // evaluation invocations per second of thesis_terrain.tese through the interpreter
 // (tessref/shader.h, one invocation at a time) and of thesis_evaluate (the C++ model, one
-// point at a time), on one patch of the thesis height map, at the same domain points.
+// point at a time, and in the pipeline's batches), on one patch of the thesis height map
+// (8 x 8 world units, level 16 fractional odd), at the same domain points.
 //   build/bench_shader --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
@@ -82,8 +83,32 @@ void BM_ThesisEvaluationModel(benchmark::State& state) {
     state.counters["invocations/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
 }
 
+// The model as the pipeline runs it: the whole patch's points in one batch (SSE2, the height
+// map read once per block of points).
+void BM_ThesisEvaluationModelBatch(benchmark::State& state) {
+    const tessref::TerrainGrid& g = *scene().grid;
+    const tessref::Texture* t = &g.heightmap->texture;
+    const tessref::Sampler2DBatch<float> heightMap = [t](std::span<const glm::vec2> uv, std::span<glm::vec4> out) {
+        t->texture(uv, out);
+    };
+    const std::vector<glm::vec3> points = domain_points();
+    std::vector<tessref::DomainPoint<float>> tc;
+    for (const glm::vec3& p : points) tc.push_back({p.x, p.y, p.z});
+    std::vector<glm::vec3> position(points.size());
+    std::vector<glm::vec2> textureCoordinate(points.size());
+    std::size_t n = 0;
+    for (auto _ : state) {
+        tessref::thesis_evaluate_batch<float>(kCorners, tc, heightMap, static_cast<float>(g.scale_xy),
+                                              static_cast<float>(g.scale_z), position, textureCoordinate);
+        benchmark::DoNotOptimize(position.data());
+        n += points.size();
+    }
+    state.counters["invocations/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
+}
+
 BENCHMARK(BM_ThesisEvaluationInterpreter)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ThesisEvaluationModel)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ThesisEvaluationModelBatch)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
