@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
+#include <cstdio>
+#include <optional>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -75,18 +78,18 @@ struct Counts {
     std::string first;
 };
 
-// The thesis twins against the thesis program: every patch's levels (when the scene's
-// control model is the thesis's), and the evaluation at every vertex of every
-// `stride`-th patch.
-Counts thesis_against_model(const std::string& name, std::size_t stride) {
+// A terrain's twins against its program: every patch's levels (when the scene has a
+// control twin), and the evaluated position (gl_Position.xyz, mvp the identity, or the
+// vec3 at `position_location`) at every vertex of every `stride`-th patch.
+Counts terrain_against_model(const std::string& name, const std::string& base, const Bindings& b,
+                             int position_location, std::size_t stride) {
     const Scene scene = load_scene(scene_path(name));
     const PipelineResult result = run_pipeline(scene);
-    const Bindings b = thesis_bindings(scene);
-    const Executable vert(twin(ShaderStage::vertex, "thesis_terrain.vert"), b, {});
-    const Executable tese(twin(ShaderStage::tess_evaluation, "thesis_terrain.tese"), b, {});
-    const bool thesis_control = scene.control && scene.control->model == ControlModel::thesis;
+    const Executable vert(twin(ShaderStage::vertex, base + ".vert"), b, {});
+    const Executable tese(twin(ShaderStage::tess_evaluation, base + ".tese"), b, {});
+    const bool control = scene.control && scene.control->model != ControlModel::constant;
     std::optional<Executable> tesc;
-    if (thesis_control) tesc.emplace(twin(ShaderStage::tess_control, "thesis_terrain.tesc"), b, RunOptions{});
+    if (control) tesc.emplace(twin(ShaderStage::tess_control, base + ".tesc"), b, RunOptions{});
     const TerrainGrid& g = *scene.grid;
     const SurfaceMesh& mesh = result.mesh;
     std::vector<std::vector<std::uint32_t>> vertices_of(g.patch_count());
@@ -112,23 +115,68 @@ Counts thesis_against_model(const std::string& name, std::size_t stride) {
                               " model " + std::to_string(l.outer[0]);
             }
         } else {
-            patch.vertices = shaded;  // the constant control shader passes the positions through
+            patch.vertices = shaded;  // the constant control shader passes the vertices through
         }
         if (p % stride != 0) continue;
         for (std::uint32_t v : vertices_of[p]) {
             const ShaderVertex out = tese.evaluate(patch, mesh.tess_coords[v], static_cast<long long>(p));
             ++n.vertices;
             const glm::vec3 model(mesh.positions[v]);
-            if (std::bit_cast<std::array<std::uint32_t, 3>>(glm::vec3(out.position)) !=
-                std::bit_cast<std::array<std::uint32_t, 3>>(model)) {
+            const glm::vec3 shader = position_location < 0 ? glm::vec3(out.position)
+                                                           : glm::vec3(as_vec4(out.locations.at(static_cast<std::size_t>(position_location))));
+            if (std::bit_cast<std::array<std::uint32_t, 3>>(shader) != std::bit_cast<std::array<std::uint32_t, 3>>(model)) {
                 ++n.position_mismatches;
                 if (n.first.empty())
-                    n.first = "patch " + std::to_string(p) + " vertex " + std::to_string(v) + " z interpreter " +
-                              std::to_string(out.position.z) + " model " + std::to_string(model.z);
+                    n.first = "patch " + std::to_string(p) + " vertex " + std::to_string(v) + " interpreter (" +
+                              std::to_string(shader.x) + ", " + std::to_string(shader.y) + ", " + std::to_string(shader.z) +
+                              ") model (" + std::to_string(model.x) + ", " + std::to_string(model.y) + ", " +
+                              std::to_string(model.z) + ")";
             }
         }
     }
     return n;
+}
+
+Counts thesis_against_model(const std::string& name, std::size_t stride) {
+    return terrain_against_model(name, "thesis_terrain", thesis_bindings(load_scene(scene_path(name))), -1, stride);
+}
+
+// cosc422_uniforms of the GL backend.
+Bindings cosc422_bindings(const Scene& scene) {
+    const TerrainGrid& g = *scene.grid;
+    Bindings b;
+    b.set("mvpMatrix", glm::mat4(scene.camera->view_projection()));
+    b.set("mvMatrix", glm::mat4(scene.camera->view()));
+    b.set("xMin", static_cast<float>(g.extent_u.x));
+    b.set("xMax", static_cast<float>(g.extent_u.y));
+    b.set("zMin", static_cast<float>(g.extent_v.x));
+    b.set("zMax", static_cast<float>(g.extent_v.y));
+    b.set("heightScale", static_cast<float>(g.scale_z));
+    b.set("gridStep", static_cast<float>(std::abs(g.extent_u.y - g.extent_u.x) / g.heightmap->texture.width()));
+    if (scene.control && scene.control->model == ControlModel::cosc422)
+        b.set("levelSpace", scene.control->cosc422 == Cosc422Space::eye ? 1 : 0);
+    b.bind_texture(0, &g.heightmap->texture);
+    return b;
+}
+
+// lab4_uniforms and lab4_control_uniforms of the GL backend.
+Bindings lab4_bindings(const Scene& scene) {
+    const TerrainGrid& g = *scene.grid;
+    Bindings b;
+    b.set("mvp", glm::mat4(scene.camera->view_projection()));
+    b.set("horizontalScale", static_cast<float>(g.scale_xy));
+    b.set("verticalScale", static_cast<float>(g.scale_z));
+    b.set("texCoordOffset", glm::vec2(g.texcoord_offset));
+    b.set("gridStep", static_cast<float>(g.scale_xy / g.heightmap->texture.width()));
+    const Lab4ControlParams<double>& c = scene.control->lab4;
+    b.set("cameraPosition", glm::vec3(scene.camera->eye));
+    b.set("firstZoneEnd", static_cast<float>(c.firstZoneEnd));
+    b.set("zoneGrowth", static_cast<float>(c.zoneGrowth));
+    b.set("maxLevel", static_cast<float>(c.maxLevel));
+    b.set("minLevel", static_cast<float>(c.minLevel));
+    b.set("edgeRule", c.edgeRule == Lab4EdgeRule::lower ? 0 : 1);
+    b.bind_texture(0, &g.heightmap->texture);
+    return b;
 }
 
 // Levels: the thesis control shader against thesis_levels on every patch, for the factors
@@ -170,6 +218,28 @@ TEST(ThesisTwins, RealHeightMapEvaluationIsTheModels) {
         EXPECT_GT(n.vertices, 500u) << name;
         EXPECT_EQ(n.position_mismatches, 0u) << name << ": " << n.first;
     }
+}
+
+// COSC422: the level in world and in eye space (mvMatrix * position), the evaluation's
+// worldPosition (location 0).
+TEST(Cosc422Twins, LevelsAndEvaluationAreTheModels) {
+    for (const char* name : {"cosc422", "cosc422-eye"}) {
+        const Counts n = terrain_against_model(name, "cosc422_terrain", cosc422_bindings(load_scene(scene_path(name))), 0, 5);
+        EXPECT_EQ(n.patches, 81u) << name;
+        EXPECT_GT(n.vertices, 2000u) << name;
+        EXPECT_EQ(n.level_mismatches, 0u) << name << ": " << n.first;
+        EXPECT_EQ(n.position_mismatches, 0u) << name << ": " << n.first;
+    }
+}
+
+// Lab 4: the zones' levels, the per-patch outputs the evaluation reads (patch out/in at
+// locations 1..4), the evaluation's worldPosition.
+TEST(Lab4Twins, LevelsAndEvaluationAreTheModels) {
+    const Counts n = terrain_against_model("lab4-canyon", "lab4_terrain", lab4_bindings(load_scene(scene_path("lab4-canyon"))), 0, 5);
+    EXPECT_EQ(n.patches, 1024u);
+    EXPECT_GT(n.vertices, 10000u);
+    EXPECT_EQ(n.level_mismatches, 0u) << n.first;
+    EXPECT_EQ(n.position_mismatches, 0u) << n.first;
 }
 
 }  // namespace
