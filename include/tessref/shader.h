@@ -24,8 +24,10 @@
 //     saturated to the integer type's range;
 //   - an array or vector index out of range is clamped into the range.
 // A sampler whose unit has no texture reads (0, 0, 0, 1), as GL's incomplete texture does.
-// GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it; a matrix times a vector
-// sums the columns' products from the first column on: ((c0 v.x + c1 v.y) + c2 v.z) + c3 v.w.
+// GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it. A matrix times a vector
+// sums the columns' products as GLM does, the C++ models' order: pairwise for four columns,
+// (c0 v.x + c1 v.y) + (c2 v.z + c3 v.w), from the first column on for two and three; a dot
+// product from the first component on. (Which order llvmpipe sums in was not measured.)
 //
 // The GLSL.std.450 functions run in one of two math modes (MathMode): `exact`, correctly
 // rounded float results (each computed in double and rounded once, see src/shader/std450.cpp

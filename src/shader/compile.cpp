@@ -8,12 +8,14 @@
 // interpreter runs the operations in the order the source writes them.
 #include <mutex>
 #include <regex>
+#include <set>
 #include <string>
 #include <vector>
 
 #include <glslang/Public/ResourceLimits.h>
 #include <glslang/Public/ShaderLang.h>
 #include <glslang/SPIRV/GlslangToSpv.h>
+#include <glslang/SPIRV/spirv.hpp>
 #include <spirv-tools/libspirv.hpp>
 
 #include "shader/module.h"
@@ -126,9 +128,32 @@ void validate_spirv(const std::vector<std::uint32_t>& spirv, const std::string& 
                                         const char* text) {
         if (message.empty()) message = "word " + std::to_string(position.index) + ": " + text;
     });
-    if (!tools.Validate(spirv))
-        throw Error("SPIR-V validation failed: " + (message.empty() ? std::string("(no message)") : message),
-                    Where::in_file(path));
+    if (tools.Validate(spirv)) return;
+    // glslang's OpenGL SPIR-V keeps `uniform bool x;` a bool UniformConstant variable, which
+    // the validator refuses (a bool has no defined memory layout; the interpreter needs
+    // none, it binds uniforms by name). Such a module is validated once more as if those
+    // variables were Private; any other problem is still found.
+    if (message.find("OpTypeBool is stored") != std::string::npos) {
+        std::vector<std::uint32_t> copy = spirv;
+        std::set<std::uint32_t> bools, bool_pointers;
+        for (std::size_t pos = 5; pos < copy.size() && (copy[pos] >> 16) > 0; pos += copy[pos] >> 16) {
+            const std::uint32_t op = copy[pos] & 0xffff, n = copy[pos] >> 16;
+            if (pos + n > copy.size()) break;
+            if (op == spv::OpTypeBool) bools.insert(copy[pos + 1]);
+            if (op == spv::OpTypePointer && copy[pos + 2] == spv::StorageClassUniformConstant &&
+                bools.count(copy[pos + 3])) {
+                copy[pos + 2] = spv::StorageClassPrivate;
+                bool_pointers.insert(copy[pos + 1]);
+            }
+            if (op == spv::OpVariable && bool_pointers.count(copy[pos + 1])) copy[pos + 3] = spv::StorageClassPrivate;
+        }
+        std::string first = std::move(message);
+        message.clear();
+        if (tools.Validate(copy)) return;
+        if (message.empty()) message = first;
+    }
+    throw Error("SPIR-V validation failed: " + (message.empty() ? std::string("(no message)") : message),
+                Where::in_file(path));
 }
 
 Module Module::compile(const Source& source) {

@@ -345,7 +345,7 @@ Invocation::Status Invocation::run(ExecContext& c) {
             case spv::OpVectorTimesMatrix: {
                 // Left operand's columns (rows of the result) times the right operand's
                 // columns; column k of the result = sum over j of left column j * right[k][j],
-                // summed from j = 0 on.
+                // in GLM's order (shader.h): four columns pairwise, else from j = 0 on.
                 const Type& lt = T(m.type_of[a[2]]);
                 const Type& rt = T(m.type_of[a[3]]);
                 const std::uint32_t* l = R(a[2]);
@@ -369,6 +369,13 @@ Invocation::Status Invocation::run(ExecContext& c) {
                     for (std::uint32_t k = 0; k < results; ++k) {
                         const std::uint32_t* v = r + k * columns;
                         for (std::uint32_t i = 0; i < rows; ++i) {
+                            if (columns == 4) {
+                                const float p0 = f(l[i]) * f(v[0]), p1 = f(l[rows + i]) * f(v[1]);
+                                const float p2 = f(l[2 * rows + i]) * f(v[2]), p3 = f(l[3 * rows + i]) * f(v[3]);
+                                const float s01 = p0 + p1, s23 = p2 + p3;
+                                out[k * rows + i] = w(s01 + s23);
+                                continue;
+                            }
                             float sum = f(l[i]) * f(v[0]);
                             for (std::uint32_t j = 1; j < columns; ++j) {
                                 const float product = f(l[j * rows + i]) * f(v[j]);
