@@ -192,6 +192,13 @@ TEST(ShaderComposite, MatrixTimesVectorSumsTheColumnsInOrder) {
     const Outcome order = run_vertex("mat3 m = mat3(vec3(a.x, 0, 0), vec3(a.y, 0, 0), vec3(a.z, 0, 0)); r.xyz = m * vec3(1.0);",
                                  {16777216.0f, 1.0f, -16777216.0f, 0});
     EXPECT_EQ(order.r.x, 0.0f);
+    // Four columns pairwise, as GLM: columns 2^24, 1, 1, -2^24 (x only) times (1, 1, 1, 1):
+    // (2^24 + 1) + (1 - 2^24) = 2^24 + (-16777215) = 1; from the first column on it would
+    // be ((2^24 + 1) + 1) - 2^24 = 0.
+    const Outcome four = run_vertex("mat4 m = mat4(vec4(a.x, 0, 0, 0), vec4(a.y, 0, 0, 0), vec4(a.z, 0, 0, 0), "
+                                    "vec4(a.w, 0, 0, 0)); r = m * vec4(1.0);",
+                                    {16777216.0f, 1.0f, 1.0f, -16777216.0f});
+    EXPECT_EQ(four.r.x, 1.0f);
 }
 
 TEST(ShaderComposite, ArraysStructsAndDynamicIndices) {
