@@ -111,14 +111,17 @@ std::vector<std::vector<Slot>> pn_inputs(const Scene& scene, std::size_t p) {
 }
 
 Counts terrain_against_model(const std::string& name, const std::string& base, const Bindings& b,
-                             int position_location, std::size_t stride, const PatchInputs& inputs = terrain_inputs) {
+                             int position_location, std::size_t stride, const PatchInputs& inputs = terrain_inputs,
+                             MathMode math = MathMode::exact) {
+    RunOptions options;
+    options.math = math;
     const Scene scene = load_scene(scene_path(name));
     const PipelineResult result = run_pipeline(scene);
-    const Executable vert(twin(ShaderStage::vertex, base + ".vert"), b, {});
-    const Executable tese(twin(ShaderStage::tess_evaluation, base + ".tese"), b, {});
+    const Executable vert(twin(ShaderStage::vertex, base + ".vert"), b, options);
+    const Executable tese(twin(ShaderStage::tess_evaluation, base + ".tese"), b, options);
     const bool control = scene.control && scene.control->model != ControlModel::constant;
     std::optional<Executable> tesc;
-    if (control) tesc.emplace(twin(ShaderStage::tess_control, base + ".tesc"), b, RunOptions{});
+    if (control) tesc.emplace(twin(ShaderStage::tess_control, base + ".tesc"), b, options);
     const SurfaceMesh& mesh = result.mesh;
     std::vector<std::vector<std::uint32_t>> vertices_of(scene.patch_count());
     for (std::uint32_t v = 0; v < mesh.patch_ids.size(); ++v) vertices_of[mesh.patch_ids[v]].push_back(v);
@@ -301,6 +304,16 @@ TEST(PnTwins, LevelsAreTheModels) {
     EXPECT_EQ(n.patches, 104u);
     EXPECT_GT(n.vertices, 10000u);
     EXPECT_EQ(n.level_mismatches, 0u) << n.first;
+}
+
+// In the llvmpipe mode inversesqrt is llvmpipe's 1 / sqrt, as the model's normalize: the
+// PN positions are then the model's on every compared vertex.
+TEST(PnTwins, PositionsAreTheModelsInTheLlvmpipeMode) {
+    const Counts n = terrain_against_model("pn-triangles", "pn_triangles", pn_bindings(load_scene(scene_path("pn-triangles"))), 0,
+                                           3, pn_inputs, MathMode::llvmpipe);
+    EXPECT_GT(n.vertices, 10000u);
+    EXPECT_EQ(n.level_mismatches, 0u) << n.first;
+    EXPECT_EQ(n.position_mismatches, 0u) << n.first;
 }
 
 }  // namespace

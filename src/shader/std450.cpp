@@ -10,7 +10,9 @@
 //     double's own error can put it on the wrong side (double rounding); such arguments are
 //     rare and none is known among the shipped scenes' values, but no exhaustive search over
 //     all float arguments was run.
-//   - llvmpipe: the approximations llvmpipe evaluates (tessref::llvmpipe_math).
+//   - llvmpipe: the approximations llvmpipe evaluates (tessref::llvmpipe_math, bit for bit
+//     with Mesa 22.3's llvmpipe). Only these functions flush denormals as llvmpipe does;
+//     the interpreter's other operations keep them (in both modes).
 // Everything else (normalize, length, distance, mix, smoothstep, reflect, cross, ...) is
 // written here as GLSL defines it, in elementary operations each rounded to float on its
 // own, calling the elementary layer where the definition does, identically in both modes:
@@ -21,6 +23,8 @@
 // min, max and clamp of a NaN return the other operand (IEEE minNum/maxNum; GLSL leaves it
 // undefined); round() rounds halves to even, as roundEven().
 #include "shader/std450.h"
+
+#include "shader/llvmpipe_math.h"
 
 #include <algorithm>
 #include <bit>
@@ -36,13 +40,40 @@ namespace {
 float f(std::uint32_t w) { return std::bit_cast<float>(w); }
 std::uint32_t w(float x) { return std::bit_cast<std::uint32_t>(x); }
 
-[[noreturn]] void no_llvmpipe_math() {
-    throw Error("the llvmpipe math mode is not available in this build (only exact)");
+// The llvmpipe mode's functions (src/shader/llvmpipe_math.h). radians() and degrees(),
+// which Mesa's GLSL compiler writes as a product with a float constant, are that product.
+float llvmpipe(std::uint32_t op, float x, float y) {
+    namespace m = llvmpipe_math;
+    switch (op) {
+        case GLSLstd450Sin: return m::sin(x);
+        case GLSLstd450Cos: return m::cos(x);
+        case GLSLstd450Tan: return m::tan(x);
+        case GLSLstd450Asin: return m::asin(x);
+        case GLSLstd450Acos: return m::acos(x);
+        case GLSLstd450Atan: return m::atan(x);
+        case GLSLstd450Atan2: return m::atan2(x, y);
+        case GLSLstd450Sinh: return m::sinh(x);
+        case GLSLstd450Cosh: return m::cosh(x);
+        case GLSLstd450Tanh: return m::tanh(x);
+        case GLSLstd450Asinh: return m::asinh(x);
+        case GLSLstd450Acosh: return m::acosh(x);
+        case GLSLstd450Atanh: return m::atanh(x);
+        case GLSLstd450Exp: return m::exp(x);
+        case GLSLstd450Exp2: return m::exp2(x);
+        case GLSLstd450Log: return m::log(x);
+        case GLSLstd450Log2: return m::log2(x);
+        case GLSLstd450Pow: return m::pow(x, y);
+        case GLSLstd450Sqrt: return m::sqrt(x);
+        case GLSLstd450InverseSqrt: return m::inversesqrt(x);
+        case GLSLstd450Radians: return x * 0.017453292519943295f;
+        case GLSLstd450Degrees: return x * 57.29577951308232f;
+        default: return 0.0f;
+    }
 }
 
 // The mode-dependent functions. y is the second argument of pow and atan2.
 float elementary(std::uint32_t op, MathMode mode, float x, float y = 0.0f) {
-    if (mode == MathMode::llvmpipe) no_llvmpipe_math();
+    if (mode == MathMode::llvmpipe) return llvmpipe(op, x, y);
     const double d = x, e = y;
     switch (op) {
         case GLSLstd450Sin: return static_cast<float>(std::sin(d));
