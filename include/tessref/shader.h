@@ -27,7 +27,10 @@
 // GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it. A matrix times a vector
 // sums the columns' products as GLM does, the C++ models' order: pairwise for four columns,
 // (c0 v.x + c1 v.y) + (c2 v.z + c3 v.w), from the first column on for two and three; a dot
-// product from the first component on. (Which order llvmpipe sums in was not measured.)
+// product from the first component on, in both math modes. (llvmpipe sums a dot product
+// from the last component and a matrix times a vector from the first column on, as the
+// branch that wrote src/shader/llvmpipe_math found; the llvmpipe mode does not follow
+// those orders yet.)
 //
 // The GLSL.std.450 functions run in one of two math modes (MathMode): `exact`, correctly
 // rounded float results (each computed in double and rounded once, see src/shader/std450.cpp
