@@ -25,6 +25,7 @@
 #include "tessref/check.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 
 namespace {
 

@@ -26,6 +26,7 @@
 #include "mesh/openmesh.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 
 namespace {
 

@@ -26,6 +26,7 @@
 #include <tbb/global_control.h>
 
 #include "tessref/mesh.h"
+#include "tessref/prepare.h"
 #include "tessref/raster.h"
 #include "tessref/pipeline.h"
 

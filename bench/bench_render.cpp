@@ -24,6 +24,7 @@
 
 #include <tbb/global_control.h>
 
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/pipeline.h"
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "tessref/evaluation.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 #include "tessref/shader.h"
 #include "tessref/tessellator.h"

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "fuzz_common.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 namespace {

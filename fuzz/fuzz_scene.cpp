@@ -6,6 +6,7 @@
 // resolve to small copies of the shipped data there: the seeds load completely, quickly,
 // and the fuzzer reaches the checks that come after the images are loaded.
 #include "fuzz_common.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 #ifndef TESSREF_FUZZ_SCENE_ENV

@@ -27,6 +27,7 @@
 #include "tessref/error.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/tessellator.h"
 
 namespace fs = std::filesystem;

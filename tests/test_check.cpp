@@ -46,6 +46,7 @@
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/solid.h"
 
 namespace fs = std::filesystem;

@@ -33,6 +33,7 @@
 #include "geomip_maps.h"
 #include "tessref/geomipmap.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/shading.h"

@@ -280,6 +280,7 @@ TEST(GeoMipSurface, TweenZeroIsTheDiscreteLevelAndTweenOneReachesTheNextLevel) {
 
 #include "command_dir_test.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 namespace {

@@ -32,8 +32,9 @@
 #include "tessref/compare.h"
 #include "tessref/error.h"
 #include "tessref/capture.h"
-#include "tessref/gl_backend.h"
+#include "tessref/gl_render.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 
 namespace {
 

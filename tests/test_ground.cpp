@@ -14,6 +14,7 @@
 #include "extremes/extremes.h"
 #include "tessref/error.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 
 using namespace tessref::test;

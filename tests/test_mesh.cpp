@@ -40,6 +40,7 @@
 #include "tessref/error.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 
 namespace fs = std::filesystem;
 using tessref::MeshFormat;

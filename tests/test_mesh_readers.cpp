@@ -1,4 +1,4 @@
-// Tests of the mesh readers (src/check/read.cpp) against hostile and unusual files.
+// Tests of the mesh readers (src/mesh/read_*.cpp) against hostile and unusual files.
 //
 // The contract: a file that is exactly what its format says reads as it lists itself (the
 // counts, positions and faces written here by hand); anything else is refused at once with
@@ -27,6 +27,7 @@
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 namespace fs = std::filesystem;
@@ -393,6 +394,35 @@ TEST(MeshReaders, NonRegularFilesAreRefused) {
     expect_refused(scratch_dir() / "dir.off", "is a directory");
     const tessref::Error e = read_error("/dev/null");
     EXPECT_TRUE(contains(e.what(), "unsupported mesh format")) << e.what();
+}
+
+// The same through a scene's [[mesh]] and the command: the scene says what the path is (a
+// FIFO, a directory), not "no such file", exits 2 and writes nothing; a path that is not
+// there is still "no such file".
+TEST(MeshReaders, SceneMeshThatIsNotAFileSaysWhatItIs) {
+    const fs::path fifo = scratch_dir() / "scene_fifo.ply";
+    fs::remove(fifo);
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    const fs::path dir = scratch_dir() / "scene_dir.obj";
+    fs::create_directories(dir);
+    struct Case {
+        fs::path path;
+        std::string says;
+    };
+    for (const Case& c : {Case{fifo, "a FIFO (named pipe)"}, Case{dir, "is a directory"},
+                          Case{scratch_dir() / "absent.ply", "no such file"}}) {
+        SCOPED_TRACE(c.path.string());
+        const fs::path scene = scratch("not_a_file_scene.toml", "[scene]\nname = \"n\"\n[[mesh]]\npath = \"" +
+                                                                    c.path.string() +
+                                                                    "\"\n[evaluation]\nmodel = \"pn\"\n");
+        const fs::path out = scratch_dir() / "not_a_file.ply";
+        const RunResult r = tessref({"mesh", scene.string(), "-o", out.string()});
+        EXPECT_EQ(r.status, 2) << r.err;
+        EXPECT_TRUE(contains(r.err, c.says)) << r.err;
+        EXPECT_TRUE(contains(r.err, "mesh[0].path")) << r.err;
+        if (c.says != "no such file") EXPECT_FALSE(contains(r.err, "no such file")) << r.err;
+        EXPECT_FALSE(fs::exists(out));
+    }
 }
 
 // ---------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@
 #include "scratch_dir.h"
 #include "tessref/error.h"
 #include "tessref/parallax.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 #include "tessref/shading.h"
 

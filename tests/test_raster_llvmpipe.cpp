@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "tessref/prepare.h"
 #include "tessref/raster.h"
 #include "tessref/pipeline.h"
 

@@ -42,6 +42,7 @@
 #include <tbb/global_control.h>
 
 #include "tessref/error.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/pipeline.h"
 #include "tessref/shading.h"

@@ -19,6 +19,7 @@
 
 #include "tessref/error.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/raster.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"

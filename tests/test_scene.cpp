@@ -38,6 +38,7 @@
 
 #include "tessref/error.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 
 namespace fs = std::filesystem;
 using namespace tessref;

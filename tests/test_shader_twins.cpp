@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 #include "tessref/shader.h"
 

@@ -30,6 +30,7 @@
 #include "run_program.h"
 #include "sweep/geometric_error.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 namespace fs = std::filesystem;

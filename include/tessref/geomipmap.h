@@ -101,7 +101,9 @@
 
 #include <glm/glm.hpp>
 
-#include "tessref/mesh.h"
+namespace tessref {
+struct SurfaceMesh;  // mesh.h: build_surface's result
+}  // namespace tessref
 
 namespace tessref::geomip {
 

@@ -22,19 +22,17 @@
 // the patch there (tessellate() models this); the calling thread's FP mode is left as is.
 //
 // A Context is current on the thread that created it; use it from that thread only.
+//
+// A whole scene drawn through its GLSL twins on such a context (`tessref gl`) is
+// gl_render.h's.
 #pragma once
 
-#include <cstdint>
+#include <cstddef>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
-#include <glm/glm.hpp>
-
-#include "tessref/capture.h"
-#include "tessref/render.h"
-#include "tessref/pipeline.h"
 #include "tessref/tessellator.h"
 
 namespace tessref::gl {
@@ -91,119 +89,6 @@ CapturedPatch capture_pattern(Context& context, const TessSettings& settings,
 // Human-readable dump of one captured patch, one primitive a line, each coordinate as
 // %.9g and as the hexadecimal float bits: for debugging a mismatch by hand.
 std::string dump(const CapturedPatch& patch);
-
-// ---- A scene through its GLSL twins (`tessref gl`) ---------------------------------------
-//
-// render_scene() draws a scene with the shaders of data/shaders/ on llvmpipe: the vertex and
-// evaluation shader of the [evaluation] model, the control shader of the [control] model (a
-// constant control stage: a pass-through control shader writing the level, or none when the
-// evaluation shader reads gl_in directly, with GL_PATCH_DEFAULT_*_LEVEL set), the geometry
-// shader of [geometry] where the model has one (thesis normal_map, cosc422 face; lab 4's
-// height-field normals are computed in its evaluation shader), and the fragment shader of
-// [shading]. The evaluation twin's layout(...) in; line is replaced by the scene's
-// [generator] settings, as the CPU pipeline uses them. Uniforms come from the scene's
-// settings structs (one function per model, scene_render.cpp), textures are uploaded from
-// the very Texture objects the CPU samples (same format and codes, glGenerateMipmap,
-// clamp-to-edge, GL_LINEAR / GL_LINEAR_MIPMAP_LINEAR). Camera and image size as
-// `tessref render` (render.h): --size replaces the viewport.
-//
-// The CPU pipeline runs first: its per-patch triangle counts size the draws (at most
-// max_primitives_per_draw predicted primitives per draw, at least one patch) and every
-// draw's GL_PRIMITIVES_GENERATED must equal its prediction. A draw that disagrees ends the
-// render: batch_failure names it and no image is returned (llvmpipe corrupts large
-// tessellated draws silently; a level computed differently by the GLSL twin shows here too).
-//
-// User shaders (the scene's [shaders], `tessref gl --shader STAGE=FILE`): a user's GLSL file
-// takes the place of one stage's twin, or is added where the models have no such stage
-// (a geometry shader without [geometry], a control shader where the constant stage has
-// none). Everything else stays: the other stages, the uniforms, the textures and the CPU
-// reference's predicted counts (the CPU pipeline keeps the reference models). A user's
-// evaluation shader keeps its own layout(...) in; line (it is what is under test), so a
-// layout or a control shader that tessellates differently ends the render as above, the
-// message naming the user's files. The contract a user's shader is held to is the twins'
-// interface: the uniform names and types, the sampler bindings, the vertex attributes and
-// the blocks between the stages (below; README, "Debugging your own shader"); a uniform it
-// leaves out is not set, one it declares with another type is an error.
-//
-// THE CONTRACT, per model (the twins in data/shaders/ are the reference text; the uniforms
-// are set by the functions *_uniforms in src/gl/scene_render.cpp). A stage talks to its
-// neighbours through these blocks (matched by block name and location 0) and attributes:
-//   thesis   attribute 0 vec4 position (the corner, z = 0);
-//            vert -> tesc VertexData { vec4 vPosition; }, tesc -> tese ControlData
-//            { vec4 tcPosition; } (4 vertices), tese -> geom EvaluationData { vec2
-//            textureCoordinate; }, geom -> frag GeometryData { vec3 gNormal; vec2
-//            gTextureCoordinate; }; uniforms float scaleXY, scaleZ; mat4 mvp; mat3
-//            normalMatrix; control: float tessellationLevel, distanceLimit, distanceDivisor,
-//            normalAngleThreshold, {normal,texture,distance,constant}TessellationWeight;
-//            vec3 cameraPosition; int thesisFactor; constant control: float constantLevel
-//   cosc422  attribute 0 vec4 position, handed on as gl_Position (tesc/tese read gl_in);
-//            tese -> geom EvaluationData { vec3 worldPosition; vec2 texCoord; }, geom ->
-//            frag GeometryData { vec3 faceNormal; vec2 texCoord; }; uniforms mat4 mvpMatrix,
-//            mvMatrix; float xMin, xMax, zMin, zMax, heightScale; int levelSpace
-//   lab4     attribute 0 vec4 position; VertexData and ControlData as thesis; patch outputs
-//            of the control stage at locations 1..4: float maxLogTessellationLevel; vec4
-//            logOuter; float logInner; vec4 logCorner; tese -> frag EvaluationData { vec3
-//            worldPosition; vec3 normal; vec2 texCoord; }; uniforms mat4 mvp; float
-//            horizontalScale, verticalScale, gridStep; vec2 texCoordOffset; control: vec3
-//            cameraPosition; float firstZoneEnd, zoneGrowth, maxLevel, minLevel; int edgeRule
-//   pn       attributes 0 vec3 v3VertexPos, 1 vec3 v3VertexNormal, 2 vec2 v2VertexUV;
-//            vert -> tesc VertexData { vec3 v3Position; vec3 v3Normal; vec2 v2UV; }, tesc ->
-//            tese PatchVertex { ... } (3 vertices) and patch vec3 v3P111 at location 6, tese
-//            -> frag EvaluationData { vec3 v3PositionOut; vec3 v3NormalOut; vec2 v2UVOut; };
-//            uniforms mat4 m4Transform, m4ViewProjection; vec2 v2Resolution; float
-//            fInfluence; int normalMode; bool watertightEdges, flatEdgesAtLevel1
-//   samplers heightMap 0, tessellationMap 1, normalMap 2, the fragment twins' textures
-//            4.. in the order of shading.h's sampler_names (the thesis's diffuse is 4)
-//   fragment uniforms as the [shading] model's twin declares them (shading.h), output at
-//            location 0; flat: vec4 colour; depth: int windowMapping, double nearPlane,
-//            farPlane.
-// --capture wraps the stages before rasterization and reads the twins' outputs (thesis:
-// gl_Position with mvp = identity; cosc422, lab4: evaluationOut.worldPosition; pn:
-// evaluationOut.v3PositionOut; normals: geometryOut.gNormal / .faceNormal,
-// evaluationOut.normal / .v3NormalOut), so a user's stage there must declare them too.
-struct SceneRenderOptions {
-    glm::ivec2 size{0, 0};  // {0, 0}: the camera's viewport
-    bool wireframe = false; // glPolygonMode(GL_FRONT_AND_BACK, GL_LINE)
-    bool capture = false;   // also record every evaluated vertex by transform feedback
-    std::size_t max_primitives_per_draw = 32768;  // `tessref gl --max-primitives-per-draw N`
-    // Test hook: the prediction of this draw (0-based) is made one too high, so that the
-    // check must fail there. -1: none.
-    long long corrupt_prediction_of_batch = -1;
-    // User shaders (--shader), each in place of the scene's [shaders] entry of its stage.
-    std::vector<StageShader> shaders;
-};
-
-// SceneRender::capture: one CapturedVertex (tessref/capture.h) per vertex of every
-// primitive, as transform feedback recorded it (three per triangle, in the order the
-// pipeline emitted them); patch_id is gl_PrimitiveID of the evaluation shader plus the
-// draw's first patch, levels are gl_TessLevelOuter/Inner as the evaluation shader read them.
-
-struct SceneRenderStats {
-    std::uint64_t triangles = 0;  // GL_PRIMITIVES_GENERATED summed over the draws
-    std::size_t draws = 0;
-    double seconds_pipeline = 0.0;  // the CPU pipeline (predictions)
-    double seconds_gl = 0.0;        // the GL draws, the read-back included
-    double seconds_capture = 0.0;
-};
-
-struct SceneRender {
-    int width = 0;
-    int height = 0;
-    RenderShading shading{};
-    std::vector<glm::vec4> colour;  // row 0 on top (OSMesa's rows flipped), unclamped float
-    std::vector<CapturedVertex> capture;  // with SceneRenderOptions::capture
-    std::string batch_failure;  // non-empty: a draw's primitive count was wrong (no image)
-    std::shared_ptr<const PipelineResult> pipeline;  // the CPU pipeline the counts came from
-    std::vector<StageShader> user_shaders;  // the user's files in place of twins, vertex .. fragment
-    SceneRenderStats stats{};
-};
-
-// Throws tessref::Error on a scene the GL backend cannot draw (no camera, a stage
-// combination without a GLSL twin), an unreadable shader file (a user's: Where is its
-// scene key or flag), a shader that does not compile or link (the driver's log and the
-// stage; Where: the file and, from the log, the line), a user's shader that declares a
-// twin's uniform with another type, or a GL error.
-SceneRender render_scene(Context& context, const Scene& scene, const SceneRenderOptions& options = {});
 
 // ---- A float expression on llvmpipe ------------------------------------------------------
 //

@@ -216,15 +216,6 @@ WeldedMesh run_pipeline_welded(const Scene& scene, const PipelineOptions& option
 // run_pipeline()'s mesh, holding both.
 bool surface_streams(const Scene& scene);
 
-// A geomipmapped scene's height samples (mip 0, exactly) and their world placement, as
-// run_pipeline() builds its terrain from them (and `tessref pvs` its PVS). Throws
-// tessref::Error for a scene without a terrain grid.
-struct GeomipTerrain {
-    geomip::HeightSamples map;
-    geomip::Settings settings;
-};
-GeomipTerrain geomip_terrain(const Scene& scene);
-
 // camera_relative: the origin the evaluation works relative to (see PipelineOptions): the
 // camera's eye, for a terrain with its up-axis component 0; (0, 0, 0) without a camera.
 glm::dvec3 camera_relative_origin(const Scene& scene);

@@ -1,9 +1,11 @@
 // tessref/scene.h — scenes: the TOML file that names the stages of one pipeline run.
 //
 // A scene names only the stages it uses; a stage it does not name is not run and costs
-// nothing. load_scene() parses and validates it, loads every image and mesh it names, and
-// throws tessref::Error naming the file, line, column and key of the first problem.
-// pipeline.h runs it.
+// nothing. parse_scene() parses and validates it, loads every image and mesh it names, and
+// throws tessref::Error naming the file, line, column and key of the first problem; it runs
+// no stage. What a scene asks to be computed from its own terrain (the camera's ground
+// clearance, a light map) is done after it by the preparation pass, prepare.h, whose
+// load_scene() is the two together. pipeline.h runs a scene.
 //
 // The file format (every table and key, defaults and ranges, with examples) is documented
 // in one place: data/scenes/README.md. The structs below are what the loader makes of it.
@@ -144,6 +146,19 @@ struct StageShader {
     Where where;         // for errors: the scene key's place, or the flag
 };
 
+// What the preparation pass (prepare.h) computes from the scene's own terrain after the
+// load: the loader reads the keys and checks them, and runs no stage.
+struct ScenePreparation {
+    // [camera] ground_clearance = d (lab 4's camera collision): the eye is lifted to the
+    // tessellated surface under it plus d.
+    std::optional<double> ground_clearance;
+    Where ground_clearance_where;
+    // [shading] model = "geomip_lightmap": the light its light map is computed from
+    // (shading.geomip.lightMap, lightMapScale, lightMapOffset).
+    std::optional<geomip::LightMapParams> light_map;
+    bool done = false;  // prepare_scene() has run
+};
+
 struct Scene {
     std::string file;  // the scene file as given (used in error messages)
     std::string name;
@@ -162,18 +177,35 @@ struct Scene {
     std::vector<StageShader> shaders;          // [shaders] (`tessref gl` only)
     std::uint64_t max_triangles = 50'000'000;
     Where max_triangles_where;  // where the budget was set (or the scene file): for errors
+    ScenePreparation preparation;
 
     std::size_t patch_count() const;
 };
 
-// Parses, validates and loads a scene file (images and meshes included). Throws
-// tessref::Error with Where{file, line, column, key} on any problem; errors from an image
-// or mesh loader are re-thrown with the scene's place (the key that named the file) and
-// the loader's message (which names the image) in what().
-Scene load_scene(const std::string& path);
+// Parses, validates and loads a scene file (images and meshes included), running no stage:
+// a scene that asks for preparation (ScenePreparation) needs prepare_scene() (prepare.h)
+// before it is run; load_scene() there does both. Throws tessref::Error with Where{file,
+// line, column, key} on any problem; errors from an image or mesh loader are re-thrown with
+// the scene's place (the key that named the file) and the loader's message (which names the
+// image) in what().
+Scene parse_scene(const std::string& path);
 // The same from TOML text; `path` names the text in errors and is the base of relative
 // paths (it need not exist).
-Scene load_scene_from_string(const std::string& toml_text, const std::string& path);
+Scene parse_scene_from_string(const std::string& toml_text, const std::string& path);
+
+// The shading uniforms that read the camera (lab 4 cameraPosition, PN and POM
+// v3CameraPosition, depth near/far) set from scene.camera: the loader sets them, and the
+// preparation pass again when it moves the camera. No camera: nothing changes.
+void set_camera_uniforms(Scene& scene);
+
+// A geomipmapped scene's height samples (mip 0, exactly) and their world placement, as
+// run_pipeline() builds its terrain from them (and `tessref pvs` its PVS, the loader checks
+// a PVS file against). Throws tessref::Error for a scene without a terrain grid.
+struct GeomipTerrain {
+    geomip::HeightSamples map;
+    geomip::Settings settings;
+};
+GeomipTerrain geomip_terrain(const Scene& scene);
 
 // ---------------------------------------------------------------------------------------
 // Patch adjacency (for crack checks)

@@ -13,9 +13,10 @@
 #include <system_error>
 #include <unordered_map>
 
-#include "tessref/check.h"
+#include "common/file_name.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
+#include "tessref/mesh_io.h"
 #include "tessref/pipeline.h"
 
 namespace tessref {
@@ -23,13 +24,6 @@ namespace tessref {
 namespace {
 
 constexpr std::string_view kVersionLine = "tessref-capture 1";
-
-std::string lowercase_extension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
 
 }  // namespace
 

@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "check/check_internal.h"
+#include "mesh/openmesh.h"
 #include "tessref/error.h"
 
 namespace tessref {
@@ -274,6 +275,26 @@ CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& opt
         return refused;
     });
     return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// The mesh as the check reads it: the file's faces, and which of them OpenMesh's kernel
+// refuses.
+
+IndexedMesh read_mesh_for_check(const std::string& path) { return read_mesh_for_check(path, {}); }
+
+IndexedMesh read_mesh_for_check(const std::string& path, const std::function<void(double)>& progress) {
+    MeshFileOptions options;
+    options.progress = progress;
+    IndexedMesh mesh = read_mesh_file(path, options);
+    mesh.kernel_refused_faces = check_detail::kernel_refused_faces(mesh);
+    return mesh;
+}
+
+std::vector<std::uint32_t> check_detail::kernel_refused_faces(const IndexedMesh& mesh) {
+    // The importer explains each refusal on omerr(); the check's report does that.
+    const mesh_detail::QuietStream quiet(::omerr());
+    return mesh_detail::import_half_edge_mesh(mesh, false).refused_faces;
 }
 
 }  // namespace tessref

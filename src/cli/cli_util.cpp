@@ -367,14 +367,6 @@ void write_output(const std::string& target, std::string_view bytes) {
     output.commit();
 }
 
-std::string lowercase_extension(const std::string& path) {
-    std::string extension = std::filesystem::path(path).extension().string();
-    if (!extension.empty() && extension.front() == '.') extension.erase(0, 1);
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return extension;
-}
-
 // ---------------------------------------------------------------------------------------
 // Progress
 

@@ -19,6 +19,7 @@
 #include <glm/glm.hpp>
 #include <tbb/global_control.h>
 
+#include "common/file_name.h"  // lowercase_extension
 #include "tessref/error.h"
 #include "tessref/tessellator.h"
 
@@ -130,9 +131,6 @@ void write_output(const std::string& target, std::string_view bytes);
 
 // True when `target` names stdout (empty or "-").
 bool is_stdout(const std::string& target);
-
-// The extension of a path, lower-cased, without the dot ("png" for "a/B.PNG"); "" if none.
-std::string lowercase_extension(const std::string& path);
 
 // ---------------------------------------------------------------------------------------
 // Progress

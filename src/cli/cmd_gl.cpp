@@ -21,9 +21,10 @@
 #include "cli/commands.h"
 #include "tessref/capture.h"
 #include "tessref/error.h"
-#include "tessref/gl_backend.h"
+#include "tessref/gl_render.h"
 #include "tessref/limits.h"
 #include "tessref/mesh.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 

@@ -47,8 +47,9 @@
 #include "tessref/capture.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
-#include "tessref/gl_backend.h"
+#include "tessref/gl_render.h"
 #include "tessref/mesh.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/pipeline.h"
 

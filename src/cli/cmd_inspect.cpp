@@ -27,6 +27,7 @@
 #include "cli/cli_util.h"
 #include "cli/commands.h"
 #include "tessref/error.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"

@@ -29,6 +29,7 @@
 #include "tessref/error.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/solid.h"
 #include "tessref/tessellator.h"
 
@@ -203,8 +204,8 @@ Command add_mesh_command(CLI::App& parent) {
     auto options = std::make_shared<MeshCommandOptions>();
     CLI::App* app = parent.add_subcommand(
         "mesh",
-        "Run a scene's pipeline and write the tessellated surface as a mesh (PLY, OBJ, OFF, STL "
-        "through OpenMesh). Vertices are welded only where their positions are bitwise equal, so "
+        "Run a scene's pipeline and write the tessellated surface as a mesh (PLY through tessref's "
+        "own writer, byte for byte OpenMesh's; OBJ, OFF, STL through OpenMesh). Vertices are welded only where their positions are bitwise equal, so "
         "a crack between patches stays a hole. PLY also carries every vertex's patch_id and "
         "tess coord (tess_u, tess_v, tess_w).");
     app->add_option("scene", options->scene, "Scene file (TOML)")->required();

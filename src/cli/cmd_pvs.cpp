@@ -20,6 +20,7 @@
 #include "tessref/error.h"
 #include "tessref/geomipmap.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/scene.h"
 
 namespace tessref::cli {

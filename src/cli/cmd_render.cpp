@@ -21,6 +21,7 @@
 #include "cli/commands.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"

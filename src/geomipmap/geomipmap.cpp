@@ -8,6 +8,7 @@
 #include <string>
 
 #include "tessref/error.h"
+#include "tessref/mesh.h"
 
 namespace tessref::geomip {
 

@@ -19,7 +19,9 @@
 #include "gl/gl_api.h"
 #include "gl/program.h"
 #include "tessref/error.h"
+#include "tessref/gl_render.h"
 #include "tessref/limits.h"
+#include "tessref/pipeline.h"
 
 namespace tessref::gl {
 

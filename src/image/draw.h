@@ -1,7 +1,7 @@
 // src/image/draw.h — lines, points, boxes and text painted into a caller's picture by
 // OpenImageIO's ImageBufAlgo (render_line, render_point, render_box, render_text), in the
 // module tessref_oiio.so (src/image/oiio_module.h): the pictures of `tessref check
-// --image` and `tessref pattern`. The pixels stay the caller's; operations are queued and
+// --image` and `tessref tessellate -o x.png`. The pixels stay the caller's; operations are queued and
 // painted, in order, by paint().
 #pragma once
 

@@ -1,7 +1,7 @@
 // src/mesh/openmesh.h — where a mesh read by tessref's own readers (read_mesh_file,
-// tessref/check.h) enters OpenMesh (private to the library).
+// tessref/mesh_io.h) enters OpenMesh (private to the library).
 //
-// OpenMesh's readers are not used on user files (src/check/read.cpp says why), but its
+// OpenMesh's readers are not used on user files (src/mesh/read.cpp says why), but its
 // half-edge kernel stays the reference for what a mesh file means to OpenMesh: which faces
 // it refuses (the check's refused_face class) and the vertex normals it computes (a
 // scene's [mesh] without normals). Both are asked of one import, done here as OpenMesh's
@@ -15,8 +15,8 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
-#include "tessref/check.h"
 #include "tessref/mesh.h"
+#include "tessref/mesh_io.h"
 
 namespace tessref::mesh_detail {
 

@@ -19,7 +19,6 @@
 #include <span>
 
 #include "tessref/control.h"
-#include "tessref/pipeline.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
 #include "tessref/scene.h"

@@ -12,9 +12,7 @@
 #include "mesh/openmesh.h"
 #include "scene/shading_load.h"
 #include "scene/toml_reader.h"
-#include "tessref/check.h"
-#include "tessref/pipeline.h"
-#include "tessref/render.h"
+#include "tessref/mesh_io.h"
 #include "tessref/scene.h"
 
 namespace tessref {
@@ -184,8 +182,10 @@ struct Loader {
         cam.near_plane = t.real_or("near", 1.0, 0.0, HUGE_VAL, true);
         cam.far_plane = t.real_or("far", 10000.0, 0.0, HUGE_VAL, true);
         if (!(cam.far_plane > cam.near_plane)) t.fail("far", "camera.far must be greater than camera.near");
-        ground_clearance = t.real_opt("ground_clearance", 0.0, 1e12);
-        if (ground_clearance) ground_clearance_where = t.where("ground_clearance");
+        // Lifted by the preparation pass (prepare.h), which runs the pipeline.
+        ScenePreparation& p = scene.preparation;
+        p.ground_clearance = t.real_opt("ground_clearance", 0.0, 1e12);
+        if (p.ground_clearance) p.ground_clearance_where = t.where("ground_clearance");
         t.finish();
         scene.camera = cam;
     }
@@ -384,8 +384,8 @@ struct Loader {
     bool read_one_mesh(const TableReader& t, const std::string& path, const glm::dvec3& translate, double scale,
                        TriangleMeshes& out) {
         std::error_code ec;
-        if (!fs::is_regular_file(path, ec))
-            throw Error("cannot read mesh " + path + ": no such file", t.where("path"));
+        // Anything else that is not a mesh file (a directory, a FIFO) the reader names.
+        if (!fs::exists(path, ec)) throw Error("cannot read mesh " + path + ": no such file", t.where("path"));
         // The reader `tessref check` uses (it refuses hostile files, naming line or byte).
         IndexedMesh file;
         try {
@@ -720,45 +720,16 @@ struct Loader {
                             std::to_string(scene.max_triangles),
                         w);
         }
-        if (scene.camera && ground_clearance) lift_camera_above_ground();
+        if (scene.preparation.ground_clearance && !(scene.grid && scene.grid->heightmap))
+            throw Error("camera.ground_clearance keeps the eye above a terrain: the scene needs a [domain] with a "
+                        "height map",
+                        scene.preparation.ground_clearance_where);
         // Last: the scene's other errors come first, its textures are the slowest to load,
         // and COSC422's default heightMap is the grid's.
         const toml::node* shading = root.get("shading");
         scene.shading = scene_detail::read_shading(file, shading ? shading->as_table() : nullptr, scene,
                                                    [this](const std::string& p) { return resolve(p); });
-    }
-
-    // ---- camera collision (lab 4) -----------------------------------------------------
-    // [camera] ground_clearance = d: the pipeline runs with the camera as given (the current
-    // frame's levels), the tessellated surface's height h under the eye is found
-    // (render.h ground_height), and the eye's up coordinate becomes h + d, the center moving
-    // with it. The render then tessellates again from the lifted eye, so levels that depend
-    // on the eye may differ a little from those the height was read on, as in an
-    // application that moves the camera with the previous frame's surface.
-    std::optional<double> ground_clearance;
-    Where ground_clearance_where;
-    void lift_camera_above_ground() {
-        SceneCamera& cam = *scene.camera;
-        const Where& w = ground_clearance_where;
-        if (!scene.grid || !scene.grid->heightmap)
-            throw Error("camera.ground_clearance keeps the eye above a terrain: the scene needs a [domain] with a "
-                        "height map",
-                        w);
-        const bool xy = scene.grid->plane == GroundPlane::xy;
-        const glm::dvec2 ground = xy ? glm::dvec2(cam.eye.x, cam.eye.y) : glm::dvec2(cam.eye.x, cam.eye.z);
-        GroundHeight h;
-        try {
-            h = ground_height(scene, run_pipeline(scene), ground);
-        } catch (const Error& e) {
-            throw Error("camera.ground_clearance: " + e.message(), w);
-        }
-        if (!h.on_surface)
-            throw Error("camera.ground_clearance: no triangle of the surface lies under the eye", w);
-        const double up = h.tessellated + *ground_clearance;
-        double& eye_up = xy ? cam.eye.z : cam.eye.y;
-        double& center_up = xy ? cam.center.z : cam.center.y;
-        center_up += up - eye_up;
-        eye_up = up;
+        set_camera_uniforms(scene);
     }
 
     // Models, domain and camera must fit together.
@@ -852,7 +823,7 @@ std::string read_text_file(const std::string& path) {
 
 }  // namespace
 
-Scene load_scene_from_string(const std::string& toml_text, const std::string& path) {
+Scene parse_scene_from_string(const std::string& toml_text, const std::string& path) {
     Loader loader;
     loader.file = path;
     loader.base_dir = fs::path(path).parent_path();
@@ -860,6 +831,6 @@ Scene load_scene_from_string(const std::string& toml_text, const std::string& pa
     return std::move(loader.scene);
 }
 
-Scene load_scene(const std::string& path) { return load_scene_from_string(read_text_file(path), path); }
+Scene parse_scene(const std::string& path) { return parse_scene_from_string(read_text_file(path), path); }
 
 }  // namespace tessref

@@ -11,7 +11,6 @@
 #include "scene/toml_reader.h"
 #include "tessref/geomipmap.h"
 #include "tessref/heightfield.h"
-#include "tessref/pipeline.h"
 
 namespace tessref::scene_detail {
 
@@ -197,15 +196,16 @@ std::shared_ptr<const Texture> read_image(TableReader& t, const std::string& k, 
     return std::make_shared<const Texture>(std::move(texture));
 }
 
-// geomip_lightmap: the light map computed from the terrain, the materials, the clouds.
-void read_geomip_lightmap(TableReader& t, const Scene& scene, GeomipLightmapShading& g, const Resolve& resolve) {
-    if (scene.evaluation.model != EvaluationModel::geomipmap || !scene.grid)
+// geomip_lightmap: the light the light map is computed from (by the preparation pass,
+// prepare.h: the light map is geomipmap.h's LIGHT MAP over the terrain), the materials, the
+// clouds.
+void read_geomip_lightmap(TableReader& t, Scene& scene, GeomipLightmapShading& g, const Resolve& resolve) {
+    if (scene.evaluation.model != EvaluationModel::geomipmap || !scene.grid || !scene.grid->heightmap)
         t.fail("model", "shading model geomip_lightmap lights a geomipmapped terrain from its height map: it needs "
                         "evaluation model geomipmap");
-    const GeomipTerrain terrain = geomip_terrain(scene);
-    const int w = terrain.map.width, h = terrain.map.height;
+    // One light and alpha texel per height sample (geomip_terrain() reads mip 0 of the map).
+    const int w = scene.grid->heightmap->texture.width(), h = scene.grid->heightmap->texture.height();
 
-    // The light map (geomipmap.h, LIGHT MAP), computed here once: the scene's light.
     geomip::LightMapParams light;
     if (const auto d = t.vec3_opt("light_direction")) {
         light.light_direction = *d;
@@ -214,11 +214,7 @@ void read_geomip_lightmap(TableReader& t, const Scene& scene, GeomipLightmapShad
             t.fail("light_direction", t.key("light_direction") + " cannot be normalized");
     }
     light.ambient = t.real_or("ambient", light.ambient, 0.0, 1.0);
-    const std::vector<double> values = geomip::light_map(terrain.map, terrain.settings.spacing, terrain.settings.scale_z, light);
-    g.lightMap = std::make_shared<const Texture>(
-        Texture::from_float(w, h, 1, std::vector<float>(values.begin(), values.end())));
-    g.lightMapScale = glm::vec2(glm::dvec2(w - 1, h - 1) / glm::dvec2(w, h));
-    g.lightMapOffset = glm::vec2(glm::dvec2(0.5) / glm::dvec2(w, h));
+    scene.preparation.light_map = light;
 
     // The materials: an array of { texture, repeat, alpha }; the first is the base pass.
     const toml::node* n = t.node("materials");
@@ -283,18 +279,10 @@ Texture load_scene_texture(const std::string& file, const Scene& scene) {
     return load_texture(file);
 }
 
-RenderShading read_shading(const std::string& file, const toml::table* table, const Scene& scene,
+RenderShading read_shading(const std::string& file, const toml::table* table, Scene& scene,
                            const Resolve& resolve) {
     RenderShading out;
     ShadingModel& m = out.model;
-    if (scene.camera) {
-        const glm::vec3 eye(scene.camera->eye);
-        m.lab4.cameraPosition = eye;
-        m.pn.v3CameraPosition = eye;
-        m.pom.v3CameraPosition = eye;
-        m.depth.near_plane = static_cast<float>(scene.camera->near_plane);
-        m.depth.far_plane = static_cast<float>(scene.camera->far_plane);
-    }
     if (!table) return out;
 
     TableReader t(file, *table, "shading", kShadingKeys);
@@ -360,3 +348,18 @@ RenderShading read_shading(const std::string& file, const toml::table* table, co
 }
 
 }  // namespace tessref::scene_detail
+
+namespace tessref {
+
+void set_camera_uniforms(Scene& scene) {
+    if (!scene.camera) return;
+    ShadingModel& m = scene.shading.model;
+    const glm::vec3 eye(scene.camera->eye);
+    m.lab4.cameraPosition = eye;
+    m.pn.v3CameraPosition = eye;
+    m.pom.v3CameraPosition = eye;
+    m.depth.near_plane = static_cast<float>(scene.camera->near_plane);
+    m.depth.far_plane = static_cast<float>(scene.camera->far_plane);
+}
+
+}  // namespace tessref

@@ -15,11 +15,11 @@ namespace tessref::scene_detail {
 Texture load_scene_texture(const std::string& file, const Scene& scene);
 
 // [shading] (null `table`: the scene has none, depth shading) as Scene::shading, its textures
-// loaded. `scene` has its camera and grid read: the camera gives the camera-dependent
-// uniforms (lab 4 cameraPosition, PN v3CameraPosition, depth near/far), the grid's height
-// map is COSC422's heightMap unless the table binds another. `resolve` makes a path of the
-// scene file openable. Errors as TableReader's (toml_reader.h).
-RenderShading read_shading(const std::string& file, const toml::table* table, const Scene& scene,
+// loaded, the camera's uniforms not yet set (set_camera_uniforms, scene.h). `scene` has its
+// grid read: its height map is COSC422's heightMap unless the table binds another, and
+// geomip_lightmap's light goes into scene.preparation. `resolve` makes a path of the scene
+// file openable. Errors as TableReader's (toml_reader.h).
+RenderShading read_shading(const std::string& file, const toml::table* table, Scene& scene,
                            const std::function<std::string(const std::string&)>& resolve);
 
 }  // namespace tessref::scene_detail

@@ -25,6 +25,7 @@
 #include "tessref/error.h"
 #include "tessref/limits.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 

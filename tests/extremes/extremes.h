@@ -20,6 +20,7 @@
 
 #include "command_dir_test.h"
 #include "tessref/capture.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 

@@ -24,6 +24,7 @@
 
 #include "extremes.h"
 #include "tessref/pipeline.h"
+#include "tessref/prepare.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"

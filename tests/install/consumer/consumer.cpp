@@ -13,6 +13,7 @@
 #include <tessref/error.h>
 #include <tessref/gl_backend.h>
 #include <tessref/pipeline.h>
+#include <tessref/prepare.h>
 #include <tessref/tessellator.h>
 
 namespace {
