@@ -424,6 +424,14 @@ Precision parse_precision_flag(const std::string& text) {
     return *precision;
 }
 
+MathMode parse_math_flag(const std::string& text) {
+    if (text == "exact") return MathMode::exact;
+    if (text == "llvmpipe") return MathMode::llvmpipe;
+    throw Error("unknown math mode '" + text + "'; expected exact or llvmpipe", Where::in_file("--math"));
+}
+
+std::string math_note(MathMode math) { return math == MathMode::llvmpipe ? ", llvmpipe math" : ""; }
+
 ThreadLimit::ThreadLimit(int threads) {
     if (threads < 0)
         throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(threads), Where::in_file("--threads"));

@@ -20,6 +20,7 @@
 #include <tbb/global_control.h>
 
 #include "common/file_name.h"  // lowercase_extension
+#include "tessref/control.h"
 #include "tessref/error.h"
 #include "tessref/tessellator.h"
 
@@ -44,6 +45,11 @@ std::optional<long long> parse_integer(std::string_view text);
 
 // Parses --precision: "gpu" or "exact". Throws tessref::Error naming the flag.
 Precision parse_precision_flag(const std::string& text);
+// --math exact|llvmpipe (control.h MathMode); anything else is an error naming the flag.
+MathMode parse_math_flag(const std::string& text);
+// What a summary line adds after "<precision> precision": nothing for exact math (the
+// default, so the line reads as it always has), ", llvmpipe math" otherwise.
+std::string math_note(MathMode math);
 
 // --threads N for the rest of a command: 0 means every core, N > 0 caps oneTBB's
 // parallelism while the object lives, a negative N is a tessref::Error naming the flag.
