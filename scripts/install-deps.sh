@@ -10,6 +10,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   fonts-dejavu-core admesh
   glslang-tools
+  # The shader interpreter's front end (src/shader/): glslang's library, SPIRV-Tools' validator
+  glslang-dev spirv-tools
   # SHA-256 of the golden digests (tessref golden)
   libssl-dev
   # OpenImageIO's CMake package lists /usr/include/opencv4 among its include

@@ -9,6 +9,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -62,6 +63,80 @@ CompareResult compare(const FloatImage& a, const FloatImage& b, int deviation = 
 }
 
 // ---- the rule and the statistics --------------------------------------------------------
+
+// THE RULE of compare.h written out as it reads, pixel by pixel over the whole (2*PX+1)^2
+// neighbourhood, independently of compare.cpp's search: the reference for the property
+// test below.
+bool rule_match(const FloatImage& p, int px, int py, const FloatImage& q, int qx, int qy, double t) {
+    for (int c = 0; c < p.channels; ++c) {
+        const float a = p.at(px, py, c), b = q.at(qx, qy, c);
+        double d;
+        if (a == b || (std::isnan(a) && std::isnan(b))) d = 0.0;
+        else if (std::isnan(a) || std::isnan(b)) d = std::numeric_limits<double>::infinity();
+        else d = std::abs(static_cast<double>(a) - static_cast<double>(b));
+        if (!(d <= t)) return false;
+    }
+    return true;
+}
+std::vector<std::uint8_t> rule_failing(const FloatImage& ref, const FloatImage& test, int n, double t) {
+    std::vector<std::uint8_t> failing(static_cast<std::size_t>(ref.width * ref.height), 0);
+    const auto near = [&](const FloatImage& p, const FloatImage& q, int x, int y) {
+        for (int sy = std::max(0, y - n); sy <= std::min(ref.height - 1, y + n); ++sy)
+            for (int sx = std::max(0, x - n); sx <= std::min(ref.width - 1, x + n); ++sx)
+                if (rule_match(p, x, y, q, sx, sy, t)) return true;
+        return false;
+    };
+    for (int y = 0; y < ref.height; ++y)
+        for (int x = 0; x < ref.width; ++x) {
+            const bool pass = rule_match(ref, x, y, test, x, y, t) || (n > 0 && near(ref, test, x, y) && near(test, ref, x, y));
+            failing[static_cast<std::size_t>(y * ref.width + x)] = pass ? 0 : 1;
+        }
+    return failing;
+}
+
+// compare_images gives THE RULE's verdict for every pixel (a property that any faster search
+// must keep): random images of few levels (so that matches near and far both happen), NaN
+// and infinities among them, every deviation up to the bound, thresholds 0, between the
+// levels, on them and infinite.
+TEST(CompareImages, TheNeighbourhoodSearchGivesTheBruteForceVerdicts) {
+    std::uint32_t state = 12345;
+    const auto next = [&] { return state = state * 1664525u + 1013904223u; };
+    const float specials[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                              -std::numeric_limits<float>::infinity(), -0.0f};
+    int cases = 0;
+    for (int round = 0; round < 60; ++round) {
+        const int width = 1 + static_cast<int>(next() % 37), height = 1 + static_cast<int>(next() % 29);
+        const int channels = 1 + static_cast<int>(next() % 4);
+        const int levels = 2 + static_cast<int>(next() % 6);
+        FloatImage a = filled(width, height, channels, 0.0f), b = a;
+        for (FloatImage* image : {&a, &b})
+            for (float& v : image->samples)
+                v = next() % 50 == 0 ? specials[next() % 4] : static_cast<float>(next() % levels) / static_cast<float>(levels);
+        // b is mostly a moved by a few pixels, so that the search finds matches at a distance.
+        const int dx = static_cast<int>(next() % 7) - 3, dy = static_cast<int>(next() % 7) - 3;
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x)
+                if (next() % 4 != 0 && x + dx >= 0 && x + dx < width && y + dy >= 0 && y + dy < height)
+                    for (int c = 0; c < channels; ++c) b.samples[b.index(x, y, c)] = a.at(x + dx, y + dy, c);
+        const double thresholds[] = {0.0, 0.5 / levels, 1.0 / levels, std::numeric_limits<double>::infinity()};
+        const int deviation = static_cast<int>(next() % (tessref::kMaxPositionDeviation + 1));
+        const double t = thresholds[next() % 4];
+        const CompareResult r = compare(a, b, deviation, t);
+        ASSERT_EQ(r.failing, rule_failing(a, b, deviation, t))
+            << "round " << round << ": " << width << "x" << height << "x" << channels << ", PX " << deviation << ", T " << t;
+        ++cases;
+    }
+    EXPECT_EQ(cases, 60);
+}
+
+// The deviation is bounded (compare.h kMaxPositionDeviation, 16): 2^31 - 1 was accepted and
+// the search costs O(pixels * PX^2).
+TEST(CompareImages, APositionDeviationAboveTheBoundIsRefused) {
+    const FloatImage a = filled(4, 4, 1, 0.0f);
+    EXPECT_NO_THROW(compare(a, a, tessref::kMaxPositionDeviation));
+    EXPECT_THROW(compare(a, a, tessref::kMaxPositionDeviation + 1), tessref::Error);
+    EXPECT_THROW(compare(a, a, std::numeric_limits<int>::max()), tessref::Error);
+}
 
 TEST(CompareImages, IdenticalImagesPassWithZeroErrorAndInfinitePsnr) {
     FloatImage a = filled(5, 3, 4, 0.0f);
@@ -443,6 +518,8 @@ TEST_F(CompareFiles, BadFlagsExit2BeforeReading) {
          {std::vector<std::string>{"--threshold", "-0.1"}, std::vector<std::string>{"--threshold", "nan"},
           std::vector<std::string>{"--threshold", "x"}, std::vector<std::string>{"--max-position-deviation", "-1"},
           std::vector<std::string>{"--max-position-deviation", "1.5"},
+          std::vector<std::string>{"--max-position-deviation", "17"},
+          std::vector<std::string>{"--max-position-deviation", "2147483647"},
           std::vector<std::string>{"--max-failing-pixels", "-3"}, std::vector<std::string>{"--diff", "diff.nope"}}) {
         const RunResult r = run({"compare", path("none1.png"), path("none2.png"), flag[0], flag[1]});
         EXPECT_EQ(r.status, 2) << flag[0] << " " << flag[1];

@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -328,8 +329,10 @@ TEST_F(GlBackend, BrokenShaderGivesDriverLogWithFileAndLineAndExit2) {
     EXPECT_FALSE(fs::exists(out));
 }
 
-// A draw whose count disagrees with the CPU's prediction: exit 1, the draw named, no image.
-TEST_F(GlBackend, WrongDrawCountGivesExit1NamingTheDrawAndWritesNoImage) {
+// A draw whose count disagrees with the CPU's prediction: exit 1, the draw named, the image
+// and the capture written all the same, and the patches behind it listed: none here, since
+// the hook alters only the prediction, not what any patch computes.
+TEST_F(GlBackend, WrongDrawCountGivesExit1NamingTheDrawAndStillWritesImageAndCapture) {
     const fs::path out = dir_ / "x.png", capture = dir_ / "x.txt";
     // lab4-canyon at 320x200 needs 5 draws (133496 triangles, at most 32768 per draw).
     const RunResult r = run_program("env", {"TESSREF_GL_CORRUPT_BATCH=2", kExe, "gl",
@@ -337,13 +340,61 @@ TEST_F(GlBackend, WrongDrawCountGivesExit1NamingTheDrawAndWritesNoImage) {
                                             "320x200", "--capture", capture.string()},
                                     dir_);
     EXPECT_EQ(r.status, 1) << r.out << r.err;
-    EXPECT_NE(r.err.find("draw 2 (patches "), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("no image written"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(out));
-    EXPECT_FALSE(fs::exists(capture));
-    std::size_t left = 0;
-    for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++left;
-    EXPECT_EQ(left, 0u) << "a temporary file was left behind";
+    EXPECT_NE(r.err.find("tessref: gl: draw 2 (patches "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("image and capture written; 0 patches whose levels or triangle counts differ"),
+              std::string::npos) << r.err;
+    EXPECT_TRUE(fs::exists(out));
+    EXPECT_TRUE(fs::exists(capture));
+    std::size_t files = 0;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++files;
+    EXPECT_EQ(files, 2u) << "a temporary file was left behind";
+}
+
+// A user's control shader that computes other levels (tests/data/gl/edge_sum.tesc: outer
+// level 0 lost its "/ 2"): exit 1 with the image and the capture, and every patch whose
+// levels or counts differ listed with the CPU's and llvmpipe's values. Only outer[0] is
+// wrong in that shader, so on each listed patch outer[1..3] must read the same on both sides
+// and outer[0] must not, unless llvmpipe culled the patch (outer[0] <= 0) and emitted nothing.
+TEST_F(GlBackend, UserControlShaderWithOtherLevelsIsReportedPatchByPatch) {
+    const fs::path out = dir_ / "x.png", capture = dir_ / "x.txt";
+    const RunResult r = run({"gl", scene_path("cosc422").string(), "-o", out.string(), "--size", "160x100",
+                             "--capture", capture.string(), "--shader",
+                             "tesc=" + (kSource / "tests" / "data" / "gl" / "edge_sum.tesc").string()});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_TRUE(fs::exists(out));
+    EXPECT_TRUE(fs::exists(capture));
+    EXPECT_NE(r.err.find("llvmpipe generated "), std::string::npos) << r.err;
+    std::size_t listed = 0;
+    for (std::size_t at = r.err.find("\n  patch "); at != std::string::npos; at = r.err.find("\n  patch ", at + 1)) {
+        const std::string line = r.err.substr(at + 1, r.err.find('\n', at + 1) - at - 1);
+        const std::size_t cpu = line.find("levels CPU outer "), gl = line.find(", GL outer ");
+        ASSERT_NE(cpu, std::string::npos) << line;
+        ++listed;
+        if (gl == std::string::npos) {  // the lost "/ 2" took outer level 0 to <= 0: culled
+            EXPECT_NE(line.find(", GL (nothing emitted); triangles CPU "), std::string::npos) << line;
+            EXPECT_TRUE(line.ends_with(", GL 0")) << line;
+            continue;
+        }
+        std::istringstream c(line.substr(cpu + 17)), g(line.substr(gl + 11));
+        std::string cw, gw;
+        std::vector<std::string> cv, gv;
+        while (c >> cw) {  // o0 o1 o2 o3 inner i0 i1,
+            cv.push_back(cw);
+            if (cw.back() == ',') break;
+        }
+        while (g >> gw) {  // o0 o1 o2 o3 inner i0 i1;
+            gv.push_back(gw);
+            if (gw.back() == ';') break;
+        }
+        ASSERT_EQ(cv.size(), 7u) << line;
+        ASSERT_EQ(gv.size(), 7u) << line;
+        EXPECT_NE(cv[0], gv[0]) << line;
+        for (std::size_t k = 1; k < 4; ++k) EXPECT_EQ(cv[k], gv[k]) << line;
+        EXPECT_NE(line.find("; triangles CPU "), std::string::npos) << line;
+    }
+    EXPECT_GT(listed, 0u) << r.err;
+    EXPECT_NE(r.err.find(" " + std::to_string(listed) + " patches whose levels or triangle counts differ"),
+              std::string::npos) << r.err;
 }
 
 // --max-primitives-per-draw N: smaller draws, the same picture and every count as predicted;
@@ -370,8 +421,8 @@ TEST_F(GlBackend, MaxPrimitivesPerDrawSplitsTheDrawsAndKeepsThePicture) {
                                         dir_);
     EXPECT_EQ(wrong.status, 1) << wrong.out << wrong.err;
     EXPECT_NE(wrong.err.find("tessref: gl: draw 20 (patches "), std::string::npos) << wrong.err;
-    EXPECT_NE(wrong.err.find("no image written"), std::string::npos) << wrong.err;
-    EXPECT_FALSE(fs::exists(out));
+    EXPECT_NE(wrong.err.find("image written; 0 patches"), std::string::npos) << wrong.err;
+    EXPECT_TRUE(fs::exists(out));
 }
 
 TEST_F(GlBackend, MaxPrimitivesPerDrawMustBeAPositiveInteger) {
@@ -584,7 +635,7 @@ TEST_F(GlUserShaders, RaisedEvaluationShaderFailsCompareAgainstRender) {
 // A user's evaluation shader keeps its own layout line: equal spacing where the scene's
 // generator says fractional_odd tessellates thesis-all-10's fractional levels otherwise,
 // so the first draw's count is not the reference's: exit 1, the message says the user's
-// shader made it, no image.
+// shader made it, and the image is written all the same.
 TEST_F(GlUserShaders, OwnLayoutWithOtherCountsIsExit1NamingTheUsersShader) {
     std::string text = read_file(kSource / "data" / "shaders" / "thesis_terrain.tese");
     const std::size_t at = text.find("fractional_odd_spacing");
@@ -600,7 +651,10 @@ TEST_F(GlUserShaders, OwnLayoutWithOtherCountsIsExit1NamingTheUsersShader) {
                          ") generated a different number of primitives than the reference"),
               std::string::npos)
         << r.err;
-    EXPECT_FALSE(fs::exists(out));
+    // The image is written all the same, and the patches whose counts differ are listed.
+    EXPECT_TRUE(fs::exists(out));
+    EXPECT_NE(r.err.find("image written; "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("\n  patch "), std::string::npos) << r.err;
 }
 
 // A stage the models do not have is added: a pass-through geometry shader for PN triangles

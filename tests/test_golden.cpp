@@ -6,6 +6,7 @@
 #include <fstream>
 #include <regex>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -105,6 +106,71 @@ TEST_F(GoldenCommand, BadInputIsExitTwo) {
     r = golden("update", "../thesis-map-4");
     EXPECT_EQ(r.status, 2);
     EXPECT_FALSE(fs::exists(dir_ / "golden"));
+}
+
+// A golden file that is not what `golden update` writes is refused (exit 2, naming the
+// file), never read as far as it goes: a malformed digest read as STALE (exit 1), and a
+// deleted or duplicated patch line, levels that are not numbers or a patch count that is
+// not the file's passed.
+TEST_F(GoldenCommand, CorruptGoldenFilesAreRefused) {
+    update("thesis-map-4");
+    const fs::path dir = dir_ / "golden" / "thesis-map-4";
+    const std::string capture = read_file(dir / "capture.txt"), mesh = read_file(dir / "mesh.txt");
+    const auto replaced = [](std::string text, const std::string& from, const std::string& to) {
+        const std::size_t at = text.find(from);
+        EXPECT_NE(at, std::string::npos) << from;
+        return at == std::string::npos ? text : text.replace(at, from.size(), to);
+    };
+    const std::size_t patch0 = capture.find("\npatch 0 ") + 1;
+    const std::string patch0_line = capture.substr(patch0, capture.find('\n', patch0) + 1 - patch0);
+    const std::size_t whole = capture.find(" sha256 ", capture.find("capture patches")) + 8;
+    const std::size_t mesh_sha = mesh.find(" sha256 ") + 8;
+    struct Case {
+        std::string name, file, text;
+    };
+    const std::vector<Case> cases{
+        {"digest one digit short", "capture.txt", std::string(capture).erase(whole, 1)},
+        {"digest in upper case", "capture.txt", std::string(capture).replace(whole, 1, "A")},
+        {"digest not hex", "capture.txt", std::string(capture).replace(whole, 1, "g")},
+        {"patch digest short", "capture.txt", replaced(capture, patch0_line, patch0_line.substr(0, patch0_line.size() - 2) + "\n")},
+        {"patch line duplicated", "capture.txt", replaced(capture, patch0_line, patch0_line + patch0_line)},
+        {"patch line deleted", "capture.txt", replaced(capture, patch0_line, "")},
+        {"levels nan", "capture.txt", std::regex_replace(capture, std::regex("\npatch 0 levels [^t]*triangles"), "\npatch 0 levels nan triangles")},
+        {"six levels, one nan", "capture.txt", std::regex_replace(capture, std::regex("\n(patch 0 levels )[^ ]*"), "\n$1nan")},
+        {"patch count 4000000000", "capture.txt", std::regex_replace(capture, std::regex("capture patches [0-9]+"), "capture patches 4000000000")},
+        {"no size", "capture.txt", std::regex_replace(capture, std::regex("\nsize [^\n]*"), "")},
+        {"mesh digest short", "mesh.txt", std::string(mesh).erase(mesh_sha, 1)},
+        {"mesh digest not hex", "mesh.txt", std::string(mesh).replace(mesh_sha, 1, "z")},
+        {"mesh line twice", "mesh.txt", mesh + mesh.substr(mesh.find("\nmesh ") + 1)},
+    };
+    for (const Case& c : cases) {
+        write_file(dir / "capture.txt", c.file == "capture.txt" ? c.text : capture);
+        write_file(dir / "mesh.txt", c.file == "mesh.txt" ? c.text : mesh);
+        const auto r = golden("verify", "thesis-map-4");
+        EXPECT_EQ(r.status, 2) << c.name << "\n" << r.out << r.err;
+        EXPECT_NE(r.err.find(c.file), std::string::npos) << c.name << ": " << r.err;
+    }
+    write_file(dir / "capture.txt", capture);
+    write_file(dir / "mesh.txt", mesh);
+    const auto r = golden("verify", "thesis-map-4");
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+}
+
+// update writes only what verify reads back: a scene file named "..toml" (stem ".", the
+// golden directory itself) or with a newline in its name (which would break a comment line
+// of capture.txt) is refused before anything is written.
+TEST_F(GoldenCommand, UpdateRefusesSceneNamesVerifyCouldNotReadBack) {
+    const std::string scene = tessref::test::with_absolute_data_paths(read_file(kScenes + "/thesis-map-4.toml"),
+                                                                      fs::path(kScenes).parent_path());
+    for (const std::string name : {"..toml", "a\nb.toml", "tab\there.toml"}) {
+        fs::remove_all(dir_ / "scenes");
+        fs::remove_all(dir_ / "golden");
+        fs::create_directories(dir_ / "scenes");
+        write_file(dir_ / "scenes" / name, scene);
+        const auto r = run({"golden", "update", "--golden", path("golden"), "--scenes", path("scenes")});
+        EXPECT_EQ(r.status, 2) << name << ": " << r.out << r.err;
+        EXPECT_FALSE(fs::exists(dir_ / "golden")) << name;
+    }
 }
 
 }  // namespace

@@ -1187,6 +1187,19 @@ TEST_F(MeshCommand, OutputIsTheSameWhateverTheThreadCount) {
     }
 }
 
+// --math llvmpipe: the summary says which math ran; exact, the default, adds nothing to it.
+TEST_F(MeshCommand, MathModeIsNamedInTheSummaryWhenItIsLlvmpipe) {
+    const RunResult exact = run({scene("thesis-all-10"), "-o", path("e.ply").string()});
+    ASSERT_EQ(exact.status, 0) << exact.err;
+    EXPECT_NE(exact.out.find(": ply ascii, gpu precision, 256 patches"), std::string::npos) << exact.out;
+    const RunResult llvmpipe = run({scene("thesis-all-10"), "-o", path("l.ply").string(), "--math", "llvmpipe"});
+    ASSERT_EQ(llvmpipe.status, 0) << llvmpipe.err;
+    EXPECT_NE(llvmpipe.out.find(": ply ascii, gpu precision, llvmpipe math, 256 patches"), std::string::npos)
+        << llvmpipe.out;
+    // The acos of the normal factor moves some levels, and with them the surface.
+    EXPECT_NE(read_text(path("e.ply")), read_text(path("l.ply")));
+}
+
 TEST_F(MeshCommand, BadOutputIsAnErrorBeforeAnythingIsWritten) {
     const std::string good = scene("thesis-constant-1");
     struct Case {
@@ -1199,6 +1212,7 @@ TEST_F(MeshCommand, BadOutputIsAnErrorBeforeAnythingIsWritten) {
         {{good, "-o", (dir_ / "missing" / "t.ply").string()}, "cannot create output file"},
         {{good, "-o", path("t.obj").string(), "--binary"}, "no binary form"},
         {{good, "-o", path("t.ply").string(), "--precision", "half"}, "unknown precision"},
+        {{good, "-o", path("t.ply").string(), "--math", "fast"}, "unknown math mode 'fast'; expected exact or llvmpipe (--math)"},
         {{(dir_ / "missing.toml").string(), "-o", path("t.ply").string()}, ""},
     };
     for (const Case& c : cases) {

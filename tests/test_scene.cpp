@@ -552,6 +552,34 @@ TEST_F(BadScene, MalformedToml) {
     EXPECT_NE(std::string(e.what()).find("malformed TOML"), std::string::npos) << e.what();
 }
 
+// The gpu precision computes in float: a value beyond float's range (scale_z = 1e39 gave an
+// empty mesh and picture) or nonzero below its normal range (scale_xy = 1e-45 gave infinite
+// texture coordinates) is refused, naming the key and the file. 0 and float's extremes stay
+// accepted where the key's own range allows them.
+TEST_F(BadScene, ValuesOutsideFloatsRangeAreRefused) {
+    struct Case {
+        std::string from, to, key;
+    };
+    for (const Case& c : std::vector<Case>{{"scale_z = 2.0", "scale_z = 1e39", "domain.scale_z"},
+                                           {"scale_z = 2.0", "scale_z = -1e39", "domain.scale_z"},
+                                           {"scale_xy = 8.0", "scale_xy = 1e-45", "domain.scale_xy"},
+                                           {"scale_z = 2.0", "scale_z = 1e-40", "domain.scale_z"},
+                                           {"x = [0.0, 8.0]", "x = [0.0, 1e300]", "domain.x[1]"}}) {
+        std::string text = terrain_scene("h.pgm");
+        text.replace(text.find(c.from), c.from.size(), c.to);
+        const Error e = load_error(text);
+        EXPECT_EQ(e.where().file, path_) << c.to;
+        EXPECT_EQ(e.where().key, c.key) << c.to << ": " << e.what();
+        EXPECT_NE(std::string(e.what()).find("float"), std::string::npos) << e.what();
+    }
+    for (const std::string value : {"0.0", "3.4e38", "-3.4e38", "1.2e-38"}) {
+        std::string text = terrain_scene(dir_->path("h.pgm"));
+        text.replace(text.find("scale_z = 2.0"), 13, "scale_z = " + value);
+        const std::string path = dir_->write("ok.toml", text);
+        EXPECT_NO_THROW(load_scene(path)) << value;
+    }
+}
+
 TEST_F(BadScene, UnknownKey) {
     std::string text = terrain_scene("h.pgm");
     text.replace(text.find("level = 3.0"), 11, "levle = 3.0");

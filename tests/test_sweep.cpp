@@ -13,6 +13,13 @@
 //    refusals (exit 2, nothing written), the SLURM variables.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -778,6 +785,88 @@ TEST_F(SweepCommand, GeomipLevelZeroIsTheRayTracedTruthUpToRasterization) {
     const std::size_t at = cmp.out.find("rmse");
     ASSERT_NE(at, std::string::npos) << cmp.out;
     EXPECT_NEAR(std::stod(cmp.out.substr(at + 4)), rmse, 1e-4) << cmp.out;
+}
+
+// A shard whose pictures are gone (copied without images/, or pruned) is refused: the
+// merged report would link to nothing.
+TEST_F(SweepCommand, MergeRefusesAShardWhosePicturesAreMissing) {
+    const std::string a = terrain("bump");
+    for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(sweep({a, "--levels", "1,2", "-o", "s" + std::to_string(i), "--shard", std::to_string(i) + "/2"}).status, 0);
+    ASSERT_EQ(run_here({"sweep", "merge", "s0", "s1", "-o", "merged"}).status, 0);
+    fs::remove_all(dir_ / "merged");
+    // One picture of shard 1 removed.
+    std::vector<fs::path> pictures;
+    for (const auto& e : fs::recursive_directory_iterator(dir_ / "s1" / "images"))
+        if (e.is_regular_file()) pictures.push_back(e.path());
+    ASSERT_FALSE(pictures.empty());
+    std::sort(pictures.begin(), pictures.end());
+    fs::remove(pictures.back());
+    const RunResult r = run_here({"sweep", "merge", "s0", "s1", "-o", "merged"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("missing from the shard"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("s1/sweep.csv"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "merged"));
+}
+
+// The names of the temporary directories of a sweep into `out`, beside it.
+std::set<std::string> sweep_temporaries(const fs::path& dir) {
+    std::set<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir))
+        if (e.path().filename().string().rfind(".out.tmp-", 0) == 0) names.insert(e.path().filename().string());
+    return names;
+}
+
+// Killed by SIGTERM, SIGINT, SIGHUP or SIGQUIT while it runs, a sweep leaves no temporary
+// directory (it removes it, then dies of the signal).
+TEST_F(SweepCommand, ASweepKilledByASignalLeavesNoTemporaryDirectory) {
+    const std::string a = terrain("bump");
+    for (const int signal_number : {SIGTERM, SIGINT, SIGHUP, SIGQUIT}) {
+        const pid_t child = ::fork();
+        ASSERT_GE(child, 0);
+        if (child == 0) {
+            // A sweep long enough to be caught running: every level, five runs a row.
+            ::chdir(dir_.c_str());
+            const rlimit no_core{0, 0};
+            ::setrlimit(RLIMIT_CORE, &no_core);  // SIGQUIT dumps core by default
+            ::signal(signal_number, SIG_DFL);
+            const int null = ::open("/dev/null", O_WRONLY);
+            ::dup2(null, 1);
+            ::dup2(null, 2);
+            ::execl(TESSREF_EXE, TESSREF_EXE, "sweep", a.c_str(), "--levels", "1..64", "--repeat", "5", "--size",
+                    "320x200", "-o", "out", static_cast<char*>(nullptr));
+            ::_exit(127);
+        }
+        // Wait for the temporary directory (at most 60 s), then send the signal.
+        for (int i = 0; i < 6000 && sweep_temporaries(dir_).empty(); ++i) ::usleep(10000);
+        ASSERT_FALSE(sweep_temporaries(dir_).empty()) << "signal " << signal_number;
+        ::usleep(200000);  // into the rows
+        ::kill(child, signal_number);
+        int status = 0;
+        ASSERT_EQ(::waitpid(child, &status, 0), child);
+        EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal_number) << "signal " << signal_number;
+        EXPECT_TRUE(sweep_temporaries(dir_).empty()) << "signal " << signal_number << ": left " << *sweep_temporaries(dir_).begin();
+        EXPECT_FALSE(fs::exists(dir_ / "out"));
+    }
+}
+
+// What a killed run could not remove (SIGKILL) is removed by the next sweep into the same
+// directory: its name holds the dead process's id. A live process's is left alone.
+TEST_F(SweepCommand, TheNextSweepRemovesTheTemporaryDirectoryOfAKilledOne) {
+    const std::string a = terrain("bump");
+    const pid_t gone = ::fork();
+    ASSERT_GE(gone, 0);
+    if (gone == 0) ::_exit(0);
+    ASSERT_EQ(::waitpid(gone, nullptr, 0), gone);
+    const std::string stale = ".out.tmp-" + std::to_string(gone) + "-AbC123";
+    const std::string live = ".out.tmp-" + std::to_string(::getpid()) + "-XyZ789";
+    for (const std::string& name : {stale, live}) {
+        fs::create_directories(dir_ / name / "images");
+        write_file(dir_ / name / "sweep.csv", "left by a killed run\n");
+    }
+    ASSERT_EQ(sweep({a, "--levels", "1", "-o", "out"}).status, 0);
+    EXPECT_FALSE(fs::exists(dir_ / stale));
+    EXPECT_TRUE(fs::exists(dir_ / live));
 }
 
 }  // namespace

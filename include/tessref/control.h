@@ -35,8 +35,12 @@
 // PRECISION. Each model is a template over the scalar: float is the GPU-faithful path
 // (the shader's operations in the shader's order, float rounding at each step), double the
 // accuracy path (same formula). Both are instantiated in src/control/. Transcendentals
-// (acos, sqrt, log2) come from the C library; a GPU's approximations may differ by a few
-// ulp, which cannot open a crack because both patches of an edge use the same function.
+// (acos, log2) and the vector built-ins come in two math modes (MathMode, below): exact, the
+// C library's correctly rounded functions and glm (the default, and the only mode of the
+// double path), or, in float, llvmpipe's own approximations and orders of operations
+// (src/shader/llvmpipe_math.h), which put the thesis's normal factor off the exact one by up
+// to thousands of ulps. Either way both patches of an edge compute alike, so no mode can open
+// a crack.
 // The compiler must not contract a*b+c into fma (the project builds with ISO C++, where
 // GCC's default is -ffp-contract=off; x86-64 without -mfma has no fma anyway; the build
 // also says -ffp-contract=off explicitly).
@@ -78,6 +82,15 @@
 #include "tessref/tessellator.h"
 
 namespace tessref {
+
+// How the float path computes GLSL's built-ins: exact, glm and the C library (acos and log2
+// correctly rounded, dot products summed from the first component; what `render`, `mesh`
+// and the goldens use unless --math says otherwise), or llvmpipe, bit for bit as Mesa's
+// llvmpipe computes them (src/shader/llvmpipe_math.h: its acos and log2 approximations, dot,
+// length, distance and normalize summed from the last component, a matrix times a vector
+// summed column by column; what `tessref gl` predicts its draws with). The double path
+// always uses exact.
+enum class MathMode : std::uint8_t { exact, llvmpipe };
 
 // ---------------------------------------------------------------------------------------
 // Common types
@@ -175,7 +188,7 @@ T distance_factor(T distance, const ThesisDistance<T>& params = {});
 
 // NormalFromTexture as the control shader has it (no normalMatrix): normalize(rgb - 0.5).
 template <typename T>
-vec3_t<T> normal_from_texture(const vec3_t<T>& rgb);
+vec3_t<T> normal_from_texture(const vec3_t<T>& rgb, MathMode math = MathMode::exact);
 
 // The weights of formula (2); defaults are the shader's (normal 5, texture 5, distance 5,
 // constant 1).
@@ -216,6 +229,7 @@ struct ThesisControlParams {
 // normal reads normalMap; all reads both).
 template <typename T>
 struct ThesisControl : ThesisControlParams<T> {
+    MathMode math = MathMode::exact;  // acos of the normal factor (float only)
     T scaleXY = T(1);
     vec3_t<T> cameraPosition{T(0)};
     Sampler2D<T> tessellationMap;
@@ -314,6 +328,7 @@ struct Lab4ControlParams {  // [control] model = "lab4"
 };
 template <typename T>
 struct Lab4Control : Lab4ControlParams<T> {
+    MathMode math = MathMode::exact;  // log2 of the LOD outputs (float only)
     vec3_t<T> cameraPosition{T(0)};
 };
 
@@ -371,6 +386,7 @@ struct PnControlParams {  // [control] model = "pn"
 };
 template <typename T>
 struct PnControl : PnControlParams<T> {
+    MathMode math = MathMode::exact;  // distance and length of the level (float only)
     vec2_t<T> v2Resolution{T(1280), T(800)};  // the camera's viewport
 };
 template <typename T>

@@ -90,4 +90,16 @@ CapturedPatch capture_pattern(Context& context, const TessSettings& settings,
 // %.9g and as the hexadecimal float bits: for debugging a mismatch by hand.
 std::string dump(const CapturedPatch& patch);
 
+// ---- A float expression on llvmpipe ------------------------------------------------------
+//
+// Evaluates the GLSL float expression `expression` of `float x` and `float y` once per
+// element of x (y[i] as its second operand; y may be empty, then y = 0), in a vertex shader
+// whose inputs arrive as raw bits, and returns each result's bits as transform feedback
+// wrote them. The vertex stage runs where llvmpipe runs every stage before the rasterizer,
+// in the same floating-point environment (denormals flushed), so this is how llvmpipe
+// computes the expression in a control shader too. tests/test_llvmpipe_math.cpp holds
+// shader/llvmpipe_math.h to it. Throws tessref::Error when the expression does not compile.
+std::vector<float> evaluate(Context& context, const std::string& expression,
+                            std::span<const float> x, std::span<const float> y = {});
+
 }  // namespace tessref::gl

@@ -33,11 +33,14 @@ namespace tessref::gl {
 // clamp-to-edge, GL_LINEAR / GL_LINEAR_MIPMAP_LINEAR). Camera and image size as
 // `tessref render` (render.h): --size replaces the viewport.
 //
-// The CPU pipeline runs first: its per-patch triangle counts size the draws (at most
-// max_primitives_per_draw predicted primitives per draw, at least one patch) and every
-// draw's GL_PRIMITIVES_GENERATED must equal its prediction. A draw that disagrees ends the
-// render: batch_failure names it and no image is returned (llvmpipe corrupts large
-// tessellated draws silently; a level computed differently by the GLSL twin shows here too).
+// The CPU pipeline runs first, in llvmpipe's math mode (SceneRenderOptions::math): its
+// per-patch triangle counts size the draws (at most max_primitives_per_draw predicted
+// primitives per draw, at least one patch) and every draw's GL_PRIMITIVES_GENERATED is held
+// against its prediction. A draw that disagrees is named in batch_failure (llvmpipe
+// corrupts large tessellated draws silently; a level computed differently by a user's
+// shader shows here too); the image is still drawn, and the capture is taken (with or
+// without SceneRenderOptions::capture) to list the patches whose levels or triangle counts
+// differ (differences).
 //
 // User shaders (the scene's [shaders], `tessref gl --shader STAGE=FILE`): a user's GLSL file
 // takes the place of one stage's twin, or is added where the models have no such stage
@@ -45,7 +48,7 @@ namespace tessref::gl {
 // none). Everything else stays: the other stages, the uniforms, the textures and the CPU
 // reference's predicted counts (the CPU pipeline keeps the reference models). A user's
 // evaluation shader keeps its own layout(...) in; line (it is what is under test), so a
-// layout or a control shader that tessellates differently ends the render as above, the
+// layout or a control shader that tessellates differently is reported as above, the
 // message naming the user's files. The contract a user's shader is held to is the twins'
 // interface: the uniform names and types, the sampler bindings, the vertex attributes and
 // the blocks between the stages (below; README, "Debugging your own shader"); a uniform it
@@ -101,6 +104,19 @@ struct SceneRenderOptions {
     // (render_scene_isolated() runs it in the parent); null: render_scene() runs it.
     std::shared_ptr<const PipelineResult> pipeline;
     double pipeline_seconds = 0.0;  // how long that took, for SceneRenderStats
+    // The math mode of the CPU pipeline that predicts the counts (control.h MathMode):
+    // llvmpipe's approximations, so that its levels are the driver's bit for bit.
+    MathMode math = MathMode::llvmpipe;
+};
+
+// A patch whose levels or triangle count differ between the CPU pipeline and llvmpipe.
+struct PatchDifference {
+    std::size_t patch = 0;
+    std::uint64_t cpu_triangles = 0;
+    std::uint64_t gl_triangles = 0;   // captured by transform feedback
+    TessLevels cpu_levels{};
+    TessLevels gl_levels{};           // as llvmpipe's evaluation shader read them
+    bool gl_levels_known = false;     // false: llvmpipe emitted nothing for the patch
 };
 
 // SceneRender::capture: one CapturedVertex (tessref/capture.h) per vertex of every
@@ -122,7 +138,10 @@ struct SceneRender {
     RenderShading shading{};
     std::vector<glm::vec4> colour;  // row 0 on top (OSMesa's rows flipped), unclamped float
     std::vector<CapturedVertex> capture;  // with SceneRenderOptions::capture
-    std::string batch_failure;  // non-empty: a draw's primitive count was wrong (no image)
+    // Non-empty: a draw's primitive count differed from the prediction (every such draw
+    // named). The image is still drawn, and the capture taken to find the patches:
+    std::string batch_failure;
+    std::vector<PatchDifference> differences;  // with batch_failure: the patches that differ
     std::shared_ptr<const PipelineResult> pipeline;  // the CPU pipeline the counts came from
     std::vector<StageShader> user_shaders;  // the user's files in place of twins, vertex .. fragment
     SceneRenderStats stats{};

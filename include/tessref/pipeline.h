@@ -51,6 +51,9 @@ struct PipelineTimings {
 
 struct PipelineOptions {
     Precision precision = Precision::gpu;  // gpu: float stages, exact: double stages
+    // The control stage's acos and log2 in gpu precision (control.h MathMode): exact (the
+    // C library) or llvmpipe (Mesa's approximations, bit for bit). Exact precision ignores it.
+    MathMode math = MathMode::exact;
     // Called with (patches done, patch count) as patches finish, from worker threads
     // (serialized by the pipeline); may be empty.
     std::function<void(std::size_t done, std::size_t total)> progress;

@@ -77,6 +77,7 @@ struct RenderOptions {
     glm::ivec2 size{0, 0};
     RenderMode mode = RenderMode::fill;
     Precision precision = Precision::gpu;   // of the pipeline (the rasterizer is float)
+    MathMode math = MathMode::exact;        // PipelineOptions::math
     // Camera-relative evaluation (PipelineOptions::camera_relative, gpu precision only): the
     // pipeline evaluates relative to the eye, and gl_Position = mvp * the eye-relative float
     // position with mvp the view-projection of the camera moved by -origin (built in double,

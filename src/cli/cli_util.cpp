@@ -17,6 +17,8 @@
 #include <unistd.h>
 
 #include "common/input_file.h"
+#include "common/temp_cleanup.h"
+#include "common/temp_name.h"
 #include "tessref/error.h"
 
 namespace tessref::cli {
@@ -132,47 +134,48 @@ std::string format_double(double x) {
     return buffer;
 }
 
+std::string utf8_for_json(std::string_view text) {
+    std::string out;
+    out.reserve(text.size());
+    const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+    for (std::size_t i = 0; i < text.size();) {
+        const unsigned char lead = byte(i);
+        // The length of a well-formed sequence starting here (RFC 3629: no overlong forms,
+        // no surrogates, nothing above U+10FFFF), 0 when there is none.
+        std::size_t length = 0;
+        if (lead < 0x80) {
+            length = 1;
+        } else {
+            const std::size_t want = lead >= 0xC2 && lead <= 0xDF ? 2 : lead >= 0xE0 && lead <= 0xEF ? 3
+                                     : lead >= 0xF0 && lead <= 0xF4 ? 4 : 0;
+            if (want && i + want <= text.size()) {
+                unsigned char lo = 0x80, hi = 0xBF;  // the second byte's range
+                if (lead == 0xE0) lo = 0xA0;
+                if (lead == 0xED) hi = 0x9F;
+                if (lead == 0xF0) lo = 0x90;
+                if (lead == 0xF4) hi = 0x8F;
+                bool ok = byte(i + 1) >= lo && byte(i + 1) <= hi;
+                for (std::size_t k = 2; ok && k < want; ++k) ok = byte(i + k) >= 0x80 && byte(i + k) <= 0xBF;
+                if (ok) length = want;
+            }
+        }
+        if (length) {
+            out.append(text.substr(i, length));
+            i += length;
+        } else {
+            char escaped[8];
+            std::snprintf(escaped, sizeof escaped, "\\x%02X", lead);
+            out += escaped;
+            ++i;
+        }
+    }
+    return out;
+}
+
 // ---------------------------------------------------------------------------------------
 // Output
 
 namespace {
-
-// Live temporary files, for the signal handler: it may only read memory that no one frees
-// or moves under it, so each slot is a fixed path buffer behind a lock-free state.
-constexpr int kSlotFree = 0, kSlotFilling = 1, kSlotLive = 2;
-struct TempSlot {
-    std::atomic<int> state{kSlotFree};
-    char path[PATH_MAX];
-};
-TempSlot temp_slots[64];
-
-// Returns the slot, or -1 when none is free or the path is too long (the file is then
-// still removed on errors, only not on signals).
-int register_temp(const std::filesystem::path& path) {
-    std::error_code error;
-    const std::string absolute = std::filesystem::absolute(path, error).string();
-    if (error || absolute.size() >= PATH_MAX) return -1;
-    for (int i = 0; i < static_cast<int>(std::size(temp_slots)); ++i) {
-        int expected = kSlotFree;
-        if (!temp_slots[i].state.compare_exchange_strong(expected, kSlotFilling)) continue;
-        std::memcpy(temp_slots[i].path, absolute.c_str(), absolute.size() + 1);
-        temp_slots[i].state.store(kSlotLive);
-        return i;
-    }
-    return -1;
-}
-
-void unregister_temp(int slot) {
-    if (slot >= 0) temp_slots[slot].state.store(kSlotFree);
-}
-
-extern "C" void remove_temps_and_die(int signal_number) {
-    // Only async-signal-safe calls: unlink, signal, raise.
-    for (TempSlot& slot : temp_slots)
-        if (slot.state.load() == kSlotLive) ::unlink(slot.path);
-    ::signal(signal_number, SIG_DFL);
-    ::raise(signal_number);  // pending until this handler returns, then the default action
-}
 
 // The descriptor a path names without being a file of its own: /dev/stdout, /dev/stderr,
 // /dev/fd/N, /proc/self/fd/N. Writing there must go to the descriptor (its offset, its
@@ -219,18 +222,6 @@ int write_all(int fd, const char* bytes, std::size_t size) {
 
 }  // namespace
 
-void install_signal_cleanup() {
-    // SIGPIPE too: a reader of a FIFO or pipe output that goes away kills us the same way.
-    for (const int signal_number : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) {
-        struct sigaction current {};
-        if (::sigaction(signal_number, nullptr, &current) != 0 || current.sa_handler == SIG_IGN) continue;
-        struct sigaction action {};
-        action.sa_handler = remove_temps_and_die;
-        sigemptyset(&action.sa_mask);
-        ::sigaction(signal_number, &action, nullptr);
-    }
-}
-
 AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extension)
     : target_(std::move(target)) {
     if (target_.empty()) throw Error("empty output file name");
@@ -274,25 +265,29 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
     // The temporary file: beside the file a rename replaces (same file system), or in the
     // temp directory for a write-through (no file may be created beside /dev/null).
     std::filesystem::path dir;
-    std::string prefix;
+    std::string lead, base;
     if (write_through_) {
         std::error_code error;
         dir = std::filesystem::temp_directory_path(error);
         if (error) dir = "/tmp";
-        prefix = "tessref-" + target_.filename().string();
+        lead = "tessref-";
+        base = target_.filename().string();
     } else {
         dir = replaced_.parent_path();
-        prefix = "." + replaced_.filename().string();
+        lead = ".";
+        base = replaced_.filename().string();
     }
     const std::string extension = temp_extension.empty() ? target_.extension().string() : temp_extension;
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 100; ++attempt) {
-        // "<prefix>.<pid>-<n>.tmp<ext>": unique to this process, the target's extension.
-        const std::string name = prefix + "." + std::to_string(::getpid()) + "-" +
-                                 std::to_string(counter.fetch_add(1)) + ".tmp" + extension;
+        // "<lead><name>.<pid>-<n>.tmp<ext>": unique to this process, the target's extension,
+        // the name cut where the whole would not fit in a file name (temp_name.h).
+        const std::string name = temporary_name(
+            lead, base, "." + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1)) + ".tmp",
+            extension);
         const std::filesystem::path candidate = dir.empty() ? std::filesystem::path(name) : dir / name;
         // Registered before it exists, so no signal can come between creating and listing it.
-        const int slot = register_temp(candidate);
+        const int slot = register_temporary(candidate);
         const int fd = ::open(candidate.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd >= 0) {
             ::close(fd);
@@ -302,7 +297,7 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
             return;
         }
         const int error = errno;
-        unregister_temp(slot);
+        unregister_temporary(slot);
         if (error != EEXIST) throw Error("cannot create output file: " + errno_text(error), Where::in_file(given));
     }
     throw Error("cannot create a temporary file next to the output", Where::in_file(given));
@@ -333,7 +328,7 @@ void AtomicOutput::refuse_an_input() const {
 
 void AtomicOutput::discard() {
     if (!temp_.empty()) ::unlink(temp_.c_str());
-    unregister_temp(temp_slot_);
+    unregister_temporary(temp_slot_);
     temp_slot_ = -1;
     committed_ = true;  // nothing left to clean up
 }
@@ -364,7 +359,7 @@ void AtomicOutput::commit() {
             discard();
             throw Error("cannot write output file: " + errno_text(error), Where::in_file(target_.string()));
         }
-        unregister_temp(temp_slot_);
+        unregister_temporary(temp_slot_);
         temp_slot_ = -1;
         committed_ = true;
         return;
@@ -470,6 +465,14 @@ Precision parse_precision_flag(const std::string& text) {
     if (!precision) throw Error("unknown precision '" + text + "'; expected gpu or exact", Where::in_file("--precision"));
     return *precision;
 }
+
+MathMode parse_math_flag(const std::string& text) {
+    if (text == "exact") return MathMode::exact;
+    if (text == "llvmpipe") return MathMode::llvmpipe;
+    throw Error("unknown math mode '" + text + "'; expected exact or llvmpipe", Where::in_file("--math"));
+}
+
+std::string math_note(MathMode math) { return math == MathMode::llvmpipe ? ", llvmpipe math" : ""; }
 
 ThreadLimit::ThreadLimit(int threads) {
     if (threads < 0)

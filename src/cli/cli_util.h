@@ -20,6 +20,7 @@
 #include <tbb/global_control.h>
 
 #include "common/file_name.h"  // lowercase_extension
+#include "tessref/control.h"
 #include "tessref/error.h"
 #include "tessref/tessellator.h"
 
@@ -44,6 +45,11 @@ std::optional<long long> parse_integer(std::string_view text);
 
 // Parses --precision: "gpu" or "exact". Throws tessref::Error naming the flag.
 Precision parse_precision_flag(const std::string& text);
+// --math exact|llvmpipe (control.h MathMode); anything else is an error naming the flag.
+MathMode parse_math_flag(const std::string& text);
+// What a summary line adds after "<precision> precision": nothing for exact math (the
+// default, so the line reads as it always has), ", llvmpipe math" otherwise.
+std::string math_note(MathMode math);
 
 // --threads N for the rest of a command: 0 means every core, N > 0 caps oneTBB's
 // parallelism while the object lives, a negative N is a tessref::Error naming the flag.
@@ -73,6 +79,12 @@ std::string format_float_short(float x);
 // "%.17g" for doubles, same NaN/inf spelling.
 std::string format_double(double x);
 
+// `text` (a file name, a scene name) as valid UTF-8 for a JSON report: valid sequences as
+// they are, every byte that is not part of one as the four characters "\xNN" (NN its
+// value in hex), as Python's "backslashreplace" spells it. JSON strings must be UTF-8, and
+// a Linux file name is any bytes: nlohmann::json refuses to dump such a name.
+std::string utf8_for_json(std::string_view text);
+
 // ---------------------------------------------------------------------------------------
 // Output
 
@@ -80,7 +92,7 @@ std::string format_double(double x);
 // to the target (same directory, so the final rename never crosses file systems; same
 // extension as the name given, so writers that pick a codec by extension, such as
 // OpenImageIO, still work). Write to temp_path(), then commit() puts it in place. If
-// commit() is never reached (an exception, an early return, SIGINT/SIGTERM/SIGHUP once
+// commit() is never reached (an exception, an early return, a signal once
 // install_signal_cleanup() ran), the temporary file is removed and the target is left
 // exactly as it was.
 //
@@ -127,10 +139,9 @@ private:
     bool committed_ = false;
 };
 
-// Installs handlers for SIGINT, SIGTERM and SIGHUP (unless ignored, as under nohup) that
-// remove every live AtomicOutput temporary file, then die of the same signal with its
-// default action, so the exit status still says "killed by signal".
-void install_signal_cleanup();
+// install_signal_cleanup() (common/temp_cleanup.h) makes SIGINT, SIGTERM, SIGHUP, SIGQUIT
+// and SIGPIPE remove every live AtomicOutput temporary file before the signal kills the
+// process.
 
 // Writes `bytes` to `target` atomically, or to stdout when target is empty or "-".
 void write_output(const std::string& target, std::string_view bytes);

@@ -103,12 +103,12 @@ std::string report_json(const CompareCommandOptions& options, const FloatImage& 
                         const CompareOptions& compare, const CompareResult& result) {
     nlohmann::json channels = nlohmann::json::array(), maxima = nlohmann::json::array();
     for (std::size_t k = 0; k < result.compared_channels.size(); ++k) {
-        channels.push_back(channel_name(reference, result.compared_channels[k]));
+        channels.push_back(utf8_for_json(channel_name(reference, result.compared_channels[k])));
         maxima.push_back(number_json(result.channel_max_error[k]));
     }
     nlohmann::json report = {
-        {"reference", options.reference},
-        {"test", options.test},
+        {"reference", utf8_for_json(options.reference)},
+        {"test", utf8_for_json(options.test)},
         {"width", result.width},
         {"height", result.height},
         {"channels", channels},
@@ -121,7 +121,7 @@ std::string report_json(const CompareCommandOptions& options, const FloatImage& 
         {"psnr", number_json(result.psnr)},
         {"max_error", number_json(result.max_error)},
         {"channel_max_error", maxima},
-        {"diff", options.diff.empty() ? nlohmann::json(nullptr) : nlohmann::json(options.diff)},
+        {"diff", options.diff.empty() ? nlohmann::json(nullptr) : nlohmann::json(utf8_for_json(options.diff))},
         {"passed", result.passed},
     };
     return report.dump(2) + "\n";
@@ -264,8 +264,8 @@ std::string capture_report_json(const CompareCommandOptions& options, const Capt
         per_patch.push_back({{"patch", patch}, {"failing_vertices", count}});
     for (const DivergingPatch& d : r.listed) listed.push_back(diverging_json(d, reference, test));
     nlohmann::json report = {
-        {"reference", options.reference},
-        {"test", options.test},
+        {"reference", utf8_for_json(options.reference)},
+        {"test", utf8_for_json(options.test)},
         {"reference_has_levels", reference.has_levels},
         {"test_has_levels", test.has_levels},
         {"max_position_ulps", compare.max_position_ulps},
@@ -345,8 +345,10 @@ int run_compare(const CompareCommandOptions& options) {
     // Flags first: nothing is read for a command line that cannot succeed.
     CompareOptions compare;
     const long long deviation = parse_count(options.max_position_deviation, "--max-position-deviation");
-    if (deviation > 1'000'000'000)
-        throw Error("'" + options.max_position_deviation + "' is too large", Where::in_file("--max-position-deviation"));
+    if (deviation > kMaxPositionDeviation)
+        throw Error("'" + options.max_position_deviation + "' is more than " + std::to_string(kMaxPositionDeviation) +
+                        " pixels: a position deviation allows for rasterization differences, a pixel or two",
+                    Where::in_file("--max-position-deviation"));
     compare.max_position_deviation = static_cast<int>(deviation);
     compare.threshold = parse_threshold(options.threshold);
     compare.max_failing_pixels = static_cast<std::uint64_t>(parse_count(options.max_failing_pixels, "--max-failing-pixels"));
@@ -392,7 +394,10 @@ int run_compare(const CompareCommandOptions& options) {
                         std::to_string(test.channels),
                     Where::in_file(options.test));
     const CompareResult result = compare_images(reference, test, compare);
-
+    // The report is made before the diff is put in place: a report that cannot be made
+    // leaves no diff behind.
+    const std::string report = options.json ? report_json(options, reference, compare, result)
+                                            : report_text(options, reference, compare, result);
     if (output) {
         try {
             write_float_image(difference_picture(reference, result), output->temp_path().string());
@@ -401,9 +406,7 @@ int run_compare(const CompareCommandOptions& options) {
         }
         output->commit();
     }
-    std::cout << (options.json ? report_json(options, reference, compare, result)
-                               : report_text(options, reference, compare, result))
-              << std::flush;
+    std::cout << report << std::flush;
     return result.passed ? 0 : 1;
 }
 
@@ -424,7 +427,7 @@ Command add_compare_command(CLI::App& parent) {
         ->required();
     app->add_option("test", options->test, "The image or capture to check against it")->required();
     app->add_option("--max-position-deviation", options->max_position_deviation,
-                    "How far, in pixels (x and y), a matching pixel may lie: the neighbourhood is (2*PX+1)^2 pixels")
+                    "How far, in pixels (x and y), a matching pixel may lie (0..16): the neighbourhood is (2*PX+1)^2 pixels")
         ->type_name("PX")
         ->default_str("0");
     app->add_option("--threshold", options->threshold,

@@ -4,9 +4,11 @@
 //   tessref gl SCENE -o OUT.{png,exr,tif} [--size WxH] [--wireframe] [--capture OUT.{txt,ply}]
 //              [--shader STAGE=FILE]... [--max-primitives-per-draw N]
 //
-// Exit 1, with no image written, when a draw's GL_PRIMITIVES_GENERATED differs from the CPU
-// primitive generator's count (gl_backend.h). TESSREF_GL_CORRUPT_BATCH=N (a test hook) makes
-// the prediction of draw N one too high.
+// Exit 1 when a draw's GL_PRIMITIVES_GENERATED differs from the CPU primitive generator's
+// count (gl_render.h): the image and the capture are written all the same, and the patches
+// whose levels or triangle counts differ are listed. TESSREF_GL_CORRUPT_BATCH=N (a test hook)
+// makes the prediction of draw N one too high.
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -77,6 +79,27 @@ std::size_t parse_max_primitives_per_draw(const std::string& text) {
     return static_cast<std::size_t>(*value);
 }
 
+// The draws whose counts differed and the patches behind them: one line a patch, the CPU
+// value and llvmpipe's of its levels (%.9g, outer then inner) and triangle count.
+void report_differences(std::ostream& err, const gl::SceneRender& r) {
+    err << "tessref: gl: " << r.batch_failure << "; image";
+    if (!r.capture.empty()) err << " and capture";
+    err << " written; " << r.differences.size() << " patch" << (r.differences.size() == 1 ? "" : "es")
+        << " whose levels or triangle counts differ from the CPU's (math mode llvmpipe)"
+        << (r.differences.empty() ? "" : ":") << "\n";
+    const auto levels = [](const TessLevels& l) {
+        char text[160];
+        std::snprintf(text, sizeof text, "outer %.9g %.9g %.9g %.9g inner %.9g %.9g", l.outer[0], l.outer[1],
+                      l.outer[2], l.outer[3], l.inner[0], l.inner[1]);
+        return std::string(text);
+    };
+    for (const gl::PatchDifference& d : r.differences) {
+        err << "  patch " << d.patch << ": levels CPU " << levels(d.cpu_levels) << ", GL "
+            << (d.gl_levels_known ? levels(d.gl_levels) : std::string("(nothing emitted)")) << "; triangles CPU "
+            << d.cpu_triangles << ", GL " << d.gl_triangles << "\n";
+    }
+}
+
 int run_gl(const GlCommandOptions& options) {
     // Camera-relative evaluation is the CPU pipeline's only (render, mesh): the GLSL twins
     // compute texture coordinates from the world position (thesis xy / scaleXY, COSC422 the
@@ -113,10 +136,6 @@ int run_gl(const GlCommandOptions& options) {
     // In a child process with its own limits: a user's shader cannot take tessref down.
     const gl::IsolatedRender isolated = gl::render_scene_isolated(scene, render_options);
     const gl::SceneRender& r = isolated.render;
-    if (!r.batch_failure.empty()) {
-        std::cerr << "tessref: gl: " << r.batch_failure << "; no image written\n";
-        return 1;
-    }
 
     RenderResult image;
     image.width = r.width;
@@ -134,6 +153,10 @@ int run_gl(const GlCommandOptions& options) {
         capture_output->commit();
     }
     output.commit();
+    if (!r.batch_failure.empty()) {
+        report_differences(std::cerr, r);
+        return 1;
+    }
     std::cout << options.output << ": " << r.width << "x" << r.height << ", " << to_string(r.shading.model.kind)
               << " shading, " << isolated.renderer << ", " << r.stats.triangles << " triangles in "
               << r.stats.draws << " draws (every count as predicted), " << r.stats.seconds_gl
@@ -152,8 +175,8 @@ Command add_gl_command(CLI::App& parent) {
         "gl",
         "Render a scene through its GLSL 4.50 twins (data/shaders/) on Mesa llvmpipe (OSMesa, OpenGL 4.5 core): "
         "only the stages the scene names, its uniforms and textures, the camera of `tessref render`. Draws are "
-        "batched and each one's primitive count is checked against the CPU primitive generator (exit 1, no image, "
-        "when they differ).");
+        "batched and each one's primitive count is checked against the CPU pipeline's, run with llvmpipe's math "
+        "(exit 1 when they differ: the image and capture are written and the patches that differ listed).");
     app->add_option("scene", options->scene, "Scene file (TOML)")->required();
     app->add_option("-o,--output", options->output,
                     "Output image: .png and .tif (8-bit RGBA), .exr (float RGBA)")

@@ -45,6 +45,7 @@
 #include "cli/cli_util.h"
 #include "common/input_file.h"
 #include "cli/commands.h"
+#include "cli/golden_files.h"
 #include "tessref/capture.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
@@ -80,12 +81,6 @@ constexpr double kGoldenMaxPositionAbs = 1e-6;
 constexpr std::uint64_t kGoldenMaxNormalUlps = 3;
 constexpr double kGoldenMaxNormalAbs = 1e-6;
 constexpr double kGoldenMaxLevelDifference = 1.0 / 64.0;
-
-// A patch's digest keeps the first 16 hex digits of its SHA-256 (64 bits: a changed patch
-// goes unnoticed with probability 2^-64; the whole capture's digest is kept in full).
-constexpr std::size_t kPatchDigits = 16;
-constexpr const char* kCaptureHeader = "tessref-golden-capture 1";
-constexpr const char* kMeshHeader = "tessref-golden-mesh 1";
 
 struct GoldenOptions {
     std::string action;  // update | verify
@@ -151,7 +146,7 @@ std::vector<PatchDigest> patch_digests(const std::string& capture_text) {
     const auto finish = [&] {
         if (out.empty()) return;
         out.back().triangles = vertex_lines / 3;
-        out.back().sha256 = sha256_hex(body).substr(0, kPatchDigits);
+        out.back().sha256 = sha256_hex(body).substr(0, kGoldenPatchDigits);
     };
     std::istringstream lines(capture_text);
     for (std::string line; std::getline(lines, line);) {
@@ -209,7 +204,7 @@ CpuReference cpu_reference(const Scene& scene, const fs::path& scene_path, glm::
 
 std::string capture_file_text(const std::string& name, glm::ivec2 size, const CpuReference& ref) {
     std::ostringstream out;
-    out << kCaptureHeader << "\n"
+    out << kGoldenCaptureHeader << "\n"
         << "# The CPU reference capture of data/scenes/" << name << ".toml, its viewport replaced by " << size.x << "x"
         << size.y << " (as `tessref render --size` runs the pipeline), as SHA-256 digests.\n"
         << "# Regenerate: tessref golden update " << name << "\n"
@@ -226,7 +221,7 @@ std::string capture_file_text(const std::string& name, glm::ivec2 size, const Cp
 
 std::string mesh_file_text(const std::string& name, const CpuReference& ref) {
     std::ostringstream out;
-    out << kMeshHeader << "\n"
+    out << kGoldenMeshHeader << "\n"
         << "# The SHA-256 of the binary PLY that `tessref mesh data/scenes/" << name
         << ".toml --binary -o mesh.ply` writes\n"
         << "# (check by hand: run it, then sha256sum mesh.ply). Regenerate: tessref golden update " << name << "\n"
@@ -248,7 +243,11 @@ std::vector<std::string> scene_names(const GoldenOptions& options) {
         if (names.empty()) throw Error("no *.toml scene", Where::in_file(options.scenes_dir));
     }
     for (const std::string& n : names) {
-        if (n.empty() || n.find('/') != std::string::npos || n.find("..") != std::string::npos)
+        // The name becomes a directory under --golden and is written into the golden files'
+        // comment lines: "." (the file "..toml") would be --golden itself, and a control
+        // character (a newline) would break a comment line that verify then refuses.
+        const bool control = std::any_of(n.begin(), n.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
+        if (n.empty() || n == "." || control || n.find('/') != std::string::npos || n.find("..") != std::string::npos)
             throw Error("a scene is named by its file stem in --scenes (e.g. thesis-all-10), not '" + n + "'",
                         Where::in_file(n));
         if (!fs::is_regular_file(fs::path(options.scenes_dir) / (n + ".toml")))
@@ -283,58 +282,6 @@ int run_update(const GoldenOptions& options) {
 
 // ---- verify ----------------------------------------------------------------------------
 
-struct GoldenCapture {
-    std::string size;
-    std::string capture_sha256;
-    std::map<std::uint32_t, std::string> patch_sha256;
-};
-
-GoldenCapture read_golden_capture(const fs::path& path) {
-    const std::string text = read_text(path);
-    std::istringstream lines(text);
-    std::string line;
-    GoldenCapture g;
-    int n = 0;
-    bool header = false;
-    while (std::getline(lines, line)) {
-        ++n;
-        if (line.empty() || line[0] == '#') continue;
-        std::istringstream words(line);
-        std::string key;
-        words >> key;
-        if (!header) {
-            if (line != kCaptureHeader) throw Error("not a golden capture digest (first line '" + line + "')", Where::in_file(path.string()));
-            header = true;
-        } else if (key == "size") {
-            words >> g.size;
-        } else if (key == "capture") {
-            std::string w;
-            while (words >> w)
-                if (w == "sha256") words >> g.capture_sha256;
-        } else if (key == "patch") {
-            std::uint32_t id = 0;
-            words >> id;
-            std::string w, sha;
-            while (words >> w)
-                if (w == "sha256") words >> sha;
-            if (sha.size() != kPatchDigits) throw Error("a patch line without its sha256", Where::in_file(path.string(), n));
-            g.patch_sha256[id] = sha;
-        } else {
-            throw Error("unknown line '" + line + "'", Where::in_file(path.string(), n));
-        }
-    }
-    if (!header || g.capture_sha256.empty()) throw Error("not a golden capture digest", Where::in_file(path.string()));
-    return g;
-}
-
-std::string read_golden_mesh_sha(const fs::path& path) {
-    const std::string text = read_text(path);
-    const std::size_t at = text.find(" sha256 ");
-    if (text.rfind(kMeshHeader, 0) != 0 || at == std::string::npos)
-        throw Error("not a golden mesh digest", Where::in_file(path.string()));
-    return text.substr(at + 8, 64);
-}
-
 struct SceneVerdict {
     std::string scene;
     std::size_t triangles = 0;
@@ -364,7 +311,8 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
     SceneVerdict v;
     v.scene = name;
     const fs::path dir = fs::path(options.golden_dir) / name;
-    const GoldenCapture golden_capture = read_golden_capture(dir / "capture.txt");
+    const GoldenCapture golden_capture =
+        parse_golden_capture(read_text(dir / "capture.txt"), (dir / "capture.txt").string());
     const glm::ivec2 size = parse_image_size(golden_capture.size, (dir / "capture.txt").string());
     // The size comes from a file: the whole verification's memory at that size is asked for
     // before anything is drawn (limits.h). Held at once: the CPU render, the golden, CPU and
@@ -375,7 +323,7 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
                        saturating_bytes(pixels, 3 * 20 + 3 * 16 + 1),
                    "verifying a golden image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
                    Where::in_file((dir / "capture.txt").string()));
-    const std::string golden_mesh = read_golden_mesh_sha(dir / "mesh.txt");
+    const std::string golden_mesh = parse_golden_mesh(read_text(dir / "mesh.txt"), (dir / "mesh.txt").string()).sha256;
     const FloatImage golden_image = read_float_image((dir / "image.png").string());
 
     // (1) The CPU reference against its golden files.
@@ -551,10 +499,15 @@ int run_verify(const GoldenOptions& options) {
     const bool ok = std::all_of(verdicts.begin(), verdicts.end(), [](const SceneVerdict& v) { return v.ok(); });
     if (options.json) {
         nlohmann::json j;
-        j["renderer"] = renderer;
+        j["renderer"] = utf8_for_json(renderer);
         j["passed"] = ok;
+        const auto texts = [](const std::vector<std::string>& lines) {
+            std::vector<std::string> out;
+            for (const std::string& line : lines) out.push_back(utf8_for_json(line));
+            return out;
+        };
         for (const SceneVerdict& v : verdicts)
-            j["scenes"].push_back({{"scene", v.scene},
+            j["scenes"].push_back({{"scene", utf8_for_json(v.scene)},
                                    {"triangles", v.triangles},
                                    {"failing_pixels", v.failing_pixels},
                                    {"level_divergent_pixels", v.explained_pixels},
@@ -564,8 +517,8 @@ int run_verify(const GoldenOptions& options) {
                                    {"level_divergent_patches", v.level_divergent_patches},
                                    {"level_ulps", v.level_ulps},
                                    {"level_difference", v.level_difference},
-                                   {"stale", v.stale},
-                                   {"failures", v.failures},
+                                   {"stale", texts(v.stale)},
+                                   {"failures", texts(v.failures)},
                                    {"verdict", v.verdict()}});
         std::cout << j.dump(2) << "\n";
     } else {

@@ -2,7 +2,7 @@
 // (PLY with tessref's writer, byte for byte OpenMesh's; OBJ, OFF, STL through OpenMesh; see
 // include/tessref/mesh.h for what each carries and how vertices are welded).
 //
-//   tessref mesh SCENE [-o OUT.{ply,obj,off,stl}] [--capture CAP.{txt,ply}] [--precision gpu|exact]
+//   tessref mesh SCENE [-o OUT.{ply,obj,off,stl}] [--capture CAP.{txt,ply}] [--precision gpu|exact] [--math exact|llvmpipe]
 //                [--binary] [--solid [--base B]] [--threads N] [--camera-relative]
 //
 // --capture writes the CPU reference's capture (tessref/capture.h), the layout `tessref gl
@@ -42,6 +42,7 @@ struct MeshCommandOptions {
     std::string output;
     std::string capture;
     std::string precision = "gpu";
+    std::string math = "exact";
     bool binary = false;
     int threads = 0;  // 0: every core
     bool solid = false;
@@ -76,7 +77,8 @@ void print_mesh_summary(const MeshCommandOptions& options, const Scene& scene, P
     if (const std::string lost = report.precision_warning(); !lost.empty())
         std::cerr << "tessref: warning: " << lost << "\n";
     std::cout << options.output << ": " << to_string(format) << (options.binary ? " binary" : " ascii") << ", "
-              << to_string(precision) << " precision, " << scene.patch_count() << " patches, " << report.triangles
+              << to_string(precision) << " precision" << math_note(parse_math_flag(options.math)) << ", "
+              << scene.patch_count() << " patches, " << report.triangles
               << " triangles, " << report.vertices << " vertices (welded from " << report.emitted_vertices << ")";
     if (captured) std::cout << ", " << *captured << " triangles captured to " << options.capture;
     std::cout << "\n";
@@ -97,6 +99,7 @@ int run_mesh(const MeshCommandOptions& options) {
                     Where::in_file("--binary"));
     }
     const Precision precision = parse_precision_flag(options.precision);
+    const MathMode math = parse_math_flag(options.math);
     const ThreadLimit thread_limit(options.threads);
     std::optional<double> given_base;
     if (!options.base.empty()) {
@@ -119,6 +122,7 @@ int run_mesh(const MeshCommandOptions& options) {
 
     PipelineOptions pipeline_options;
     pipeline_options.precision = precision;
+    pipeline_options.math = math;
     pipeline_options.camera_relative = options.camera_relative;
     // The surface is welded as it is evaluated, never held unwelded, unless --capture or
     // --solid needs the pipeline's whole surface (or the scene cannot stream it).
@@ -153,14 +157,15 @@ int run_mesh(const MeshCommandOptions& options) {
         try {
             write_capture(capture, out, capture_format,
                           "tessref mesh " + options.scene + ": the CPU reference, " + std::string(to_string(precision)) +
-                              " precision");
+                              " precision" + math_note(pipeline_options.math));
         } catch (const Error& error) {
             throw Error(error.what(), Where::in_file(options.capture));  // the name given, not the temporary one
         }
     }
     if (!output) {
         capture_output->commit();
-        std::cout << options.capture << ": " << to_string(precision) << " precision, " << scene.patch_count()
+        std::cout << options.capture << ": " << to_string(precision) << " precision"
+                  << math_note(pipeline_options.math) << ", " << scene.patch_count()
                   << " patches, " << captured << " triangles captured\n";
         return 0;
     }
@@ -216,6 +221,10 @@ Command add_mesh_command(CLI::App& parent) {
                     "patch id, tess coord, position, normal and the patch's levels, in the layout of `tessref gl "
                     "--capture` (.txt, or .ply without levels), for `tessref compare`")
         ->type_name("FILE");
+    app->add_option("--math", options->math,
+                    "The control stage's acos and log2 in gpu precision: exact (the C library, correctly rounded) "
+                    "or llvmpipe (Mesa llvmpipe's approximations, bit for bit, as `tessref gl` predicts with)")
+        ->default_val("exact");
     app->add_option("--precision", options->precision,
                     "gpu: float stages, as the GPU computes them; exact: double stages. Files "
                     "store 32-bit floats either way (OpenMesh's writers)")

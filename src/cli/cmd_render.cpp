@@ -4,7 +4,7 @@
 //
 //   tessref render SCENE -o OUT.{png,exr,tif} [--wireframe | --overlay-wireframe]
 //                  [--aov depth,patch,triangle,tesscoord,level] [--threads N]
-//                  [--precision gpu|exact] [--size WxH] [--raytrace] [--camera-relative]
+//                  [--precision gpu|exact] [--math exact|llvmpipe] [--size WxH] [--raytrace] [--camera-relative]
 //
 // Every flag and the output name are checked before the scene is loaded; the image goes to a
 // temporary file next to OUT and is renamed over it only when complete.
@@ -41,6 +41,7 @@ struct RenderCommandOptions {
     std::string aov;
     int threads = 0;  // 0: every core
     std::string precision = "gpu";
+    std::string math = "exact";
     std::string size;  // empty: the camera's viewport
     bool raytrace = false;
     bool camera_relative = false;
@@ -71,6 +72,7 @@ int run_render(const RenderCommandOptions& options) {
     render_options.camera_relative = options.camera_relative;
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.precision = precision;
+    render_options.math = parse_math_flag(options.math);
     // The provenance buffers only for the channels that write them.
     render_options.provenance = aovs.patch || aovs.tesscoord || aovs.level;
     render_options.mode = options.wireframe           ? RenderMode::wireframe
@@ -109,7 +111,8 @@ int run_render(const RenderCommandOptions& options) {
         std::cout << "ray-traced height field of " << raytrace_stats.grid_columns << "x" << raytrace_stats.grid_rows
                   << " vertices (" << raytrace_stats.triangles << " triangles), ";
     } else {
-        std::cout << to_string(precision) << " precision, " << result.stats.triangles << " triangles, ";
+        std::cout << to_string(precision) << " precision" << math_note(render_options.math) << ", "
+                  << result.stats.triangles << " triangles, ";
     }
     std::cout << result.stats.covered_pixels << " covered pixels";
     if (!options.raytrace && scene.culling && result.pipeline) {
@@ -158,6 +161,10 @@ Command add_render_command(CLI::App& parent) {
     app->add_option("--threads", options->threads,
                     "Worker threads (0: every core); the image is the same whatever the count")
         ->default_val(0);
+    app->add_option("--math", options->math,
+                    "The control stage's acos and log2 in gpu precision: exact (the C library, correctly rounded) "
+                    "or llvmpipe (Mesa llvmpipe's approximations, bit for bit, as `tessref gl` predicts with)")
+        ->default_val("exact");
     app->add_option("--precision", options->precision,
                     "Pipeline precision: gpu (float stages, as the GPU) or exact (double stages)")
         ->default_val("gpu");

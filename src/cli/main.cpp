@@ -1,19 +1,28 @@
 // tessref — the command. Parses the command line with CLI11, runs the one subcommand named,
 // and maps every outcome to an exit status:
 //   0  done;  1  a check or comparison failed;  2  bad input (tessref::Error or a command
-//   line CLI11 rejects), reported as `tessref: error: <what> (<where>)` on stderr.
+//   line CLI11 rejects), reported as `tessref: error: <what> (<where>)` on stderr; also a
+//   report on stdout that could not be written (finish_stdout).
 // The subcommands live in src/cli/cmd_<name>.cpp and are listed in make_commands() below.
+#include <cerrno>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <exception>
+#include <fstream>
 #include <iostream>
 #include <new>
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "common/temp_cleanup.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
 
@@ -42,11 +51,65 @@ void print_error(const std::string& message) {
     std::cerr << "tessref: error: " << message << std::endl;
 }
 
+// The command line as typed, for messages that must say which run failed.
+std::string command_line(int argc, char** argv) {
+    std::string line = "tessref";
+    for (int i = 1; i < argc && line.size() < 200; ++i) line += std::string(" ") + argv[i];
+    return line.size() < 200 ? line : line.substr(0, 200) + "...";
+}
+
+// The memory the process holds now (its resident set), from /proc/self/statm; 0 unknown.
+std::uint64_t resident_bytes() {
+    std::ifstream statm("/proc/self/statm");
+    std::uint64_t pages = 0, resident = 0;
+    if (!(statm >> pages >> resident)) return 0;
+    const long page = ::sysconf(_SC_PAGE_SIZE);
+    return page > 0 ? resident * static_cast<std::uint64_t>(page) : 0;
+}
+
+// A std::bad_alloc that reached main: no loader's estimate caught it, so say at least which
+// run it was, how much the process held and what the limit is.
+std::string out_of_memory_message(int argc, char** argv) {
+    const std::uint64_t held = resident_bytes();
+    return "out of memory: an allocation failed" +
+           (held ? " with " + tessref::format_bytes(held) + " in use" : std::string()) +
+           " (the limit on what inputs ask for is " + tessref::format_bytes(tessref::memory_limit()) +
+           ": --max-memory, TESSREF_MAX_MEMORY) (" + command_line(argc, argv) + ")";
+}
+
+// TESSREF_MAX_MEMORY, when set, must be a size as --max-memory's is: a typo must not leave
+// the default limit in force unnoticed.
+void check_memory_environment() {
+    const char* env = std::getenv("TESSREF_MAX_MEMORY");
+    if (env && !tessref::parse_byte_size(env))
+        throw tessref::Error("'" + std::string(env) + "' is not a memory size (e.g. 4G, 512M, 1000000)",
+                             tessref::Where::in_file("TESSREF_MAX_MEMORY"));
+}
+
+int run(int argc, char** argv);
+
+// Everything a command printed on stdout (a report, --json, --help) is only delivered once
+// it is flushed: a write error there (a full disk, /dev/full, a closed pipe) turns the exit
+// status into 2 with a message, whatever the command returned; the one place that checks.
+int finish_stdout(int status) {
+    std::cout.flush();
+    const bool failed = !std::cout.good() || std::fflush(stdout) != 0 || std::ferror(stdout);
+    if (!failed) return status;
+    const int error = errno;
+    std::cerr << "tessref: error: cannot write to stdout: "
+              << (error ? std::strerror(error) : "write error") << " (stdout)" << std::endl;
+    return exit_bad_input;
+}
+
 }  // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv) { return finish_stdout(run(argc, argv)); }
+
+namespace {
+
+int run(int argc, char** argv) {
     // Ctrl-C or a kill while an output is being written must not leave its temporary file.
-    tessref::cli::install_signal_cleanup();
+    tessref::install_signal_cleanup();
     CLI::App app{"tessref — a CPU reference of the GPU tessellation pipeline: control stage, "
                  "primitive generator, evaluation, geometry, raster and shading.",
                  "tessref"};
@@ -89,6 +152,7 @@ int main(int argc, char** argv) {
             std::cerr << "Run 'tessref --help' or 'tessref <command> --help' for usage." << std::endl;
             return exit_bad_input;
         }
+        check_memory_environment();
         if (!max_memory.empty()) {
             const auto bytes = tessref::parse_byte_size(max_memory);
             if (!bytes)
@@ -106,10 +170,12 @@ int main(int argc, char** argv) {
         print_error(error.message());
         return exit_bad_input;
     } catch (const std::bad_alloc&) {
-        print_error("out of memory");
+        print_error(out_of_memory_message(argc, argv));
         return exit_bad_input;
     } catch (const std::exception& error) {
         print_error(error.what());
         return exit_bad_input;
     }
 }
+
+}  // namespace

@@ -102,7 +102,7 @@ std::uint64_t mapped_bytes() {
 }
 
 [[noreturn]] void run_child(int fd, const std::function<std::string()>& work, std::uint64_t address_space) {
-    for (const int s : {SIGINT, SIGTERM, SIGHUP, SIGPIPE}) ::signal(s, SIG_DFL);  // the parent cleans up
+    for (const int s : {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE}) ::signal(s, SIG_DFL);  // the parent cleans up
     const struct rlimit no_core {0, 0};
     ::setrlimit(RLIMIT_CORE, &no_core);
     const struct rlimit space {address_space, address_space};

@@ -67,8 +67,10 @@ CompareResult compare_images(const FloatImage& reference, const FloatImage& test
                     Where::at_key("channels"));
     if (!(options.threshold >= 0.0))
         throw Error("the threshold must be a number >= 0", Where::at_key("--threshold"));
-    if (options.max_position_deviation < 0)
-        throw Error("the position deviation must be >= 0", Where::at_key("--max-position-deviation"));
+    if (options.max_position_deviation < 0 || options.max_position_deviation > kMaxPositionDeviation)
+        throw Error("the position deviation must lie in 0.." + std::to_string(kMaxPositionDeviation) + ", not " +
+                        std::to_string(options.max_position_deviation),
+                    Where::at_key("--max-position-deviation"));
 
     CompareResult result;
     result.width = reference.width;

@@ -2,7 +2,9 @@
 // zones, edge levels consistent with the neighbours, log2 levels for the mip selection.
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
+#include "shader/llvmpipe_math.h"
 #include "tessref/control.h"
 
 namespace tessref {
@@ -59,13 +61,20 @@ Lab4ControlOutput<T> lab4_control(const QuadCorners<T>& corners, const Lab4Contr
     out.levels.inner[0] = patchLevel;
     out.levels.inner[1] = patchLevel;
 
+    // log2 as the math mode says: the C library's, or llvmpipe's (float only).
+    const auto log2 = [&](T x) {
+        if constexpr (std::is_same_v<T, float>) {
+            if (control.math == MathMode::llvmpipe) return llvmpipe_math::log2(x);
+        }
+        return std::log2(x);
+    };
     // GLSL: lab4_terrain.tesc:92 maxLogTessellationLevel
-    out.lod.maxLogTessellationLevel = std::log2(control.maxLevel);
-    for (int i = 0; i < 4; ++i) out.lod.logOuter[i] = std::log2(out.levels.outer[i]);
-    out.lod.logInner = std::log2(patchLevel);
+    out.lod.maxLogTessellationLevel = log2(control.maxLevel);
+    for (int i = 0; i < 4; ++i) out.lod.logOuter[i] = log2(out.levels.outer[i]);
+    out.lod.logInner = log2(patchLevel);
     for (int i = 0; i < 4; ++i) {
         out.lod.logCorner[i] =
-            std::log2(lab4_zone_level(glm::distance(corners[i], control.cameraPosition), control));
+            log2(lab4_zone_level(glm::distance(corners[i], control.cameraPosition), control));
     }
     return out;
 }

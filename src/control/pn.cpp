@@ -1,6 +1,8 @@
 // The PN triangles tutorial's control shader, twin of data/shaders/pn_triangles.tesc.
 #include <algorithm>
+#include <type_traits>
 
+#include "shader/llvmpipe_math.h"
 #include "tessref/control.h"
 
 namespace tessref {
@@ -19,8 +21,21 @@ T pn_tess_level(const vec3_t<T>& v3Point1, const vec3_t<T>& v3Point2, const PnCo
     // GLSL: pn_triangles.tesc:44 pn_tess_level
     const vec2_t<T> v2P1 = (vec2_t<T>(v3Point1) + vec2_t<T>(v3Point2)) * T(0.5);
     vec2_t<T> v2P2 = v2P1;
-    v2P2.y += glm::distance(v3Point1, v3Point2);
-    const T fLength = glm::length((v2P1 - v2P2) * control.v2Resolution * T(0.5));
+    // distance and length: glm's in exact math, the driver's order in llvmpipe math (float).
+    const auto distance = [&](const vec3_t<T>& a, const vec3_t<T>& b) {
+        if constexpr (std::is_same_v<T, float>) {
+            if (control.math == MathMode::llvmpipe) return llvmpipe_math::distance(a, b);
+        }
+        return glm::distance(a, b);
+    };
+    const auto length = [&](const vec2_t<T>& v) {
+        if constexpr (std::is_same_v<T, float>) {
+            if (control.math == MathMode::llvmpipe) return llvmpipe_math::length(v);
+        }
+        return glm::length(v);
+    };
+    v2P2.y += distance(v3Point1, v3Point2);
+    const T fLength = length((v2P1 - v2P2) * control.v2Resolution * T(0.5));
     return glm::clamp(fLength / control.fPixelsPerEdge, control.minLevel, control.maxLevel);
 }
 

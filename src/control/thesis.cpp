@@ -5,6 +5,7 @@
 #include <cmath>
 #include <type_traits>
 
+#include "shader/llvmpipe_math.h"
 #include "tessref/control.h"
 
 namespace tessref {
@@ -31,14 +32,46 @@ T distance_factor(T factor, const ThesisDistance<T>& params) {
     return factor;
 }
 
+namespace {
+
+// GLSL's dot, distance and normalize: glm's in exact math; in llvmpipe math (float) the
+// driver's order of operations (llvmpipe_math.h: a dot product summed from its last
+// component), which moves a unit normals' dot product by an ulp often enough, and acos near
+// 1 turns an ulp into hundreds.
 template <typename T>
-vec3_t<T> normal_from_texture(const vec3_t<T>& rgb) {
+T glsl_dot(const vec3_t<T>& a, const vec3_t<T>& b, MathMode math) {
+    if constexpr (std::is_same_v<T, float>) {
+        if (math == MathMode::llvmpipe) return llvmpipe_math::dot(a, b);
+    }
+    return glm::dot(a, b);
+}
+
+template <typename T>
+T glsl_distance(const vec3_t<T>& a, const vec3_t<T>& b, MathMode math) {
+    if constexpr (std::is_same_v<T, float>) {
+        if (math == MathMode::llvmpipe) return llvmpipe_math::distance(a, b);
+    }
+    return glm::distance(a, b);
+}
+
+template <typename T>
+vec3_t<T> glsl_normalize(const vec3_t<T>& v, MathMode math) {
+    if constexpr (std::is_same_v<T, float>) {
+        if (math == MathMode::llvmpipe) return llvmpipe_math::normalize(v);
+    }
+    return glm::normalize(v);
+}
+
+}  // namespace
+
+template <typename T>
+vec3_t<T> normal_from_texture(const vec3_t<T>& rgb, MathMode math) {
     // GLSL: thesis_terrain.tesc:54 normal_from_texture
     vec3_t<T> normal = rgb;
     normal.x = normal.x - T(0.5);
     normal.y = normal.y - T(0.5);
     normal.z = normal.z - T(0.5);
-    normal = glm::normalize(normal);
+    normal = glsl_normalize(normal, math);
     return normal;
 }
 
@@ -50,18 +83,26 @@ namespace {
 // gives NaN, the NaN outer level culls the patch on llvmpipe and on GPUs, and the terrain
 // gets holes. That is a bug of the shader, not a property of the hardware, so this twin
 // and data/shaders/thesis_terrain.tesc both clamp (a documented departure from the seed).
+// In MathMode::llvmpipe the float path takes llvmpipe's acos (a polynomial in sqrt(1 - |x|),
+// off the exact value by up to a few hundred ulps), so its levels are the driver's bit for
+// bit: near a fractional_odd level's odd integer, the exact acos would put the level on the
+// other side and change the patch's triangle count.
 template <typename T>
-T angle_between(const vec3_t<T>& n1, const vec3_t<T>& n2) {
-    return std::acos(std::clamp(glm::dot(n1, n2), T(-1), T(1)));
+T angle_between(const vec3_t<T>& n1, const vec3_t<T>& n2, MathMode math) {
+    const T cosine = std::clamp(glsl_dot(n1, n2, math), T(-1), T(1));
+    if constexpr (std::is_same_v<T, float>) {
+        if (math == MathMode::llvmpipe) return llvmpipe_math::acos(cosine);
+    }
+    return std::acos(cosine);
 }
 
 // GLSL: thesis_terrain.tesc:79 normal_tess_factor
 template <typename T>
-T normal_tess_factor(const std::array<vec3_t<T>, 6>& vertexNormal, T threshold) {
-    const T testangle = angle_between(vertexNormal[0], vertexNormal[3]);
-    const T testangle90 = angle_between(vertexNormal[2], vertexNormal[1]);
-    const T testangle2 = angle_between(vertexNormal[0], vertexNormal[5]);
-    const T testangle902 = angle_between(vertexNormal[1], vertexNormal[4]);
+T normal_tess_factor(const std::array<vec3_t<T>, 6>& vertexNormal, T threshold, MathMode math) {
+    const T testangle = angle_between(vertexNormal[0], vertexNormal[3], math);
+    const T testangle90 = angle_between(vertexNormal[2], vertexNormal[1], math);
+    const T testangle2 = angle_between(vertexNormal[0], vertexNormal[5], math);
+    const T testangle902 = angle_between(vertexNormal[1], vertexNormal[4], math);
 
     if (testangle > threshold || testangle90 > threshold || testangle2 > threshold ||
         testangle902 > threshold) {
@@ -91,7 +132,7 @@ ThesisEdgeFactors<T> thesis_edge_factors(const vec3_t<T>& p, const vec3_t<T>& q,
         // GLSL: thesis_terrain.tesc:119 midPos
         const vec3_t<T> midPos = a + ((b - a) / T(2));
         factors.distanceTessellation =
-            distance_factor(glm::distance(midPos, control.cameraPosition), control.distance);
+            distance_factor(glsl_distance(midPos, control.cameraPosition, control.math), control.distance);
     }
 
     if (uses<T>(control.factor, ThesisFactor::tessellation_map)) {
@@ -111,13 +152,13 @@ ThesisEdgeFactors<T> thesis_edge_factors(const vec3_t<T>& p, const vec3_t<T>& q,
         const vec2_t<T> plus = alongV ? vec2_t<T>(bXY - aXY) : vec2_t<T>(aXY - bXY);   // right / up
         auto probe = [&](const vec2_t<T>& xy) {
             const vec4_t<T> texel = control.normalMap(xy / control.scaleXY);
-            return normal_from_texture(vec3_t<T>(texel.x, texel.y, texel.z));
+            return normal_from_texture(vec3_t<T>(texel.x, texel.y, texel.z), control.math);
         };
         // GLSL: thesis_terrain.tesc:135 vertexNormal
         const std::array<vec3_t<T>, 6> vertexNormal{probe(aXY),         probe(bXY),
                                                     probe(aXY + minus), probe(bXY + minus),
                                                     probe(aXY + plus),  probe(bXY + plus)};
-        factors.normalTessellation = normal_tess_factor(vertexNormal, control.normalAngleThreshold);
+        factors.normalTessellation = normal_tess_factor(vertexNormal, control.normalAngleThreshold, control.math);
     }
     return factors;
 }
@@ -177,7 +218,7 @@ PatchLevels<T> thesis_levels(const QuadCorners<T>& vPosition, const ThesisContro
 #define TESSREF_INSTANTIATE(T)                                                                  \
     template vec4_t<T> thesis_vertex(const vec2_t<T>&, const Sampler2D<T>&, T, T);             \
     template T distance_factor(T, const ThesisDistance<T>&);                                    \
-    template vec3_t<T> normal_from_texture(const vec3_t<T>&);                                   \
+    template vec3_t<T> normal_from_texture(const vec3_t<T>&, MathMode);                         \
     template ThesisEdgeFactors<T> thesis_edge_factors(const vec3_t<T>&, const vec3_t<T>&,       \
                                                       ThesisEdgeDirection,                      \
                                                       const ThesisControl<T>&);                 \

@@ -1,4 +1,4 @@
-// A scene through its GLSL twins on llvmpipe (gl_backend.h, render_scene): `tessref gl`.
+// A scene through its GLSL twins on llvmpipe (gl_render.h, render_scene): `tessref gl`.
 //
 // Per draw: the patches' corners (terrain) or triangles (PN) -> the twins -> a float colour
 // buffer with a 24-bit depth buffer, depth LESS, as `tessref render` draws. Every draw's
@@ -924,6 +924,37 @@ struct FeedbackRecord {
 };
 static_assert(sizeof(FeedbackRecord) == 64);
 
+// The patches whose levels (those the domain uses, as llvmpipe's evaluation shader read
+// them, bit for bit) or triangle counts differ between the CPU pipeline and the capture. A
+// patch llvmpipe emitted nothing for has no captured levels.
+std::vector<PatchDifference> patch_differences(const PipelineResult& pipe, const std::vector<std::uint64_t>& per_patch,
+                                               const std::vector<CapturedVertex>& capture, Domain domain) {
+    std::vector<PatchDifference> gl(per_patch.size());
+    for (std::size_t p = 0; p < gl.size(); ++p) {
+        gl[p].patch = p;
+        gl[p].cpu_triangles = per_patch[p];
+        if (p < pipe.levels.size()) gl[p].cpu_levels = pipe.levels[p];
+    }
+    for (std::size_t v = 0; v + 2 < capture.size(); v += 3) {
+        const std::size_t p = capture[v].patch_id;
+        if (p >= gl.size()) continue;
+        ++gl[p].gl_triangles;
+        if (!gl[p].gl_levels_known) gl[p].gl_levels = capture[v].levels;
+        gl[p].gl_levels_known = true;
+    }
+    const std::size_t outer = domain == Domain::quads ? 4 : domain == Domain::triangles ? 3 : 2;
+    const std::size_t inner = domain == Domain::quads ? 2 : domain == Domain::triangles ? 1 : 0;
+    const auto same_bits = [&](const TessLevels& a, const TessLevels& b) {
+        return std::memcmp(a.outer.data(), b.outer.data(), sizeof(float) * outer) == 0 &&
+               std::memcmp(a.inner.data(), b.inner.data(), sizeof(float) * inner) == 0;
+    };
+    std::vector<PatchDifference> out;
+    for (const PatchDifference& d : gl)
+        if (d.cpu_triangles != d.gl_triangles || (d.gl_levels_known && !same_bits(d.cpu_levels, d.gl_levels)))
+            out.push_back(d);
+    return out;
+}
+
 }  // namespace
 
 SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRenderOptions& options) {
@@ -942,7 +973,10 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
 
     // The CPU pipeline: the prediction of every draw.
     auto start = Clock::now();
-    result.pipeline = options.pipeline ? options.pipeline : std::make_shared<const PipelineResult>(run_pipeline(scene));
+    PipelineOptions pipeline_options;
+    pipeline_options.math = options.math;
+    result.pipeline = options.pipeline ? options.pipeline
+                                       : std::make_shared<const PipelineResult>(run_pipeline(scene, pipeline_options));
     const PipelineResult& pipe = *result.pipeline;
     std::vector<std::uint64_t> per_patch(scene.patch_count(), 0);
     for (const auto& tri : pipe.mesh.triangles) ++per_patch[pipe.mesh.patch_ids[tri[0]]];
@@ -1072,13 +1106,14 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         }
         ++result.stats.draws;
         result.stats.triangles += generated;
-        if (generated != predicted_of(k)) {
-            result.batch_failure = batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
-                                   " primitives, the CPU primitive generator predicts " +
-                                   std::to_string(predicted_of(k)) + user_note;
-            return result;
+        if (generated != predicted_of(k)) {  // reported, not fatal: the patches are found below
+            result.batch_failure += (result.batch_failure.empty() ? "" : "; ") + batch_name(k, b) +
+                                    ": llvmpipe generated " + std::to_string(generated) +
+                                    " primitives, the CPU primitive generator predicts " +
+                                    std::to_string(predicted_of(k));
         }
     }
+    if (!result.batch_failure.empty()) result.batch_failure += user_note;
     gl.Finish();
     gl.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
     c.check_error("drawing the scene");
@@ -1092,7 +1127,10 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     result.stats.seconds_gl = seconds_since(start);
 
     // ---- the capture ---------------------------------------------------------------------
-    if (!options.capture) return result;
+    // Also run when a count differed: the capture's levels and triangles per patch are what
+    // names the patches that differ (SceneRender::differences).
+    const bool diagnose = !result.batch_failure.empty();
+    if (!options.capture && !diagnose) return result;
     set_isolated_phase("capturing the scene by transform feedback" +
                            (user_files.empty() ? std::string() : " with the user's " + user_files),
                        draw_where);
@@ -1110,16 +1148,22 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     require_memory(saturating_bytes(saturating_bytes(total, 3), sizeof(CapturedVertex)),
                    "the capture of " + std::to_string(total) + " triangles", Where::at_key(scene.file, "--capture"));
     result.capture.reserve(static_cast<std::size_t>(total) * 3);
-    // One primitive of slack: an overflow still shows as written < generated.
-    const std::uint64_t capacity_primitives = largest + 1;
+    // One primitive of slack: an overflow still shows as written < generated, and the draw
+    // is then repeated into a buffer of the size llvmpipe reported.
+    std::uint64_t capacity_primitives = largest + 1;
     gl.GenBuffers(1, &objects.feedback);
-    gl.BindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, objects.feedback);
-    gl.BufferData(GL_TRANSFORM_FEEDBACK_BUFFER,
-                  static_cast<GLsizeiptr>(capacity_primitives * 3 * sizeof(FeedbackRecord)), nullptr, GL_STREAM_READ);
-    gl.BindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, objects.feedback);
+    const auto size_feedback = [&] {
+        gl.BindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, objects.feedback);
+        gl.BufferData(GL_TRANSFORM_FEEDBACK_BUFFER,
+                      static_cast<GLsizeiptr>(capacity_primitives * 3 * sizeof(FeedbackRecord)), nullptr,
+                      GL_STREAM_READ);
+        gl.BindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, objects.feedback);
+    };
+    size_feedback();
     gl.Enable(GL_RASTERIZER_DISCARD);
     c.check_error("setting up the capture");
     std::vector<FeedbackRecord> records;
+    bool retried = false;
     for (std::size_t k = 0; k < batches.size(); ++k) {
         const Batch& b = batches[k];
         gl.BeginQuery(GL_PRIMITIVES_GENERATED, objects.query);
@@ -1134,7 +1178,16 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         gl.GetQueryObjectuiv(objects.query, GL_QUERY_RESULT, &generated);
         gl.GetQueryObjectuiv(objects.query_written, GL_QUERY_RESULT, &written);
         c.check_error("a capture draw");
-        if (generated != predicted_of(k) || written != generated) {
+        if (written < generated && !retried) {  // more than predicted: room for all, once
+            capacity_primitives = std::uint64_t{generated} + 1;
+            size_feedback();
+            c.check_error("growing the capture buffer");
+            retried = true;
+            --k;
+            continue;
+        }
+        retried = false;
+        if (written != generated || (!diagnose && generated != predicted_of(k))) {
             gl.Disable(GL_RASTERIZER_DISCARD);
             result.capture.clear();
             result.batch_failure = "capture " + batch_name(k, b) + ": llvmpipe generated " + std::to_string(generated) +
@@ -1170,6 +1223,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     gl.Disable(GL_RASTERIZER_DISCARD);
     c.check_error("reading the capture back");
     result.stats.seconds_capture = seconds_since(start);
+    if (diagnose) result.differences = patch_differences(pipe, per_patch, result.capture, scene.generator.domain);
+    if (!options.capture) result.capture.clear();
     return result;
 }
 
@@ -1239,7 +1294,9 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
     SceneRenderOptions options = options_in;
     if (!options.pipeline) {
         const auto start = Clock::now();
-        options.pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene));
+        PipelineOptions pipeline_options;
+        pipeline_options.math = options.math;  // as render_scene() runs it
+        options.pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene, pipeline_options));
         options.pipeline_seconds = seconds_since(start);
     }
     // Every user file is read here, where the input checks apply, and handed to the child
@@ -1259,6 +1316,7 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         put_vector(out, r.colour);
         put_vector(out, r.capture);
         put_string(out, r.batch_failure);
+        put_vector(out, r.differences);
         put_value(out, r.stats);
         return out;
     });
@@ -1271,6 +1329,7 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
     r.colour = in.vector<glm::vec4>();
     r.capture = in.vector<CapturedVertex>();
     r.batch_failure = in.string();
+    r.differences = in.vector<PatchDifference>();
     r.stats = in.value<SceneRenderStats>();
     r.stats.seconds_pipeline += options.pipeline_seconds;
     r.shading = scene_in.shading;

@@ -166,6 +166,7 @@ struct StreamImpl final : PatchStream::Impl {
         // Camera-relative evaluation: gpu precision only (exact precision would gain nothing).
         if (options.camera_relative && std::is_same_v<T, float>) origin = camera_relative_origin(scene);
         program = pipeline::make_program<T>(scene, origin);
+        program->use_math(options.math);
         has_uvs = program->has_uvs;
         has_normals = program->has_normals;
         face_normals = scene.geometry && scene.geometry->normals == GeometryNormals::face;

@@ -3,8 +3,10 @@
 // surface and its normal.
 #include "pipeline/program.h"
 
+#include <type_traits>
 #include <vector>
 
+#include "shader/llvmpipe_math.h"
 #include "tessref/evaluation.h"
 
 namespace tessref::pipeline {
@@ -37,7 +39,7 @@ public:
             pos[k] = vec3_t<T>(meshes.positions[tri[k]]);
             nrm[k] = vec3_t<T>(meshes.normals[tri[k]]);
             if (!meshes.uvs.empty()) uv[k] = vec2_t<T>(meshes.uvs[tri[k]]);
-            glPosition[k] = camera.viewProjection * vec4_t<T>(pos[k], T(1));  // the tutorial's vertex shader
+            glPosition[k] = vertex(pos[k]);
         }
         if (relative) {
             // Camera-relative: the evaluation's control points from the positions minus the
@@ -52,6 +54,19 @@ public:
         if (!scene.control) return {};  // GL's default patch levels: 1
         if (scene.control->model == ControlModel::pn) return pn_levels<T>(glPosition, nrm, control_uniforms);
         return scene_constant_levels<T>(*scene.control);
+    }
+
+    void use_math(MathMode math) override { control_uniforms.math = math; }
+
+    // The tutorial's vertex shader: gl_Position = m4ViewProjection * (m4Transform * position),
+    // the model transform the identity. In llvmpipe math (float) the product's sums in the
+    // driver's order.
+    vec4_t<T> vertex(const vec3_t<T>& position) const {
+        if constexpr (std::is_same_v<T, float>) {
+            if (control_uniforms.math == MathMode::llvmpipe)
+                return llvmpipe_math::transform(camera.viewProjection, vec4_t<T>(position, T(1)));
+        }
+        return camera.viewProjection * vec4_t<T>(position, T(1));
     }
 
     void evaluate(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,

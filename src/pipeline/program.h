@@ -46,6 +46,10 @@ public:
     virtual void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                           std::size_t first_vertex, bool normals) const = 0;
 
+    // The math mode of the control stage's transcendentals (control.h MathMode); set once,
+    // before the first control(). Models without transcendentals ignore it.
+    virtual void use_math(MathMode) {}
+
     bool has_uvs = false;     // the evaluation writes texture coordinates
     bool has_normals = false; // the evaluation or the geometry stage writes vertex normals
     bool flip = false;        // reverse each triangle so that it faces up / out

@@ -29,6 +29,10 @@ public:
     PatchLevels<T> control(std::size_t patch) override;
     void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                   std::size_t first_vertex, bool normals) const override;
+    void use_math(MathMode math) override {
+        thesisControl.math = math;
+        lab4Control.math = math;
+    }
 
 protected:
     TerrainProgram(const Scene& scene, const glm::dvec3& origin);

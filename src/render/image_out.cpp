@@ -68,6 +68,10 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
         const auto pixels = std::make_unique_for_overwrite<std::uint8_t[]>(n * 4);
         render_detail::to_rgba8(result, pixels.get());
         if (format == ImageFormat::tiff) options.compression = "zip";
+        // Named and marked as the PNG's are, so that a reader (compare --ignore-alpha) knows
+        // the fourth channel for alpha.
+        options.channel_names = {"R", "G", "B", "A"};
+        options.alpha_channel = 3;
         image::write_image(path, {width, height, 4, image::SampleType::uint8, pixels.get()}, options);
         return;
     }

@@ -344,6 +344,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     };
     PipelineOptions pipeline_options;
     pipeline_options.precision = options.precision;
+    pipeline_options.math = options.math;
     pipeline_options.camera_relative = options.camera_relative;
     // The stream reads its scene for as long as it lives (pixel_provenance evaluates from it
     // after this returns): it keeps a copy of its own.
@@ -565,6 +566,7 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
     const auto start = Clock::now();
     PipelineOptions pipeline_options;
     pipeline_options.precision = options.precision;
+    pipeline_options.math = options.math;
     pipeline_options.camera_relative = options.camera_relative;
     if (options.progress) {
         pipeline_options.progress = [&](std::size_t done, std::size_t total) {

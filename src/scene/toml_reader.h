@@ -8,6 +8,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
@@ -189,6 +190,8 @@ public:
             const std::string ek = key(k) + "[" + std::to_string(i) + "]";
             if (!v) throw Error(ek + " must be a number, not " + std::string(type_name(e)), where_at(file_, e.source(), ek));
             if (!std::isfinite(*v)) throw Error(ek + " must be finite", where_at(file_, e.source(), ek));
+            if (const char* why = not_a_float(*v))
+                throw Error(ek + " = " + format_number(*v) + " " + why, where_at(file_, e.source(), ek));
             out.push_back(*v);
         }
         return out;
@@ -259,8 +262,23 @@ public:
     }
 
 private:
+    // Why `v` cannot be a scene value, or nullptr. The gpu precision computes in float (each
+    // stage converts the scene's doubles once): a value beyond float's range would become
+    // infinite there (scale_z = 1e39: an empty mesh), and one nonzero but below float's
+    // normal range would lose its digits or turn 0 (scale_xy = 1e-45 divides the texture
+    // coordinates to infinity). No scene quantity needs either.
+    static const char* not_a_float(double v) {
+        if (!std::isfinite(v)) return "must be finite";
+        if (std::abs(v) > static_cast<double>(FLT_MAX))
+            return "is beyond float's range (3.4e38), in which the gpu precision computes";
+        if (v != 0.0 && std::abs(v) < static_cast<double>(FLT_MIN))
+            return "is below float's normal range (1.2e-38), in which the gpu precision computes: use 0 or a larger value";
+        return nullptr;
+    }
+
     void check_range(const std::string& k, double v, double lo, double hi, bool lo_open, bool hi_open) const {
         if (!std::isfinite(v)) fail(k, key(k) + " must be finite");
+        if (const char* why = not_a_float(v)) fail(k, key(k) + " = " + format_number(v) + " " + why);
         const bool below = lo_open ? !(v > lo) : !(v >= lo);
         const bool above = hi_open ? !(v < hi) : !(v <= hi);
         if (below || above) {

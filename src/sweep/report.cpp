@@ -8,6 +8,8 @@
 // in the error-vs-time plot, never in index.html.
 #include "sweep/report.h"
 
+#include "common/temp_name.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -37,8 +39,8 @@ namespace {
 // that a failure never leaves a half-written file under the real name.
 
 fs::path temp_name(const fs::path& target) {
-    return target.parent_path() /
-           ("." + target.stem().string() + ".tmp-" + std::to_string(::getpid()) + target.extension().string());
+    return target.parent_path() / temporary_name(".", target.stem().string(), ".tmp-" + std::to_string(::getpid()),
+                                                 target.extension().string());
 }
 
 void replace_with(const fs::path& temp, const fs::path& target) {

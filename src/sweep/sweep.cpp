@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -20,6 +22,8 @@
 #include <nlohmann/json.hpp>
 
 #include "common/input_file.h"
+#include "common/temp_cleanup.h"
+#include "common/temp_name.h"
 #include "sweep/geometric_error.h"
 #include "sweep/report.h"
 #include "tessref/compare.h"
@@ -221,21 +225,28 @@ void check_output_dir(const fs::path& given) {
         throw Error("the output's parent directory does not exist", Where::in_file(given.string()));
 }
 
-// A fresh directory beside the target; removed unless commit() put it in place.
+// A fresh directory beside the target, ".<DIR>.tmp-<pid>-XXXXXX" (temp_name.h); removed
+// unless commit() put it in place, also when a signal kills the process (temp_cleanup.h).
+// Those that a killed run left beside the same target are removed first.
 class TempDir {
 public:
     explicit TempDir(fs::path target) : target_(fs::absolute(std::move(target)).lexically_normal()) {
         if (target_.filename().empty()) target_ = target_.parent_path();
-        std::string pattern = (target_.parent_path() / ("." + target_.filename().string() + ".tmp-XXXXXX")).string();
+        const std::string base = target_.filename().string();
+        remove_stale_temporaries(target_.parent_path(), ".", base, ".tmp-");
+        std::string pattern =
+            (target_.parent_path() / temporary_name(".", base, ".tmp-" + std::to_string(::getpid()) + "-", "XXXXXX")).string();
         std::vector<char> name(pattern.begin(), pattern.end());
         name.push_back('\0');
         if (!::mkdtemp(name.data()))
             throw Error("cannot create a temporary directory beside the output", Where::in_file(target_.string()));
         path_ = fs::path(name.data());
+        slot_ = register_temporary(path_, true);
     }
     ~TempDir() {
         std::error_code ec;
         if (!committed_) fs::remove_all(path_, ec);
+        unregister_temporary(slot_);
     }
     TempDir(const TempDir&) = delete;
     TempDir& operator=(const TempDir&) = delete;
@@ -265,12 +276,15 @@ public:
             if (old) fs::rename(*old, target_, ec);
             throw Error("cannot put the output directory in place: " + ec.message(), Where::in_file(target_.string()));
         }
+        unregister_temporary(slot_);
+        slot_ = -1;
         committed_ = true;
         if (old) fs::remove_all(*old, ec);
     }
 
 private:
     fs::path target_, path_;
+    int slot_ = -1;
     bool committed_ = false;
 };
 
@@ -787,15 +801,26 @@ struct NumberList {
     bool integers;      // every item a whole number
 };
 
-// std::stod of the number at the start of item, its length in used (0: none there).
+// The decimal number at the start of item (an optional sign, digits, a fraction, an
+// exponent), its length in used (0: none there). Decimal only, as every other number of the
+// command line (parse_integer): std::stod would also read "0x10" as 16.
 double leading_number(const std::string& item, std::size_t& used) {
     used = 0;
-    try {
-        return std::stod(item, &used);
-    } catch (const std::exception&) {
-        used = 0;
+    const char* begin = item.data();
+    const char* const end = item.data() + item.size();
+    const bool plus = begin != end && *begin == '+';  // from_chars takes '-' only
+    if (plus) ++begin;
+    double x = 0.0;
+    const auto [stop, error] = std::from_chars(begin, end, x, std::chars_format::general);
+    if (error == std::errc::result_out_of_range) {
+        // Beyond double's range: strtod of the same decimal text gives +-inf or 0, for the
+        // range check to judge.
+        x = std::strtod(std::string(begin, stop).c_str(), nullptr);
+    } else if (error != std::errc()) {
         return 0.0;
     }
+    used = static_cast<std::size_t>(stop - item.data());
+    return x;
 }
 
 std::vector<double> parse_number_list(const std::string& text, const NumberList& rule) {
@@ -955,6 +980,22 @@ ShardDir read_shard(const fs::path& dir) {
             throw Error("corrupt sweep.csv: " + std::to_string(records[k].fields.size()) + " fields, the header has " +
                             std::to_string(columns),
                         Where::in_file(csv_path, records[k].line));
+    // Every picture a row names must be in the shard: the merged report links to it.
+    for (std::size_t k = 1; k < records.size(); ++k)
+        for (const char* column : {"image", "diff_image", "wire_image", "truth_image"}) {
+            const auto at = std::find(csv_columns().begin(), csv_columns().end(), column) - csv_columns().begin();
+            const std::string& picture = records[k].fields[static_cast<std::size_t>(at)];
+            if (picture.empty()) continue;
+            const fs::path relative(picture);
+            const bool inside = relative.is_relative() && !picture.empty() &&
+                                std::none_of(relative.begin(), relative.end(), [](const fs::path& part) { return part == ".."; }) &&
+                                *relative.begin() == "images";
+            std::error_code ec;
+            if (!inside || !fs::is_regular_file(dir / relative, ec))
+                throw Error("the row's " + std::string(column) + " '" + picture + "' is " +
+                                (inside ? "missing from the shard" : "not a picture under images/"),
+                            Where::in_file(csv_path, records[k].line));
+        }
     records.erase(records.begin());
     if (records.size() != s.indices.size())
         throw Error("corrupt sweep.csv: " + std::to_string(records.size()) + " rows, sweep.json lists " +

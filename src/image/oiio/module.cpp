@@ -146,6 +146,11 @@ int write_image(const char* path, const tessref_oiio_image* image, char* error, 
         }
         spec.alpha_channel = image->alpha_channel;
         spec.z_channel = image->z_channel;
+        // tessref's colour is never premultiplied by alpha (as in its PNGs): a TIFF says so in
+        // its ExtraSamples tag (unassociated alpha), which is also what marks the channel as
+        // alpha for a reader (OpenImageIO's TIFF writer otherwise writes associated alpha).
+        if (spec.alpha_channel >= 0 && std::strcmp(out->format_name(), "tiff") == 0)
+            spec.attribute("oiio:UnassociatedAlpha", 1);
         if (image->compression != nullptr) spec.attribute("compression", image->compression);
         if (image->software != nullptr) spec.attribute("Software", image->software);
         spec.attribute("DateTime", "");  // OpenImageIO stamps TIFF and EXR files with the time unless told

@@ -1,0 +1,189 @@
+// tessref/shader.h — GLSL shader stages executed on the CPU, exactly.
+//
+// A stage's GLSL (a twin of data/shaders/ or a user's file) is compiled to SPIR-V by
+// glslang, validated by SPIRV-Tools, and run by tessref's own SPIR-V interpreter, one
+// invocation at a time, with the GL stage interface the GL backend sets up: the same
+// #version and defines, loose uniforms set by name (as glUniform*), samplers read through
+// tessref::Texture at their layout(binding = N) unit, inputs and outputs matched by location.
+//
+//   shader::Module tese = shader::Module::compile({ShaderStage::tess_evaluation, path, text});
+//   shader::Bindings b;
+//   b.set("scaleXY", 1.0f);
+//   b.bind_texture(0, &heightMap);
+//   shader::Executable run(tese, b, {});
+//   shader::ShaderVertex v = run.evaluate(patch, {u, v, 0}, patch_id);
+//
+// Float semantics: every operation is rounded to float32 on its own, as the GPU rounds it
+// (no contraction: the build passes -ffp-contract=off); denormals are kept. Integer
+// operations wrap as SPIR-V defines them. The few results SPIR-V leaves undefined are
+// defined here, each with a warning naming the source line (RunOptions::warnings):
+//   - integer division or remainder by zero: x / 0 = all ones (unsigned 0xffffffff,
+//     signed -1), x % 0 = x; INT_MIN / -1 = INT_MIN, INT_MIN % -1 = 0;
+//   - a shift by 32 or more shifts by the count modulo 32 (as x86 and llvmpipe do);
+//   - float -> integer conversion of NaN or of a value out of range: 0 for NaN, else
+//     saturated to the integer type's range;
+//   - an array or vector index out of range is clamped into the range.
+// A sampler whose unit has no texture reads (0, 0, 0, 1), as GL's incomplete texture does.
+// GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it. A matrix times a vector
+// sums the columns' products as GLM does, the C++ models' order: pairwise for four columns,
+// (c0 v.x + c1 v.y) + (c2 v.z + c3 v.w), from the first column on for two and three; a dot
+// product from the first component on, in both math modes. (llvmpipe sums a dot product
+// from the last component and a matrix times a vector from the first column on, as the
+// branch that wrote src/shader/llvmpipe_math found; the llvmpipe mode does not follow
+// those orders yet.)
+//
+// The GLSL.std.450 functions run in one of two math modes (MathMode): `exact`, correctly
+// rounded float results (each computed in double and rounded once, see src/shader/std450.cpp
+// for where that is exact and the exceptions), and `llvmpipe`, the approximations Mesa's
+// llvmpipe uses.
+//
+// Bad input throws tessref::Error: a GLSL compile error (glslang's log, at the file and
+// line), SPIR-V that fails validation (the validator's message), an opcode, capability or
+// execution model the interpreter does not run (naming the opcode and the source
+// file:line), a uniform set with another type than the shader declares, and an invocation
+// that runs past RunOptions::max_instructions (naming the stage, patch and invocation).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "tessref/scene.h"  // ShaderStage
+#include "tessref/texture.h"
+
+namespace tessref::shader {
+
+enum class MathMode : std::uint8_t { exact, llvmpipe };
+const char* to_string(MathMode mode);  // "exact", "llvmpipe"
+
+// One interface location: four 32-bit components as bit patterns (a float's or an int's).
+using Slot = std::array<std::uint32_t, 4>;
+Slot slot(glm::vec4 v);
+glm::vec4 as_vec4(const Slot& s);
+
+// A stage's GLSL text. `prefix` is inserted right after the #version line (the GL backend's
+// #defines); the file's own line numbers are kept for errors and OpLine.
+struct Source {
+    ShaderStage stage = ShaderStage::vertex;
+    std::string path;  // as errors and the debug line information name the file
+    std::string text;
+    std::string prefix;
+};
+
+// The tessellation layout of an evaluation shader's `layout(...) in;` (its execution modes).
+struct TessLayout {
+    Domain domain = Domain::triangles;
+    Spacing spacing = Spacing::equal;
+    Winding winding = Winding::ccw;
+    bool point_mode = false;
+};
+
+// A compiled, validated stage: immutable, cheap to copy (shared), safe to run from many
+// threads at once.
+class Module {
+public:
+    // GLSL -> SPIR-V (with debug line information) -> validated -> ready to run.
+    static Module compile(const Source& source);
+    // A SPIR-V binary (validated here as well); `path` names it in errors.
+    static Module load(std::vector<std::uint32_t> spirv, const std::string& path);
+
+    ShaderStage stage() const;
+    const std::string& path() const;
+    const std::vector<std::uint32_t>& spirv() const;
+    // The uniforms (not samplers) the stage declares, by name.
+    std::vector<std::string> uniform_names() const;
+    // A control shader's layout(vertices = N) out; 0 for other stages.
+    int output_vertices() const;
+    // An evaluation shader's layout; throws tessref::Error for other stages.
+    TessLayout tess_layout() const;
+
+    struct Impl;
+    const Impl& impl() const { return *impl_; }
+
+private:
+    explicit Module(std::shared_ptr<const Impl> impl) : impl_(std::move(impl)) {}
+    std::shared_ptr<const Impl> impl_;
+};
+
+// Uniform values by name and textures by unit, as a GL program's state. A name the module
+// does not declare is ignored (GL's location -1); an undeclared uniform the module reads
+// holds its initializer, or zero.
+class Bindings {
+public:
+    void set(const std::string& name, float v);
+    void set(const std::string& name, int v);
+    void set(const std::string& name, glm::vec2 v);
+    void set(const std::string& name, glm::vec3 v);
+    void set(const std::string& name, glm::vec4 v);
+    void set(const std::string& name, const glm::mat3& m);
+    void set(const std::string& name, const glm::mat4& m);
+    // The texture read by the sampler with layout(binding = unit); not owned.
+    void bind_texture(int unit, const Texture* texture);
+
+    enum class Type : std::uint8_t { float_, int_, vec2, vec3, vec4, mat3, mat4 };
+    struct Value {
+        Type type;
+        std::vector<std::uint32_t> words;  // column-major for matrices
+    };
+    const std::map<std::string, Value>& values() const { return values_; }
+    const std::map<int, const Texture*>& textures() const { return textures_; }
+
+private:
+    std::map<std::string, Value> values_;
+    std::map<int, const Texture*> textures_;
+};
+
+struct RunOptions {
+    MathMode math = MathMode::exact;
+    // Instructions one invocation may execute before it is stopped with an Error.
+    std::uint64_t max_instructions = 10'000'000;
+    // Where warnings (undefined behaviour met at run time, each once per source line) go;
+    // nullptr: nowhere.
+    std::vector<std::string>* warnings = nullptr;
+};
+
+// A vertex as one stage hands it to the next: gl_Position and the locations it wrote.
+struct ShaderVertex {
+    glm::vec4 position{0.0f, 0.0f, 0.0f, 1.0f};
+    std::vector<Slot> locations;  // indexed by location
+};
+
+// A control shader's patch: its output vertices, per-patch locations and levels.
+struct ShaderPatch {
+    std::vector<ShaderVertex> vertices;
+    std::vector<Slot> patch_locations;  // `patch out` variables, indexed by location
+    std::array<float, 4> outer{0.0f, 0.0f, 0.0f, 0.0f};
+    std::array<float, 2> inner{0.0f, 0.0f};
+};
+
+// A module with its uniforms and textures resolved: the stage drivers. Const and
+// thread-safe; each call runs its own invocations.
+class Executable {
+public:
+    Executable(Module module, const Bindings& bindings, RunOptions options);
+    ~Executable();
+    Executable(Executable&&) noexcept;
+    Executable& operator=(Executable&&) noexcept;
+
+    const Module& module() const;
+
+    // Vertex shader: attributes by location; gl_VertexID = vertex_id.
+    ShaderVertex vertex(std::span<const Slot> attributes, int vertex_id) const;
+    // Tessellation control: every invocation of the patch (layout(vertices = N)), run to each
+    // barrier() before any passes it. gl_PrimitiveID = patch_id.
+    ShaderPatch control(std::span<const ShaderVertex> in, long long patch_id) const;
+    // Tessellation evaluation at one domain point of a patch.
+    ShaderVertex evaluate(const ShaderPatch& patch, glm::vec3 tess_coord, long long patch_id) const;
+
+private:
+    struct State;
+    std::unique_ptr<const State> state_;
+};
+
+}  // namespace tessref::shader

@@ -1,0 +1,289 @@
+// The stage drivers: uniforms and textures resolved once (Executable), a stage's inputs
+// written into its invocation's memory, the invocations run, its outputs read back, with
+// the GL stage interface: locations and built-ins (tessref/shader.h).
+#define SPV_ENABLE_UTILITY_CODE
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <set>
+
+#include <glslang/SPIRV/spirv.hpp>
+
+#include "shader/executor.h"
+#include "shader/module.h"
+
+namespace tessref::shader {
+
+// ---- Bindings ------------------------------------------------------------------------------
+
+namespace {
+
+template <class T>
+std::vector<std::uint32_t> words_of(const T& v, std::size_t n) {
+    std::vector<std::uint32_t> out(n);
+    std::memcpy(out.data(), &v, n * 4);
+    return out;
+}
+
+const char* type_name(Bindings::Type t) {
+    switch (t) {
+        case Bindings::Type::float_: return "float";
+        case Bindings::Type::int_: return "int";
+        case Bindings::Type::vec2: return "vec2";
+        case Bindings::Type::vec3: return "vec3";
+        case Bindings::Type::vec4: return "vec4";
+        case Bindings::Type::mat3: return "mat3";
+        case Bindings::Type::mat4: return "mat4";
+    }
+    return "?";
+}
+
+// Whether a value of Bindings type `b` may set a uniform of module type `t` (as glUniform*
+// of that type may: glUniform1i also sets a bool).
+bool fits(const Module::Impl& m, const Type& t, Bindings::Type b) {
+    const auto vec = [&](std::uint32_t n) { return t.kind == Kind::vector && t.count == n && t.scalar == Kind::float_; };
+    const auto mat = [&](std::uint32_t n) {
+        return t.kind == Kind::matrix && t.count == n && m.types[t.element].count == n;
+    };
+    switch (b) {
+        case Bindings::Type::float_: return t.kind == Kind::float_;
+        case Bindings::Type::int_: return t.kind == Kind::int_ || t.kind == Kind::bool_;
+        case Bindings::Type::vec2: return vec(2);
+        case Bindings::Type::vec3: return vec(3);
+        case Bindings::Type::vec4: return vec(4);
+        case Bindings::Type::mat3: return mat(3);
+        case Bindings::Type::mat4: return mat(4);
+    }
+    return false;
+}
+
+}  // namespace
+
+void Bindings::set(const std::string& name, float v) { values_[name] = {Type::float_, words_of(v, 1)}; }
+void Bindings::set(const std::string& name, int v) { values_[name] = {Type::int_, words_of(v, 1)}; }
+void Bindings::set(const std::string& name, glm::vec2 v) { values_[name] = {Type::vec2, words_of(v, 2)}; }
+void Bindings::set(const std::string& name, glm::vec3 v) { values_[name] = {Type::vec3, words_of(v, 3)}; }
+void Bindings::set(const std::string& name, glm::vec4 v) { values_[name] = {Type::vec4, words_of(v, 4)}; }
+void Bindings::set(const std::string& name, const glm::mat3& m) { values_[name] = {Type::mat3, words_of(m, 9)}; }
+void Bindings::set(const std::string& name, const glm::mat4& m) { values_[name] = {Type::mat4, words_of(m, 16)}; }
+void Bindings::bind_texture(int unit, const Texture* texture) {
+    if (unit < 0 || unit > 255) throw Error("texture unit " + std::to_string(unit) + " is outside [0, 255]");
+    textures_[unit] = texture;
+}
+
+// ---- Executable ----------------------------------------------------------------------------
+
+struct Executable::State {
+    Module module;
+    RunOptions options;
+    std::vector<std::uint32_t> shared;  // uniforms set, samplers' units; inputs and outputs zero
+    std::vector<const Texture*> units;
+    explicit State(Module m) : module(std::move(m)) {}
+};
+
+Executable::Executable(Module module, const Bindings& bindings, RunOptions options) {
+    auto state = std::make_unique<State>(std::move(module));
+    const Module::Impl& m = state->module.impl();
+    state->options = options;
+    state->shared = m.shared_init;
+    for (const Variable& v : m.variables) {
+        if (v.storage != spv::StorageClassUniformConstant) continue;
+        const Type& t = m.types[v.type];
+        if (t.kind == Kind::sampled_image) {
+            state->shared[v.address] = static_cast<std::uint32_t>(std::max(v.binding, 0));
+            continue;
+        }
+        const auto value = bindings.values().find(v.name);
+        if (value == bindings.values().end()) continue;
+        if (!fits(m, t, value->second.type))
+            throw Error("the uniform " + v.name + " is set as a " + type_name(value->second.type) +
+                            " but the shader declares another type",
+                        Where::in_file(m.path));
+        std::copy(value->second.words.begin(), value->second.words.end(), state->shared.begin() + v.address);
+    }
+    for (const auto& [unit, texture] : bindings.textures()) {
+        if (state->units.size() <= static_cast<std::size_t>(unit)) state->units.resize(static_cast<std::size_t>(unit) + 1);
+        state->units[static_cast<std::size_t>(unit)] = texture;
+    }
+    state_ = std::move(state);
+}
+
+Executable::~Executable() = default;
+Executable::Executable(Executable&&) noexcept = default;
+Executable& Executable::operator=(Executable&&) noexcept = default;
+const Module& Executable::module() const { return state_->module; }
+
+namespace {
+
+bool is_input(const Variable& v) { return v.storage == spv::StorageClassInput; }
+bool is_output(const Variable& v) { return v.storage == spv::StorageClassOutput; }
+
+void to_slot(std::vector<Slot>& slots, int location, const std::uint32_t* from, std::uint32_t words) {
+    if (location < 0) return;
+    if (slots.size() <= static_cast<std::size_t>(location)) slots.resize(static_cast<std::size_t>(location) + 1, Slot{});
+    Slot& s = slots[static_cast<std::size_t>(location)];
+    std::copy_n(from, std::min<std::uint32_t>(words, 4), s.begin());
+}
+
+void from_slot(const std::vector<Slot>& slots, int location, std::uint32_t* to, std::uint32_t words) {
+    if (location < 0 || static_cast<std::size_t>(location) >= slots.size()) return;  // unwritten: zero
+    std::copy_n(slots[static_cast<std::size_t>(location)].begin(), std::min<std::uint32_t>(words, 4), to);
+}
+
+// One vertex's element of an interface variable (the whole variable when not arrayed):
+// written from / read into a ShaderVertex.
+void write_vertex(const Variable& v, std::uint32_t* element, const ShaderVertex& from) {
+    for (const InterfacePart& p : v.parts) {
+        if (p.builtin == spv::BuiltInPosition) std::memcpy(element + p.offset, &from.position[0], 16);
+        else if (p.builtin == spv::BuiltInPointSize) element[p.offset] = std::bit_cast<std::uint32_t>(1.0f);
+        else if (p.builtin < 0) from_slot(from.locations, p.location, element + p.offset, p.words);
+    }
+}
+void read_vertex(const Variable& v, const std::uint32_t* element, ShaderVertex& to) {
+    for (const InterfacePart& p : v.parts) {
+        if (p.builtin == spv::BuiltInPosition) std::memcpy(&to.position[0], element + p.offset, 16);
+        else if (p.builtin < 0) to_slot(to.locations, p.location, element + p.offset, p.words);
+    }
+}
+
+std::string who(const Module::Impl& m, long long patch, int invocation) {
+    std::string s = std::string(to_string(m.stage)) + " shader " + m.path;
+    if (patch >= 0) s += ", patch " + std::to_string(patch);
+    if (invocation >= 0) s += ", invocation " + std::to_string(invocation);
+    return s;
+}
+
+void require_stage(const Module::Impl& m, ShaderStage stage, const char* call) {
+    if (m.stage != stage)
+        throw Error(std::string("Executable::") + call + " runs a " + to_string(stage) + " shader, not a " +
+                        to_string(m.stage) + " shader",
+                    Where::in_file(m.path));
+}
+
+// Reads a single invocation's outputs (vertex and evaluation shaders).
+ShaderVertex read_outputs(const Module::Impl& m, const std::vector<std::uint32_t>& shared) {
+    ShaderVertex out;
+    for (const Variable& v : m.variables)
+        if (is_output(v)) read_vertex(v, &shared[v.address], out);
+    return out;
+}
+
+}  // namespace
+
+ShaderVertex Executable::vertex(std::span<const Slot> attributes, int vertex_id) const {
+    const Module::Impl& m = state_->module.impl();
+    require_stage(m, ShaderStage::vertex, "vertex");
+    std::vector<std::uint32_t> shared = state_->shared;
+    const std::vector<Slot> attribute_slots(attributes.begin(), attributes.end());
+    for (const Variable& v : m.variables) {
+        if (!is_input(v)) continue;
+        if (v.builtin == spv::BuiltInVertexId || v.builtin == spv::BuiltInVertexIndex) {
+            shared[v.address] = static_cast<std::uint32_t>(vertex_id);
+            continue;
+        }
+        for (const InterfacePart& p : v.parts) {
+            if (p.builtin >= 0) continue;  // gl_InstanceID and the like: 0
+            // An attribute the draw does not supply reads as GL's current value (0, 0, 0, 1).
+            const Slot fallback = slot(glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+            const Slot& s = p.location >= 0 && static_cast<std::size_t>(p.location) < attribute_slots.size()
+                                ? attribute_slots[static_cast<std::size_t>(p.location)]
+                                : fallback;
+            std::copy_n(s.begin(), std::min<std::uint32_t>(p.words, 4), &shared[v.address + p.offset]);
+        }
+    }
+    std::set<std::uint32_t> warned;
+    ExecContext c{m, shared, state_->units, state_->options, who(m, -1, vertex_id), &warned};
+    Invocation invocation(m);
+    if (invocation.run(c) != Invocation::Status::done)
+        throw Error("the " + c.who + " stopped at a barrier or discard outside a control or fragment shader",
+                    Where::in_file(m.path));
+    return read_outputs(m, shared);
+}
+
+ShaderPatch Executable::control(std::span<const ShaderVertex> in, long long patch_id) const {
+    const Module::Impl& m = state_->module.impl();
+    require_stage(m, ShaderStage::tess_control, "control");
+    std::vector<std::uint32_t> shared = state_->shared;
+    const int vertices_out = m.output_vertices;
+    std::uint32_t invocation_id_address = kNone;
+    for (const Variable& v : m.variables) {
+        if (!is_input(v)) continue;
+        if (v.builtin == spv::BuiltInInvocationId) invocation_id_address = v.address;
+        else if (v.builtin == spv::BuiltInPrimitiveId) shared[v.address] = static_cast<std::uint32_t>(patch_id);
+        else if (v.builtin == spv::BuiltInPatchVertices) shared[v.address] = static_cast<std::uint32_t>(in.size());
+        else if (v.arrayed)
+            for (std::uint32_t k = 0; k < v.vertices && k < in.size(); ++k)
+                write_vertex(v, &shared[v.address + k * v.element_words], in[k]);
+    }
+    // Every invocation runs to the next barrier() (or its end) before any runs past it.
+    std::vector<Invocation> invocations(static_cast<std::size_t>(vertices_out), Invocation(m));
+    std::vector<bool> finished(invocations.size(), false);
+    std::set<std::uint32_t> warned;
+    for (std::size_t remaining = invocations.size(); remaining > 0;) {
+        for (std::size_t i = 0; i < invocations.size(); ++i) {
+            if (finished[i]) continue;
+            if (invocation_id_address != kNone) shared[invocation_id_address] = static_cast<std::uint32_t>(i);
+            ExecContext c{m, shared, state_->units, state_->options, who(m, patch_id, static_cast<int>(i)), &warned};
+            const Invocation::Status status = invocations[i].run(c);
+            if (status == Invocation::Status::killed)
+                throw Error("the " + c.who + " executed discard outside a fragment shader", Where::in_file(m.path));
+            if (status == Invocation::Status::done) {
+                finished[i] = true;
+                --remaining;
+            }
+        }
+    }
+    ShaderPatch patch;
+    patch.vertices.resize(static_cast<std::size_t>(vertices_out));
+    for (const Variable& v : m.variables) {
+        if (!is_output(v)) continue;
+        if (v.builtin == spv::BuiltInTessLevelOuter) {
+            for (std::uint32_t k = 0; k < 4 && k < m.types[v.type].words; ++k)
+                patch.outer[k] = std::bit_cast<float>(shared[v.address + k]);
+        } else if (v.builtin == spv::BuiltInTessLevelInner) {
+            for (std::uint32_t k = 0; k < 2 && k < m.types[v.type].words; ++k)
+                patch.inner[k] = std::bit_cast<float>(shared[v.address + k]);
+        } else if (v.arrayed) {
+            for (std::uint32_t k = 0; k < v.vertices && k < patch.vertices.size(); ++k)
+                read_vertex(v, &shared[v.address + k * v.element_words], patch.vertices[k]);
+        } else {
+            for (const InterfacePart& p : v.parts)
+                if (p.builtin < 0) to_slot(patch.patch_locations, p.location, &shared[v.address + p.offset], p.words);
+        }
+    }
+    return patch;
+}
+
+ShaderVertex Executable::evaluate(const ShaderPatch& patch, glm::vec3 tess_coord, long long patch_id) const {
+    const Module::Impl& m = state_->module.impl();
+    require_stage(m, ShaderStage::tess_evaluation, "evaluate");
+    std::vector<std::uint32_t> shared = state_->shared;
+    for (const Variable& v : m.variables) {
+        if (!is_input(v)) continue;
+        std::uint32_t* at = &shared[v.address];
+        switch (v.builtin) {
+            case spv::BuiltInTessCoord: std::memcpy(at, &tess_coord[0], 12); continue;
+            case spv::BuiltInPrimitiveId: *at = static_cast<std::uint32_t>(patch_id); continue;
+            case spv::BuiltInPatchVertices: *at = static_cast<std::uint32_t>(patch.vertices.size()); continue;
+            case spv::BuiltInTessLevelOuter: std::memcpy(at, patch.outer.data(), 4 * std::min<std::uint32_t>(4, m.types[v.type].words)); continue;
+            case spv::BuiltInTessLevelInner: std::memcpy(at, patch.inner.data(), 4 * std::min<std::uint32_t>(2, m.types[v.type].words)); continue;
+            default: break;
+        }
+        if (v.arrayed) {
+            for (std::uint32_t k = 0; k < v.vertices && k < patch.vertices.size(); ++k)
+                write_vertex(v, at + k * v.element_words, patch.vertices[k]);
+        } else {
+            for (const InterfacePart& p : v.parts)
+                if (p.builtin < 0) from_slot(patch.patch_locations, p.location, at + p.offset, p.words);
+        }
+    }
+    std::set<std::uint32_t> warned;
+    ExecContext c{m, shared, state_->units, state_->options, who(m, patch_id, -1), &warned};
+    Invocation invocation(m);
+    if (invocation.run(c) != Invocation::Status::done)
+        throw Error("the " + c.who + " stopped at a barrier or discard outside a control or fragment shader",
+                    Where::in_file(m.path));
+    return read_outputs(m, shared);
+}
+
+}  // namespace tessref::shader

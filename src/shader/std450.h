@@ -1,0 +1,28 @@
+// src/shader/std450.h — the GLSL.std.450 extended instructions: the one place that
+// dispatches (instruction, math mode, arguments), private to src/shader/.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "shader/module.h"
+
+namespace tessref::shader {
+
+// The arguments of one GLSL.std.450 instruction, flattened (module.h).
+struct Std450Args {
+    const std::uint32_t* value[3] = {nullptr, nullptr, nullptr};
+    std::uint32_t components[3] = {0, 0, 0};  // each argument's scalar count (1 for a scalar)
+    Kind scalar[3] = {Kind::none, Kind::none, Kind::none};
+    std::uint32_t count = 0;
+};
+
+// Runs instruction `op` (GLSLstd450) in `mode`: the result's `components` words of leaf kind
+// `scalar` to `out`. Returns false for an instruction the interpreter does not run.
+bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t components, const Std450Args& args,
+                std::uint32_t* out);
+
+// The instruction's name ("Acos"), for errors and traces.
+std::string std450_name(std::uint32_t op);
+
+}  // namespace tessref::shader
