@@ -34,18 +34,21 @@ namespace gl = tessref::gl;
 namespace lm = tessref::llvmpipe_math;
 
 gl::Context* context() {
-    static std::unique_ptr<gl::Context> ctx;
+    // Never destroyed: destroying it from a static destructor at exit, after gl::evaluate's
+    // draws, crashes inside OSMesaDestroyContext (Mesa's own teardown has run by then); the
+    // process's end frees it.
+    static gl::Context* ctx = nullptr;
     static std::string failure;
     if (!ctx && failure.empty()) {
         try {
-            ctx = std::make_unique<gl::Context>(gl::Context::create());
+            ctx = new gl::Context(gl::Context::create());
             std::printf("[ gl       ] %s | %s\n", ctx->renderer().c_str(), ctx->version().c_str());
         } catch (const tessref::Error& e) {
             failure = e.message();
         }
     }
     if (!ctx) ADD_FAILURE() << "no OSMesa OpenGL 4.5 context: " << failure;
-    return ctx.get();
+    return ctx;
 }
 
 std::uint32_t bits(float f) {
