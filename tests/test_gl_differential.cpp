@@ -34,6 +34,7 @@
 #define TESSREF_HAVE_MXCSR 1
 #endif
 
+#include "gl_test_context.h"
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 #include "tessref/tessellator.h"
@@ -48,21 +49,7 @@ using tessref::TessSettings;
 using tessref::Winding;
 namespace gl = tessref::gl;
 
-// One GL context per test process, created on first use.
-gl::Context* context() {
-    static std::unique_ptr<gl::Context> ctx;
-    static std::string failure;
-    if (!ctx && failure.empty()) {
-        try {
-            ctx = std::make_unique<gl::Context>(gl::Context::create());
-            std::printf("[ gl       ] %s | %s\n", ctx->renderer().c_str(), ctx->version().c_str());
-        } catch (const tessref::Error& e) {
-            failure = e.message();
-        }
-    }
-    if (!ctx) ADD_FAILURE() << "no OSMesa OpenGL 4.5 context: " << failure;
-    return ctx.get();
-}
+gl::Context* context() { return gl_test_context(); }
 
 std::uint32_t bits(float f) {
     std::uint32_t b;

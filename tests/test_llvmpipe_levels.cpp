@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "gl_test_context.h"
 #include "tessref/error.h"
 #include "tessref/gl_render.h"
 #include "tessref/pipeline.h"
@@ -28,19 +29,7 @@ using tessref::TessLevels;
 
 const fs::path kScenes = fs::path(TESSREF_SOURCE_DIR) / "data" / "scenes";
 
-gl::Context* context() {
-    static std::unique_ptr<gl::Context> ctx;
-    static std::string failure;
-    if (!ctx && failure.empty()) {
-        try {
-            ctx = std::make_unique<gl::Context>(gl::Context::create());
-        } catch (const tessref::Error& e) {
-            failure = e.message();
-        }
-    }
-    if (!ctx) ADD_FAILURE() << "no OSMesa OpenGL 4.5 context: " << failure;
-    return ctx.get();
-}
+gl::Context* context() { return gl_test_context(); }
 
 std::vector<std::string> shipped_scenes() {
     std::vector<std::string> names;

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "shader/llvmpipe_math.h"
+#include "gl_test_context.h"
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 
@@ -33,23 +34,7 @@ namespace {
 namespace gl = tessref::gl;
 namespace lm = tessref::llvmpipe_math;
 
-gl::Context* context() {
-    // Never destroyed: destroying it from a static destructor at exit, after gl::evaluate's
-    // draws, crashes inside OSMesaDestroyContext (Mesa's own teardown has run by then); the
-    // process's end frees it.
-    static gl::Context* ctx = nullptr;
-    static std::string failure;
-    if (!ctx && failure.empty()) {
-        try {
-            ctx = new gl::Context(gl::Context::create());
-            std::printf("[ gl       ] %s | %s\n", ctx->renderer().c_str(), ctx->version().c_str());
-        } catch (const tessref::Error& e) {
-            failure = e.message();
-        }
-    }
-    if (!ctx) ADD_FAILURE() << "no OSMesa OpenGL 4.5 context: " << failure;
-    return ctx;
-}
+gl::Context* context() { return gl_test_context(); }
 
 std::uint32_t bits(float f) {
     std::uint32_t b;
