@@ -255,9 +255,9 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(CompareCaptures, IdenticalPassesWhateverTheTriangleAndCornerOrder) {
     const Capture ref = two_patches();
     Capture test;
-    // Triangles reversed, each triangle's corners rotated and re-oriented.
+    // Triangles reversed, each triangle's corners rotated (the same way round).
     for (std::size_t t = ref.vertices.size() / 3; t-- > 0;)
-        for (const int k : {1, 0, 2}) test.vertices.push_back(ref.vertices[3 * t + static_cast<std::size_t>(k)]);
+        for (const int k : {1, 2, 0}) test.vertices.push_back(ref.vertices[3 * t + static_cast<std::size_t>(k)]);
     const CaptureCompareResult r = tessref::compare_captures(ref, test);
     EXPECT_TRUE(r.passed);
     EXPECT_EQ(r.reference_patches, 2u);
@@ -366,6 +366,31 @@ TEST(CompareCaptures, SameTessCoordsOtherTrianglesIsATriangleDivergence) {
     ASSERT_EQ(r.listed.size(), 1u);
     EXPECT_EQ(r.listed[0].patch_id, 0u);
     EXPECT_EQ(r.listed[0].kind, PatchDivergence::triangles);
+}
+
+// A `cw` evaluation layout where the reference has `ccw` gives the same triangles with
+// their corners the other way round: the comparison must say so, not pass. Patch 1's
+// second triangle 00, 11, 01 (vertices 9, 10, 11) is written 00, 01, 11: one swap.
+TEST(CompareCaptures, ATriangleTheOtherWayRoundIsAnOrientationDivergence) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    std::swap(test.vertices[10], test.vertices[11]);
+    const CaptureCompareResult r = tessref::compare_captures(ref, test);
+    EXPECT_FALSE(r.passed);
+    EXPECT_EQ(r.triangle_divergences, 0u);
+    EXPECT_EQ(r.orientation_divergences, 1u);
+    EXPECT_EQ(r.flipped_triangles, 1u);
+    EXPECT_EQ(r.compared_patches, 1u);  // patch 0
+    ASSERT_EQ(r.listed.size(), 1u);
+    EXPECT_EQ(r.listed[0].patch_id, 1u);
+    EXPECT_EQ(r.listed[0].kind, PatchDivergence::orientation);
+    EXPECT_EQ(r.listed[0].flipped_triangles, 1u);
+    // Every triangle of both patches flipped: two patches, four triangles.
+    Capture all = ref;
+    for (std::size_t t = 0; t < all.vertices.size() / 3; ++t) std::swap(all.vertices[3 * t + 1], all.vertices[3 * t + 2]);
+    const CaptureCompareResult a = tessref::compare_captures(ref, all);
+    EXPECT_EQ(a.orientation_divergences, 2u);
+    EXPECT_EQ(a.flipped_triangles, 4u);
 }
 
 TEST(CompareCaptures, RefusesACaptureOfPartTriangles) {

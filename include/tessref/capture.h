@@ -28,6 +28,11 @@
 //    sides' levels and their largest difference in ulps: on identical levels the generator
 //    is bit-identical, so this points at the control stage);
 //  - then the triangles (as tess-coord sets) must be identical, else a triangle divergence;
+//  - then each triangle's corners must run the same way round (the cyclic order of its tess
+//    coords), else an orientation divergence: a `cw` evaluation layout where the reference
+//    has `ccw` makes the same triangles facing the other way, which culling and every
+//    normal computed from the corners see (a triangle with two equal tess coords has no
+//    orientation and is not counted);
 //  - then every triangle corner's position and normal are compared component by component
 //    in ulps (ulp_distance below); a corner fails when a position component is more than
 //    max_position_ulps or a normal component more than max_normal_ulps away.
@@ -138,6 +143,7 @@ enum class PatchDivergence : std::uint8_t {
     missing_in_reference,
     tess_coords,           // the multisets of tess coords differ
     triangles,             // same tess coords, different triangles
+    orientation,           // same triangles, some with their corners the other way round
     values,                // some corner's position or normal beyond the tolerance
 };
 const char* to_string(PatchDivergence kind);
@@ -169,6 +175,9 @@ struct DivergingPatch {
     // triangles: a corner of the first triangle that differs.
     glm::vec3 tess_coord{0.0f};
     bool tess_coord_in_reference = true;
+    // orientation: how many of the patch's triangles face the other way (the first one's
+    // smallest tess coord is tess_coord).
+    std::size_t flipped_triangles = 0;
     // values: failing corners, and the first one (in the comparison's order).
     std::size_t failing_vertices = 0;
     glm::vec3 reference_position{0.0f}, test_position{0.0f};
@@ -188,6 +197,8 @@ struct CaptureCompareResult {
     std::size_t tess_coord_divergences = 0;
     std::size_t tess_coord_divergences_with_equal_levels = 0;  // levels known and bit-identical
     std::size_t triangle_divergences = 0;
+    std::size_t orientation_divergences = 0;
+    std::size_t flipped_triangles = 0;  // over all patches with an orientation divergence
     std::size_t value_divergences = 0;
     WorstUlps worst_position;
     WorstUlps worst_normal;
@@ -197,7 +208,7 @@ struct CaptureCompareResult {
 
     std::size_t diverging_patches() const {
         return missing_in_test + missing_in_reference + tess_coord_divergences + triangle_divergences +
-               value_divergences;
+               orientation_divergences + value_divergences;
     }
 };
 

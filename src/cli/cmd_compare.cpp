@@ -185,6 +185,10 @@ std::string diverging_text(const DivergingPatch& d, const Capture& reference, co
         case PatchDivergence::triangles:
             s += "the same tess coords in other triangles, first at " + vec_text(d.tess_coord);
             break;
+        case PatchDivergence::orientation:
+            s += std::to_string(d.flipped_triangles) + " of " + std::to_string(d.reference_vertices / 3) +
+                 " triangles the other way round (cw against ccw), first at " + vec_text(d.tess_coord);
+            break;
         case PatchDivergence::values:
             s += std::to_string(d.failing_vertices) + " of " + std::to_string(d.reference_vertices) +
                  " vertices fail; first at tess coord " + vec_text(d.tess_coord) + ": position reference " +
@@ -208,6 +212,7 @@ nlohmann::json diverging_json(const DivergingPatch& d, const Capture& reference,
                         {"level_ulps", d.levels_known ? ulps_json(d.level_ulps) : nlohmann::json(nullptr)},
                         {"tess_coord", vec_json(d.tess_coord)}};
     if (d.kind == PatchDivergence::tess_coords) j["tess_coord_only_in"] = d.tess_coord_in_reference ? "reference" : "test";
+    if (d.kind == PatchDivergence::orientation) j["flipped_triangles"] = d.flipped_triangles;
     if (d.kind == PatchDivergence::values) {
         j["failing_vertices"] = d.failing_vertices;
         j["reference_position"] = vec_json(d.reference_position);
@@ -235,7 +240,9 @@ std::string capture_report_text(const CompareCommandOptions& options, const Capt
             std::to_string(r.missing_in_test) + " missing in test, " + std::to_string(r.missing_in_reference) +
             " missing in reference, " + std::to_string(r.tess_coord_divergences) + " other tess coords (" +
             std::to_string(r.tess_coord_divergences_with_equal_levels) + " of them with equal levels), " +
-            std::to_string(r.triangle_divergences) + " other triangles, " + std::to_string(r.value_divergences) +
+            std::to_string(r.triangle_divergences) + " other triangles, " + std::to_string(r.orientation_divergences) +
+            " other orientation (" + std::to_string(r.flipped_triangles) + " triangles), " +
+            std::to_string(r.value_divergences) +
             " beyond the tolerance\n";
     text += "vertices   " + std::to_string(r.vertices_compared) + " compared, " + std::to_string(r.failing_vertices) +
             " beyond the tolerance\n";
@@ -282,6 +289,8 @@ std::string capture_report_json(const CompareCommandOptions& options, const Capt
         {"tess_coord_divergences", r.tess_coord_divergences},
         {"tess_coord_divergences_with_equal_levels", r.tess_coord_divergences_with_equal_levels},
         {"triangle_divergences", r.triangle_divergences},
+        {"orientation_divergences", r.orientation_divergences},
+        {"flipped_triangles", r.flipped_triangles},
         {"value_divergences", r.value_divergences},
         {"worst_position", worst_json(r.worst_position)},
         {"worst_normal", worst_json(r.worst_normal)},

@@ -454,6 +454,9 @@ SceneVerdict verify_scene(const GoldenOptions& options, const std::string& name,
         v.failures.push_back("capture: " + std::to_string(c.tess_coord_divergences_with_equal_levels) +
                              " patches with equal levels but different tess coords");
     if (c.triangle_divergences) v.failures.push_back("capture: " + std::to_string(c.triangle_divergences) + " patches with other triangles");
+    if (c.orientation_divergences)
+        v.failures.push_back("capture: " + std::to_string(c.flipped_triangles) + " triangles the other way round in " +
+                             std::to_string(c.orientation_divergences) + " patches");
     if (c.value_divergences)
         v.failures.push_back("capture: " + std::to_string(c.failing_vertices) + " vertices beyond " +
                              std::to_string(kGoldenMaxPositionUlps) + " position / " +

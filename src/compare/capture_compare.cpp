@@ -36,6 +36,7 @@ const char* to_string(PatchDivergence kind) {
         case PatchDivergence::missing_in_reference: return "missing in reference";
         case PatchDivergence::tess_coords: return "tess coords";
         case PatchDivergence::triangles: return "triangles";
+        case PatchDivergence::orientation: return "orientation";
         case PatchDivergence::values: return "values";
     }
     return "?";
@@ -57,6 +58,9 @@ struct Triangle {
     std::array<Bits, 3> keys{};
     std::uint32_t index = 0;               // triangle index in the capture
     std::array<std::uint8_t, 3> corner{};  // the capture's corner of keys[k]
+    // The capture's corners run the other way round than the sorted keys (the permutation
+    // `corner` is odd); -1 when two keys are equal (a degenerate triangle has no way round).
+    int odd = -1;
 
     bool operator<(const Triangle& o) const {
         if (patch != o.patch) return patch < o.patch;
@@ -93,6 +97,9 @@ std::vector<Triangle> sorted_triangles(const Capture& capture, const char* side)
             tri.keys[k] = keys[order[k]];
             tri.corner[k] = order[k];
         }
+        // A permutation of three is even exactly when it is a rotation: 012, 120, 201.
+        if (tri.keys[0] != tri.keys[1] && tri.keys[1] != tri.keys[2])
+            tri.odd = (order[1] + 3 - order[0]) % 3 == 1 ? 0 : 1;
     }
     std::sort(triangles.begin(), triangles.end());
     return triangles;
@@ -231,6 +238,20 @@ private:
             ++result_.triangle_divergences;
             const int c = a.keys[0] != b.keys[0] ? 0 : a.keys[1] != b.keys[1] ? 1 : 2;
             d.tess_coord = vec_of(a.keys[c]);
+            list(d);
+            return;
+        }
+
+        // The way round of each triangle's corners.
+        for (std::size_t k = 0; k < r.size(); ++k) {
+            const Triangle &a = ref_tris_[r.begin + k], &b = test_tris_[t.begin + k];
+            if (a.odd < 0 || a.odd == b.odd) continue;
+            if (d.flipped_triangles++ == 0) d.tess_coord = vec_of(a.keys[0]);
+        }
+        if (d.flipped_triangles) {
+            d.kind = PatchDivergence::orientation;
+            ++result_.orientation_divergences;
+            result_.flipped_triangles += d.flipped_triangles;
             list(d);
             return;
         }
