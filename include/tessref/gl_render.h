@@ -45,17 +45,20 @@ namespace tessref::gl {
 // User shaders (the scene's [shaders], `tessref gl --shader STAGE=FILE`): a user's GLSL file
 // takes the place of one stage's twin, or is added where the models have no such stage
 // (a geometry shader without [geometry], a control shader where the constant stage has
-// none). Everything else stays: the other stages, the uniforms, the textures and the CPU
-// reference's predicted counts (the CPU pipeline keeps the reference models). A user's
-// evaluation shader keeps its own layout(...) in; line (it is what is under test), so a
-// layout or a control shader that tessellates differently is reported as above, the
-// message naming the user's files. The contract a user's shader is held to is the twins'
+// none). Everything else stays: the other stages, the uniforms and the textures. The CPU
+// pipeline that predicts the counts runs the user's vertex, control and evaluation shaders
+// through its interpreter (pipeline.h, src/pipeline/user_program.cpp), so a control shader
+// that computes other levels than the model is predicted. A user's evaluation shader keeps
+// its own layout(...) in; line (it is what is under test; the CPU tessellates as
+// [generator]), so a layout that tessellates differently, or levels llvmpipe computes
+// otherwise than the interpreter, are reported as above, the message naming the user's files. The contract a user's shader is held to is the twins'
 // interface: the uniform names and types, the sampler bindings, the vertex attributes and
 // the blocks between the stages (below; README, "Debugging your own shader"); a uniform it
 // leaves out is not set, one it declares with another type is an error.
 //
 // THE CONTRACT, per model (the twins in data/shaders/ are the reference text; the uniforms
-// are set by the functions *_uniforms in src/gl/scene_render.cpp). A stage talks to its
+// are set by src/pipeline/stage_uniforms.cpp, for the GL backend and the CPU's interpreter,
+// and the fragment stage's by src/gl/scene_render.cpp). A stage talks to its
 // neighbours through these blocks (matched by block name and location 0) and attributes:
 //   thesis   attribute 0 vec4 position (the corner, z = 0);
 //            vert -> tesc VertexData { vec4 vPosition; }, tesc -> tese ControlData

@@ -139,13 +139,37 @@ private:
     std::map<int, const Texture*> textures_;
 };
 
+// What an invocation executes, as it executes it (`tessref trace`): set RunOptions::observer.
+// Without one the executor tests a single pointer per instruction and records nothing.
+// Called on the thread that runs the invocation.
+class Observer {
+public:
+    virtual ~Observer() = default;
+    // A control shader's invocation `index` starts or resumes (after a barrier()).
+    virtual void invocation(int /*index*/) {}
+    // An instruction of source `file`:`line` (OpLine) is about to run; called when the line
+    // differs from the previous instruction's.
+    virtual void line(const std::string& file, std::uint32_t line) = 0;
+    // A store into the variable `name` (OpName; "" when the module has none) at word
+    // `offset` of it: the words stored, each a float, a signed or an unsigned int or a bool
+    // as `kind` says ('f', 'i', 'u', 'b').
+    virtual void store(const std::string& name, std::uint32_t offset, char kind, std::span<const std::uint32_t> words) = 0;
+};
+
+// The budget RunOptions starts from: 10 000 000 instructions, or what `--max-instructions`
+// set for the process (render, mesh, gl: the pipeline makes the RunOptions of a scene's
+// user shaders itself, user_program.cpp, with no caller between that could pass one).
+std::uint64_t default_max_instructions();
+void set_default_max_instructions(std::uint64_t max_instructions);  // >= 1
+
 struct RunOptions {
     MathMode math = MathMode::exact;
     // Instructions one invocation may execute before it is stopped with an Error.
-    std::uint64_t max_instructions = 10'000'000;
+    std::uint64_t max_instructions = default_max_instructions();
     // Where warnings (undefined behaviour met at run time, each once per source line) go;
     // nullptr: nowhere.
     std::vector<std::string>* warnings = nullptr;
+    Observer* observer = nullptr;  // not owned; nullptr: nothing is recorded
 };
 
 // A vertex as one stage hands it to the next: gl_Position and the locations it wrote.

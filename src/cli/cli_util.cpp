@@ -17,6 +17,8 @@
 #include <unistd.h>
 
 #include "common/input_file.h"
+#include "pipeline/stage_uniforms.h"
+#include "tessref/shader.h"
 #include "common/temp_cleanup.h"
 #include "common/temp_name.h"
 #include "tessref/error.h"
@@ -464,6 +466,43 @@ Precision parse_precision_flag(const std::string& text) {
     const std::optional<Precision> precision = parse_precision(text);
     if (!precision) throw Error("unknown precision '" + text + "'; expected gpu or exact", Where::in_file("--precision"));
     return *precision;
+}
+
+// --shader STAGE=FILE: FILE relative to the working directory; one flag per stage.
+std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flags) {
+    std::vector<StageShader> shaders;
+    for (const std::string& flag : flags) {
+        const std::string typed = "--shader " + flag;
+        const std::size_t eq = flag.find('=');
+        if (eq == std::string::npos || eq + 1 == flag.size())
+            throw Error("--shader takes STAGE=FILE, not '" + flag + "'", Where::in_file("--shader"));
+        const std::string name = flag.substr(0, eq);
+        const auto stage = shader_stage_from_string(name);
+        if (!stage)
+            throw Error("unknown shader stage '" + name + "' in " + typed +
+                            " (known: vertex|vert, tess_control|tesc, tess_evaluation|tese, geometry|geom, "
+                            "fragment|frag)",
+                        Where::in_file("--shader"));
+        for (const StageShader& s : shaders)
+            if (s.stage == *stage)
+                throw Error(std::string("--shader names the ") + to_string(*stage) + " stage twice (" + s.origin +
+                                ", " + typed + ")",
+                            Where::in_file("--shader"));
+        shaders.push_back(StageShader{*stage, flag.substr(eq + 1), typed, Where::in_file("--shader")});
+    }
+    return shaders;
+}
+
+void apply_shader_flags(Scene& scene, const std::vector<StageShader>& flags) {
+    scene.shaders = pipeline::with_shader_flags(scene.shaders, flags);
+}
+
+void apply_max_instructions_flag(const std::string& text) {
+    if (text.empty()) return;
+    const std::optional<long long> n = parse_integer(text);
+    if (!n || *n < 1)
+        throw Error("--max-instructions takes a whole number >= 1, not '" + text + "'", Where::in_file("--max-instructions"));
+    shader::set_default_max_instructions(static_cast<std::uint64_t>(*n));
 }
 
 MathMode parse_math_flag(const std::string& text) {

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -22,6 +23,7 @@
 #include "common/file_name.h"  // lowercase_extension
 #include "tessref/control.h"
 #include "tessref/error.h"
+#include "tessref/scene.h"
 #include "tessref/tessellator.h"
 
 namespace tessref::cli {
@@ -42,6 +44,17 @@ std::optional<double> parse_double(std::string_view text);
 // Parses an integer (whole text, decimal, optional sign). nullopt when not an integer or
 // out of range.
 std::optional<long long> parse_integer(std::string_view text);
+
+// --shader STAGE=FILE (render, mesh, gl): FILE relative to the working directory; one
+// flag per stage. Throws tessref::Error naming the flag.
+std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flags);
+// The scene's [shaders] with each --shader in place of its stage's entry: what the CPU
+// pipeline runs through the interpreter (render, mesh; tessref/pipeline.h).
+void apply_shader_flags(Scene& scene, const std::vector<StageShader>& flags);
+// --max-instructions N (N >= 1): the instruction budget of every invocation of a user's
+// shader this process runs (shader.h default_max_instructions); "" leaves the default.
+// Throws tessref::Error naming the flag.
+void apply_max_instructions_flag(const std::string& text);
 
 // Parses --precision: "gpu" or "exact". Throws tessref::Error naming the flag.
 Precision parse_precision_flag(const std::string& text);

@@ -41,34 +41,11 @@ struct GlCommandOptions {
     bool wireframe = false;
     std::string capture;
     std::vector<std::string> shaders;  // STAGE=FILE, as typed
+    std::string max_instructions;      // empty: the interpreter's default
     std::string max_primitives_per_draw;  // empty: SceneRenderOptions' default
     bool camera_relative = false;      // refused (see run_gl)
 };
 
-// --shader STAGE=FILE: FILE relative to the working directory; one flag per stage.
-std::vector<StageShader> parse_shader_flags(const std::vector<std::string>& flags) {
-    std::vector<StageShader> shaders;
-    for (const std::string& flag : flags) {
-        const std::string typed = "--shader " + flag;
-        const std::size_t eq = flag.find('=');
-        if (eq == std::string::npos || eq + 1 == flag.size())
-            throw Error("--shader takes STAGE=FILE, not '" + flag + "'", Where::in_file("--shader"));
-        const std::string name = flag.substr(0, eq);
-        const auto stage = shader_stage_from_string(name);
-        if (!stage)
-            throw Error("unknown shader stage '" + name + "' in " + typed +
-                            " (known: vertex|vert, tess_control|tesc, tess_evaluation|tese, geometry|geom, "
-                            "fragment|frag)",
-                        Where::in_file("--shader"));
-        for (const StageShader& s : shaders)
-            if (s.stage == *stage)
-                throw Error(std::string("--shader names the ") + to_string(*stage) + " stage twice (" + s.origin +
-                                ", " + typed + ")",
-                            Where::in_file("--shader"));
-        shaders.push_back(StageShader{*stage, flag.substr(eq + 1), typed, Where::in_file("--shader")});
-    }
-    return shaders;
-}
 
 // --max-primitives-per-draw N: 1..2^31-1 (a draw's GL_PRIMITIVES_GENERATED is read as a GLuint).
 std::size_t parse_max_primitives_per_draw(const std::string& text) {
@@ -118,6 +95,7 @@ int run_gl(const GlCommandOptions& options) {
     render_options.wireframe = options.wireframe;
     render_options.capture = !options.capture.empty();
     render_options.shaders = parse_shader_flags(options.shaders);
+    apply_max_instructions_flag(options.max_instructions);
     if (!options.max_primitives_per_draw.empty())
         render_options.max_primitives_per_draw = parse_max_primitives_per_draw(options.max_primitives_per_draw);
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)
@@ -196,6 +174,10 @@ Command add_gl_command(CLI::App& parent) {
                     "own layout(...) in; (README: Debugging your own shader)")
         ->type_name("STAGE=FILE")
         ->allow_extra_args(false);  // one file per flag: the scene after it stays the scene
+    app->add_option("--max-instructions", options->max_instructions,
+                    "Instructions one shader invocation of a user's stage may run before it is stopped (default "
+                    "10000000): a shader that never ends is an error naming the stage, patch and invocation")
+        ->type_name("N");
     app->add_option("--max-primitives-per-draw", options->max_primitives_per_draw,
                     "Predicted primitives per draw at most (default 32768; a draw holds at least one patch): "
                     "the size of the draws whose counts are checked. Above the default, llvmpipe can draw a wrong "

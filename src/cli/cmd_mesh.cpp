@@ -48,6 +48,8 @@ struct MeshCommandOptions {
     bool solid = false;
     std::string base;  // --base as typed: the solid's bottom; empty: below the lowest vertex
     bool camera_relative = false;
+    std::vector<std::string> shaders;  // --shader STAGE=FILE, as typed
+    std::string max_instructions;      // empty: the interpreter's default
 };
 
 // Writes the mesh file through `write` into the output's temporary file, with progress.
@@ -116,7 +118,10 @@ int run_mesh(const MeshCommandOptions& options) {
         capture_output.emplace(options.capture);
     }
 
-    const Scene scene = load_scene(options.scene);
+    const std::vector<StageShader> shader_flags = parse_shader_flags(options.shaders);
+    apply_max_instructions_flag(options.max_instructions);
+    Scene scene = load_scene(options.scene);
+    apply_shader_flags(scene, shader_flags);
     if (options.solid && !scene.grid)
         throw Error("--solid closes a terrain; this scene has no [domain] grid", Where::in_file(options.scene));
 
@@ -229,6 +234,15 @@ Command add_mesh_command(CLI::App& parent) {
                     "gpu: float stages, as the GPU computes them; exact: double stages. Files "
                     "store 32-bit floats either way (OpenMesh's writers)")
         ->default_val("gpu");
+    app->add_option("--shader", options->shaders, "A GLSL file of your own for one stage (repeatable; over the scene's [shaders]): STAGE is "
+                    "vertex|vert, tess_control|tesc or tess_evaluation|tese, which the CPU runs through its SPIR-V "
+                    "interpreter with the twins' uniforms and textures (README: Your shaders on the CPU)")
+        ->type_name("STAGE=FILE")
+        ->allow_extra_args(false);
+    app->add_option("--max-instructions", options->max_instructions,
+                    "Instructions one shader invocation of a user's stage may run before it is stopped (default "
+                    "10000000): a shader that never ends is an error naming the stage, patch and invocation")
+        ->type_name("N");
     app->add_flag("--binary", options->binary,
                   "Binary file (PLY little endian, OFF binary, STL binary); OBJ has none");
     app->add_option("--threads", options->threads, "Worker threads (0: every core)")->default_val(0);

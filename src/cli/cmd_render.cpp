@@ -45,6 +45,8 @@ struct RenderCommandOptions {
     std::string size;  // empty: the camera's viewport
     bool raytrace = false;
     bool camera_relative = false;
+    std::vector<std::string> shaders;  // --shader STAGE=FILE, as typed
+    std::string max_instructions;      // empty: the interpreter's default
 };
 
 int run_render(const RenderCommandOptions& options) {
@@ -73,6 +75,8 @@ int run_render(const RenderCommandOptions& options) {
     if (!options.size.empty()) render_options.size = parse_image_size(options.size);
     render_options.precision = precision;
     render_options.math = parse_math_flag(options.math);
+    apply_max_instructions_flag(options.max_instructions);
+    const std::vector<StageShader> shader_flags = parse_shader_flags(options.shaders);
     // The provenance buffers only for the channels that write them.
     render_options.provenance = aovs.patch || aovs.tesscoord || aovs.level;
     render_options.mode = options.wireframe           ? RenderMode::wireframe
@@ -81,7 +85,8 @@ int run_render(const RenderCommandOptions& options) {
     AtomicOutput output(options.output);  // fails now on a missing or unwritable directory
 
     const auto load_start = Clock::now();
-    const Scene scene = load_scene(options.scene);
+    Scene scene = load_scene(options.scene);
+    apply_shader_flags(scene, shader_flags);
     const double seconds_load = seconds_since(load_start);
     if (scene.camera) {
         // Refused here, before the pipeline, rather than after it as an "out of memory".
@@ -165,6 +170,15 @@ Command add_render_command(CLI::App& parent) {
                     "The control stage's acos and log2 in gpu precision: exact (the C library, correctly rounded) "
                     "or llvmpipe (Mesa llvmpipe's approximations, bit for bit, as `tessref gl` predicts with)")
         ->default_val("exact");
+    app->add_option("--shader", options->shaders, "A GLSL file of your own for one stage (repeatable; over the scene's [shaders]): STAGE is "
+                    "vertex|vert, tess_control|tesc or tess_evaluation|tese, which the CPU runs through its SPIR-V "
+                    "interpreter with the twins' uniforms and textures (README: Your shaders on the CPU)")
+        ->type_name("STAGE=FILE")
+        ->allow_extra_args(false);
+    app->add_option("--max-instructions", options->max_instructions,
+                    "Instructions one shader invocation of a user's stage may run before it is stopped (default "
+                    "10000000): a shader that never ends is an error naming the stage, patch and invocation")
+        ->type_name("N");
     app->add_option("--precision", options->precision,
                     "Pipeline precision: gpu (float stages, as the GPU) or exact (double stages)")
         ->default_val("gpu");

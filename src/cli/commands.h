@@ -40,6 +40,7 @@ Command add_golden_command(CLI::App& parent);  // tessref golden: src/cli/cmd_go
 Command add_sweep_command(CLI::App& parent);  // tessref sweep: src/cli/cmd_sweep.cpp
 
 Command add_pvs_command(CLI::App& parent);  // tessref pvs: src/cli/cmd_pvs.cpp
+Command add_trace_command(CLI::App& parent);  // tessref trace: src/cli/cmd_trace.cpp
 
 // Later subcommands, one file each (declare here, list in main.cpp).
 

@@ -43,6 +43,7 @@ std::vector<tessref::cli::Command> make_commands(CLI::App& app) {
         tessref::cli::add_golden_command(app),
         tessref::cli::add_sweep_command(app),
         tessref::cli::add_pvs_command(app),
+        tessref::cli::add_trace_command(app),
     };
 }
 

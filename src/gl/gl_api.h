@@ -12,29 +12,15 @@
 #include <tuple>
 #include <vector>
 
+#include "pipeline/stage_uniforms.h"
 #include "tessref/gl_backend.h"
 
 namespace tessref::gl {
 
-// The GLSL layout qualifiers of a generator setting: `layout(quads, fractional_odd_spacing,
-// ccw) in;` in an evaluation shader (both the capture and the scene programs write it).
-inline const char* domain_qualifier(Domain d) {
-    switch (d) {
-        case Domain::quads: return "quads";
-        case Domain::triangles: return "triangles";
-        case Domain::isolines: return "isolines";
-    }
-    return "quads";
-}
-
-inline const char* spacing_qualifier(Spacing s) {
-    switch (s) {
-        case Spacing::equal: return "equal_spacing";
-        case Spacing::fractional_odd: return "fractional_odd_spacing";
-        case Spacing::fractional_even: return "fractional_even_spacing";
-    }
-    return "equal_spacing";
-}
+// The GLSL layout qualifiers of a generator setting (stage_uniforms.h, shared with the CPU's
+// interpreter of the twins).
+using pipeline::domain_qualifier;
+using pipeline::spacing_qualifier;
 
 // X(name, return type, parameter list)
 #define TESSREF_GL_FUNCTIONS(X)                                                                 \

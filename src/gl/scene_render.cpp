@@ -20,6 +20,7 @@
 #include "common/isolated.h"
 #include "gl/gl_api.h"
 #include "gl/program.h"
+#include "pipeline/stage_uniforms.h"
 #include "tessref/error.h"
 #include "tessref/gl_render.h"
 #include "tessref/limits.h"
@@ -34,40 +35,7 @@ double seconds_since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// The scene's [generator] in place of the evaluation shader's own layout(...) in; line, so
-// that GL tessellates as the CPU pipeline does (the twins' lines are the scenes' defaults).
-std::string with_generator(const std::string& text, const TessSettings& g, const std::string& path) {
-    static const std::regex layout(R"(layout\s*\(\s*(quads|triangles|isolines)[^)]*\)\s*in\s*;)");
-    std::string replacement = std::string("layout(") + domain_qualifier(g.domain) + ", " +
-                              spacing_qualifier(g.spacing) + ", " + (g.winding == Winding::cw ? "cw" : "ccw") +
-                              (g.point_mode ? ", point_mode" : "") + ") in;";
-    std::smatch m;
-    if (!std::regex_search(text, m, layout))
-        throw Error("the evaluation shader has no layout(quads|triangles|isolines, ...) in; line", Where::in_file(path));
-    return m.prefix().str() + replacement + m.suffix().str();
-}
-
 // ---- the programs: which twin for which scene ------------------------------------------
-
-// The constant control stage for the twins whose vertex shader hands on VertexData and
-// whose evaluation shader reads ControlData (thesis): GL has no constant control shader of
-// its own, and without one the blocks of the two stages would not match.
-const char* kConstantControlShader = R"(#version 450 core
-layout(vertices = 4) out;
-layout(location = 0) in VertexData { vec4 vPosition; } vertexIn[];
-layout(location = 0) out ControlData { vec4 tcPosition; } controlOut[];
-uniform float constantLevel;
-void main()
-{
-    controlOut[gl_InvocationID].tcPosition = vertexIn[gl_InvocationID].vPosition;
-    gl_TessLevelOuter[0] = constantLevel;
-    gl_TessLevelOuter[1] = constantLevel;
-    gl_TessLevelOuter[2] = constantLevel;
-    gl_TessLevelOuter[3] = constantLevel;
-    gl_TessLevelInner[0] = constantLevel;
-    gl_TessLevelInner[1] = constantLevel;
-}
-)";
 
 // The "no shading" modes of shading.h have no twin: flat_colour and depth_colour here.
 const char* kFlatFragmentShader = R"(#version 450 core
@@ -204,7 +172,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
         }
         plan.has_control_shader = true;
     } else if (em == EvaluationModel::thesis) {
-        plan.stages.push_back(text_stage(GL_TESS_CONTROL_SHADER, kConstantControlShader));
+        plan.stages.push_back(text_stage(GL_TESS_CONTROL_SHADER, pipeline::kConstantControlShader));
         plan.has_control_shader = true;
     } else if (em != EvaluationModel::cosc422) {
         throw Error(std::string("tessref gl: a constant control stage with evaluation model '") + to_string(em) +
@@ -213,7 +181,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
     }
 
     StageSource tese = file_stage(GL_TESS_EVALUATION_SHADER, base + ".tese");
-    tese.text = with_generator(tese.text, scene.generator, tese.path);
+    tese.text = pipeline::with_generator(tese.text, scene.generator, tese.path);
     plan.stages.push_back(std::move(tese));
 
     if (scene.geometry) {
@@ -290,29 +258,11 @@ GLenum gl_stage(ShaderStage stage) {
 
 // The scene's [shaders], each replaced by the option of the same stage where there is one.
 std::vector<StageShader> user_shaders(const Scene& scene, const SceneRenderOptions& options) {
-    std::vector<StageShader> shaders = options.shaders;
-    for (const StageShader& s : scene.shaders)
-        if (std::none_of(shaders.begin(), shaders.end(), [&](const StageShader& o) { return o.stage == s.stage; }))
-            shaders.push_back(s);
-    std::sort(shaders.begin(), shaders.end(),
-              [](const StageShader& a, const StageShader& b) { return a.stage < b.stage; });
-    return shaders;
+    return pipeline::with_shader_flags(scene.shaders, options.shaders);
 }
 
 StageSource user_stage(const StageShader& user) {
-    const std::string what = std::string("the ") + to_string(user.stage) + " shader " + user.path + " of " + user.origin;
-    std::string text;
-    try {
-        text = read_input_file(user.path, "shader file", kShaderFileBytes);
-    } catch (const Error& e) {
-        throw Error("cannot read " + what + ": " + e.message(), user.where);
-    }
-    // GL takes the source as C strings: a NUL byte would end the shader there, silently.
-    if (const std::size_t nul = text.find('\0'); nul != std::string::npos)
-        throw Error("the " + std::string(to_string(user.stage)) + " shader " + user.path + " of " + user.origin +
-                        " holds a NUL byte (GL would read the shader only up to it)",
-                    Where::in_file(user.path, static_cast<std::size_t>(std::count(text.begin(), text.begin() +
-                                                                                 static_cast<std::ptrdiff_t>(nul), '\n')) + 1));
+    std::string text = pipeline::read_user_shader(user);
     StageSource s;
     s.stage = gl_stage(user.stage);
     s.path = user.path;
@@ -440,10 +390,11 @@ std::string capture_note(const Plan& plan) {
 
 // A program may lack any of these uniforms (location -1: the call sets nothing), as a user's
 // shader may; one that declares a twin's uniform with another type makes GL refuse the call.
-struct Uniforms {
+struct Uniforms final : pipeline::UniformSink {
     GlFunctions& gl;
     GLuint program;
     const std::vector<StageSource>* stages = nullptr;  // to name the user's file that declares it
+    Uniforms(GlFunctions& g, GLuint p, const std::vector<StageSource>* s = nullptr) : gl(g), program(p), stages(s) {}
     GLint at(const char* name) const { return gl.GetUniformLocation(program, name); }
     void check(const char* name, const char* type) const {
         if (gl.GetError() != GL_NO_ERROR)
@@ -464,11 +415,11 @@ struct Uniforms {
         }
         return {};
     }
-    void i(const char* name, int v) const {
+    void i(const char* name, int v) const override {
         gl.Uniform1i(at(name), v);
         check(name, "int");
     }
-    void f(const char* name, double v) const {
+    void f(const char* name, double v) const override {
         gl.Uniform1f(at(name), static_cast<float>(v));
         check(name, "float");
     }
@@ -476,106 +427,27 @@ struct Uniforms {
         gl.Uniform1d(at(name), v);
         check(name, "double");
     }
-    void v2(const char* name, glm::vec2 v) const {
+    void v2(const char* name, glm::vec2 v) const override {
         gl.Uniform2f(at(name), v.x, v.y);
         check(name, "vec2");
     }
-    void v3(const char* name, glm::vec3 v) const {
+    void v3(const char* name, glm::vec3 v) const override {
         gl.Uniform3f(at(name), v.x, v.y, v.z);
         check(name, "vec3");
     }
-    void v4(const char* name, glm::vec4 v) const {
+    void v4(const char* name, glm::vec4 v) const override {
         gl.Uniform4f(at(name), v.x, v.y, v.z, v.w);
         check(name, "vec4");
     }
-    void m3(const char* name, const glm::mat3& m) const {
+    void m3(const char* name, const glm::mat3& m) const override {
         gl.UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]);
         check(name, "mat3");
     }
-    void m4(const char* name, const glm::mat4& m) const {
+    void m4(const char* name, const glm::mat4& m) const override {
         gl.UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]);
         check(name, "mat4");
     }
 };
-
-// The matrices as the CPU pipeline rounds them (src/pipeline/program.h: mat4_t<float>(camera.view_projection())).
-struct Matrices {
-    glm::mat4 view{1.0f};
-    glm::mat4 view_projection{1.0f};
-    glm::vec3 eye{0.0f};
-};
-
-void thesis_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
-    const TerrainGrid& g = *scene.grid;
-    u.f("scaleXY", g.scale_xy);
-    u.f("scaleZ", g.scale_z);
-    u.m4("mvp", m.view_projection);
-    u.m3("normalMatrix", glm::mat3(1.0f));  // the model matrix is the identity
-}
-
-void thesis_control_uniforms(const Uniforms& u, const Scene& scene, const ThesisControlParams<double>& c,
-                             const Matrices& m) {
-    u.f("tessellationLevel", c.tessellationLevel);
-    u.f("scaleXY", scene.grid->scale_xy);
-    u.v3("cameraPosition", m.eye);
-    u.i("thesisFactor", static_cast<int>(c.factor));  // distance 0, map 1, normal 2, all 3
-    u.f("distanceLimit", c.distance.limit);
-    u.f("distanceDivisor", c.distance.divisor);
-    u.f("normalAngleThreshold", c.normalAngleThreshold);
-    u.f("normalTessellationWeight", c.weights.normal);
-    u.f("textureTessellationWeight", c.weights.texture);
-    u.f("distanceTessellationWeight", c.weights.distance);
-    u.f("constantTessellationWeight", c.weights.constant);
-}
-
-void cosc422_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
-    const TerrainGrid& g = *scene.grid;
-    u.m4("mvpMatrix", m.view_projection);
-    u.m4("mvMatrix", m.view);
-    u.f("xMin", g.extent_u.x);
-    u.f("xMax", g.extent_u.y);
-    u.f("zMin", g.extent_v.x);
-    u.f("zMax", g.extent_v.y);
-    u.f("heightScale", g.scale_z);
-    // TERRAIN_NORMALS: one texel, as the CPU's height_field_normal (pipeline/terrain.cpp)
-    u.f("gridStep", std::abs(g.extent_u.y - g.extent_u.x) / g.heightmap->texture.width());
-    if (scene.control && scene.control->model == ControlModel::cosc422)
-        u.i("levelSpace", scene.control->cosc422 == Cosc422Space::eye ? 1 : 0);
-}
-
-void lab4_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
-    const TerrainGrid& g = *scene.grid;
-    u.m4("mvp", m.view_projection);
-    u.f("horizontalScale", g.scale_xy);
-    u.f("verticalScale", g.scale_z);
-    u.v2("texCoordOffset", glm::vec2(g.texcoord_offset));
-    u.f("gridStep", g.scale_xy / g.heightmap->texture.width());  // as the CPU program: one texel
-}
-
-void lab4_control_uniforms(const Uniforms& u, const Lab4ControlParams<double>& c, const Matrices& m) {
-    u.v3("cameraPosition", m.eye);
-    u.f("firstZoneEnd", c.firstZoneEnd);
-    u.f("zoneGrowth", c.zoneGrowth);
-    u.f("maxLevel", c.maxLevel);
-    u.f("minLevel", c.minLevel);
-    u.i("edgeRule", c.edgeRule == Lab4EdgeRule::lower ? 0 : 1);
-}
-
-void pn_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m, glm::ivec2 viewport) {
-    u.m4("m4Transform", glm::mat4(1.0f));  // the meshes are translated and scaled at load
-    u.m4("m4ViewProjection", m.view_projection);
-    u.f("fInfluence", scene.evaluation.pn.fInfluence);
-    u.i("normalMode", scene.evaluation.pn.normal == PnNormal::linear ? 0 : 1);
-    u.i("watertightEdges", scene.evaluation.pn.watertightEdges ? 1 : 0);
-    u.v2("v2Resolution", glm::vec2(viewport));
-    if (scene.control && scene.control->model == ControlModel::pn)
-        u.i("flatEdgesAtLevel1", scene.control->pn.flatEdgesAtLevel1 ? 1 : 0);
-}
-
-void geomip_uniforms(const Uniforms& u, const Scene& scene, const Matrices& m) {
-    u.m4("mvp", m.view_projection);
-    u.f("scaleZ", scene.grid->scale_z);  // the pipeline's float(settings.scale_z)
-}
 
 void geomip_shading_uniforms(const Uniforms& u, const GeomipLightmapShading& g) {
     u.i("materialCount", static_cast<int>(g.materials.size()));
@@ -642,25 +514,11 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
 }
 
 void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const RenderShading& shading,
-                  const Matrices& m, glm::ivec2 viewport, const std::vector<StageSource>& stages) {
+                  const pipeline::StageMatrices& m, glm::ivec2 viewport, const std::vector<StageSource>& stages) {
     gl.UseProgram(program);
     if (gl.GetError() != GL_NO_ERROR) throw Error("OpenGL refused to use the scene's program");
     const Uniforms u{gl, program, &stages};
-    switch (scene.evaluation.model) {
-        case EvaluationModel::thesis: thesis_uniforms(u, scene, m); break;
-        case EvaluationModel::cosc422: cosc422_uniforms(u, scene, m); break;
-        case EvaluationModel::lab4: lab4_uniforms(u, scene, m); break;
-        case EvaluationModel::pn: pn_uniforms(u, scene, m, viewport); break;
-        case EvaluationModel::geomipmap: geomip_uniforms(u, scene, m); break;
-    }
-    if (scene.control) {
-        const ControlStage& c = *scene.control;
-        if (c.model == ControlModel::thesis) thesis_control_uniforms(u, scene, c.thesis, m);
-        if (c.model == ControlModel::lab4) lab4_control_uniforms(u, c.lab4, m);
-        if (c.model == ControlModel::constant) u.f("constantLevel", c.constant.level);
-    } else {
-        u.f("constantLevel", 1.0);  // GL's default patch levels
-    }
+    pipeline::set_stage_uniforms(u, scene, m, viewport);
     shading_uniforms(u, shading.model);
 }
 
@@ -752,12 +610,7 @@ struct BoundTextures {
 };
 
 void bind_textures(BoundTextures& b, const Scene& scene, const RenderShading& shading) {
-    if (scene.grid) {
-        b.bind(0, &scene.grid->heightmap->texture, "heightMap (" + scene.grid->heightmap_path + ")");
-        if (scene.grid->normal_map) b.bind(2, scene.grid->normal_map.get(), "normalMap");
-    }
-    if (scene.control && scene.control->model == ControlModel::thesis && scene.control->tessellation_map)
-        b.bind(1, scene.control->tessellation_map.get(), "tessellationMap");
+    pipeline::bind_stage_textures(scene, [&](int unit, const Texture* t, const std::string& what) { b.bind(unit, t, what); });
     if (shading.model.kind == ShadingKind::geomip_lightmap) {  // geomip_terrain.frag's bindings
         const GeomipLightmapShading& g = shading.model.geomip;
         b.bind(4, g.lightMap.get(), "lightMap");
@@ -960,6 +813,8 @@ std::vector<PatchDifference> patch_differences(const PipelineResult& pipe, const
 SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRenderOptions& options) {
     if (!scene_in.camera) throw Error("tessref gl needs a [camera] in the scene", Where::at_key(scene_in.file, "camera"));
     Scene scene = scene_in;  // the pipeline sees the image's viewport, as render_scene does
+    // and runs the user's shaders through the interpreter: the prediction of each draw.
+    scene.shaders = user_shaders(scene_in, options);
     if (options.size != glm::ivec2(0, 0)) scene.camera->viewport = options.size;
     const glm::ivec2 size = scene.camera->viewport;
     if (size.x < 1 || size.y < 1 || size.x > 16384 || size.y > 16384)
@@ -982,10 +837,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     for (const auto& tri : pipe.mesh.triangles) ++per_patch[pipe.mesh.patch_ids[tri[0]]];
     result.stats.seconds_pipeline = seconds_since(start);
 
-    Matrices m;
-    m.view = glm::mat4(scene.camera->view());
-    m.view_projection = glm::mat4(scene.camera->view_projection());
-    m.eye = glm::vec3(scene.camera->eye);
+    const pipeline::StageMatrices m = pipeline::stage_matrices(scene);
 
     Plan plan = plan_for(scene, result.shading);
     result.user_shaders = user_shaders(scene, options);
@@ -1292,6 +1144,7 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
     Scene scene = scene_in;
     if (options_in.size != glm::ivec2(0, 0)) scene.camera->viewport = options_in.size;
     SceneRenderOptions options = options_in;
+    scene.shaders = user_shaders(scene_in, options);
     if (!options.pipeline) {
         const auto start = Clock::now();
         PipelineOptions pipeline_options;

@@ -15,8 +15,10 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <span>
+#include <vector>
 
 #include "tessref/control.h"
 #include "tessref/mesh.h"
@@ -49,6 +51,13 @@ public:
     // The math mode of the control stage's transcendentals (control.h MathMode); set once,
     // before the first control(). Models without transcendentals ignore it.
     virtual void use_math(MathMode) {}
+    // The geometry stage's per-vertex normals ([geometry] normals = "normal_map" or
+    // "height_field") at points whose positions and texture coordinates another evaluation
+    // shader computed (a user's, run by the interpreter); the spans have the same size.
+    // Called after control() of the same patch. Programs without such a stage write nothing.
+    virtual void geometry_normals(std::size_t /*patch*/, std::span<const DomainPoint<T>> /*points*/,
+                                  std::span<const vec3_t<T>> /*position*/, std::span<const vec2_t<T>> /*uv*/,
+                                  std::span<vec3_t<T>> /*normal*/) const {}
 
     bool has_uvs = false;     // the evaluation writes texture coordinates
     bool has_normals = false; // the evaluation or the geometry stage writes vertex normals
@@ -66,6 +75,22 @@ PipelineResult run_geomipmap(const Scene& scene, const PipelineOptions& options)
 // positions relative to origin.
 template <typename T>
 std::unique_ptr<PatchProgram<T>> make_program(const Scene& scene, const glm::dvec3& origin);
+
+// The scene's evaluation model's program (the C++ models; nullptr for geomipmap).
+template <typename T>
+std::unique_ptr<PatchProgram<T>> make_model_program(const Scene& scene, const glm::dvec3& origin);
+
+// The user's vertex, control and evaluation shaders of the scene's [shaders] that the CPU
+// runs through the interpreter: those whose text is not exactly the shipped twin's (a twin
+// given as a user file keeps its C++ model). Empty for a geomipmapped terrain (no
+// tessellation stages) and for geometry and fragment shaders, which the CPU does not run.
+// Throws tessref::Error when a file cannot be read.
+std::vector<StageShader> interpreted_stages(const Scene& scene);
+
+// The program that runs `user` (interpreted_stages) through the SPIR-V interpreter, with the
+// model's program for what the interpreter does not run (user_program.cpp).
+std::unique_ptr<PatchProgram<float>> make_user_program(const Scene& scene, std::unique_ptr<PatchProgram<float>> model,
+                                                       const std::vector<StageShader>& user);
 
 // The uniforms every model reads from the camera, in precision T (identity without one).
 template <typename T>

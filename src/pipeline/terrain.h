@@ -29,6 +29,15 @@ public:
     PatchLevels<T> control(std::size_t patch) override;
     void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                   std::size_t first_vertex, bool normals) const override;
+    void geometry_normals(std::size_t patch, std::span<const DomainPoint<T>> points, std::span<const vec3_t<T>> position,
+                          std::span<const vec2_t<T>> uv, std::span<vec3_t<T>> normal) const override {
+        if (!geometry_vertex_normals) return;
+        for (std::size_t k0 = 0; k0 < points.size(); k0 += kBlock) {
+            const std::size_t count = std::min(kBlock, points.size() - k0);
+            vertex_normals(patch, points.subspan(k0, count), position.subspan(k0, count), uv.subspan(k0, count),
+                           normal.subspan(k0, count));
+        }
+    }
     void use_math(MathMode math) override {
         thesisControl.math = math;
         lab4Control.math = math;

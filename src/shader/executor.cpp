@@ -56,6 +56,38 @@ std::uint32_t* Invocation::memory(ExecContext& c, std::uint32_t address, std::ui
     return &local_[at];
 }
 
+// The variable a store's address falls in, named as the source names it (an array's
+// element as name[i], a word further in as +k; the unnamed gl_PerVertex block by its
+// built-in), and the kind of the stored value's scalars, for RunOptions::observer.
+void Invocation::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t value, std::uint32_t words) {
+    const Module::Impl& m = c.module;
+    std::string name;
+    std::uint32_t offset = 0;
+    for (const Variable& v : m.variables) {
+        if (address < v.address || address >= v.address + m.types[v.type].words) continue;
+        name = v.name;
+        offset = address - v.address;
+        const Type& t = m.types[v.type];
+        if (t.kind == Kind::array && m.types[t.element].words > 0) {
+            const std::uint32_t element = m.types[t.element].words;
+            name += "[" + std::to_string(offset / element) + "]";
+            offset %= element;
+        }
+        if (v.name.empty())
+            for (const InterfacePart& part : v.parts)
+                if (part.builtin == spv::BuiltInPosition && offset >= part.offset && offset < part.offset + part.words) {
+                    name = "gl_Position" + name;
+                    offset -= part.offset;
+                }
+        break;
+    }
+    // The scalar beneath vectors, matrices and arrays.
+    const Type* t = &m.types[m.type_of[value]];
+    while (t->kind == Kind::vector || t->kind == Kind::matrix || t->kind == Kind::array) t = &m.types[t->element];
+    const char kind = t->kind == Kind::bool_ ? 'b' : t->kind == Kind::int_ ? (t->is_signed ? 'i' : 'u') : 'f';
+    c.options.observer->store(name, offset, kind, std::span<const std::uint32_t>(regs_.data() + m.reg[value], words));
+}
+
 Invocation::Status Invocation::run(ExecContext& c) {
     const Module::Impl& m = c.module;
     const std::uint32_t* const words = m.words.data();
@@ -110,8 +142,15 @@ Invocation::Status Invocation::run(ExecContext& c) {
         return offset;
     };
 
+    observed_line_ = observed_file_ = 0;  // a resumed invocation tells its line again
     for (;;) {
         const Instr& in = m.code[pc_];
+        if (c.options.observer && in.line != 0 && (in.line != observed_line_ || in.file != observed_file_)) {
+            observed_line_ = in.line;
+            observed_file_ = in.file;
+            const auto file = m.strings.find(in.file);
+            c.options.observer->line(file != m.strings.end() ? file->second : m.path, in.line);
+        }
         if (++executed_ > c.options.max_instructions)
             throw Error("the " + c.who + " ran past its instruction budget of " +
                             std::to_string(c.options.max_instructions) +
@@ -206,6 +245,7 @@ Invocation::Status Invocation::run(ExecContext& c) {
             case spv::OpStore: {
                 const std::uint32_t size = T(T(m.type_of[a[0]]).element).words;
                 std::copy_n(R(a[1]), size, memory(c, *R(a[0]), size));
+                if (c.options.observer) observe_store(c, *R(a[0]), a[1], size);
                 break;
             }
             case spv::OpCopyMemory: {

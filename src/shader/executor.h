@@ -29,6 +29,7 @@ public:
     // Runs until the entry point returns, a barrier() or a discard.
     Status run(ExecContext& context);
     std::uint32_t* memory(ExecContext& context, std::uint32_t address, std::uint32_t words);
+    void observe_store(ExecContext& context, std::uint32_t address, std::uint32_t value, std::uint32_t words);
 
 private:
     struct Frame {
@@ -42,6 +43,7 @@ private:
     std::uint32_t pc_ = 0;
     std::uint32_t label_ = 0, previous_label_ = 0;
     std::uint64_t executed_ = 0;
+    std::uint32_t observed_line_ = 0, observed_file_ = 0;  // RunOptions::observer: the last line told
 };
 
 }  // namespace tessref::shader

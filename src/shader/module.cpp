@@ -13,7 +13,8 @@ namespace tessref::shader {
 
 std::string opcode_name(std::uint32_t op) {
     const char* name = spv::OpcodeString(static_cast<int>(op));
-    if (name && std::strcmp(name, "Bad") != 0) return std::string("Op") + name;
+    // glslang's table spells some names with their "Op" and some without.
+    if (name && std::strcmp(name, "Bad") != 0) return std::strncmp(name, "Op", 2) == 0 ? name : std::string("Op") + name;
     return "opcode " + std::to_string(op);
 }
 

@@ -2,6 +2,7 @@
 // written into its invocation's memory, the invocations run, its outputs read back, with
 // the GL stage interface: locations and built-ins (tessref/shader.h).
 #define SPV_ENABLE_UTILITY_CODE
+#include <atomic>
 #include <algorithm>
 #include <bit>
 #include <cstring>
@@ -13,6 +14,15 @@
 #include "shader/module.h"
 
 namespace tessref::shader {
+
+namespace {
+std::atomic<std::uint64_t> g_default_max_instructions{10'000'000};
+}  // namespace
+
+std::uint64_t default_max_instructions() { return g_default_max_instructions.load(std::memory_order_relaxed); }
+void set_default_max_instructions(std::uint64_t max_instructions) {
+    g_default_max_instructions.store(max_instructions, std::memory_order_relaxed);
+}
 
 // ---- Bindings ------------------------------------------------------------------------------
 
@@ -223,6 +233,7 @@ ShaderPatch Executable::control(std::span<const ShaderVertex> in, long long patc
         for (std::size_t i = 0; i < invocations.size(); ++i) {
             if (finished[i]) continue;
             if (invocation_id_address != kNone) shared[invocation_id_address] = static_cast<std::uint32_t>(i);
+            if (state_->options.observer) state_->options.observer->invocation(static_cast<int>(i));
             ExecContext c{m, shared, state_->units, state_->options, who(m, patch_id, static_cast<int>(i)), &warned};
             const Invocation::Status status = invocations[i].run(c);
             if (status == Invocation::Status::killed)

@@ -1,0 +1,377 @@
+// user_program.cpp — a scene with a user's vertex, control or evaluation shader ([shaders],
+// `--shader STAGE=FILE`): the CPU runs those stages through the SPIR-V interpreter
+// (tessref/shader.h), with the twins of data/shaders/ for the stages before the
+// rasterizer that the user did not give, and the same uniforms, texture units and vertex
+// buffer as the GL backend (stage_uniforms.h, src/gl/scene_render.cpp).
+//
+// Which stages run where:
+//  - vertex, control, evaluation: the interpreter, the user's file or the twin (the twins
+//    run bit for bit as their models, tests/test_shader_twins.cpp). Where the user gave
+//    neither a vertex nor a control shader, the levels are the model's (the twins agree
+//    with them but for the thesis normal factor's acos in exact math, where the model calls
+//    the C library's acosf), so that only what the user changed changes.
+//  - the geometry stage's per-vertex normals (thesis normal_map, height-field normals the
+//    evaluation shader does not compute) and everything after the evaluation stage: the
+//    models, on the interpreter's positions and texture coordinates. A user's geometry or
+//    fragment shader is not run on the CPU (the interpreter runs neither stage yet).
+//  - the primitive generator tessellates as the scene's [generator] says, whatever the
+//    user's evaluation shader's layout(...) in; line (GL draws with the user's: a cw where
+//    [generator] has ccw shows as an orientation divergence of the captures).
+// Where the GL backend's capture reads the evaluated world position (gl_render.h's
+// position expression) the CPU reads it too: the thesis's gl_Position with mvp the
+// identity (as the capture pass sets it), the other models' EvaluationData block.
+#include <algorithm>
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/data_dir.h"
+#include "common/input_file.h"
+#include "pipeline/program.h"
+#include "pipeline/stage_trace.h"
+#include "pipeline/stage_uniforms.h"
+#include "tessref/error.h"
+#include "tessref/shader.h"
+
+namespace tessref::pipeline {
+
+namespace {
+
+std::string twin_text(const std::string& file) {
+    return read_input_file(data_dir() + "/shaders/" + file, "shader file", kShaderFileBytes);
+}
+
+// The twins' base name of an evaluation model (none for geomipmap: no tessellation).
+const char* twin_base(EvaluationModel m) {
+    switch (m) {
+        case EvaluationModel::thesis: return "thesis_terrain";
+        case EvaluationModel::cosc422: return "cosc422_terrain";
+        case EvaluationModel::lab4: return "lab4_terrain";
+        case EvaluationModel::pn: return "pn_triangles";
+        case EvaluationModel::geomipmap: break;
+    }
+    return nullptr;
+}
+
+// The control model's twin file; "" for the constant model (and no [control]).
+std::string control_twin(const Scene& scene) {
+    if (!scene.control) return "";
+    switch (scene.control->model) {
+        case ControlModel::thesis: return "thesis_terrain.tesc";
+        case ControlModel::cosc422: return "cosc422_terrain.tesc";
+        case ControlModel::lab4: return "lab4_terrain.tesc";
+        case ControlModel::pn: return "pn_triangles.tesc";
+        case ControlModel::constant: break;
+    }
+    return "";
+}
+
+const StageShader* given(const std::vector<StageShader>& user, ShaderStage stage) {
+    for (const StageShader& s : user)
+        if (s.stage == stage) return &s;
+    return nullptr;
+}
+
+// shader::Bindings as a UniformSink: the GL backend's list, set into the interpreter's state.
+struct BindingsSink final : UniformSink {
+    shader::Bindings& b;
+    explicit BindingsSink(shader::Bindings& bindings) : b(bindings) {}
+    void i(const char* name, int v) const override { b.set(name, v); }
+    void f(const char* name, double v) const override { b.set(name, static_cast<float>(v)); }
+    void v2(const char* name, glm::vec2 v) const override { b.set(name, v); }
+    void v3(const char* name, glm::vec3 v) const override { b.set(name, v); }
+    void v4(const char* name, glm::vec4 v) const override { b.set(name, v); }
+    void m3(const char* name, const glm::mat3& m) const override { b.set(name, m); }
+    void m4(const char* name, const glm::mat4& m) const override { b.set(name, m); }
+};
+
+class UserProgram final : public PatchProgram<float> {
+public:
+    UserProgram(const Scene& s, std::unique_ptr<PatchProgram<float>> model_program, const std::vector<StageShader>& user)
+        : scene(s), model(std::move(model_program)) {
+        const EvaluationModel em = scene.evaluation.model;
+        const std::string base = twin_base(em);
+        // TERRAIN_NORMALS: cosc422_terrain.tese computes the height-field normal (as the GL
+        // backend's plan defines it for the twins, not for a user's file).
+        const bool terrain_normals = em == EvaluationModel::cosc422 && scene.geometry &&
+                                     scene.geometry->normals == GeometryNormals::height_field;
+        const std::string defines = terrain_normals ? "#define TERRAIN_NORMALS\n" : "";
+        const auto compile = [&](ShaderStage stage, const std::string& twin_file, const std::string& builtin_text) {
+            shader::Source src;
+            src.stage = stage;
+            const StageShader* u = given(user, stage);
+            if (u) {
+                src.path = u->path;
+                src.text = read_user_shader(*u);
+            } else if (!twin_file.empty()) {
+                src.path = data_dir() + "/shaders/" + twin_file;
+                src.text = twin_text(twin_file);
+                src.prefix = defines;
+                if (stage == ShaderStage::tess_evaluation) src.text = with_generator(src.text, scene.generator, src.path);
+            } else {
+                src.path = "tessref's constant control shader";
+                src.text = builtin_text;
+            }
+            try {
+                return shader::Module::compile(src);
+            } catch (const Error& e) {
+                if (!u) throw;
+                // The user's file as they named it (flag or [shaders] key), as the GL backend's errors do.
+                throw Error(std::string(e.what()) + " (" + u->origin + ")", e.where());
+            }
+        };
+        vert.emplace(compile(ShaderStage::vertex, base + ".vert", ""));
+        const std::string tesc_file = control_twin(scene);
+        if (given(user, ShaderStage::tess_control) || !tesc_file.empty())
+            tesc.emplace(compile(ShaderStage::tess_control, tesc_file, ""));
+        else if (em == EvaluationModel::thesis)
+            tesc.emplace(compile(ShaderStage::tess_control, "", kConstantControlShader));
+        tese.emplace(compile(ShaderStage::tess_evaluation, base + ".tese", ""));
+        model_levels = !given(user, ShaderStage::vertex) && !given(user, ShaderStage::tess_control);
+
+        // The GL capture pass's uniforms: the thesis's mvp the identity (gl_Position is the
+        // world position there).
+        BindingsSink sink(bindings);
+        set_stage_uniforms(sink, scene, stage_matrices(scene), scene.camera ? scene.camera->viewport : glm::ivec2(1280, 800));
+        if (em == EvaluationModel::thesis) bindings.set("mvp", glm::mat4(1.0f));
+        bind_stage_textures(scene, [&](int unit, const Texture* t, const std::string&) { bindings.bind_texture(unit, t); });
+
+        // Where the evaluation shader hands on what the mesh keeps (the twins' EvaluationData).
+        switch (em) {
+            case EvaluationModel::thesis: uv_location = 0; break;
+            case EvaluationModel::cosc422:
+                position_location = 0;
+                normal_location = terrain_normals ? 1 : -1;
+                uv_location = terrain_normals ? 2 : 1;
+                break;
+            case EvaluationModel::lab4:
+            case EvaluationModel::pn:
+                position_location = 0;
+                normal_location = 1;
+                uv_location = 2;
+                break;
+            case EvaluationModel::geomipmap: break;
+        }
+        has_uvs = model->has_uvs;
+        has_normals = model->has_normals;
+        flip = model->flip;
+        patches.assign(scene.patch_count(), {});
+        executables();
+    }
+
+    void use_math(MathMode math) override {
+        model->use_math(math);
+        options.math = math == MathMode::llvmpipe ? shader::MathMode::llvmpipe : shader::MathMode::exact;
+        executables();
+    }
+
+    PatchLevels<float> control(std::size_t p) override {
+        const std::vector<std::vector<shader::Slot>> attributes = vertex_attributes(p);
+        std::vector<shader::ShaderVertex> shaded(attributes.size());
+        for (std::size_t k = 0; k < attributes.size(); ++k)
+            shaded[k] = vert_run->vertex(attributes[k], static_cast<int>(p * attributes.size() + k));
+        shader::ShaderPatch& patch = patches[p];
+        PatchLevels<float> levels;
+        if (tesc_run) {
+            patch = tesc_run->control(shaded, static_cast<long long>(p));
+            for (int k = 0; k < 4; ++k) levels.outer[k] = patch.outer[k];
+            for (int k = 0; k < 2; ++k) levels.inner[k] = patch.inner[k];
+        } else {
+            // No control shader: the evaluation reads gl_in, the levels are GL_PATCH_DEFAULT_*.
+            patch.vertices = std::move(shaded);
+            if (scene.control) levels = scene_constant_levels<float>(*scene.control);
+        }
+        // The levels the domain does not read as the models hold them (1; GL leaves them
+        // undefined, the shader may not write them).
+        const Domain d = scene.generator.domain;
+        const int outer_used = d == Domain::quads ? 4 : d == Domain::triangles ? 3 : 2;
+        const int inner_used = d == Domain::quads ? 2 : d == Domain::triangles ? 1 : 0;
+        for (int k = outer_used; k < 4; ++k) levels.outer[k] = 1.0f;
+        for (int k = inner_used; k < 2; ++k) levels.inner[k] = 1.0f;
+        // The model's control stage runs as well: its levels where the user changed neither
+        // stage that makes them, and what its geometry stage reads of the patch.
+        const PatchLevels<float> model_patch_levels = model->control(p);
+        if (model_levels) levels = model_patch_levels;
+        // The generator's levels are what the evaluation shader reads.
+        for (int k = 0; k < 4; ++k) patch.outer[k] = levels.outer[k];
+        for (int k = 0; k < 2; ++k) patch.inner[k] = levels.inner[k];
+        return levels;
+    }
+
+    void evaluate(std::size_t p, std::span<const DomainPoint<float>> points, SurfaceMesh& mesh, std::size_t first_vertex,
+                  bool normals) const override {
+        const shader::ShaderPatch& patch = patches[p];
+        const bool model_normals = has_normals && normals && normal_location < 0;
+        std::vector<glm::vec3> position(points.size()), normal(model_normals ? points.size() : 0);
+        std::vector<glm::vec2> uv(points.size());
+        for (std::size_t k = 0; k < points.size(); ++k) {
+            const shader::ShaderVertex out =
+                tese_run->evaluate(patch, glm::vec3(points[k].u, points[k].v, points[k].w), static_cast<long long>(p));
+            position[k] = position_location < 0 ? glm::vec3(out.position) : glm::vec3(location(out, position_location));
+            uv[k] = glm::vec2(location(out, uv_location));
+            const std::size_t v = first_vertex + k;
+            mesh.positions[v] = glm::dvec3(position[k]);
+            if (has_uvs) mesh.uvs[v] = glm::dvec2(uv[k]);
+            if (has_normals && normals && normal_location >= 0)
+                mesh.normals[v] = glm::dvec3(glm::vec3(location(out, normal_location)));
+        }
+        if (model_normals) {
+            model->geometry_normals(p, points, position, uv, normal);
+            for (std::size_t k = 0; k < points.size(); ++k) mesh.normals[first_vertex + k] = glm::dvec3(normal[k]);
+        }
+    }
+
+    // One invocation with an observer (`tessref trace`).
+    StageTrace trace(const StageTraceRequest& r, shader::Observer& observer) {
+        shader::RunOptions traced = options;
+        traced.observer = &observer;
+        StageTrace t;
+        const std::vector<std::vector<shader::Slot>> attributes = vertex_attributes(r.patch);
+        t.vertices_per_patch = static_cast<int>(attributes.size());
+        switch (r.stage) {
+            case ShaderStage::vertex: {
+                if (r.vertex < 0 || static_cast<std::size_t>(r.vertex) >= attributes.size())
+                    throw Error("vertex " + std::to_string(r.vertex) + " is not one of the patch's " +
+                                    std::to_string(attributes.size()) + " vertices (0.." +
+                                    std::to_string(attributes.size() - 1) + ")",
+                                Where::in_file("--vertex"));
+                t.shader = vert->path();
+                const shader::Executable run(*vert, bindings, traced);
+                const std::size_t k = static_cast<std::size_t>(r.vertex);
+                t.vertex = run.vertex(attributes[k], static_cast<int>(r.patch * attributes.size() + k));
+                return t;
+            }
+            case ShaderStage::tess_control: {
+                if (!tesc)
+                    throw Error("the scene has no control shader (a constant control stage whose evaluation shader reads "
+                                "gl_in directly)",
+                                Where::in_file("--stage"));
+                t.shader = tesc->path();
+                std::vector<shader::ShaderVertex> shaded(attributes.size());
+                for (std::size_t k = 0; k < attributes.size(); ++k)
+                    shaded[k] = vert_run->vertex(attributes[k], static_cast<int>(r.patch * attributes.size() + k));
+                const shader::Executable run(*tesc, bindings, traced);
+                t.patch = run.control(shaded, static_cast<long long>(r.patch));
+                return t;
+            }
+            case ShaderStage::tess_evaluation: {
+                t.shader = tese->path();
+                control(r.patch);  // the patch as the evaluation reads it (the levels the generator used)
+                t.patch = patches[r.patch];
+                const shader::Executable run(*tese, bindings, traced);
+                t.vertex = run.evaluate(patches[r.patch], r.tess_coord, static_cast<long long>(r.patch));
+                return t;
+            }
+            case ShaderStage::geometry:
+            case ShaderStage::fragment: break;
+        }
+        throw Error(std::string("the CPU does not run the ") + to_string(r.stage) + " stage (vert, tesc or tese)",
+                    Where::in_file("--stage"));
+    }
+
+private:
+    static glm::vec4 location(const shader::ShaderVertex& v, int at) {
+        if (at < 0 || static_cast<std::size_t>(at) >= v.locations.size()) return glm::vec4(0.0f);
+        return shader::as_vec4(v.locations[static_cast<std::size_t>(at)]);
+    }
+
+    // The patch's vertices as the GL backend's vertex buffer holds them: a terrain's four
+    // corners vec4(ground, 1) at location 0 (control.h's corner order), a PN triangle's
+    // position, normal and uv at locations 0, 1, 2.
+    std::vector<std::vector<shader::Slot>> vertex_attributes(std::size_t p) const {
+        std::vector<std::vector<shader::Slot>> out;
+        if (scene.grid) {
+            const TerrainGrid& g = *scene.grid;
+            const std::size_t i = p % static_cast<std::size_t>(g.patches_u), j = p / static_cast<std::size_t>(g.patches_u);
+            const std::size_t c[4][2] = {{i, j}, {i, j + 1}, {i + 1, j + 1}, {i + 1, j}};
+            for (const auto& k : c) {
+                const float u = static_cast<float>(g.u_coords[k[0]]), v = static_cast<float>(g.v_coords[k[1]]);
+                out.push_back({shader::slot(g.plane == GroundPlane::xy ? glm::vec4(u, v, 0.0f, 1.0f)
+                                                                        : glm::vec4(u, 0.0f, v, 1.0f))});
+            }
+            return out;
+        }
+        const TriangleMeshes& m = *scene.meshes;
+        for (std::uint32_t v : m.triangles[p]) {
+            const glm::vec2 uv = m.uvs.empty() ? glm::vec2(0.0f) : glm::vec2(m.uvs[v]);
+            out.push_back({shader::slot(glm::vec4(glm::vec3(m.positions[v]), 0.0f)),
+                           shader::slot(glm::vec4(glm::vec3(m.normals[v]), 0.0f)), shader::slot(glm::vec4(uv, 0.0f, 0.0f))});
+        }
+        return out;
+    }
+
+    void executables() {
+        vert_run.emplace(*vert, bindings, options);
+        if (tesc) tesc_run.emplace(*tesc, bindings, options);
+        tese_run.emplace(*tese, bindings, options);
+    }
+
+    const Scene& scene;
+    std::unique_ptr<PatchProgram<float>> model;  // levels (when the user gave no vertex or control shader), normals
+    bool model_levels = false;
+    std::optional<shader::Module> vert, tesc, tese;
+    shader::Bindings bindings;
+    shader::RunOptions options;
+    std::optional<shader::Executable> vert_run, tesc_run, tese_run;
+    int position_location = -1;  // -1: gl_Position.xyz
+    int normal_location = -1;    // -1: the model's geometry stage
+    int uv_location = -1;
+    std::vector<shader::ShaderPatch> patches;  // per patch: the control stage's output
+};
+
+}  // namespace
+
+std::vector<StageShader> interpreted_stages(const Scene& scene) {
+    std::vector<StageShader> out;
+    const char* base = twin_base(scene.evaluation.model);
+    if (!base) return out;  // geomipmap: no tessellation stages to run
+    for (const StageShader& s : scene.shaders) {
+        std::string twin;
+        switch (s.stage) {
+            case ShaderStage::vertex: twin = std::string(base) + ".vert"; break;
+            case ShaderStage::tess_control: twin = control_twin(scene); break;
+            case ShaderStage::tess_evaluation: twin = std::string(base) + ".tese"; break;
+            case ShaderStage::geometry:
+            case ShaderStage::fragment: continue;  // not run on the CPU
+        }
+        // A file whose text is exactly the shipped twin's is the twin: the C++ model, which
+        // the twin is proven to compute bit for bit, is the fast path for it. Any other text
+        // (a changed constant, a comment) runs through the interpreter.
+        if (!twin.empty() && read_user_shader(s) == twin_text(twin)) continue;
+        out.push_back(s);
+    }
+    return out;
+}
+
+StageTrace trace_stage(const Scene& scene, const StageTraceRequest& request, shader::Observer& observer) {
+    if (!twin_base(scene.evaluation.model))
+        throw Error("a geomipmapped terrain has no tessellation stages to trace (its vertex shader is the CPU's "
+                    "geomorph)",
+                    Where::at_key(scene.file, "evaluation.model"));
+    if (request.patch >= scene.patch_count())
+        throw Error("patch " + std::to_string(request.patch) + " is not one of the scene's " +
+                        std::to_string(scene.patch_count()) + " patches (0.." + std::to_string(scene.patch_count() - 1) + ")",
+                    Where::in_file("--patch"));
+    StageTraceRequest r = request;
+    if (r.stage == ShaderStage::tess_evaluation) {
+        const glm::vec3 tc = r.tess_coord;
+        const bool triangles = scene.generator.domain == Domain::triangles;
+        if (!(tc.x >= 0.0f && tc.x <= 1.0f && tc.y >= 0.0f && tc.y <= 1.0f) || (triangles && tc.x + tc.y > 1.0f))
+            throw Error(std::string("the tess coord must lie in the ") + (triangles ? "triangle u, v >= 0, u + v <= 1"
+                                                                                    : "square [0, 1] x [0, 1]"),
+                        Where::in_file("--tess-coord"));
+        r.tess_coord.z = triangles ? (1.0f - tc.x) - tc.y : 0.0f;  // gl_TessCoord's w, as the generator computes it
+    }
+    std::unique_ptr<PatchProgram<float>> model = make_model_program<float>(scene, glm::dvec3(0.0));
+    UserProgram program(scene, std::move(model), interpreted_stages(scene));
+    program.use_math(request.math);
+    return program.trace(r, observer);
+}
+
+std::unique_ptr<PatchProgram<float>> make_user_program(const Scene& scene, std::unique_ptr<PatchProgram<float>> model,
+                                                       const std::vector<StageShader>& user) {
+    return std::make_unique<UserProgram>(scene, std::move(model), user);
+}
+
+}  // namespace tessref::pipeline

@@ -1,0 +1,39 @@
+#version 450 core
+// A user's evaluation shader: data/shaders/thesis_terrain.tese with the height doubled
+// (`* 2.0` below). Multiplying by two is exact in float, so every vertex the CPU runs this
+// shader at has the model's x and y and twice its z, bit for bit (test_user_shaders.cpp).
+
+layout(quads, fractional_odd_spacing, ccw) in;
+
+layout(location = 0) in ControlData {
+    vec4 tcPosition;
+} controlIn[];
+
+layout(location = 0) out EvaluationData {
+    vec2 textureCoordinate;
+} evaluationOut;
+
+layout(binding = 0) uniform sampler2D heightMap;
+uniform mat4 mvp;
+uniform float scaleXY;
+uniform float scaleZ;
+
+void main()
+{
+    // The positions on the ad and the bc vectors.
+    vec4 adPosition = mix(controlIn[0].tcPosition, controlIn[3].tcPosition, gl_TessCoord.x);
+    vec4 bcPosition = mix(controlIn[1].tcPosition, controlIn[2].tcPosition, gl_TessCoord.x);
+
+    // Then the position between the adPosition and the bcPosition point.
+    vec4 position = mix(adPosition, bcPosition, gl_TessCoord.y);
+
+    // Texture coordinate from the position and the scale in the xy plane.
+    evaluationOut.textureCoordinate = position.xy / scaleXY;
+
+    // The height map value times the z scale is the height.
+    float height = texture(heightMap, evaluationOut.textureCoordinate).r * scaleZ * 2.0;  // twice the height
+
+    vec4 positionWithHeight = vec4(position.x, position.y, height, 1.0);
+
+    gl_Position = mvp * positionWithHeight;
+}

@@ -1,0 +1,41 @@
+#version 450 core
+// A user's evaluation shader that never ends: data/shaders/thesis_terrain.tese with a loop
+// whose condition stays true. The CPU stops it at the instruction budget
+// (--max-instructions) with an error naming the stage, patch and invocation.
+
+layout(quads, fractional_odd_spacing, ccw) in;
+
+layout(location = 0) in ControlData {
+    vec4 tcPosition;
+} controlIn[];
+
+layout(location = 0) out EvaluationData {
+    vec2 textureCoordinate;
+} evaluationOut;
+
+layout(binding = 0) uniform sampler2D heightMap;
+uniform mat4 mvp;
+uniform float scaleXY;
+uniform float scaleZ;
+
+void main()
+{
+    // The positions on the ad and the bc vectors.
+    vec4 adPosition = mix(controlIn[0].tcPosition, controlIn[3].tcPosition, gl_TessCoord.x);
+    vec4 bcPosition = mix(controlIn[1].tcPosition, controlIn[2].tcPosition, gl_TessCoord.x);
+
+    // Then the position between the adPosition and the bcPosition point.
+    vec4 position = mix(adPosition, bcPosition, gl_TessCoord.y);
+
+    // Texture coordinate from the position and the scale in the xy plane.
+    evaluationOut.textureCoordinate = position.xy / scaleXY;
+
+    // The height map value times the z scale is the height.
+    float height = texture(heightMap, evaluationOut.textureCoordinate).r * scaleZ;
+
+    vec4 positionWithHeight = vec4(position.x, position.y, height, 1.0);
+
+    gl_Position = mvp * positionWithHeight;
+    while (scaleZ > 0.0)  // never false for a scene's positive scale
+        gl_Position.w = gl_Position.w + 1.0;
+}

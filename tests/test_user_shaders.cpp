@@ -1,0 +1,385 @@
+// A user's vertex, control and evaluation shaders run by the CPU pipeline through the SPIR-V
+// interpreter ([shaders], --shader on render, mesh and gl): what they compute against what
+// the models compute (a change whose effect is exact in float), against llvmpipe's capture
+// of the same shaders, and the shipped twins given as user files.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <unistd.h>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+#include "command_dir_test.h"
+#include "run_program.h"
+#include "pipeline/program.h"
+#include "tessref/capture.h"
+#include "tessref/error.h"
+#include "tessref/pipeline.h"
+#include "tessref/prepare.h"
+#include "tessref/scene.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using tessref::test::read_file;
+using tessref::test::RunResult;
+using tessref::test::write_file;
+
+const fs::path kSource = TESSREF_SOURCE_DIR;
+const fs::path kUserShaders = kSource / "tests" / "data" / "gl";
+
+fs::path scene_path(const std::string& name) { return kSource / "data" / "scenes" / (name + ".toml"); }
+
+tessref::Scene with_shader(const std::string& scene, tessref::ShaderStage stage, const fs::path& file) {
+    tessref::Scene s = tessref::load_scene(scene_path(scene).string());
+    s.shaders.push_back(tessref::StageShader{stage, file.string(), "--shader " + file.string(), tessref::Where::in_file("--shader")});
+    return s;
+}
+
+std::uint32_t bits(double v) { return std::bit_cast<std::uint32_t>(static_cast<float>(v)); }
+
+// double_height.tese is the thesis twin with the height times 2.0, which is exact in float:
+// at every vertex the CPU must give the model's x and y and twice the model's z, bit for
+// bit (the models ignore [shaders]; the interpreter runs the user's file).
+TEST(UserShaders, DoubledHeightIsTwiceTheModelsHeightAtEveryVertex) {
+    const tessref::Scene model_scene = tessref::load_scene(scene_path("thesis-all-10").string());
+    const tessref::Scene user_scene =
+        with_shader("thesis-all-10", tessref::ShaderStage::tess_evaluation, kUserShaders / "double_height.tese");
+    const tessref::PipelineResult model = tessref::run_pipeline(model_scene);
+    const tessref::PipelineResult user = tessref::run_pipeline(user_scene);
+    ASSERT_EQ(model.mesh.positions.size(), user.mesh.positions.size());
+    ASSERT_GT(model.mesh.positions.size(), 1000u);
+    std::size_t same_xy = 0, doubled_z = 0, raised = 0;
+    for (std::size_t v = 0; v < model.mesh.positions.size(); ++v) {
+        const glm::dvec3 m = model.mesh.positions[v], u = user.mesh.positions[v];
+        same_xy += bits(m.x) == bits(u.x) && bits(m.y) == bits(u.y);
+        doubled_z += bits(2.0 * m.z) == bits(u.z);
+        raised += m.z != 0.0;
+    }
+    EXPECT_GT(raised, model.mesh.positions.size() / 2);  // the terrain is not flat
+    EXPECT_EQ(same_xy, model.mesh.positions.size());
+    EXPECT_EQ(doubled_z, model.mesh.positions.size());
+    // The levels are the model's: the user changed no stage that makes them.
+    ASSERT_EQ(model.levels.size(), user.levels.size());
+    for (std::size_t p = 0; p < model.levels.size(); ++p)
+        EXPECT_EQ(std::memcmp(&model.levels[p], &user.levels[p], sizeof(tessref::TessLevels)), 0) << p;
+}
+
+// The twins themselves through the interpreter (a copy with a comment appended is not the
+// twin's text, so it is interpreted): the very mesh of the model path, positions, normals
+// (the thesis's normal-map geometry stage runs as the model on the interpreter's texture
+// coordinates) and uvs, bit for bit, in the math mode where the twin tests hold each twin
+// to its model.
+struct TwinCase {
+    const char* scene;
+    const char* base;
+    bool control;
+    // lab 4's normal is its evaluation shader's normalize(): correctly rounded inversesqrt in
+    // exact math, 1 / sqrt (the model's) in llvmpipe math, where lab 4 is compared.
+    tessref::MathMode math = tessref::MathMode::exact;
+    // PN's positions and normals are the model's in neither math mode as a whole scene: in
+    // exact math the correctly rounded inversesqrt of normalize() moves a few ulps (the
+    // model rounds 1 / sqrt twice), in llvmpipe math the model's vertex shader sums the
+    // matrix product in llvmpipe's order (llvmpipe_math::transform) where the interpreter
+    // does not yet (shader.h): its levels and triangles are compared, in exact math.
+    bool values = true;
+};
+
+class InterpretedTwins : public ::testing::TestWithParam<TwinCase> {};
+
+TEST_P(InterpretedTwins, GiveTheModelsMeshBitForBit) {
+    const TwinCase c = GetParam();
+    const fs::path dir = fs::temp_directory_path() / ("tessref-test-twins-" + std::to_string(::getpid()) + "-" + c.scene);
+    fs::create_directories(dir);
+    tessref::Scene user = tessref::load_scene(scene_path(c.scene).string());
+    const tessref::Scene model_scene = user;
+    std::vector<std::pair<tessref::ShaderStage, std::string>> stages = {
+        {tessref::ShaderStage::vertex, ".vert"}, {tessref::ShaderStage::tess_evaluation, ".tese"}};
+    if (c.control) stages.push_back({tessref::ShaderStage::tess_control, ".tesc"});
+    for (const auto& [stage, ext] : stages) {
+        const fs::path copy = dir / (std::string(c.base) + ext);
+        write_file(copy, read_file(kSource / "data" / "shaders" / (std::string(c.base) + ext)) + "// a copy\n");
+        user.shaders.push_back(tessref::StageShader{stage, copy.string(), copy.string(), tessref::Where::in_file(copy.string())});
+    }
+    ASSERT_EQ(tessref::pipeline::interpreted_stages(user).size(), stages.size());
+    tessref::PipelineOptions options;
+    options.math = c.math;
+    const tessref::PipelineResult a = tessref::run_pipeline(model_scene, options);
+    const tessref::PipelineResult b = tessref::run_pipeline(user, options);
+    fs::remove_all(dir);
+    ASSERT_EQ(a.mesh.positions.size(), b.mesh.positions.size());
+    std::size_t positions = 0, normals = 0, uvs = 0, levels = 0;
+    for (std::size_t v = 0; v < a.mesh.positions.size(); ++v) {
+        positions += a.mesh.positions[v] != b.mesh.positions[v];
+        if (!a.mesh.normals.empty()) normals += a.mesh.normals[v] != b.mesh.normals[v];
+        if (!a.mesh.uvs.empty()) uvs += a.mesh.uvs[v] != b.mesh.uvs[v];
+    }
+    for (std::size_t p = 0; p < a.levels.size(); ++p)
+        levels += std::memcmp(&a.levels[p], &b.levels[p], sizeof(tessref::TessLevels)) != 0;
+    EXPECT_EQ(a.mesh.normals.size(), b.mesh.normals.size());
+    EXPECT_EQ(a.mesh.uvs.size(), b.mesh.uvs.size());
+    EXPECT_EQ(levels, 0u);
+    EXPECT_EQ(uvs, 0u);
+    if (!c.values) return;
+    EXPECT_EQ(positions, 0u);
+    EXPECT_EQ(normals, 0u);
+    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, InterpretedTwins,
+    ::testing::Values(TwinCase{"thesis-map-4", "thesis_terrain", true}, TwinCase{"thesis-constant-1", "thesis_terrain", false},
+                      TwinCase{"cosc422", "cosc422_terrain", true}, TwinCase{"lab4-canyon", "lab4_terrain", true, tessref::MathMode::llvmpipe},
+                      TwinCase{"pn-triangles", "pn_triangles", true, tessref::MathMode::exact, false}),
+    [](const auto& info) {
+        std::string name = info.param.scene;
+        for (char& ch : name) ch = std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+        return name;
+    });
+
+// A user file whose text is exactly the twin's is the twin: the model's fast path.
+TEST(UserShaders, TheTwinsOwnTextKeepsTheModelPath) {
+    const tessref::Scene s = with_shader("thesis-all-10", tessref::ShaderStage::tess_evaluation,
+                                         kSource / "data" / "shaders" / "thesis_terrain.tese");
+    EXPECT_TRUE(tessref::pipeline::interpreted_stages(s).empty());
+}
+
+class UserShaderCommand : public tessref::test::CommandDirTest {};
+
+// `tessref mesh --shader` with the shipped twin's own file writes the very bytes of the
+// run without it; with the doubled height, other bytes.
+TEST_F(UserShaderCommand, MeshWithTheTwinsFileIsByteIdentical) {
+    const std::string scene = scene_path("thesis-all-10").string();
+    ASSERT_EQ(run({"mesh", scene, "-o", path("model.ply")}).status, 0);
+    const RunResult twin = run({"mesh", scene, "-o", path("twin.ply"), "--shader",
+                                "tese=" + (kSource / "data" / "shaders" / "thesis_terrain.tese").string()});
+    ASSERT_EQ(twin.status, 0) << twin.err;
+    const RunResult user = run({"mesh", scene, "-o", path("user.ply"), "--shader",
+                                "tese=" + (kUserShaders / "double_height.tese").string()});
+    ASSERT_EQ(user.status, 0) << user.err;
+    EXPECT_EQ(read_file(path("model.ply")), read_file(path("twin.ply")));
+    EXPECT_NE(read_file(path("model.ply")), read_file(path("user.ply")));
+}
+
+// A shader that never ends: exit 2 naming the stage, the patch and the budget, no file.
+TEST_F(UserShaderCommand, EndlessShaderStopsAtTheInstructionBudget) {
+    const RunResult r = run({"mesh", scene_path("thesis-constant-1").string(), "-o", path("x.ply"), "--shader",
+                             "tese=" + (kUserShaders / "endless.tese").string(), "--max-instructions", "5000"});
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("evaluation shader"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("patch "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("instruction budget of 5000"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("endless.tese"), std::string::npos) << r.err;
+    EXPECT_TRUE(files().empty());
+    const RunResult bad = run({"mesh", scene_path("thesis-constant-1").string(), "-o", path("x.ply"),
+                               "--max-instructions", "0"});
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("--max-instructions"), std::string::npos) << bad.err;
+}
+
+// An instruction the interpreter does not run: exit 2 naming the opcode (once "Op") and
+// the file and line of the source (the bitfieldExtract line of unsupported_op.tese).
+TEST_F(UserShaderCommand, UnsupportedOpcodeNamesItAndTheSourceLine) {
+    const fs::path tese = kUserShaders / "unsupported_op.tese";
+    const std::string text = read_file(tese);
+    const std::size_t at = text.find("bitfieldExtract");
+    ASSERT_NE(at, std::string::npos);
+    const std::size_t line = static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n')) + 1;
+    const RunResult r = run({"mesh", scene_path("thesis-constant-1").string(), "-o", path("x.ply"), "--shader",
+                             "tese=" + tese.string()});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("OpBitFieldSExtract is not supported"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("OpOp"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("unsupported_op.tese:" + std::to_string(line)), std::string::npos) << r.err;
+    EXPECT_TRUE(files().empty());
+}
+
+// Exact precision runs the double models; a user's shader runs in float only.
+TEST_F(UserShaderCommand, ExactPrecisionWithAUsersShaderIsRefused) {
+    const RunResult r = run({"mesh", scene_path("thesis-all-10").string(), "-o", path("x.ply"), "--precision", "exact",
+                             "--shader", "tese=" + (kUserShaders / "double_height.tese").string()});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("gpu precision only"), std::string::npos) << r.err;
+    EXPECT_TRUE(files().empty());
+}
+
+// ---- tessref trace ------------------------------------------------------------------------
+
+// thesis-constant-1: 16 x 16 patches over [0, 128]^2, so patch 17 (column 1, row 1) has the
+// corners (8, 8), (8, 16), (16, 16), (16, 8) in the twin's order c0..c3. At tess coord
+// (0.5, 0.25): adPosition = mix(c0, c3, 0.5) = (12, 8), bcPosition = mix(c1, c2, 0.5) =
+// (12, 16), position = mix(ad, bc, 0.25) = (12, 10), and textureCoordinate = position.xy /
+// scaleXY (128) = (0.09375, 0.078125); every step exact in float.
+TEST_F(UserShaderCommand, TraceOfTheTwinsEvaluationGivesTheHandComputedValues) {
+    const RunResult r = run({"trace", scene_path("thesis-constant-1").string(), "--patch", "17", "--stage", "tese",
+                             "--tess-coord", "0.5,0.25", "--json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["math"], "exact");
+    EXPECT_EQ(j["stage"], "tess_evaluation");
+    const auto stored = [&](const std::string& name) {
+        std::vector<double> values;
+        for (const auto& line : j["lines"])
+            for (const auto& s : line["stores"])
+                if (s["name"] == name && s["offset"] == 0) {
+                    values.clear();
+                    for (const auto& v : s["values"]) values.push_back(v.get<double>());
+                }
+        return values;
+    };
+    const std::vector<double> ad = stored("adPosition"), bc = stored("bcPosition"), position = stored("position"),
+                              st = stored("evaluationOut");
+    ASSERT_EQ(ad.size(), 4u) << r.out;
+    ASSERT_EQ(position.size(), 4u) << r.out;
+    ASSERT_EQ(st.size(), 2u) << r.out;
+    EXPECT_EQ(ad[0], 12.0);
+    EXPECT_EQ(ad[1], 8.0);
+    EXPECT_EQ(bc[0], 12.0);
+    EXPECT_EQ(bc[1], 16.0);
+    EXPECT_EQ(position[0], 12.0);
+    EXPECT_EQ(position[1], 10.0);
+    EXPECT_EQ(st[0], 0.09375);
+    EXPECT_EQ(st[1], 0.078125);
+    // The lines in execution order: the mix of ad comes before the one of position.
+    std::vector<unsigned> lines;
+    for (const auto& line : j["lines"]) lines.push_back(line["line"].get<unsigned>());
+    ASSERT_FALSE(lines.empty());
+    // The outputs: gl_Position with the capture's mvp (the identity) is the position with its height.
+    EXPECT_EQ(j["outputs"]["gl_Position"][0], 12.0);
+    EXPECT_EQ(j["outputs"]["gl_Position"][1], 10.0);
+
+    const RunResult text = run({"trace", scene_path("thesis-constant-1").string(), "--patch", "17", "--stage", "tese",
+                                "--tess-coord", "0.5,0.25", "--math", "llvmpipe"});
+    ASSERT_EQ(text.status, 0) << text.err;
+    EXPECT_NE(text.out.find("llvmpipe math"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("position = (12, 10, "), std::string::npos) << text.out;
+}
+
+// A control shader: each invocation's lines and the levels; corner_max.tesc's outer level 0
+// is (max(z0, z1) + 100) * 18 / 100 + 2 of its corners 0 and 1.
+TEST_F(UserShaderCommand, TraceOfAUsersControlShaderListsEveryInvocation) {
+    const std::string scene = scene_path("cosc422").string();
+    const RunResult r = run({"trace", scene, "--patch", "10", "--stage", "tesc", "--json", "--shader",
+                             "tesc=" + (kUserShaders / "corner_max.tesc").string()});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    std::set<int> invocations;
+    for (const auto& line : j["lines"]) invocations.insert(line["invocation"].get<int>());
+    EXPECT_EQ(invocations, (std::set<int>{0, 1, 2, 3}));
+    const tessref::Scene s = tessref::load_scene(scene);
+    const tessref::TerrainGrid& g = *s.grid;
+    const std::size_t row = 10 / static_cast<std::size_t>(g.patches_u);
+    const float z0 = static_cast<float>(g.v_coords[row]), z1 = static_cast<float>(g.v_coords[row + 1]);
+    const float z = std::max(z0, z1);
+    const float level = (z + 100.0f) * 18.0f / 100.0f + 2.0f;
+    EXPECT_EQ(j["outputs"]["outer"][0].get<float>(), level) << r.out;
+    EXPECT_EQ(j["outputs"]["vertices"].size(), 4u);
+}
+
+// Bad requests: exit 2 naming the flag.
+TEST_F(UserShaderCommand, TraceRefusesABadPatchCoordOrStage) {
+    const std::string scene = scene_path("thesis-constant-1").string();
+    struct Case {
+        std::vector<std::string> args;
+        const char* flag;
+    };
+    const Case cases[] = {
+        {{"--patch", "256", "--stage", "tese", "--tess-coord", "0.5,0.5"}, "--patch"},
+        {{"--patch", "-1", "--stage", "tese", "--tess-coord", "0.5,0.5"}, "--patch"},
+        {{"--patch", "0", "--stage", "tese", "--tess-coord", "1.5,0.5"}, "--tess-coord"},
+        {{"--patch", "0", "--stage", "tese", "--tess-coord", "half"}, "--tess-coord"},
+        {{"--patch", "0", "--stage", "tese"}, "--tess-coord"},
+        {{"--patch", "0", "--stage", "vert", "--vertex", "4"}, "--vertex"},
+        {{"--patch", "0", "--stage", "frag"}, "--stage"},
+    };
+    for (const Case& c : cases) {
+        std::vector<std::string> args = {"trace", scene};
+        args.insert(args.end(), c.args.begin(), c.args.end());
+        const RunResult r = run(args);
+        EXPECT_EQ(r.status, 2) << c.flag << "\n" << r.out << r.err;
+        EXPECT_NE(r.err.find(c.flag), std::string::npos) << r.err;
+    }
+}
+
+// ---- against llvmpipe (tessref gl) ----------------------------------------------------------
+
+// Positions bit for bit; normals within 3 ulps: they are the geometry stage's (thesis
+// normal_map, COSC422 face), which the CPU computes with its models, not the interpreter,
+// and which differ from llvmpipe's geometry shader by up to that much without any user
+// shader as well (the goldens' kGoldenMaxNormalUlps; thesis-all-10: 1303 of 39900 vertices).
+tessref::CaptureCompareResult compare(const std::string& cpu, const std::string& gl, std::uint64_t normal_ulps = 3) {
+    tessref::CaptureCompareOptions options;
+    options.max_normal_ulps = normal_ulps;
+    return tessref::compare_captures(tessref::read_capture(cpu), tessref::read_capture(gl), options);
+}
+
+// A user's control shader with a loop, a constant array, a per-patch output array and
+// barrier(): the CPU runs it to predict llvmpipe's counts, so every draw is as predicted,
+// and its levels are llvmpipe's on every patch.
+TEST_F(UserShaderCommand, GlPredictsTheCountsOfAUsersControlShader) {
+    const std::string scene = scene_path("cosc422").string(), tesc = "tesc=" + (kUserShaders / "corner_max.tesc").string();
+    const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--size", "160x100", "--capture", path("gl.txt"),
+                              "--shader", tesc});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    EXPECT_NE(gl.out.find("every count as predicted"), std::string::npos) << gl.out;
+    const RunResult cpu = run({"mesh", scene, "--capture", path("cpu.txt"), "--math", "llvmpipe", "--shader", tesc});
+    ASSERT_EQ(cpu.status, 0) << cpu.err;
+    const tessref::CaptureCompareResult c = compare(path("cpu.txt"), path("gl.txt"));
+    EXPECT_EQ(c.missing_in_test + c.missing_in_reference, 0u);
+    EXPECT_EQ(c.tess_coord_divergences, 0u);
+    EXPECT_EQ(c.triangle_divergences, 0u);
+    EXPECT_EQ(c.orientation_divergences, 0u);
+    EXPECT_GT(c.vertices_compared, 1000u);
+    EXPECT_EQ(c.worst_position.ulps, 0u);
+    EXPECT_EQ(c.failing_vertices, 0u);
+}
+
+// A user's evaluation shader (the height doubled), on the CPU and on llvmpipe, in the
+// llvmpipe math mode: the same tess coords and triangles on every patch, and every position
+// bit-identical (the issue asks for 99 % of the vertices; the normals are the model's
+// geometry stage, see compare()).
+TEST_F(UserShaderCommand, DoubledHeightCaptureIsLlvmpipes) {
+    const std::string scene = scene_path("thesis-all-10").string(),
+                      tese = "tese=" + (kUserShaders / "double_height.tese").string();
+    const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--size", "160x100", "--capture", path("gl.txt"),
+                              "--shader", tese});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    const RunResult cpu = run({"mesh", scene, "--capture", path("cpu.txt"), "--math", "llvmpipe", "--shader", tese});
+    ASSERT_EQ(cpu.status, 0) << cpu.err;
+    const tessref::CaptureCompareResult c = compare(path("cpu.txt"), path("gl.txt"));
+    EXPECT_EQ(c.tess_coord_divergences + c.triangle_divergences + c.orientation_divergences, 0u);
+    ASSERT_GT(c.vertices_compared, 10000u);
+    EXPECT_EQ(c.worst_position.ulps, 0u);
+    EXPECT_EQ(c.failing_vertices, 0u);
+    const tessref::CaptureCompareResult exact = compare(path("cpu.txt"), path("gl.txt"), 0);
+    std::printf("doubled height: positions bit-identical on all %zu vertices; normals on %zu (worst %llu ulps)\n",
+                exact.vertices_compared, exact.vertices_compared - exact.failing_vertices,
+                static_cast<unsigned long long>(exact.worst_normal.ulps));
+}
+
+// `cw` in a user's evaluation shader where the scene says `ccw`: llvmpipe emits the same
+// triangles the other way round, and compare on the captures says so. thesis-constant-1 at
+// level 1: two triangles in each of the 256 patches, every one flipped.
+TEST_F(UserShaderCommand, FlippedWindingIsReportedByCompare) {
+    const std::string scene = scene_path("thesis-constant-1").string();
+    const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--size", "160x100", "--capture", path("gl.txt"),
+                              "--shader", "tese=" + (kUserShaders / "flipped_winding.tese").string()});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    ASSERT_EQ(run({"mesh", scene, "--capture", path("cpu.txt")}).status, 0);
+    const RunResult cmp = run({"compare", path("cpu.txt"), path("gl.txt")});
+    EXPECT_EQ(cmp.status, 1) << cmp.out << cmp.err;
+    EXPECT_NE(cmp.out.find("256 other orientation (512 triangles)"), std::string::npos) << cmp.out;
+    const tessref::CaptureCompareResult c = compare(path("cpu.txt"), path("gl.txt"));
+    EXPECT_EQ(c.orientation_divergences, 256u);
+    EXPECT_EQ(c.flipped_triangles, 512u);
+}
+
+}  // namespace
