@@ -13,8 +13,8 @@ void Drawing::add(int kind, int x0, int y0, int x1, int y1, const Colour& colour
     op.x1 = x1;
     op.y1 = y1;
     const auto channels = colour.channels();
-    for (int c = 0; c < 3; ++c) op.color[c] = channels[c];
-    op.color[3] = 1.0f;
+    for (int c = 0; c < 3; ++c) op.colour[c] = channels[c];
+    op.colour[3] = 1.0f;
     ops_.push_back(op);
 }
 
