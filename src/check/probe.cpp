@@ -32,7 +32,7 @@ namespace {
 // 16 to 128 scene resolutions away (far enough to leave the edge's rounding behind, close
 // enough to stay in a crack it went through), turning by the golden angle so that the
 // tries leave a vertex between different pairs of its edges.
-constexpr int recasts = 8;
+constexpr int kRecasts = 8;
 
 glm::dvec3 beside(const glm::dvec3& origin, const glm::dvec3& across_u, const glm::dvec3& across_w, int attempt,
                   double resolution) {
@@ -120,7 +120,7 @@ OpenBoundary open_boundary(const CheckState& state) {
     return out;
 }
 
-constexpr double association_budget = 2e7;  // point-to-vertex distance evaluations
+constexpr double kAssociationBudget = 2e7;  // point-to-vertex distance evaluations
 
 void terrain_probe(CheckState& state, const RayScene& scene) {
     const IndexedMesh& mesh = state.mesh;
@@ -220,7 +220,7 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
 
     const OpenBoundary open = open_boundary(state);
     const auto clusters = cluster(failures);
-    const bool associate = double(clusters.size()) * double(open.vertices.size()) <= association_budget;
+    const bool associate = double(clusters.size()) * double(open.vertices.size()) <= kAssociationBudget;
     const double mid_height = 0.5 * (state.bbox_min[k] + state.bbox_max[k]);
     for (const auto& cells : clusters) {
         glm::dvec2 centre(0.0);
@@ -291,7 +291,7 @@ struct GridCrossings {
 };
 
 // Casts every line of the grid and counts its crossings; a line that grazes an edge is recast
-// beside itself, up to `recasts` times, and left undecided after that.
+// beside itself, up to `kRecasts` times, and left undecided after that.
 GridCrossings cast_grid(CheckState& state, const RayScene& scene, const ProbeGrid& grid) {
     CheckReport& report = state.report;
     const int resolution = grid.resolution;
@@ -333,7 +333,7 @@ GridCrossings cast_grid(CheckState& state, const RayScene& scene, const ProbeGri
                     std::optional<Crossings> crossings = crossings_along(l.origin, l.direction);
                     if (!crossings) ++result.recast;
                     const glm::dvec3 origin = l.origin;
-                    for (int attempt = 1; !crossings && attempt <= recasts; ++attempt) {
+                    for (int attempt = 1; !crossings && attempt <= kRecasts; ++attempt) {
                         l.origin = beside(origin, across_u, across_w, attempt, scene.resolution());
                         crossings = crossings_along(l.origin, l.direction);
                     }
@@ -391,7 +391,7 @@ void report_closed_failures(CheckState& state, const ProbeGrid& grid, const Grid
     const std::vector<GridFailure>& odd = found.odd;
     const OpenBoundary open = open_boundary(state);
     const std::size_t failures = odd.size() + escapes.size();
-    const bool associate = !open.vertices.empty() && double(failures) * double(open.vertices.size()) <= association_budget;
+    const bool associate = !open.vertices.empty() && double(failures) * double(open.vertices.size()) <= kAssociationBudget;
     auto nearest = [&](const glm::dvec3& origin, const glm::dvec3& direction, bool whole_line) {
         std::uint32_t best = open.vertices[0];
         double best_distance = std::numeric_limits<double>::infinity();

@@ -18,31 +18,31 @@ namespace {
 // ---------------------------------------------------------------------------------------
 // Layout (pixels)
 
-constexpr int picture_width = 920;
-constexpr int picture_height = 720;
-constexpr double domain_left = 96.0;
-constexpr double domain_top = 118.0;
-constexpr double domain_size = 500.0;
-constexpr double panel_left = 690.0;
+constexpr int kPictureWidth = 920;
+constexpr int kPictureHeight = 720;
+constexpr double kDomainLeft = 96.0;
+constexpr double kDomainTop = 118.0;
+constexpr double kDomainSize = 500.0;
+constexpr double kPanelLeft = 690.0;
 
 // Palette. Triangles: blue family when counter-clockwise in (u right, v up), orange when
 // clockwise; the darker tone marks triangles that touch an outer edge (the outer ring).
-constexpr Colour ink = Colour::from_codes(34, 34, 34);
-constexpr Colour muted = Colour::from_codes(110, 110, 110);
-constexpr Colour faint = Colour::from_codes(170, 170, 170);
-constexpr Colour domain_fill = Colour::from_codes(246, 246, 246);
-constexpr Colour domain_outline = Colour::from_codes(60, 60, 60);
-constexpr Colour ccw_outer = Colour::from_codes(190, 214, 238);
-constexpr Colour ccw_inner = Colour::from_codes(228, 238, 249);
-constexpr Colour ccw_edge = Colour::from_codes(79, 112, 148);
-constexpr Colour ccw_arrow = Colour::from_codes(36, 78, 128);
-constexpr Colour cw_outer = Colour::from_codes(246, 206, 168);
-constexpr Colour cw_inner = Colour::from_codes(252, 234, 216);
-constexpr Colour cw_edge = Colour::from_codes(156, 104, 60);
-constexpr Colour cw_arrow = Colour::from_codes(150, 72, 14);
-constexpr Colour boundary_point = Colour::from_codes(178, 40, 36);
-constexpr Colour interior_point = Colour::from_codes(28, 58, 104);
-constexpr Colour isoline_colours[2] = {Colour::from_codes(31, 96, 170), Colour::from_codes(24, 140, 90)};
+constexpr Colour kInk = Colour::from_codes(34, 34, 34);
+constexpr Colour kMuted = Colour::from_codes(110, 110, 110);
+constexpr Colour kFaint = Colour::from_codes(170, 170, 170);
+constexpr Colour kDomainFill = Colour::from_codes(246, 246, 246);
+constexpr Colour kDomainOutline = Colour::from_codes(60, 60, 60);
+constexpr Colour kCcwOuter = Colour::from_codes(190, 214, 238);
+constexpr Colour kCcwInner = Colour::from_codes(228, 238, 249);
+constexpr Colour kCcwEdge = Colour::from_codes(79, 112, 148);
+constexpr Colour kCcwArrow = Colour::from_codes(36, 78, 128);
+constexpr Colour kCwOuter = Colour::from_codes(246, 206, 168);
+constexpr Colour kCwInner = Colour::from_codes(252, 234, 216);
+constexpr Colour kCwEdge = Colour::from_codes(156, 104, 60);
+constexpr Colour kCwArrow = Colour::from_codes(150, 72, 14);
+constexpr Colour kBoundaryPoint = Colour::from_codes(178, 40, 36);
+constexpr Colour kInteriorPoint = Colour::from_codes(28, 58, 104);
+constexpr Colour kIsolineColours[2] = {Colour::from_codes(31, 96, 170), Colour::from_codes(24, 140, 90)};
 
 std::string display_number(float x) {
     if (std::isnan(x)) return "nan";
@@ -82,7 +82,7 @@ public:
 
     // (u, v) in the domain -> pixels: u to the right, v up.
     static glm::dvec2 at(double u, double v) {
-        return {domain_left + u * domain_size, domain_top + (1.0 - v) * domain_size};
+        return {kDomainLeft + u * kDomainSize, kDomainTop + (1.0 - v) * kDomainSize};
     }
 
     void polygon(std::vector<glm::dvec2> points, Colour fill) {
@@ -140,7 +140,7 @@ void draw_title(Painter& paint, Picture& picture, const Pattern& pattern, const 
     if (settings.point_mode) title += ", point mode";
     title += " (" + std::string(to_string(pattern.precision())) + " precision)";
     picture.title = "tessref tessellate: " + title;
-    paint.text({32, 44}, title, 24, ink, Anchor::start, TextFont::sans_bold);
+    paint.text({32, 44}, title, 24, kInk, Anchor::start, TextFont::sans_bold);
     constexpr std::size_t max_chars = 118;
     std::string rest = command_line;
     double line_y = 68;
@@ -150,7 +150,7 @@ void draw_title(Painter& paint, Picture& picture, const Pattern& pattern, const 
             cut = rest.rfind(' ', max_chars);
             if (cut == std::string::npos || cut == 0) cut = max_chars;
         }
-        paint.text({32, line_y}, rest.substr(0, cut), 12, muted, Anchor::start, TextFont::mono);
+        paint.text({32, line_y}, rest.substr(0, cut), 12, kMuted, Anchor::start, TextFont::mono);
         rest = cut < rest.size() ? "    " + rest.substr(rest[cut] == ' ' ? cut + 1 : cut) : "";
         line_y += 15;
     }
@@ -201,10 +201,10 @@ Windings draw_triangles(Painter& paint, const Pattern& pattern) {
         const bool ccw = area >= 0;
         (ccw ? windings.any_ccw : windings.any_cw) = true;
         const bool outer = outer_edge(a) || outer_edge(b) || outer_edge(c);
-        const Colour fill = ccw ? (outer ? ccw_outer : ccw_inner) : (outer ? cw_outer : cw_inner);
-        paint.polygon({pixel(tri[0]), pixel(tri[1]), pixel(tri[2])}, fill, ccw ? ccw_edge : cw_edge, edge_width);
+        const Colour fill = ccw ? (outer ? kCcwOuter : kCcwInner) : (outer ? kCwOuter : kCwInner);
+        paint.polygon({pixel(tri[0]), pixel(tri[1]), pixel(tri[2])}, fill, ccw ? kCcwEdge : kCwEdge, edge_width);
         if (windings.arrows)
-            draw_winding_arrow(paint, pixel(tri[0]), pixel(tri[1]), pixel(tri[2]), ccw ? ccw_arrow : cw_arrow);
+            draw_winding_arrow(paint, pixel(tri[0]), pixel(tri[1]), pixel(tri[2]), ccw ? kCcwArrow : kCwArrow);
     }
     return windings;
 }
@@ -218,7 +218,7 @@ void draw_isolines(Painter& paint, const Pattern& pattern) {
         const auto seg = pattern.primitive(i);
         if (i > 0 && points[seg[0]].v != points[pattern.primitive(i - 1)[0]].v) ++line_index;
         paint.line(Painter::at(points[seg[0]].u, points[seg[0]].v), Painter::at(points[seg[1]].u, points[seg[1]].v),
-                   isoline_colours[line_index % 2], 2.0);
+                   kIsolineColours[line_index % 2], 2.0);
     }
 }
 
@@ -227,17 +227,17 @@ void draw_points(Painter& paint, const Pattern& pattern) {
     const auto points = pattern.points();
     // Dots shrink with the point spacing so that a level-64 pattern stays readable.
     const double typical_spacing =
-        domain_size / std::sqrt(std::max<double>(1.0, static_cast<double>(points.size())));
+        kDomainSize / std::sqrt(std::max<double>(1.0, static_cast<double>(points.size())));
     const double dot_radius = std::clamp(0.18 * typical_spacing, 1.2, 4.0);
     const double radius = pattern.settings().point_mode ? dot_radius + 1.0 : dot_radius;
     for (const TessCoord& p : points) {
         paint.disc(Painter::at(p.u, p.v), radius,
-                   on_outer_edge(pattern.settings().domain, p) ? boundary_point : interior_point);
+                   on_outer_edge(pattern.settings().domain, p) ? kBoundaryPoint : kInteriorPoint);
     }
     if (points.size() <= 40) {
         for (std::size_t i = 0; i < points.size(); ++i) {
             const glm::dvec2 p = Painter::at(points[i].u, points[i].v);
-            paint.text({p.x + 5, p.y - 5}, std::to_string(i), 11, muted);
+            paint.text({p.x + 5, p.y - 5}, std::to_string(i), 11, kMuted);
         }
     }
 }
@@ -246,39 +246,39 @@ void draw_points(Painter& paint, const Pattern& pattern) {
 void draw_domain_labels(Painter& paint, Domain domain) {
     const glm::dvec2 c00 = Painter::at(0, 0), c10 = Painter::at(1, 0), c11 = Painter::at(1, 1),
                      c01 = Painter::at(0, 1);
-    const Colour label = muted;
+    const Colour label = kMuted;
     if (domain == Domain::triangles) {
         paint.text({c00.x, c00.y + 22}, "(u,v,w) = (0,0,1)", 12, label, Anchor::start);
         paint.text({c10.x, c10.y + 22}, "(1,0,0)", 12, label, Anchor::end);
         paint.text({c01.x - 10, c01.y + 4}, "(0,1,0)", 12, label, Anchor::end);
-        paint.text({c00.x - 24, (c00.y + c01.y) / 2 + 5}, "outer[0]", 13, ink, Anchor::end);
-        paint.text({(c00.x + c10.x) / 2, c00.y + 40}, "outer[1]", 13, ink, Anchor::middle);
+        paint.text({c00.x - 24, (c00.y + c01.y) / 2 + 5}, "outer[0]", 13, kInk, Anchor::end);
+        paint.text({(c00.x + c10.x) / 2, c00.y + 40}, "outer[1]", 13, kInk, Anchor::middle);
         const glm::dvec2 mid = (c10 + c01) / 2.0;
-        paint.text({mid.x + 26, mid.y - 20}, "outer[2]", 13, ink, Anchor::start);
+        paint.text({mid.x + 26, mid.y - 20}, "outer[2]", 13, kInk, Anchor::start);
     } else {
         paint.text({c00.x, c00.y + 22}, "(u,v) = (0,0)", 12, label, Anchor::start);
         paint.text({c10.x, c10.y + 22}, "(1,0)", 12, label, Anchor::end);
         paint.text({c11.x + 10, c11.y + 4}, "(1,1)", 12, label, Anchor::start);
         paint.text({c01.x - 10, c01.y + 4}, "(0,1)", 12, label, Anchor::end);
         if (domain == Domain::isolines) {
-            paint.text({c00.x - 12, (c00.y + c01.y) / 2 - 8}, "density", 13, ink, Anchor::end);
-            paint.text({c00.x - 12, (c00.y + c01.y) / 2 + 10}, "outer[0]", 12, muted, Anchor::end);
-            paint.text({(c00.x + c10.x) / 2, c00.y + 40}, "detail  outer[1]", 13, ink, Anchor::middle);
+            paint.text({c00.x - 12, (c00.y + c01.y) / 2 - 8}, "density", 13, kInk, Anchor::end);
+            paint.text({c00.x - 12, (c00.y + c01.y) / 2 + 10}, "outer[0]", 12, kMuted, Anchor::end);
+            paint.text({(c00.x + c10.x) / 2, c00.y + 40}, "detail  outer[1]", 13, kInk, Anchor::middle);
         } else {
-            paint.text({c00.x - 24, (c00.y + c01.y) / 2 + 5}, "outer[0]", 13, ink, Anchor::end);
-            paint.text({(c00.x + c10.x) / 2, c00.y + 40}, "outer[1]", 13, ink, Anchor::middle);
-            paint.text({c10.x + 24, (c10.y + c11.y) / 2 + 5}, "outer[2]", 13, ink, Anchor::start);
-            paint.text({(c01.x + c11.x) / 2, c01.y - 22}, "outer[3]", 13, ink, Anchor::middle);
+            paint.text({c00.x - 24, (c00.y + c01.y) / 2 + 5}, "outer[0]", 13, kInk, Anchor::end);
+            paint.text({(c00.x + c10.x) / 2, c00.y + 40}, "outer[1]", 13, kInk, Anchor::middle);
+            paint.text({c10.x + 24, (c10.y + c11.y) / 2 + 5}, "outer[2]", 13, kInk, Anchor::start);
+            paint.text({(c01.x + c11.x) / 2, c01.y - 22}, "outer[3]", 13, kInk, Anchor::middle);
         }
     }
     // Axes: u to the right, v up (drawn, not typed: the raster text has no arrow glyphs).
     const glm::dvec2 origin{c00.x - 58, c00.y + 34};
-    paint.line(origin, origin + glm::dvec2{34, 0}, muted, 1.4);
-    paint.arrow_head(origin + glm::dvec2{40, 0}, {1, 0}, 8, muted);
-    paint.line(origin, origin + glm::dvec2{0, -34}, muted, 1.4);
-    paint.arrow_head(origin + glm::dvec2{0, -40}, {0, -1}, 8, muted);
-    paint.text(origin + glm::dvec2{44, 5}, "u", 13, muted);
-    paint.text(origin + glm::dvec2{-4, -46}, "v", 13, muted);
+    paint.line(origin, origin + glm::dvec2{34, 0}, kMuted, 1.4);
+    paint.arrow_head(origin + glm::dvec2{40, 0}, {1, 0}, 8, kMuted);
+    paint.line(origin, origin + glm::dvec2{0, -34}, kMuted, 1.4);
+    paint.arrow_head(origin + glm::dvec2{0, -40}, {0, -1}, 8, kMuted);
+    paint.text(origin + glm::dvec2{44, 5}, "u", 13, kMuted);
+    paint.text(origin + glm::dvec2{-4, -46}, "v", 13, kMuted);
 }
 
 // The panel beside the domain: the levels as given and as the generator used them, the
@@ -287,20 +287,20 @@ double draw_panel(Painter& paint, const Pattern& pattern, const PatternPictureIn
     const Domain domain = pattern.settings().domain;
     const std::size_t point_count = pattern.points().size();
     const std::size_t primitive_count = pattern.primitive_count();
-    double y = domain_top + 4;
-    const double col_given = panel_left + 76, col_effective = panel_left + 150;
-    paint.text({panel_left, y}, "levels", 16, ink, Anchor::start, TextFont::sans_bold);
+    double y = kDomainTop + 4;
+    const double col_given = kPanelLeft + 76, col_effective = kPanelLeft + 150;
+    paint.text({kPanelLeft, y}, "levels", 16, kInk, Anchor::start, TextFont::sans_bold);
     y += 24;
-    paint.text({col_given, y}, "given", 12, muted);
-    paint.text({col_effective, y}, "effective", 12, muted);
+    paint.text({col_given, y}, "given", 12, kMuted);
+    paint.text({col_effective, y}, "effective", 12, kMuted);
     y += 6;
-    paint.line({panel_left, y}, {picture_width - 16.0, y}, faint, 1.0);
+    paint.line({kPanelLeft, y}, {kPictureWidth - 16.0, y}, kFaint, 1.0);
     y += 20;
     const TessLevels& given = pattern.levels();
     const TessLevels& effective = pattern.effective_levels();
     const auto level_row = [&](const std::string& name, float given_value, float effective_value, bool used) {
-        const Colour colour = used ? ink : faint;
-        paint.text({panel_left, y}, name, 13, colour, Anchor::start, TextFont::mono);
+        const Colour colour = used ? kInk : kFaint;
+        paint.text({kPanelLeft, y}, name, 13, colour, Anchor::start, TextFont::mono);
         paint.text({col_given, y}, display_number(given_value), 13, colour, Anchor::start, TextFont::mono);
         paint.text({col_effective, y}, used ? display_number(effective_value) : "unused", 13, colour,
                    Anchor::start, used ? TextFont::mono : TextFont::sans);
@@ -314,23 +314,23 @@ double draw_panel(Painter& paint, const Pattern& pattern, const PatternPictureIn
     }
 
     y += 14;
-    paint.text({panel_left, y}, "counts", 16, ink, Anchor::start, TextFont::sans_bold);
+    paint.text({kPanelLeft, y}, "counts", 16, kInk, Anchor::start, TextFont::sans_bold);
     y += 24;
-    paint.text({panel_left, y}, std::to_string(point_count) + (point_count == 1 ? " point" : " points"), 13, ink);
+    paint.text({kPanelLeft, y}, std::to_string(point_count) + (point_count == 1 ? " point" : " points"), 13, kInk);
     y += 20;
-    paint.text({panel_left, y}, std::to_string(primitive_count) + " " + primitive_noun(pattern, primitive_count),
-               13, ink);
+    paint.text({kPanelLeft, y}, std::to_string(primitive_count) + " " + primitive_noun(pattern, primitive_count),
+               13, kInk);
     y += 20;
     if (pattern.culled()) {
-        paint.text({panel_left, y}, "patch culled", 13, boundary_point, Anchor::start, TextFont::sans_bold);
+        paint.text({kPanelLeft, y}, "patch culled", 13, kBoundaryPoint, Anchor::start, TextFont::sans_bold);
         y += 20;
     }
     y += 14;
-    paint.text({panel_left, y}, "precision", 16, ink, Anchor::start, TextFont::sans_bold);
+    paint.text({kPanelLeft, y}, "precision", 16, kInk, Anchor::start, TextFont::sans_bold);
     y += 24;
-    paint.text({panel_left, y}, "points from: " + std::string(to_string(pattern.precision())), 13, ink);
+    paint.text({kPanelLeft, y}, "points from: " + std::string(to_string(pattern.precision())), 13, kInk);
     y += 20;
-    paint.text({panel_left, y}, "max |gpu - exact| = " + display_distance(info.gpu_exact_max_difference), 13, ink);
+    paint.text({kPanelLeft, y}, "max |gpu - exact| = " + display_distance(info.gpu_exact_max_difference), 13, kInk);
     return y + 34;
 }
 
@@ -338,47 +338,47 @@ double draw_panel(Painter& paint, const Pattern& pattern, const PatternPictureIn
 void draw_legend(Painter& paint, const Pattern& pattern, const Windings& windings, double y) {
     const TessSettings& settings = pattern.settings();
     const std::size_t point_count = pattern.points().size();
-    paint.text({panel_left, y}, "legend", 16, ink, Anchor::start, TextFont::sans_bold);
+    paint.text({kPanelLeft, y}, "legend", 16, kInk, Anchor::start, TextFont::sans_bold);
     y += 22;
     const auto swatch = [&](Colour fill, Colour stroke, const std::string& text) {
-        paint.polygon({{panel_left, y - 11}, {panel_left + 16, y - 11}, {panel_left + 16, y + 3}, {panel_left, y + 3}},
+        paint.polygon({{kPanelLeft, y - 11}, {kPanelLeft + 16, y - 11}, {kPanelLeft + 16, y + 3}, {kPanelLeft, y + 3}},
                       fill, stroke, 1.0);
-        paint.text({panel_left + 24, y}, text, 12, ink);
+        paint.text({kPanelLeft + 24, y}, text, 12, kInk);
         y += 20;
     };
     const auto dot = [&](Colour fill, const std::string& text) {
-        paint.disc({panel_left + 8, y - 4}, 4, fill);
-        paint.text({panel_left + 24, y}, text, 12, ink);
+        paint.disc({kPanelLeft + 8, y - 4}, 4, fill);
+        paint.text({kPanelLeft + 24, y}, text, 12, kInk);
         y += 20;
     };
     if (!settings.point_mode && pattern.vertices_per_primitive() == 3) {
         const bool show_ccw = windings.any_ccw || !windings.any_cw;
         if (show_ccw) {
-            swatch(ccw_outer, ccw_edge, "ccw, touches an outer edge");
-            swatch(ccw_inner, ccw_edge, "ccw, interior");
+            swatch(kCcwOuter, kCcwEdge, "ccw, touches an outer edge");
+            swatch(kCcwInner, kCcwEdge, "ccw, interior");
         }
         if (windings.any_cw) {
-            swatch(cw_outer, cw_edge, "cw, touches an outer edge");
-            swatch(cw_inner, cw_edge, "cw, interior");
+            swatch(kCwOuter, kCwEdge, "cw, touches an outer edge");
+            swatch(kCwInner, kCwEdge, "cw, interior");
         }
-        paint.text({panel_left, y}, "ccw/cw: vertex order in (u, v),", 11, muted);
+        paint.text({kPanelLeft, y}, "ccw/cw: vertex order in (u, v),", 11, kMuted);
         y += 15;
-        paint.text({panel_left, y}, windings.arrows ? "u right, v up; arrows run a, b, c" : "u right, v up", 11,
-                   muted);
+        paint.text({kPanelLeft, y}, windings.arrows ? "u right, v up; arrows run a, b, c" : "u right, v up", 11,
+                   kMuted);
         y += 22;
     } else if (!settings.point_mode) {
-        paint.line({panel_left, y - 4}, {panel_left + 16, y - 4}, isoline_colours[0], 2.0);
-        paint.text({panel_left + 24, y}, "isoline segment", 12, ink);
+        paint.line({kPanelLeft, y - 4}, {kPanelLeft + 16, y - 4}, kIsolineColours[0], 2.0);
+        paint.text({kPanelLeft + 24, y}, "isoline segment", 12, kInk);
         y += 20;
     }
     if (settings.domain == Domain::isolines) {
-        dot(interior_point, "point");
+        dot(kInteriorPoint, "point");
     } else {
-        dot(boundary_point, "point on an outer edge");
-        dot(interior_point, "interior point");
+        dot(kBoundaryPoint, "point on an outer edge");
+        dot(kInteriorPoint, "interior point");
     }
     if (point_count <= 40 && point_count > 0) {
-        paint.text({panel_left, y}, "numbers: point index", 11, muted);
+        paint.text({kPanelLeft, y}, "numbers: point index", 11, kMuted);
     }
 }
 
@@ -386,8 +386,8 @@ void draw_legend(Painter& paint, const Pattern& pattern, const Windings& winding
 
 Picture draw_pattern(const Pattern& pattern, const PatternPictureInfo& info) {
     Picture picture;
-    picture.width = picture_width;
-    picture.height = picture_height;
+    picture.width = kPictureWidth;
+    picture.height = kPictureHeight;
     Painter paint(picture);
     const TessSettings& settings = pattern.settings();
     draw_title(paint, picture, pattern, info.command_line);
@@ -400,11 +400,11 @@ Picture draw_pattern(const Pattern& pattern, const PatternPictureInfo& info) {
     const std::vector<glm::dvec2> outline = settings.domain == Domain::triangles
                                                 ? std::vector<glm::dvec2>{c00, c10, c01}
                                                 : std::vector<glm::dvec2>{c00, c10, c11, c01};
-    paint.polygon(outline, domain_fill);
+    paint.polygon(outline, kDomainFill);
     const bool dashed_outline = pattern.culled() || settings.domain == Domain::isolines || settings.point_mode;
     const auto draw_outline = [&] {
         for (std::size_t i = 0; i < outline.size(); ++i) {
-            paint.line(outline[i], outline[(i + 1) % outline.size()], dashed_outline ? faint : domain_outline,
+            paint.line(outline[i], outline[(i + 1) % outline.size()], dashed_outline ? kFaint : kDomainOutline,
                        dashed_outline ? 1.0 : 1.6, dashed_outline);
         }
     };
@@ -422,8 +422,8 @@ Picture draw_pattern(const Pattern& pattern, const PatternPictureInfo& info) {
     if (pattern.culled()) {
         const glm::dvec2 centre =
             settings.domain == Domain::triangles ? Painter::at(1.0 / 3, 1.0 / 3) : Painter::at(0.5, 0.5);
-        paint.text({centre.x, centre.y}, "culled", 30, boundary_point, Anchor::middle, TextFont::sans_bold);
-        paint.text({centre.x, centre.y + 26}, "an outer level it uses is NaN or <= 0", 14, muted, Anchor::middle);
+        paint.text({centre.x, centre.y}, "culled", 30, kBoundaryPoint, Anchor::middle, TextFont::sans_bold);
+        paint.text({centre.x, centre.y + 26}, "an outer level it uses is NaN or <= 0", 14, kMuted, Anchor::middle);
     }
     const double legend_y = draw_panel(paint, pattern, info);
     // Nothing to explain on a culled patch.
