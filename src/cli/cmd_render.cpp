@@ -172,7 +172,7 @@ Command add_render_command(CLI::App& parent) {
         ->default_val("exact");
     app->add_option("--shader", options->shaders, "A GLSL file of your own for one stage (repeatable; over the scene's [shaders]): STAGE is "
                     "vertex|vert, tess_control|tesc or tess_evaluation|tese, which the CPU runs through its SPIR-V "
-                    "interpreter with the twins' uniforms and textures (README: Your shaders on the CPU)")
+                    "interpreter with the twins' uniforms and textures (docs/CLI.md: Your shaders on the CPU)")
         ->type_name("STAGE=FILE")
         ->allow_extra_args(false);
     app->add_option("--max-instructions", options->max_instructions,
