@@ -17,6 +17,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -510,11 +511,39 @@ TEST_F(CaptureCommand, CompareFailsWithExit1NamingThePatchAndPassesWithTheTolera
     EXPECT_EQ(r.status, 1) << r.out << r.err;
     EXPECT_NE(r.out.find("  patch 1  values: 1 of 6 vertices fail; first at tess coord (1, 1, 0)"), std::string::npos)
         << r.out;
-    EXPECT_NE(r.out.find("(3 ulps)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(3 ulps, |difference| "), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("\n  1:1\n"), std::string::npos) << r.out;
     r = run({"compare", path("ref.txt"), path("test.txt"), "--max-position-ulps", "3", "--json"});
     EXPECT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_EQ(nlohmann::json::parse(r.out)["worst_position"]["ulps"], 3);
+}
+
+// Ulps alone say nothing to a reader ("1036026642 ulps" for 0 against 0.094): the absolute
+// difference stands beside them, and a per-component summary (x, y, z, normal) covers the
+// whole capture. 0.094f's bits are 1036026642 above 0's (struct.pack("<f", 0.094) in Python),
+// 0.5f's 1056964608 (0x3f000000);
+// 12 corners are compared, so the means are 0.094 / 12 and 0.5 / 12.
+TEST_F(CaptureCommand, CompareGivesAbsoluteDifferencesAndAPerComponentSummary) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    test.vertices[0].position.z = 0.094f;  // patch 0's corner (0, 0), z 0 in the reference
+    test.vertices[7].normal.x = 0.5f;      // patch 1's corner (1, 0)
+    write_file(path("ref.txt"), tessref::capture_text(ref.vertices));
+    write_file(path("test.txt"), tessref::capture_text(test.vertices));
+    RunResult r = run({"compare", path("ref.txt"), path("test.txt")});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("worst position  1036026642 ulps (|difference| 0.094) at patch 0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("worst normal    1056964608 ulps (|difference| 0.5) at patch 1"), std::string::npos) << r.out;
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("\n  x +0 +0 +0 +0\n"))) << r.out;
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("\n  z +0\\.094 +0\\.00783333 +1036026642 +1\n"))) << r.out;
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("\n  normal +0\\.5 +0\\.0416667 +1056964608 +1\n"))) << r.out;
+    r = run({"compare", path("ref.txt"), path("test.txt"), "--json"});
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_FLOAT_EQ(j["worst_position"]["abs"].get<double>(), 0.094f);
+    EXPECT_EQ(j["components"]["z"]["max_ulps"], 1036026642u);
+    EXPECT_EQ(j["components"]["z"]["compared"], 12u);
+    EXPECT_EQ(j["components"]["normal"]["beyond"], 1u);
+    EXPECT_EQ(j["components"]["y"]["max_abs"], 0.0);
 }
 
 TEST_F(CaptureCommand, CompareBadInputIsExit2) {

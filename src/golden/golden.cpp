@@ -284,10 +284,10 @@ void compare_with_gl(const Scene& scene, const CpuReference& ref, const FloatIma
             ++(explained ? v.explained_pixels : v.failing_pixels);
         }
     if (v.failing_pixels > kImageMaxFailingPixels) {
-        write_float_image(difference_picture(golden_image, image), (work / "diff.png").string());
+        write_float_image(difference_picture(golden_image, test_image, image).image, (work / "diff.png").string());
         v.failures.push_back("image: " + std::to_string(v.failing_pixels) + " failing pixels");
     } else if (v.explained_pixels && keep) {
-        write_float_image(difference_picture(golden_image, image), (work / "diff.png").string());
+        write_float_image(difference_picture(golden_image, test_image, image).image, (work / "diff.png").string());
     }
     if (c.missing_in_test || c.missing_in_reference) v.failures.push_back("capture: patches missing on one side");
     if (c.tess_coord_divergences_with_equal_levels)
