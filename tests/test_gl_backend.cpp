@@ -25,6 +25,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <regex>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -503,8 +504,26 @@ TEST_F(GlUserShaders, CopyOfTheTwinsEvaluationShaderGivesTheTwinsImage) {
                              "160x100", "--shader", "tese=" + copy.string()});
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("user tess_evaluation shader " + copy.string()), std::string::npos) << r.out;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;  // the twin declares what tessref sets
     const tessref::FloatImage twin = image(dir_ / "twin.png"), user = image(dir_ / "user.png");
     EXPECT_EQ(twin.samples, user.samples);
+}
+
+// A misspelt uniform (scaleZZ for the twin's scaleZ) reads 0: a flat terrain, and the draw
+// counts are still the reference's, so nothing failed. It is a warning naming the uniform
+// and the file; the run still succeeds.
+TEST_F(GlUserShaders, AMisspeltUniformIsAWarningNamingItAndTheFile) {
+    const fs::path copy = dir_ / "misspelt.tese";
+    write_file(copy, std::regex_replace(read_file(kSource / "data" / "shaders" / "thesis_terrain.tese"),
+                                        std::regex("\\bscaleZ\\b"), "scaleZZ"));
+    const RunResult r = run({"gl", scene_path("thesis-all-10").string(), "-o", (dir_ / "user.png").string(), "--size",
+                             "160x100", "--shader", "tese=" + copy.string()});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("tessref: warning: the tess_evaluation shader " + copy.string() +
+                         " declares the uniform scaleZZ, which tessref does not set"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("scaleXY"), std::string::npos) << r.err;  // only the misspelt one
 }
 
 // A user's fragment shader writing constant red: red exactly where the twins' picture is not
