@@ -30,6 +30,9 @@
 //                              number of times
 //   probe_escape               closed mesh: a ray from inside that leaves without a hit
 //
+// A capture (capture.h) is checked as the mesh weld_capture() makes of it, and
+// shared_edge_cracks() names the patches whose shared edges were tessellated differently.
+//
 // Faces with a repeated vertex and later copies of duplicate faces are reported and then
 // left out of the topology (edges, fans, loops, orientation), so one defect is reported as
 // itself rather than as a cascade of others.
@@ -48,6 +51,10 @@
 
 #include "tessref/mesh.h"
 #include "tessref/mesh_io.h"
+
+namespace tessref {
+struct Capture;
+}  // namespace tessref
 
 namespace tessref {
 
@@ -203,6 +210,33 @@ struct CheckedMesh {
 };
 CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options = {},
                                 const std::function<void(double)>& read_progress = {});
+
+// read_and_check_mesh() of a mesh already in memory (a welded capture, below).
+CheckedMesh check_indexed_mesh(IndexedMesh mesh, const CheckOptions& options = {});
+
+// ---- captures (capture.h): every vertex of every primitive, each patch's own copies ------
+
+// A capture as a mesh to check: its vertices merged where their positions are bitwise equal
+// (weld_tolerance 0: the rule of `tessref mesh`'s export, so a crack between patches stays a
+// crack), or within weld_tolerance of an earlier kept vertex (each vertex joins the first
+// kept one that near, in capture order); its triangles in capture order, as emitted.
+// `source` names the capture in the report. Throws tessref::Error for a negative or
+// non-finite tolerance.
+IndexedMesh weld_capture(const Capture& capture, double weld_tolerance = 0.0, const std::string& source = {});
+
+// Two patches whose shared edge was tessellated differently: the vertices each put on the
+// edge differ, so the surface cracks there. The edge is shared when both patches have its
+// two corners at bitwise-equal positions; a side of the domain is the outer level GL pairs
+// with it (quads: outer[0] u = 0, outer[1] v = 0, outer[2] u = 1, outer[3] v = 1;
+// triangles: outer[0] u = 0, outer[1] v = 0, outer[2] w = 0).
+struct SharedEdgeCrack {
+    std::uint32_t patch_a = 0, patch_b = 0;  // patch_a < patch_b
+    int side_a = 0, side_b = 0;              // the outer level index of the edge in each
+    float level_a = 0.0f, level_b = 0.0f;    // those levels (0 when the capture has none)
+    std::size_t points_a = 0, points_b = 0;  // vertices each patch put on the edge
+    glm::dvec3 from{0.0}, to{0.0};           // the edge's corners in world space
+};
+std::vector<SharedEdgeCrack> shared_edge_cracks(const Capture& capture);
 
 // The whole report as JSON text (pretty-printed, ends with a newline).
 std::string report_json(const CheckReport& report);

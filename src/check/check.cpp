@@ -253,12 +253,9 @@ CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
     });
 }
 
-CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options,
-                                const std::function<void(double)>& read_progress) {
-    MeshFileOptions read_options;
-    read_options.progress = read_progress;
+CheckedMesh check_indexed_mesh(IndexedMesh mesh, const CheckOptions& options) {
     CheckedMesh out;
-    out.mesh = read_mesh_file(path, read_options);
+    out.mesh = std::move(mesh);
     std::vector<std::uint32_t>& refused = out.mesh.kernel_refused_faces;
     out.report = run_checks(out.mesh, options, [&refused](const CheckState& state) -> const std::vector<std::uint32_t>& {
         refused.clear();
@@ -275,6 +272,13 @@ CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& opt
         return refused;
     });
     return out;
+}
+
+CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options,
+                                const std::function<void(double)>& read_progress) {
+    MeshFileOptions read_options;
+    read_options.progress = read_progress;
+    return check_indexed_mesh(read_mesh_file(path, read_options), options);
 }
 
 // ---------------------------------------------------------------------------------------

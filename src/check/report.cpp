@@ -136,6 +136,7 @@ std::string report_text(const CheckReport& r, std::size_t locations_per_class) {
     for (const DefectReport& d : r.defects) failing += d.count > 0;
     out << "  result      " << (r.passed ? "PASS" : "FAIL: " + std::to_string(failing) + " defect class" + (failing == 1 ? "" : "es"))
         << "\n";
+    if (!r.passed) out << "  ids         vertex and face ids are 0-based, in the order the file lists them\n";
     for (const DefectReport& d : r.defects) {
         if (d.count == 0) continue;
         out << "  " << defect_class_name(d.kind) << ": " << d.count << "  (" << defect_class_description(d.kind) << ")\n";
