@@ -574,14 +574,15 @@ TEST_F(CaptureCommand, CheckWeldsACaptureAsTheExporterDoes) {
 // Patch 0 (x 0..1) at level 1; patch 1 (x 1..2) splits its u = 0 side, the one it shares
 // with patch 0's u = 1 side, at v = 0.5 (outer[0] = 2): patch 0 puts 2 vertices on the edge,
 // patch 1 puts 3, and the surface cracks there (a T-junction once welded).
-Capture cracked_pair(float shift = 0.0f) {
+Capture cracked_pair(float shift = 0.0f, float middle_height = 0.0f) {
     Capture c;
     const TessLevels l0 = levels_of(1.0f, 1.0f);
     TessLevels l1 = levels_of(1.0f, 1.0f);
     l1.outer[0] = 2.0f;
     const auto at0 = [&](float u, float v) { return vertex(0, {u, v, 0.0f}, {u, v, 0.0f}, {0, 0, 1}, l0); };
     const auto at1 = [&](float u, float v) {
-        return vertex(1, {u, v, 0.0f}, {1.0f + u + (u == 0.0f ? shift : 0.0f), v, 0.0f}, {0, 0, 1}, l1);
+        const float z = u == 0.0f && v == 0.5f ? middle_height : 0.0f;
+        return vertex(1, {u, v, 0.0f}, {1.0f + u + (u == 0.0f ? shift : 0.0f), v, z}, {0, 0, 1}, l1);
     };
     for (const CapturedVertex& v : {at0(0, 0), at0(1, 0), at0(1, 1), at0(0, 0), at0(1, 1), at0(0, 1)})
         c.vertices.push_back(v);
@@ -623,6 +624,20 @@ TEST_F(CaptureCommand, CheckWeldsACaptureWithinAToleranceWhenAsked) {
     r = run({"check", path("m.off"), "--weld-tolerance", "0.001"});
     EXPECT_EQ(r.status, 2) << r.err;
     EXPECT_NE(r.err.find("--weld-tolerance"), std::string::npos) << r.err;
+}
+
+// A cw where the twin says ccw passes compare and, as a mesh, every topological check: the
+// capture's triangles all wound the other way. On a terrain (the thesis's lies in the xy
+// plane, z up) every face then faces down, a defect class of its own.
+TEST_F(CaptureCommand, CheckReportsATerrainWoundTheOtherWay) {
+    ASSERT_EQ(run({"mesh", scene_path("thesis-constant-1").string(), "--capture", path("c.txt")}).status, 0);
+    Capture c = tessref::read_capture(path("c.txt"));
+    for (std::size_t i = 0; i < c.vertices.size(); i += 3) std::swap(c.vertices[i + 1], c.vertices[i + 2]);
+    write_file(path("cw.txt"), tessref::capture_text(c.vertices));
+    const RunResult r = run({"check", path("cw.txt")});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("facing_down: 512  (terrain faces facing down its up axis"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("inconsistent_orientation"), std::string::npos) << r.out;
 }
 
 TEST_F(CaptureCommand, CompareBadInputIsExit2) {

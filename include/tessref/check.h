@@ -29,6 +29,10 @@
 //   probe_odd_parity           closed mesh: a line through the mesh crossing it an odd
 //                              number of times
 //   probe_escape               closed mesh: a ray from inside that leaves without a hit
+//   facing_down                terrain: a face whose normal points down its up axis (the
+//                              up axis's positive direction: z for a terrain in the xy
+//                              plane), i.e. wound cw where the terrain is ccw from above; a
+//                              flipped face (inconsistent_orientation) is not reported again
 //
 // A capture (capture.h) is checked as the mesh weld_capture() makes of it, and
 // shared_edge_cracks() names the patches whose shared edges were tessellated differently.
@@ -109,8 +113,9 @@ enum class DefectClass {
     probe_miss,
     probe_odd_parity,
     probe_escape,
+    facing_down,
 };
-inline constexpr int defect_class_count = 14;
+inline constexpr int defect_class_count = 15;
 std::string_view defect_class_name(DefectClass kind);         // "t_junction"
 std::string_view defect_class_description(DefectClass kind);  // "T-junction"
 
@@ -137,6 +142,11 @@ struct BoundaryLoop {
     bool closed = true;     // false: a chain that could not be closed (orientation breaks)
     bool allowed = false;   // the outer outline of an open mesh
     glm::dvec3 centroid{0.0};
+    // A defect loop's largest gap, in world units: the loop is split at its two vertices
+    // farthest apart into two sides, and this is the largest distance from a vertex of one
+    // side to the other side (a crack's width or step; about 0.7 of a round hole's
+    // diameter). 0 for the allowed outline.
+    double gap = 0.0;
 };
 
 struct ProbeStats {
@@ -182,6 +192,9 @@ struct CheckReport {
     std::string judged_as;     // "closed" or "open": the rules applied
     std::vector<BoundaryLoop> boundary_loops;  // at most max_locations, largest first
     std::vector<std::uint32_t> flipped_faces;  // minority orientation within a component
+    // Faces OpenMesh's kernel refused only because of the flipped faces (the flip is the
+    // defect, reported once as inconsistent_orientation; not again as refused_face).
+    std::vector<std::uint32_t> refused_for_flips;
     ProbeStats probe;
     std::vector<DefectReport> defects;  // one per DefectClass, in enum order
     bool passed = false;

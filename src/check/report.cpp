@@ -74,6 +74,7 @@ std::string report_json(const CheckReport& r) {
     for (const BoundaryLoop& loop : r.boundary_loops)
         loops.push_back({{"edges", loop.edge_count},
                          {"length", loop.length},
+                         {"gap", loop.gap},
                          {"area", loop.area},
                          {"closed", loop.closed},
                          {"allowed", loop.allowed},
@@ -81,6 +82,7 @@ std::string report_json(const CheckReport& r) {
                          {"vertices", loop.vertices}});
     j["boundary_loops"] = std::move(loops);
     j["flipped_faces"] = r.flipped_faces;
+    j["refused_for_flips"] = r.refused_for_flips;
     j["probe"] = {{"mode", r.probe.mode},
                   {"rays", r.probe.rays},
                   {"failed_rays", r.probe.failed_rays},
@@ -130,7 +132,12 @@ std::string report_text(const CheckReport& r, std::size_t locations_per_class) {
     out << "\n";
     if (!r.flipped_faces.empty())
         out << "  flipped     " << r.flipped_faces.size() << " face" << (r.flipped_faces.size() == 1 ? "" : "s")
-            << " against their neighbours: " << id_list(r.flipped_faces) << "\n";
+            << " against their neighbours: " << id_list(r.flipped_faces)
+            << (r.refused_for_flips.empty() ? std::string()
+                                            : " (OpenMesh's kernel refuses face" +
+                                                  std::string(r.refused_for_flips.size() == 1 ? " " : "s ") +
+                                                  id_list(r.refused_for_flips) + " because of them)")
+            << "\n";
     for (const std::string& note : r.reader_notes) out << "  note        " << note << "\n";
     std::size_t failing = 0;
     for (const DefectReport& d : r.defects) failing += d.count > 0;
