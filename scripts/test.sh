@@ -4,6 +4,7 @@
 #   scripts/test.sh [ctest arguments...]                        plain build in build/
 #   scripts/test.sh --sanitize address,undefined [ctest args]   ASan + UBSan in build-asan/
 #   scripts/test.sh --sanitize thread [ctest args]              TSan in build-tsan/
+#   TESSREF_TEST_SUITES="test_hostile;test_scene" scripts/test.sh ...   those suites only
 #
 # Sanitized builds leave out the benchmarks and run the same suite; any sanitizer report
 # fails the test that caused it (the tessref executable the end-to-end tests start is
@@ -40,6 +41,11 @@ case "$sanitize" in
     exit 2
     ;;
 esac
+
+# TESSREF_TEST_SUITES="test_a;test_b" builds and runs only those suites (and the fuzz
+# replays); empty or unset: everything. Passed every time, so a build directory never keeps
+# an earlier run's subset.
+export CMAKE_ARGS="${CMAKE_ARGS:-} -DTESSREF_TEST_SUITES=${TESSREF_TEST_SUITES:-}"
 
 scripts/install-deps.sh
 scripts/build.sh

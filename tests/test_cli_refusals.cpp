@@ -160,4 +160,31 @@ TEST_F(CliRefusals, OutOfMemorySaysWhatAndWhere) {
     EXPECT_TRUE(files().empty());
 }
 
+// A write that the disk refuses (full, or past the file size limit: RLIMIT_FSIZE stands in
+// for a full disk here, without root or a small file system) is exit 2 with the reason, and
+// the message names the file the user asked for, never the temporary name the bytes were
+// going to; nothing is left behind. SIGXFSZ is ignored, so the write fails with EFBIG.
+TEST_F(CliRefusals, AWriteTheDiskRefusesNamesTheUsersFileAndTheReason) {
+    struct Case {
+        std::vector<std::string> args;
+        std::string named;  // what the message must name
+    };
+    const std::vector<Case> cases{
+        {{"render", kScene, "-o", "x.png", "--size", "640x400"}, "x.png"},
+        {{"render", kScene, "-o", "x.exr", "--size", "640x400"}, "x.exr"},
+        {{"mesh", kScene, "-o", "x.ply"}, "x.ply"},
+        {{"mesh", kScene, "-o", "x.obj"}, "x.obj"},
+        {{"mesh", kScene, "-o", "y.ply", "--capture", "c.txt"}, "c.txt"},
+        {{"sweep", kScene, "-o", "sw", "--levels", "1,2", "--size", "64x40"}, "sw/"},
+    };
+    for (const Case& c : cases) {
+        const RunResult r = shell("trap '' XFSZ; ulimit -f 16;", c.args);
+        EXPECT_EQ(r.status, 2) << c.named << ": " << r.err;
+        EXPECT_NE(r.err.find("File too large"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find(c.named), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find(".tmp"), std::string::npos) << r.err;
+        EXPECT_TRUE(files().empty()) << c.named << ": left " << *files().begin();
+    }
+}
+
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include "common/file_name.h"
 #include "common/input_file.h"
+#include "common/stream_failure.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
 #include "tessref/mesh_io.h"
@@ -155,6 +156,7 @@ std::string capture_text(std::span<const CapturedVertex> capture, const std::str
 
 void write_capture(std::span<const CapturedVertex> capture, std::ostream& out, CaptureFormat format,
                    const std::string& origin) {
+    errno = 0;  // stream_failure() reports only what this write's calls set
     if (format == CaptureFormat::text) {
         out << capture_text(capture, origin);
     } else {
@@ -164,7 +166,7 @@ void write_capture(std::span<const CapturedVertex> capture, std::ostream& out, C
         write_mesh(capture_mesh(capture), out, options);
     }
     out.flush();
-    if (!out) throw Error("cannot write the capture: output stream failed");
+    if (!out) throw Error("cannot write the capture: " + stream_failure());
 }
 
 CaptureFormat capture_format_from_path(const std::string& path, const std::string& flag) {

@@ -293,6 +293,7 @@ AtomicOutput::AtomicOutput(std::filesystem::path target, std::string temp_extens
             ::close(fd);
             temp_ = candidate;
             temp_slot_ = slot;
+            name_temporary(temp_, target_);
             live_outputs().push_back(this);
             return;
         }

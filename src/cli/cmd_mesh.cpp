@@ -25,6 +25,7 @@
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "common/stream_failure.h"
 #include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/mesh.h"
@@ -60,9 +61,15 @@ MeshWriteReport write_mesh_file(const Write& write, const AtomicOutput& output, 
     };
     std::ofstream file(output.temp_path(), std::ios::binary | std::ios::trunc);
     if (!file) throw Error("cannot write output file", Where::in_file(name));
-    const MeshWriteReport report = write(file, write_options);
+    MeshWriteReport report;
+    try {
+        report = write(file, write_options);
+    } catch (const Error& error) {
+        if (!error.where().file.empty()) throw;
+        throw Error(error.what(), Where::in_file(name));  // the writer knows a stream, not its name
+    }
     file.close();
-    if (!file) throw Error("cannot write output file", Where::in_file(name));
+    if (!file) throw Error("cannot write output file: " + stream_failure(), Where::in_file(name));
     return report;
 }
 

@@ -48,7 +48,7 @@ std::vector<tessref::cli::Command> make_commands(CLI::App& app) {
 
 void print_error(const std::string& message) {
     std::fflush(stdout);
-    std::cerr << "tessref: error: " << message << std::endl;
+    std::cerr << "tessref: error: " << tessref::with_user_file_names(message) << std::endl;
 }
 
 // The command line as typed, for messages that must say which run failed.

@@ -1,10 +1,14 @@
 #include "common/temp_cleanup.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <climits>
 #include <csignal>
 #include <cstring>
+#include <mutex>
+#include <utility>
+#include <vector>
 #include <system_error>
 
 #include <dirent.h>
@@ -114,6 +118,36 @@ int register_temporary(const std::filesystem::path& path, bool directory) {
 
 void unregister_temporary(int slot) {
     if (slot >= 0) temp_slots[slot].state.store(kSlotFree);
+}
+
+namespace {
+// Every temporary this process named, never forgotten: an error is printed after its owner
+// has removed the file. A handful per command.
+std::mutex user_names_mutex;
+std::vector<std::pair<std::string, std::string>> user_names;  // temporary path, name shown
+}  // namespace
+
+void name_temporary(const std::filesystem::path& path, const std::filesystem::path& shown_as) {
+    const std::lock_guard lock(user_names_mutex);
+    user_names.emplace_back(path.string(), shown_as.string());
+    std::error_code error;
+    const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+    if (!error && absolute != path) user_names.emplace_back(absolute.string(), shown_as.string());
+}
+
+std::string with_user_file_names(std::string message) {
+    const std::lock_guard lock(user_names_mutex);
+    // Longest first, so that an absolute path is replaced whole before its relative tail is.
+    std::vector<std::pair<std::string, std::string>> names = user_names;
+    std::stable_sort(names.begin(), names.end(),
+                     [](const auto& a, const auto& b) { return a.first.size() > b.first.size(); });
+    for (const auto& [temporary, shown] : names) {
+        if (temporary.empty()) continue;
+        for (std::size_t at = message.find(temporary); at != std::string::npos;
+             at = message.find(temporary, at + shown.size()))
+            message.replace(at, temporary.size(), shown);
+    }
+    return message;
 }
 
 void remove_stale_temporaries(const std::filesystem::path& dir, std::string_view lead, std::string_view name,

@@ -29,6 +29,13 @@ void install_signal_cleanup();
 int register_temporary(const std::filesystem::path& path, bool directory = false);
 void unregister_temporary(int slot);
 
+// Messages name the user's file, never its temporary. `shown_as` is the name the user gave
+// for what `path` (a temporary file, or a directory whose contents are written before it is
+// renamed into place) becomes; with_user_file_names() puts it back into an error message
+// that a writer (libpng, OpenEXR, a stream) phrased with the path it was handed.
+void name_temporary(const std::filesystem::path& path, const std::filesystem::path& shown_as);
+std::string with_user_file_names(std::string message);
+
 // Removes the entries of `dir` named lead + <any prefix of name> + middle_before_pid + <pid>
 // + <anything>, whose process <pid> no longer exists (kill(pid, 0) says ESRCH): the
 // temporaries of a run of this same output that was killed. Entries of a live process (a

@@ -1304,6 +1304,7 @@ struct Reader {
     std::size_t at = 0;
     void take(void* to, std::size_t n) {
         if (n > bytes.size() - at) throw Error("the GL backend's child process answered with too few bytes");
+        if (n == 0) return;  // an empty vector's data() may be null, which memcpy may not take
         std::memcpy(to, bytes.data() + at, n);
         at += n;
     }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -215,10 +216,21 @@ void write_image(const std::string& path, const ImageView& image, const WriteOpt
     spec.compression = options.compression.empty() ? nullptr : options.compression.c_str();
     spec.software = options.software_tag ? software.c_str() : nullptr;
     char error[1024] = "";
+    errno = 0;
     if (oiio.write_image(path.c_str(), &spec, error, sizeof error) != 0) {
+        // Some codecs (OpenEXR: "File output failed.") drop the system's reason. A write that
+        // the disk refused leaves it in errno; only those reasons are added, since a codec's
+        // own probing (a stat of a missing file) may leave others there.
+        const int system_error = errno;
+        std::string reason = error[0] ? std::string(error) : std::string("unknown error");
+        if (system_error == ENOSPC || system_error == EFBIG || system_error == EDQUOT || system_error == EIO ||
+            system_error == EROFS) {
+            const std::string words = std::generic_category().message(system_error);
+            if (reason.find(words) == std::string::npos) reason += " (" + words + ")";
+        }
         std::error_code ec;
         fs::remove(path, ec);  // never a partial file
-        fail(path, "cannot write the image: " + (error[0] ? std::string(error) : std::string("unknown error")));
+        fail(path, "cannot write the image: " + reason);
     }
 }
 

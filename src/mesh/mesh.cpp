@@ -20,6 +20,7 @@
 
 #include "common/huge_pages.h"
 #include "common/parallel.h"
+#include "common/stream_failure.h"
 #include "mesh/openmesh.h"
 #include "tessref/error.h"
 
@@ -760,7 +761,7 @@ MeshWriteReport write_view(const SurfaceMesh& mesh, std::size_t emitted, std::si
 
     if (format == MeshFormat::ply && !openmesh_ply_writer) write_ply(mesh, written, options, out, progress);
     else write_through_openmesh(mesh, written, options, out, progress);
-    if (!out) throw Error("cannot write the mesh: output stream failed");
+    if (!out) throw Error("cannot write the mesh: " + stream_failure());
     progress("writing", 1.0);
     return report;
 }
@@ -768,6 +769,7 @@ MeshWriteReport write_view(const SurfaceMesh& mesh, std::size_t emitted, std::si
 MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out, const MeshWriteOptions& options,
                            bool openmesh_ply_writer) {
     check_write_options(options);
+    errno = 0;  // stream_failure() reports only what this write's calls set
     const auto progress = [&options](std::string_view stage, double fraction) {
         if (options.progress) options.progress(stage, fraction);
     };
@@ -791,6 +793,7 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out, const Mes
 
 MeshWriteReport write_mesh(const WeldedMesh& welded, std::ostream& out, const MeshWriteOptions& options) {
     check_write_options(options);
+    errno = 0;  // stream_failure() reports only what this write's calls set
     if (!options.weld) throw Error("a welded mesh cannot be written unwelded");
     validate(welded.mesh);
     return write_view(welded.mesh, welded.emitted_vertices, welded.degenerate_triangles, out, options, false);

@@ -8,6 +8,7 @@
 // in the error-vs-time plot, never in index.html.
 #include "sweep/report.h"
 
+#include "common/temp_cleanup.h"
 #include "common/temp_name.h"
 
 #include <unistd.h>
@@ -39,8 +40,10 @@ namespace {
 // that a failure never leaves a half-written file under the real name.
 
 fs::path temp_name(const fs::path& target) {
-    return target.parent_path() / temporary_name(".", target.stem().string(), ".tmp-" + std::to_string(::getpid()),
-                                                 target.extension().string());
+    fs::path temp = target.parent_path() / temporary_name(".", target.stem().string(), ".tmp-" + std::to_string(::getpid()),
+                                                          target.extension().string());
+    name_temporary(temp, target);  // an error message names the target (temp_cleanup.h)
+    return temp;
 }
 
 void replace_with(const fs::path& temp, const fs::path& target) {

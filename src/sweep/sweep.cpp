@@ -230,7 +230,7 @@ void check_output_dir(const fs::path& given) {
 // Those that a killed run left beside the same target are removed first.
 class TempDir {
 public:
-    explicit TempDir(fs::path target) : target_(fs::absolute(std::move(target)).lexically_normal()) {
+    explicit TempDir(const fs::path& target) : target_(fs::absolute(target).lexically_normal()) {
         if (target_.filename().empty()) target_ = target_.parent_path();
         const std::string base = target_.filename().string();
         remove_stale_temporaries(target_.parent_path(), ".", base, ".tmp-");
@@ -242,6 +242,7 @@ public:
             throw Error("cannot create a temporary directory beside the output", Where::in_file(target_.string()));
         path_ = fs::path(name.data());
         slot_ = register_temporary(path_, true);
+        name_temporary(path_, target.filename().empty() ? target.parent_path() : target);
     }
     ~TempDir() {
         std::error_code ec;
