@@ -165,13 +165,18 @@ void check_compared(const FloatImage& reference, const FloatImage& test, const C
 
 PixelDifference worst_pixel(const FloatImage& reference, const FloatImage& test, const CompareResult& result) {
     check_compared(reference, test, result);
-    PixelDifference worst = pixel_difference(reference, test, result, 0, 0);
+    // The differences first, the pixel's samples only for the one found.
+    int worst_x = 0, worst_y = 0;
+    double worst = 0.0;
     for (int y = 0; y < result.height; ++y)
-        for (int x = 0; x < result.width; ++x) {
-            PixelDifference p = pixel_difference(reference, test, result, x, y);
-            if (p.difference > worst.difference) worst = std::move(p);
-        }
-    return worst;
+        for (int x = 0; x < result.width; ++x)
+            for (const int c : result.compared_channels)
+                if (const double d = sample_difference(reference.at(x, y, c), test.at(x, y, c)); d > worst) {
+                    worst = d;
+                    worst_x = x;
+                    worst_y = y;
+                }
+    return pixel_difference(reference, test, result, worst_x, worst_y);
 }
 
 std::vector<PixelDifference> first_failing_pixels(const FloatImage& reference, const FloatImage& test,
