@@ -2,7 +2,6 @@
 // Exit status: 0 the mesh passes, 1 it has defects, 2 it cannot be read.
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <optional>
 #include <memory>
@@ -13,6 +12,7 @@
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "common/input_file.h"
 #include "image/image_io.h"
 #include "tessref/capture.h"
 #include "tessref/check.h"
@@ -38,10 +38,12 @@ struct CheckCommandOptions {
 // capture's vertex properties (a welded export of `tessref mesh` lists them too; read_capture
 // then refuses it, and it is checked as the mesh it is).
 bool ply_with_capture_properties(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::string header(8192, '\0');
-    in.read(header.data(), static_cast<std::streamsize>(header.size()));
-    header.resize(static_cast<std::size_t>(in.gcount()));
+    std::string header;
+    try {
+        header = InputFile(path, "mesh file").head(8192);  // never blocks on a FIFO
+    } catch (const Error&) {
+        return false;  // the mesh reader names what is wrong with it
+    }
     const std::size_t end = header.find("end_header");
     if (header.rfind("ply", 0) != 0 || end == std::string::npos) return false;
     header.resize(end);
