@@ -15,7 +15,7 @@
 # application would not: the column "llvmpipe s" is the gl process's time less that CPU
 # pipeline (the time it prints), and the ratio "llvmpipe/render" is the one to quote.
 # gl runs each scene at the draw size (--max-primitives-per-draw, gl_flags below) measured
-# best for llvmpipe (README: Benchmarks).
+# best for llvmpipe (docs/PERFORMANCE.md, "Benchmarks").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 pairs=${1:-3}

@@ -12,6 +12,8 @@
 //  - the golden workflow's domain (tolerances, digest files, verifying a scene) is the golden
 //    room's (tessref/golden.h, src/golden/), which knows nothing of the command line; the
 //    command (src/cli/cmd_golden.cpp) parses flags and prints, and runs no stage itself;
+//  - one picture kit: the diagrams (pattern pictures, sweep plots, defect pictures) share
+//    src/picture/'s colour, SVG escape and bitmap face; no other file defines its own;
 //  - parse_scene() runs no stage: a scene whose camera clearance the pipeline cannot
 //    compute parses, keeping its camera and leaving its light map to prepare_scene().
 #include <gtest/gtest.h>
@@ -109,6 +111,27 @@ TEST(Layers, GoldenDomainLivesInItsRoomNotInTheCommand) {
                                   {"tessref/capture.h", "tessref/compare.h", "tessref/pipeline.h", "tessref/mesh.h",
                                    "tessref/prepare.h", "tessref/limits.h"});
     EXPECT_TRUE(stages.empty()) << joined(stages);
+}
+
+// The text of every .h and .cpp under src/ but `except` (a folder), as (relative path, text).
+std::vector<std::pair<std::string, std::string>> sources_except(const fs::path& except) {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const fs::path& f : sources_under(kSource / "src")) {
+        if (f.string().rfind(except.string(), 0) == 0) continue;
+        std::ifstream in(f);
+        out.emplace_back(fs::relative(f, kSource).string(),
+                         std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()));
+    }
+    return out;
+}
+
+TEST(Layers, OnePictureKit) {
+    // Definitions, not uses: an escape function, a colour struct, a bitmap glyph table.
+    const std::regex own_kit(R"re(std::string\s+xml_escape\s*\(|struct\s+(Color|Colour|Rgb)\s*\{|struct\s+Glyph\s*\{)re");
+    std::vector<std::string> bad;
+    for (const auto& [path, text] : sources_except(kSource / "src" / "picture"))
+        if (std::regex_search(text, own_kit)) bad.push_back(path);
+    EXPECT_TRUE(bad.empty()) << "defines its own escape, colour or font instead of src/picture/'s:" << joined(bad);
 }
 
 // The lab 4 canyon with a camera clearance (and `extra` appended).

@@ -3,7 +3,7 @@
 // the CPU pipeline vertex by vertex; a broken twin and a wrong draw count end the run with
 // exit 2 and 1.
 //
-// Tolerances, from measurements at 320x200 (README, `gl`): 13 of the 14 scenes differ from
+// Tolerances, from measurements at 320x200 (docs/CLI.md, `gl`): 13 of the 14 scenes differ from
 // `tessref render` by at most one 8-bit code in a handful of pixels (at most 14 of 64000):
 // colours that land on a rounding boundary of the unorm8 conversion after the GPU's
 // transcendental functions (pow, normalize's inverse square root: llvmpipe's are not
@@ -167,7 +167,7 @@ bool same_bits(const tessref::TessLevels& a, const tessref::TessLevels& b, tessr
 // (bit-identical); where GL's control shader wrote bitwise the CPU control model's levels,
 // every captured position must be within the stated ulps of the CPU vertex with the same
 // tess coord. Where the levels differ (the twins' float arithmetic is not the CPU's: see
-// the README), the positions are not compared and the difference is printed.
+// docs/PERFORMANCE.md), the positions are not compared and the difference is printed.
 TEST_P(GlCapture, TessCoordsBitIdenticalToTheGeneratorPositionsWithinUlps) {
     const CaptureCase c = GetParam();
     tessref::gl::Context context = tessref::gl::Context::create();

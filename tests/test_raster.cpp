@@ -423,7 +423,7 @@ TEST(RasterSubPixel, SmallBoxFragmentsMatchTheTilesRasterizationOfTheirPlanes) {
     EXPECT_TRUE(same(fast.barycentric, tiles.barycentric));
     EXPECT_TRUE(same(fast.fragment_count, tiles.fragment_count));
     EXPECT_TRUE(same(fast.front_facing, tiles.front_facing));
-    EXPECT_TRUE(same(fast.color, tiles.color));
+    EXPECT_TRUE(same(fast.colour, tiles.colour));
 }
 
 // Clip positions that exercise the vertex preparation: inside and outside the view volume, on
@@ -986,7 +986,7 @@ TEST(RasterDeterminism, ByteIdenticalForOneTwoAndFourThreads) {
             RasterSettings s;
             s.threads = threads;
             s.polygon_mode = mode;
-            s.color = glm::vec4(0.2f, 0.4f, 0.6f, 1.0f);
+            s.colour = glm::vec4(0.2f, 0.4f, 0.6f, 1.0f);
             const RasterStats stats = tessref::rasterize(fb, m.input(), s);
             EXPECT_GT(stats.triangles_clipped, 0u);
             EXPECT_GT(stats.fragments_passed, 0u);
@@ -1000,7 +1000,7 @@ TEST(RasterDeterminism, ByteIdenticalForOneTwoAndFourThreads) {
             EXPECT_TRUE(same_bytes(a.triangle_id, b.triangle_id));
             EXPECT_TRUE(same_bytes(a.barycentric, b.barycentric));
             EXPECT_TRUE(same_bytes(a.varyings, b.varyings));
-            EXPECT_TRUE(same_bytes(a.color, b.color));
+            EXPECT_TRUE(same_bytes(a.colour, b.colour));
             EXPECT_TRUE(same_bytes(a.fragment_count, b.fragment_count));
             EXPECT_TRUE(same_bytes(a.front_facing, b.front_facing));
         }

@@ -122,14 +122,14 @@ void main() {
 const char* kFragmentShader = R"(#version 450 core
 uniform int mode;
 uniform int id;
-out vec4 color;
+out vec4 colour;
 void main() {
     if (mode == 0) {
         vec4 c = vec4(0.0);
         c[id / 6] = float(1 << (4 * (id % 6)));
-        color = c;
+        colour = c;
     } else {
-        color = vec4(float(id + 1), 0.0, 0.0, 1.0);
+        colour = vec4(float(id + 1), 0.0, 0.0, 1.0);
     }
 }
 )";

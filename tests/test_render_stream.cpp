@@ -190,7 +190,7 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     tessref::Rasterizer rasterizer(batched, settings);
     // The same draws into a visibility framebuffer (depth, ids and weights only).
     tessref::Framebuffer visible = tessref::Framebuffer::create_visibility(173, 97);
-    ASSERT_TRUE(visible.color.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
+    ASSERT_TRUE(visible.colour.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
     tessref::Rasterizer visible_rasterizer(visible, settings);
     // Uneven chunks, each indexing its own vertices from 0, two or three per draw.
     std::vector<std::vector<glm::vec4>> chunk_positions;
@@ -253,7 +253,7 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     EXPECT_TRUE(same_bytes(visible.barycentric, whole.barycentric));
     EXPECT_TRUE(same_bytes(visible.barycentric_dx, whole.barycentric_dx));
     EXPECT_TRUE(same_bytes(visible.barycentric_dy, whole.barycentric_dy));
-    EXPECT_TRUE(visible.color.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
+    EXPECT_TRUE(visible.colour.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
     const tessref::RasterStats lean = visible_rasterizer.stats();
     EXPECT_EQ(lean.primitives, one.primitives);
     EXPECT_EQ(lean.primitives_culled, one.primitives_culled);

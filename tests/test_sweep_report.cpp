@@ -282,10 +282,10 @@ TEST_F(SweepReport, WritesPlotsAndAPageThatNeedsNoNetwork) {
         std::vector<unsigned char> pixels(static_cast<std::size_t>(in->spec().width) * in->spec().height * 4);
         ASSERT_TRUE(in->read_image(0, 0, 0, 4, OIIO::TypeDesc::UINT8, pixels.data()));
         // Not blank: some pixels are painted in the first series' colour.
-        const tessref::sweep::Rgb c = tessref::sweep::series_color(0);
+        const auto c = tessref::sweep::series_colour(0).codes();
         bool painted = false;
         for (std::size_t i = 0; i < pixels.size() && !painted; i += 4)
-            painted = pixels[i] == c.r && pixels[i + 1] == c.g && pixels[i + 2] == c.b;
+            painted = pixels[i] == c[0] && pixels[i + 1] == c[1] && pixels[i + 2] == c[2];
         EXPECT_TRUE(painted) << png;
     }
     // The fronts through the whole pipeline, one ring per front point plus the legend's.

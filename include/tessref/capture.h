@@ -119,7 +119,8 @@ inline constexpr std::uint64_t kInfiniteUlps = std::numeric_limits<std::uint64_t
 std::uint64_t ulp_distance(float a, float b);
 
 // The defaults of `tessref compare` on captures: bit-identical. Expected differences
-// between llvmpipe and the CPU twins (README, `gl`) are given with the flags.
+// between llvmpipe and the CPU twins (docs/PERFORMANCE.md, "The CPU reference against
+// llvmpipe") are given with the flags.
 inline constexpr std::uint64_t kDefaultMaxPositionUlps = 0;
 inline constexpr std::uint64_t kDefaultMaxNormalUlps = 0;
 

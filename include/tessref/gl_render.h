@@ -56,8 +56,8 @@ namespace tessref::gl {
 // layout or a control shader that tessellates differently is reported as above, the
 // message naming the user's files. The contract a user's shader is held to is the twins'
 // interface: the uniform names and types, the sampler bindings, the vertex attributes and
-// the blocks between the stages (below; README, "Debugging your own shader"); a uniform it
-// leaves out is not set, one it declares with another type is an error.
+// the blocks between the stages (below; docs/CLI.md, "Debugging your own shader"); a
+// uniform it leaves out is not set, one it declares with another type is an error.
 //
 // THE CONTRACT, per model (the twins in data/shaders/ are the reference text; the uniforms
 // are set by the functions *_uniforms in src/gl/scene_render.cpp). A stage talks to its

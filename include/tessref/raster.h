@@ -100,7 +100,7 @@ struct RasterSettings {
     DepthFunc depth_func = DepthFunc::less;
     bool depth_write = true;
     WindowTransform window_transform = WindowTransform::tessellation;
-    glm::vec4 color{1.0f};  // written to Framebuffer::color by every fragment that passes
+    glm::vec4 colour{1.0f};  // written to Framebuffer::colour by every fragment that passes
     // Also record Framebuffer::barycentric_dx/dy (sized by rasterize() when asked).
     bool quad_derivatives = false;
     int threads = 0;        // 0: the calling oneTBB arena; N > 0: an arena of N threads
@@ -111,7 +111,7 @@ struct Framebuffer {
     int width = 0;
     int height = 0;
     int varying_count = 0;
-    std::vector<glm::vec4> color;               // cleared to (0,0,0,0)
+    std::vector<glm::vec4> colour;              // cleared to (0,0,0,0)
     std::vector<float> depth;                   // window z in [0,1], cleared to 1
     std::vector<std::uint32_t> triangle_id;     // visible triangle's id, kNoTriangle if none
     std::vector<std::uint32_t> patch_id;        // its patch, kNoTriangle if none/unknown

@@ -174,7 +174,7 @@ struct PomShading {
 
 // The "no shading" modes.
 struct FlatShading {
-    glm::vec4 colour{1.0f};  // every fragment (raster.h's RasterSettings::color default)
+    glm::vec4 colour{1.0f};  // every fragment (raster.h's RasterSettings::colour default)
 };
 enum class DepthMapping : std::uint8_t {
     window,  // grey = gl_FragCoord.z, what a depth buffer holds (near 1 for most of a

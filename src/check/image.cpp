@@ -8,16 +8,17 @@
 #include <vector>
 
 #include "check/check_internal.h"
-#include "common/fill.h"
 #include "image/draw.h"
 #include "image/image_io.h"
+#include "picture/colour.h"
+#include "picture/fill.h"
 #include "tessref/error.h"
 
 namespace tessref {
 
 namespace {
 
-using Colour = std::array<float, 3>;
+using picture::Colour;
 
 Colour class_colour(DefectClass kind) {
     switch (kind) {

@@ -32,7 +32,7 @@ namespace {
 // 16 to 128 scene resolutions away (far enough to leave the edge's rounding behind, close
 // enough to stay in a crack it went through), turning by the golden angle so that the
 // tries leave a vertex between different pairs of its edges.
-constexpr int recasts = 8;
+constexpr int kRecasts = 8;
 
 glm::dvec3 beside(const glm::dvec3& origin, const glm::dvec3& across_u, const glm::dvec3& across_w, int attempt,
                   double resolution) {
@@ -120,7 +120,7 @@ OpenBoundary open_boundary(const CheckState& state) {
     return out;
 }
 
-constexpr double association_budget = 2e7;  // point-to-vertex distance evaluations
+constexpr double kAssociationBudget = 2e7;  // point-to-vertex distance evaluations
 
 void terrain_probe(CheckState& state, const RayScene& scene) {
     const IndexedMesh& mesh = state.mesh;
@@ -220,7 +220,7 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
 
     const OpenBoundary open = open_boundary(state);
     const auto clusters = cluster(failures);
-    const bool associate = double(clusters.size()) * double(open.vertices.size()) <= association_budget;
+    const bool associate = double(clusters.size()) * double(open.vertices.size()) <= kAssociationBudget;
     const double mid_height = 0.5 * (state.bbox_min[k] + state.bbox_max[k]);
     for (const auto& cells : clusters) {
         glm::dvec2 centre(0.0);
@@ -254,30 +254,51 @@ void terrain_probe(CheckState& state, const RayScene& scene) {
     }
 }
 
-void closed_probe(CheckState& state, const RayScene& scene) {
-    CheckReport& report = state.report;
-    report.probe.mode = "closed";
-    const int resolution = std::max(1, state.options.probe_resolution);
-    const glm::dvec3 extent = state.bbox_max - state.bbox_min;
-    const double margin = 0.01 * state.diagonal + state.tolerance + 1e-12;
-    const glm::dvec2 offset = state.options.probe_offset;
+// The lines of the closed probe: a grid of resolution x resolution lines along each axis,
+// from a margin outside the bounding box, each shifted by `probe_offset` cells.
+struct ProbeGrid {
+    struct Line {
+        glm::dvec3 origin, direction;
+    };
+    glm::dvec3 bbox_min, extent;
+    double margin;
+    glm::dvec2 offset;
+    int resolution;
 
+    explicit ProbeGrid(const CheckState& state)
+        : bbox_min(state.bbox_min),
+          extent(state.bbox_max - state.bbox_min),
+          margin(0.01 * state.diagonal + state.tolerance + 1e-12),
+          offset(state.options.probe_offset),
+          resolution(std::max(1, state.options.probe_resolution)) {}
+
+    Line line(int axis, int i, int j) const {
+        const int iu = (axis + 1) % 3, iw = (axis + 2) % 3;
+        Line l{glm::dvec3(0.0), glm::dvec3(0.0)};
+        l.origin[axis] = bbox_min[axis] - margin;
+        l.origin[iu] = bbox_min[iu] + (i + offset.x) * extent[iu] / resolution;
+        l.origin[iw] = bbox_min[iw] + (j + offset.y) * extent[iw] / resolution;
+        l.direction[axis] = 1.0;
+        return l;
+    }
+};
+
+// What the grid's lines found: those that crossed the surface an odd number of times, and a
+// point inside the solid from each line along x that crossed it twice or more.
+struct GridCrossings {
+    std::vector<GridFailure> odd;
+    std::vector<glm::dvec3> inside;
+};
+
+// Casts every line of the grid and counts its crossings; a line that grazes an edge is recast
+// beside itself, up to `kRecasts` times, and left undecided after that.
+GridCrossings cast_grid(CheckState& state, const RayScene& scene, const ProbeGrid& grid) {
+    CheckReport& report = state.report;
+    const int resolution = grid.resolution;
     struct LineResult {
         std::size_t rays = 0, recast = 0, undecided = 0;
         std::vector<GridFailure> odd;
         std::vector<glm::dvec3> inside;  // a point between the first two crossings
-    };
-    struct Line {
-        glm::dvec3 origin, direction;
-    };
-    auto line = [&](int axis, int i, int j) {
-        const int iu = (axis + 1) % 3, iw = (axis + 2) % 3;
-        Line l{glm::dvec3(0.0), glm::dvec3(0.0)};
-        l.origin[axis] = state.bbox_min[axis] - margin;
-        l.origin[iu] = state.bbox_min[iu] + (i + offset.x) * extent[iu] / resolution;
-        l.origin[iw] = state.bbox_min[iw] + (j + offset.y) * extent[iw] / resolution;
-        l.direction[axis] = 1.0;
-        return l;
     };
     // Every hit of a line that grazes nothing is a crossing of the surface from one side to
     // the other; a line with a grazing hit has no count.
@@ -307,12 +328,12 @@ void closed_probe(CheckState& state, const RayScene& scene) {
                 across_w[(axis + 2) % 3] = 1.0;
                 LineResult& result = rows[row];
                 for (int i = 0; i < resolution; ++i) {
-                    Line l = line(axis, i, j);
+                    ProbeGrid::Line l = grid.line(axis, i, j);
                     ++result.rays;
                     std::optional<Crossings> crossings = crossings_along(l.origin, l.direction);
                     if (!crossings) ++result.recast;
                     const glm::dvec3 origin = l.origin;
-                    for (int attempt = 1; !crossings && attempt <= recasts; ++attempt) {
+                    for (int attempt = 1; !crossings && attempt <= kRecasts; ++attempt) {
                         l.origin = beside(origin, across_u, across_w, attempt, scene.resolution());
                         crossings = crossings_along(l.origin, l.direction);
                     }
@@ -328,45 +349,49 @@ void closed_probe(CheckState& state, const RayScene& scene) {
         });
         state.progress("ray probe", 0.8 + 0.15 * double(r1) / (3 * resolution));
     }
-    std::vector<GridFailure> odd;
-    std::vector<glm::dvec3> inside;
+    GridCrossings found;
     for (LineResult& r : rows) {
         report.probe.rays += r.rays;
         report.probe.recast_rays += r.recast;
         report.probe.undecided_rays += r.undecided;
-        odd.insert(odd.end(), r.odd.begin(), r.odd.end());
-        inside.insert(inside.end(), r.inside.begin(), r.inside.end());
+        found.odd.insert(found.odd.end(), r.odd.begin(), r.odd.end());
+        found.inside.insert(found.inside.end(), r.inside.begin(), r.inside.end());
     }
+    return found;
+}
 
-    // Escape rays: from each inside point, one direction of a spiral over the sphere.
-    const std::size_t directions = 4096;
+// The escape rays: the n-th inside point looks along the n-th (mod 4096) direction of a
+// spiral over the sphere, golden angle apart.
+constexpr std::size_t kEscapeDirections = 4096;
+glm::dvec3 escape_direction(std::size_t n) {
+    const double index = double(n % kEscapeDirections) + 0.5;
+    const double z = 1.0 - 2.0 * index / double(kEscapeDirections);
+    const double phi = index * 2.399963229728653;  // golden angle
+    const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+    return {s * std::cos(phi), s * std::sin(phi), z};
+}
+
+// The inside points whose escape ray hits nothing: a closed surface would have stopped it.
+std::vector<std::size_t> escaping(const RayScene& scene, const std::vector<glm::dvec3>& inside) {
     std::vector<std::uint8_t> escaped(inside.size(), 0);
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, inside.size(), 256), [&](const auto& r) {
-        for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            const double index = double(n % directions) + 0.5;
-            const double z = 1.0 - 2.0 * index / double(directions);
-            const double phi = index * 2.399963229728653;  // golden angle
-            const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-            const glm::dvec3 direction(s * std::cos(phi), s * std::sin(phi), z);
-            escaped[n] = !scene.intersect(inside[n], direction).hit;
-        }
+        for (std::size_t n = r.begin(); n != r.end(); ++n) escaped[n] = !scene.intersect(inside[n], escape_direction(n)).hit;
     });
-    state.progress("ray probe", 1.0);
-    report.probe.rays += inside.size();
     std::vector<std::size_t> escapes;
     for (std::size_t n = 0; n < inside.size(); ++n)
         if (escaped[n]) escapes.push_back(n);
-    if (odd.empty() && escapes.empty()) return;
-    if (!topology_allows_leaks(state, -1)) {
-        report.probe.dismissed_rays = odd.size() + escapes.size();
-        return;
-    }
-    report.probe.failed_rays = odd.size() + escapes.size();
+    return escapes;
+}
 
-    // Locate: the open boundary vertex nearest each failed ray, grouped by its loop.
+// The failed rays as defects, located: when few enough, each at the open boundary vertex
+// nearest its ray, grouped by that vertex's loop; otherwise the odd lines clustered by
+// cell and every escape ray on its own.
+void report_closed_failures(CheckState& state, const ProbeGrid& grid, const GridCrossings& found,
+                            const std::vector<std::size_t>& escapes) {
+    const std::vector<GridFailure>& odd = found.odd;
     const OpenBoundary open = open_boundary(state);
     const std::size_t failures = odd.size() + escapes.size();
-    const bool associate = !open.vertices.empty() && double(failures) * double(open.vertices.size()) <= association_budget;
+    const bool associate = !open.vertices.empty() && double(failures) * double(open.vertices.size()) <= kAssociationBudget;
     auto nearest = [&](const glm::dvec3& origin, const glm::dvec3& direction, bool whole_line) {
         std::uint32_t best = open.vertices[0];
         double best_distance = std::numeric_limits<double>::infinity();
@@ -423,13 +448,13 @@ void closed_probe(CheckState& state, const RayScene& scene) {
     if (associate) {
         std::vector<std::pair<glm::dvec3, glm::dvec3>> rays;
         for (const GridFailure& g : odd) {
-            const Line l = line(g.axis, g.i, g.j);
+            const ProbeGrid::Line l = grid.line(g.axis, g.i, g.j);
             rays.emplace_back(l.origin, l.direction);
         }
         emit(DefectClass::probe_odd_parity, std::move(rays), true, "lines crossed the surface an odd number of times");
     } else {
         for (const auto& cells : cluster(odd)) {
-            const Line l = line(cells[0].axis, cells[0].i, cells[0].j);
+            const ProbeGrid::Line l = grid.line(cells[0].axis, cells[0].i, cells[0].j);
             Defect d;
             d.position = l.origin;
             d.measure = double(cells.size());
@@ -439,14 +464,27 @@ void closed_probe(CheckState& state, const RayScene& scene) {
         }
     }
     std::vector<std::pair<glm::dvec3, glm::dvec3>> escape_rays;
-    for (std::size_t n : escapes) {
-        const double index = double(n % directions) + 0.5;
-        const double z = 1.0 - 2.0 * index / double(directions);
-        const double phi = index * 2.399963229728653;
-        const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-        escape_rays.emplace_back(inside[n], glm::dvec3(s * std::cos(phi), s * std::sin(phi), z));
-    }
+    for (std::size_t n : escapes) escape_rays.emplace_back(found.inside[n], escape_direction(n));
     emit(DefectClass::probe_escape, std::move(escape_rays), false, "rays from inside escaped without a hit");
+}
+
+// The probe of a closed solid: every grid line must cross the surface an even number of
+// times, and no ray from a point inside may escape.
+void closed_probe(CheckState& state, const RayScene& scene) {
+    CheckReport& report = state.report;
+    report.probe.mode = "closed";
+    const ProbeGrid grid(state);
+    const GridCrossings found = cast_grid(state, scene, grid);
+    const std::vector<std::size_t> escapes = escaping(scene, found.inside);
+    state.progress("ray probe", 1.0);
+    report.probe.rays += found.inside.size();
+    if (found.odd.empty() && escapes.empty()) return;
+    if (!topology_allows_leaks(state, -1)) {
+        report.probe.dismissed_rays = found.odd.size() + escapes.size();
+        return;
+    }
+    report.probe.failed_rays = found.odd.size() + escapes.size();
+    report_closed_failures(state, grid, found, escapes);
 }
 
 }  // namespace

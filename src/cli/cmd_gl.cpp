@@ -194,13 +194,13 @@ Command add_gl_command(CLI::App& parent) {
                     "A GLSL file of your own in place of the GLSL twin of one stage (repeatable; over the scene's "
                     "[shaders]): STAGE is vertex|vert, tess_control|tesc, tess_evaluation|tese, geometry|geom or "
                     "fragment|frag. Uniforms, textures and the CPU reference's draw counts stay; the file keeps its "
-                    "own layout(...) in; (README: Debugging your own shader)")
+                    "own layout(...) in; (docs/CLI.md: Debugging your own shader)")
         ->type_name("STAGE=FILE")
         ->allow_extra_args(false);  // one file per flag: the scene after it stays the scene
     app->add_option("--max-primitives-per-draw", options->max_primitives_per_draw,
                     "Predicted primitives per draw at most (default 32768; a draw holds at least one patch): "
                     "the size of the draws whose counts are checked. Above the default, llvmpipe can draw a wrong "
-                    "picture with every count right (README: Benchmarks)")
+                    "picture with every count right (docs/PERFORMANCE.md: Benchmarks)")
         ->type_name("N");
     app->add_flag("--camera-relative", options->camera_relative,
                   "Refused (exit 2): camera-relative evaluation is `tessref render` and `tessref mesh`'s only");

@@ -21,25 +21,26 @@
 
 #include <glm/vec2.hpp>
 
+#include "picture/canvas.h"
 #include "tessref/tessellator.h"
 
 namespace tessref::cli {
 
-struct Color {
-    std::uint8_t r = 0, g = 0, b = 0;
-};
+using picture::Anchor;
+using picture::Colour;
+using picture::TextFont;
 
 struct PicturePolygon {
     std::vector<glm::dvec2> points;  // convex, in pixels
-    Color fill{};
+    Colour fill{};
     bool stroked = false;
-    Color stroke{};
+    Colour stroke{};
     double stroke_width = 1.0;
 };
 
 struct PictureLine {
     glm::dvec2 from{}, to{};
-    Color color{};
+    Colour colour{};
     double width = 1.0;
     bool dashed = false;
 };
@@ -47,25 +48,22 @@ struct PictureLine {
 struct PictureDisc {
     glm::dvec2 centre{};
     double radius = 1.0;
-    Color fill{};
+    Colour fill{};
 };
-
-enum class TextAnchor : std::uint8_t { start, middle, end };
-enum class TextFont : std::uint8_t { sans, sans_bold, mono };
 
 struct PictureText {
     glm::dvec2 baseline{};  // the anchor point on the baseline
     std::string text;       // UTF-8
     double size = 13.0;     // pixels
-    Color color{};
-    TextAnchor anchor = TextAnchor::start;
+    Colour colour{};
+    Anchor anchor = Anchor::start;
     TextFont font = TextFont::sans;
 };
 
 // Shapes are painted in this order: polygons, lines, discs, texts (each in list order).
 struct Picture {
     int width = 0, height = 0;
-    Color background{255, 255, 255};
+    Colour background = Colour::from_codes(255, 255, 255);
     std::vector<PicturePolygon> polygons;
     std::vector<PictureLine> lines;
     std::vector<PictureDisc> discs;
@@ -83,7 +81,7 @@ Picture draw_pattern(const Pattern& pattern, const PatternPictureInfo& info);
 // A standalone SVG 1.1 document (starts with "<svg", ends with "</svg>\n").
 std::string picture_to_svg(const Picture& picture);
 
-// Rasterizes the picture (lines and text by OpenImageIO through src/image/draw.h, plus
+// Rasterizes the picture on an RGB float picture::Canvas (lines and text by OpenImageIO,
 // plain pixel fills for polygons and discs, no antialiasing) and writes it to `path`; the
 // codec follows the extension of `path`. Text uses DejaVu Sans; when no font can be loaded
 // the picture is still written, without text, and the returned warnings say so.

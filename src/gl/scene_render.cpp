@@ -460,7 +460,7 @@ struct Uniforms {
         if (gl->GetError() != GL_NO_ERROR)
             throw Error(std::string("the uniform ") + name + " is declared with a type other than " + type +
                             ", the GLSL twins' (the twins' uniform names and types are the contract of a user's "
-                            "shader: README, `gl`)",
+                            "shader: docs/CLI.md, `gl`)",
                         declared_at(name));
     }
     // The user's file (and line) whose text declares `uniform <type> name`, where one does.

@@ -12,8 +12,9 @@ void Drawing::add(int kind, int x0, int y0, int x1, int y1, const Colour& colour
     op.y0 = y0;
     op.x1 = x1;
     op.y1 = y1;
-    for (int c = 0; c < 3; ++c) op.color[c] = colour[c];
-    op.color[3] = 1.0f;
+    const auto channels = colour.channels();
+    for (int c = 0; c < 3; ++c) op.colour[c] = channels[c];
+    op.colour[3] = 1.0f;
     ops_.push_back(op);
 }
 

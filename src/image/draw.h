@@ -1,17 +1,18 @@
 // src/image/draw.h — lines, points, boxes and text painted into a caller's picture by
 // OpenImageIO's ImageBufAlgo (render_line, render_point, render_box, render_text), in the
 // module tessref_oiio.so (src/image/oiio_module.h): the pictures of `tessref check
-// --image` and `tessref tessellate -o x.png`. The pixels stay the caller's; operations are queued and
-// painted, in order, by paint().
+// --image` and, through the diagrams' canvas (src/picture/canvas.h), `tessref tessellate -o
+// x.png`. The pixels stay the caller's; operations are queued and painted, in order, by
+// paint(). Colours are the diagrams' one colour type (src/picture/colour.h).
 #pragma once
 
-#include <array>
 #include <deque>
 #include <string>
 #include <vector>
 
 #include "image/image_io.h"
 #include "image/oiio_module_abi.h"
+#include "picture/colour.h"
 
 namespace tessref::image {
 
@@ -29,7 +30,7 @@ enum class TextAlign { left, centre, right };
 
 class Drawing {
 public:
-    using Colour = std::array<float, 3>;
+    using Colour = picture::Colour;
 
     void line(int x0, int y0, int x1, int y1, const Colour& colour);
     void point(int x, int y, const Colour& colour);

@@ -68,7 +68,7 @@ enum tessref_oiio_draw_kind {
 typedef struct tessref_oiio_draw {
     int kind;
     int x0, y0, x1, y1;
-    float color[4];  /* the canvas's channels, in [0, 1] */
+    float colour[4];  /* the canvas's channels, in [0, 1] */
     int size;        /* text: font size in pixels */
     const char* text;
     const char* font;

@@ -29,8 +29,8 @@
 namespace tessref::mesh_read {
 
 // Vertex ids are 32-bit, and the check uses the largest as "none".
-constexpr std::uint64_t max_vertices = std::numeric_limits<std::uint32_t>::max() - 1;
-constexpr std::uint64_t max_faces = std::numeric_limits<std::uint32_t>::max() - 1;
+constexpr std::uint64_t kMaxVertices = std::numeric_limits<std::uint32_t>::max() - 1;
+constexpr std::uint64_t kMaxFaces = std::numeric_limits<std::uint32_t>::max() - 1;
 
 inline std::string str(std::uint64_t n) { return std::to_string(n); }
 inline std::string at_byte(std::uint64_t offset) { return " at byte offset " + str(offset); }
@@ -235,9 +235,9 @@ public:
     // min_bytes: the least the declared data needs in the file after offset.
     void require(std::uint64_t vertices, std::uint64_t faces, std::uint64_t min_bytes, std::size_t offset,
                  const std::string& declared) const {
-        if (vertices > max_vertices)
-            throw error(declared + ": more vertices than tessref can number (" + str(max_vertices) + ")");
-        if (faces > max_faces) throw error(declared + ": more faces than tessref can number (" + str(max_faces) + ")");
+        if (vertices > kMaxVertices)
+            throw error(declared + ": more vertices than tessref can number (" + str(kMaxVertices) + ")");
+        if (faces > kMaxFaces) throw error(declared + ": more faces than tessref can number (" + str(kMaxFaces) + ")");
         if (faces > std::numeric_limits<std::uint32_t>::max() / 3)
             throw error(declared + ": at three corners a face, more face corners than tessref can number (" +
                         str(std::numeric_limits<std::uint32_t>::max()) + ")");
@@ -265,7 +265,7 @@ public:
     std::uint32_t add_vertex(const Real (&xyz)[3], const Place& place) {
         const std::size_t id = mesh.positions.size();
         const std::size_t line = place.line;
-        if (id >= max_vertices) throw error("more vertices than tessref can number (" + str(max_vertices) + ")", line);
+        if (id >= kMaxVertices) throw error("more vertices than tessref can number (" + str(kMaxVertices) + ")", line);
         for (int k = 0; k < 3; ++k) {
             if (!std::isfinite(xyz[k].exact))
                 throw error("vertex " + str(id) + place.text() + " has a non-finite coordinate (" + "xyz"[k] + " = " +
@@ -283,7 +283,7 @@ public:
     }
 
     void add_face(const std::vector<std::uint32_t>& ids, std::size_t line = 0) {
-        if (mesh.face_count() >= max_faces) throw error("more faces than tessref can number (" + str(max_faces) + ")", line);
+        if (mesh.face_count() >= kMaxFaces) throw error("more faces than tessref can number (" + str(kMaxFaces) + ")", line);
         mesh.add_face(ids);
     }
 

@@ -83,7 +83,7 @@ void read_obj(Reading& r) {
                     if (part == 2) throw r.bad_token(t[k], n, "a face corner v, v/vt, v/vt/vn or v//vn");
                     rest.remove_prefix(slash + 1);
                 }
-                if (index[0] >= std::int64_t(max_vertices))
+                if (index[0] >= std::int64_t(kMaxVertices))
                     throw r.error("face " + str(face) + " at line " + str(n) + " refers to vertex " +
                                       std::to_string(index[0] + 1) + ", more than tessref can number",
                                   n);

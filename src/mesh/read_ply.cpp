@@ -170,16 +170,19 @@ PlyRoles ply_roles(Reading& r, const PlyElement& e, bool vertex) {
     return roles;
 }
 
-}  // namespace
-
-void read_ply(Reading& r) {
-    const PlyHeader h = read_ply_header(r);
-    const bool ascii = h.format == PlyFormat::ascii, big = h.format == PlyFormat::binary_big_endian;
-    const PlyElement *vertex_element = nullptr, *face_element = nullptr;
+// The vertex and face elements of the header (a PLY file may declare others, which are read
+// and dropped), once the file is known to be large enough for what the header declares.
+struct PlyMeshElements {
+    const PlyElement* vertex = nullptr;
+    const PlyElement* face = nullptr;  // none: a point cloud
+};
+PlyMeshElements mesh_elements(Reading& r, const PlyHeader& h) {
+    const bool ascii = h.format == PlyFormat::ascii;
+    PlyMeshElements found;
     std::uint64_t min_bytes = 0;
     for (const PlyElement& e : h.elements) {
         if (e.name == "vertex" || e.name == "face") {
-            const PlyElement*& slot = e.name == "vertex" ? vertex_element : face_element;
+            const PlyElement*& slot = e.name == "vertex" ? found.vertex : found.face;
             if (slot) throw r.error("PLY header declares two '" + e.name + "' elements");
             slot = &e;
         }
@@ -189,11 +192,50 @@ void read_ply(Reading& r) {
         for (const PlyProperty& p : e.properties) record += ascii ? 2 : size_of(p.list ? p.count_type : p.type);
         min_bytes = std::min<std::uint64_t>(UINT64_MAX / 2, min_bytes + saturating_bytes(e.count, record));
     }
-    if (!vertex_element) throw r.error("PLY header declares no 'vertex' element");
-    const std::uint64_t vertex_count = vertex_element->count, face_count = face_element ? face_element->count : 0;
+    if (!found.vertex) throw r.error("PLY header declares no 'vertex' element");
+    const std::uint64_t vertex_count = found.vertex->count, face_count = found.face ? found.face->count : 0;
     if (ascii && min_bytes > 0) --min_bytes;  // the last token needs no blank after it
     r.require(vertex_count, face_count, min_bytes, h.body_offset,
               "the header declares " + str(vertex_count) + " vertices and " + str(face_count) + " faces");
+    return found;
+}
+
+// Vertex `i`'s record, its scalars in `reals`, into the mesh: position, and the normal, uv,
+// patch id and tess coord the header declares. `first_line` (ascii) or `record_offset`
+// (binary) places it for the errors.
+void store_vertex(Reading& r, const PlyRoles& roles, const std::vector<Real>& reals, std::uint64_t i, bool ascii,
+                  std::size_t first_line, std::size_t record_offset) {
+    const Real xyz[3] = {reals[roles.x], reals[roles.y], reals[roles.z]};
+    r.add_vertex(xyz, ascii ? Place{first_line} : Place{0, record_offset});
+    const auto where = [&] { return ascii ? " at line " + str(first_line) : at_byte(record_offset); };
+    const auto finite = [&](int role, const char* name) {
+        if (!std::isfinite(reals[role].value))
+            throw r.error("vertex " + str(i) + where() + " has a non-finite " + name, first_line);
+        return reals[role].value;
+    };
+    if (roles.nx >= 0)
+        r.mesh.normals.emplace_back(finite(roles.nx, "normal"), finite(roles.ny, "normal"), finite(roles.nz, "normal"));
+    if (roles.u >= 0) r.mesh.uvs.emplace_back(finite(roles.u, "texture coordinate"), finite(roles.v, "texture coordinate"));
+    if (roles.patch_id >= 0) {
+        const double id = reals[roles.patch_id].exact;
+        if (!(id >= 0.0 && id <= double(std::numeric_limits<std::uint32_t>::max()) && id == std::floor(id)))
+            throw r.error("vertex " + str(i) + where() + " has patch_id " + Reading::number_text(id) +
+                              ", not a whole number >= 0",
+                          first_line);
+        r.mesh.patch_ids.push_back(static_cast<std::uint32_t>(id));
+    }
+    if (roles.tess_u >= 0)
+        r.mesh.tess_coords.emplace_back(finite(roles.tess_u, "tess coord"), finite(roles.tess_v, "tess coord"),
+                                        finite(roles.tess_w, "tess coord"));
+}
+
+}  // namespace
+
+void read_ply(Reading& r) {
+    const PlyHeader h = read_ply_header(r);
+    const bool ascii = h.format == PlyFormat::ascii, big = h.format == PlyFormat::binary_big_endian;
+    const auto [vertex_element, face_element] = mesh_elements(r, h);
+    const std::uint64_t vertex_count = vertex_element->count, face_count = face_element ? face_element->count : 0;
     const PlyRoles vroles = ply_roles(r, *vertex_element, true);
     const PlyRoles froles = face_element ? ply_roles(r, *face_element, false) : PlyRoles{};
     r.reserve(vertex_count, face_count);
@@ -304,30 +346,7 @@ void read_ply(Reading& r) {
                 }
             }
             if (is_vertex) {
-                const Real xyz[3] = {reals[vroles.x], reals[vroles.y], reals[vroles.z]};
-                r.add_vertex(xyz, ascii ? Place{first_line} : Place{0, record_offset});
-                const auto finite = [&](int role, const char* name) {
-                    if (!std::isfinite(reals[role].value))
-                        throw r.error("vertex " + str(i) + (ascii ? " at line " + str(first_line) : at_byte(record_offset)) +
-                                          " has a non-finite " + name,
-                                      first_line);
-                    return reals[role].value;
-                };
-                if (vroles.nx >= 0)
-                    r.mesh.normals.emplace_back(finite(vroles.nx, "normal"), finite(vroles.ny, "normal"),
-                                                finite(vroles.nz, "normal"));
-                if (vroles.u >= 0) r.mesh.uvs.emplace_back(finite(vroles.u, "texture coordinate"), finite(vroles.v, "texture coordinate"));
-                if (vroles.patch_id >= 0) {
-                    const double id = reals[vroles.patch_id].exact;
-                    if (!(id >= 0.0 && id <= double(std::numeric_limits<std::uint32_t>::max()) && id == std::floor(id)))
-                        throw r.error("vertex " + str(i) + (ascii ? " at line " + str(first_line) : at_byte(record_offset)) +
-                                          " has patch_id " + Reading::number_text(id) + ", not a whole number >= 0",
-                                      first_line);
-                    r.mesh.patch_ids.push_back(static_cast<std::uint32_t>(id));
-                }
-                if (vroles.tess_u >= 0)
-                    r.mesh.tess_coords.emplace_back(finite(vroles.tess_u, "tess coord"), finite(vroles.tess_v, "tess coord"),
-                                                    finite(vroles.tess_w, "tess coord"));
+                store_vertex(r, vroles, reals, i, ascii, first_line, record_offset);
             } else if (is_face) {
                 r.add_face(ids, first_line);
             }

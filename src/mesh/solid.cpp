@@ -8,6 +8,8 @@
 #include <cmath>
 #include <numeric>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tessref/error.h"
 
@@ -52,6 +54,105 @@ std::vector<std::array<std::size_t, 3>> clip_ears(const std::vector<glm::dvec2>&
     return triangles;
 }
 
+// A position seen from above: its two coordinates across the up axis, (u, w, up) a
+// right-handed frame.
+struct TopView {
+    int iu, iw;
+    glm::dvec2 operator()(const glm::dvec3& p) const { return {p[iu], p[iw]}; }
+};
+
+// The boundary half-edges of a welded mesh: directed edges (from, to) whose edge no other
+// triangle uses, sorted. Edges are filed by their smaller vertex and counted there.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary_half_edges(const SurfaceMesh& mesh) {
+    const std::size_t vertex_count = mesh.positions.size();
+    std::vector<std::uint32_t> start(vertex_count + 1, 0);
+    for (const auto& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) ++start[std::min(t[k], t[(k + 1) % 3]) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    struct Entry {
+        std::uint32_t other, from;
+    };
+    std::vector<Entry> entries(start.back());
+    {
+        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+        for (const auto& t : mesh.triangles)
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+                entries[cursor[std::min(a, b)]++] = {std::max(a, b), a};
+            }
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;  // (from, to), sorted
+    for (std::uint32_t v = 0; v < vertex_count; ++v) {
+        auto first = entries.begin() + start[v], last = entries.begin() + start[v + 1];
+        std::sort(first, last, [](const Entry& x, const Entry& y) { return x.other < y.other; });
+        for (auto it = first; it != last;) {
+            auto end = it + 1;
+            while (end != last && end->other == it->other) ++end;
+            if (end - it == 1) boundary.emplace_back(it->from, it->from == v ? it->other : v);
+            it = end;
+        }
+    }
+    std::sort(boundary.begin(), boundary.end());
+    return boundary;
+}
+
+// The outer outline: of the closed loops the boundary half-edges form, the one enclosing the
+// largest area seen from above, with its signed area (positive: counter-clockwise). Empty
+// when no loop closes.
+std::pair<std::vector<std::uint32_t>, double> outer_outline(
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& boundary, const std::vector<glm::dvec3>& positions,
+    TopView flat) {
+    std::vector<char> used(boundary.size(), 0);
+    std::vector<std::uint32_t> outline;
+    double outline_area = 0.0;
+    for (std::size_t s = 0; s < boundary.size(); ++s) {
+        if (used[s]) continue;
+        std::vector<std::uint32_t> loop;
+        std::size_t current = s;
+        bool closed = false;
+        while (true) {
+            used[current] = 1;
+            loop.push_back(boundary[current].first);
+            const std::uint32_t to = boundary[current].second;
+            if (to == boundary[s].first) {
+                closed = true;
+                break;
+            }
+            // Where several boundary edges leave `to` (patches that touch only there, a
+            // crack reaching the outline), take the sharpest right turn: it keeps to the
+            // outside, so the outline stays a simple polygon and the crack its own loop.
+            const glm::dvec2 here = flat(positions[to]);
+            const glm::dvec2 heading = here - flat(positions[boundary[current].first]);
+            auto next = boundary.end();
+            double best_turn = std::numeric_limits<double>::infinity();
+            for (auto c = std::lower_bound(boundary.begin(), boundary.end(), std::make_pair(to, std::uint32_t{0}));
+                 c != boundary.end() && c->first == to; ++c) {
+                if (used[c - boundary.begin()]) continue;
+                const glm::dvec2 out = flat(positions[c->second]) - here;
+                const double turn = std::atan2(heading.x * out.y - heading.y * out.x, glm::dot(heading, out));
+                if (turn < best_turn) {
+                    best_turn = turn;
+                    next = c;
+                }
+            }
+            if (next == boundary.end()) break;
+            current = static_cast<std::size_t>(next - boundary.begin());
+        }
+        if (!closed) continue;
+        double area = 0.0;
+        for (std::size_t i = 0; i < loop.size(); ++i) {
+            const glm::dvec2 p = flat(positions[loop[i]]);
+            const glm::dvec2 q = flat(positions[loop[(i + 1) % loop.size()]]);
+            area += 0.5 * (p.x * q.y - q.x * p.y);
+        }
+        if (std::abs(area) > std::abs(outline_area)) {
+            outline_area = area;
+            outline = std::move(loop);
+        }
+    }
+    return {std::move(outline), outline_area};
+}
+
 }  // namespace
 
 SurfaceMesh close_terrain_into_solid(const SurfaceMesh& terrain, double base_z, int up_axis) {
@@ -60,7 +161,7 @@ SurfaceMesh close_terrain_into_solid(const SurfaceMesh& terrain, double base_z, 
     if (up_axis < 0 || up_axis > 2) throw Error("the up axis must be 0, 1 or 2 (x, y or z)", Where::at_key("base_z"));
     // Seen from above: (u, w, up) is a right-handed frame.
     const int up = up_axis, iu = (up + 1) % 3, iw = (up + 2) % 3;
-    const auto flat = [&](const glm::dvec3& p) { return glm::dvec2(p[iu], p[iw]); };
+    const TopView flat{iu, iw};
     const auto on_base = [&](const glm::dvec3& p) {
         glm::dvec3 q = p;
         q[up] = base_z;
@@ -100,87 +201,9 @@ SurfaceMesh close_terrain_into_solid(const SurfaceMesh& terrain, double base_z, 
                         ") must lie below the terrain's lowest point (" + std::to_string(lowest) + ")",
                     Where::at_key("base_z"));
 
-    // Boundary half-edges: directed edges whose edge no other triangle uses, filed by
-    // their smaller vertex.
-    const std::size_t welded_count = solid.positions.size();
-    std::vector<std::uint32_t> start(welded_count + 1, 0);
-    for (const auto& t : solid.triangles)
-        for (int k = 0; k < 3; ++k) ++start[std::min(t[k], t[(k + 1) % 3]) + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    struct Entry {
-        std::uint32_t other, from;
-    };
-    std::vector<Entry> entries(start.back());
-    {
-        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
-        for (const auto& t : solid.triangles)
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-                entries[cursor[std::min(a, b)]++] = {std::max(a, b), a};
-            }
-    }
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;  // (from, to), sorted
-    for (std::uint32_t v = 0; v < welded_count; ++v) {
-        auto first = entries.begin() + start[v], last = entries.begin() + start[v + 1];
-        std::sort(first, last, [](const Entry& x, const Entry& y) { return x.other < y.other; });
-        for (auto it = first; it != last;) {
-            auto end = it + 1;
-            while (end != last && end->other == it->other) ++end;
-            if (end - it == 1) boundary.emplace_back(it->from, it->from == v ? it->other : v);
-            it = end;
-        }
-    }
-    std::sort(boundary.begin(), boundary.end());
-
-    // Loops; the outer outline is the closed one enclosing the largest area seen from above.
-    std::vector<char> used(boundary.size(), 0);
-    std::vector<std::uint32_t> outline;
-    double outline_area = 0.0;
-    for (std::size_t s = 0; s < boundary.size(); ++s) {
-        if (used[s]) continue;
-        std::vector<std::uint32_t> loop;
-        std::size_t current = s;
-        bool closed = false;
-        while (true) {
-            used[current] = 1;
-            loop.push_back(boundary[current].first);
-            const std::uint32_t to = boundary[current].second;
-            if (to == boundary[s].first) {
-                closed = true;
-                break;
-            }
-            // Where several boundary edges leave `to` (patches that touch only there, a
-            // crack reaching the outline), take the sharpest right turn: it keeps to the
-            // outside, so the outline stays a simple polygon and the crack its own loop.
-            const glm::dvec2 here = flat(solid.positions[to]);
-            const glm::dvec2 heading = here - flat(solid.positions[boundary[current].first]);
-            auto next = boundary.end();
-            double best_turn = std::numeric_limits<double>::infinity();
-            for (auto c = std::lower_bound(boundary.begin(), boundary.end(), std::make_pair(to, std::uint32_t{0}));
-                 c != boundary.end() && c->first == to; ++c) {
-                if (used[c - boundary.begin()]) continue;
-                const glm::dvec2 out = flat(solid.positions[c->second]) - here;
-                const double turn = std::atan2(heading.x * out.y - heading.y * out.x, glm::dot(heading, out));
-                if (turn < best_turn) {
-                    best_turn = turn;
-                    next = c;
-                }
-            }
-            if (next == boundary.end()) break;
-            current = static_cast<std::size_t>(next - boundary.begin());
-        }
-        if (!closed) continue;
-        double area = 0.0;
-        for (std::size_t i = 0; i < loop.size(); ++i) {
-            const glm::dvec2 p = flat(solid.positions[loop[i]]);
-            const glm::dvec2 q = flat(solid.positions[loop[(i + 1) % loop.size()]]);
-            area += 0.5 * (p.x * q.y - q.x * p.y);
-        }
-        if (std::abs(area) > std::abs(outline_area)) {
-            outline_area = area;
-            outline = std::move(loop);
-        }
-    }
+    // The outer outline, from the boundary half-edges (the other loops are holes and cracks).
+    const auto [outline, outline_area] =
+        outer_outline(boundary_half_edges(solid), solid.positions, flat);
     if (outline.empty()) throw Error("the terrain has no closed outline to close into a solid");
     if (outline_area < 0.0)
         throw Error("the terrain's triangles face downward (its outline runs clockwise seen from above)");

@@ -164,7 +164,7 @@ Framebuffer Framebuffer::create(int width, int height, int varying_count) {
     fb.height = height;
     fb.varying_count = varying_count;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    fb.color.resize(n);
+    fb.colour.resize(n);
     fb.depth.resize(n);
     fb.triangle_id.resize(n);
     fb.patch_id.resize(n);
@@ -190,7 +190,7 @@ Framebuffer Framebuffer::create_visibility(int width, int height) {
 }
 
 void Framebuffer::clear() {
-    std::fill(color.begin(), color.end(), glm::vec4(0.0f));
+    std::fill(colour.begin(), colour.end(), glm::vec4(0.0f));
     std::fill(depth.begin(), depth.end(), 1.0f);
     std::fill(triangle_id.begin(), triangle_id.end(), kNoTriangle);
     std::fill(patch_id.begin(), patch_id.end(), kNoTriangle);
@@ -208,9 +208,9 @@ std::int32_t snap_subpixel(float window_coordinate) {
 }
 
 std::vector<std::uint8_t> to_rgba8(const Framebuffer& fb) {
-    std::vector<std::uint8_t> out(fb.color.size() * 4);
-    for (std::size_t i = 0; i < fb.color.size(); ++i) {
-        unorm8_rgba(&fb.color[i][0], &out[i * 4]);
+    std::vector<std::uint8_t> out(fb.colour.size() * 4);
+    for (std::size_t i = 0; i < fb.colour.size(); ++i) {
+        unorm8_rgba(&fb.colour[i][0], &out[i * 4]);
     }
     return out;
 }
@@ -751,7 +751,7 @@ inline bool fragment(Context& ctx, int px, int py, float z, std::uint32_t source
     if (s.depth_write) fb.depth[idx] = z;
     fb.barycentric[idx] = weights();
     if (ctx.all_buffers) {
-        fb.color[idx] = s.color;
+        fb.colour[idx] = s.colour;
         fb.front_facing[idx] = front ? 1 : 0;
     }
     ctx.source[idx] = source;
@@ -855,7 +855,7 @@ void validate(const Framebuffer& fb, const RasterInput& in) {
         fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height)) {
         throw Error("framebuffer is not allocated (use Framebuffer::create)", Where::at_key("framebuffer"));
     }
-    if (fb.color.size() != fb.depth.size() || fb.fragment_count.size() != fb.depth.size())
+    if (fb.colour.size() != fb.depth.size() || fb.fragment_count.size() != fb.depth.size())
         throw Error("rasterize() writes every buffer: a visibility framebuffer is for the Rasterizer class",
                     Where::at_key("framebuffer"));
     if (in.varying_count < 0 || in.varying_count > kMaxVaryings) {
@@ -937,7 +937,7 @@ struct Rasterizer::State {
           ctx{settings, framebuffer, raster::make_viewport(framebuffer.width, framebuffer.height), 0, 0, source} {
         ctx.tiles_x = (framebuffer.width + kTileSize - 1) / kTileSize;
         ctx.tiles_y = (framebuffer.height + kTileSize - 1) / kTileSize;
-        ctx.all_buffers = framebuffer.color.size() == framebuffer.depth.size() &&
+        ctx.all_buffers = framebuffer.colour.size() == framebuffer.depth.size() &&
                           framebuffer.fragment_count.size() == framebuffer.depth.size() &&
                           framebuffer.front_facing.size() == framebuffer.depth.size();
         tile_stats.resize(static_cast<std::size_t>(ctx.tiles_x * ctx.tiles_y));

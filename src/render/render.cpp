@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -332,6 +333,121 @@ constexpr std::size_t kStreamBatchTrianglesPerThread = std::size_t{1} << 15;
 // triangles a pixel (render_streamed).
 constexpr std::uint64_t kDeferNormalsTrianglesPerPixel = 8;
 
+// The next batch's chunk boundaries, in patch order, from `next_patch` on: runs of whole
+// patches of about kStreamChunkTriangles triangles until the batch holds `batch_size`.
+// Reuses `chunks`' storage; returns how many chunks the batch has, and moves next_patch on.
+std::size_t plan_batch(const PatchStream& stream, std::size_t& next_patch, std::size_t batch_size,
+                       std::vector<PatchChunk>& chunks) {
+    chunks.reserve(64);
+    std::size_t used = 0, batch_triangles = 0;
+    while (next_patch < stream.patch_count() && batch_triangles < batch_size) {
+        if (chunks.size() <= used) chunks.emplace_back();
+        PatchChunk& c = chunks[used++];
+        c.first_patch = next_patch;
+        c.first_triangle = static_cast<std::uint32_t>(stream.triangle_base(next_patch));
+        next_patch = c.last_patch = stream.run_end(next_patch, kStreamChunkTriangles);
+        batch_triangles += stream.triangle_base(c.last_patch) - c.first_triangle;
+    }
+    return used;
+}
+
+// Evaluates and projects the chunks' patches (pass 4 of the pipeline, then gl_Position),
+// noting per chunk whether every vertex is finite.
+void evaluate_batch(const PatchStream& stream, std::span<PatchChunk> chunks, const glm::mat4& mvp,
+                    PatchStream::VertexNormals normals_mode) {
+    tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t k) {
+        PatchChunk& c = chunks[k];
+        SurfaceMesh& m = c.mesh;
+        stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode);
+        const std::size_t vertices = m.positions.size();
+        if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(vertices, 0);
+        c.clip.resize(vertices);
+        bool finite = true;
+        for (std::size_t v = 0; v < vertices; ++v) {
+            const glm::dvec3& q = m.positions[v];
+            // No short circuit: a loop without branches.
+            finite &= std::isfinite(q.x) & std::isfinite(q.y) & std::isfinite(q.z);
+            // The renderer's gl_Position of the evaluation's float position.
+            c.clip[v] = gl_position(mvp, glm::vec3(q));
+        }
+        c.finite = finite;
+    });
+}
+
+// A triangle id of a batch: its chunk and its index there; the chunk count for an id outside
+// the batch. Asked for every resolved pixel: per block of 2^10 ids, the chunk that holds the
+// block's first id, and from there the chunks that start inside the block, in order (chunks
+// hold about kStreamChunkTriangles, so a block holds one start at most but for small chunks:
+// a load and a compare instead of a binary search).
+class BatchIds {
+public:
+    BatchIds(std::span<const PatchChunk> chunks, std::uint32_t batch_end)
+        : batch_{chunks.front().first_triangle, batch_end - chunks.front().first_triangle} {
+        for (const PatchChunk& c : chunks) chunk_first_.push_back(c.first_triangle);
+        block_chunk_.resize((std::size_t{batch_.count} + (1u << kIdBlockBits) - 1) >> kIdBlockBits);
+        for (std::size_t b = 0, k = 0; b < block_chunk_.size(); ++b) {
+            const std::uint32_t first = batch_.first + static_cast<std::uint32_t>(b << kIdBlockBits);
+            while (k + 1 < chunk_first_.size() && chunk_first_[k + 1] <= first) ++k;
+            block_chunk_[b] = static_cast<std::uint32_t>(k);
+        }
+    }
+    IdRange range() const { return batch_; }
+    std::size_t none() const { return chunk_first_.size(); }
+    std::pair<std::size_t, std::uint32_t> find(std::uint32_t id) const {
+        if (!batch_.holds(id)) return {none(), 0};
+        std::size_t k = block_chunk_[(id - batch_.first) >> kIdBlockBits];
+        while (k + 1 < chunk_first_.size() && chunk_first_[k + 1] <= id) ++k;
+        return {k, id - chunk_first_[k]};
+    }
+
+private:
+    static constexpr int kIdBlockBits = 10;
+    IdRange batch_;
+    std::vector<std::uint32_t> chunk_first_;
+    std::vector<std::uint32_t> block_chunk_;
+};
+
+// The deferred vertex normals of the vertices the resolve reads: every pixel of the whole
+// quads it visits in the rectangles the draw changed (a superset does no harm) marks its
+// triangle's vertices; then their normals are evaluated chunk by chunk by
+// PatchStream::evaluate_points, so every value is the one emit() would have written.
+void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, const BatchIds& ids,
+                      const Framebuffer& fb, const RenderResult& result,
+                      const std::vector<Rasterizer::Rect>& drawn) {
+    const int width = result.width, height = result.height;
+    tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
+        const Rasterizer::Rect& rect = drawn[r];
+        const int row_end = std::min(2 * ((rect.row + rect.height + 1) / 2), height);
+        const int x_end = std::min(rect.x + 2 * ((rect.width + 1) / 2), width);
+        for (int row = 2 * (rect.row / 2); row < row_end; ++row) {
+            for (int x = rect.x; x < x_end; ++x) {
+                const auto [k, tri] = ids.find(fb.triangle_id[result.index(x, row)]);
+                if (k == ids.none()) continue;
+                PatchChunk& c = chunks[k];
+                for (const std::uint32_t v : c.mesh.triangles[tri])
+                    std::atomic_ref<std::uint8_t>(c.wins[v]).store(1, std::memory_order_relaxed);
+            }
+        }
+    });
+    tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t k) {
+        PatchChunk& c = chunks[k];
+        const std::size_t v0 = stream.vertex_base(c.first_patch);
+        SurfaceMesh some;
+        std::vector<glm::dvec3> no_faces;
+        std::vector<std::uint32_t> points;
+        for (std::size_t p = c.first_patch; p < c.last_patch; ++p) {
+            const std::size_t first = stream.vertex_base(p) - v0, end = stream.vertex_base(p + 1) - v0;
+            points.clear();
+            for (std::size_t v = first; v < end; ++v)
+                if (c.wins[v]) points.push_back(static_cast<std::uint32_t>(v - first));
+            if (points.empty()) continue;
+            stream.size(some, no_faces, points.size(), 0);
+            stream.evaluate_points(p, points, some, 0);
+            for (std::size_t j = 0; j < points.size(); ++j) c.mesh.normals[first + points[j]] = some.normals[j];
+        }
+    });
+}
+
 // Fill mode, streamed: the surface is evaluated, projected, rasterized and resolved a
 // batch of patches at a time and never held whole (render.h, RenderOptions::keep_surface).
 // Every value is the one the materialized path computes: PatchStream::emit writes what
@@ -409,7 +525,6 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     const bool defer_normals = stream.has_normals() && result.stats.triangles > kDeferNormalsTrianglesPerPixel * pixels;
     const auto normals_mode = defer_normals ? PatchStream::VertexNormals::later : PatchStream::VertexNormals::now;
 
-    // Chunks: runs of whole patches of about kStreamChunkTriangles triangles.
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
     std::vector<PatchChunk> chunks;
     std::vector<RasterChunk> views;
@@ -417,124 +532,40 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         std::max(kStreamBatchTriangles, kStreamBatchTrianglesPerThread * static_cast<std::size_t>(worker_threads()));
     std::size_t next_patch = 0;
     while (next_patch < n) {
-        // The next batch's chunk boundaries, in patch order.
-        chunks.reserve(64);
-        std::size_t used = 0, batch_triangles = 0;
-        while (next_patch < n && batch_triangles < batch_size) {
-            if (chunks.size() <= used) chunks.emplace_back();
-            PatchChunk& c = chunks[used++];
-            c.first_patch = next_patch;
-            c.first_triangle = static_cast<std::uint32_t>(stream.triangle_base(next_patch));
-            next_patch = c.last_patch = stream.run_end(next_patch, kStreamChunkTriangles);
-            batch_triangles += stream.triangle_base(c.last_patch) - c.first_triangle;
-        }
-        // Evaluate and project the chunks' patches (pass 4 of the pipeline, then gl_Position).
         auto lap = Clock::now();
-        tessref::parallel_for(std::size_t{0}, used, [&](std::size_t k) {
-            PatchChunk& c = chunks[k];
-            SurfaceMesh& m = c.mesh;
-            stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode);
-            const std::size_t vertices = m.positions.size();
-            if (defer_normals) c.wins.assign(vertices, 0);
-            c.clip.resize(vertices);
-            bool finite = true;
-            for (std::size_t v = 0; v < vertices; ++v) {
-                const glm::dvec3& q = m.positions[v];
-                // No short circuit: a loop without branches.
-                finite &= std::isfinite(q.x) & std::isfinite(q.y) & std::isfinite(q.z);
-                // The renderer's gl_Position of the evaluation's float position.
-                c.clip[v] = gl_position(mvp, glm::vec3(q));
-            }
-            c.finite = finite;
-        });
-        for (std::size_t k = 0; k < used; ++k) {
-            if (!chunks[k].finite) {
+        const std::size_t used = plan_batch(stream, next_patch, batch_size, chunks);
+        const std::span<PatchChunk> batch_chunks(chunks.data(), used);
+        evaluate_batch(stream, batch_chunks, mvp, normals_mode);
+        for (const PatchChunk& c : batch_chunks) {
+            if (!c.finite) {
                 // The materialized pipeline names the first non-finite vertex (and throws).
                 run_pipeline(pipeline_scene, pipeline_options);
                 throw Error("the surface has a non-finite vertex", Where::in_file(scene.file));
             }
         }
         views.clear();
-        for (std::size_t k = 0; k < used; ++k)
-            views.push_back({chunks[k].clip, chunks[k].mesh.triangles, chunks[k].first_triangle});
+        for (const PatchChunk& c : batch_chunks) views.push_back({c.clip, c.mesh.triangles, c.first_triangle});
         result.stats.seconds_pipeline += seconds_since(lap);
         lap = Clock::now();
         rasterizer.draw(views);
         result.stats.seconds_raster += seconds_since(lap);
         lap = Clock::now();
 
-        // Resolve the pixels whose visible triangle this batch drew.
-        const std::uint32_t batch_first = chunks[0].first_triangle;
-        const std::uint32_t batch_end = static_cast<std::uint32_t>(stream.triangle_base(chunks[used - 1].last_patch));
+        // Resolve the pixels whose visible triangle this batch drew, only where the draw
+        // changed a pixel (the rasterizer's tiles).
+        const BatchIds ids(batch_chunks, static_cast<std::uint32_t>(stream.triangle_base(chunks[used - 1].last_patch)));
         std::vector<SurfaceView> chunk_views;
-        std::vector<std::uint32_t> chunk_first;
-        for (std::size_t k = 0; k < used; ++k) {
-            chunk_views.push_back({chunks[k].mesh, chunks[k].face_normals, chunks[k].clip, stream.face_normals(), origin});
-            chunk_first.push_back(chunks[k].first_triangle);
-        }
-        // A triangle id of this batch: its chunk and its index there; used = none. Asked for
-        // every resolved pixel: per block of 2^10 ids, the chunk that holds the block's first
-        // id, and from there the chunks that start inside the block, in order (chunks hold
-        // about kStreamChunkTriangles, so a block holds one start at most but for small
-        // chunks: a load and a compare instead of a binary search).
-        const IdRange batch{batch_first, batch_end - batch_first};
-        constexpr int kIdBlockBits = 10;
-        std::vector<std::uint32_t> block_chunk((std::size_t{batch.count} + (1u << kIdBlockBits) - 1) >> kIdBlockBits);
-        for (std::size_t b = 0, k = 0; b < block_chunk.size(); ++b) {
-            const std::uint32_t first = batch_first + static_cast<std::uint32_t>(b << kIdBlockBits);
-            while (k + 1 < used && chunk_first[k + 1] <= first) ++k;
-            block_chunk[b] = static_cast<std::uint32_t>(k);
-        }
-        auto chunk_of = [&](std::uint32_t id) -> std::pair<std::size_t, std::uint32_t> {
-            if (!batch.holds(id)) return {used, 0};
-            std::size_t k = block_chunk[(id - batch_first) >> kIdBlockBits];
-            while (k + 1 < used && chunk_first[k + 1] <= id) ++k;
-            return {k, id - chunk_first[k]};
-        };
-        // Only where the draw changed a pixel (the rasterizer's tiles).
+        for (const PatchChunk& c : batch_chunks)
+            chunk_views.push_back({c.mesh, c.face_normals, c.clip, stream.face_normals(), origin});
         const std::vector<Rasterizer::Rect> drawn = rasterizer.drawn();
-        if (defer_normals && needs.normal) {
-            // Mark the vertices the resolve reads: every pixel of the whole quads it visits
-            // (a superset does no harm), then evaluate their normals chunk by chunk.
-            tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
-                const Rasterizer::Rect& rect = drawn[r];
-                const int row_end = std::min(2 * ((rect.row + rect.height + 1) / 2), height);
-                const int x_end = std::min(rect.x + 2 * ((rect.width + 1) / 2), width);
-                for (int row = 2 * (rect.row / 2); row < row_end; ++row) {
-                    for (int x = rect.x; x < x_end; ++x) {
-                        const auto [k, tri] = chunk_of(fb.triangle_id[result.index(x, row)]);
-                        if (k == used) continue;
-                        PatchChunk& c = chunks[k];
-                        for (const std::uint32_t v : c.mesh.triangles[tri])
-                            std::atomic_ref<std::uint8_t>(c.wins[v]).store(1, std::memory_order_relaxed);
-                    }
-                }
-            });
-            tessref::parallel_for(std::size_t{0}, used, [&](std::size_t k) {
-                PatchChunk& c = chunks[k];
-                const std::size_t v0 = stream.vertex_base(c.first_patch);
-                SurfaceMesh some;
-                std::vector<glm::dvec3> no_faces;
-                std::vector<std::uint32_t> points;
-                for (std::size_t p = c.first_patch; p < c.last_patch; ++p) {
-                    const std::size_t first = stream.vertex_base(p) - v0, end = stream.vertex_base(p + 1) - v0;
-                    points.clear();
-                    for (std::size_t v = first; v < end; ++v)
-                        if (c.wins[v]) points.push_back(static_cast<std::uint32_t>(v - first));
-                    if (points.empty()) continue;
-                    stream.size(some, no_faces, points.size(), 0);
-                    stream.evaluate_points(p, points, some, 0);
-                    for (std::size_t j = 0; j < points.size(); ++j) c.mesh.normals[first + points[j]] = some.normals[j];
-                }
-            });
-        }
+        if (defer_normals && needs.normal) complete_normals(stream, batch_chunks, ids, fb, result, drawn);
         tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
             const Rasterizer::Rect& rect = drawn[r];
             resolve(result, fb, pipe->levels, domain, needs, derivatives, false, options.provenance, rect.row / 2,
-                    (rect.row + rect.height + 1) / 2, batch,
+                    (rect.row + rect.height + 1) / 2, ids.range(),
                     [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
-                        const auto [k, tri] = chunk_of(id);
-                        if (k == used) return {nullptr, 0};
+                        const auto [k, tri] = ids.find(id);
+                        if (k == ids.none()) return {nullptr, 0};
                         return {&chunk_views[k], tri};
                     },
                     rect.x, rect.x + rect.width);

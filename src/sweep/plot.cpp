@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -12,8 +11,8 @@
 
 #include <glm/vec2.hpp>
 
-#include "common/fill.h"
 #include "image/image_io.h"
+#include "picture/svg.h"
 #include "tessref/error.h"
 
 namespace tessref::sweep {
@@ -32,10 +31,11 @@ constexpr double kLegendGap = 28.0;
 constexpr double kLegendRow = 18.0;
 constexpr double kCharWidth = 8.0;  // the PNG font's advance; the SVG's 12 px sans is narrower
 
-constexpr Rgb kInk{34, 34, 34};
-constexpr Rgb kMuted{110, 110, 110};
-constexpr Rgb kGrid{226, 226, 226};
-constexpr Rgb kFront{20, 20, 20};
+constexpr Colour kInk = Colour::from_codes(34, 34, 34);
+constexpr Colour kMuted = Colour::from_codes(110, 110, 110);
+constexpr Colour kGrid = Colour::from_codes(226, 226, 226);
+constexpr Colour kFront = Colour::from_codes(20, 20, 20);
+constexpr Colour kWhite = Colour::from_codes(255, 255, 255);
 
 std::string fixed(double x, int decimals = 2) {
     char buffer[64];
@@ -66,14 +66,14 @@ std::string tick_label(double value) {
 
 }  // namespace
 
-Rgb series_color(std::size_t i) {
+Colour series_colour(std::size_t i) {
     // Ten strong colours, then their light tints (the 20-colour "tab20" set), so that up to 20
     // series stay apart; beyond that the colours repeat.
-    static constexpr std::array<Rgb, 20> palette{{{31, 119, 180},  {255, 127, 14},  {44, 160, 44},   {214, 39, 40},
-                                                  {148, 103, 189}, {140, 86, 75},   {227, 119, 194}, {127, 127, 127},
-                                                  {188, 189, 34},  {23, 190, 207},  {174, 199, 232}, {255, 187, 120},
-                                                  {152, 223, 138}, {255, 152, 150}, {197, 176, 213}, {196, 156, 148},
-                                                  {247, 182, 210}, {199, 199, 199}, {219, 219, 141}, {158, 218, 229}}};
+    static constexpr std::array<Colour, 20> palette{Colour::from_codes(31, 119, 180),  Colour::from_codes(255, 127, 14),  Colour::from_codes(44, 160, 44),   Colour::from_codes(214, 39, 40),
+                                                  Colour::from_codes(148, 103, 189), Colour::from_codes(140, 86, 75),   Colour::from_codes(227, 119, 194), Colour::from_codes(127, 127, 127),
+                                                  Colour::from_codes(188, 189, 34),  Colour::from_codes(23, 190, 207),  Colour::from_codes(174, 199, 232), Colour::from_codes(255, 187, 120),
+                                                  Colour::from_codes(152, 223, 138), Colour::from_codes(255, 152, 150), Colour::from_codes(197, 176, 213), Colour::from_codes(196, 156, 148),
+                                                  Colour::from_codes(247, 182, 210), Colour::from_codes(199, 199, 199), Colour::from_codes(219, 219, 141), Colour::from_codes(158, 218, 229)};
     return palette[i % palette.size()];
 }
 
@@ -88,11 +88,11 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     shapes.width = static_cast<int>(legend_left + legend_width + 16.0);
     shapes.height = static_cast<int>(std::max(kPlotTop + kPlotHeight + kBottomMargin, kPlotTop + legend_height + 16.0));
 
-    auto line = [&](double x0, double y0, double x1, double y1, Rgb color, double width, bool dashed = false) {
-        shapes.lines.push_back({x0, y0, x1, y1, color, width, dashed});
+    auto line = [&](double x0, double y0, double x1, double y1, Colour colour, double width, bool dashed = false) {
+        shapes.lines.push_back({x0, y0, x1, y1, colour, width, dashed});
     };
-    auto text = [&](double x, double y, std::string s, Anchor anchor, Rgb color, bool bold = false) {
-        shapes.texts.push_back({x, y, std::move(s), anchor, color, bold});
+    auto text = [&](double x, double y, std::string s, Anchor anchor, Colour colour, bool bold = false) {
+        shapes.texts.push_back({x, y, std::move(s), anchor, colour, bold});
     };
     text(kPlotLeft, 26.0, spec.title, Anchor::start, kInk, true);
     text(kPlotLeft, kPlotTop - 12.0, spec.y_label, Anchor::start, kMuted);
@@ -153,7 +153,7 @@ PlotShapes layout_plot(const PlotSpec& spec) {
         for (const PlotPoint& p : spec.points) {
             if (p.series != s || p.own) continue;
             if (previous)
-                line(px(previous->x), py(previous->y), px(p.x), py(p.y), spec.series[s].color, 1.0);
+                line(px(previous->x), py(previous->y), px(p.x), py(p.y), spec.series[s].colour, 1.0);
             previous = &p;
         }
     }
@@ -170,11 +170,11 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     // then the rings.
     for (const PlotPoint& p : spec.points)
         if (!p.own)
-            shapes.markers.push_back({px(p.x), py(p.y), 3.5, PlotShapes::MarkerKind::dot, spec.series[p.series].color});
+            shapes.markers.push_back({px(p.x), py(p.y), 3.5, PlotShapes::MarkerKind::dot, spec.series[p.series].colour});
     for (const PlotPoint& p : spec.points) {
         if (!p.own) continue;
         shapes.markers.push_back({px(p.x), py(p.y), 7.0, PlotShapes::MarkerKind::diamond, kInk});
-        shapes.markers.push_back({px(p.x), py(p.y), 5.0, PlotShapes::MarkerKind::diamond, spec.series[p.series].color});
+        shapes.markers.push_back({px(p.x), py(p.y), 5.0, PlotShapes::MarkerKind::diamond, spec.series[p.series].colour});
     }
     for (const PlotPoint& p : spec.points)
         if (p.pareto) shapes.markers.push_back({px(p.x), py(p.y), 8.0, PlotShapes::MarkerKind::ring, kFront});
@@ -182,8 +182,8 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     // Legend: one row per series, then the two marks that are not colours.
     double y = kPlotTop;
     for (const PlotSeries& s : spec.series) {
-        line(legend_left, y - 4.0, legend_left + 20.0, y - 4.0, s.color, 1.0);
-        shapes.markers.push_back({legend_left + 10.0, y - 4.0, 3.5, PlotShapes::MarkerKind::dot, s.color});
+        line(legend_left, y - 4.0, legend_left + 20.0, y - 4.0, s.colour, 1.0);
+        shapes.markers.push_back({legend_left + 10.0, y - 4.0, 3.5, PlotShapes::MarkerKind::dot, s.colour});
         text(legend_left + 28.0, y, s.label, Anchor::start, kInk);
         y += kLegendRow;
     }
@@ -198,31 +198,12 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     return shapes;
 }
 
-std::string xml_escape(const std::string& text) {
-    std::string out;
-    for (char c : text) {
-        switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            case '\'': out += "&#39;"; break;
-            default: out += c;
-        }
-    }
-    return out;
-}
-
 // ---------------------------------------------------------------------------------------
 // SVG
 
 namespace {
 
-std::string hex(Rgb c) {
-    char buffer[8];
-    std::snprintf(buffer, sizeof buffer, "#%02x%02x%02x", c.r, c.g, c.b);
-    return buffer;
-}
+std::string num(double x) { return picture::number_fixed(x); }
 
 std::vector<glm::dvec2> diamond(double x, double y, double r) {
     return {{x, y - r}, {x + r, y}, {x, y + r}, {x - r, y}};
@@ -231,16 +212,11 @@ std::vector<glm::dvec2> diamond(double x, double y, double r) {
 }  // namespace
 
 std::string plot_to_svg(const PlotShapes& shapes) {
-    std::string svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"" +
-                      std::to_string(shapes.width) + "\" height=\"" + std::to_string(shapes.height) +
-                      "\" viewBox=\"0 0 " + std::to_string(shapes.width) + " " + std::to_string(shapes.height) +
-                      "\">\n";
-    svg += "<title>" + xml_escape(shapes.title) + "</title>\n";
-    svg += "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
+    std::string svg = picture::svg_begin(shapes.width, shapes.height, shapes.title, kWhite);
     svg += "<g stroke-linecap=\"butt\">\n";
     for (const PlotShapes::Line& l : shapes.lines) {
-        svg += "<line x1=\"" + fixed(l.x0) + "\" y1=\"" + fixed(l.y0) + "\" x2=\"" + fixed(l.x1) + "\" y2=\"" +
-               fixed(l.y1) + "\" stroke=\"" + hex(l.color) + "\" stroke-width=\"" + fixed(l.width) + "\"";
+        svg += "<line x1=\"" + num(l.x0) + "\" y1=\"" + num(l.y0) + "\" x2=\"" + num(l.x1) + "\" y2=\"" +
+               num(l.y1) + "\" stroke=\"" + picture::hex(l.colour) + "\" stroke-width=\"" + num(l.width) + "\"";
         if (l.dashed) svg += " stroke-dasharray=\"5 3\"";
         svg += "/>\n";
     }
@@ -248,30 +224,30 @@ std::string plot_to_svg(const PlotShapes& shapes) {
     for (const PlotShapes::Marker& m : shapes.markers) {
         switch (m.kind) {
             case PlotShapes::MarkerKind::dot:
-                svg += "<circle cx=\"" + fixed(m.x) + "\" cy=\"" + fixed(m.y) + "\" r=\"" + fixed(m.radius) +
-                       "\" fill=\"" + hex(m.color) + "\"/>\n";
+                svg += "<circle cx=\"" + num(m.x) + "\" cy=\"" + num(m.y) + "\" r=\"" + num(m.radius) +
+                       "\" fill=\"" + picture::hex(m.colour) + "\"/>\n";
                 break;
             case PlotShapes::MarkerKind::ring:
-                svg += "<circle cx=\"" + fixed(m.x) + "\" cy=\"" + fixed(m.y) + "\" r=\"" + fixed(m.radius) +
-                       "\" fill=\"none\" stroke=\"" + hex(m.color) + "\" stroke-width=\"1.50\"/>\n";
+                svg += "<circle cx=\"" + num(m.x) + "\" cy=\"" + num(m.y) + "\" r=\"" + num(m.radius) +
+                       "\" fill=\"none\" stroke=\"" + picture::hex(m.colour) + "\" stroke-width=\"1.50\"/>\n";
                 break;
             case PlotShapes::MarkerKind::diamond: {
                 svg += "<polygon points=\"";
                 const std::vector<glm::dvec2> points = diamond(m.x, m.y, m.radius);
                 for (std::size_t i = 0; i < points.size(); ++i)
-                    svg += (i ? " " : "") + fixed(points[i].x) + "," + fixed(points[i].y);
-                svg += "\" fill=\"" + hex(m.color) + "\"/>\n";
+                    svg += (i ? " " : "") + num(points[i].x) + "," + num(points[i].y);
+                svg += "\" fill=\"" + picture::hex(m.colour) + "\"/>\n";
                 break;
             }
         }
     }
     svg += "</g>\n<g font-family=\"DejaVu Sans, Verdana, Arial, sans-serif\" font-size=\"12\">\n";
     for (const PlotShapes::Text& t : shapes.texts) {
-        svg += "<text x=\"" + fixed(t.x) + "\" y=\"" + fixed(t.y) + "\" fill=\"" + hex(t.color) + "\"";
+        svg += "<text x=\"" + num(t.x) + "\" y=\"" + num(t.y) + "\" fill=\"" + picture::hex(t.colour) + "\"";
         if (t.anchor == Anchor::middle) svg += " text-anchor=\"middle\"";
         if (t.anchor == Anchor::end) svg += " text-anchor=\"end\"";
         if (t.bold) svg += " font-weight=\"bold\" font-size=\"14\"";
-        svg += ">" + xml_escape(t.text) + "</text>\n";
+        svg += ">" + picture::xml_escape(t.text) + "</text>\n";
     }
     svg += "</g>\n</svg>\n";
     return svg;
@@ -280,86 +256,17 @@ std::string plot_to_svg(const PlotShapes& shapes) {
 // ---------------------------------------------------------------------------------------
 // PNG
 
-namespace {
-
-// A 3x5 bitmap font, drawn for this report: each glyph is five rows of three cells, top row
-// first, '#' painted. Lower-case letters are drawn as capitals; a character without a glyph
-// is drawn as '?'.
-struct Glyph {
-    char c;
-    const char* rows;  // 15 cells
-};
-constexpr Glyph kFont[] = {
-    {' ', "..............."}, {'0', "####.##.##.####"}, {'1', ".#.##..#..#.###"}, {'2', "###..#####..###"},
-    {'3', "###..#.##..####"}, {'4', "#.##.####..#..#"}, {'5', "####..###..####"}, {'6', "####..####.####"},
-    {'7', "###..#..#.#..#."}, {'8', "####.#####.####"}, {'9', "####.####..####"}, {'A', ".#.#.#####.##.#"},
-    {'B', "##.#.###.#.###."}, {'C', ".###..#..#...##"}, {'D', "##.#.##.##.###."}, {'E', "####..##.#..###"},
-    {'F', "####..##.#..#.."}, {'G', ".###..#.##.#.##"}, {'H', "#.##.#####.##.#"}, {'I', "###.#..#..#.###"},
-    {'J', "..#..#..##.#.#."}, {'K', "#.##.###.#.##.#"}, {'L', "#..#..#..#..###"}, {'M', "#.########.##.#"},
-    {'N', "##.#.##.##.##.#"}, {'O', ".#.#.##.##.#.#."}, {'P', "##.#.###.#..#.."}, {'Q', ".#.#.##.###..##"},
-    {'R', "##.#.###.#.##.#"}, {'S', ".###...#...###."}, {'T', "###.#..#..#..#."}, {'U', "#.##.##.##.####"},
-    {'V', "#.##.##.##.#.#."}, {'W', "#.##.########.#"}, {'X', "#.##.#.#.#.##.#"}, {'Y', "#.##.#.#..#..#."},
-    {'Z', "###..#.#.#..###"}, {'.', ".............#."}, {',', "..........#.#.."}, {'-', "......###......"},
-    {'+', "....#.###.#...."}, {'_', "............###"}, {'/', "..#..#.#.#..#.."}, {'(', ".#.#..#..#...#."},
-    {')', ".#...#..#..#.#."}, {':', "....#.....#...."}, {'=', "...###...###..."}, {'%', "#.#..#.#.#..#.#"},
-    {'[', "##.#..#..#..##."}, {']', ".##..#..#..#.##"}, {'\'', ".#..#.........."}, {'?', "###..#.#.....#."},
-};
-
-const char* glyph_rows(char c) {
-    const char upper = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-    for (const Glyph& g : kFont)
-        if (g.c == upper) return g.rows;
-    return glyph_rows('?');
-}
-
-constexpr int kFontScale = 2;
-constexpr int kGlyphAdvance = 4 * kFontScale;  // three cells and a gap
-
-class Canvas {
-public:
-    Canvas(int width, int height)
-        : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height * 4, 255) {}
-
-    std::vector<std::uint8_t> take() { return std::move(pixels_); }
-
-    void set(int x, int y, Rgb c) {
-        if (x < 0 || y < 0 || x >= width_ || y >= height_) return;
-        std::uint8_t* p = &pixels_[(static_cast<std::size_t>(y) * width_ + x) * 4];
-        p[0] = c.r;
-        p[1] = c.g;
-        p[2] = c.b;
-        p[3] = 255;
-    }
-
-    void polygon(const std::vector<glm::dvec2>& points, Rgb c) {
-        fill_convex_polygon(std::span<const glm::dvec2>(points), width_, height_, 0.0,
-                            [&](int x, int y) { set(x, y, c); });
-    }
-
-    // A segment as a quad of the line's width (at least one pixel, so thin lines show).
-    void segment(glm::dvec2 a, glm::dvec2 b, double width, Rgb c) {
-        const glm::dvec2 d = b - a;
-        const double length = std::hypot(d.x, d.y);
-        const double half = std::max(width, 1.0) / 2.0;
-        if (length == 0.0) return;
-        const glm::dvec2 n{-d.y / length * half, d.x / length * half};
-        const glm::dvec2 t{d.x / length * 0.5, d.y / length * 0.5};
-        polygon({a - t + n, b + t + n, b + t - n, a - t - n}, c);
-    }
-
-    void line(const PlotShapes::Line& l) {
+void write_plot_png(const PlotShapes& shapes, const std::string& path) {
+    picture::Canvas canvas(shapes.width, shapes.height, 4, image::SampleType::uint8, kWhite, path);
+    for (const PlotShapes::Line& l : shapes.lines) {
         const glm::dvec2 a{l.x0, l.y0}, b{l.x1, l.y1};
-        if (!l.dashed) {
-            segment(a, b, l.width, l.color);
-            return;
-        }
-        const double length = std::hypot(b.x - a.x, b.y - a.y);
-        for (double s = 0.0; s < length; s += 8.0)  // the SVG's dash: 5 on, 3 off
-            segment(a + (b - a) * (s / length), a + (b - a) * (std::min(s + 5.0, length) / length), l.width,
-                    l.color);
+        const auto segment = [&](glm::dvec2 p, glm::dvec2 q) { canvas.fill_segment(p, q, l.width, l.colour); };
+        if (l.dashed)
+            picture::for_each_dash(a, b, 5.0, 3.0, segment);  // the SVG's dash
+        else
+            segment(a, b);
     }
-
-    void marker(const PlotShapes::Marker& m) {
+    for (const PlotShapes::Marker& m : shapes.markers) {
         constexpr int sides = 24;
         std::vector<glm::dvec2> circle;
         for (int i = 0; i < sides; ++i) {
@@ -367,51 +274,18 @@ public:
             circle.push_back({m.x + m.radius * std::cos(angle), m.y + m.radius * std::sin(angle)});
         }
         switch (m.kind) {
-            case PlotShapes::MarkerKind::dot: polygon(circle, m.color); break;
-            case PlotShapes::MarkerKind::diamond: polygon(diamond(m.x, m.y, m.radius), m.color); break;
+            case PlotShapes::MarkerKind::dot: canvas.fill_polygon(circle, m.colour, 0.0); break;
+            case PlotShapes::MarkerKind::diamond: canvas.fill_polygon(diamond(m.x, m.y, m.radius), m.colour, 0.0); break;
             case PlotShapes::MarkerKind::ring:
-                for (int i = 0; i < sides; ++i) segment(circle[i], circle[(i + 1) % sides], 1.5, m.color);
+                for (int i = 0; i < sides; ++i) canvas.fill_segment(circle[i], circle[(i + 1) % sides], 1.5, m.colour);
                 break;
         }
     }
-
-    void text(const PlotShapes::Text& t) {
-        const int width = static_cast<int>(t.text.size()) * kGlyphAdvance - kFontScale;
-        int x = static_cast<int>(std::lround(t.x));
-        if (t.anchor == Anchor::middle) x -= width / 2;
-        if (t.anchor == Anchor::end) x -= width;
-        const int top = static_cast<int>(std::lround(t.y)) - 5 * kFontScale;
-        for (char c : t.text) {
-            const char* rows = glyph_rows(c);
-            for (int row = 0; row < 5; ++row)
-                for (int col = 0; col < 3; ++col)
-                    if (rows[row * 3 + col] == '#')
-                        for (int dy = 0; dy < kFontScale; ++dy)
-                            for (int dx = 0; dx < kFontScale; ++dx)
-                                set(x + col * kFontScale + dx, top + row * kFontScale + dy, t.color);
-            x += kGlyphAdvance;
-        }
-    }
-
-private:
-    int width_, height_;
-    std::vector<std::uint8_t> pixels_;
-};
-
-}  // namespace
-
-std::vector<std::uint8_t> plot_to_rgba(const PlotShapes& shapes) {
-    Canvas canvas(shapes.width, shapes.height);
-    for (const PlotShapes::Line& l : shapes.lines) canvas.line(l);
-    for (const PlotShapes::Marker& m : shapes.markers) canvas.marker(m);
-    for (const PlotShapes::Text& t : shapes.texts) canvas.text(t);
-    return canvas.take();
-}
-
-void write_rgba_png(const std::vector<std::uint8_t>& rgba, int width, int height, const std::string& path) {
+    constexpr int font_scale = 2;  // the bitmap face at twice its size
+    for (const PlotShapes::Text& t : shapes.texts) canvas.bitmap_text(t.x, t.y, t.text, t.anchor, t.colour, font_scale);
     image::WriteOptions options;
     options.software_tag = true;  // and no time stamp: the same plot gives the same bytes
-    image::write_image(path, {width, height, 4, image::SampleType::uint8, rgba.data()}, options);
+    image::write_image(path, canvas.view(), options);
 }
 
 }  // namespace tessref::sweep

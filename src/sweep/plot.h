@@ -5,24 +5,25 @@
 //
 // layout_plot() lays the plot out once as plain shapes in pixels (y down); plot_to_svg() and
 // plot_to_rgba() are two back-ends of that one list, so the SVG and the PNG show the same
-// marks. The SVG carries every label as <text>; the PNG writes the same labels with a
-// built-in 3x5 bitmap font drawn at twice its size (digits, letters shown in capitals, a few
-// signs), so it needs no font file and its bytes do not depend on the machine.
+// marks. The SVG carries every label as <text>; the PNG writes the same labels in the
+// diagrams' bitmap face (src/picture/font.h) at twice its size, so it needs no font file and
+// its bytes do not depend on the machine.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "picture/canvas.h"
+
 namespace tessref::sweep {
 
-struct Rgb {
-    std::uint8_t r = 0, g = 0, b = 0;
-};
+using picture::Anchor;
+using picture::Colour;
 
 struct PlotSeries {
     std::string label;
-    Rgb color{};
+    Colour colour{};
 };
 
 struct PlotPoint {
@@ -44,19 +45,14 @@ struct PlotSpec {
     std::vector<std::vector<PlotPoint>> fronts;
 };
 
-// Text for XML or HTML, element content or a quoted attribute value: & < > " ' escaped.
-std::string xml_escape(const std::string& text);
-
 // The i-th colour of the report's palette (cycles).
-Rgb series_color(std::size_t i);
-
-enum class Anchor : std::uint8_t { start, middle, end };
+Colour series_colour(std::size_t i);
 
 // The plot as shapes (pixels, y down), painted in this order: lines, markers, texts.
 struct PlotShapes {
     struct Line {
         double x0, y0, x1, y1;
-        Rgb color;
+        Colour colour;
         double width;
         bool dashed;
     };
@@ -64,13 +60,13 @@ struct PlotShapes {
     struct Marker {
         double x, y, radius;
         MarkerKind kind;
-        Rgb color;  // fill (dot, diamond) or stroke (ring)
+        Colour colour;  // fill (dot, diamond) or stroke (ring)
     };
     struct Text {
         double x, y;  // baseline anchor point
         std::string text;
         Anchor anchor;
-        Rgb color;
+        Colour colour;
         bool bold;
     };
     int width = 0, height = 0;
@@ -86,10 +82,8 @@ PlotShapes layout_plot(const PlotSpec& spec);
 // with fixed formats, so the same spec gives the same bytes.
 std::string plot_to_svg(const PlotShapes& shapes);
 
-// The same shapes painted into an RGBA8 buffer (row 0 on top, opaque, no antialiasing).
-std::vector<std::uint8_t> plot_to_rgba(const PlotShapes& shapes);
-
-// Writes an RGBA8 buffer as a PNG (src/image/image_io.h; no time stamp). Throws tessref::Error.
-void write_rgba_png(const std::vector<std::uint8_t>& rgba, int width, int height, const std::string& path);
+// The same shapes painted as an RGBA 8-bit PNG (opaque, no antialiasing, no time stamp) at
+// `path`. Throws tessref::Error.
+void write_plot_png(const PlotShapes& shapes, const std::string& path);
 
 }  // namespace tessref::sweep

@@ -25,6 +25,7 @@
 #include <system_error>
 #include <tuple>
 
+#include "picture/svg.h"
 #include "sweep/plot.h"
 #include "sweep/report_data.h"
 #include "tessref/error.h"
@@ -73,7 +74,7 @@ void write_text_atomically(const fs::path& target, const std::string& bytes) {
 void write_png_atomically(const fs::path& target, const PlotShapes& shapes) {
     const fs::path temp = temp_name(target);  // keeps ".png": the writer picks the format by it
     try {
-        write_rgba_png(plot_to_rgba(shapes), shapes.width, shapes.height, temp.string());
+        write_plot_png(shapes, temp.string());
     } catch (...) {
         std::error_code ec;
         fs::remove(temp, ec);
@@ -85,7 +86,7 @@ void write_png_atomically(const fs::path& target, const PlotShapes& shapes) {
 // ---------------------------------------------------------------------------------------
 // Text
 
-std::string html(const std::string& s) { return xml_escape(s); }
+std::string html(const std::string& s) { return picture::xml_escape(s); }
 
 // A relative path as a URL: bytes outside the unreserved set and '/' percent-encoded.
 std::string url(const std::string& path) {
@@ -175,7 +176,7 @@ PlotSpec make_plot(const SweepTable& table, const std::vector<Series>& series, c
     std::vector<std::string> point_scene;
     std::size_t left_out = 0;
     for (std::size_t s = 0; s < series.size(); ++s) {
-        spec.series.push_back({series_label(series[s], table.has_camera_relative), series_color(s)});
+        spec.series.push_back({series_label(series[s], table.has_camera_relative), series_colour(s)});
         for (const SweepRow* row : series[s].rows) {
             const std::optional<double> x = cost(*row);
             if (!x || !(*x > 0) || !row->img_rmse) {  // a log axis has no place for 0

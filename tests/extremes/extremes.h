@@ -80,7 +80,7 @@ struct Terrain {
 
 // A plain PGM (P2): one code per sample, row 0 first. maxval 255 gives an 8-bit map, 65535 a
 // 16-bit one (codes up to 32768 only: OpenImageIO 2.4.7 reads larger 16-bit PNM codes one low,
-// README "Known limits of the dependencies").
+// docs/LIMITS.md, "Known limits of the dependencies").
 inline void write_pgm(const std::filesystem::path& path, int width, int height, int maxval,
                       const std::vector<int>& codes) {
     std::string text = "P2\n" + std::to_string(width) + " " + std::to_string(height) + "\n" + std::to_string(maxval) + "\n";

@@ -6,7 +6,7 @@
 //  - GL's texture sampling: a unorm16 code c reads c / 65535; clamp-to-edge makes the height
 //    constant within half a texel of the border; between texel centres it is bilinear
 //    (GL 4.6, 8.14.2), so a vertex's height follows from the codes by hand;
-//  - the documented limits (include/tessref/heightfield.h, README "Hostile input and
+//  - the documented limits (include/tessref/heightfield.h, docs/LIMITS.md "Hostile input and
 //    limits"): a height field needs 2 x 2 samples, at most 16384 per side; a NaN sample is an
 //    error naming the file and the texel unless a nodata policy fills it; a scene whose
 //    estimated triangle count exceeds [limits] max_triangles is refused before tessellating;

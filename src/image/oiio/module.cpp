@@ -172,16 +172,16 @@ int draw(const tessref_oiio_canvas* canvas, const tessref_oiio_draw* ops, std::s
         int result = 0;
         for (std::size_t i = 0; i < count; ++i) {
             const tessref_oiio_draw& op = ops[i];
-            const OIIO::cspan<float> color(op.color, static_cast<std::size_t>(std::min(canvas->channels, 4)));
+            const OIIO::cspan<float> colour(op.colour, static_cast<std::size_t>(std::min(canvas->channels, 4)));
             bool ok = true;
             switch (op.kind) {
                 case TESSREF_OIIO_LINE:
-                    ok = OIIO::ImageBufAlgo::render_line(image, op.x0, op.y0, op.x1, op.y1, color);
+                    ok = OIIO::ImageBufAlgo::render_line(image, op.x0, op.y0, op.x1, op.y1, colour);
                     break;
-                case TESSREF_OIIO_POINT: ok = OIIO::ImageBufAlgo::render_point(image, op.x0, op.y0, color); break;
+                case TESSREF_OIIO_POINT: ok = OIIO::ImageBufAlgo::render_point(image, op.x0, op.y0, colour); break;
                 case TESSREF_OIIO_BOX:
                 case TESSREF_OIIO_FILLED_BOX:
-                    ok = OIIO::ImageBufAlgo::render_box(image, op.x0, op.y0, op.x1, op.y1, color,
+                    ok = OIIO::ImageBufAlgo::render_box(image, op.x0, op.y0, op.x1, op.y1, colour,
                                                         op.kind == TESSREF_OIIO_FILLED_BOX);
                     break;
                 case TESSREF_OIIO_TEXT: {
@@ -189,7 +189,7 @@ int draw(const tessref_oiio_canvas* canvas, const tessref_oiio_draw* ops, std::s
                                        : op.x1 == 1 ? OIIO::ImageBufAlgo::TextAlignX::Center
                                                     : OIIO::ImageBufAlgo::TextAlignX::Right;
                     ok = OIIO::ImageBufAlgo::render_text(image, op.x0, op.y0, op.text ? op.text : "", op.size,
-                                                         op.font ? op.font : "", color, align,
+                                                         op.font ? op.font : "", colour, align,
                                                          OIIO::ImageBufAlgo::TextAlignY::Baseline);
                     break;
                 }

@@ -1,7 +1,7 @@
 #version 450 core
 // A user's evaluation shader: data/shaders/thesis_terrain.tese with every vertex raised by
 // one unit of height (the `+ 1.0` below), the kind of bug `tessref compare` against
-// `tessref render` must catch (test_gl_backend.cpp, README "Debugging your own shader").
+// `tessref render` must catch (test_gl_backend.cpp, docs/CLI.md, "Debugging your own shader").
 
 layout(quads, fractional_odd_spacing, ccw) in;
 

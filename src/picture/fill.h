@@ -1,5 +1,6 @@
-// src/common/fill.h — the polygon filler of tessref's diagrams: the pattern picture
-// (`tessref tessellate --format png`) and the defect picture (`tessref check --image`).
+// src/picture/fill.h — the polygon filler of tessref's diagrams: the pattern picture
+// (`tessref tessellate --format png`), the sweep plots and the defect picture (`tessref check
+// --image`), through picture::Canvas or directly.
 // Not the GL rasterizer of src/raster/: that one follows GL's fixed-point, top-left rule;
 // a diagram wants a shape's every pixel painted, edges included, in plain double.
 #pragma once
