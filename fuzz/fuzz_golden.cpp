@@ -1,22 +1,26 @@
 // fuzz/fuzz_golden.cpp — the golden digest files of `tessref golden verify`
-// (src/cli/golden_files.h): the same text read as capture.txt and as mesh.txt.
+// (tessref/golden.h): the same text read as capture.txt and as mesh.txt.
 #include "fuzz_common.h"
-#include "cli/golden_files.h"
+#include "tessref/golden.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace tessref;
     tessref_fuzz::init_limits();
     const std::string_view text = tessref_fuzz::as_text(data, size);
     tessref_fuzz::expect_only_tessref_errors([&] {
-        const cli::GoldenCapture g = cli::parse_golden_capture(text, "capture.txt");
-        // The reader's promises: one digest per listed patch (ids may repeat, never exceed),
-        // digests of their documented length.
-        if (g.patch_sha256.size() > g.patches || g.capture_sha256.size() != 64) std::abort();
-        for (const auto& [id, sha] : g.patch_sha256)
-            if (sha.size() != cli::kGoldenPatchDigits) std::abort();
+        const golden::CaptureDigest g = golden::parse_capture_digest(text, "capture.txt");
+        // The reader's promises: digests of their documented length, patch triangles that
+        // add up to the capture's.
+        if (g.sha256.size() != 64) std::abort();
+        std::size_t triangles = 0;
+        for (const golden::PatchDigest& p : g.patches) {
+            if (p.sha256.size() != golden::kPatchDigits) std::abort();
+            triangles += p.triangles;
+        }
+        if (triangles != g.triangles) std::abort();
     });
     tessref_fuzz::expect_only_tessref_errors([&] {
-        const cli::GoldenMesh m = cli::parse_golden_mesh(text, "mesh.txt");
+        const golden::MeshDigest m = golden::parse_mesh_digest(text, "mesh.txt");
         if (m.sha256.size() != 64) std::abort();
     });
     return 0;

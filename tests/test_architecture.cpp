@@ -9,6 +9,9 @@
 //    (tessref/check.h, src/check/), and check.h no longer declares the readers;
 //  - the GL backend's header is not a hub: it includes neither the CPU render (render.h),
 //    the pipeline (pipeline.h) nor captures (capture.h);
+//  - the golden workflow's domain (tolerances, digest files, verifying a scene) is the golden
+//    room's (tessref/golden.h, src/golden/), which knows nothing of the command line; the
+//    command (src/cli/cmd_golden.cpp) parses flags and prints, and runs no stage itself;
 //  - one picture kit: the diagrams (pattern pictures, sweep plots, defect pictures) share
 //    src/picture/'s colour, SVG escape and bitmap face; no other file defines its own;
 //  - parse_scene() runs no stage: a scene whose camera clearance the pipeline cannot
@@ -76,8 +79,8 @@ TEST(Layers, SceneLoadingIncludesNoLaterStage) {
     const auto bad = offending(sources_under(kSource / "src" / "scene"),
                                {"tessref/pipeline.h", "tessref/render.h", "tessref/raster.h", "tessref/raycast.h",
                                 "tessref/check.h", "tessref/capture.h", "tessref/gl_backend.h", "tessref/compare.h",
-                                "tessref/solid.h", "tessref/prepare.h", "pipeline/", "render/", "raster/", "check/",
-                                "capture/", "gl/", "cli/"});
+                                "tessref/solid.h", "tessref/prepare.h", "tessref/golden.h", "pipeline/", "render/",
+                                "raster/", "check/", "capture/", "gl/", "golden/", "cli/"});
     EXPECT_TRUE(bad.empty()) << joined(bad);
 }
 
@@ -95,6 +98,19 @@ TEST(Layers, GlBackendHeaderIsNoHub) {
     const auto bad = offending({kSource / "include" / "tessref" / "gl_backend.h"},
                                {"tessref/render.h", "tessref/pipeline.h", "tessref/capture.h"});
     EXPECT_TRUE(bad.empty()) << joined(bad);
+}
+
+TEST(Layers, GoldenDomainLivesInItsRoomNotInTheCommand) {
+    std::vector<fs::path> room = sources_under(kSource / "src" / "golden");
+    room.push_back(kSource / "include" / "tessref" / "golden.h");
+    EXPECT_GE(room.size(), 3u);
+    const auto up = offending(room, {"cli/"});
+    EXPECT_TRUE(up.empty()) << joined(up);
+    // The command reaches the stages only through the room.
+    const auto stages = offending({kSource / "src" / "cli" / "cmd_golden.cpp"},
+                                  {"tessref/capture.h", "tessref/compare.h", "tessref/pipeline.h", "tessref/mesh.h",
+                                   "tessref/prepare.h", "tessref/limits.h"});
+    EXPECT_TRUE(stages.empty()) << joined(stages);
 }
 
 // The text of every .h and .cpp under src/ but `except` (a folder), as (relative path, text).

@@ -17,6 +17,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -535,11 +536,133 @@ TEST_F(CaptureCommand, CompareFailsWithExit1NamingThePatchAndPassesWithTheTolera
     EXPECT_EQ(r.status, 1) << r.out << r.err;
     EXPECT_NE(r.out.find("  patch 1  values: 1 of 6 vertices fail; first at tess coord (1, 1, 0)"), std::string::npos)
         << r.out;
-    EXPECT_NE(r.out.find("(3 ulps)"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(3 ulps, |difference| "), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("\n  1:1\n"), std::string::npos) << r.out;
     r = run({"compare", path("ref.txt"), path("test.txt"), "--max-position-ulps", "3", "--json"});
     EXPECT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_EQ(nlohmann::json::parse(r.out)["worst_position"]["ulps"], 3);
+}
+
+// Ulps alone say nothing to a reader ("1036026642 ulps" for 0 against 0.094): the absolute
+// difference stands beside them, and a per-component summary (x, y, z, normal) covers the
+// whole capture. 0.094f's bits are 1036026642 above 0's (struct.pack("<f", 0.094) in Python),
+// 0.5f's 1056964608 (0x3f000000);
+// 12 corners are compared, so the means are 0.094 / 12 and 0.5 / 12.
+TEST_F(CaptureCommand, CompareGivesAbsoluteDifferencesAndAPerComponentSummary) {
+    const Capture ref = two_patches();
+    Capture test = ref;
+    test.vertices[0].position.z = 0.094f;  // patch 0's corner (0, 0), z 0 in the reference
+    test.vertices[7].normal.x = 0.5f;      // patch 1's corner (1, 0)
+    write_file(path("ref.txt"), tessref::capture_text(ref.vertices));
+    write_file(path("test.txt"), tessref::capture_text(test.vertices));
+    RunResult r = run({"compare", path("ref.txt"), path("test.txt")});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("worst position  1036026642 ulps (|difference| 0.094) at patch 0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("worst normal    1056964608 ulps (|difference| 0.5) at patch 1"), std::string::npos) << r.out;
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("\n  x +0 +0 +0 +0\n"))) << r.out;
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("\n  z +0\\.094 +0\\.00783333 +1036026642 +1\n"))) << r.out;
+    EXPECT_TRUE(std::regex_search(r.out, std::regex("\n  normal +0\\.5 +0\\.0416667 +1056964608 +1\n"))) << r.out;
+    r = run({"compare", path("ref.txt"), path("test.txt"), "--json"});
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_FLOAT_EQ(j["worst_position"]["abs"].get<double>(), 0.094f);
+    EXPECT_EQ(j["components"]["z"]["max_ulps"], 1036026642u);
+    EXPECT_EQ(j["components"]["z"]["compared"], 12u);
+    EXPECT_EQ(j["components"]["normal"]["beyond"], 1u);
+    EXPECT_EQ(j["components"]["y"]["max_abs"], 0.0);
+}
+
+// ---- check on a capture ---------------------------------------------------------------------
+
+// `tessref check` on a capture used to see every patch's own copies of its vertices: one
+// boundary loop per patch. It welds first, bitwise as `tessref mesh` does, so a capture of a
+// crack-free terrain passes and welds into the exported mesh's vertices (the PLY header's
+// count: the exporter's own weld).
+TEST_F(CaptureCommand, CheckWeldsACaptureAsTheExporterDoes) {
+    const std::string scene = scene_path("thesis-constant-1").string();
+    ASSERT_EQ(run({"mesh", scene, "-o", path("m.ply"), "--capture", path("c.txt")}).status, 0);
+    ASSERT_EQ(run({"mesh", scene, "--capture", path("c.ply")}).status, 0);
+    std::smatch m;
+    const std::string header = read_file(path("m.ply")).substr(0, 400);
+    ASSERT_TRUE(std::regex_search(header, m, std::regex("element vertex ([0-9]+)")));
+    for (const char* capture : {"c.txt", "c.ply"}) {
+        const RunResult r = run({"check", path(capture)});
+        EXPECT_EQ(r.status, 0) << capture << "\n" << r.out << r.err;
+        EXPECT_NE(r.out.find("welded bitwise into " + m[1].str() + " vertices"), std::string::npos) << r.out;
+        EXPECT_NE(r.out.find("tessellated differently: 0\n"), std::string::npos) << r.out;
+    }
+    // The exported (welded) PLY is still read as the mesh it is.
+    const RunResult mesh = run({"check", path("m.ply")});
+    EXPECT_EQ(mesh.status, 0) << mesh.out << mesh.err;
+    EXPECT_EQ(mesh.out.find("welded"), std::string::npos) << mesh.out;
+}
+
+// Patch 0 (x 0..1) at level 1; patch 1 (x 1..2) splits its u = 0 side, the one it shares
+// with patch 0's u = 1 side, at v = 0.5 (outer[0] = 2): patch 0 puts 2 vertices on the edge,
+// patch 1 puts 3, and the surface cracks there (a T-junction once welded).
+Capture cracked_pair(float shift = 0.0f, float middle_height = 0.0f) {
+    Capture c;
+    const TessLevels l0 = levels_of(1.0f, 1.0f);
+    TessLevels l1 = levels_of(1.0f, 1.0f);
+    l1.outer[0] = 2.0f;
+    const auto at0 = [&](float u, float v) { return vertex(0, {u, v, 0.0f}, {u, v, 0.0f}, {0, 0, 1}, l0); };
+    const auto at1 = [&](float u, float v) {
+        const float z = u == 0.0f && v == 0.5f ? middle_height : 0.0f;
+        return vertex(1, {u, v, 0.0f}, {1.0f + u + (u == 0.0f ? shift : 0.0f), v, z}, {0, 0, 1}, l1);
+    };
+    for (const CapturedVertex& v : {at0(0, 0), at0(1, 0), at0(1, 1), at0(0, 0), at0(1, 1), at0(0, 1)})
+        c.vertices.push_back(v);
+    for (const CapturedVertex& v :
+         {at1(0, 0), at1(1, 0), at1(1, 1), at1(0, 0), at1(1, 1), at1(0, 0.5f), at1(0, 0.5f), at1(1, 1), at1(0, 1)})
+        c.vertices.push_back(v);
+    return c;
+}
+
+TEST_F(CaptureCommand, CheckNamesTheSharedEdgesTwoPatchesTessellatedDifferently) {
+    write_file(path("c.txt"), tessref::capture_text(cracked_pair().vertices));
+    RunResult r = run({"check", path("c.txt")});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("tessellated differently: 1\n  patch 0 outer[2] = 1, patch 1 outer[0] = 2: their shared edge "
+                         "cracks (2 and 3 vertices on it), from (1, 0, 0) to (1, 1, 0)\n"),
+              std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("into 7 vertices"), std::string::npos) << r.out;  // 4 + 5 - 2 shared corners
+    EXPECT_NE(r.out.find("t_junction: 1"), std::string::npos) << r.out;      // patch 1's (1, 0.5) on patch 0's edge
+    EXPECT_NE(r.out.find("vertex and face ids are 0-based"), std::string::npos) << r.out;
+    r = run({"check", path("c.txt"), "--json"});
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    ASSERT_EQ(j["shared_edge_cracks"].size(), 1u);
+    EXPECT_EQ(j["shared_edge_cracks"][0]["outer"], nlohmann::json({2, 0}));
+    EXPECT_EQ(j["passed"], false);
+}
+
+// Patch 1's shared side moved 1e-4 along x: bitwise nothing welds across the edge (4 + 5
+// vertices); within 1e-3 the two shared corners weld (7), as in the unshifted pair.
+TEST_F(CaptureCommand, CheckWeldsACaptureWithinAToleranceWhenAsked) {
+    write_file(path("c.txt"), tessref::capture_text(cracked_pair(1e-4f).vertices));
+    RunResult r = run({"check", path("c.txt")});
+    EXPECT_NE(r.out.find("welded bitwise into 9 vertices"), std::string::npos) << r.out;
+    r = run({"check", path("c.txt"), "--weld-tolerance", "0.001"});
+    EXPECT_NE(r.out.find("welded within 0.001 into 7 vertices"), std::string::npos) << r.out;
+    r = run({"check", path("c.txt"), "--weld-tolerance", "-1"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    write_file(path("m.off"), "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    r = run({"check", path("m.off"), "--weld-tolerance", "0.001"});
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--weld-tolerance"), std::string::npos) << r.err;
+}
+
+// A cw where the twin says ccw passes compare and, as a mesh, every topological check: the
+// capture's triangles all wound the other way. On a terrain (the thesis's lies in the xy
+// plane, z up) every face then faces down, a defect class of its own.
+TEST_F(CaptureCommand, CheckReportsATerrainWoundTheOtherWay) {
+    ASSERT_EQ(run({"mesh", scene_path("thesis-constant-1").string(), "--capture", path("c.txt")}).status, 0);
+    Capture c = tessref::read_capture(path("c.txt"));
+    for (std::size_t i = 0; i < c.vertices.size(); i += 3) std::swap(c.vertices[i + 1], c.vertices[i + 2]);
+    write_file(path("cw.txt"), tessref::capture_text(c.vertices));
+    const RunResult r = run({"check", path("cw.txt")});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_NE(r.out.find("facing_down: 512  (terrain faces facing down its up axis"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("inconsistent_orientation"), std::string::npos) << r.out;
 }
 
 TEST_F(CaptureCommand, CompareBadInputIsExit2) {

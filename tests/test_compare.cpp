@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -297,7 +298,8 @@ TEST(CompareImages, DiffPictureMarksFailingPixelsOverADimmedReference) {
     set(test, 0, 1, 2, 0.0f);  // (0, 1) fails
     const CompareResult r = compare(ref, test);
     ASSERT_EQ(r.failing_pixels, 1u);
-    const FloatImage diff = tessref::difference_picture(ref, r);
+    // One failing pixel is both ends of the scale: red.
+    const FloatImage diff = tessref::difference_picture(ref, test, r).image;
     ASSERT_EQ(diff.channels, 3);
     EXPECT_EQ(diff.at(0, 1, 0), 1.0f);
     EXPECT_EQ(diff.at(0, 1, 1), 0.0f);
@@ -310,9 +312,88 @@ TEST(CompareImages, DiffPictureMarksFailingPixelsOverADimmedReference) {
     EXPECT_FLOAT_EQ(diff.at(2, 1, 2), 0.15f);
     // A grey reference (one channel) is dimmed into all three.
     FloatImage grey = filled(1, 1, 1, 0.8f);
-    const FloatImage grey_diff = tessref::difference_picture(grey, compare(grey, grey));
+    const FloatImage grey_diff = tessref::difference_picture(grey, grey, compare(grey, grey)).image;
     EXPECT_FLOAT_EQ(grey_diff.at(0, 0, 0), 0.2f);
     EXPECT_FLOAT_EQ(grey_diff.at(0, 0, 2), 0.2f);
+}
+
+// A half-texel bug fails most of a frame, a precision bug four pixels of 256 000: the diff
+// shows how much each failing pixel differs (the scale of compare.h, from blue, the
+// smallest difference, to red, the largest) and rings isolated failures so that they are
+// seen at 640x400; a band below the picture holds the scale.
+TEST(CompareImages, DiffPictureShowsMagnitudeAndRingsIsolatedFailures) {
+    const int w = 640, h = 400;
+    FloatImage ref = filled(w, h, 3, 0.5f);
+    FloatImage test = ref;
+    struct Spot {
+        int x, y;
+        float value;  // the test's red there: a difference of |value - 0.5|
+    };
+    const std::vector<Spot> isolated{{100, 50, 0.6f}, {300, 200, 0.8f}, {500, 350, 1.0f}, {20, 390, 0.7f}};
+    for (const Spot& s : isolated) set(test, s.x, s.y, 0, s.value);
+    for (int y = 200; y < 205; ++y)  // a 5 x 5 block differing by 0.4: not isolated
+        for (int x = 400; x < 405; ++x) set(test, x, y, 1, 0.9f);
+    const CompareResult r = compare(ref, test);
+    ASSERT_EQ(r.failing_pixels, 4u + 25u);
+    const tessref::DiffPicture d = tessref::difference_picture(ref, test, r);
+    EXPECT_EQ(d.isolated, 4u);
+    EXPECT_NEAR(d.smallest, 0.1, 1e-6);
+    EXPECT_NEAR(d.largest, 0.5, 1e-6);
+    ASSERT_TRUE(d.legend);
+    const FloatImage& p = d.image;
+    ASSERT_EQ(p.width, w);
+    ASSERT_EQ(p.height, h + tessref::kDiffLegendHeight);
+    const auto expect_colour = [&](int x, int y, std::array<float, 3> c, const char* what) {
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(p.at(x, y, k), c[static_cast<std::size_t>(k)], 1e-5) << what << " " << k;
+    };
+    expect_colour(100, 50, {0.0f, 0.4f, 1.0f}, "the smallest difference: blue");
+    expect_colour(500, 350, {1.0f, 0.0f, 0.0f}, "the largest: red");
+    // 0.3 is half way up the scale: half way from green (0, 0.85, 0.2) to yellow (1, 0.9, 0).
+    expect_colour(300, 200, {0.5f, 0.875f, 0.1f}, "half way");
+    // 0.4: three quarters up, a quarter of the way from yellow to red.
+    expect_colour(402, 202, {1.0f, 0.675f, 0.0f}, "the block");
+    // Each isolated failure is ringed kDiffRing pixels out, in magenta; inside the ring the
+    // reference dimmed to a quarter stays.
+    for (const Spot& s : isolated) {
+        expect_colour(s.x + tessref::kDiffRing, s.y, {1.0f, 0.0f, 1.0f}, "ring, right");
+        expect_colour(s.x, s.y - tessref::kDiffRing, {1.0f, 0.0f, 1.0f}, "ring, top");
+        expect_colour(s.x + 2, s.y, {0.125f, 0.125f, 0.125f}, "inside the ring");
+    }
+    // The block is not ringed.
+    expect_colour(402 + tessref::kDiffRing, 202, {0.125f, 0.125f, 0.125f}, "no ring around the block");
+    // The scale in the band: blue at its left end, red at its right.
+    bool blue = false, red = false;
+    for (int x = 0; x < w; ++x) {
+        blue |= p.at(x, h + 12, 0) == 0.0f && std::abs(p.at(x, h + 12, 1) - 0.4f) < 1e-6f && p.at(x, h + 12, 2) == 1.0f;
+        red |= p.at(x, h + 12, 0) == 1.0f && p.at(x, h + 12, 1) == 0.0f && p.at(x, h + 12, 2) == 0.0f;
+    }
+    EXPECT_TRUE(blue);
+    EXPECT_TRUE(red);
+    // A picture too narrow for the band keeps the pictures' size.
+    const FloatImage small = filled(3, 2, 3, 0.0f);
+    EXPECT_FALSE(tessref::difference_picture(small, small, compare(small, small)).legend);
+}
+
+// Where to look: the worst pixel and the first failing pixels, with both pictures' values.
+TEST(CompareImages, WorstAndFirstFailingPixelsCarryBothValues) {
+    FloatImage ref = filled(4, 3, 2, 0.25f);
+    FloatImage test = ref;
+    set(test, 3, 0, 1, 0.5f);   // 0.25 off in channel 1
+    set(test, 1, 2, 0, 0.75f);  // 0.5 off in channel 0: the worst
+    const CompareResult r = compare(ref, test);
+    const tessref::PixelDifference worst = tessref::worst_pixel(ref, test, r);
+    EXPECT_EQ(worst.x, 1);
+    EXPECT_EQ(worst.y, 2);
+    EXPECT_EQ(worst.channel, 0);
+    EXPECT_DOUBLE_EQ(worst.difference, 0.5);
+    EXPECT_EQ(worst.reference, (std::vector<float>{0.25f, 0.25f}));
+    EXPECT_EQ(worst.test, (std::vector<float>{0.75f, 0.25f}));
+    const auto first = tessref::first_failing_pixels(ref, test, r, 10);
+    ASSERT_EQ(first.size(), 2u);
+    EXPECT_EQ(first[0].x, 3);  // row order: (3, 0) before (1, 2)
+    EXPECT_EQ(first[0].y, 0);
+    EXPECT_EQ(first[0].channel, 1);
+    EXPECT_EQ(tessref::first_failing_pixels(ref, test, r, 1).size(), 1u);
 }
 
 TEST(CompareImages, RenderCompareImagesIsTheSameComparisonOverClampedRgb) {
@@ -436,8 +517,10 @@ TEST_F(CompareFiles, CommandEdgeShiftAndMaxFailingPixels) {
 }
 
 TEST_F(CompareFiles, CommandDiffPicturePixels) {
-    // REF 3 x 2 RGB codes (255, 204, 0) = (1, 0.8, 0); TEST differs at (1, 0) and (2, 1).
-    // Dimmed: (0.25, 0.2, 0) -> round(63.75, 51, 0) = (64, 51, 0); failing: (255, 0, 0).
+    // REF 3 x 2 RGB codes (255, 204, 0) = (1, 0.8, 0); TEST differs at (1, 0) by 9 codes in
+    // blue and at (2, 1) by 255 codes in red. Dimmed: (0.25, 0.2, 0) -> round(63.75, 51, 0)
+    // = (64, 51, 0); failing: the smallest difference blue (0, 0.4, 1) -> (0, 102, 255), the
+    // largest red (255, 0, 0).
     std::vector<std::uint8_t> ref(3 * 2 * 3), test;
     for (std::size_t i = 0; i < ref.size(); i += 3) {
         ref[i] = 255;
@@ -458,11 +541,22 @@ TEST_F(CompareFiles, CommandDiffPicturePixels) {
     const auto code = [&](int x, int y, int c) { return std::lround(diff.at(x, y, c) * 255.0f); };
     for (int y = 0; y < 2; ++y)
         for (int x = 0; x < 3; ++x) {
-            const bool failing = (x == 1 && y == 0) || (x == 2 && y == 1);
-            EXPECT_EQ(code(x, y, 0), failing ? 255 : 64) << x << ", " << y;
-            EXPECT_EQ(code(x, y, 1), failing ? 0 : 51) << x << ", " << y;
-            EXPECT_EQ(code(x, y, 2), 0) << x << ", " << y;
+            const bool small = x == 1 && y == 0, large = x == 2 && y == 1;
+            EXPECT_EQ(code(x, y, 0), small ? 0 : large ? 255 : 64) << x << ", " << y;
+            EXPECT_EQ(code(x, y, 1), small ? 102 : large ? 0 : 51) << x << ", " << y;
+            EXPECT_EQ(code(x, y, 2), small ? 255 : 0) << x << ", " << y;
         }
+    // The report names the worst pixel and lists the failing ones with both values.
+    EXPECT_NE(r.out.find("worst      (2, 1)  reference (1, 0.8, 0), test (0, 0.8, 0), difference 1 in R\n"),
+              std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("failing pixels (x, y), the first 2 of 2 in row order:\n"
+                         "  (1, 0)  reference (1, 0.8, 0), test (1, 0.8, 0.0352941), difference 0.0352941 in B\n"
+                         "  (2, 1)  reference (1, 0.8, 0), test (0, 0.8, 0), difference 1 in R\n"),
+              std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("blue 0.0352941 to red 1"), std::string::npos) << r.out;
+    const RunResult one = run({"compare", path("ref.png"), path("test.png"), "--list", "1"});
+    EXPECT_NE(one.out.find("the first 1 of 2 in row order:\n  (1, 0) "), std::string::npos) << one.out;
+    EXPECT_EQ(one.out.find("\n  (2, 1) "), std::string::npos) << one.out;
     // A passing comparison writes its diff too (all dimmed) and exits 0.
     const RunResult pass = run({"compare", path("ref.png"), path("ref.png"), "--diff", path("same.png")});
     EXPECT_EQ(pass.status, 0) << pass.err;

@@ -25,6 +25,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <regex>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -486,8 +487,63 @@ TEST_F(GlUserShaders, CopyOfTheTwinsEvaluationShaderGivesTheTwinsImage) {
                              "160x100", "--shader", "tese=" + copy.string()});
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("user tess_evaluation shader " + copy.string()), std::string::npos) << r.out;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;  // the twin declares what tessref sets
     const tessref::FloatImage twin = image(dir_ / "twin.png"), user = image(dir_ / "user.png");
     EXPECT_EQ(twin.samples, user.samples);
+}
+
+// docs/DEBUGGING.md walks a planted bug through tessref's output: run again, every line it
+// quotes of the two comparisons is what tessref prints, and the lines it names in the twin
+// are those lines.
+TEST_F(GlUserShaders, TheDebuggingPageQuotesWhatTessrefPrints) {
+    const std::string page = read_file(kSource / "docs" / "DEBUGGING.md");
+    std::string tese = read_file(kSource / "data" / "shaders" / "thesis_terrain.tese");
+    const std::string line = "evaluationOut.textureCoordinate = position.xy / scaleXY;";
+    const std::size_t at = tese.find(line);
+    ASSERT_NE(at, std::string::npos);
+    EXPECT_EQ(std::count(tese.begin(), tese.begin() + static_cast<std::ptrdiff_t>(at), '\n') + 1, 31);
+    EXPECT_NE(page.find("written on line 31"), std::string::npos);
+    const std::size_t height = tese.find("float height = texture(heightMap, evaluationOut.textureCoordinate).r * scaleZ;");
+    ASSERT_NE(height, std::string::npos);
+    EXPECT_EQ(std::count(tese.begin(), tese.begin() + static_cast<std::ptrdiff_t>(height), '\n') + 1, 34);
+    EXPECT_NE(page.find("(line 34)"), std::string::npos);
+    tese.replace(at, line.size(), "evaluationOut.textureCoordinate = (position.xy + 0.5) / scaleXY;");
+    write_file(dir_ / "mine.tese", tese);
+    const std::string scene = scene_path("thesis-map-4").string();
+    // Run in the test's directory, so that the file names print as the page quotes them.
+    const auto here = [&](const std::vector<std::string>& args) { return run_program(kExe, args, dir_, dir_); };
+    ASSERT_EQ(here({"gl", scene, "-o", "twin.png", "--capture", "twin.txt"}).status, 0);
+    const RunResult user = here({"gl", scene, "--shader", "tese=mine.tese", "-o", "mine.png", "--capture", "mine.txt"});
+    ASSERT_EQ(user.status, 0) << user.err;
+    const auto quoted = [&](const std::string& out, std::size_t lines) {
+        std::istringstream in(out);
+        std::string l;
+        for (std::size_t k = 0; k < lines && std::getline(in, l); ++k)
+            EXPECT_NE(page.find(l + "\n"), std::string::npos) << "not on the page: " << l;
+    };
+    const RunResult images = here({"compare", "twin.png", "mine.png", "--diff", "diff.png", "--list", "3"});
+    EXPECT_EQ(images.status, 1);
+    quoted(images.out, 100);
+    const RunResult captures = here({"compare", "twin.txt", "mine.txt"});
+    EXPECT_EQ(captures.status, 1);
+    quoted(captures.out, 11);  // to the worst position
+}
+
+// A misspelt uniform (scaleZZ for the twin's scaleZ) reads 0: a flat terrain, and the draw
+// counts are still the reference's, so nothing failed. It is a warning naming the uniform
+// and the file; the run still succeeds.
+TEST_F(GlUserShaders, AMisspeltUniformIsAWarningNamingItAndTheFile) {
+    const fs::path copy = dir_ / "misspelt.tese";
+    write_file(copy, std::regex_replace(read_file(kSource / "data" / "shaders" / "thesis_terrain.tese"),
+                                        std::regex("\\bscaleZ\\b"), "scaleZZ"));
+    const RunResult r = run({"gl", scene_path("thesis-all-10").string(), "-o", (dir_ / "user.png").string(), "--size",
+                             "160x100", "--shader", "tese=" + copy.string()});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("tessref: warning: the tess_evaluation shader " + copy.string() +
+                         " declares the uniform scaleZZ, which tessref does not set"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("scaleXY"), std::string::npos) << r.err;  // only the misspelt one
 }
 
 // A user's fragment shader writing constant red: red exactly where the twins' picture is not

@@ -9,8 +9,10 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "command_dir_test.h"
+#include "tessref/golden.h"
 
 namespace fs = std::filesystem;
 using tessref::test::read_file;
@@ -171,6 +173,161 @@ TEST_F(GoldenCommand, UpdateRefusesSceneNamesVerifyCouldNotReadBack) {
         EXPECT_EQ(r.status, 2) << name << ": " << r.out << r.err;
         EXPECT_FALSE(fs::exists(dir_ / "golden")) << name;
     }
+}
+
+// ---- verify reports every scene, whatever happens to one (issue 27) -----------------------
+
+// The verdict printed at the end of `scene`'s table row ("" when there is no row).
+std::string table_verdict(const std::string& out, const std::string& scene) {
+    const std::regex row("(^|\n)" + scene + " [^\n]* ([A-Z-]+)(\n|$)");
+    std::smatch m;
+    return std::regex_search(out, m, row) ? m[2].str() : std::string();
+}
+
+// One flipped byte in a golden image.png or a missing mesh.txt used to abort the whole run
+// (exit 2, a half-printed table, no JSON). Each scene now gets its own verdict, the table
+// and the JSON list every scene, and the exit status is the worst verdict's.
+TEST_F(GoldenCommand, EveryScenesVerdictWhateverHappensToOne) {
+    for (const char* scene : {"thesis-constant-1", "thesis-map-18", "thesis-map-4"}) update(scene);
+    const fs::path image = dir_ / "golden" / "thesis-constant-1" / "image.png";
+    std::string png = read_file(image);
+    png[png.size() / 2] = static_cast<char>(png[png.size() / 2] ^ 0x5a);  // inside the pixel data
+    write_file(image, png);
+    fs::remove(dir_ / "golden" / "thesis-map-4" / "mesh.txt");
+    const std::vector<std::string> args{"golden",  "verify",          "thesis-constant-1", "thesis-map-18", "thesis-map-4",
+                                        "--golden", path("golden"), "--scenes",          kScenes};
+    const auto r = run(args);
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_EQ(table_verdict(r.out, "thesis-constant-1"), "CORRUPT") << r.out;
+    EXPECT_EQ(table_verdict(r.out, "thesis-map-18"), "PASS") << r.out;
+    EXPECT_EQ(table_verdict(r.out, "thesis-map-4"), "MISSING") << r.out;
+    EXPECT_NE(r.out.find("mesh.txt is not there"), std::string::npos) << r.out;
+    EXPECT_NE(r.err.find("image.png"), std::string::npos) << r.err;
+
+    std::vector<std::string> json_args = args;
+    json_args.push_back("--json");
+    const auto j = run(json_args);
+    EXPECT_EQ(j.status, 2) << j.out << j.err;
+    const nlohmann::json report = nlohmann::json::parse(j.out);
+    ASSERT_EQ(report["scenes"].size(), 3u) << j.out;
+    EXPECT_EQ(report["scenes"][0]["verdict"], "CORRUPT");
+    EXPECT_EQ(report["scenes"][1]["verdict"], "PASS");
+    EXPECT_EQ(report["scenes"][2]["verdict"], "MISSING");
+    EXPECT_EQ(report["worst"], "CORRUPT");
+    EXPECT_EQ(report["passed"], false);
+
+    // A stale scene alone is exit 1 (the worst verdict), not 2.
+    update("thesis-map-4");
+    fs::copy_file(dir_ / "golden" / "thesis-map-18" / "image.png", dir_ / "golden" / "thesis-map-4" / "image.png",
+                  fs::copy_options::overwrite_existing);
+    const auto stale = run({"golden", "verify", "thesis-map-4", "thesis-map-18", "--golden", path("golden"), "--scenes", kScenes});
+    EXPECT_EQ(stale.status, 1) << stale.out << stale.err;
+    EXPECT_EQ(table_verdict(stale.out, "thesis-map-4"), "STALE") << stale.out;
+    EXPECT_EQ(table_verdict(stale.out, "thesis-map-18"), "PASS") << stale.out;
+}
+
+// The lines verify never read: a patch line's levels or digest edited by hand, while the
+// whole capture's digest still names the reference's capture, is a file that disagrees
+// with itself (CORRUPT), and so is an edited whole digest whose patch lines all match: no
+// change of the reference makes either. (It used to PASS, and to say "0 of 256 patches
+// differ (the patch count)".)
+TEST_F(GoldenCommand, AGoldenFileThatDisagreesWithItselfIsCorrupt) {
+    update("thesis-map-4");
+    const fs::path file = dir_ / "golden" / "thesis-map-4" / "capture.txt";
+    const std::string capture = read_file(file);
+    const auto verify_with = [&](const std::string& text) {
+        write_file(file, text);
+        return golden("verify", "thesis-map-4");
+    };
+    // Patch 17's first level.
+    auto r = verify_with(std::regex_replace(capture, std::regex("(\npatch 17 levels )[^ ]+"), "$010.5"));
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_EQ(table_verdict(r.out, "thesis-map-4"), "CORRUPT") << r.out;
+    EXPECT_NE(r.out.find("disagrees with itself"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("patch 17 ("), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("levels 0.5 "), std::string::npos) << r.out;
+    // Patch 17's digest.
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(capture, m, std::regex("\npatch 17 [^\n]* sha256 [0-9a-f]{15}([0-9a-f])")));
+    std::string edited = capture;
+    edited[static_cast<std::size_t>(m.position(1))] = m[1].str()[0] == '0' ? '1' : '0';
+    r = verify_with(edited);
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_EQ(table_verdict(r.out, "thesis-map-4"), "CORRUPT") << r.out;
+    // The whole digest alone.
+    edited = capture;
+    const std::size_t sha = edited.find("sha256 ", edited.find("capture patches")) + 7;
+    edited[sha] = edited[sha] == '0' ? '1' : '0';
+    r = verify_with(edited);
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_EQ(table_verdict(r.out, "thesis-map-4"), "CORRUPT") << r.out;
+    EXPECT_EQ(r.out.find("0 of 256"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("all 256 patch lines match"), std::string::npos) << r.out;
+    // The mesh digest's counts.
+    write_file(file, capture);
+    const fs::path mesh = dir_ / "golden" / "thesis-map-4" / "mesh.txt";
+    write_file(mesh, std::regex_replace(read_file(mesh), std::regex("triangles ([0-9]+)"), "triangles 1$1"));
+    r = golden("verify", "thesis-map-4");
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_EQ(table_verdict(r.out, "thesis-map-4"), "CORRUPT") << r.out;
+}
+
+// A scene of one's own (--scenes, --golden): the golden files' headers name the real scene
+// file and the full command that rewrites them; when the reference changes, the stale
+// patches are listed with their old and new levels. The constant control model gives every
+// level of every patch the scene's `level` (control.h), so 1 before and 3 after.
+TEST_F(GoldenCommand, OwnScenesNameTheirPathsAndStaleLevelsTheirValues) {
+    fs::create_directories(dir_ / "scenes");
+    const std::string scene = tessref::test::with_absolute_data_paths(read_file(kScenes + "/thesis-constant-1.toml"),
+                                                                      fs::path(kScenes).parent_path());
+    write_file(dir_ / "scenes" / "mine.toml", scene);
+    const auto u = run({"golden", "update", "mine", "--golden", path("golden"), "--scenes", path("scenes")});
+    ASSERT_EQ(u.status, 0) << u.out << u.err;
+    const std::string command =
+        "tessref golden update mine --golden " + path("golden") + " --scenes " + path("scenes");
+    const std::string capture = read_file(dir_ / "golden" / "mine" / "capture.txt");
+    EXPECT_NE(capture.find("# The CPU reference capture of " + path("scenes") + "/mine.toml,"), std::string::npos)
+        << capture.substr(0, 600);
+    EXPECT_NE(capture.find("# Regenerate: " + command + "\n"), std::string::npos) << capture.substr(0, 600);
+    const std::string mesh = read_file(dir_ / "golden" / "mine" / "mesh.txt");
+    EXPECT_NE(mesh.find("`tessref mesh " + path("scenes") + "/mine.toml --binary -o mesh.ply`"), std::string::npos) << mesh;
+    EXPECT_NE(mesh.find("Regenerate: " + command + "\n"), std::string::npos) << mesh;
+
+    write_file(dir_ / "scenes" / "mine.toml", std::regex_replace(scene, std::regex("\nlevel = 1.0"), "\nlevel = 3.0"));
+    const auto r = run({"golden", "verify", "mine", "--golden", path("golden"), "--scenes", path("scenes")});
+    EXPECT_EQ(r.status, 1) << r.out << r.err;
+    EXPECT_EQ(table_verdict(r.out, "mine"), "STALE") << r.out;
+    EXPECT_NE(r.out.find("256 of 256 patches differ"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("patch 0 (" + path("golden") + "/mine/capture.txt:"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("levels 1 1 1 1 1 1 in the file, 3 3 3 3 3 3 now"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("... and 248 more"), std::string::npos) << r.out;
+}
+
+// The shipped files name data/scenes/NAME.toml and `tessref golden update NAME`: the
+// defaults write what they always wrote (golden/ stays byte-identical).
+TEST(GoldenLocation, TheDefaultsNameWhatTheShippedFilesName) {
+    const tessref::golden::Location shipped;
+    EXPECT_EQ(shipped.scene_file("jacksboro").string(), "data/scenes/jacksboro.toml");
+    EXPECT_EQ(shipped.update_command("jacksboro"), "tessref golden update jacksboro");
+    const std::string file = read_file(fs::path(TESSREF_SOURCE_DIR) / "golden" / "jacksboro" / "capture.txt");
+    EXPECT_NE(file.find("of data/scenes/jacksboro.toml,"), std::string::npos);
+    EXPECT_NE(file.find("# Regenerate: tessref golden update jacksboro\n"), std::string::npos);
+    const tessref::golden::Location mine{"my scenes", "out"};
+    EXPECT_EQ(mine.update_command("a b"), "tessref golden update 'a b' --golden out --scenes 'my scenes'");
+}
+
+// Fixed-width columns that never run together, and a legend saying what each header means.
+TEST_F(GoldenCommand, TheTableHasALegendAndSeparatedColumns) {
+    update("thesis-map-4");
+    const auto r = golden("verify", "thesis-map-4");
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.out, m, std::regex("\nthesis-map-4((?: +[-0-9.e+]+){10})  PASS\n"))) << r.out;
+    for (const char* header : {"fail px", "lvl px", "max err", "pos ulp", "nrm ulp", "lvl patches", "lvl ulp", "lvl diff", "GL s"})
+        EXPECT_TRUE(std::regex_search(r.out, std::regex("\n  " + std::string(header) + " +[a-z.]"))) << header << "\n" << r.out;
+    EXPECT_NE(r.out.find("CORRUPT "), std::string::npos) << r.out;  // the verdicts' legend
+    const auto help = run({"golden", "--help"});
+    EXPECT_NE(help.out.find("lvl px"), std::string::npos) << help.out;
 }
 
 }  // namespace

@@ -412,7 +412,7 @@ TEST(PomScenes, GlTwinMatchesRenderOnATerrainOnLlvmpipe) {
 }
 
 // terrain-pom's capture (`tessref gl --capture`) against the CPU's (`tessref mesh --capture`)
-// under golden verify's capture rule (src/cli/cmd_golden.cpp): positions bit-identical,
+// under golden verify's capture rule (include/tessref/golden.h): positions bit-identical,
 // normals within 3 ulps or 1e-6. The normals are cosc422_terrain.tese's height-field normal
 // against the CPU geometry stage's (measured: 2 ulps at most).
 TEST(PomScenes, GlTerrainCaptureHasTheCpuHeightFieldNormals) {

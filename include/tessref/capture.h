@@ -39,6 +39,7 @@
 // It passes when no patch diverges.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -187,6 +188,16 @@ struct DivergingPatch {
     std::uint64_t normal_ulps = 0;
 };
 
+// One component over every compared triangle corner: x, y, z of the position, or the
+// normal (each corner's largest normal component difference).
+struct ComponentSummary {
+    std::size_t compared = 0;    // corners
+    std::uint64_t max_ulps = 0;
+    double max_abs = 0.0;        // the largest |reference - test| (+inf against a NaN)
+    double sum_abs = 0.0;        // for the mean: sum_abs / compared
+    std::size_t beyond = 0;      // corners where this component is beyond the tolerance
+};
+
 struct CaptureCompareResult {
     std::size_t reference_patches = 0;
     std::size_t test_patches = 0;
@@ -203,6 +214,7 @@ struct CaptureCompareResult {
     std::size_t value_divergences = 0;
     WorstUlps worst_position;
     WorstUlps worst_normal;
+    std::array<ComponentSummary, 4> components;  // x, y, z, normal
     std::vector<std::pair<std::uint32_t, std::size_t>> failing_vertices_per_patch;  // patch order
     std::vector<DivergingPatch> listed;  // the first max_listed diverging patches
     bool passed = true;

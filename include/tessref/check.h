@@ -29,6 +29,13 @@
 //   probe_odd_parity           closed mesh: a line through the mesh crossing it an odd
 //                              number of times
 //   probe_escape               closed mesh: a ray from inside that leaves without a hit
+//   facing_down                terrain: a face whose normal points down its up axis (the
+//                              up axis's positive direction: z for a terrain in the xy
+//                              plane), i.e. wound cw where the terrain is ccw from above; a
+//                              flipped face (inconsistent_orientation) is not reported again
+//
+// A capture (capture.h) is checked as the mesh weld_capture() makes of it, and
+// shared_edge_cracks() names the patches whose shared edges were tessellated differently.
 //
 // Faces with a repeated vertex and later copies of duplicate faces are reported and then
 // left out of the topology (edges, fans, loops, orientation), so one defect is reported as
@@ -48,6 +55,10 @@
 
 #include "tessref/mesh.h"
 #include "tessref/mesh_io.h"
+
+namespace tessref {
+struct Capture;
+}  // namespace tessref
 
 namespace tessref {
 
@@ -102,8 +113,9 @@ enum class DefectClass {
     probe_miss,
     probe_odd_parity,
     probe_escape,
+    facing_down,
 };
-inline constexpr int defect_class_count = 14;
+inline constexpr int defect_class_count = 15;
 std::string_view defect_class_name(DefectClass kind);         // "t_junction"
 std::string_view defect_class_description(DefectClass kind);  // "T-junction"
 
@@ -130,6 +142,11 @@ struct BoundaryLoop {
     bool closed = true;     // false: a chain that could not be closed (orientation breaks)
     bool allowed = false;   // the outer outline of an open mesh
     glm::dvec3 centroid{0.0};
+    // A defect loop's largest gap, in world units: the loop is split at its two vertices
+    // farthest apart into two sides, and this is the largest distance from a vertex of one
+    // side to the other side (a crack's width or step; about 0.7 of a round hole's
+    // diameter). 0 for the allowed outline.
+    double gap = 0.0;
 };
 
 struct ProbeStats {
@@ -175,6 +192,9 @@ struct CheckReport {
     std::string judged_as;     // "closed" or "open": the rules applied
     std::vector<BoundaryLoop> boundary_loops;  // at most max_locations, largest first
     std::vector<std::uint32_t> flipped_faces;  // minority orientation within a component
+    // Faces OpenMesh's kernel refused only because of the flipped faces (the flip is the
+    // defect, reported once as inconsistent_orientation; not again as refused_face).
+    std::vector<std::uint32_t> refused_for_flips;
     ProbeStats probe;
     std::vector<DefectReport> defects;  // one per DefectClass, in enum order
     bool passed = false;
@@ -203,6 +223,33 @@ struct CheckedMesh {
 };
 CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options = {},
                                 const std::function<void(double)>& read_progress = {});
+
+// read_and_check_mesh() of a mesh already in memory (a welded capture, below).
+CheckedMesh check_indexed_mesh(IndexedMesh mesh, const CheckOptions& options = {});
+
+// ---- captures (capture.h): every vertex of every primitive, each patch's own copies ------
+
+// A capture as a mesh to check: its vertices merged where their positions are bitwise equal
+// (weld_tolerance 0: the rule of `tessref mesh`'s export, so a crack between patches stays a
+// crack), or within weld_tolerance of an earlier kept vertex (each vertex joins the first
+// kept one that near, in capture order); its triangles in capture order, as emitted.
+// `source` names the capture in the report. Throws tessref::Error for a negative or
+// non-finite tolerance.
+IndexedMesh weld_capture(const Capture& capture, double weld_tolerance = 0.0, const std::string& source = {});
+
+// Two patches whose shared edge was tessellated differently: the vertices each put on the
+// edge differ, so the surface cracks there. The edge is shared when both patches have its
+// two corners at bitwise-equal positions; a side of the domain is the outer level GL pairs
+// with it (quads: outer[0] u = 0, outer[1] v = 0, outer[2] u = 1, outer[3] v = 1;
+// triangles: outer[0] u = 0, outer[1] v = 0, outer[2] w = 0).
+struct SharedEdgeCrack {
+    std::uint32_t patch_a = 0, patch_b = 0;  // patch_a < patch_b
+    int side_a = 0, side_b = 0;              // the outer level index of the edge in each
+    float level_a = 0.0f, level_b = 0.0f;    // those levels (0 when the capture has none)
+    std::size_t points_a = 0, points_b = 0;  // vertices each patch put on the edge
+    glm::dvec3 from{0.0}, to{0.0};           // the edge's corners in world space
+};
+std::vector<SharedEdgeCrack> shared_edge_cracks(const Capture& capture);
 
 // The whole report as JSON text (pretty-printed, ends with a newline).
 std::string report_json(const CheckReport& report);

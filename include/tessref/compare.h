@@ -46,6 +46,7 @@
 // files store it), as in render.h.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -117,11 +118,52 @@ FloatImage read_float_image(const std::string& path);
 // Throws tessref::Error as read_float_image does for a file it cannot read.
 std::uint64_t float_image_memory(const std::string& path, int* width = nullptr, int* height = nullptr);
 
-// The diff picture: RGB, failing pixels pure red (1, 0, 0), every other pixel the
-// reference dimmed to a quarter: kDiffDim * REF's colour clamped to [0, 1] (channels 0..2;
-// a one- or two-channel REF is grey from channel 0; alpha is not drawn).
+// One pixel of a comparison with both pictures' samples there: where to look first.
+struct PixelDifference {
+    int x = 0;
+    int y = 0;
+    std::vector<float> reference;  // every channel, in the file's order
+    std::vector<float> test;
+    double difference = 0.0;  // the largest same-position |REF - TEST| over the compared channels
+    int channel = 0;          // the channel of that difference
+};
+
+// The pixel with the largest same-position difference, the first in row order among equal
+// ones (pixel (0, 0), difference 0, when the pictures are equal).
+PixelDifference worst_pixel(const FloatImage& reference, const FloatImage& test, const CompareResult& result);
+// The first `count` failing pixels, in row order.
+std::vector<PixelDifference> first_failing_pixels(const FloatImage& reference, const FloatImage& test,
+                                                  const CompareResult& result, std::size_t count);
+
+// The diff picture, RGB. Pixel (x, y) of the pictures is pixel (x, y) of the diff:
+//  - a passing pixel is the reference dimmed to a quarter: kDiffDim * REF's colour clamped
+//    to [0, 1] (channels 0..2; a one- or two-channel REF is grey from channel 0);
+//  - a failing pixel shows how much it differs: its same-position difference d on the colour
+//    scale diff_scale_colour((d - smallest) / (largest - smallest)), from blue (the smallest
+//    difference of a failing pixel) through green and yellow to red (the largest);
+//  - an isolated failing pixel (fewer than kDiffIsolatedBelow failing pixels, itself
+//    included, within 3 pixels) is ringed in magenta (a square outline kDiffRing pixels
+//    out), so that a handful of failures are seen on a large picture; at most kDiffMaxRings;
+//  - below the pictures' rows, when they are at least kDiffLegendMinWidth wide, a legend band
+//    of kDiffLegendHeight rows: the scale, labelled with its ends (text by OpenImageIO when
+//    a font is found; the scale itself always).
 constexpr float kDiffDim = 0.25f;
-FloatImage difference_picture(const FloatImage& reference, const CompareResult& result);
+constexpr int kDiffIsolatedBelow = 4;
+constexpr int kDiffRing = 5;
+constexpr std::size_t kDiffMaxRings = 256;
+constexpr int kDiffLegendMinWidth = 160;
+constexpr int kDiffLegendHeight = 24;
+struct DiffPicture {
+    FloatImage image;
+    double smallest = 0.0;  // the scale's ends: the smallest and largest d of a failing pixel
+    double largest = 0.0;
+    std::size_t isolated = 0;  // isolated failing pixels (ringed: min(isolated, kDiffMaxRings))
+    bool legend = false;       // the band is there
+};
+DiffPicture difference_picture(const FloatImage& reference, const FloatImage& test, const CompareResult& result);
+// The scale's colour at t in [0, 1] (clamped): blue (0, 0.4, 1), green (0, 0.85, 0.2),
+// yellow (1, 0.9, 0), red (1, 0, 0) at t = 0, 1/3, 2/3, 1, linear between.
+std::array<float, 3> diff_scale_colour(double t);
 
 // Writes the picture in the format the extension of `path` names (PNG by tessref itself,
 // any other through OpenImageIO): 8-bit

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,10 @@
 namespace tessref {
 struct PipelineResult;  // pipeline.h
 }  // namespace tessref
+
+namespace tessref::shader {
+class Module;
+}  // namespace tessref::shader
 
 namespace tessref::gl {
 
@@ -147,6 +152,8 @@ struct SceneRender {
     std::vector<PatchDifference> differences;  // with batch_failure: the patches that differ
     std::shared_ptr<const PipelineResult> pipeline;  // the CPU pipeline the counts came from
     std::vector<StageShader> user_shaders;  // the user's files in place of twins, vertex .. fragment
+    // render_scene_isolated(): unset_uniform_warnings() of each user's stage.
+    std::vector<std::string> warnings;
     SceneRenderStats stats{};
 };
 
@@ -170,5 +177,14 @@ struct IsolatedRender {
 IsolatedRender render_scene_isolated(const Scene& scene, const SceneRenderOptions& options = {});
 // GL_RENDERER, from a context made in a child process as above.
 std::string renderer_isolated();
+
+// The uniforms tessref sets for `scene`, by name, as the GLSL twins declare them: what the
+// GL backend sets with glUniform* (and what a CPU run of a user's stage is to be given).
+std::set<std::string> uniforms_set(const Scene& scene);
+// One warning per loose uniform `stage` declares (shader::Module::uniform_names(); samplers
+// are not listed there) that tessref does not set for `scene`, naming the uniform and the
+// stage's file: it reads 0, so a misspelt name (scaleZZ for scaleZ) is a silently wrong
+// picture. For every place a user's stage is loaded.
+std::vector<std::string> unset_uniform_warnings(const Scene& scene, const shader::Module& stage);
 
 }  // namespace tessref::gl

@@ -27,6 +27,7 @@ std::string_view defect_class_name(DefectClass kind) {
         case DefectClass::probe_miss: return "probe_miss";
         case DefectClass::probe_odd_parity: return "probe_odd_parity";
         case DefectClass::probe_escape: return "probe_escape";
+        case DefectClass::facing_down: return "facing_down";
     }
     return "unknown";
 }
@@ -47,6 +48,7 @@ std::string_view defect_class_description(DefectClass kind) {
         case DefectClass::probe_miss: return "probe: rays through the terrain";
         case DefectClass::probe_odd_parity: return "probe: lines with odd crossings";
         case DefectClass::probe_escape: return "probe: rays escaping from inside";
+        case DefectClass::facing_down: return "terrain faces facing down its up axis (wound the other way)";
     }
     return "unknown";
 }
@@ -108,8 +110,17 @@ void classify_faces(CheckState& state) {
 
 void report_refused_faces(CheckState& state, const std::vector<std::uint32_t>& refused_faces) {
     const IndexedMesh& mesh = state.mesh;
+    // Where every edge has at most two faces and every vertex one fan, the kernel refuses a
+    // kept face only for an edge two faces traverse the same way: a flipped face, already
+    // reported as inconsistent_orientation and listed as flipped. One defect, one report.
+    const bool explained_by_flips = state.non_manifold_edges == 0 && state.inconsistent_edges != 0 &&
+                                    state.report.count(DefectClass::non_manifold_vertex) == 0;
     for (std::uint32_t f : refused_faces) {
         if (f >= mesh.face_count()) continue;
+        if (explained_by_flips && state.face_status[f] == face_kept) {
+            state.report.refused_for_flips.push_back(f);
+            continue;
+        }
         Defect d;
         const auto face = mesh.face(f);
         glm::dvec3 centre(0.0);
@@ -195,12 +206,12 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     report.closed = state.boundary.empty();
     state.progress("topology", 0.3);
     find_non_manifold_vertices(state);
-    // Only this step adds refused_face defects, and no later step reads them: here or first,
-    // the report is the same.
-    report_refused_faces(state, refused_faces(state));
     state.progress("topology", 0.4);
     find_components(state);
     check_orientation(state);
+    // Only this step adds refused_face defects, and no later step reads them; after the
+    // orientation, whose flipped faces explain some refusals (report_refused_faces).
+    report_refused_faces(state, refused_faces(state));
     state.progress("coincident vertices", 0.45);
     find_coincident_vertices(state);
     state.half_edges.clear();
@@ -211,6 +222,7 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     analyse_face_geometry(state);
     trace_boundary_loops(state);
     judge_boundary(state);
+    find_faces_facing_down(state);
     state.progress("T-junctions", 0.7);
     find_t_junctions(state);
     run_ray_probe(state);
@@ -253,12 +265,9 @@ CheckReport check_mesh(const IndexedMesh& mesh, const CheckOptions& options) {
     });
 }
 
-CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options,
-                                const std::function<void(double)>& read_progress) {
-    MeshFileOptions read_options;
-    read_options.progress = read_progress;
+CheckedMesh check_indexed_mesh(IndexedMesh mesh, const CheckOptions& options) {
     CheckedMesh out;
-    out.mesh = read_mesh_file(path, read_options);
+    out.mesh = std::move(mesh);
     std::vector<std::uint32_t>& refused = out.mesh.kernel_refused_faces;
     out.report = run_checks(out.mesh, options, [&refused](const CheckState& state) -> const std::vector<std::uint32_t>& {
         refused.clear();
@@ -275,6 +284,13 @@ CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& opt
         return refused;
     });
     return out;
+}
+
+CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& options,
+                                const std::function<void(double)>& read_progress) {
+    MeshFileOptions read_options;
+    read_options.progress = read_progress;
+    return check_indexed_mesh(read_mesh_file(path, read_options), options);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -158,6 +158,7 @@ void trace_boundary_loops(CheckState& state);
 void judge_boundary(CheckState& state);
 void find_coincident_vertices(CheckState& state);
 void find_t_junctions(CheckState& state);
+void find_faces_facing_down(CheckState& state);
 void run_ray_probe(CheckState& state);
 
 // The faces of `mesh` OpenMesh's kernel refuses (IndexedMesh::kernel_refused_faces), by

@@ -467,4 +467,33 @@ void find_t_junctions(CheckState& state) {
     }
 }
 
+// On a terrain, the faces whose oriented normal points down its up axis (the axis's positive
+// direction is up: GL's terrains lie in the xy plane with z up, or the xz plane with y up).
+// A terrain's faces all turn one way (analyse_face_geometry), so either none faces down or
+// every face does: the whole surface wound the other way, as a cw evaluation shader makes it.
+void find_faces_facing_down(CheckState& state) {
+    if (!state.report.terrain_like || state.up_sign > 0.0) return;
+    const IndexedMesh& mesh = state.mesh;
+    for (std::uint32_t f = 0; f < mesh.face_count(); ++f) {
+        if (state.face_status[f] != face_kept) continue;
+        if (!state.face_flipped.empty() && state.face_flipped[f]) continue;  // reported as a flip
+        const auto face = mesh.face(f);
+        glm::dvec3 normal(0.0), centre(0.0);
+        for (std::size_t i = 0; i < face.size(); ++i) {
+            const glm::dvec3& a = mesh.positions[face[i]];
+            const glm::dvec3& b = mesh.positions[face[(i + 1) % face.size()]];
+            normal += glm::cross(a, b);
+            centre += a;
+        }
+        if (!(normal[state.up_axis] < 0.0)) continue;
+        Defect d;
+        d.position = centre / double(face.size());
+        d.faces = {f};
+        d.vertices.assign(face.begin(), face.end());
+        d.detail = std::string("face ") + std::to_string(f) + " faces down " + "xyz"[state.up_axis] +
+                   " (the terrain is wound the other way)";
+        state.add_defect(DefectClass::facing_down, std::move(d));
+    }
+}
+
 }  // namespace tessref::check_detail

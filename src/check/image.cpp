@@ -36,6 +36,7 @@ Colour class_colour(DefectClass kind) {
         case DefectClass::probe_miss: return {0.05f, 0.05f, 0.05f};
         case DefectClass::probe_odd_parity: return {0.30f, 0.30f, 0.30f};
         case DefectClass::probe_escape: return {0.20f, 0.20f, 0.55f};
+        case DefectClass::facing_down: return {0.55f, 0.10f, 0.45f};
     }
     return {0.0f, 0.0f, 0.0f};
 }

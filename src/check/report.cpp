@@ -74,6 +74,7 @@ std::string report_json(const CheckReport& r) {
     for (const BoundaryLoop& loop : r.boundary_loops)
         loops.push_back({{"edges", loop.edge_count},
                          {"length", loop.length},
+                         {"gap", loop.gap},
                          {"area", loop.area},
                          {"closed", loop.closed},
                          {"allowed", loop.allowed},
@@ -81,6 +82,7 @@ std::string report_json(const CheckReport& r) {
                          {"vertices", loop.vertices}});
     j["boundary_loops"] = std::move(loops);
     j["flipped_faces"] = r.flipped_faces;
+    j["refused_for_flips"] = r.refused_for_flips;
     j["probe"] = {{"mode", r.probe.mode},
                   {"rays", r.probe.rays},
                   {"failed_rays", r.probe.failed_rays},
@@ -130,12 +132,18 @@ std::string report_text(const CheckReport& r, std::size_t locations_per_class) {
     out << "\n";
     if (!r.flipped_faces.empty())
         out << "  flipped     " << r.flipped_faces.size() << " face" << (r.flipped_faces.size() == 1 ? "" : "s")
-            << " against their neighbours: " << id_list(r.flipped_faces) << "\n";
+            << " against their neighbours: " << id_list(r.flipped_faces)
+            << (r.refused_for_flips.empty() ? std::string()
+                                            : " (OpenMesh's kernel refuses face" +
+                                                  std::string(r.refused_for_flips.size() == 1 ? " " : "s ") +
+                                                  id_list(r.refused_for_flips) + " because of them)")
+            << "\n";
     for (const std::string& note : r.reader_notes) out << "  note        " << note << "\n";
     std::size_t failing = 0;
     for (const DefectReport& d : r.defects) failing += d.count > 0;
     out << "  result      " << (r.passed ? "PASS" : "FAIL: " + std::to_string(failing) + " defect class" + (failing == 1 ? "" : "es"))
         << "\n";
+    if (!r.passed) out << "  ids         vertex and face ids are 0-based, in the order the file lists them\n";
     for (const DefectReport& d : r.defects) {
         if (d.count == 0) continue;
         out << "  " << defect_class_name(d.kind) << ": " << d.count << "  (" << defect_class_description(d.kind) << ")\n";

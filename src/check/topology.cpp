@@ -3,6 +3,7 @@
 // exactly (a half-edge data structure cannot even hold it).
 #include <algorithm>
 #include <atomic>
+#include <limits>
 #include <numeric>
 #include <queue>
 #include <string>
@@ -479,6 +480,47 @@ void trace_boundary_loops(CheckState& state) {
     }
 }
 
+namespace {
+
+double point_segment_distance(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
+    const glm::dvec3 ab = b - a;
+    const double length2 = glm::dot(ab, ab);
+    const double t = length2 > 0.0 ? std::clamp(glm::dot(p - a, ab) / length2, 0.0, 1.0) : 0.0;
+    return glm::distance(p, a + t * ab);
+}
+
+// BoundaryLoop::gap. Quadratic in the loop's vertices: a loop of more than kGapVertices is
+// measured on every k-th vertex (its sides' segments joining those).
+double loop_gap(const IndexedMesh& mesh, const BoundaryLoop& loop) {
+    constexpr std::size_t kGapVertices = 2048;
+    const std::size_t stride = loop.vertices.size() / kGapVertices + 1;
+    std::vector<glm::dvec3> p;
+    for (std::size_t i = 0; i < loop.vertices.size(); i += stride) p.push_back(mesh.positions[loop.vertices[i]]);
+    const std::size_t n = p.size();
+    if (n < 3) return n == 2 ? glm::distance(p[0], p[1]) : 0.0;
+    std::size_t a = 0, b = 0;
+    double farthest = -1.0;
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = i + 1; j < n; ++j)
+            if (const double d = glm::distance(p[i], p[j]); d > farthest) {
+                farthest = d;
+                a = i;
+                b = j;
+            }
+    // Side one: a .. b; side two: b .. a around the loop (the two share their ends).
+    const auto distance_to_side = [&](const glm::dvec3& q, std::size_t from, std::size_t to) {
+        double best = std::numeric_limits<double>::infinity();
+        for (std::size_t k = from; k != to; k = (k + 1) % n) best = std::min(best, point_segment_distance(q, p[k], p[(k + 1) % n]));
+        return best;
+    };
+    double gap = 0.0;
+    for (std::size_t k = a; k != b; k = (k + 1) % n) gap = std::max(gap, distance_to_side(p[k], b, a));
+    for (std::size_t k = b; k != a; k = (k + 1) % n) gap = std::max(gap, distance_to_side(p[k], a, b));
+    return gap;
+}
+
+}  // namespace
+
 void judge_boundary(CheckState& state) {
     CheckReport& report = state.report;
     const bool open_rules = report.expect == Expect::open ||
@@ -502,8 +544,9 @@ void judge_boundary(CheckState& state) {
         if (loop < loop_faces.size() && loop_faces[loop].size() < 64) loop_faces[loop].push_back(state.boundary[i].face);
     }
     for (std::size_t i = 0; i < state.loops.size(); ++i) {
-        const BoundaryLoop& loop = state.loops[i];
+        BoundaryLoop& loop = state.loops[i];
         if (loop.allowed) continue;
+        loop.gap = loop_gap(state.mesh, loop);
         Defect d;
         d.position = loop.centroid;
         d.vertices.assign(loop.vertices.begin(), loop.vertices.begin() + std::min<std::size_t>(loop.vertices.size(), 64));
@@ -515,7 +558,7 @@ void judge_boundary(CheckState& state) {
         d.measure = loop.length;
         d.detail = std::string(loop.closed ? "boundary loop" : "open boundary chain") + " of " +
                    std::to_string(loop.edge_count) + " edges, length " + format_number(loop.length) +
-                   (open_rules ? ", not the outer outline" : "");
+                   ", largest gap " + format_number(loop.gap) + (open_rules ? ", not the outer outline" : "");
         state.add_defect(DefectClass::boundary_loop, std::move(d));
     }
 

@@ -1,16 +1,20 @@
 // tessref check — watertightness and crack checks for any mesh (PLY, OBJ, OFF, STL).
 // Exit status: 0 the mesh passes, 1 it has defects, 2 it cannot be read.
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <optional>
 #include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "common/input_file.h"
 #include "image/image_io.h"
+#include "tessref/capture.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
 
@@ -27,22 +31,72 @@ struct CheckCommandOptions {
     int probe_resolution = 512;
     bool no_probe = false;
     std::size_t max_locations = 1000;
+    std::string weld_tolerance;  // captures; empty: bitwise
 };
+
+// A PLY that `tessref gl --capture` or `tessref mesh --capture` wrote: its header lists the
+// capture's vertex properties (a welded export of `tessref mesh` lists them too; read_capture
+// then refuses it, and it is checked as the mesh it is).
+bool ply_with_capture_properties(const std::string& path) {
+    std::string header;
+    try {
+        header = InputFile(path, "mesh file").head(8192);  // never blocks on a FIFO
+    } catch (const Error&) {
+        return false;  // the mesh reader names what is wrong with it
+    }
+    const std::size_t end = header.find("end_header");
+    if (header.rfind("ply", 0) != 0 || end == std::string::npos) return false;
+    header.resize(end);
+    return header.find(" patch_id\n") != std::string::npos && header.find(" tess_u\n") != std::string::npos;
+}
+
+// The capture `path` names, when it is one: a .txt, or a .ply with the capture's properties
+// whose triangles share no corner.
+std::optional<Capture> capture_to_check(const std::string& path) {
+    if (!is_capture_path(path)) return std::nullopt;
+    if (capture_format_from_path(path) == CaptureFormat::text) return read_capture(path);
+    if (!ply_with_capture_properties(path)) return std::nullopt;
+    try {
+        return read_capture(path);
+    } catch (const Error&) {
+        return std::nullopt;  // a welded export: the mesh reader reads it (and names its errors)
+    }
+}
+
+std::string short_number(double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.7g", x);
+    return text;
+}
+
+std::string vec_text(const glm::dvec3& p) {
+    return "(" + short_number(p.x) + ", " + short_number(p.y) + ", " + short_number(p.z) + ")";
+}
+
+std::string crack_text(const SharedEdgeCrack& c, bool levels) {
+    const auto level = [&](std::uint32_t patch, int side, float value) {
+        return "patch " + std::to_string(patch) + " outer[" + std::to_string(side) + "]" +
+               (levels ? " = " + format_float_short(value) : std::string());
+    };
+    return level(c.patch_a, c.side_a, c.level_a) + ", " + level(c.patch_b, c.side_b, c.level_b) +
+           ": their shared edge cracks (" + std::to_string(c.points_a) + " and " + std::to_string(c.points_b) +
+           " vertices on it), from " + vec_text(c.from) + " to " + vec_text(c.to);
+}
 
 // --tolerance as typed: a finite distance >= 0. Read here rather than by CLI11, whose
 // range check words its message with DBL_MAX written out (309 digits) and lets NaN by.
-double parse_tolerance(const std::string& text) {
+double parse_distance(const std::string& text, const std::string& flag) {
     const std::optional<double> value = parse_double(text);
-    if (!value) throw Error("'" + text + "' is not a number", Where::in_file("--tolerance"));
+    if (!value) throw Error("'" + text + "' is not a number", Where::in_file(flag));
     if (!std::isfinite(*value) || *value < 0.0)
-        throw Error("'" + text + "' is not a distance: give a finite number >= 0", Where::in_file("--tolerance"));
+        throw Error("'" + text + "' is not a distance: give a finite number >= 0", Where::in_file(flag));
     return *value;
 }
 
 int run_check(const CheckCommandOptions& options) {
     // Flags first: nothing is read for a command line that cannot succeed.
     const std::optional<double> tolerance =
-        options.tolerance.empty() ? std::nullopt : std::optional<double>(parse_tolerance(options.tolerance));
+        options.tolerance.empty() ? std::nullopt : std::optional<double>(parse_distance(options.tolerance, "--tolerance"));
     if (!options.image.empty()) image::require_writable(options.image, "--image");
     StageProgress progress;
     CheckOptions check;
@@ -54,9 +108,22 @@ int run_check(const CheckCommandOptions& options) {
     check.progress = [&progress](std::string_view name, double fraction) {
         progress("check: " + std::string(name), fraction);
     };
+    const std::optional<double> weld =
+        options.weld_tolerance.empty() ? std::nullopt : std::optional<double>(parse_distance(options.weld_tolerance, "--weld-tolerance"));
+    // A capture is welded first (each patch emits its own copies of its vertices), and its
+    // patches' sides are held against each other.
+    const std::optional<Capture> capture = capture_to_check(options.mesh);
+    if (weld && !capture)
+        throw Error("--weld-tolerance welds a capture (.txt, or .ply of --capture); " + options.mesh + " is a mesh",
+                    Where::in_file("--weld-tolerance"));
+    const double weld_distance = weld ? *weld : 0.0;
+    std::vector<SharedEdgeCrack> cracks;
+    if (capture) cracks = shared_edge_cracks(*capture);
     // read_mesh_for_check() and check_mesh(), with OpenMesh's import skipped where it cannot refuse a face.
-    const CheckedMesh checked = read_and_check_mesh(
-        options.mesh, check, [&progress](double fraction) { progress("check: reading", fraction); });
+    const CheckedMesh checked =
+        capture ? check_indexed_mesh(weld_capture(*capture, weld_distance, options.mesh), check)
+                : read_and_check_mesh(options.mesh, check,
+                                      [&progress](double fraction) { progress("check: reading", fraction); });
     const IndexedMesh& mesh = checked.mesh;
     const CheckReport& report = checked.report;
     progress = StageProgress();  // clears the last stage's line
@@ -70,8 +137,40 @@ int run_check(const CheckCommandOptions& options) {
         }
         output.commit();
     }
-    std::cout << (options.json ? report_json(report) : report_text(report)) << std::flush;
-    return report.passed ? 0 : 1;
+    const bool passed = report.passed && cracks.empty();
+    if (options.json) {
+        nlohmann::json j = nlohmann::json::parse(report_json(report));
+        if (capture) {
+            j["capture"] = {{"triangles", capture->vertices.size() / 3},
+                            {"weld_tolerance", weld_distance},
+                            {"welded_vertices", mesh.vertex_count()}};
+            j["shared_edge_cracks"] = nlohmann::json::array();
+            for (const SharedEdgeCrack& c : cracks)
+                j["shared_edge_cracks"].push_back(
+                    {{"patches", {c.patch_a, c.patch_b}},
+                     {"outer", {c.side_a, c.side_b}},
+                     {"levels", capture->has_levels ? nlohmann::json{c.level_a, c.level_b} : nlohmann::json(nullptr)},
+                     {"vertices_on_edge", {c.points_a, c.points_b}},
+                     {"from", {c.from.x, c.from.y, c.from.z}},
+                     {"to", {c.to.x, c.to.y, c.to.z}}});
+            j["passed"] = passed;
+        }
+        std::cout << j.dump(2) << "\n" << std::flush;
+    } else {
+        std::string text;
+        if (capture) {
+            text += "capture " + options.mesh + ": " + std::to_string(capture->vertices.size() / 3) +
+                    " triangles, their " + std::to_string(capture->vertices.size()) + " corners welded " +
+                    (weld_distance > 0 ? "within " + short_number(weld_distance) : std::string("bitwise")) +
+                    " into " + std::to_string(mesh.vertex_count()) + " vertices (ids below are the welded mesh's, 0-based)\n";
+            text += "shared edges whose sides the two patches tessellated differently: " + std::to_string(cracks.size()) + "\n";
+            for (std::size_t k = 0; k < cracks.size() && k < 20; ++k) text += "  " + crack_text(cracks[k], capture->has_levels) + "\n";
+            if (cracks.size() > 20) text += "  ... and " + std::to_string(cracks.size() - 20) + " more\n";
+        }
+        std::cout << text << report_text(report) << (capture && report.passed && !passed ? "FAIL: shared edges crack\n" : "")
+                  << std::flush;
+    }
+    return passed ? 0 : 1;
 }
 
 }  // namespace
@@ -83,7 +182,13 @@ Command add_check_command(CLI::App& parent) {
         "Check a mesh (PLY, OBJ, OFF, STL) for holes, cracks, T-junctions, non-manifold edges and vertices, "
         "flipped or degenerate or duplicate faces and unwelded vertices, with an Embree ray-cast probe. "
         "Exit status 0: it passes, 1: it has defects, 2: it cannot be read.");
-    app->add_option("mesh", options->mesh, "The mesh file")->required();
+    app->add_option("mesh", options->mesh,
+                    "The mesh file, or a capture (.txt, or the unwelded .ply of --capture): welded first (bitwise, "
+                    "or --weld-tolerance), and its patches' shared edges checked for differing tessellations")
+        ->required();
+    app->add_option("--weld-tolerance", options->weld_tolerance,
+                    "Captures: weld corners within this distance instead of bitwise-equal ones")
+        ->type_name("DISTANCE");
     app->add_option("--expect", options->expect,
                     "closed: no boundary edge at all; open: boundary edges only as one outer outline (a terrain); "
                     "auto: closed unless the mesh is open and looks like a terrain")

@@ -2,10 +2,12 @@
 // (tessref/compare.h), or, for two captures (.txt, .ply: tessref/capture.h), every vertex
 // of every patch in ulps. Exit status: 0 it passes, 1 it fails, 2 an input cannot be read,
 // two images differ in size or channel count, or a flag is wrong (then nothing is written).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -40,6 +42,7 @@ struct CompareCommandOptions {
     std::string max_normal_abs;
     bool json = false;
     bool ignore_alpha = false;
+    std::string list = "10";  // failing pixels listed with their values
 };
 
 // A count flag as typed: a whole number >= 0.
@@ -75,8 +78,36 @@ std::string number_text(double x) {
 // JSON has no infinity or NaN: a statistic that is not finite is null.
 nlohmann::json number_json(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
+// What the report says of the pixels themselves: the worst one, the first failing ones, the
+// diff picture's scale.
+struct PixelReport {
+    PixelDifference worst;
+    std::vector<PixelDifference> failing;
+    std::optional<DiffPicture> diff;
+};
+
+std::string samples_text(const std::vector<float>& samples) {
+    std::string s = "(";
+    for (std::size_t c = 0; c < samples.size(); ++c) s += (c ? ", " : "") + number_text(samples[c]);
+    return s + ")";
+}
+
+std::string pixel_text(const FloatImage& reference, const PixelDifference& p) {
+    return "(" + std::to_string(p.x) + ", " + std::to_string(p.y) + ")  reference " + samples_text(p.reference) +
+           ", test " + samples_text(p.test) + ", difference " + number_text(p.difference) + " in " +
+           channel_name(reference, p.channel);
+}
+
+nlohmann::json pixel_json(const FloatImage& reference, const PixelDifference& p) {
+    nlohmann::json ref = nlohmann::json::array(), test = nlohmann::json::array();
+    for (const float v : p.reference) ref.push_back(number_json(v));
+    for (const float v : p.test) test.push_back(number_json(v));
+    return {{"x", p.x}, {"y", p.y}, {"reference", ref}, {"test", test}, {"difference", number_json(p.difference)},
+            {"channel", utf8_for_json(channel_name(reference, p.channel))}};
+}
+
 std::string report_text(const CompareCommandOptions& options, const FloatImage& reference,
-                        const CompareOptions& compare, const CompareResult& result) {
+                        const CompareOptions& compare, const CompareResult& result, const PixelReport& pixels) {
     std::string channels, maxima;
     for (std::size_t k = 0; k < result.compared_channels.size(); ++k) {
         const std::string name = channel_name(reference, result.compared_channels[k]);
@@ -94,13 +125,28 @@ std::string report_text(const CompareCommandOptions& options, const FloatImage& 
     text += "rmse       " + number_text(result.rmse) + "\n";
     text += "psnr       " + number_text(result.psnr) + " dB\n";
     text += "max error  " + number_text(result.max_error) + "  (" + maxima + ")\n";
-    if (!options.diff.empty()) text += "diff       " + options.diff + "\n";
+    if (pixels.worst.difference > 0) text += "worst      " + pixel_text(reference, pixels.worst) + "\n";
+    if (!pixels.failing.empty()) {
+        text += "failing pixels (x, y), the first " + std::to_string(pixels.failing.size()) + " of " +
+                std::to_string(result.failing_pixels) + " in row order:\n";
+        for (const PixelDifference& p : pixels.failing) text += "  " + pixel_text(reference, p) + "\n";
+    }
+    if (pixels.diff) {
+        const DiffPicture& d = *pixels.diff;
+        text += "diff       " + options.diff + ": passing pixels the reference dimmed, failing pixels by their largest "
+                "channel difference, blue " + number_text(d.smallest) + " to red " + number_text(d.largest);
+        if (d.isolated)
+            text += "; " + std::to_string(d.isolated) + " isolated failing pixels ringed in magenta" +
+                    (d.isolated > kDiffMaxRings ? " (the first " + std::to_string(kDiffMaxRings) + ")" : std::string());
+        if (d.legend) text += "; the scale below row " + std::to_string(result.height - 1);
+        text += "\n";
+    }
     text += result.passed ? "PASS\n" : "FAIL\n";
     return text;
 }
 
 std::string report_json(const CompareCommandOptions& options, const FloatImage& reference,
-                        const CompareOptions& compare, const CompareResult& result) {
+                        const CompareOptions& compare, const CompareResult& result, const PixelReport& pixels) {
     nlohmann::json channels = nlohmann::json::array(), maxima = nlohmann::json::array();
     for (std::size_t k = 0; k < result.compared_channels.size(); ++k) {
         channels.push_back(utf8_for_json(channel_name(reference, result.compared_channels[k])));
@@ -124,6 +170,13 @@ std::string report_json(const CompareCommandOptions& options, const FloatImage& 
         {"diff", options.diff.empty() ? nlohmann::json(nullptr) : nlohmann::json(utf8_for_json(options.diff))},
         {"passed", result.passed},
     };
+    report["worst_pixel"] = pixels.worst.difference > 0 ? pixel_json(reference, pixels.worst) : nlohmann::json(nullptr);
+    report["failing_pixel_list"] = nlohmann::json::array();
+    for (const PixelDifference& p : pixels.failing) report["failing_pixel_list"].push_back(pixel_json(reference, p));
+    if (pixels.diff) {
+        report["diff_scale"] = {number_json(pixels.diff->smallest), number_json(pixels.diff->largest)};
+        report["isolated_failing_pixels"] = pixels.diff->isolated;
+    }
     return report.dump(2) + "\n";
 }
 
@@ -150,15 +203,29 @@ nlohmann::json levels_json(const TessLevels& l) {
             {"inner", {number_json(l.inner[0]), number_json(l.inner[1])}}};
 }
 
+// |reference - test| of one component, as the ulps beside it count it.
+double abs_of(float reference, float test) {
+    if (reference == test) return 0.0;
+    if (std::isnan(reference) || std::isnan(test)) return std::isnan(reference) && std::isnan(test) ? 0.0 : std::numeric_limits<double>::infinity();
+    return std::abs(static_cast<double>(reference) - static_cast<double>(test));
+}
+double abs_of(const glm::vec3& reference, const glm::vec3& test) {
+    double d = 0.0;
+    for (int k = 0; k < 3; ++k) d = std::max(d, abs_of(reference[k], test[k]));
+    return d;
+}
+
 std::string worst_text(const WorstUlps& w) {
     if (!w.found) return "none compared";
-    return ulps_text(w.ulps) + " ulps at patch " + std::to_string(w.patch_id) + ", tess coord " + vec_text(w.tess_coord) +
+    return ulps_text(w.ulps) + " ulps (|difference| " +
+           number_text(abs_of(w.reference[w.component], w.test[w.component])) + ") at patch " + std::to_string(w.patch_id) + ", tess coord " + vec_text(w.tess_coord) +
            ", " + "xyz"[w.component] + ": reference " + format_float(w.reference[w.component]) + ", test " +
            format_float(w.test[w.component]) + "  (reference " + vec_text(w.reference) + ", test " + vec_text(w.test) + ")";
 }
 nlohmann::json worst_json(const WorstUlps& w) {
     if (!w.found) return nullptr;
-    return {{"ulps", ulps_json(w.ulps)},          {"patch", w.patch_id},
+    return {{"ulps", ulps_json(w.ulps)},          {"abs", number_json(abs_of(w.reference[w.component], w.test[w.component]))},
+            {"patch", w.patch_id},
             {"tess_coord", vec_json(w.tess_coord)}, {"component", std::string(1, "xyz"[w.component])},
             {"reference", vec_json(w.reference)},   {"test", vec_json(w.test)}};
 }
@@ -193,8 +260,10 @@ std::string diverging_text(const DivergingPatch& d, const Capture& reference, co
             s += std::to_string(d.failing_vertices) + " of " + std::to_string(d.reference_vertices) +
                  " vertices fail; first at tess coord " + vec_text(d.tess_coord) + ": position reference " +
                  vec_text(d.reference_position) + ", test " + vec_text(d.test_position) + " (" +
-                 ulps_text(d.position_ulps) + " ulps); normal reference " + vec_text(d.reference_normal) + ", test " +
-                 vec_text(d.test_normal) + " (" + ulps_text(d.normal_ulps) + " ulps)";
+                 ulps_text(d.position_ulps) + " ulps, |difference| " +
+                 number_text(abs_of(d.reference_position, d.test_position)) + "); normal reference " +
+                 vec_text(d.reference_normal) + ", test " + vec_text(d.test_normal) + " (" + ulps_text(d.normal_ulps) +
+                 " ulps, |difference| " + number_text(abs_of(d.reference_normal, d.test_normal)) + ")";
             break;
     }
     return s + "\n";
@@ -246,6 +315,20 @@ std::string capture_report_text(const CompareCommandOptions& options, const Capt
             " beyond the tolerance\n";
     text += "vertices   " + std::to_string(r.vertices_compared) + " compared, " + std::to_string(r.failing_vertices) +
             " beyond the tolerance\n";
+    if (r.vertices_compared) {
+        text += "per component over the " + std::to_string(r.vertices_compared) +
+                " compared corners (normal: each corner's largest normal component):\n"
+                "  component  max |difference|  mean |difference|    max ulps  beyond tolerance\n";
+        static const char* const names[] = {"x", "y", "z", "normal"};
+        for (std::size_t k = 0; k < r.components.size(); ++k) {
+            const ComponentSummary& c = r.components[k];
+            char line[160];
+            std::snprintf(line, sizeof line, "  %-9s  %16s  %17s  %10s  %16zu\n", names[k], number_text(c.max_abs).c_str(),
+                          number_text(c.compared ? c.sum_abs / static_cast<double>(c.compared) : 0.0).c_str(),
+                          ulps_text(c.max_ulps).c_str(), c.beyond);
+            text += line;
+        }
+    }
     text += "worst position  " + worst_text(r.worst_position) + "\n";
     text += "worst normal    " + worst_text(r.worst_normal) + "\n";
     if (!r.listed.empty()) {
@@ -262,6 +345,20 @@ std::string capture_report_text(const CompareCommandOptions& options, const Capt
     }
     text += r.passed ? "PASS\n" : "FAIL\n";
     return text;
+}
+
+nlohmann::json components_json(const CaptureCompareResult& r) {
+    nlohmann::json out = nlohmann::json::object();
+    static const char* const names[] = {"x", "y", "z", "normal"};
+    for (std::size_t k = 0; k < r.components.size(); ++k) {
+        const ComponentSummary& c = r.components[k];
+        out[names[k]] = {{"compared", c.compared},
+                         {"max_abs", number_json(c.max_abs)},
+                         {"mean_abs", number_json(c.compared ? c.sum_abs / static_cast<double>(c.compared) : 0.0)},
+                         {"max_ulps", ulps_json(c.max_ulps)},
+                         {"beyond", c.beyond}};
+    }
+    return out;
 }
 
 std::string capture_report_json(const CompareCommandOptions& options, const Capture& reference, const Capture& test,
@@ -292,6 +389,7 @@ std::string capture_report_json(const CompareCommandOptions& options, const Capt
         {"orientation_divergences", r.orientation_divergences},
         {"flipped_triangles", r.flipped_triangles},
         {"value_divergences", r.value_divergences},
+        {"components", components_json(r)},
         {"worst_position", worst_json(r.worst_position)},
         {"worst_normal", worst_json(r.worst_normal)},
         {"failing_vertices_per_patch", per_patch},
@@ -320,9 +418,10 @@ int run_compare_captures(const CompareCommandOptions& options) {
                         "or two images",
                         Where::in_file(*input));
     const bool image_flags = options.max_position_deviation != "0" || options.threshold != "0" ||
-                             options.max_failing_pixels != "0" || !options.diff.empty() || options.ignore_alpha;
+                             options.max_failing_pixels != "0" || !options.diff.empty() || options.ignore_alpha ||
+                             options.list != "10";
     if (image_flags)
-        throw Error("--max-position-deviation, --threshold, --max-failing-pixels, --diff and --ignore-alpha compare "
+        throw Error("--max-position-deviation, --threshold, --max-failing-pixels, --diff, --list and --ignore-alpha compare "
                     "images; for captures give --max-position-ulps and --max-normal-ulps",
                     Where::in_file(options.test));
     CaptureCompareOptions compare;
@@ -362,6 +461,7 @@ int run_compare(const CompareCommandOptions& options) {
     compare.threshold = parse_threshold(options.threshold);
     compare.max_failing_pixels = static_cast<std::uint64_t>(parse_count(options.max_failing_pixels, "--max-failing-pixels"));
     compare.ignore_alpha = options.ignore_alpha;
+    const auto listed = static_cast<std::size_t>(parse_count(options.list, "--list"));
     if (!options.diff.empty()) image::require_writable(options.diff, "--diff");
 
     // A diff written over an input would destroy the golden image it was compared with: the
@@ -403,13 +503,17 @@ int run_compare(const CompareCommandOptions& options) {
                         std::to_string(test.channels),
                     Where::in_file(options.test));
     const CompareResult result = compare_images(reference, test, compare);
+    PixelReport found;
+    found.worst = worst_pixel(reference, test, result);
+    found.failing = first_failing_pixels(reference, test, result, listed);
+    if (output) found.diff = difference_picture(reference, test, result);
     // The report is made before the diff is put in place: a report that cannot be made
     // leaves no diff behind.
-    const std::string report = options.json ? report_json(options, reference, compare, result)
-                                            : report_text(options, reference, compare, result);
+    const std::string report = options.json ? report_json(options, reference, compare, result, found)
+                                            : report_text(options, reference, compare, result, found);
     if (output) {
         try {
-            write_float_image(difference_picture(reference, result), output->temp_path().string());
+            write_float_image(found.diff->image, output->temp_path().string());
         } catch (const Error& error) {
             throw Error(error.what(), Where::in_file(options.diff));  // the name given, not the temporary one
         }
@@ -448,8 +552,13 @@ Command add_compare_command(CLI::App& parent) {
         ->type_name("N")
         ->default_str("0");
     app->add_option("--diff", options->diff,
-                    "Write a picture of the failing pixels (red) over the reference dimmed to a quarter "
-                    "(PNG, TIFF, EXR)");
+                    "Write a picture of the failing pixels over the reference dimmed to a quarter (PNG, TIFF, EXR): "
+                    "each failing pixel coloured by its largest channel difference on a scale from blue (the "
+                    "smallest) to red (the largest), isolated failing pixels ringed in magenta, the scale with its "
+                    "ends in a band below the picture (when it is at least 160 pixels wide)");
+    app->add_option("--list", options->list, "Images: list the first N failing pixels with both values")
+        ->type_name("N")
+        ->default_str("10");
     app->add_flag("--ignore-alpha", options->ignore_alpha, "Leave the alpha channel out of the comparison");
     app->add_option("--max-position-ulps", options->max_position_ulps,
                     "Captures: largest accepted difference of a position component, in ulps")

@@ -114,6 +114,7 @@ int run_gl(const GlCommandOptions& options) {
     // In a child process with its own limits: a user's shader cannot take tessref down.
     const gl::IsolatedRender isolated = gl::render_scene_isolated(scene, render_options);
     const gl::SceneRender& r = isolated.render;
+    for (const std::string& w : r.warnings) std::cerr << "tessref: warning: " << w << "\n";
 
     RenderResult image;
     image.width = r.width;

@@ -9,6 +9,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -142,6 +143,26 @@ bool within(const glm::vec3& a, const glm::vec3& b, std::uint64_t max_ulps, doub
     return true;
 }
 
+// |a - b| in double; equal values (the same NaN bits, one infinity twice) 0, a NaN against
+// anything else +inf.
+double abs_difference(float a, float b) {
+    if (ulp_distance(a, b) == 0) return 0.0;
+    if (std::isnan(a) || std::isnan(b)) return std::numeric_limits<double>::infinity();
+    return std::abs(static_cast<double>(a) - static_cast<double>(b));
+}
+
+bool component_within(float a, float b, std::uint64_t max_ulps, double max_abs) {
+    return ulp_distance(a, b) <= max_ulps || (max_abs > 0.0 && abs_difference(a, b) <= max_abs);
+}
+
+void add_to(ComponentSummary& s, std::uint64_t ulps, double abs, bool beyond) {
+    ++s.compared;
+    s.max_ulps = std::max(s.max_ulps, ulps);
+    s.max_abs = std::max(s.max_abs, abs);
+    s.sum_abs += abs;
+    s.beyond += beyond;
+}
+
 class Comparison {
 public:
     Comparison(const Capture& reference, const Capture& test, const CaptureCompareOptions& options)
@@ -267,6 +288,19 @@ private:
                 const std::uint64_t pu = worst_component(rv.position, tv.position, position_component);
                 const std::uint64_t nu = worst_component(rv.normal, tv.normal, normal_component);
                 ++result_.vertices_compared;
+                for (int k = 0; k < 3; ++k)
+                    add_to(result_.components[static_cast<std::size_t>(k)], ulp_distance(rv.position[k], tv.position[k]),
+                           abs_difference(rv.position[k], tv.position[k]),
+                           !component_within(rv.position[k], tv.position[k], options_.max_position_ulps,
+                                             options_.max_position_abs));
+                double normal_abs = 0.0;
+                bool normal_beyond = false;
+                for (int k = 0; k < 3; ++k) {
+                    normal_abs = std::max(normal_abs, abs_difference(rv.normal[k], tv.normal[k]));
+                    normal_beyond |= !component_within(rv.normal[k], tv.normal[k], options_.max_normal_ulps,
+                                                       options_.max_normal_abs);
+                }
+                add_to(result_.components[3], nu, normal_abs, normal_beyond);
                 track(result_.worst_position, pu, position_component, rv.position, tv.position, rv);
                 track(result_.worst_normal, nu, normal_component, rv.normal, tv.normal, rv);
                 if (within(rv.position, tv.position, options_.max_position_ulps, options_.max_position_abs) &&

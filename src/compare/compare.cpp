@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <string>
 
 #include "common/parallel.h"
+#include "image/draw.h"
 
 #include "tessref/error.h"
 
@@ -131,31 +134,166 @@ CompareResult compare_images(const FloatImage& reference, const FloatImage& test
     return result;
 }
 
-FloatImage difference_picture(const FloatImage& reference, const CompareResult& result) {
-    if (reference.width != result.width || reference.height != result.height || reference.channels <= 0)
-        throw Error("the reference is not the image the comparison was of", Where::at_key("size"));
-    FloatImage picture;
-    picture.width = reference.width;
-    picture.height = reference.height;
-    picture.channels = 3;
-    picture.channel_names = {"R", "G", "B"};
-    picture.samples.resize(picture.index(0, picture.height));
-    const auto dimmed = [](float v) { return kDiffDim * (std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f)); };
-    for (int y = 0; y < picture.height; ++y) {
-        for (int x = 0; x < picture.width; ++x) {
-            const std::size_t pixel = static_cast<std::size_t>(y) * static_cast<std::size_t>(picture.width) +
-                                      static_cast<std::size_t>(x);
-            for (int c = 0; c < 3; ++c) {
-                float v;
-                if (result.failing[pixel])
-                    v = c == 0 ? 1.0f : 0.0f;
-                else
-                    v = dimmed(reference.at(x, y, reference.channels >= 3 ? c : 0));
-                picture.samples[picture.index(x, y, c)] = v;
-            }
+namespace {
+
+PixelDifference pixel_difference(const FloatImage& reference, const FloatImage& test, const CompareResult& result, int x,
+                                 int y) {
+    PixelDifference p;
+    p.x = x;
+    p.y = y;
+    for (int c = 0; c < reference.channels; ++c) {
+        p.reference.push_back(reference.at(x, y, c));
+        p.test.push_back(test.at(x, y, c));
+    }
+    for (const int c : result.compared_channels) {
+        const double d = sample_difference(reference.at(x, y, c), test.at(x, y, c));
+        if (d > p.difference) {
+            p.difference = d;
+            p.channel = c;
         }
     }
-    return picture;
+    return p;
+}
+
+void check_compared(const FloatImage& reference, const FloatImage& test, const CompareResult& result) {
+    if (reference.width != result.width || reference.height != result.height || test.width != result.width ||
+        test.height != result.height || test.channels != reference.channels || reference.channels <= 0)
+        throw Error("the pictures are not those the comparison was of", Where::at_key("size"));
+}
+
+}  // namespace
+
+PixelDifference worst_pixel(const FloatImage& reference, const FloatImage& test, const CompareResult& result) {
+    check_compared(reference, test, result);
+    // The differences first, the pixel's samples only for the one found.
+    int worst_x = 0, worst_y = 0;
+    double worst = 0.0;
+    for (int y = 0; y < result.height; ++y)
+        for (int x = 0; x < result.width; ++x)
+            for (const int c : result.compared_channels)
+                if (const double d = sample_difference(reference.at(x, y, c), test.at(x, y, c)); d > worst) {
+                    worst = d;
+                    worst_x = x;
+                    worst_y = y;
+                }
+    return pixel_difference(reference, test, result, worst_x, worst_y);
+}
+
+std::vector<PixelDifference> first_failing_pixels(const FloatImage& reference, const FloatImage& test,
+                                                  const CompareResult& result, std::size_t count) {
+    check_compared(reference, test, result);
+    std::vector<PixelDifference> out;
+    for (int y = 0; y < result.height && out.size() < count; ++y)
+        for (int x = 0; x < result.width && out.size() < count; ++x)
+            if (result.failing[static_cast<std::size_t>(y) * static_cast<std::size_t>(result.width) + static_cast<std::size_t>(x)])
+                out.push_back(pixel_difference(reference, test, result, x, y));
+    return out;
+}
+
+std::array<float, 3> diff_scale_colour(double t) {
+    static constexpr std::array<std::array<float, 3>, 4> stops{{{0.0f, 0.4f, 1.0f}, {0.0f, 0.85f, 0.2f},
+                                                                 {1.0f, 0.9f, 0.0f}, {1.0f, 0.0f, 0.0f}}};
+    if (!(t > 0.0)) return stops[0];
+    if (t >= 1.0) return stops[3];
+    const double at = t * 3.0;
+    const int i = std::min(2, static_cast<int>(at));
+    const float f = static_cast<float>(at - i);
+    std::array<float, 3> c{};
+    for (int k = 0; k < 3; ++k) c[static_cast<std::size_t>(k)] = stops[i][k] + f * (stops[i + 1][k] - stops[i][k]);
+    return c;
+}
+
+DiffPicture difference_picture(const FloatImage& reference, const FloatImage& test, const CompareResult& result) {
+    check_compared(reference, test, result);
+    const int w = reference.width, h = reference.height;
+    const auto failing = [&](int x, int y) {
+        return result.failing[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)] != 0;
+    };
+    // Each failing pixel's same-position difference, and the scale's ends.
+    std::vector<double> difference(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), 0.0);
+    DiffPicture out;
+    bool any = false;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!failing(x, y)) continue;
+            double d = 0.0;
+            for (const int c : result.compared_channels)
+                d = std::max(d, sample_difference(reference.at(x, y, c), test.at(x, y, c)));
+            difference[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)] = d;
+            out.smallest = any ? std::min(out.smallest, d) : d;
+            out.largest = any ? std::max(out.largest, d) : d;
+            any = true;
+        }
+    const auto scale_position = [&](double d) {
+        if (std::isinf(d)) return 1.0;
+        const double span = (std::isinf(out.largest) ? d : out.largest) - out.smallest;
+        return span > 0.0 ? (d - out.smallest) / span : 1.0;
+    };
+
+    out.legend = w >= kDiffLegendMinWidth;
+    FloatImage& picture = out.image;
+    picture.width = w;
+    picture.height = h + (out.legend ? kDiffLegendHeight : 0);
+    picture.channels = 3;
+    picture.channel_names = {"R", "G", "B"};
+    picture.samples.assign(picture.index(0, picture.height), 0.0f);
+    const auto dimmed = [](float v) { return kDiffDim * (std::isnan(v) ? 0.0f : std::clamp(v, 0.0f, 1.0f)); };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (failing(x, y)) {
+                const auto colour = diff_scale_colour(
+                    scale_position(difference[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)]));
+                for (int c = 0; c < 3; ++c) picture.samples[picture.index(x, y, c)] = colour[static_cast<std::size_t>(c)];
+            } else {
+                for (int c = 0; c < 3; ++c)
+                    picture.samples[picture.index(x, y, c)] = dimmed(reference.at(x, y, reference.channels >= 3 ? c : 0));
+            }
+        }
+
+    // Isolated failures, ringed: a pixel or two of colour is lost on a large picture.
+    image::Drawing drawing;
+    const image::Drawing::Colour magenta{1.0f, 0.0f, 1.0f};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!failing(x, y)) continue;
+            int near = 0;
+            for (int sy = std::max(0, y - 3); sy <= std::min(h - 1, y + 3); ++sy)
+                for (int sx = std::max(0, x - 3); sx <= std::min(w - 1, x + 3); ++sx) near += failing(sx, sy);
+            if (near >= kDiffIsolatedBelow) continue;
+            if (out.isolated++ >= kDiffMaxRings) continue;
+            const int x0 = x - kDiffRing, y0 = y - kDiffRing, x1 = x + kDiffRing, y1 = y + kDiffRing;
+            drawing.line(x0, y0, x1, y0, magenta);
+            drawing.line(x1, y0, x1, y1, magenta);
+            drawing.line(x1, y1, x0, y1, magenta);
+            drawing.line(x0, y1, x0, y0, magenta);
+        }
+
+    // The legend: the scale as a bar of pixels, its ends as text.
+    if (out.legend) {
+        const int bar_x0 = 60, bar_x1 = std::min(w - 60, bar_x0 + 256), bar_y0 = h + 6, bar_y1 = h + 18;
+        for (int x = bar_x0; x < bar_x1; ++x) {
+            const auto colour = diff_scale_colour(static_cast<double>(x - bar_x0) / std::max(1, bar_x1 - 1 - bar_x0));
+            for (int y = bar_y0; y < bar_y1; ++y)
+                for (int c = 0; c < 3; ++c) picture.samples[picture.index(x, y, c)] = colour[static_cast<std::size_t>(c)];
+        }
+        const auto label = [](double v) {
+            char text[32];
+            std::snprintf(text, sizeof text, "%.3g", v);
+            return std::string(text);
+        };
+        const std::string font = std::filesystem::exists("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
+                                     ? "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
+                                     : "";
+        const image::Drawing::Colour white{1.0f, 1.0f, 1.0f};
+        drawing.text(bar_x0 - 4, bar_y1, any ? label(out.smallest) : "-", 11, font, white, image::TextAlign::right);
+        drawing.text(bar_x1 + 4, bar_y1, any ? label(out.largest) : "-", 11, font, white, image::TextAlign::left);
+    }
+    // Without a font the scale and the rings are still drawn; the labels are a bonus (and
+    // the report prints the scale's ends).
+    if (!drawing.empty())
+        drawing.paint({picture.samples.data(), picture.width, picture.height, 3, image::SampleType::float32}, false,
+                      "the diff picture");
+    return out;
 }
 
 }  // namespace tessref

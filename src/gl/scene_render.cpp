@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -25,6 +26,7 @@
 #include "tessref/gl_render.h"
 #include "tessref/limits.h"
 #include "tessref/pipeline.h"
+#include "tessref/shader.h"
 
 namespace tessref::gl {
 
@@ -390,14 +392,24 @@ std::string capture_note(const Plan& plan) {
 
 // A program may lack any of these uniforms (location -1: the call sets nothing), as a user's
 // shader may; one that declares a twin's uniform with another type makes GL refuse the call.
+// Without a GL (gl null) the calls only list the names they would set, in `names`: the one
+// list of what tessref sets, which unset_uniform_warnings() reads.
 struct Uniforms final : pipeline::UniformSink {
-    GlFunctions& gl;
-    GLuint program;
+    GlFunctions* gl = nullptr;
+    GLuint program = 0;
     const std::vector<StageSource>* stages = nullptr;  // to name the user's file that declares it
-    Uniforms(GlFunctions& g, GLuint p, const std::vector<StageSource>* s = nullptr) : gl(g), program(p), stages(s) {}
-    GLint at(const char* name) const { return gl.GetUniformLocation(program, name); }
+    std::set<std::string>* names = nullptr;            // with gl null: every name set
+    Uniforms(GlFunctions* g, GLuint p, const std::vector<StageSource>* s = nullptr, std::set<std::string>* n = nullptr)
+        : gl(g), program(p), stages(s), names(n) {}
+    GLint at(const char* name) const { return gl->GetUniformLocation(program, name); }
+    // True when the call is only listed.
+    bool listed(const char* name) const {
+        if (gl) return false;
+        if (names) names->insert(name);
+        return true;
+    }
     void check(const char* name, const char* type) const {
-        if (gl.GetError() != GL_NO_ERROR)
+        if (gl->GetError() != GL_NO_ERROR)
             throw Error(std::string("the uniform ") + name + " is declared with a type other than " + type +
                             ", the GLSL twins' (the twins' uniform names and types are the contract of a user's "
                             "shader: docs/CLI.md, `gl`)",
@@ -416,35 +428,43 @@ struct Uniforms final : pipeline::UniformSink {
         return {};
     }
     void i(const char* name, int v) const override {
-        gl.Uniform1i(at(name), v);
+        if (listed(name)) return;
+        gl->Uniform1i(at(name), v);
         check(name, "int");
     }
     void f(const char* name, double v) const override {
-        gl.Uniform1f(at(name), static_cast<float>(v));
+        if (listed(name)) return;
+        gl->Uniform1f(at(name), static_cast<float>(v));
         check(name, "float");
     }
     void d(const char* name, double v) const {
-        gl.Uniform1d(at(name), v);
+        if (listed(name)) return;
+        gl->Uniform1d(at(name), v);
         check(name, "double");
     }
     void v2(const char* name, glm::vec2 v) const override {
-        gl.Uniform2f(at(name), v.x, v.y);
+        if (listed(name)) return;
+        gl->Uniform2f(at(name), v.x, v.y);
         check(name, "vec2");
     }
     void v3(const char* name, glm::vec3 v) const override {
-        gl.Uniform3f(at(name), v.x, v.y, v.z);
+        if (listed(name)) return;
+        gl->Uniform3f(at(name), v.x, v.y, v.z);
         check(name, "vec3");
     }
     void v4(const char* name, glm::vec4 v) const override {
-        gl.Uniform4f(at(name), v.x, v.y, v.z, v.w);
+        if (listed(name)) return;
+        gl->Uniform4f(at(name), v.x, v.y, v.z, v.w);
         check(name, "vec4");
     }
     void m3(const char* name, const glm::mat3& m) const override {
-        gl.UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]);
+        if (listed(name)) return;
+        gl->UniformMatrix3fv(at(name), 1, GL_FALSE, &m[0][0]);
         check(name, "mat3");
     }
     void m4(const char* name, const glm::mat4& m) const override {
-        gl.UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]);
+        if (listed(name)) return;
+        gl->UniformMatrix4fv(at(name), 1, GL_FALSE, &m[0][0]);
         check(name, "mat4");
     }
 };
@@ -513,13 +533,43 @@ void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
     }
 }
 
+// Every uniform tessref sets for the scene, through `u` (set, or listed).
+void each_uniform(const Uniforms& u, const Scene& scene, const ShadingModel& shading, const pipeline::StageMatrices& m,
+                  glm::ivec2 viewport) {
+    pipeline::set_stage_uniforms(u, scene, m, viewport);
+    shading_uniforms(u, shading);
+}
+
+}  // namespace
+
+std::set<std::string> uniforms_set(const Scene& scene) {
+    std::set<std::string> names;
+    each_uniform(Uniforms{nullptr, 0, nullptr, &names}, scene, scene.shading.model, pipeline::StageMatrices{},
+                 glm::ivec2(1, 1));
+    // An array's elements are set one by one ("materialRepeat[2]"); the stage declares the array.
+    std::set<std::string> out;
+    for (const std::string& n : names) out.insert(n.substr(0, n.find('[')));
+    return out;
+}
+std::vector<std::string> unset_uniform_warnings(const Scene& scene, const shader::Module& stage) {
+    const std::set<std::string> set = uniforms_set(scene);
+    std::vector<std::string> warnings;
+    for (const std::string& name : stage.uniform_names())
+        if (!set.count(name))
+            warnings.push_back("the " + std::string(to_string(stage.stage())) + " shader " + stage.path() +
+                               " declares the uniform " + name +
+                               ", which tessref does not set for this scene: it reads 0 (a misspelt name? the uniforms "
+                               "tessref sets are the GLSL twins')");
+    return warnings;
+}
+
+namespace {
+
 void set_uniforms(GlFunctions& gl, GLuint program, const Scene& scene, const RenderShading& shading,
                   const pipeline::StageMatrices& m, glm::ivec2 viewport, const std::vector<StageSource>& stages) {
     gl.UseProgram(program);
     if (gl.GetError() != GL_NO_ERROR) throw Error("OpenGL refused to use the scene's program");
-    const Uniforms u{gl, program, &stages};
-    pipeline::set_stage_uniforms(u, scene, m, viewport);
-    shading_uniforms(u, shading.model);
+    each_uniform(Uniforms{&gl, program, &stages, nullptr}, scene, shading.model, m, viewport);
 }
 
 // ---- textures: the Texture objects the CPU samples, uploaded as they were loaded ---------
@@ -993,7 +1043,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
                                     "the --capture program" + capture_note(plan)));
     const GLuint capture_program = objects.programs.back();
     set_uniforms(gl, capture_program, scene, result.shading, m, size, plan.stages);
-    if (plan.identity_mvp_for_capture) Uniforms{gl, capture_program}.m4("mvp", glm::mat4(1.0f));
+    if (plan.identity_mvp_for_capture) Uniforms{&gl, capture_program}.m4("mvp", glm::mat4(1.0f));
     std::uint64_t largest = 0;
     for (std::size_t k = 0; k < batches.size(); ++k) largest = std::max<std::uint64_t>(largest, predicted_of(k));
     const std::uint64_t total = pipe.mesh.triangles.size();
@@ -1155,7 +1205,18 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
     }
     // Every user file is read here, where the input checks apply, and handed to the child
     // as text; the child reads it again from the same path only after these checks passed.
-    for (const StageShader& s : user_shaders(scene_in, options)) (void)user_stage(s);
+    // A uniform a user's stage declares and tessref does not set reads 0, silently: each is
+    // a warning (the stage compiled by the interpreter, which lists its uniforms; a stage it
+    // cannot compile is left to GL's own errors).
+    std::vector<std::string> warnings;
+    for (const StageShader& s : user_shaders(scene_in, options)) {
+        const StageSource source = user_stage(s);
+        try {
+            const shader::Module module = shader::Module::compile({s.stage, source.path, source.text, source.prefix});
+            for (std::string& w : unset_uniform_warnings(scene_in, module)) warnings.push_back(std::move(w));
+        } catch (const Error&) {
+        }
+    }
     const std::string answer = run_isolated(kIsolatedWhat, [&] {
         set_isolated_phase("creating the OSMesa context");
         // Never destroyed: the child exits when it has answered, and a driver's teardown
@@ -1189,6 +1250,7 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
     r.shading = scene_in.shading;
     r.pipeline = options.pipeline;
     r.user_shaders = user_shaders(scene_in, options);
+    r.warnings = std::move(warnings);
     return result;
 }
 

@@ -704,7 +704,7 @@ private:
             write_image(wire, (dir_ / (stem + "-wire.png")).string(), ImageFormat::png);
             f["wire_image"] = stem + "-wire.png";
             if (compared) {
-                write_float_image(difference_picture(*truth.image, *compared), (dir_ / (stem + "-diff.png")).string());
+                write_float_image(difference_picture(*truth.image, picture, *compared).image, (dir_ / (stem + "-diff.png")).string());
                 f["diff_image"] = stem + "-diff.png";
             }
         }

@@ -1,19 +1,32 @@
-#include "cli/golden_files.h"
-
+// src/golden/digest_files.cpp — the digest files of golden/<scene>/ (capture.txt, mesh.txt):
+// reading them strictly, and the per-patch digests of a capture text.
+#include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <sstream>
 #include <vector>
 
-#include <glm/glm.hpp>
+#include <openssl/evp.h>
 
-#include "cli/cli_util.h"
+#include "golden/golden_internal.h"
 #include "tessref/error.h"
+#include "tessref/golden.h"
 
-namespace tessref::cli {
+namespace tessref::golden {
 
 namespace {
+
+// A float as the capture text prints it ("%.9g", "nan", "inf"): the whole word.
+std::optional<float> parse_float(std::string_view word) {
+    if (word.empty() || word.front() == ' ') return std::nullopt;
+    const std::string copy(word);
+    char* end = nullptr;
+    const float value = std::strtof(copy.c_str(), &end);
+    if (end != copy.c_str() + copy.size()) return std::nullopt;
+    return value;
+}
 
 // The words of a line, split at single spaces as the writer writes them: a doubled space,
 // a tab or a trailing space is not the writer's and is refused with the rest.
@@ -41,9 +54,10 @@ std::optional<std::size_t> count_of(std::string_view word) {
     if (word.empty() || word.size() > 18) return std::nullopt;  // 10^18 - 1: more than any file holds
     for (const char c : word)
         if (c < '0' || c > '9') return std::nullopt;
-    const std::optional<long long> value = parse_integer(word);
-    if (!value) return std::nullopt;
-    return static_cast<std::size_t>(*value);
+    std::size_t value = 0;
+    const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
+    if (ec != std::errc() || end != word.data() + word.size()) return std::nullopt;
+    return value;
 }
 
 // Calls line(number, text) for every line but comments and blank lines, after checking the
@@ -73,11 +87,12 @@ void for_each_line(std::string_view text, const std::string& path, const char* h
 
 }  // namespace
 
-GoldenCapture parse_golden_capture(std::string_view text, const std::string& path) {
-    GoldenCapture g;
+CaptureDigest parse_capture_digest(std::string_view text, const std::string& path) {
+    CaptureDigest g;
+    std::size_t declared_patches = 0;
     bool have_size = false, have_capture = false;
     std::size_t patch_lines = 0, patch_triangles = 0;
-    for_each_line(text, path, kGoldenCaptureHeader, "golden capture digest", [&](std::size_t n, std::string_view line) {
+    for_each_line(text, path, kCaptureHeader, "golden capture digest", [&](std::size_t n, std::string_view line) {
         const Where where = Where::in_file(path, n);
         const std::vector<std::string_view> w = words_of(line);
         const auto bad = [&](const std::string& why) {
@@ -86,7 +101,7 @@ GoldenCapture parse_golden_capture(std::string_view text, const std::string& pat
         if (w[0] == "size") {
             if (have_size) bad("a second `size` line");
             if (w.size() != 2) bad("expected `size WxH`");
-            (void)parse_image_size(std::string(w[1]), path);
+            (void)parse_size(std::string(w[1]), Where::in_file(path, n));
             g.size = std::string(w[1]);
             have_size = true;
         } else if (w[0] == "capture") {
@@ -96,9 +111,9 @@ GoldenCapture parse_golden_capture(std::string_view text, const std::string& pat
             const auto patches = count_of(w[2]), triangles = count_of(w[4]);
             if (!patches || !triangles) bad("the counts are not whole numbers");
             if (!is_hex_digest(w[6], 64)) bad("the sha256 is not 64 lower-case hex digits");
-            g.patches = *patches;
+            declared_patches = *patches;
             g.triangles = *triangles;
-            g.capture_sha256 = std::string(w[6]);
+            g.sha256 = std::string(w[6]);
             have_capture = true;
         } else if (w[0] == "patch") {
             if (!have_capture) bad("a `patch` line before the `capture` line");
@@ -106,17 +121,20 @@ GoldenCapture parse_golden_capture(std::string_view text, const std::string& pat
                 bad("expected `patch ID levels L1 L2 L3 L4 L5 L6 triangles N sha256 H`");
             const auto id = count_of(w[1]), triangles = count_of(w[10]);
             if (!id || *id > std::numeric_limits<std::uint32_t>::max()) bad("the patch id is not a 32-bit whole number");
+            std::string levels;
             for (std::size_t k = 3; k < 9; ++k) {
                 const std::optional<float> level = parse_float(w[k]);
                 if (!level || !std::isfinite(*level)) bad("level " + std::to_string(k - 2) + " is not a finite number");
+                levels += (k > 3 ? " " : "") + std::string(w[k]);
             }
             if (!triangles) bad("the triangle count is not a whole number");
-            if (!is_hex_digest(w[12], kGoldenPatchDigits))
-                bad("the sha256 is not " + std::to_string(kGoldenPatchDigits) + " lower-case hex digits");
+            if (!is_hex_digest(w[12], kPatchDigits))
+                bad("the sha256 is not " + std::to_string(kPatchDigits) + " lower-case hex digits");
             ++patch_lines;
             patch_triangles += *triangles;
-            if (patch_lines > g.patches) bad("more `patch` lines than the `capture` line's " + std::to_string(g.patches));
-            g.patch_sha256[static_cast<std::uint32_t>(*id)] = std::string(w[12]);
+            if (patch_lines > declared_patches)
+                bad("more `patch` lines than the `capture` line's " + std::to_string(declared_patches));
+            g.patches.push_back({static_cast<std::uint32_t>(*id), levels, *triangles, std::string(w[12]), n});
         } else {
             bad("unknown line");
         }
@@ -124,8 +142,8 @@ GoldenCapture parse_golden_capture(std::string_view text, const std::string& pat
     const Where where = Where::in_file(path);
     if (!have_size) throw Error("not a golden capture digest: no `size` line", where);
     if (!have_capture) throw Error("not a golden capture digest: no `capture` line", where);
-    if (patch_lines != g.patches)
-        throw Error("the `capture` line counts " + std::to_string(g.patches) + " patches, the file lists " +
+    if (patch_lines != declared_patches)
+        throw Error("the `capture` line counts " + std::to_string(declared_patches) + " patches, the file lists " +
                         std::to_string(patch_lines) + " (a deleted or duplicated `patch` line?)",
                     where);
     if (patch_triangles != g.triangles)
@@ -135,10 +153,10 @@ GoldenCapture parse_golden_capture(std::string_view text, const std::string& pat
     return g;
 }
 
-GoldenMesh parse_golden_mesh(std::string_view text, const std::string& path) {
-    GoldenMesh m;
+MeshDigest parse_mesh_digest(std::string_view text, const std::string& path) {
+    MeshDigest m;
     bool have_mesh = false;
-    for_each_line(text, path, kGoldenMeshHeader, "golden mesh digest", [&](std::size_t n, std::string_view line) {
+    for_each_line(text, path, kMeshHeader, "golden mesh digest", [&](std::size_t n, std::string_view line) {
         const Where where = Where::in_file(path, n);
         const std::vector<std::string_view> w = words_of(line);
         const auto bad = [&](const std::string& why) {
@@ -158,4 +176,60 @@ GoldenMesh parse_golden_mesh(std::string_view text, const std::string& path) {
     return m;
 }
 
-}  // namespace tessref::cli
+std::string sha256_hex(std::string_view bytes) {
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int length = 0;
+    if (EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr) != 1)
+        throw Error("SHA-256 failed (OpenSSL)");
+    static const char* const hex_digits = "0123456789abcdef";
+    std::string hex;
+    for (unsigned int i = 0; i < length; ++i) {
+        hex += hex_digits[digest[i] >> 4];
+        hex += hex_digits[digest[i] & 15];
+    }
+    return hex;
+}
+
+glm::ivec2 parse_size(const std::string& text, const Where& where) {
+    const std::size_t x = text.find('x');
+    const std::optional<std::size_t> w = x == std::string::npos ? std::nullopt : count_of(std::string_view(text).substr(0, x));
+    const std::optional<std::size_t> h = x == std::string::npos ? std::nullopt : count_of(std::string_view(text).substr(x + 1));
+    if (!w || !h) throw Error("image size '" + text + "' is not WIDTHxHEIGHT (e.g. 320x200)", where);
+    if (*w < 1 || *h < 1 || *w > 16384 || *h > 16384)
+        throw Error("image size " + text + " is outside 1..16384 in width or height", where);
+    return {static_cast<int>(*w), static_cast<int>(*h)};
+}
+
+std::vector<PatchDigest> patch_digests(const std::string& capture_text) {
+    std::vector<PatchDigest> out;
+    std::string body;
+    std::size_t vertex_lines = 0;
+    const auto finish = [&] {
+        if (out.empty()) return;
+        out.back().triangles = vertex_lines / 3;
+        out.back().sha256 = sha256_hex(body).substr(0, kPatchDigits);
+    };
+    std::istringstream lines(capture_text);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("patch ", 0) == 0) {
+            finish();
+            PatchDigest p;
+            std::istringstream words(line.substr(6));
+            words >> p.patch_id;
+            const std::size_t levels = line.find(" levels ");
+            p.levels = levels == std::string::npos ? std::string() : line.substr(levels + 8);
+            out.push_back(p);
+            body.clear();
+            vertex_lines = 0;
+        } else if (out.empty() || line.empty() || line[0] == '#') {
+            continue;  // the version and comment lines
+        } else {
+            ++vertex_lines;
+        }
+        body += line + "\n";
+    }
+    finish();
+    return out;
+}
+
+}  // namespace tessref::golden
