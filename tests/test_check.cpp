@@ -1038,7 +1038,7 @@ TEST(CheckCommand, JsonHoldsTheWholeReport) {
     const auto& location = j["defects"]["non_manifold_edge"]["locations"][0];
     EXPECT_EQ(location["position"], nlohmann::json::array({1.0, 1.0, 0.5}));
     EXPECT_EQ(location["faces"].size(), 4u);
-    EXPECT_EQ(j["defects"].size(), std::size_t(tessref::defect_class_count));
+    EXPECT_EQ(j["defects"].size(), std::size_t(tessref::kDefectClassCount));
 }
 
 TEST(CheckCommand, UnreadableInputExitsTwoNamingTheFile) {

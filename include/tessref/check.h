@@ -115,7 +115,7 @@ enum class DefectClass {
     probe_escape,
     facing_down,
 };
-inline constexpr int defect_class_count = 15;
+inline constexpr int kDefectClassCount = 15;
 std::string_view defect_class_name(DefectClass kind);         // "t_junction"
 std::string_view defect_class_description(DefectClass kind);  // "T-junction"
 

@@ -57,8 +57,6 @@ namespace {
 
 using namespace check_detail;
 
-constexpr std::uint8_t face_non_finite = 4;
-
 void classify_faces(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     state.face_status.assign(mesh.face_count(), face_kept);
@@ -170,7 +168,7 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     report.vertex_count = mesh.vertex_count();
     report.face_count = mesh.face_count();
     report.expect = options.expect;
-    for (int k = 0; k < defect_class_count; ++k) report.defects.push_back({static_cast<DefectClass>(k), 0, {}});
+    for (int k = 0; k < kDefectClassCount; ++k) report.defects.push_back({static_cast<DefectClass>(k), 0, {}});
     if (options.tolerance && !(*options.tolerance >= 0.0 && std::isfinite(*options.tolerance)))
         throw Error("the tolerance must be a finite number >= 0", Where::in_file("--tolerance"));
 

@@ -21,7 +21,7 @@
 
 namespace tessref::check_detail {
 
-inline constexpr std::uint32_t none = std::numeric_limits<std::uint32_t>::max();
+inline constexpr std::uint32_t kNoIndex = std::numeric_limits<std::uint32_t>::max();
 
 // Why a face is left out of the topology.
 enum FaceStatus : std::uint8_t {
@@ -29,6 +29,7 @@ enum FaceStatus : std::uint8_t {
     face_too_few_vertices = 1,
     face_repeated_vertex = 2,
     face_duplicate = 3,
+    face_non_finite = 4,
 };
 
 // A half-edge filed under its smaller vertex: the other vertex, and face << 1 | forward,

@@ -18,8 +18,8 @@ namespace tessref::check_detail {
 
 namespace {
 
-constexpr std::size_t face_chunk = 1 << 14;
-constexpr std::size_t vertex_chunk = 1 << 14;
+constexpr std::size_t kFaceChunk = 1 << 14;
+constexpr std::size_t kVertexChunk = 1 << 14;
 
 // Spreads the low 21 bits of x to every third bit.
 std::uint64_t spread_bits(std::uint64_t x) {
@@ -122,7 +122,7 @@ void analyse_face_geometry(CheckState& state) {
     struct ComponentSums {
         double volume = 0.0;  // with flipped faces turned back
         std::size_t faces = 0;
-        std::uint32_t first_face = none;
+        std::uint32_t first_face = kNoIndex;
     };
     struct ChunkResult {
         double area = 0.0, volume_as_listed = 0.0;
@@ -137,9 +137,9 @@ void analyse_face_geometry(CheckState& state) {
     };
     const std::size_t cap = state.options.max_locations;
     const double tolerance = state.tolerance;
-    auto results = map_chunks<ChunkResult>(mesh.face_count(), face_chunk, [&](std::size_t f0, std::size_t f1, ChunkResult& out) {
+    auto results = map_chunks<ChunkResult>(mesh.face_count(), kFaceChunk, [&](std::size_t f0, std::size_t f1, ChunkResult& out) {
         // Faces of one component come in runs: look its sums up once a run.
-        std::uint32_t component = none;
+        std::uint32_t component = kNoIndex;
         ComponentSums* sums = nullptr;
         for (std::size_t f = f0; f < f1; ++f) {
             const auto face = mesh.face(f);
@@ -268,7 +268,7 @@ void find_coincident_vertices(CheckState& state) {
         const double cell = std::max(32.0 * tolerance, 1e-12 * std::max(1.0, state.diagonal));
         const PointGrid grid(mesh.positions, ids, state.bbox_min, cell);
         auto parts = map_chunks<std::vector<std::pair<std::uint32_t, std::uint32_t>>>(
-            grid.size(), vertex_chunk, [&](std::size_t i0, std::size_t i1, auto& out) {
+            grid.size(), kVertexChunk, [&](std::size_t i0, std::size_t i1, auto& out) {
                 for (std::size_t i = i0; i < i1; ++i) {
                     // Not a structured binding: the lambda below captures v, which clang 15
                     // (the fuzz build's compiler) cannot do for a binding.

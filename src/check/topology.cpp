@@ -15,8 +15,8 @@ namespace tessref::check_detail {
 
 namespace {
 
-constexpr std::size_t vertex_chunk = 1 << 14;
-constexpr std::size_t face_chunk = 1 << 14;
+constexpr std::size_t kVertexChunk = 1 << 14;
+constexpr std::size_t kFaceChunk = 1 << 14;
 
 bool same_vertex_set(const IndexedMesh& mesh, std::uint32_t f, std::uint32_t g) {
     const auto a = mesh.face(f);
@@ -60,7 +60,7 @@ void build_half_edges(CheckState& state) {
         throw Error("mesh too large to check: more than 2^31 faces", Where::in_file(mesh.source));
 
     std::vector<std::uint32_t> counts(vertex_count + 1, 0);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, kFaceChunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
             const auto face = mesh.face(f);
@@ -81,7 +81,7 @@ void build_half_edges(CheckState& state) {
     std::copy(state.half_edge_start.begin(), state.half_edge_start.end(), cursor.begin());
 
     state.half_edges.resize(total);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, face_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, kFaceChunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
             const auto face = mesh.face(f);
@@ -95,7 +95,7 @@ void build_half_edges(CheckState& state) {
         }
     });
     // Sorting each group fixes the order the atomic scatter left undetermined.
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, vertex_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, kVertexChunk), [&](const auto& r) {
         for (std::size_t v = r.begin(); v != r.end(); ++v)
             std::sort(state.half_edges.begin() + state.half_edge_start[v],
                       state.half_edges.begin() + state.half_edge_start[v + 1],
@@ -109,8 +109,8 @@ void find_duplicate_faces(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     // Two faces over the same vertex set share every edge, so comparing the faces met on
     // each edge finds every duplicate; the earliest face of a set is the original.
-    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), none);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), vertex_chunk), [&](const auto& r) {
+    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), kNoIndex);
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kVertexChunk), [&](const auto& r) {
         for_each_edge_in(state, r.begin(), r.end(), [&](std::uint32_t, std::uint32_t, std::uint32_t b, std::uint32_t e) {
             for (std::uint32_t i = b; i < e; ++i)
                 for (std::uint32_t j = i + 1; j < e; ++j) {
@@ -131,7 +131,7 @@ void find_duplicate_faces(CheckState& state) {
         });
     });
     for (std::uint32_t g = 0; g < mesh.face_count(); ++g) {
-        if (duplicate_of[g] == none) continue;
+        if (duplicate_of[g] == kNoIndex) continue;
         state.face_status[g] = face_duplicate;
         Defect d;
         const auto face = mesh.face(g);
@@ -156,7 +156,7 @@ void classify_edges(CheckState& state) {
         std::size_t non_manifold_count = 0, inconsistent_count = 0;
     };
     const std::size_t cap = state.options.max_locations;
-    auto results = map_chunks<ChunkResult>(mesh.vertex_count(), vertex_chunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
+    auto results = map_chunks<ChunkResult>(mesh.vertex_count(), kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
         std::vector<std::uint32_t> kept;
         for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t b, std::uint32_t e) {
             kept.clear();
@@ -245,7 +245,7 @@ void find_non_manifold_vertices(CheckState& state) {
         std::vector<std::pair<std::uint64_t, std::uint32_t>> fans;  // (vertex << 32 | face, fan)
     };
     const std::size_t cap = state.options.max_locations;
-    auto results = map_chunks<ChunkResult>(vertex_count, vertex_chunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
+    auto results = map_chunks<ChunkResult>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
         // neighbour << 32 | local face: one integer compare a step, and a vertex's few
         // entries sorted by insertion.
         std::vector<std::uint64_t> by_neighbour;
@@ -314,7 +314,7 @@ void find_non_manifold_vertices(CheckState& state) {
 void find_components(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     ConcurrentDisjointSets sets(mesh.vertex_count());
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), face_chunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.face_count(), kFaceChunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
             const auto face = mesh.face(f);
@@ -327,7 +327,7 @@ void find_components(CheckState& state) {
             for (std::uint32_t v : mesh.face(f)) in_kept_face[v] = 1;
     // Roots are the smallest vertex of their set, so numbering roots in vertex order numbers
     // components by their smallest vertex.
-    state.vertex_component.assign(mesh.vertex_count(), none);
+    state.vertex_component.assign(mesh.vertex_count(), kNoIndex);
     std::uint32_t components = 0;
     for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
         if (!in_kept_face[v]) continue;
@@ -424,13 +424,13 @@ void check_orientation(CheckState& state) {
 void trace_boundary_loops(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     const auto& boundary = state.boundary;  // sorted by (from, to, face)
-    state.loop_of_boundary.assign(boundary.size(), none);
+    state.loop_of_boundary.assign(boundary.size(), kNoIndex);
     auto first_out = [&](std::uint32_t v) {
         return static_cast<std::size_t>(
             std::lower_bound(boundary.begin(), boundary.end(), BoundaryHalfEdge{v, 0, 0}) - boundary.begin());
     };
     for (std::size_t start = 0; start < boundary.size(); ++start) {
-        if (state.loop_of_boundary[start] != none) continue;
+        if (state.loop_of_boundary[start] != kNoIndex) continue;
         const auto loop_id = static_cast<std::uint32_t>(state.loops.size());
         BoundaryLoop loop;
         std::size_t current = start;
@@ -447,13 +447,13 @@ void trace_boundary_loops(CheckState& state) {
             std::size_t next = boundary.size();
             const auto fan_of = [&](std::uint32_t face) {
                 const auto it = state.fan_at_pinch.find(std::uint64_t(h.to) << 32 | face);
-                return it == state.fan_at_pinch.end() ? none : it->second;
+                return it == state.fan_at_pinch.end() ? kNoIndex : it->second;
             };
-            const std::uint32_t fan_in = state.fan_at_pinch.empty() ? none : fan_of(h.face);
+            const std::uint32_t fan_in = state.fan_at_pinch.empty() ? kNoIndex : fan_of(h.face);
             for (std::size_t c = first_out(h.to); c < boundary.size() && boundary[c].from == h.to; ++c) {
-                if (state.loop_of_boundary[c] != none) continue;
+                if (state.loop_of_boundary[c] != kNoIndex) continue;
                 if (next == boundary.size()) next = c;
-                if (fan_in != none && fan_of(boundary[c].face) == fan_in) {
+                if (fan_in != kNoIndex && fan_of(boundary[c].face) == fan_in) {
                     next = c;
                     break;
                 }

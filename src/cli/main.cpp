@@ -28,7 +28,7 @@
 
 namespace {
 
-constexpr int exit_bad_input = 2;
+constexpr int kExitBadInput = 2;
 
 // Every subcommand, in the order `tessref --help` lists them. Add new ones here.
 std::vector<tessref::cli::Command> make_commands(CLI::App& app) {
@@ -99,7 +99,7 @@ int finish_stdout(int status) {
     const int error = errno;
     std::cerr << "tessref: error: cannot write to stdout: "
               << (error ? std::strerror(error) : "write error") << " (stdout)" << std::endl;
-    return exit_bad_input;
+    return kExitBadInput;
 }
 
 }  // namespace
@@ -151,7 +151,7 @@ int run(int argc, char** argv) {
             const tessref::Error error(parse_error.what(), tessref::Where::in_file("command line"));
             print_error(error.message());
             std::cerr << "Run 'tessref --help' or 'tessref <command> --help' for usage." << std::endl;
-            return exit_bad_input;
+            return kExitBadInput;
         }
         check_memory_environment();
         if (!max_memory.empty()) {
@@ -166,16 +166,16 @@ int run(int argc, char** argv) {
         }
         // require_subcommand(1) makes this unreachable; keep a clear message anyway.
         print_error("no command given (command line)");
-        return exit_bad_input;
+        return kExitBadInput;
     } catch (const tessref::Error& error) {
         print_error(error.message());
-        return exit_bad_input;
+        return kExitBadInput;
     } catch (const std::bad_alloc&) {
         print_error(out_of_memory_message(argc, argv));
-        return exit_bad_input;
+        return kExitBadInput;
     } catch (const std::exception& error) {
         print_error(error.what());
-        return exit_bad_input;
+        return kExitBadInput;
     }
 }
 

@@ -157,7 +157,7 @@ public:
         while (capacity < 2 * expected) capacity *= 2;
         slots_.reserve(capacity);
         advise_huge_pages(slots_);
-        slots_.assign(capacity, empty);
+        slots_.assign(capacity, kEmpty);
     }
 
     static std::uint64_t hash(const glm::dvec3& p) {
@@ -175,7 +175,7 @@ public:
         const PositionKey key = position_key(p);
         const std::uint64_t tag = hash >> 32;
         std::size_t slot = hash & mask();
-        while (slots_[slot] != empty) {
+        while (slots_[slot] != kEmpty) {
             const std::uint64_t s = slots_[slot];
             if ((s >> 32) == tag && position_key(position_of(static_cast<std::uint32_t>(s))) == key)
                 return static_cast<std::uint32_t>(s);
@@ -187,7 +187,7 @@ public:
     }
 
 private:
-    static constexpr std::uint64_t empty = std::numeric_limits<std::uint64_t>::max();
+    static constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
     std::size_t mask() const { return slots_.size() - 1; }
 
     template <typename PositionOf>
@@ -195,12 +195,12 @@ private:
         std::vector<std::uint64_t> old;
         old.reserve(2 * slots_.size());
         advise_huge_pages(old);
-        old.assign(2 * slots_.size(), empty);
+        old.assign(2 * slots_.size(), kEmpty);
         old.swap(slots_);
         for (const std::uint64_t s : old) {
-            if (s == empty) continue;
+            if (s == kEmpty) continue;
             std::size_t slot = hash(position_of(static_cast<std::uint32_t>(s))) & mask();
-            while (slots_[slot] != empty) slot = (slot + 1) & mask();
+            while (slots_[slot] != kEmpty) slot = (slot + 1) & mask();
             slots_[slot] = s;
         }
     }
