@@ -16,6 +16,8 @@
 #include <system_error>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
+
 #include "common/input_file.h"
 #include "pipeline/stage_uniforms.h"
 #include "tessref/shader.h"
@@ -518,6 +520,25 @@ ThreadLimit::ThreadLimit(int threads) {
     if (threads < 0)
         throw Error("thread count must be >= 0 (0: every core), got " + std::to_string(threads), Where::in_file("--threads"));
     if (threads > 0) control_.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+}
+
+void add_math_option(CLI::App& app, std::string& math) {
+    app.add_option("--math", math,
+                    "The control stage's acos and log2 in gpu precision: exact (the C library, correctly rounded) "
+                    "or llvmpipe (Mesa llvmpipe's approximations, bit for bit, as `tessref gl` predicts with)")
+        ->default_val("exact");
+}
+
+void add_cpu_shader_options(CLI::App& app, std::vector<std::string>& shaders, std::string& max_instructions) {
+    app.add_option("--shader", shaders, "A GLSL file of your own for one stage (repeatable; over the scene's [shaders]): STAGE is "
+                    "vertex|vert, tess_control|tesc or tess_evaluation|tese, which the CPU runs through its SPIR-V "
+                    "interpreter with the twins' uniforms and textures (docs/CLI.md: Your shaders on the CPU)")
+        ->type_name("STAGE=FILE")
+        ->allow_extra_args(false);
+    app.add_option("--max-instructions", max_instructions,
+                    "Instructions one shader invocation of a user's stage may run before it is stopped (default "
+                    "10000000): a shader that never ends is an error naming the stage, patch and invocation")
+        ->type_name("N");
 }
 
 }  // namespace tessref::cli

@@ -26,6 +26,10 @@
 #include "tessref/scene.h"
 #include "tessref/tessellator.h"
 
+namespace CLI {
+class App;
+}
+
 namespace tessref::cli {
 
 // ---------------------------------------------------------------------------------------
@@ -60,6 +64,10 @@ void apply_max_instructions_flag(const std::string& text);
 Precision parse_precision_flag(const std::string& text);
 // --math exact|llvmpipe (control.h MathMode); anything else is an error naming the flag.
 MathMode parse_math_flag(const std::string& text);
+// The flags of the commands whose CPU pipeline runs a user's stages (render, mesh), one text
+// for both: --math (into `math`), and --shader STAGE=FILE and --max-instructions N.
+void add_math_option(CLI::App& app, std::string& math);
+void add_cpu_shader_options(CLI::App& app, std::vector<std::string>& shaders, std::string& max_instructions);
 // What a summary line adds after "<precision> precision": nothing for exact math (the
 // default, so the line reads as it always has), ", llvmpipe math" otherwise.
 std::string math_note(MathMode math);

@@ -233,23 +233,12 @@ Command add_mesh_command(CLI::App& parent) {
                     "patch id, tess coord, position, normal and the patch's levels, in the layout of `tessref gl "
                     "--capture` (.txt, or .ply without levels), for `tessref compare`")
         ->type_name("FILE");
-    app->add_option("--math", options->math,
-                    "The control stage's acos and log2 in gpu precision: exact (the C library, correctly rounded) "
-                    "or llvmpipe (Mesa llvmpipe's approximations, bit for bit, as `tessref gl` predicts with)")
-        ->default_val("exact");
+    add_math_option(*app, options->math);
     app->add_option("--precision", options->precision,
                     "gpu: float stages, as the GPU computes them; exact: double stages. Files "
                     "store 32-bit floats either way (OpenMesh's writers)")
         ->default_val("gpu");
-    app->add_option("--shader", options->shaders, "A GLSL file of your own for one stage (repeatable; over the scene's [shaders]): STAGE is "
-                    "vertex|vert, tess_control|tesc or tess_evaluation|tese, which the CPU runs through its SPIR-V "
-                    "interpreter with the twins' uniforms and textures (docs/CLI.md: Your shaders on the CPU)")
-        ->type_name("STAGE=FILE")
-        ->allow_extra_args(false);
-    app->add_option("--max-instructions", options->max_instructions,
-                    "Instructions one shader invocation of a user's stage may run before it is stopped (default "
-                    "10000000): a shader that never ends is an error naming the stage, patch and invocation")
-        ->type_name("N");
+    add_cpu_shader_options(*app, options->shaders, options->max_instructions);
     app->add_flag("--binary", options->binary,
                   "Binary file (PLY little endian, OFF binary, STL binary); OBJ has none");
     app->add_option("--threads", options->threads, "Worker threads (0: every core)")->default_val(0);

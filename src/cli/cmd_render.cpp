@@ -166,19 +166,8 @@ Command add_render_command(CLI::App& parent) {
     app->add_option("--threads", options->threads,
                     "Worker threads (0: every core); the image is the same whatever the count")
         ->default_val(0);
-    app->add_option("--math", options->math,
-                    "The control stage's acos and log2 in gpu precision: exact (the C library, correctly rounded) "
-                    "or llvmpipe (Mesa llvmpipe's approximations, bit for bit, as `tessref gl` predicts with)")
-        ->default_val("exact");
-    app->add_option("--shader", options->shaders, "A GLSL file of your own for one stage (repeatable; over the scene's [shaders]): STAGE is "
-                    "vertex|vert, tess_control|tesc or tess_evaluation|tese, which the CPU runs through its SPIR-V "
-                    "interpreter with the twins' uniforms and textures (docs/CLI.md: Your shaders on the CPU)")
-        ->type_name("STAGE=FILE")
-        ->allow_extra_args(false);
-    app->add_option("--max-instructions", options->max_instructions,
-                    "Instructions one shader invocation of a user's stage may run before it is stopped (default "
-                    "10000000): a shader that never ends is an error naming the stage, patch and invocation")
-        ->type_name("N");
+    add_math_option(*app, options->math);
+    add_cpu_shader_options(*app, options->shaders, options->max_instructions);
     app->add_option("--precision", options->precision,
                     "Pipeline precision: gpu (float stages, as the GPU) or exact (double stages)")
         ->default_val("gpu");
