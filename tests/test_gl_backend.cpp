@@ -546,6 +546,38 @@ TEST_F(GlUserShaders, AMisspeltUniformIsAWarningNamingItAndTheFile) {
     EXPECT_EQ(r.err.find("scaleXY"), std::string::npos) << r.err;  // only the misspelt one
 }
 
+// A sampler tessref binds no texture to reads 0 (GL's unbound unit): the same flat terrain as
+// a misspelt uniform. tessref binds by unit (the twins' layout(binding = N)), so the warning
+// names the sampler, its unit and the file; a sampler at a bound unit, whatever its name, is
+// not warned about.
+TEST_F(GlUserShaders, ASamplerAtAnUnboundUnitIsAWarningNamingItTheUnitAndTheFile) {
+    const std::string twin = read_file(kSource / "data" / "shaders" / "thesis_terrain.tese");
+    const std::string declaration = "layout(binding = 0) uniform sampler2D heightMap;";
+    ASSERT_NE(twin.find(declaration), std::string::npos);
+    const fs::path unbound = dir_ / "unbound.tese", renamed = dir_ / "renamed.tese";
+    // Another name than the other stages' heightMap, which GL requires to have one binding.
+    const std::string renamed_text = std::regex_replace(twin, std::regex("\\bheightMap\\b"), "heights");
+    std::string text = renamed_text;
+    const std::string renamed_declaration = "layout(binding = 0) uniform sampler2D heights;";
+    write_file(unbound, text.replace(renamed_text.find(renamed_declaration), renamed_declaration.size(),
+                                     "layout(binding = 3) uniform sampler2D heights;"));
+    write_file(renamed, renamed_text);
+    const auto draw_with = [&](const fs::path& file) {
+        return run({"gl", scene_path("thesis-all-10").string(), "-o", (dir_ / "user.png").string(), "--size",
+                    "160x100", "--shader", "tese=" + file.string()});
+    };
+    const RunResult r = draw_with(unbound);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("tessref: warning: the tess_evaluation shader " + unbound.string() +
+                         " declares the sampler heights at texture unit 3, to which tessref binds no texture "
+                         "for this scene"),
+              std::string::npos)
+        << r.err;
+    const RunResult bound = draw_with(renamed);
+    ASSERT_EQ(bound.status, 0) << bound.err;
+    EXPECT_EQ(bound.err.find("warning"), std::string::npos) << bound.err;
+}
+
 // A user's fragment shader writing constant red: red exactly where the twins' picture is not
 // the background (the terrain's coverage does not depend on the fragment shader), the
 // background elsewhere.

@@ -181,10 +181,13 @@ std::string renderer_isolated();
 // The uniforms tessref sets for `scene`, by name, as the GLSL twins declare them: what the
 // GL backend sets with glUniform* (and what a CPU run of a user's stage is to be given).
 std::set<std::string> uniforms_set(const Scene& scene);
-// One warning per loose uniform `stage` declares (shader::Module::uniform_names(); samplers
-// are not listed there) that tessref does not set for `scene`, naming the uniform and the
-// stage's file: it reads 0, so a misspelt name (scaleZZ for scaleZ) is a silently wrong
-// picture. For every place a user's stage is loaded.
+// One warning per loose uniform `stage` declares (shader::Module::uniform_names()) that
+// tessref does not set for `scene`, naming the uniform and the stage's file: it reads 0, so a
+// misspelt name (scaleZZ for scaleZ) is a silently wrong picture. Likewise one per sampler
+// (shader::Module::samplers()) at a texture unit to which tessref binds no texture for
+// `scene`, naming the sampler and its unit: samplers are bound by unit, the twins'
+// layout(binding = N), so a sampler's name does not matter and its unit does. For every
+// place a user's stage is loaded.
 std::vector<std::string> unset_uniform_warnings(const Scene& scene, const shader::Module& stage);
 
 }  // namespace tessref::gl

@@ -98,6 +98,13 @@ public:
     const std::vector<std::uint32_t>& spirv() const;
     // The uniforms (not samplers) the stage declares, by name.
     std::vector<std::string> uniform_names() const;
+    // The samplers the stage declares, by name, with the texture unit each reads: its
+    // layout(binding = N), or 0 without one (GL's default value of a sampler uniform).
+    struct Sampler {
+        std::string name;
+        int unit = 0;
+    };
+    std::vector<Sampler> samplers() const;
     // A control shader's layout(vertices = N) out; 0 for other stages.
     int output_vertices() const;
     // An evaluation shader's layout; throws tessref::Error for other stages.

@@ -540,6 +540,9 @@ void each_uniform(const Uniforms& u, const Scene& scene, const ShadingModel& sha
     shading_uniforms(u, shading);
 }
 
+// Below, with the texture upload: every texture the program samples, with its unit.
+void each_texture(const Scene& scene, const RenderShading& shading, const pipeline::TextureBinder& bind);
+
 }  // namespace
 
 std::set<std::string> uniforms_set(const Scene& scene) {
@@ -560,6 +563,19 @@ std::vector<std::string> unset_uniform_warnings(const Scene& scene, const shader
                                " declares the uniform " + name +
                                ", which tessref does not set for this scene: it reads 0 (a misspelt name? the uniforms "
                                "tessref sets are the GLSL twins')");
+    // Samplers are bound by unit, not by name (the twins' layout(binding = N)): one at a unit
+    // no texture is bound to samples GL's unbound texture, 0, as silently.
+    std::set<int> units;
+    each_texture(scene, scene.shading, [&](int unit, const Texture* t, const std::string&) {
+        if (t) units.insert(unit);
+    });
+    for (const shader::Module::Sampler& sampler : stage.samplers())
+        if (!units.count(sampler.unit))
+            warnings.push_back("the " + std::string(to_string(stage.stage())) + " shader " + stage.path() +
+                               " declares the sampler " + sampler.name + " at texture unit " +
+                               std::to_string(sampler.unit) +
+                               ", to which tessref binds no texture for this scene: it reads 0 (the units tessref "
+                               "binds are the GLSL twins' layout(binding = N))");
     return warnings;
 }
 
@@ -659,24 +675,30 @@ struct BoundTextures {
     }
 };
 
-void bind_textures(BoundTextures& b, const Scene& scene, const RenderShading& shading) {
-    pipeline::bind_stage_textures(scene, [&](int unit, const Texture* t, const std::string& what) { b.bind(unit, t, what); });
+// Every texture the scene's program samples, with its unit: the one list the GL binds and
+// unset_uniform_warnings() reads. A null texture (a slot the scene leaves empty) binds nothing.
+void each_texture(const Scene& scene, const RenderShading& shading, const pipeline::TextureBinder& bind) {
+    pipeline::bind_stage_textures(scene, bind);
     if (shading.model.kind == ShadingKind::geomip_lightmap) {  // geomip_terrain.frag's bindings
         const GeomipLightmapShading& g = shading.model.geomip;
-        b.bind(4, g.lightMap.get(), "lightMap");
+        bind(4, g.lightMap.get(), "lightMap");
         for (std::size_t i = 0; i < g.materials.size(); ++i) {
-            b.bind(5 + static_cast<int>(i), g.materials[i].texture.get(), "materials[" + std::to_string(i) + "]");
-            b.bind(9 + static_cast<int>(i), g.materials[i].alpha.get(), "alphaMaps[" + std::to_string(i) + "]");
+            bind(5 + static_cast<int>(i), g.materials[i].texture.get(), "materials[" + std::to_string(i) + "]");
+            bind(9 + static_cast<int>(i), g.materials[i].alpha.get(), "alphaMaps[" + std::to_string(i) + "]");
         }
-        b.bind(13, g.clouds.get(), "clouds");
+        bind(13, g.clouds.get(), "clouds");
     }
     const auto names = sampler_names(shading.model.kind);
     for (std::size_t i = 0; i < names.size(); ++i) {
         const auto* slot = sampler_slot(shading.model.textures, names[i]);
         if (!slot || !*slot) continue;
         const int unit = names[i] == "heightMap" ? 0 : 4 + static_cast<int>(i);
-        b.bind(unit, slot->get(), std::string(names[i]));
+        bind(unit, slot->get(), std::string(names[i]));
     }
+}
+
+void bind_textures(BoundTextures& b, const Scene& scene, const RenderShading& shading) {
+    each_texture(scene, shading, [&](int unit, const Texture* t, const std::string& what) { b.bind(unit, t, what); });
 }
 
 // ---- vertex data -----------------------------------------------------------------------

@@ -509,6 +509,14 @@ std::vector<std::string> Module::uniform_names() const {
     return names;
 }
 
+std::vector<Module::Sampler> Module::samplers() const {
+    std::vector<Sampler> out;
+    for (const Variable& v : impl_->variables)
+        if (v.storage == spv::StorageClassUniformConstant && impl_->types[v.type].kind == Kind::sampled_image)
+            out.push_back({v.name, std::max(v.binding, 0)});  // as Executable binds it (stages.cpp)
+    return out;
+}
+
 const char* to_string(MathMode mode) { return mode == MathMode::exact ? "exact" : "llvmpipe"; }
 
 Slot slot(glm::vec4 v) {
