@@ -638,6 +638,127 @@ TEST(RenderCommand, AovChannelsAgreeWithInspect) {
     }
 }
 
+// `--aov level` to a PNG: the heat map for eyes. Its picture rows are the EXR's level_heat
+// channels as 8-bit codes (the same colour map, pixel for pixel), and below them a legend
+// band whose bar runs from level 1's colour (blue) at its left end to level 64's (red) at its
+// right. Any other AOV in a PNG is still refused (BadInputExitsTwoAndWritesNothing).
+TEST(RenderCommand, LevelHeatMapAsAPngWithItsLegend) {
+    TempDir dir;
+    const fs::path exr = dir.path() / "level.exr", png = dir.path() / "level.png";
+    for (const fs::path& out : {exr, png}) {
+        const RunResult r = run_tessref({"render", "data/scenes/thesis-all-10.toml", "-o", out.string(), "--size",
+                                         "160x100", "--aov", "level"},
+                                        dir.path());
+        ASSERT_EQ(r.status, 0) << r.err;
+    }
+    const ImageData floats = read_image(exr), heat = read_image(png);
+    ASSERT_EQ(heat.width, 160);
+    ASSERT_GT(heat.height, 100 + 16);  // the legend's band
+    ASSERT_EQ(heat.channels, 3);
+    const auto code = [](float v) { return std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f); };
+    std::size_t differ = 0, surface = 0;
+    for (int y = 0; y < 100; ++y)
+        for (int x = 0; x < 160; ++x) {
+            surface += std::isnan(floats.at(x, y, floats.channel("level"))) ? 0 : 1;
+            for (int c = 0; c < 3; ++c) {
+                const char* name[] = {"level_heat.R", "level_heat.G", "level_heat.B"};
+                differ += code(floats.at(x, y, floats.channel(name[c]))) != code(heat.at(x, y, c)) ? 1 : 0;
+            }
+        }
+    EXPECT_EQ(differ, 0u);
+    EXPECT_GT(surface, 1000u);
+    // The bar: find the row of the band with the most blue-to-red, and read its two ends.
+    bool blue_then_red = false;
+    for (int y = 100; y < heat.height && !blue_then_red; ++y) {
+        int first = -1, last = -1;
+        for (int x = 0; x < 160; ++x)
+            if (heat.at(x, y, 0) + heat.at(x, y, 1) + heat.at(x, y, 2) > 0.0f && heat.at(x, y, 0) + heat.at(x, y, 1) +
+                                                                                      heat.at(x, y, 2) < 2.9f) {
+                if (first < 0) first = x;
+                last = x;
+            }
+        if (first < 0 || last - first < 100) continue;
+        blue_then_red = code(heat.at(first, y, 2)) == 255 && code(heat.at(first, y, 0)) == 0 &&
+                        code(heat.at(last, y, 0)) == 255 && code(heat.at(last, y, 2)) == 0;
+    }
+    EXPECT_TRUE(blue_then_red);
+}
+
+// inspect --pixel --capture: the capture's values for the pixel's patch and its triangle's
+// tess coords beside the reference's. The CPU's own capture (`mesh --capture`, the same
+// pipeline) agrees everywhere; the same capture with one corner's z raised by 1 and the
+// patch's outer[0] changed says so for that corner and the levels, with the difference.
+TEST(RenderCommand, InspectPixelBesideACapture) {
+    TempDir dir;
+    const std::string scene = "data/scenes/thesis-map-4.toml";  // its levels do not depend on the viewport
+    const fs::path capture = dir.path() / "cpu.txt", edited = dir.path() / "edited.txt";
+    ASSERT_EQ(run_tessref({"mesh", scene, "--capture", capture.string()}, dir.path()).status, 0);
+    const std::vector<std::string> inspect{"inspect", scene, "--size", "160x100", "--pixel", "80,60", "--capture"};
+    auto with = [&](const fs::path& file, bool json) {
+        std::vector<std::string> args = inspect;
+        args.push_back(file.string());
+        if (json) args.push_back("--json");
+        return run_tessref(args, dir.path());
+    };
+    const RunResult same = with(capture, true);
+    ASSERT_EQ(same.status, 0) << same.err;
+    const nlohmann::json j = nlohmann::json::parse(same.out);
+    ASSERT_TRUE(j.at("covered").get<bool>());
+    const nlohmann::json& c = j.at("capture");
+    EXPECT_TRUE(c.at("patch_levels_equal").get<bool>());
+    ASSERT_EQ(c.at("corners").size(), 3u);
+    for (const auto& corner : c.at("corners")) {
+        ASSERT_TRUE(corner.at("found").get<bool>());
+        EXPECT_EQ(corner.at("position"), corner.at("reference_position"));
+        EXPECT_EQ(corner.at("position_ulps").get<int>(), 0);
+    }
+    const RunResult text = with(capture, false);
+    EXPECT_NE(text.out.find("capture " + capture.string() + ": "), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("levels: outer"), std::string::npos);
+    EXPECT_EQ(text.out.find("the reference "), std::string::npos) << text.out;  // nothing differs
+
+    // Raise corner 0 (every copy of its domain point in the patch) by 1 and change outer[0].
+    const std::string patch = std::to_string(j.at("patch_id").get<std::uint32_t>());
+    std::array<float, 3> t{};
+    for (int k = 0; k < 3; ++k) t[static_cast<std::size_t>(k)] = c.at("corners")[0].at("tess_coord")[k].get<float>();
+    std::istringstream in(read_file(capture));
+    std::string out, line;
+    float z = 0.0f;
+    while (std::getline(in, line)) {
+        std::vector<std::string> w = split_words(line);
+        if (w.size() == 9 && w[0] == "patch" && w[1] == patch && w[2] == "levels") {
+            w[3] = "7.25";
+        } else if (w.size() == 10 && w[0] == patch && std::stof(w[1]) == t[0] && std::stof(w[2]) == t[1] &&
+                   std::stof(w[3]) == t[2]) {
+            z = std::stof(w[6]);
+            char raised[32];
+            std::snprintf(raised, sizeof raised, "%.9g", static_cast<double>(z + 1.0f));
+            w[6] = raised;
+        } else {
+            out += line + "\n";
+            continue;
+        }
+        for (std::size_t k = 0; k < w.size(); ++k) out += (k ? " " : "") + w[k];
+        out += "\n";
+    }
+    write_file(edited, out);
+    const RunResult changed = with(edited, true);
+    ASSERT_EQ(changed.status, 0) << changed.err;
+    const nlohmann::json e = nlohmann::json::parse(changed.out).at("capture");
+    EXPECT_FALSE(e.at("patch_levels_equal").get<bool>());
+    EXPECT_EQ(e.at("patch_levels").at("outer")[0].get<float>(), 7.25f);
+    EXPECT_EQ(e.at("corners")[0].at("position_difference")[2].get<float>(), (z + 1.0f) - z);
+    EXPECT_GT(e.at("corners")[0].at("position_ulps").get<int>(), 0);
+    EXPECT_EQ(e.at("corners")[1].at("position_ulps").get<int>(), 0);
+    const RunResult changed_text = with(edited, false);
+    EXPECT_NE(changed_text.out.find("(the reference: outer"), std::string::npos) << changed_text.out;
+    EXPECT_NE(changed_text.out.find("corner 0 at tess coord"), std::string::npos);
+    EXPECT_NE(changed_text.out.find("ulps at most)"), std::string::npos) << changed_text.out;
+    // A capture that is not one is refused before the render.
+    write_file(dir.path() / "bad.txt", "not a capture\n");
+    EXPECT_EQ(with(dir.path() / "bad.txt", false).status, 2);
+}
+
 TEST(RenderCommand, InspectTextNamesThePixelsOrigin) {
     TempDir dir;
     const RunResult r =

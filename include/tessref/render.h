@@ -281,6 +281,9 @@ struct AovSelection {
                              // "level_heat.R", "level_heat.G", "level_heat.B"
     bool any() const { return depth || patch || triangle || tesscoord || level; }
 };
+// A PNG takes `level` alone: the level heat map as a picture, its legend in a band below
+// (write_image). Every other selection needs an EXR.
+inline bool aovs_as_png(const AovSelection& a) { return a.level && !a.depth && !a.patch && !a.triangle && !a.tesscoord; }
 // Parses "depth,patch,triangle,tesscoord,level" (any subset, any order). Throws
 // tessref::Error (key "--aov") naming an unknown item.
 AovSelection parse_aovs(std::string_view list);

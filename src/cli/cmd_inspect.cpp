@@ -2,18 +2,24 @@
 // the tess coord, the tessellation levels, the world position, the depth and the colour
 // (include/tessref/render.h, pixel_provenance).
 //
-//   tessref inspect SCENE --pixel X,Y [--json] [--size WxH] [--precision gpu|exact]
-//                   [--wireframe] [--threads N]
+//   tessref inspect SCENE --pixel X,Y [--capture FILE] [--json] [--size WxH]
+//                   [--precision gpu|exact] [--wireframe] [--threads N]
 //   tessref inspect SCENE --ground X,Y|camera [--json] [--size WxH] [--precision gpu|exact]
 //
 // X, Y: column from the left and row from the top of the image `tessref render` writes with
-// the same options (as an image viewer shows it).
+// the same options (as an image viewer shows it). --capture FILE (a capture of `tessref gl
+// --capture` or `tessref mesh --capture`, capture.h): that capture's values for the same
+// patch and the same tess coords beside the reference's, the patch's levels and each corner
+// of the pixel's triangle, so a pixel that differs leads to the stage that differs.
 //
 // --ground: lab 4's camera collision question. The height of the height map and of the
 // tessellated surface (the levels the scene's camera gives) at ground point X,Y ((x, y) on
 // plane xy, (x, z) on plane xz; `camera`: under the eye), their difference, and with
 // `camera` the eye's clearance above each (render.h, ground_height).
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -26,6 +32,7 @@
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/prepare.h"
 #include "tessref/render.h"
@@ -40,6 +47,7 @@ struct InspectOptions {
     std::string scene;
     std::string pixel;
     std::string ground;
+    std::string capture;
     bool json = false;
     std::string size;
     std::string precision = "gpu";
@@ -165,11 +173,135 @@ int run_ground(const InspectOptions& options) {
     return 0;
 }
 
+// The capture's side of a covered pixel: the patch's levels and the triangle's corners, each
+// found by patch id and tess coord (exact float bits, as compare_captures matches them).
+struct CapturedCorner {
+    glm::vec3 tess_coord{0.0f};
+    const CapturedVertex* vertex = nullptr;  // null: the capture has no such vertex
+    glm::vec3 reference_position{0.0f}, reference_normal{0.0f};
+    bool has_reference_normal = false;
+};
+struct CaptureSide {
+    std::string file;
+    bool has_levels = false;
+    std::size_t patch_vertices = 0;          // the capture's vertices of the pixel's patch
+    const CapturedVertex* patch = nullptr;   // one of them (its levels), null: none
+    std::array<CapturedCorner, 3> corners{};
+};
+
+bool same_bits(glm::vec3 a, glm::vec3 b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+CaptureSide capture_side(const Capture& capture, const std::string& file, const PixelProvenance& p,
+                         const PipelineResult& pipeline) {
+    CaptureSide side;
+    side.file = file;
+    side.has_levels = capture.has_levels;
+    for (int k = 0; k < 3; ++k) {
+        CapturedCorner& c = side.corners[static_cast<std::size_t>(k)];
+        c.tess_coord = p.vertex_tess_coords[static_cast<std::size_t>(k)];
+        const std::uint32_t v = p.vertices[static_cast<std::size_t>(k)];
+        c.reference_position = glm::vec3(pipeline.mesh.positions[v]);
+        c.has_reference_normal = v < pipeline.mesh.normals.size();
+        if (c.has_reference_normal) c.reference_normal = glm::vec3(pipeline.mesh.normals[v]);
+    }
+    for (const CapturedVertex& v : capture.vertices) {
+        if (v.patch_id != p.patch_id) continue;
+        ++side.patch_vertices;
+        if (!side.patch) side.patch = &v;
+        for (CapturedCorner& c : side.corners)
+            if (!c.vertex && same_bits(v.tess_coord, c.tess_coord)) c.vertex = &v;
+    }
+    return side;
+}
+
+std::uint64_t largest_ulps(glm::vec3 a, glm::vec3 b) {
+    std::uint64_t most = 0;
+    for (int i = 0; i < 3; ++i) most = std::max(most, ulp_distance(a[i], b[i]));
+    return most;
+}
+
+std::string ulps_text(std::uint64_t ulps) { return ulps == kInfiniteUlps ? "NaN against a number" : std::to_string(ulps); }
+
+Json capture_json(const CaptureSide& side, const PixelProvenance& p) {
+    Json doc;
+    doc["file"] = utf8_for_json(side.file);
+    doc["patch_vertices"] = side.patch_vertices;
+    if (side.patch && side.has_levels) {
+        Json outer = Json::array(), inner = Json::array();
+        for (const float x : side.patch->levels.outer) outer.push_back(number(x));
+        for (const float x : side.patch->levels.inner) inner.push_back(number(x));
+        doc["patch_levels"] = {{"outer", outer}, {"inner", inner}};
+        doc["patch_levels_equal"] = side.patch->levels.outer == p.patch_levels.outer &&
+                                    side.patch->levels.inner == p.patch_levels.inner;
+    }
+    Json corners = Json::array();
+    for (const CapturedCorner& c : side.corners) {
+        Json corner;
+        corner["tess_coord"] = vector_json(c.tess_coord);
+        corner["found"] = c.vertex != nullptr;
+        corner["reference_position"] = vector_json(c.reference_position);
+        if (c.vertex) {
+            corner["position"] = vector_json(c.vertex->position);
+            corner["position_difference"] = vector_json(c.vertex->position - c.reference_position);
+            const std::uint64_t ulps = largest_ulps(c.vertex->position, c.reference_position);
+            corner["position_ulps"] = ulps == kInfiniteUlps ? Json("inf") : Json(ulps);
+            corner["normal"] = vector_json(c.vertex->normal);
+        }
+        if (c.has_reference_normal) corner["reference_normal"] = vector_json(c.reference_normal);
+        corners.push_back(corner);
+    }
+    doc["corners"] = corners;
+    return doc;
+}
+
+std::string capture_text(const CaptureSide& side, const PixelProvenance& p) {
+    std::ostringstream out;
+    out << "capture " << side.file << ": ";
+    if (!side.patch) {
+        out << "no vertex of patch " << p.patch_id << "\n";
+        return out.str();
+    }
+    out << side.patch_vertices << " vertices of patch " << p.patch_id << "\n";
+    if (side.has_levels) {
+        const bool equal = side.patch->levels.outer == p.patch_levels.outer && side.patch->levels.inner == p.patch_levels.inner;
+        out << "  levels: " << levels_text(side.patch->levels) << (equal ? " (the reference's)" : " (the reference: " +
+                                                                                                      levels_text(p.patch_levels) + ")")
+            << "\n";
+    } else {
+        out << "  levels: unknown (a PLY capture has none)\n";
+    }
+    for (std::size_t k = 0; k < 3; ++k) {
+        const CapturedCorner& c = side.corners[k];
+        out << "  corner " << k << " at tess coord " << vector_text(c.tess_coord) << ": ";
+        if (!c.vertex) {
+            out << "not in the capture (the patch's tessellation differs there)\n";
+            continue;
+        }
+        const std::uint64_t ulps = largest_ulps(c.vertex->position, c.reference_position);
+        out << "position " << vector_text(c.vertex->position);
+        if (ulps == 0)
+            out << " (the reference's)";
+        else
+            out << " (the reference " << vector_text(c.reference_position) << ", difference "
+                << vector_text(c.vertex->position - c.reference_position) << ", " << ulps_text(ulps) << " ulps at most)";
+        out << "; normal " << vector_text(c.vertex->normal);
+        if (c.has_reference_normal) {
+            if (largest_ulps(c.vertex->normal, c.reference_normal) == 0)
+                out << " (the reference's)";
+            else
+                out << " (the reference " << vector_text(c.reference_normal) << ")";
+        }
+        out << "\n";
+    }
+    return out.str();
+}
+
 int run_inspect(const InspectOptions& options) {
     if (options.pixel.empty() == options.ground.empty())
         throw Error("give exactly one of --pixel X,Y and --ground X,Y|camera", Where::in_file("command line"));
     if (!options.ground.empty()) {
         if (options.wireframe) throw Error("--wireframe is for --pixel", Where::in_file("--wireframe"));
+        if (!options.capture.empty()) throw Error("--capture is for --pixel", Where::in_file("--capture"));
         return run_ground(options);
     }
     const glm::ivec2 pixel = parse_pixel(options.pixel);
@@ -180,6 +312,14 @@ int run_inspect(const InspectOptions& options) {
     render_options.precision = precision;
     render_options.mode = options.wireframe ? RenderMode::wireframe : RenderMode::fill;
 
+    // The capture first: a bad file is refused before the render.
+    std::optional<Capture> capture;
+    if (!options.capture.empty()) {
+        (void)capture_format_from_path(options.capture, "--capture");
+        capture = read_capture(options.capture);
+    }
+    // The capture is held to the surface's own vertices, which a streamed render does not keep.
+    render_options.keep_surface = capture.has_value();
     const Scene scene = load_scene(options.scene);
     const RenderResult result = render_scene(scene, render_options);
     if (pixel.x >= result.width || pixel.y >= result.height)
@@ -187,6 +327,9 @@ int run_inspect(const InspectOptions& options) {
                         std::to_string(result.height) + " image",
                     Where::in_file("--pixel"));
     const PixelProvenance p = pixel_provenance(result, pixel.x, pixel.y);
+    std::optional<CaptureSide> side;
+    if (capture && p.covered && result.pipeline && !result.pipeline->mesh.positions.empty())
+        side = capture_side(*capture, options.capture, p, *result.pipeline);
 
     if (options.json) {
         Json doc;
@@ -215,6 +358,7 @@ int run_inspect(const InspectOptions& options) {
             if (p.normal) doc["normal"] = vector_json(*p.normal);
             if (p.uv) doc["uv"] = vector_json(*p.uv);
         }
+        if (side) doc["capture"] = capture_json(*side, p);
         std::cout << doc.dump(2) << "\n";
         return 0;
     }
@@ -226,6 +370,7 @@ int run_inspect(const InspectOptions& options) {
     out << "depth: " << format_float(p.depth) << "\n";
     if (!p.covered) {
         out << "covered: no (background)\n";
+        if (capture) out << "capture " << options.capture << ": nothing to compare (the reference draws no surface here)\n";
     } else {
         out << "covered: yes\n";
         out << "patch: " << p.patch_id << " (levels " << levels_text(p.patch_levels) << ")\n";
@@ -239,6 +384,7 @@ int run_inspect(const InspectOptions& options) {
         out << "world position: " << vector_text(p.world_position) << "\n";
         if (p.normal) out << "normal: " << vector_text(*p.normal) << "\n";
         if (p.uv) out << "uv: " << vector_text(*p.uv) << "\n";
+        if (side) out << capture_text(*side, p);
     }
     std::cout << out.str();
     return 0;
@@ -262,6 +408,10 @@ Command add_inspect_command(CLI::App& parent) {
                     "A ground point (x,y on plane xy; x,z on plane xz) or `camera` (under the eye): the heights of the "
                     "height map and of the tessellated surface there")
         ->type_name("X,Y|camera");
+    app->add_option("--capture", options->capture,
+                    "With --pixel: a capture (`tessref gl --capture`, `tessref mesh --capture`; .txt or .ply) whose "
+                    "values for the pixel's patch and its triangle's tess coords are printed beside the reference's")
+        ->type_name("FILE");
     app->add_flag("--json", options->json, "Print JSON instead of text");
     app->add_option("--size", options->size, "Image size WIDTHxHEIGHT, as given to `tessref render`")
         ->type_name("WxH");

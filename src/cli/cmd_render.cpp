@@ -53,8 +53,10 @@ int run_render(const RenderCommandOptions& options) {
     // Flags and output first: nothing is computed for a command line that cannot succeed.
     const ImageFormat format = image_format_from_path(options.output);
     const AovSelection aovs = options.aov.empty() ? AovSelection{} : parse_aovs(options.aov);
-    if (aovs.any() && format != ImageFormat::exr)
-        throw Error("--aov writes float channels: the output must be an .exr file", Where::in_file("--aov"));
+    if (aovs.any() && format != ImageFormat::exr && !(format == ImageFormat::png && aovs_as_png(aovs)))
+        throw Error("--aov writes float channels: the output must be an .exr file (a .png takes --aov level alone: "
+                    "the level heat map with its legend)",
+                    Where::in_file("--aov"));
     if (aovs.any() && options.raytrace && (aovs.patch || aovs.tesscoord || aovs.level))
         throw Error("a ray-traced image has no patches, tess coords or levels: with --raytrace, --aov takes depth "
                     "and triangle only",

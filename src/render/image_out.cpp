@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "image/image_io.h"
+#include "picture/canvas.h"
 #include "render/render_internal.h"
 #include "tessref/error.h"
 #include "tessref/render.h"
@@ -21,6 +22,46 @@ namespace {
 std::string lower(std::string s) {
     std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return s;
+}
+
+// The level heat map as a picture for eyes (`render --aov level -o FILE.png`): every pixel in
+// level_heat_colour() (black: no surface), and below it a band with the colour map's legend,
+// a bar over log2(level) 0..6 with the levels 1, 2, 4, ... 64 under their places. Drawn with
+// the picture kit's bitmap face, so the bytes do not depend on the machine's fonts.
+void write_level_heat_png(const RenderResult& result, const std::string& path) {
+    const int w = result.width, h = result.height;
+    const int scale = w >= 480 ? 2 : 1;                 // the bitmap face's cell, in pixels
+    const int text = picture::kBitmapGlyphRows * scale;  // a line of text's height
+    const int bar_top = h + 6, bar_bottom = bar_top + 4 * scale + 4;
+    const int labels = bar_bottom + 4 + text, caption = labels + 6 + text;
+    picture::Canvas canvas(w, caption + 6, 3, image::SampleType::uint8, picture::Colour{}, path);
+    const auto colour = [](glm::vec3 c) { return picture::Colour{c.r, c.g, c.b}; };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            canvas.put(x, y, colour(level_heat_colour(result.level[static_cast<std::size_t>(y) * w + x])));
+    // The bar spans the picture less a margin for the end labels; level L sits at log2(L) / 6.
+    const int margin = std::min(4 * 4 * scale, w / 4), x0 = margin, x1 = std::max(x0 + 1, w - 1 - margin);
+    const auto at = [&](double level) { return x0 + (x1 - x0) * std::log2(level) / 6.0; };
+    for (int x = x0; x <= x1; ++x) {
+        const float level = std::exp2(6.0f * static_cast<float>(x - x0) / static_cast<float>(x1 - x0));
+        for (int y = bar_top; y < bar_bottom; ++y) canvas.put(x, y, colour(level_heat_colour(level)));
+    }
+    const picture::Colour white{1.0f, 1.0f, 1.0f};
+    for (int level = 1; level <= 64; level *= 2) {
+        const int x = static_cast<int>(std::lround(at(level)));
+        for (int y = bar_bottom; y < bar_bottom + 3; ++y) canvas.put(x, y, white);
+        canvas.bitmap_text(x, labels, std::to_string(level), picture::Anchor::middle, white, scale);
+    }
+    // The longest caption that fits (a glyph advances four cells).
+    for (const char* words : {"TESSELLATION LEVEL, LOG SCALE. BLACK: NO SURFACE", "LEVEL, LOG SCALE. BLACK: NO SURFACE",
+                              "LEVEL. BLACK: NONE", "LEVEL"})
+        if (x0 + static_cast<int>(std::string(words).size()) * 4 * scale <= w || std::string(words) == "LEVEL") {
+            canvas.bitmap_text(x0, caption, words, picture::Anchor::start, white, scale);
+            break;
+        }
+    image::WriteOptions options;
+    options.software_tag = true;  // and no time stamp: the same render gives the same bytes
+    image::write_image(path, canvas.view(), options);
 }
 
 }  // namespace
@@ -57,8 +98,14 @@ AovSelection parse_aovs(std::string_view list) {
 }
 
 void write_image(const RenderResult& result, const std::string& path, ImageFormat format, const AovSelection& aovs) {
+    if (aovs.any() && format == ImageFormat::png && aovs_as_png(aovs)) {
+        write_level_heat_png(result, path);
+        return;
+    }
     if (aovs.any() && format != ImageFormat::exr)
-        throw Error("AOV channels need an EXR file (float channels): name the output *.exr", Where::in_file(path));
+        throw Error("AOV channels need an EXR file (float channels): name the output *.exr; a PNG takes --aov level "
+                    "alone (the level heat map)",
+                    Where::in_file(path));
     const int width = result.width, height = result.height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     image::WriteOptions options;
