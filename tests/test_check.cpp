@@ -320,6 +320,54 @@ TEST(CheckClean, TerrainFileAndExpectations) {
 // ---------------------------------------------------------------------------------------
 // The defect corpus: each defect in its class, at its place
 
+// A closed sphere standing on an open plate (the PN triangles scene's layout): automatic
+// judgement takes the plate, a component seen from one side, for an open sheet and allows
+// its outline, and holds the rest to the closed rules. A hole in the plate and a hole in
+// the sphere are each still a boundary loop.
+IndexedMesh sphere_on_plate(bool hole_in_plate, bool hole_in_sphere) {
+    IndexedMesh mesh = icosphere(2);
+    for (glm::dvec3& p : mesh.positions) p += glm::dvec3(5.0, 5.0, 2.0);
+    if (hole_in_sphere) {
+        IndexedMesh holed;
+        holed.positions = mesh.positions;
+        for (std::size_t f = 1; f < mesh.face_count(); ++f) holed.add_face(mesh.face(f));
+        mesh = std::move(holed);
+    }
+    const SurfaceMesh plate = grid_terrain(1, 4, flat);  // 10 x 10, 4 x 4 quads
+    const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), plate.positions.begin(), plate.positions.end());
+    for (std::size_t t = 0; t < plate.triangles.size(); ++t) {
+        if (hole_in_plate && (t == 10 || t == 11)) continue;  // quad (1, 1): x in [2.5, 5], y in [2.5, 5]
+        const std::array<std::uint32_t, 3> f{base + plate.triangles[t][0], base + plate.triangles[t][1],
+                                             base + plate.triangles[t][2]};
+        mesh.add_face(f);
+    }
+    return mesh;
+}
+
+TEST(CheckCorpus, OpenSheetBesideAClosedMeshIsJudgedPerComponent) {
+    const CheckReport clean = tessref::check_mesh(sphere_on_plate(false, false), quick());
+    EXPECT_TRUE(clean.passed) << tessref::report_text(clean);
+    EXPECT_EQ(clean.judged_as, "closed");
+    EXPECT_EQ(clean.open_sheets, 1u);
+    EXPECT_EQ(clean.probe.mode, "closed");
+    EXPECT_NE(tessref::report_text(clean).find("but for 1 open sheet"), std::string::npos);
+    // Expect closed still refuses the plate's outline.
+    EXPECT_EQ(tessref::check_mesh(sphere_on_plate(false, false), quick(Expect::closed)).count(DefectClass::boundary_loop),
+              1u);
+
+    const CheckReport plate = tessref::check_mesh(sphere_on_plate(true, false), quick());
+    ASSERT_EQ(plate.count(DefectClass::boundary_loop), 1u) << tessref::report_text(plate);
+    const auto& hole = plate.of(DefectClass::boundary_loop).locations[0];
+    EXPECT_NEAR(hole.position.x, 3.75, 1e-9);
+    EXPECT_NEAR(hole.position.y, 3.75, 1e-9);
+
+    const CheckReport sphere = tessref::check_mesh(sphere_on_plate(false, true), quick());
+    EXPECT_EQ(sphere.open_sheets, 1u);
+    ASSERT_EQ(sphere.count(DefectClass::boundary_loop), 1u) << tessref::report_text(sphere);
+    EXPECT_GT(sphere.of(DefectClass::boundary_loop).locations[0].position.z, 1.0);  // on the sphere
+}
+
 TEST(CheckCorpus, HoleIsABoundaryLoopAroundTheMissingFace) {
     for (const char* name : {"hole.off", "hole.stl"}) {
         SCOPED_TRACE(name);
@@ -732,9 +780,9 @@ TEST(CheckScenes, EveryShippedSceneExportPasses) {
         SCOPED_TRACE(path.filename().string());
         const tessref::Scene scene = tessref::load_scene(path.string());
         const tessref::PipelineResult result = tessref::run_pipeline(scene);
-        // Terrains are open; the PN scene holds an open bump beside closed meshes, so
-        // every scene is checked with boundary edges allowed as one outline.
-        const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(result.mesh), quick(Expect::open));
+        // Terrains are open; the PN scene holds an open plate beside closed meshes: every
+        // scene's export passes with the default, automatic judgement.
+        const CheckReport r = tessref::check_mesh(tessref::indexed_mesh_from(result.mesh), quick());
         EXPECT_TRUE(r.passed) << tessref::report_text(r);
         if (!scene.grid) continue;
         const int up = scene.grid->plane == tessref::GroundPlane::xy ? 2 : 1;
@@ -1027,6 +1075,35 @@ TEST(CheckCommand, ExitStatusAndSummary) {
     EXPECT_EQ(tessref_check({corpus("cube.off").string(), "--expect", "sideways"}).status, 2);
 }
 
+// The shipped PN triangles scene, exported as `tessref mesh` writes it, passes `check` by
+// default (its plate is an open sheet); held to closed rules, the plate's outline is a
+// boundary loop whose location names the patches of its vertices, as the PLY's patch_id
+// property gives them (read here through the mesh reader).
+TEST(CheckCommand, ShippedPnMeshPassesAndLocationsNameTheirPatches) {
+    const fs::path ply = scratch_dir() / "pn.ply";
+    const RunResult mesh = run(TESSREF_EXE, {"mesh", (fs::path(TESSREF_SOURCE_DIR) / "data/scenes/pn-triangles.toml").string(),
+                                             "-o", ply.string()});
+    ASSERT_EQ(mesh.status, 0) << mesh.err;
+    const RunResult pass = tessref_check({ply.string()});
+    EXPECT_EQ(pass.status, 0) << pass.out;
+    const RunResult closed = tessref_check({ply.string(), "--expect", "closed", "--json"});
+    ASSERT_EQ(closed.status, 1) << closed.out;
+    const nlohmann::json j = nlohmann::json::parse(closed.out);
+    const auto& location = j["defects"]["boundary_loop"]["locations"][0];
+    tessref::MeshFileOptions options;
+    options.provenance = true;
+    const IndexedMesh file = tessref::read_mesh_file(ply.string(), options);
+    ASSERT_EQ(file.patch_ids.size(), file.vertex_count());
+    std::set<std::uint32_t> expected;
+    for (const auto& v : location["vertices"]) expected.insert(file.patch_ids[v.get<std::uint32_t>()]);
+    for (const auto& f : location["faces"])
+        for (std::uint32_t v : file.face(f.get<std::size_t>())) expected.insert(file.patch_ids[v]);
+    ASSERT_FALSE(expected.empty());
+    EXPECT_EQ(location["patches"].get<std::set<std::uint32_t>>(), expected);
+    const RunResult text = tessref_check({ply.string(), "--expect", "closed"});
+    EXPECT_NE(text.out.find("; patch"), std::string::npos) << text.out;
+}
+
 TEST(CheckCommand, JsonHoldsTheWholeReport) {
     const RunResult r = tessref_check({corpus("nonmanifold_edge.off").string(), "--json"});
     EXPECT_EQ(r.status, 1);
@@ -1077,6 +1154,70 @@ TEST(CheckCommand, UnreadableInputExitsTwoNamingTheFile) {
         EXPECT_TRUE(r.out.empty()) << r.out;
         EXPECT_THROW(tessref::read_mesh_for_check(path.string()), tessref::Error);
     }
+}
+
+// A passing terrain's picture must not look cracked: the jacksboro export (576 patches,
+// slivers along the patch borders) has no white pixel inside its footprint, where on main
+// rows of pinholes along the patch borders showed. Under the view, a scale bar whose length
+// is a round number (1, 2 or 5 times a power of ten) of world units at the picture's own
+// scale, measured here from the footprint's width in pixels against the mesh's extent.
+TEST(CheckCommand, PassingTerrainPictureHasNoPinholesAndAScaleBar) {
+    const fs::path dir = scratch_dir();
+    const fs::path ply = dir / "jacksboro.ply", png = dir / "jacksboro.png";
+    ASSERT_EQ(run(TESSREF_EXE, {"mesh", (fs::path(TESSREF_SOURCE_DIR) / "data/scenes/jacksboro.toml").string(), "-o",
+                                ply.string()})
+                  .status,
+              0);
+    const RunResult r = tessref_check({ply.string(), "--image", png.string(), "--json"});
+    ASSERT_EQ(r.status, 0) << r.out;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    const double extent_x = j["bbox"]["max"][0].get<double>() - j["bbox"]["min"][0].get<double>();
+    OIIO::ImageBuf image(png.string());
+    ASSERT_TRUE(image.read()) << image.geterror();
+    const int w = image.spec().width, total = image.spec().height;
+    const auto code = [&](int x, int y) {
+        float rgb[3];
+        image.getpixel(x, y, rgb);
+        return std::array<int, 3>{int(std::lround(rgb[0] * 255)), int(std::lround(rgb[1] * 255)), int(std::lround(rgb[2] * 255))};
+    };
+    const auto black = [&](int x, int y) { return code(x, y) == std::array<int, 3>{0, 0, 0}; };
+    // The view ends at the legend's black rule across the whole width.
+    int h = -1;
+    for (int y = 0; y < total && h < 0; ++y) {
+        bool rule = true;
+        for (int x = 0; x < w && rule; x += 7) rule = black(x, y);
+        if (rule) h = y;
+    }
+    ASSERT_GT(h, 0);
+    // The footprint: the box of the pixels that are not white.
+    int x0 = w, x1 = -1, y0 = h, y1 = -1;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (code(x, y) != std::array<int, 3>{255, 255, 255}) {
+                x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+            }
+    ASSERT_GT(x1 - x0, 100);
+    std::size_t white = 0;
+    for (int y = y0 + 2; y <= y1 - 2; ++y)
+        for (int x = x0 + 2; x <= x1 - 2; ++x) white += code(x, y) == std::array<int, 3>{255, 255, 255};
+    EXPECT_EQ(white, 0u);
+    // The scale bar: the longest run of black pixels under the rule.
+    int longest = 0;
+    for (int y = h + 1; y < total; ++y)
+        for (int x = 0, run = 0; x < w; ++x) {
+            run = black(x, y) ? run + 1 : 0;
+            longest = std::max(longest, run);
+        }
+    // A round length at most a quarter of the width is more than a tenth of it (1, 2, 5 steps).
+    EXPECT_GE(longest, w / 10 - 2);
+    EXPECT_LE(longest, w / 4 + 2);
+    const double pixels_per_unit = (x1 - x0 + 1) / extent_x;
+    const double units = longest / pixels_per_unit;
+    const double power = std::pow(10.0, std::floor(std::log10(units) + 1e-9));
+    const double mantissa = units / power;
+    EXPECT_TRUE(std::abs(mantissa - 1.0) < 0.03 || std::abs(mantissa - 2.0) < 0.06 || std::abs(mantissa - 5.0) < 0.15 ||
+                std::abs(mantissa - 10.0) < 0.3)
+        << longest << " px = " << units << " units";
 }
 
 TEST(CheckCommand, PictureMarksTheDefects) {

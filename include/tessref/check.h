@@ -72,7 +72,9 @@ enum class Expect { automatic, closed, open };
 struct CheckOptions {
     // closed: no boundary edge at all. open: boundary edges allowed only as one loop, the
     // outer outline (a terrain). automatic: closed rules, unless the mesh has boundary
-    // edges and looks like a terrain (every face seen from one side along one axis).
+    // edges and looks like a terrain (every face seen from one side along one axis); and on
+    // a mesh with boundary edges that does not, per component: one that looks like a
+    // terrain by itself (an open sheet, a plate under a model) may have its outer outline.
     Expect expect = Expect::automatic;
     // Absolute distance under which vertices coincide, a vertex lies on an edge, and a face
     // is degenerate (thinner than this across its longest edge). Default: 1e-7 times the
@@ -126,6 +128,9 @@ struct Defect {
     std::vector<std::uint32_t> vertices;
     double measure = 0.0;  // class-specific: loop length, face height, distance, ray count
     std::string detail;    // one line for people
+    // The patches of its vertices and its faces' vertices, in a mesh that carries patch ids
+    // (a PLY of `tessref mesh`: the property patch_id); sorted, distinct; else empty.
+    std::vector<std::uint32_t> patches;
 };
 
 struct DefectReport {
@@ -190,6 +195,10 @@ struct CheckReport {
     bool consistently_oriented = false;
     Expect expect = Expect::automatic;
     std::string judged_as;     // "closed" or "open": the rules applied
+    // Under Expect::automatic, on a mesh that is neither closed nor a terrain: the components
+    // judged open sheets (check_detail's judge_sheets: a boundary, every face seen from one
+    // side), each with its outer outline allowed; the rest is held to the closed rules.
+    std::size_t open_sheets = 0;
     std::vector<BoundaryLoop> boundary_loops;  // at most max_locations, largest first
     std::vector<std::uint32_t> flipped_faces;  // minority orientation within a component
     // Faces OpenMesh's kernel refused only because of the flipped faces (the flip is the

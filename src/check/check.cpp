@@ -160,6 +160,8 @@ void attach_faces(CheckState& state) {
 // find_non_manifold_vertices): read_and_check_mesh() may then answer without the import.
 using RefusedFaces = std::function<const std::vector<std::uint32_t>&(const CheckState&)>;
 
+void name_patches(CheckState& state);
+
 CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, const RefusedFaces& refused_faces) {
     CheckReport report;
     report.source = mesh.source;
@@ -225,6 +227,7 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     find_t_junctions(state);
     run_ray_probe(state);
     attach_faces(state);
+    name_patches(state);
 
     std::size_t kept_faces = 0;
     std::vector<std::uint8_t> in_kept(mesh.vertex_count(), 0);
@@ -242,6 +245,23 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     report.passed = std::all_of(report.defects.begin(), report.defects.end(), [](const DefectReport& r) { return r.count == 0; });
     state.progress("done", 1.0);
     return report;
+}
+
+// In a mesh that carries patch ids, every location names its patches: a crack or a hole in
+// a tessellated surface is the business of the patches around it.
+void name_patches(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    if (mesh.patch_ids.size() != mesh.vertex_count()) return;
+    for (DefectReport& d : state.report.defects)
+        for (Defect& x : d.locations) {
+            for (std::uint32_t v : x.vertices)
+                if (v < mesh.vertex_count()) x.patches.push_back(mesh.patch_ids[v]);
+            for (std::uint32_t f : x.faces)
+                if (f < mesh.face_count())
+                    for (std::uint32_t v : mesh.face(f)) x.patches.push_back(mesh.patch_ids[v]);
+            std::sort(x.patches.begin(), x.patches.end());
+            x.patches.erase(std::unique(x.patches.begin(), x.patches.end()), x.patches.end());
+        }
 }
 
 // Whether the kernel provably refuses only the faces its importer drops (check.h,
@@ -288,6 +308,7 @@ CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& opt
                                 const std::function<void(double)>& read_progress) {
     MeshFileOptions read_options;
     read_options.progress = read_progress;
+    read_options.provenance = true;  // a PLY's patch ids name the patches of each location
     return check_indexed_mesh(read_mesh_file(path, read_options), options);
 }
 
@@ -300,6 +321,7 @@ IndexedMesh read_mesh_for_check(const std::string& path) { return read_mesh_for_
 IndexedMesh read_mesh_for_check(const std::string& path, const std::function<void(double)>& progress) {
     MeshFileOptions options;
     options.progress = progress;
+    options.provenance = true;
     IndexedMesh mesh = read_mesh_file(path, options);
     mesh.kernel_refused_faces = check_detail::kernel_refused_faces(mesh);
     return mesh;

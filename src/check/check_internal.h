@@ -77,7 +77,11 @@ struct CheckState {
     // half-edge (index into `boundary`) the loop it belongs to.
     std::vector<BoundaryLoop> loops;
     std::vector<std::uint32_t> loop_of_boundary;
-    int allowed_loop = -1;  // index into loops
+    int allowed_loop = -1;  // index into loops (a terrain's outline)
+    // Expect::automatic on a mesh that is neither closed nor a terrain: per component, 1 for
+    // an open sheet (a boundary, every face seen from one side along its own up axis, as a
+    // terrain is), whose outer outline is allowed and whose faces the closed probe leaves out.
+    std::vector<std::uint8_t> component_is_sheet;
 
     int up_axis = 2;
     double up_sign = 1.0;

@@ -1,8 +1,10 @@
 // The defect picture: a top view of the mesh, drawn lightly (grey, darker where steep),
-// with every located defect marked in its class colour, and a legend.
+// with every located defect marked in its class colour, and a legend with a scale bar and
+// the axes of the view.
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -68,6 +70,9 @@ public:
         return std::isfinite(q.x) && std::isfinite(q.y) && std::abs(q.x) < 1e6 && std::abs(q.y) < 1e6;
     }
     int up() const { return up_; }
+    int right_axis() const { return u_; }  // the world axis that runs right in the picture
+    int top_axis() const { return w_; }    // and the one that runs up
+    double pixels_per_unit() const { return scale_; }
 
 private:
     int up_, u_, w_;
@@ -85,15 +90,34 @@ void fill_triangle(std::vector<float>& grey, int width, int height, glm::dvec2 a
     const glm::dvec2 corners[3] = {a, b, c};
     if (pixel_box(corners, width, height).empty()) return;
     if (std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)) < 1.0) {
-        // Smaller than a pixel: a dot is what it looks like.
+        // Smaller than a pixel: a dot is what it looks like (and the centres it covers below).
         darken(std::clamp(static_cast<int>((a.x + b.x + c.x) / 3.0), 0, width - 1),
                std::clamp(static_cast<int>((a.y + b.y + c.y) / 3.0), 0, height - 1));
-        return;
     }
-    // The exact test (no margin), as defect pictures have always been drawn: a terrain's rows
-    // of vertices can fall on pixel centres, and a margin there changes which triangle's
-    // shade (the darkest wins) such a pixel gets.
-    fill_convex_polygon(corners, width, height, 0.0, darken);
+    // A pixel centre on an edge two triangles share belongs to both (a margin a little over
+    // rounding): with the exact test it belonged to neither, and a terrain whose rows of
+    // vertices fall on pixel centres showed dotted white lines along its patch borders,
+    // which look like cracks on a mesh that has none. The darker shade wins there.
+    fill_convex_polygon(corners, width, height, 1e-6, darken);
+}
+
+const char* axis_name(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
+
+// The scale bar's length in world units: the largest 1, 2 or 5 times a power of ten that
+// spans at most a quarter of the picture's width.
+double scale_bar_length(double pixels_per_unit, int width) {
+    const double most = 0.25 * width / pixels_per_unit;
+    if (!(most > 0.0) || !std::isfinite(most)) return 0.0;
+    const double power = std::pow(10.0, std::floor(std::log10(most)));
+    for (double m : {5.0, 2.0, 1.0})
+        if (m * power <= most) return m * power;
+    return power;
+}
+
+std::string short_number(double x) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", x);
+    return text;
 }
 
 }  // namespace
@@ -129,7 +153,8 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
         swatches.push_back({0.2f, 0.6f, 0.2f});
     }
     const int row = 18, pad = 6, columns = std::max(1, w / 260);
-    const int legend_rows = (static_cast<int>(lines.size()) + columns - 1) / columns;
+    // One row more: the scale bar and the axes.
+    const int legend_rows = (static_cast<int>(lines.size()) + columns - 1) / columns + 1;
     const int legend_height = 2 * pad + row * legend_rows;
 
     // 8-bit RGB, white; the grey view converted as OpenImageIO's setpixel did; then the
@@ -199,6 +224,19 @@ void write_defect_image(const IndexedMesh& mesh, const CheckReport& report, cons
         // Without a font the swatches still tell the classes apart; the text is a bonus.
         drawing.text(x + 20, y + 14, lines[i], 13, font, black, image::TextAlign::left);
     }
+    // The scale bar (its length a round number of world units) and the axes the view shows.
+    const double bar = scale_bar_length(view.pixels_per_unit(), w);
+    const int bar_y = h + pad + row * (legend_rows - 1) + 9;
+    const int bar_end = pad + static_cast<int>(std::lround(bar * view.pixels_per_unit()));
+    std::string axes = "view down the " + std::string(axis_name(view.up())) + " axis: " + axis_name(view.right_axis()) +
+                       " to the right, " + axis_name(view.top_axis()) + " up";
+    if (bar > 0.0) {
+        for (int t = -1; t <= 1; ++t) drawing.line(pad, bar_y + t, bar_end, bar_y + t, black);
+        drawing.line(pad, bar_y - 5, pad, bar_y + 5, black);
+        drawing.line(bar_end, bar_y - 5, bar_end, bar_y + 5, black);
+        axes = short_number(bar) + " world units; " + axes;
+    }
+    drawing.text(bar_end + 10, bar_y + 5, axes, 13, font, black, image::TextAlign::left);
     drawing.paint({pixels.data(), w, total_height, 3, image::SampleType::uint8}, false, path);
     image::write_image(path, {w, total_height, 3, image::SampleType::uint8, pixels.data()});
 }

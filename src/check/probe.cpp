@@ -50,8 +50,10 @@ bool grazes(const RayHit& hit, const RayScene& scene) {
 // than two.
 bool topology_allows_leaks(const CheckState& state, int outline) {
     if (state.non_manifold_edges > 0) return true;
-    for (std::size_t i = 0; i < state.boundary.size(); ++i)
-        if (static_cast<int>(state.loop_of_boundary[i]) != outline) return true;
+    for (std::size_t i = 0; i < state.boundary.size(); ++i) {
+        const std::uint32_t loop = state.loop_of_boundary[i];
+        if (static_cast<int>(loop) != outline && !(loop < state.loops.size() && state.loops[loop].allowed)) return true;
+    }
     return false;
 }
 
@@ -508,6 +510,8 @@ void run_ray_probe(CheckState& state) {
     for (std::size_t f = 0; f < mesh.face_count(); ++f) {
         if (state.face_status[f] != face_kept) continue;
         const auto face = mesh.face(f);
+        // An open sheet beside closed components has no inside: the closed probe leaves it out.
+        if (!state.component_is_sheet.empty() && state.component_is_sheet[state.vertex_component[face[0]]]) continue;
         for (std::size_t k = 1; k + 1 < face.size(); ++k) triangles.push_back({face[0], face[k], face[k + 1]});
     }
     if (triangles.empty()) {

@@ -51,6 +51,7 @@ std::string report_json(const CheckReport& r) {
     j["passed"] = r.passed;
     j["expect"] = expect_name(r.expect);
     j["judged_as"] = r.judged_as;
+    j["open_sheets"] = r.open_sheets;
     j["counts"] = {{"vertices", r.vertex_count},
                    {"faces", r.face_count},
                    {"triangles", r.triangle_count},
@@ -97,6 +98,7 @@ std::string report_json(const CheckReport& r) {
             locations.push_back({{"position", point_json(x.position)},
                                  {"faces", x.faces},
                                  {"vertices", x.vertices},
+                                 {"patches", x.patches},
                                  {"measure", x.measure},
                                  {"detail", x.detail}});
         defects[std::string(defect_class_name(d.kind))] = {{"description", defect_class_description(d.kind)},
@@ -123,7 +125,13 @@ std::string report_text(const CheckReport& r, std::size_t locations_per_class) {
         << (r.consistently_oriented ? "consistently oriented" : "not consistently oriented");
     if (r.closed) out << ", signed volume " << format_number(r.signed_volume);
     out << "\n";
-    out << "  judged as   " << r.judged_as << " (expect " << expect_name(r.expect) << ")"
+    out << "  judged as   " << r.judged_as
+        << (r.open_sheets ? ", but for " + std::to_string(r.open_sheets) + " open sheet" +
+                                (r.open_sheets == 1 ? " (a component seen from one side), its outline"
+                                                    : "s (components seen from one side), their outlines") +
+                                " allowed"
+                          : std::string())
+        << " (expect " << expect_name(r.expect) << ")"
         << (r.terrain_like ? ", a terrain with up along " + axis_name(r.up_axis) : std::string())
         << "; tolerance " << format_number(r.tolerance) << "\n";
     out << "  ray probe   " << r.probe.mode;
@@ -152,6 +160,7 @@ std::string report_text(const CheckReport& r, std::size_t locations_per_class) {
             out << "    at " << format_point(x.position) << ": " << x.detail;
             if (!x.faces.empty()) out << "; faces " << id_list(x.faces);
             if (!x.vertices.empty()) out << "; vertices " << id_list(x.vertices);
+            if (!x.patches.empty()) out << "; patch" << (x.patches.size() == 1 ? " " : "es ") << id_list(x.patches);
             out << "\n";
         }
         if (d.count > std::min(d.locations.size(), locations_per_class))

@@ -521,6 +521,49 @@ double loop_gap(const IndexedMesh& mesh, const BoundaryLoop& loop) {
 
 }  // namespace
 
+// A mesh with closed parts and open ones (a model standing on a plate, as the PN triangles
+// scene is) is judged per component: a component with a boundary whose every face is seen
+// from one side along the component's own up axis (the terrain rule of
+// analyse_face_geometry, per component) is an open sheet, and its outer outline, the closed
+// loop of the largest area, is allowed; every other boundary is a defect, as under the closed
+// rules the rest of the mesh is held to.
+void judge_sheets(CheckState& state) {
+    const IndexedMesh& mesh = state.mesh;
+    const std::size_t components = state.component_has_boundary.size();
+    std::vector<glm::dvec3> area(components, glm::dvec3(0.0));
+    for (std::size_t f = 0; f < mesh.face_count(); ++f)
+        if (state.face_status[f] == face_kept) area[state.vertex_component[mesh.face(f)[0]]] += face_vector_area(mesh, f);
+    std::vector<int> up_axis(components, 2);
+    std::vector<double> up_sign(components, 1.0);
+    state.component_is_sheet.assign(components, 0);
+    for (std::size_t c = 0; c < components; ++c) {
+        const glm::dvec3 m = glm::abs(area[c]);
+        up_axis[c] = m.x >= m.y && m.x >= m.z ? 0 : (m.y >= m.z ? 1 : 2);
+        up_sign[c] = area[c][up_axis[c]] < 0.0 ? -1.0 : 1.0;
+        state.component_is_sheet[c] = state.component_has_boundary[c] && m[up_axis[c]] > 0.0;
+    }
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+        if (state.face_status[f] != face_kept) continue;
+        const std::uint32_t c = state.vertex_component[mesh.face(f)[0]];
+        if (!state.component_is_sheet[c]) continue;
+        const glm::dvec3 a = face_vector_area(mesh, f);
+        if (up_sign[c] * a[up_axis[c]] < -1e-6 * glm::length(a)) state.component_is_sheet[c] = 0;
+    }
+    std::vector<int> outline(components, -1);
+    for (std::size_t i = 0; i < state.loops.size(); ++i) {
+        const BoundaryLoop& loop = state.loops[i];
+        if (!loop.closed || loop.vertices.empty()) continue;
+        const std::uint32_t c = state.vertex_component[loop.vertices.front()];
+        if (c >= components || !state.component_is_sheet[c]) continue;
+        if (outline[c] < 0 || loop.area > state.loops[static_cast<std::size_t>(outline[c])].area) outline[c] = static_cast<int>(i);
+    }
+    for (std::size_t c = 0; c < components; ++c) {
+        if (outline[c] < 0) continue;
+        state.loops[static_cast<std::size_t>(outline[c])].allowed = true;
+        ++state.report.open_sheets;
+    }
+}
+
 void judge_boundary(CheckState& state) {
     CheckReport& report = state.report;
     const bool open_rules = report.expect == Expect::open ||
@@ -535,6 +578,8 @@ void judge_boundary(CheckState& state) {
                 state.allowed_loop = static_cast<int>(i);
             }
         if (state.allowed_loop >= 0) state.loops[state.allowed_loop].allowed = true;
+    } else if (report.expect == Expect::automatic && !report.closed) {
+        judge_sheets(state);
     }
 
     // Faces of each loop's edges, for locating.
