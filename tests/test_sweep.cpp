@@ -36,6 +36,7 @@
 #include "extremes/extremes.h"
 #include "run_program.h"
 #include "sweep/geometric_error.h"
+#include "sweep/report_data.h"
 #include "tessref/pipeline.h"
 #include "tessref/prepare.h"
 #include "tessref/scene.h"
@@ -452,6 +453,58 @@ TEST_F(SweepCommand, ShardsMergeToTheUnshardedRun) {
     // Another thread count changes nothing but the timings.
     ASSERT_EQ(sweep(with({"-o", "two", "--threads", "2"})).status, 0);
     EXPECT_EQ(without_timings(dir_ / "two/sweep.csv"), without_timings(dir_ / "whole/sweep.csv"));
+}
+
+// The report recommends levels (the knee; the best under the own levels' triangles) and its
+// pictures must be there for them whatever the level: with levels 3, 5, 6, 7 only 7 (the
+// largest) is kept by the power-of-two rule, so the knee and the budget's level of each
+// series, found from sweep.csv by the report's rules, keep theirs too, and no other level
+// does. A sharded sweep merged keeps the same pictures, byte for byte.
+TEST_F(SweepCommand, RecommendedLevelsKeepTheirPicturesWholeOrSharded) {
+    const std::string a = terrain("bump");
+    const std::vector<std::string> args{a, "--levels", "3,5,6,7", "--precision", "gpu,exact"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> all = args;
+        all.insert(all.end(), extra.begin(), extra.end());
+        return all;
+    };
+    ASSERT_EQ(sweep(with({"-o", "whole"})).status, 0);
+    const Csv csv = read_csv(dir_ / "whole/sweep.csv");
+    std::set<std::string> recommended;  // "precision level"
+    for (const char* precision : {"gpu", "exact"}) {
+        std::vector<tessref::sweep::LevelError> curve;
+        std::vector<tessref::sweep::LevelRun> runs;
+        double budget = 0.0;
+        for (const auto& row : csv.rows) {
+            if (row.at("precision") != precision) continue;
+            if (row.at("model") != "uniform") {
+                budget = std::stod(row.at("triangles"));
+                continue;
+            }
+            curve.push_back({std::stod(row.at("level")), std::stod(row.at("img_rmse"))});
+            runs.push_back({std::stod(row.at("level")), std::stod(row.at("triangles")), std::stod(row.at("img_rmse"))});
+        }
+        const auto knee = tessref::sweep::stop_improving_level(curve);
+        ASSERT_TRUE(knee);
+        recommended.insert(std::string(precision) + " " + std::to_string(static_cast<int>(*knee)));
+        if (const auto best = tessref::sweep::best_level_under_budget(runs, budget))
+            recommended.insert(std::string(precision) + " " + std::to_string(static_cast<int>(*best)));
+    }
+    bool beyond_the_rule = false;  // a recommended level the power-of-two rule would not keep
+    for (const auto& row : csv.rows) {
+        if (row.at("model") != "uniform") continue;
+        const bool chosen = recommended.count(row.at("precision") + " " + row.at("level")) > 0;
+        beyond_the_rule = beyond_the_rule || (chosen && row.at("level") != "7");
+        EXPECT_EQ(row.at("image").empty(), !chosen && row.at("level") != "7") << row.at("precision") << row.at("level");
+        if (!row.at("image").empty()) EXPECT_TRUE(fs::is_regular_file(dir_ / "whole" / row.at("image")));
+    }
+    EXPECT_TRUE(beyond_the_rule) << "the scene no longer tests anything: every recommended level is 7";
+    for (int i = 0; i < 2; ++i)
+        ASSERT_EQ(sweep(with({"-o", "s" + std::to_string(i), "--shard", std::to_string(i) + "/2"})).status, 0);
+    const RunResult m = run_here({"sweep", "merge", "s1", "s0", "-o", "merged"});
+    ASSERT_EQ(m.status, 0) << m.err;
+    EXPECT_EQ(without_timings(dir_ / "merged/sweep.csv"), without_timings(dir_ / "whole/sweep.csv"));
+    EXPECT_EQ(files_under(dir_ / "merged/images"), files_under(dir_ / "whole/images"));
 }
 
 TEST_F(SweepCommand, MergeRefusesMismatchedDuplicateMissingAndCorruptShards) {

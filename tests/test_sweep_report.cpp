@@ -88,6 +88,39 @@ TEST(SweepReportRules, StopImprovingLevelHandDerived) {
     EXPECT_DOUBLE_EQ(tessref::sweep::stop_tolerance(1.0), 0.01);
 }
 
+// The budget rule: the least error among the levels that fit the budget, the smaller level
+// on a tie; and the dominance of the scene's own levels: the cheapest uniform level with no
+// more triangles and no more error, one of the two strictly less.
+TEST(SweepReportRules, BestLevelUnderBudgetAndDominatingLevelHandDerived) {
+    using tessref::sweep::LevelRun;
+    const std::vector<LevelRun> runs{
+        {8, 2048, 0.030},  // out of order on purpose
+        {1, 32, 0.200},
+        {2, 128, 0.100},
+        {4, 512, 0.030},   // ties level 8's error with fewer triangles
+        {16, 8192, 0.020},
+    };
+    using tessref::sweep::best_level_under_budget;
+    EXPECT_EQ(best_level_under_budget(runs, 8192), 16);  // everything fits: the least error
+    EXPECT_EQ(best_level_under_budget(runs, 8191), 4);   // 4 and 8 tie at 0.030: the smaller
+    EXPECT_EQ(best_level_under_budget(runs, 511), 2);
+    EXPECT_EQ(best_level_under_budget(runs, 32), 1);     // the budget itself fits
+    EXPECT_EQ(best_level_under_budget(runs, 31), std::nullopt);
+    EXPECT_EQ(best_level_under_budget({}, 1e9), std::nullopt);
+
+    using tessref::sweep::dominating_level;
+    // Own levels at 3000 triangles, error 0.04: level 4 (512, 0.030) is the cheapest that
+    // beats it on both (level 8 does too).
+    EXPECT_EQ(dominating_level(runs, {0, 3000, 0.04}), 4);
+    // Error 0.030 at 512 triangles: level 4 is equal on both, which is not dominance; level 8
+    // costs more. None.
+    EXPECT_EQ(dominating_level(runs, {0, 512, 0.030}), std::nullopt);
+    // Error 0.030 at 600 triangles: level 4 has fewer triangles and the same error: dominates.
+    EXPECT_EQ(dominating_level(runs, {0, 600, 0.030}), 4);
+    // A better error than any level within its triangles: not dominated.
+    EXPECT_EQ(dominating_level(runs, {0, 100, 0.15}), std::nullopt);
+}
+
 TEST(SweepReportRules, GpuExactRatio) {
     // Shared levels 1 and 2: ratios 0.2/0.1 = 2 and 0.1/0.1 = 1 -> median 1.5.
     const std::vector<LevelError> gpu{{1, 0.2}, {2, 0.1}, {4, 0.06}};
@@ -305,6 +338,43 @@ TEST_F(SweepReport, WritesPlotsAndAPageThatNeedsNoNetwork) {
     // No temporary files left behind.
     for (const auto& entry : fs::recursive_directory_iterator(dir()))
         EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
+// The advice, derived by hand from sample_rows():
+//  alpha gpu: the knee is level 8 (see above); the own levels draw 3000 triangles, so levels
+//  1, 2, 4, 8 (32 L^2 triangles) fit and level 8 has the least error among them (0.0302);
+//  it also dominates the own levels (2048 < 3000 triangles, 0.0302 < 0.04), and no smaller
+//  level does (level 4's 0.05 is worse). alpha exact: knee 4, no own row, so no budget.
+//  The plots label every point with its level and say whose time they plot.
+TEST_F(SweepReport, RecommendsLevelsByStatedRulesAndLabelsThePoints) {
+    make_sweep(sample_rows());
+    tessref::sweep::write_sweep_report(dir().string());
+    const std::string html = read_text(dir() / "index.html");
+    EXPECT_NE(html.find("<li>fractional_odd spacing, gpu precision: <b>level 8</b>, the knee (img_rmse 0.0302, 2048 "
+                        "triangles): the least image error is 0.03 at level 16, and level 8 is the smallest within "
+                        "0.001961 of it; under the triangle budget of the scene's own levels (3000), <b>level 8</b> "
+                        "(img_rmse 0.0302, 2048 triangles).</li>"),
+              std::string::npos)
+        << html;
+    EXPECT_NE(html.find("<li>fractional_odd spacing, exact precision: <b>level 4</b>, the knee (img_rmse 0.021, 512 "
+                        "triangles): the least image error is 0.02 at level 16, and level 4 is the smallest within "
+                        "0.001961 of it.</li>"),
+              std::string::npos);
+    EXPECT_NE(html.find("The scene's own control stage (distance) is dominated with fractional_odd spacing, gpu "
+                        "precision: uniform level 8 draws fewer triangles (2048 against 3000) with a lower image "
+                        "error (0.0302 against 0.04)."),
+              std::string::npos);
+    EXPECT_EQ(html.find("own control stage (distance) is dominated with fractional_odd spacing, exact"), std::string::npos);
+    // beta has a picture at its knee, level 4, and says so.
+    EXPECT_NE(html.find("fractional_odd spacing, gpu precision, level 4 (recommended: the knee): img_rmse 0.001"),
+              std::string::npos);
+    for (const char* name : {"error-vs-time.svg", "error-vs-triangles.svg"}) {
+        const std::string svg = read_text(dir() / "plots" / name);
+        for (const char* label : {">1<", ">2<", ">4<", ">8<", ">16<", ">own<"})
+            EXPECT_NE(svg.find(label), std::string::npos) << name << " " << label;
+    }
+    EXPECT_NE(read_text(dir() / "plots" / "error-vs-time.svg").find("tessref&#39;s CPU reference, not a GPU&#39;s"),
+              std::string::npos);
 }
 
 TEST_F(SweepReport, SameTableSameBytesWhateverTheRowOrder) {

@@ -178,6 +178,9 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     }
     for (const PlotPoint& p : spec.points)
         if (p.pareto) shapes.markers.push_back({px(p.x), py(p.y), 8.0, PlotShapes::MarkerKind::ring, kFront});
+    // Labels up and to the right of their marks, clear of the ring, in the series' colour.
+    for (const PlotPoint& p : spec.points)
+        if (!p.label.empty()) text(px(p.x) + 7.0, py(p.y) - 7.0, p.label, Anchor::start, spec.series[p.series].colour);
 
     // Legend: one row per series, then the two marks that are not colours.
     double y = kPlotTop;

@@ -1,7 +1,7 @@
 // src/sweep/plot.h — the scatter plots of the sweep report: image error (y, linear from 0)
 // against a cost (x, log10: time or triangles), one colour per series, a series' uniform
 // levels joined in level order, the scene's own levels as diamonds, the Pareto front ringed
-// and joined by a dashed staircase per scene.
+// and joined by a dashed staircase per scene, each point labelled (its level) beside it.
 //
 // layout_plot() lays the plot out once as plain shapes in pixels (y down); plot_to_svg() and
 // plot_to_rgba() are two back-ends of that one list, so the SVG and the PNG show the same
@@ -32,6 +32,7 @@ struct PlotPoint {
     std::size_t series = 0;
     bool own = false;    // the scene's own levels (a diamond), not a uniform level (a dot)
     bool pareto = false; // on its scene's Pareto front (ringed)
+    std::string label;   // written beside the mark (the report: the point's level); empty: none
 };
 
 struct PlotSpec {

@@ -136,6 +136,18 @@ struct Series {
             if (row->uniform() && row->img_rmse) points.push_back({*row->level, *row->img_rmse});
         return points;
     }
+    std::vector<LevelRun> runs() const {
+        std::vector<LevelRun> out;
+        for (const SweepRow* row : rows)
+            if (row->uniform() && row->img_rmse && row->triangles) out.push_back({*row->level, *row->triangles, *row->img_rmse});
+        return out;
+    }
+    // The scene's own levels (its control model), when the series ran them.
+    const SweepRow* own() const {
+        for (const SweepRow* row : rows)
+            if (!row->uniform() && !row->geomip_axis()) return row;
+        return nullptr;
+    }
     const SweepRow* at_level(double level) const {
         for (const SweepRow* row : rows)
             if (row->uniform() && row->level == level) return row;
@@ -183,7 +195,11 @@ PlotSpec make_plot(const SweepTable& table, const std::vector<Series>& series, c
                 ++left_out;
                 continue;
             }
-            spec.points.push_back({*x, *row->img_rmse, s, !row->uniform() && !row->geomip_axis(), false});
+            const std::string label = row->uniform()                  ? level_str(*row->level)
+                                      : row->model == "geomip_level" ? "L" + level_str(*row->level)
+                                      : row->model == "geomip_bound" ? level_str(*row->level) + " px"
+                                                                     : "own";
+            spec.points.push_back({*x, *row->img_rmse, s, !row->uniform() && !row->geomip_axis(), false, label});
             point_scene.push_back(row->scene);
         }
     }
@@ -286,6 +302,70 @@ std::string verdict(const std::vector<const Series*>& series, bool has_camera_re
     }
     if (!unknown.empty()) text += "; no uniform level has an image error with " + list(unknown);
     return text + ".";
+}
+
+// The levels the page recommends for one series, by the two stated rules.
+struct Advice {
+    std::optional<double> knee;    // stop_improving_level
+    std::optional<double> budget;  // best_level_under_budget, the budget the own levels' triangles
+    bool recommends(const SweepRow& row) const {
+        return row.uniform() && (row.level == knee || row.level == budget);
+    }
+};
+
+Advice advice_of(const Series& s) {
+    Advice a;
+    a.knee = stop_improving_level(s.curve());
+    const SweepRow* own = s.own();
+    if (own && own->triangles) a.budget = best_level_under_budget(s.runs(), *own->triangles);
+    return a;
+}
+
+std::string run_words(const SweepRow& row) {
+    return "img_rmse " + num(row.img_rmse) + ", " + count(row.triangles) + " triangles";
+}
+
+// Per series with uniform levels: the recommended levels and the rule that chose each, and,
+// where a uniform level beats the scene's own control stage on both counts, that sentence.
+std::string recommendations(const std::vector<const Series*>& series, bool has_camera_relative) {
+    std::string items, dominated;
+    for (const Series* s : series) {
+        const Advice a = advice_of(*s);
+        if (!a.knee) continue;
+        const std::vector<LevelError> curve = s->curve();
+        const LevelError* best = &curve.front();
+        for (const LevelError& p : curve)
+            if (p.error < best->error || (p.error == best->error && p.level < best->level)) best = &p;
+        const SweepRow& knee = *s->at_level(*a.knee);
+        items += "<li>" + html(series_words(*s, has_camera_relative)) + ": <b>level " + level_str(*a.knee) +
+                 "</b>, the knee (" + html(run_words(knee)) + "): the least image error is " + num(best->error) +
+                 " at level " + level_str(best->level) + ", and level " + level_str(*a.knee) +
+                 " is the smallest within " + num(stop_tolerance(best->error)) + " of it";
+        const SweepRow* own = s->own();
+        if (own && own->triangles) {
+            items += "; under the triangle budget of the scene's own levels (" + count(own->triangles) + "), ";
+            if (a.budget)
+                items += "<b>level " + level_str(*a.budget) + "</b> (" + html(run_words(*s->at_level(*a.budget))) +
+                         ")";
+            else
+                items += "no uniform level fits";
+            if (own->img_rmse) {
+                if (const std::optional<double> d = dominating_level(s->runs(), {0.0, *own->triangles, *own->img_rmse})) {
+                    const SweepRow& u = *s->at_level(*d);
+                    dominated += "<p class=verdict>The scene's own control stage (" + html(own->model) +
+                                 ") is dominated with " + html(series_words(*s, has_camera_relative)) +
+                                 ": uniform level " + level_str(*d) + " draws " +
+                                 (*u.triangles < *own->triangles ? "fewer" : "as many") + " triangles (" +
+                                 count(u.triangles) + " against " + count(own->triangles) + ") with " +
+                                 (*u.img_rmse < *own->img_rmse ? "a lower" : "the same") + " image error (" +
+                                 num(u.img_rmse) + " against " + num(own->img_rmse) + ").</p>\n";
+                }
+            }
+        }
+        items += ".</li>\n";
+    }
+    if (items.empty()) return dominated;
+    return "<p>Recommended uniform levels (their pictures are below):</p>\n<ul>\n" + items + "</ul>\n" + dominated;
 }
 
 std::string coordinates_cell(bool camera_relative) {
@@ -400,8 +480,13 @@ void pictures(std::string& out, const std::vector<const Series*>& series, bool h
     for (const Series* s : series) {
         for (const SweepRow* row : s->rows) {
             if (row->image.empty() && row->diff_image.empty() && row->wire_image.empty()) continue;
+            const Advice a = advice_of(*s);
+            std::string why;
+            if (row->uniform() && row->level == a.knee) why = "the knee";
+            if (row->uniform() && row->level == a.budget) why += (why.empty() ? "" : " and ") + std::string("the best under the budget");
             const std::string what = series_words(*s, has_camera_relative) + ", " + level_text(*row) +
-                                     ": img_rmse " + num(row->img_rmse) + ", triangles " + count(row->triangles);
+                                     (why.empty() ? "" : " (recommended: " + why + ")") + ": img_rmse " +
+                                     num(row->img_rmse) + ", triangles " + count(row->triangles);
             out += "<div class=strip><p>" + html(what) + "</p>";
             picture(out, row->image, "render");
             picture(out, row->diff_image, "difference to the truth");
@@ -433,7 +518,15 @@ std::string make_index(const SweepTable& table, const std::vector<Series>& serie
            "<li><b>The level at which the image error stops improving</b>, for one scene, spacing and precision: with "
            "<i>m</i> the minimum img_rmse over all its uniform levels, the smallest uniform level whose img_rmse is at "
            "most <i>m</i> + max(1% of <i>m</i>, 0.5/255). Half an 8-bit code value is the least change a picture can "
-           "show; any higher level improves the error by no more than that tolerance.</li>\n"
+           "show; any higher level improves the error by no more than that tolerance. This is <b>the knee</b>, the "
+           "first of the recommended levels.</li>\n"
+           "<li><b>The best level under the triangle budget</b>, the second: the budget is the triangle count of the "
+           "scene's own levels with the same spacing and precision, and the level is the one with the least img_rmse "
+           "among the uniform levels that draw no more triangles (the smaller on a tie). Where a uniform level has no "
+           "more triangles and no more error than the scene's own levels, one of the two strictly less, a sentence "
+           "says the scene's control stage is dominated.</li>\n"
+           "<li><b>Time</b> in the error-against-time plot is tessref's own CPU reference's (the pipeline and the "
+           "rasterizer, median of the sweep's repeats), not a GPU's: it ranks the work each level asks for.</li>\n"
            "<li><b>Pareto front</b>, per scene over all its spacings, precisions and models: the runs that no other "
            "run of the scene dominates, i.e. no other run has cost &le; and img_rmse &le; with one of the two "
            "strictly less (cost: total time in one plot, triangles in the other). Ringed in the plots, joined by a "
@@ -458,6 +551,7 @@ std::string make_index(const SweepTable& table, const std::vector<Series>& serie
             if (s.scene == scene) of_scene.push_back(&s);
         out += "<h2 id=\"" + html(anchor_id(scene)) + "\">" + html(scene) + "</h2>\n";
         out += "<p class=verdict>" + verdict(of_scene, table.has_camera_relative) + "</p>\n";
+        out += recommendations(of_scene, table.has_camera_relative);
         // gpu/exact: pairs of series that differ only in precision.
         for (const Series* gpu : of_scene) {
             if (gpu->precision != "gpu" || gpu->spacing.empty()) continue;  // empty: a geomipmapped scene's
@@ -501,7 +595,9 @@ void write_sweep_report(const std::string& dir) {
     fs::create_directories(plots, ec);
     if (ec) throw Error("cannot make the plots folder: " + ec.message(), Where::in_file(plots.string()));
     const PlotSpec time_plot =
-        make_plot(table, series, "Image error against time", "total time per run (ms), log scale", "total_ms",
+        make_plot(table, series, "Image error against time",
+                  "total time per run of tessref's CPU reference, not a GPU's (ms, median of the runs), log scale",
+                  "total_ms",
                   [](const SweepRow& row) { return row.total_ms; });
     const PlotSpec triangle_plot =
         make_plot(table, series, "Image error against triangles", "triangles, log scale", "triangles",

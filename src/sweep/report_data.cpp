@@ -220,6 +220,24 @@ std::optional<double> stop_improving_level(std::span<const LevelError> curve) {
     return level;
 }
 
+std::optional<double> best_level_under_budget(std::span<const LevelRun> runs, double budget) {
+    const LevelRun* best = nullptr;
+    for (const LevelRun& r : runs)
+        if (r.triangles <= budget &&
+            (!best || r.error < best->error || (r.error == best->error && r.level < best->level)))
+            best = &r;
+    return best ? std::optional<double>(best->level) : std::nullopt;
+}
+
+std::optional<double> dominating_level(std::span<const LevelRun> runs, const LevelRun& own) {
+    std::optional<double> level;
+    for (const LevelRun& r : runs)
+        if (r.triangles <= own.triangles && r.error <= own.error &&
+            (r.triangles < own.triangles || r.error < own.error) && (!level || r.level < *level))
+            level = r.level;
+    return level;
+}
+
 ErrorRatio gpu_exact_ratio(std::span<const LevelError> gpu, std::span<const LevelError> exact) {
     std::vector<double> ratios;
     for (const LevelError& g : gpu) {

@@ -97,6 +97,24 @@ double stop_tolerance(double minimum_error);
 // not be sorted.)
 std::optional<double> stop_improving_level(std::span<const LevelError> curve);
 
+// A uniform level's cost and image error, for the rules that weigh both.
+struct LevelRun {
+    double level = 0.0;
+    double triangles = 0.0;
+    double error = 0.0;
+};
+
+// The best level under a triangle budget: the least image error among the levels whose
+// triangle count is at most `budget`, the smaller level on a tie. nullopt when none fits. The
+// report's budget is the triangle count of the scene's own levels (same spacing and
+// precision): what a uniform level gives for the triangles the scene's control stage spends.
+std::optional<double> best_level_under_budget(std::span<const LevelRun> runs, double budget);
+
+// The uniform level that dominates `own` (the scene's own levels; own.level is not read): the
+// smallest level with triangles <= and error <= own's, at least one of the two strictly less.
+// nullopt when none does: then the scene's control stage buys something no uniform level does.
+std::optional<double> dominating_level(std::span<const LevelRun> runs, const LevelRun& own);
+
 // gpu-vs-exact: the ratio gpu img_rmse / exact img_rmse at each level both precisions ran
 // (levels where the exact error is 0 count only when the gpu error is 0 too, as ratio 1).
 struct ErrorRatio {

@@ -18,6 +18,7 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -26,6 +27,7 @@
 #include "common/temp_name.h"
 #include "sweep/geometric_error.h"
 #include "sweep/report.h"
+#include "sweep/report_data.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -461,13 +463,18 @@ std::string row_stem(const Row& row) {
     return std::string(to_string(row.spacing)) + "-L" + level_text(row.level);
 }
 
+// A uniform level whose pictures are kept whatever the errors: a power of two.
+bool keeps_level(double level) {
+    int exponent = 0;
+    return std::frexp(level, &exponent) == 0.5;
+}
+
+// The rows whose pictures run_row() keeps; the recommended levels are added once the whole
+// sweep has run (run_sweep, merge_sweeps).
 bool keeps_pictures(const Row& row, double largest_level) {
     if (row.own) return true;
     if (row.geomip != Row::Geomip::none) return true;  // at most 5 levels and a few bounds
-    if (row.level == largest_level) return true;
-    int exponent = 0;
-    const double mantissa = std::frexp(row.level, &exponent);
-    return mantissa == 0.5;  // a power of two
+    return row.level == largest_level || keeps_level(row.level);
 }
 
 std::string row_description(const Row& row, const std::vector<SweepScene>& scenes) {
@@ -574,8 +581,10 @@ struct PairData {
 
 class Runner {
 public:
-    Runner(const SweepParameters& p, const std::vector<SweepScene>& scenes, const fs::path& dir)
-        : p_(p), scenes_(scenes), dir_(dir), largest_level_(p.levels.empty() ? 0.0 : p.levels.back()) {}
+    // every_picture: a shard of several, which keeps every row's pictures for the merge to choose.
+    Runner(const SweepParameters& p, const std::vector<SweepScene>& scenes, const fs::path& dir, bool every_picture)
+        : p_(p), scenes_(scenes), dir_(dir), largest_level_(p.levels.empty() ? 0.0 : p.levels.back()),
+          every_picture_(every_picture) {}
 
     // Runs one group's rows (one per precision), returns their fields in row order.
     std::vector<Fields> run_group(const std::vector<const Row*>& rows, const std::function<void(const Row&)>& starting) {
@@ -692,32 +701,63 @@ private:
             f["img_fail_px"] = std::to_string(compared->failing_pixels);
             f["truth_image"] = truth.image_path;
         }
-        if (keeps_pictures(row, largest_level_)) {
-            const std::string stem = "images/" + s.slug + "/" + row_stem(row) + "-" +
-                                     std::string(to_string(row.precision)) + (row.camera_relative ? "-cr" : "");
-            fs::create_directories(dir_ / "images" / s.slug);
-            write_image(image, (dir_ / (stem + ".png")).string(), ImageFormat::png);
-            f["image"] = stem + ".png";
-            RenderOptions wire_options = render_options;
-            wire_options.mode = RenderMode::wireframe;
-            const RenderResult wire = render_surface(scene, pipeline, wire_options);
-            write_image(wire, (dir_ / (stem + "-wire.png")).string(), ImageFormat::png);
-            f["wire_image"] = stem + "-wire.png";
-            if (compared) {
-                write_float_image(difference_picture(*truth.image, picture, *compared).image, (dir_ / (stem + "-diff.png")).string());
-                f["diff_image"] = stem + "-diff.png";
-            }
-        }
+        if (every_picture_ || keeps_pictures(row, largest_level_))
+            write_pictures(row, scene, pipeline, render_options, image, picture, compared, f);
         pair.positions = mesh.positions;
         pair.triangles = mesh.triangles;
         pair.rgba = to_rgba8(image);
         return f;
     }
 
+public:
+    // The pictures of a row that run_row() did not keep (a recommended level that is not a
+    // power of two), into its fields: the row's surface once more, untimed.
+    void add_pictures(const Row& row, Fields& f) {
+        const SweepScene& s = scenes_[row.scene];
+        const Scene scene = uniform_scene(s.scene, row.level, row.spacing);
+        SceneTruth& truth = truth_of(row.scene);
+        PipelineOptions options;
+        options.precision = row.precision;
+        options.camera_relative = row.camera_relative;
+        const auto pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene, options));
+        RenderOptions render_options;
+        render_options.size = p_.size;
+        render_options.precision = row.precision;
+        render_options.camera_relative = row.camera_relative;
+        const RenderResult image = render_surface(scene, pipeline, render_options);
+        const FloatImage picture = float_image(image);
+        std::optional<CompareResult> compared;
+        if (truth.image) compared = compare_images(*truth.image, picture);
+        write_pictures(row, scene, pipeline, render_options, image, picture, compared, f);
+    }
+
+private:
+    void write_pictures(const Row& row, const Scene& scene, const std::shared_ptr<const PipelineResult>& pipeline,
+                        const RenderOptions& render_options, const RenderResult& image, const FloatImage& picture,
+                        const std::optional<CompareResult>& compared, Fields& f) {
+        const SweepScene& s = scenes_[row.scene];
+        const std::string stem = "images/" + s.slug + "/" + row_stem(row) + "-" +
+                                 std::string(to_string(row.precision)) + (row.camera_relative ? "-cr" : "");
+        fs::create_directories(dir_ / "images" / s.slug);
+        write_image(image, (dir_ / (stem + ".png")).string(), ImageFormat::png);
+        f["image"] = stem + ".png";
+        RenderOptions wire_options = render_options;
+        wire_options.mode = RenderMode::wireframe;
+        const RenderResult wire = render_surface(scene, pipeline, wire_options);
+        write_image(wire, (dir_ / (stem + "-wire.png")).string(), ImageFormat::png);
+        f["wire_image"] = stem + "-wire.png";
+        if (compared) {
+            write_float_image(difference_picture(*truth_.image, picture, *compared).image,
+                              (dir_ / (stem + "-diff.png")).string());
+            f["diff_image"] = stem + "-diff.png";
+        }
+    }
+
     const SweepParameters& p_;
     const std::vector<SweepScene>& scenes_;
     fs::path dir_;
     double largest_level_;
+    bool every_picture_ = false;
     std::size_t truth_scene_ = static_cast<std::size_t>(-1);
     SceneTruth truth_;
 };
@@ -731,6 +771,49 @@ std::string csv_line(const Fields& f) {
         first = false;
     }
     return line + "\n";
+}
+
+// Which rows the report recommends (report_data.h: the knee, and the best level under the
+// triangle budget of the scene's own levels), per series: the rows of one scene, spacing,
+// precision and camera_relative value. From the rows' CSV cells (cell(row, column)), so that a
+// whole sweep and a merge of its shards choose the same rows.
+using CellOf = std::function<std::string(std::size_t row, const char* column)>;
+std::vector<bool> recommended_rows(std::size_t count, const CellOf& cell) {
+    const auto number = [&](std::size_t row, const char* column) -> std::optional<double> {
+        const std::string text = cell(row, column);
+        if (text.empty()) return std::nullopt;
+        return std::stod(text);
+    };
+    std::map<std::string, std::vector<std::size_t>> series;
+    for (std::size_t row = 0; row < count; ++row) {
+        const std::string model = cell(row, "model");
+        if (model == "geomip_level" || model == "geomip_bound" || model == "geomipmap") continue;
+        series[cell(row, "scene") + "\n" + cell(row, "spacing") + "\n" + cell(row, "precision") + "\n" +
+               cell(row, "camera_relative")]
+            .push_back(row);
+    }
+    std::vector<bool> out(count, false);
+    for (const auto& [key, members] : series) {
+        std::vector<LevelError> curve;
+        std::vector<LevelRun> runs;
+        std::optional<double> budget;
+        for (std::size_t row : members) {
+            const std::optional<double> error = number(row, "img_rmse"), triangles = number(row, "triangles");
+            if (cell(row, "model") != "uniform") {
+                budget = triangles;
+            } else if (error && triangles) {
+                const double level = *number(row, "level");
+                curve.push_back({level, *error});
+                runs.push_back({level, *triangles, *error});
+            }
+        }
+        const std::optional<double> knee = stop_improving_level(curve);
+        const std::optional<double> best = budget ? best_level_under_budget(runs, *budget) : std::nullopt;
+        for (std::size_t row : members)
+            if (cell(row, "model") == "uniform" && (number(row, "level") == knee || number(row, "level") == best))
+                out[row] = true;
+    }
+    return out;
 }
 
 // Refuses, before any work, a uniform level that would exceed a scene's triangle budget.
@@ -916,27 +999,42 @@ std::size_t run_sweep(const SweepParameters& p, const Shard& shard, const std::s
 
     TempDir temp(dir);
     fs::create_directories(temp.path() / "images");
-    Runner runner(p, scenes, temp.path());
-    std::map<std::size_t, std::string> lines;  // row index -> CSV line
+    Runner runner(p, scenes, temp.path(), shard.count > 1);
+    std::map<std::size_t, Fields> fields;  // row index -> its columns
     std::size_t done = 0;
     for (const auto& [group, group_rows] : mine) {
-        const std::vector<Fields> fields = runner.run_group(group_rows, [&](const Row& row) {
+        std::vector<Fields> group_fields = runner.run_group(group_rows, [&](const Row& row) {
             if (progress) progress(done++, mine_rows, row_description(row, scenes));
         });
-        for (std::size_t k = 0; k < group_rows.size(); ++k) lines[group_rows[k]->index] = csv_line(fields[k]);
+        for (std::size_t k = 0; k < group_rows.size(); ++k) fields[group_rows[k]->index] = std::move(group_fields[k]);
+    }
+    // The report recommends levels by rules over whole series (report_data.h); their pictures
+    // are kept whatever the level. A shard holds only some of a series' levels: it keeps the
+    // pictures of every row, and the merge keeps those of the rows a whole sweep keeps.
+    if (shard.count == 1) {
+        std::vector<Fields*> by_position;
+        for (auto& [index, f] : fields) by_position.push_back(&f);
+        const std::vector<bool> recommended =
+            recommended_rows(by_position.size(), [&](std::size_t k, const char* column) {
+                const auto it = by_position[k]->find(column);
+                return it == by_position[k]->end() ? std::string() : it->second;
+            });
+        std::size_t k = 0;
+        for (auto& [index, f] : fields)
+            if (recommended[k++] && f["image"].empty()) runner.add_pictures(rows[index], f);
     }
     if (progress) progress(done, mine_rows, "");
     std::string csv = csv_header();
     std::vector<std::size_t> indices;
-    for (const auto& [index, line] : lines) {
-        csv += line;
+    for (const auto& [index, f] : fields) {
+        csv += csv_line(f);
         indices.push_back(index);
     }
     write_text(temp.path() / "sweep.csv", csv);
     write_text(temp.path() / "sweep.json", sweep_json_text(parameters_json(p, scenes, rows.size(), groups), shard, indices));
     write_sweep_report(temp.path().string());
     temp.commit();
-    return lines.size();
+    return fields.size();
 }
 
 // ---- merge -------------------------------------------------------------------------------
@@ -1006,9 +1104,10 @@ ShardDir read_shard(const fs::path& dir) {
     return s;
 }
 
-// Copies every file under from/images into to/images; a file both shards wrote (a scene's
-// truth picture) must hold the same bytes.
-void copy_images(const fs::path& from, const fs::path& to) {
+// Copies every file under from/images into to/images but those in `leave_out` (paths
+// relative to the sweep directory); a file both shards wrote (a scene's truth picture) must
+// hold the same bytes.
+void copy_images(const fs::path& from, const fs::path& to, const std::set<std::string>& leave_out) {
     const fs::path images = from / "images";
     if (!fs::is_directory(images)) return;
     for (const auto& entry : fs::recursive_directory_iterator(images)) {
@@ -1017,6 +1116,7 @@ void copy_images(const fs::path& from, const fs::path& to) {
         if (entry.is_directory()) {
             fs::create_directories(target);
         } else if (entry.is_regular_file()) {
+            if (leave_out.count(relative.generic_string())) continue;
             fs::create_directories(target.parent_path());
             if (fs::exists(target)) {
                 if (read_text(target) != read_text(entry.path()))
@@ -1066,15 +1166,38 @@ void merge_sweeps(const std::vector<std::string>& dirs, const std::string& out) 
     for (std::size_t i = 0; i < total; ++i)
         if (!rows[i]) throw Error("row " + std::to_string(i) + " is in no shard", Where::in_file(dirs.front()));
 
+    // Shards keep every row's pictures (run_sweep); the merge keeps those a whole sweep keeps:
+    // the rows keeps_pictures() chooses and the recommended ones.
+    const auto column = [](const char* name) {
+        return static_cast<std::size_t>(std::find(csv_columns().begin(), csv_columns().end(), name) -
+                                        csv_columns().begin());
+    };
+    const auto cell = [&](std::size_t row, const char* name) { return rows[row]->fields[column(name)]; };
+    const std::vector<bool> recommended = recommended_rows(total, cell);
+    const auto& levels = first.parameters.at("levels");
+    const std::string largest = levels.empty() ? std::string() : levels.back().get<std::string>();
+    std::set<std::string> leave_out;
     TempDir temp(out);
     fs::create_directories(temp.path() / "images");
     std::string csv = csv_header();
     std::vector<std::size_t> indices(total);
     for (std::size_t i = 0; i < total; ++i) {
-        csv += rows[i]->raw + "\n";
         indices[i] = i;
+        const std::string level = cell(i, "level");
+        if (first.shard.count == 1 || cell(i, "model") != "uniform" || recommended[i] || level == largest ||
+            keeps_level(std::stod(level))) {
+            csv += rows[i]->raw + "\n";
+            continue;
+        }
+        std::vector<std::string> fields = rows[i]->fields;
+        for (const char* name : {"image", "diff_image", "wire_image"}) {
+            if (!fields[column(name)].empty()) leave_out.insert(fields[column(name)]);
+            fields[column(name)].clear();
+        }
+        for (std::size_t k = 0; k < fields.size(); ++k) csv += (k ? "," : "") + csv_field(fields[k]);
+        csv += "\n";
     }
-    for (const ShardDir& s : shards) copy_images(s.dir, temp.path());
+    for (const ShardDir& s : shards) copy_images(s.dir, temp.path(), leave_out);
     write_text(temp.path() / "sweep.csv", csv);
     write_text(temp.path() / "sweep.json", sweep_json_text(first.parameters, Shard{0, 1}, indices));
     write_sweep_report(temp.path().string());
