@@ -228,6 +228,24 @@ TEST_F(SweepGeometricError, MaximumAtATessellationEdgeCrossingAGridLine) {
 
 // ---- the pipeline's timings change nothing ---------------------------------------------------
 
+// The screen measures by hand, with the identity as view-projection: clip space is world
+// space (w = 1), so a point (x, y) lands at ((x + 1) / 2 * 100, (y + 1) / 2 * 100) in a
+// 100 x 100 viewport.
+TEST(SweepScreenMeasures, VisiblePixelsAndMeanEdgeLengthByHand) {
+    using tessref::sweep::visible_pixels;
+    const glm::dmat4 identity(1.0);
+    const glm::ivec2 viewport(100, 100);
+    EXPECT_DOUBLE_EQ(visible_pixels(identity, viewport, {0, 0, 0}, {0.5, 0, 0}), 25.0);
+    EXPECT_DOUBLE_EQ(visible_pixels(identity, viewport, {0, 0, 0}, {2, 0, 0}), 50.0);  // clipped at x = 1
+    EXPECT_DOUBLE_EQ(visible_pixels(identity, viewport, {2, 0, 0}, {3, 0, 0}), 0.0);   // all off screen
+    tessref::SurfaceMesh mesh;
+    mesh.positions = {{0, 0, 0}, {0.5, 0, 0}, {0, 0.5, 0}, {2, 2, 0}, {3, 2, 0}, {2, 3, 0}};
+    mesh.triangles = {{0, 1, 2}, {3, 4, 5}};  // the second is off screen and counts nowhere
+    EXPECT_DOUBLE_EQ(tessref::sweep::mean_edge_pixels(mesh, identity, viewport),
+                     (25.0 + 25.0 + std::sqrt(2.0 * 25.0 * 25.0)) / 3.0);
+    EXPECT_EQ(tessref::sweep::mean_edge_pixels({}, identity, viewport), 0.0);
+}
+
 TEST(SweepPipelineTimings, FilledWithoutChangingTheOutput) {
     const tessref::Scene scene = tessref::load_scene((kSource / "data/scenes/thesis-distance-4.toml").string());
     for (const auto precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
@@ -255,6 +273,7 @@ const std::vector<std::string> kColumns{
     "scene",       "model",      "level",         "spacing",          "precision",     "camera_relative", "patches",
     "triangles",   "points",     "control_ms",    "generator_ms",     "evaluation_ms", "geometry_ms",
     "raster_shading_ms",         "total_ms",      "geo_max",          "geo_rms",       "geo_max_px",
+    "mean_edge_px", "triangles_per_px",
     "img_rmse",    "img_psnr",   "img_fail_px",   "gpu_exact_max_pos", "gpu_exact_image_differs",
     "image",       "diff_image", "wire_image",    "truth_image"};
 
@@ -392,6 +411,21 @@ TEST_F(SweepCommand, RowsColumnsAndOrder) {
     }
     EXPECT_TRUE(fs::is_regular_file(dir_ / "out/images/bump/truth.png"));
     EXPECT_TRUE(fs::is_regular_file(dir_ / "out/index.html"));
+    // The screen measures: on the flat map every level covers the same pixels, so triangles
+    // per pixel grow as the triangles (4x from level 1 to 2, equal spacing), and the mean
+    // edge about halves (each edge split in two; perspective makes it not exact).
+    const auto at = [&](const std::string& level, const char* column) {
+        for (const auto& row : csv.rows)
+            if (row.at("scene") == "flat" && row.at("model") == "uniform" && row.at("spacing") == "equal" &&
+                row.at("precision") == "gpu" && row.at("level") == level)
+                return std::stod(row.at(column));
+        ADD_FAILURE() << "no flat equal gpu row at level " << level;
+        return 0.0;
+    };
+    EXPECT_NEAR(at("2", "triangles_per_px") / at("1", "triangles_per_px"), 4.0, 1e-6);
+    const double halves = at("2", "mean_edge_px") / at("1", "mean_edge_px");
+    EXPECT_GT(halves, 0.4);
+    EXPECT_LT(halves, 0.6);
     // Not a chosen level: 3 of 1..4 keeps no pictures.
     ASSERT_EQ(sweep({a, "--levels", "1..4", "-o", "four"}).status, 0);
     for (const auto& row : read_csv(dir_ / "four/sweep.csv").rows)

@@ -45,7 +45,7 @@ struct SweepCommandOptions {
     std::string precision = "gpu";
     std::string camera_relative = "off";
     std::string spacing;  // empty: each scene's own
-    int repeat = 1;
+    int repeat = 3;  // the median of three: see docs/SWEEP.md, "Timings"
     std::string shard;
     std::string size = "320x200";
     int threads = 0;
@@ -200,7 +200,7 @@ Command add_sweep_command(CLI::App& parent) {
                     "Camera-relative evaluation (render --camera-relative), comma-separated: off, on; off,on runs "
                     "every row both ways")
         ->default_str("off");
-    app->add_option("--repeat", options->repeat, "Runs per row; timings are the median")->default_val(1);
+    app->add_option("--repeat", options->repeat, "Runs per row; timings are the median")->default_val(3);
     app->add_option("--shard", options->shard,
                     "Run shard I of N (0 <= I < N) into DIR (default: SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN of "
                     "SLURM_ARRAY_TASK_COUNT when set, else everything)")

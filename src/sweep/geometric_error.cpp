@@ -166,30 +166,11 @@ GeometricError geometric_error(const TruthSurface& truth, const SurfaceMesh& mes
         }
     });
 
-    // The visible part of the segment from (u, v, g) to (u, v, t): clipped to the view
-    // volume (-w <= x, y, z <= w) in clip space, where it stays a segment, then projected.
+    // The visible part of the segment from (u, v, g) to (u, v, t) (visible_pixels).
     const glm::dmat4 vp = camera ? camera->view_projection() : glm::dmat4(1.0);
     const auto visible_pixels = [&](double u, double v, double g, double t) {
-        const auto clip_of = [&](double h) {
-            return vp * glm::dvec4(xy ? glm::dvec3(u, v, h) : glm::dvec3(u, h, v), 1.0);
-        };
-        const glm::dvec4 a = clip_of(g), b = clip_of(t);
-        double t0 = 0.0, t1 = 1.0;
-        for (int axis = 0; axis < 3; ++axis) {
-            for (const double sign : {1.0, -1.0}) {
-                // f(s) = w + sign * coordinate >= 0, linear along the segment.
-                const double fa = a.w + sign * a[axis], fb = b.w + sign * b[axis];
-                if (fa < 0.0 && fb < 0.0) return 0.0;
-                if (fa < 0.0) t0 = std::max(t0, fa / (fa - fb));
-                if (fb < 0.0) t1 = std::min(t1, fa / (fa - fb));
-            }
-        }
-        if (!(t1 > t0)) return 0.0;
-        const auto window = [&](double s) {
-            const glm::dvec4 c = a + s * (b - a);
-            return (glm::dvec2(c) / c.w * 0.5 + 0.5) * glm::dvec2(camera->viewport);
-        };
-        return glm::length(window(t1) - window(t0));
+        const auto at = [&](double h) { return xy ? glm::dvec3(u, v, h) : glm::dvec3(u, h, v); };
+        return sweep::visible_pixels(vp, camera->viewport, at(g), at(t));
     };
     double sum_sq = 0.0, area = 0.0;
     result.max = 0.0;
@@ -206,6 +187,41 @@ GeometricError geometric_error(const TruthSurface& truth, const SurfaceMesh& mes
     result.area = area;
     result.rms = area > 0.0 ? std::sqrt(std::max(0.0, sum_sq) / area) : 0.0;
     return result;
+}
+
+double visible_pixels(const glm::dmat4& view_projection, glm::ivec2 viewport, const glm::dvec3& from,
+                      const glm::dvec3& to) {
+    const glm::dvec4 a = view_projection * glm::dvec4(from, 1.0), b = view_projection * glm::dvec4(to, 1.0);
+    double t0 = 0.0, t1 = 1.0;
+    for (int axis = 0; axis < 3; ++axis) {
+        for (const double sign : {1.0, -1.0}) {
+            // f(s) = w + sign * coordinate >= 0, linear along the segment.
+            const double fa = a.w + sign * a[axis], fb = b.w + sign * b[axis];
+            if (fa < 0.0 && fb < 0.0) return 0.0;
+            if (fa < 0.0) t0 = std::max(t0, fa / (fa - fb));
+            if (fb < 0.0) t1 = std::min(t1, fa / (fa - fb));
+        }
+    }
+    if (!(t1 > t0)) return 0.0;
+    const auto window = [&](double s) {
+        const glm::dvec4 c = a + s * (b - a);
+        return (glm::dvec2(c) / c.w * 0.5 + 0.5) * glm::dvec2(viewport);
+    };
+    return glm::length(window(t1) - window(t0));
+}
+
+double mean_edge_pixels(const SurfaceMesh& mesh, const glm::dmat4& view_projection, glm::ivec2 viewport) {
+    double sum = 0.0;
+    std::size_t edges = 0;
+    for (const auto& t : mesh.triangles)  // serially, in order: the same sum on any thread count
+        for (int k = 0; k < 3; ++k) {
+            const double px = visible_pixels(view_projection, viewport, mesh.positions[t[k]], mesh.positions[t[(k + 1) % 3]]);
+            if (px > 0.0) {
+                sum += px;
+                ++edges;
+            }
+        }
+    return edges ? sum / static_cast<double>(edges) : 0.0;
 }
 
 }  // namespace tessref::sweep

@@ -70,4 +70,16 @@ struct GeometricError {
 // `camera` (its viewport the image size) gives max_px, null: max_px = 0.
 GeometricError geometric_error(const TruthSurface& truth, const SurfaceMesh& mesh, const SceneCamera* camera);
 
+// The length in pixels of the part of the segment from `from` to `to` that the camera sees:
+// the segment clipped to the view volume (-w <= x, y, z <= w in clip space, where it stays a
+// segment), projected into window coordinates of `viewport`; 0 when none of it is in view.
+double visible_pixels(const glm::dmat4& view_projection, glm::ivec2 viewport, const glm::dvec3& from,
+                      const glm::dvec3& to);
+
+// The mean projected edge length: visible_pixels() of every edge of every triangle (an edge
+// two triangles share counts twice), averaged over the edges with a visible part; 0 when
+// none has one. The sweep's mean_edge_px column (docs/SWEEP.md), to hold against the 3-6
+// pixels per triangle edge that hardware-tessellated terrains aim at.
+double mean_edge_pixels(const SurfaceMesh& mesh, const glm::dmat4& view_projection, glm::ivec2 viewport);
+
 }  // namespace tessref::sweep

@@ -36,6 +36,7 @@ constexpr Colour kMuted = Colour::from_codes(110, 110, 110);
 constexpr Colour kGrid = Colour::from_codes(226, 226, 226);
 constexpr Colour kFront = Colour::from_codes(20, 20, 20);
 constexpr Colour kWhite = Colour::from_codes(255, 255, 255);
+constexpr Colour kBand = Colour::from_codes(222, 240, 222);
 
 std::string fixed(double x, int decimals = 2) {
     char buffer[64];
@@ -84,7 +85,8 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     for (const PlotSeries& s : spec.series) longest = std::max(longest, s.label.size());
     const double legend_left = kPlotLeft + kPlotWidth + kLegendGap;
     const double legend_width = 32.0 + kCharWidth * static_cast<double>(longest);
-    const double legend_height = kLegendRow * static_cast<double>(spec.series.size() + 3);
+    for (const PlotSpec::Band& b : spec.bands) longest = std::max(longest, b.label.size());
+    const double legend_height = kLegendRow * static_cast<double>(spec.series.size() + 3 + spec.bands.size());
     shapes.width = static_cast<int>(legend_left + legend_width + 16.0);
     shapes.height = static_cast<int>(std::max(kPlotTop + kPlotHeight + kBottomMargin, kPlotTop + legend_height + 16.0));
 
@@ -110,6 +112,7 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     const int decade_lo = static_cast<int>(std::floor(std::log10(x_min)));
     int decade_hi = static_cast<int>(std::ceil(std::log10(x_max)));
     if (decade_hi <= decade_lo) decade_hi = decade_lo + 1;
+    for (const PlotSpec::Band& b : spec.bands) y_max = std::max(y_max, b.y1);
     if (!(y_max > 0)) y_max = 1.0 / 255.0;
     const double y_step = nice_step(y_max * 1.04);
     const double y_top = std::ceil(y_max * 1.04 / y_step) * y_step;
@@ -120,6 +123,12 @@ PlotShapes layout_plot(const PlotSpec& spec) {
     auto py = [&](double y) { return kPlotTop + kPlotHeight * (1.0 - y / y_top); };
     const double bottom = kPlotTop + kPlotHeight;
 
+    // The bands first, under the grid: a thick line is a rectangle in both back-ends.
+    for (const PlotSpec::Band& b : spec.bands) {
+        const double top = py(std::min(b.y1, y_top)), low = py(std::max(b.y0, 0.0));
+        if (!(low > top)) continue;
+        line(kPlotLeft, (top + low) / 2.0, kPlotLeft + kPlotWidth, (top + low) / 2.0, kBand, low - top);
+    }
     // Grid, ticks and their labels.
     for (int k = decade_lo; k <= decade_hi; ++k) {
         const double x = px(std::pow(10.0, k));
@@ -191,13 +200,22 @@ PlotShapes layout_plot(const PlotSpec& spec) {
         y += kLegendRow;
     }
     y += kLegendRow / 2.0;
-    shapes.markers.push_back({legend_left + 10.0, y - 4.0, 7.0, PlotShapes::MarkerKind::diamond, kInk});
-    shapes.markers.push_back({legend_left + 10.0, y - 4.0, 5.0, PlotShapes::MarkerKind::diamond, kGrid});
-    text(legend_left + 28.0, y, "scene's own levels", Anchor::start, kInk);
-    y += kLegendRow;
-    shapes.markers.push_back({legend_left + 10.0, y - 4.0, 8.0, PlotShapes::MarkerKind::ring, kFront});
-    line(legend_left, y - 4.0, legend_left + 20.0, y - 4.0, kFront, 1.0, true);
-    text(legend_left + 28.0, y, "Pareto front per scene", Anchor::start, kInk);
+    if (spec.pareto) {
+        shapes.markers.push_back({legend_left + 10.0, y - 4.0, 7.0, PlotShapes::MarkerKind::diamond, kInk});
+        shapes.markers.push_back({legend_left + 10.0, y - 4.0, 5.0, PlotShapes::MarkerKind::diamond, kGrid});
+        text(legend_left + 28.0, y, "scene's own levels", Anchor::start, kInk);
+        y += kLegendRow;
+        shapes.markers.push_back({legend_left + 10.0, y - 4.0, 8.0, PlotShapes::MarkerKind::ring, kFront});
+        line(legend_left, y - 4.0, legend_left + 20.0, y - 4.0, kFront, 1.0, true);
+        text(legend_left + 28.0, y, "Pareto front per scene", Anchor::start, kInk);
+    } else {
+        y -= kLegendRow;
+    }
+    for (const PlotSpec::Band& b : spec.bands) {
+        y += kLegendRow;
+        line(legend_left, y - 4.0, legend_left + 20.0, y - 4.0, kBand, 10.0);
+        text(legend_left + 28.0, y, b.label, Anchor::start, kInk);
+    }
     return shapes;
 }
 

@@ -44,6 +44,14 @@ struct PlotSpec {
     std::vector<PlotPoint> points;  // a series' uniform points in level order (they are joined)
     // Each scene's Pareto front, points sorted by x: drawn as a dashed staircase.
     std::vector<std::vector<PlotPoint>> fronts;
+    // Horizontal bands of y values practitioners aim for (screen error <= 1 px, triangle
+    // edges of 3-6 px), shaded under everything else and named in the legend.
+    struct Band {
+        double y0 = 0.0, y1 = 0.0;
+        std::string label;
+    };
+    std::vector<Band> bands;
+    bool pareto = true;  // the fronts' and the own levels' legend entries (a plot against level has neither)
 };
 
 // The i-th colour of the report's palette (cycles).

@@ -178,20 +178,38 @@ std::vector<Series> group_series(const SweepTable& table) {
 // ---------------------------------------------------------------------------------------
 // Plots
 
+using Column = std::function<std::optional<double>(const SweepRow&)>;
+
+// What a plot's y axis shows: the image error (with the Pareto fronts), or a screen measure
+// against the level (with the bands practitioners aim for).
+struct YAxis {
+    std::string label, name;
+    Column value;
+    bool fronts = true;
+    std::vector<PlotSpec::Band> bands;
+};
+
+YAxis image_error_axis() {
+    return {"image error (img_rmse, 0..1)", "img_rmse", [](const SweepRow& r) { return r.img_rmse; }, true, {}};
+}
+
 PlotSpec make_plot(const SweepTable& table, const std::vector<Series>& series, const std::string& title,
-                   const std::string& x_label, const std::string& x_name,
-                   const std::function<std::optional<double>(const SweepRow&)>& cost) {
+                   const std::string& x_label, const std::string& x_name, const Column& cost,
+                   const YAxis& y_axis = image_error_axis()) {
     PlotSpec spec;
     spec.title = title;
     spec.x_label = x_label;
-    spec.y_label = "image error (img_rmse, 0..1)";
+    spec.y_label = y_axis.label;
+    spec.bands = y_axis.bands;
+    spec.pareto = y_axis.fronts;
     std::vector<std::string> point_scene;
     std::size_t left_out = 0;
     for (std::size_t s = 0; s < series.size(); ++s) {
         spec.series.push_back({series_label(series[s], table.has_camera_relative), series_colour(s)});
         for (const SweepRow* row : series[s].rows) {
             const std::optional<double> x = cost(*row);
-            if (!x || !(*x > 0) || !row->img_rmse) {  // a log axis has no place for 0
+            const std::optional<double> y = y_axis.value(*row);
+            if (!x || !(*x > 0) || !y || !std::isfinite(*y)) {  // a log axis has no place for 0
                 ++left_out;
                 continue;
             }
@@ -199,13 +217,14 @@ PlotSpec make_plot(const SweepTable& table, const std::vector<Series>& series, c
                                       : row->model == "geomip_level" ? "L" + level_str(*row->level)
                                       : row->model == "geomip_bound" ? level_str(*row->level) + " px"
                                                                      : "own";
-            spec.points.push_back({*x, *row->img_rmse, s, !row->uniform() && !row->geomip_axis(), false, label});
+            spec.points.push_back({*x, *y, s, !row->uniform() && !row->geomip_axis(), false, label});
             point_scene.push_back(row->scene);
         }
     }
     if (left_out)
-        spec.note = std::to_string(left_out) + " run" + (left_out == 1 ? "" : "s") + " without img_rmse or with " +
-                    x_name + " 0 left out";
+        spec.note = std::to_string(left_out) + " run" + (left_out == 1 ? "" : "s") + " without " + y_axis.name +
+                    (y_axis.fronts ? " or with " + x_name + " 0" : " or " + x_name) + " left out";
+    if (!y_axis.fronts) return spec;
     // The front of each scene, over all its series.
     for (std::size_t begin = 0; begin < spec.points.size();) {
         std::size_t end = begin;
@@ -430,7 +449,7 @@ void runs_table(std::string& out, const std::vector<const Series*>& series, bool
            "<th class=t>spacing</th><th class=t>precision</th>";
     if (has_camera_relative) out += "<th class=t>coordinates</th>";
     out += "<th class=t>levels</th><th>patches</th><th>triangles</th><th>points</th><th>geo_max</th><th>geo_rms</th>"
-           "<th>geo_max_px</th><th>img_rmse</th><th>img_psnr</th><th>img_fail_px</th><th>gpu_exact_max_pos</th>"
+           "<th>geo_max_px</th><th>mean_edge_px</th><th>triangles_per_px</th><th>img_rmse</th><th>img_psnr</th><th>img_fail_px</th><th>gpu_exact_max_pos</th>"
            "<th>gpu_exact_image_differs</th></tr>\n";
     for (const Series* s : series) {
         for (const SweepRow* row : s->rows) {
@@ -444,7 +463,8 @@ void runs_table(std::string& out, const std::vector<const Series*>& series, bool
             out += "<td class=t>" + html(levels) + "</td><td>" +
                    count(row->patches) + "</td><td>" + count(row->triangles) + "</td><td>" + count(row->points) +
                    "</td><td>" + num(row->geo_max) + "</td><td>" + num(row->geo_rms) + "</td><td>" +
-                   num(row->geo_max_px) + "</td><td>" + num(row->img_rmse) + "</td><td>" + num(row->img_psnr) +
+                   num(row->geo_max_px) + "</td><td>" + num(row->mean_edge_px) + "</td><td>" +
+                   num(row->triangles_per_px) + "</td><td>" + num(row->img_rmse) + "</td><td>" + num(row->img_psnr) +
                    "</td><td>" + count(row->img_fail_px) + "</td><td>" + num(row->gpu_exact_max_pos) + "</td><td>" +
                    count(row->gpu_exact_image_differs) + "</td></tr>\n";
         }
@@ -525,6 +545,10 @@ std::string make_index(const SweepTable& table, const std::vector<Series>& serie
            "among the uniform levels that draw no more triangles (the smaller on a tie). Where a uniform level has no "
            "more triangles and no more error than the scene's own levels, one of the two strictly less, a sentence "
            "says the scene's control stage is dominated.</li>\n"
+           "<li><b>Screen measures</b>: <code>geo_max_px</code>, the geometric error's size on screen, against the "
+           "shaded band of at most 1 pixel; <code>mean_edge_px</code>, the mean length of the triangles' edges on "
+           "screen, against the band of 3 to 6 pixels that hardware-tessellated terrains aim at; "
+           "<code>triangles_per_px</code>, triangles per covered pixel, in the table of runs.</li>\n"
            "<li><b>Time</b> in the error-against-time plot is tessref's own CPU reference's (the pipeline and the "
            "rasterizer, median of the sweep's repeats), not a GPU's: it ranks the work each level asks for.</li>\n"
            "<li><b>Pareto front</b>, per scene over all its spacings, precisions and models: the runs that no other "
@@ -538,7 +562,7 @@ std::string make_index(const SweepTable& table, const std::vector<Series>& serie
            "the summary names the smallest uniform level at least as accurate.</li>\n</ul>\n";
 
     out += "<h2>Plots</h2>\n<div class=plots>\n";
-    for (const char* name : {"error-vs-time", "error-vs-triangles"}) {
+    for (const char* name : {"error-vs-time", "error-vs-triangles", "screen-error-vs-level", "edge-length-vs-level"}) {
         const std::string base = std::string("plots/") + name;
         out += "<figure><img src=\"" + base + ".svg\" alt=\"" + name + "\"/><figcaption>" + name + " (<a href=\"" +
                base + ".svg\">SVG</a>, <a href=\"" + base + ".png\">PNG</a>)</figcaption></figure>\n";
@@ -602,8 +626,22 @@ void write_sweep_report(const std::string& dir) {
     const PlotSpec triangle_plot =
         make_plot(table, series, "Image error against triangles", "triangles, log scale", "triangles",
                   [](const SweepRow& row) { return row.triangles; });
+    // The screen measures against the uniform level, with the bands hardware-tessellated
+    // terrains aim at: a screen error of at most a pixel, triangle edges of 3 to 6 pixels.
+    const Column uniform_level = [](const SweepRow& row) { return row.uniform() ? row.level : std::nullopt; };
+    const PlotSpec screen_error_plot = make_plot(
+        table, series, "Screen error against level", "uniform level, log scale", "a uniform level", uniform_level,
+        {"screen size of the geometric error (geo_max_px, pixels)", "geo_max_px",
+         [](const SweepRow& r) { return r.geo_max_px; }, false, {{0.0, 1.0, "screen error <= 1 px"}}});
+    const PlotSpec edge_plot = make_plot(
+        table, series, "Triangle edge length on screen against level", "uniform level, log scale", "a uniform level",
+        uniform_level,
+        {"mean projected edge length (mean_edge_px, pixels)", "mean_edge_px",
+         [](const SweepRow& r) { return r.mean_edge_px; }, false, {{3.0, 6.0, "triangle edges 3-6 px"}}});
     for (const auto& [name, spec] : {std::pair<const char*, const PlotSpec*>{"error-vs-time", &time_plot},
-                                     std::pair<const char*, const PlotSpec*>{"error-vs-triangles", &triangle_plot}}) {
+                                     std::pair<const char*, const PlotSpec*>{"error-vs-triangles", &triangle_plot},
+                                     std::pair<const char*, const PlotSpec*>{"screen-error-vs-level", &screen_error_plot},
+                                     std::pair<const char*, const PlotSpec*>{"edge-length-vs-level", &edge_plot}}) {
         const PlotShapes shapes = layout_plot(*spec);
         write_text_atomically(plots / (std::string(name) + ".svg"), plot_to_svg(shapes));
         write_png_atomically(plots / (std::string(name) + ".png"), shapes);

@@ -165,6 +165,8 @@ SweepTable read_sweep_csv(const std::string& path) {
         row.geo_max = number("geo_max", false);
         row.geo_rms = number("geo_rms", false);
         row.geo_max_px = number("geo_max_px", false);
+        row.mean_edge_px = number("mean_edge_px", false);
+        row.triangles_per_px = number("triangles_per_px", false);
         row.img_rmse = number("img_rmse");
         row.img_psnr = number("img_psnr", false);
         row.img_fail_px = number("img_fail_px");

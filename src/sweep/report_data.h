@@ -32,6 +32,7 @@ struct SweepRow {
     std::optional<double> patches, triangles, points;
     std::optional<double> total_ms;
     std::optional<double> geo_max, geo_rms, geo_max_px;
+    std::optional<double> mean_edge_px, triangles_per_px;  // optional columns (older sweeps lack them)
     std::optional<double> img_rmse, img_psnr, img_fail_px;
     std::optional<double> gpu_exact_max_pos, gpu_exact_image_differs;
     std::string image, diff_image, wire_image, truth_image;  // relative to DIR

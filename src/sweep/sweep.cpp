@@ -46,6 +46,7 @@ const std::vector<std::string>& csv_columns() {
         "camera_relative",            "patches",
         "triangles",   "points",      "control_ms",     "generator_ms",      "evaluation_ms", "geometry_ms",
         "raster_shading_ms",          "total_ms",       "geo_max",           "geo_rms",       "geo_max_px",
+        "mean_edge_px", "triangles_per_px",
         "img_rmse",    "img_psnr",    "img_fail_px",    "gpu_exact_max_pos", "gpu_exact_image_differs",
         "image",       "diff_image",  "wire_image",     "truth_image"};
     return columns;
@@ -692,6 +693,13 @@ private:
             f["geo_rms"] = real(e.rms);
             f["geo_max_px"] = real(e.max_px);
         }
+        // The screen measures: the surface as the rasterizer drew it (image.mvp, which holds
+        // the camera-relative origin where the run has one).
+        f["mean_edge_px"] = real(mean_edge_pixels(mesh, glm::dmat4(image.mvp), p_.size));
+        f["triangles_per_px"] =
+            image.stats.covered_pixels
+                ? real(static_cast<double>(mesh.triangles.size()) / static_cast<double>(image.stats.covered_pixels))
+                : std::string();
         const FloatImage picture = float_image(image);
         std::optional<CompareResult> compared;
         if (truth.image) {
