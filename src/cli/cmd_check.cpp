@@ -191,7 +191,9 @@ Command add_check_command(CLI::App& parent) {
         ->type_name("DISTANCE");
     app->add_option("--expect", options->expect,
                     "closed: no boundary edge at all; open: boundary edges only as one outer outline (a terrain); "
-                    "auto: closed unless the mesh is open and looks like a terrain")
+                    "auto: closed unless the mesh is open and looks like a terrain, and on an open mesh that does "
+                    "not, per component (an open sheet seen from one side, a plate under a model, may have its "
+                    "outline)")
         ->check(CLI::IsMember({"auto", "closed", "open"}))
         ->default_str("auto");
     app->add_option("--tolerance", options->tolerance,
