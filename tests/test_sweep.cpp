@@ -566,6 +566,14 @@ TEST_F(SweepCommand, MergeRefusesMismatchedDuplicateMissingAndCorruptShards) {
     refused({"s0", "cut", "s2"}, "cut");
     write_file(dir_ / "cut/sweep.csv", csv.substr(0, csv.find('\n') + 1) + "a,b\n");  // a short row
     refused({"s0", "cut", "s2"}, "cut");
+    // A cell that is not a number (the merge chooses the pictures by the rows' numbers): the
+    // report's strict reading names the column, never a crash or a bare library message.
+    std::string bad_level = csv;
+    const std::size_t uniform = bad_level.find(",uniform,");
+    ASSERT_NE(uniform, std::string::npos);
+    bad_level.replace(uniform + 9, bad_level.find(',', uniform + 9) - (uniform + 9), "x");
+    write_file(dir_ / "cut/sweep.csv", bad_level);
+    refused({"s0", "cut", "s2"}, "column level");
 }
 
 TEST_F(SweepCommand, BadInputExitsTwoAndWritesNothing) {

@@ -786,12 +786,18 @@ std::string csv_line(const Fields& f) {
 // precision and camera_relative value. From the rows' CSV cells (cell(row, column)), so that a
 // whole sweep and a merge of its shards choose the same rows.
 using CellOf = std::function<std::string(std::size_t row, const char* column)>;
+
+// A cell as the sweep writes numbers, the whole of it; else nullopt (a merge reads shards'
+// cells before the report's strict reading names what is wrong with them).
+std::optional<double> cell_number(const std::string& text) {
+    double x = 0.0;
+    const auto [stop, error] = std::from_chars(text.data(), text.data() + text.size(), x, std::chars_format::general);
+    if (text.empty() || error != std::errc() || stop != text.data() + text.size()) return std::nullopt;
+    return x;
+}
+
 std::vector<bool> recommended_rows(std::size_t count, const CellOf& cell) {
-    const auto number = [&](std::size_t row, const char* column) -> std::optional<double> {
-        const std::string text = cell(row, column);
-        if (text.empty()) return std::nullopt;
-        return std::stod(text);
-    };
+    const auto number = [&](std::size_t row, const char* column) { return cell_number(cell(row, column)); };
     std::map<std::string, std::vector<std::size_t>> series;
     for (std::size_t row = 0; row < count; ++row) {
         const std::string model = cell(row, "model");
@@ -809,10 +815,9 @@ std::vector<bool> recommended_rows(std::size_t count, const CellOf& cell) {
             const std::optional<double> error = number(row, "img_rmse"), triangles = number(row, "triangles");
             if (cell(row, "model") != "uniform") {
                 budget = triangles;
-            } else if (error && triangles) {
-                const double level = *number(row, "level");
-                curve.push_back({level, *error});
-                runs.push_back({level, *triangles, *error});
+            } else if (const std::optional<double> level = number(row, "level"); error && triangles && level) {
+                curve.push_back({*level, *error});
+                runs.push_back({*level, *triangles, *error});
             }
         }
         const std::optional<double> knee = stop_improving_level(curve);
@@ -1182,8 +1187,13 @@ void merge_sweeps(const std::vector<std::string>& dirs, const std::string& out) 
     };
     const auto cell = [&](std::size_t row, const char* name) { return rows[row]->fields[column(name)]; };
     const std::vector<bool> recommended = recommended_rows(total, cell);
-    const auto& levels = first.parameters.at("levels");
-    const std::string largest = levels.empty() ? std::string() : levels.back().get<std::string>();
+    std::string largest;  // the largest level swept, as sweep.json spells it
+    try {
+        const auto& levels = first.parameters.at("levels");
+        if (!levels.empty()) largest = levels.back().get<std::string>();
+    } catch (const nlohmann::json::exception& e) {
+        throw Error(std::string("corrupt sweep.json: ") + e.what(), Where::in_file((first.dir / "sweep.json").string()));
+    }
     std::set<std::string> leave_out;
     TempDir temp(out);
     fs::create_directories(temp.path() / "images");
@@ -1192,8 +1202,9 @@ void merge_sweeps(const std::vector<std::string>& dirs, const std::string& out) 
     for (std::size_t i = 0; i < total; ++i) {
         indices[i] = i;
         const std::string level = cell(i, "level");
+        const std::optional<double> level_number = cell_number(level);
         if (first.shard.count == 1 || cell(i, "model") != "uniform" || recommended[i] || level == largest ||
-            keeps_level(std::stod(level))) {
+            !level_number || keeps_level(*level_number)) {
             csv += rows[i]->raw + "\n";
             continue;
         }
