@@ -163,7 +163,8 @@ Command add_render_command(CLI::App& parent) {
                   "Draw the filled image, then the edges on the visible surface in the [shading] wireframe_colour");
     app->add_option("--aov", options->aov,
                     "EXR channels besides RGBA, comma-separated: depth (Z), patch (patch_id), triangle "
-                    "(triangle_id), tesscoord (tess_coord.u/v/w), level (level and the heat map level_heat.R/G/B)")
+                    "(triangle_id), tesscoord (tess_coord.u/v/w), level (level and the heat map level_heat.R/G/B); "
+                    "a .png takes level alone: the level heat map with its legend")
         ->type_name("LIST");
     app->add_option("--threads", options->threads,
                     "Worker threads (0: every core); the image is the same whatever the count")
