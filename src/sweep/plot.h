@@ -1,5 +1,6 @@
 // src/sweep/plot.h — the scatter plots of the sweep report: image error (y, linear from 0)
-// against a cost (x, log10: time or triangles), one colour per series, a series' uniform
+// against a cost (x, log10: time or triangles), or a screen measure against the level with
+// shaded bands, one colour per series, a series' uniform
 // levels joined in level order, the scene's own levels as diamonds, the Pareto front ringed
 // and joined by a dashed staircase per scene, each point labelled (its level) beside it.
 //

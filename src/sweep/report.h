@@ -7,10 +7,13 @@
 //
 //   DIR/plots/error-vs-time.{svg,png}       image error against time, Pareto front marked
 //   DIR/plots/error-vs-triangles.{svg,png}  image error against triangle count, likewise
+//   DIR/plots/screen-error-vs-level.{svg,png}  geo_max_px against the level, the <= 1 px band
+//   DIR/plots/edge-length-vs-level.{svg,png}   mean_edge_px against the level, the 3-6 px band
 //   DIR/index.html                          the plots, chosen levels side by side with their
-//                                           difference pictures and wireframes, and one
+//                                           difference pictures and wireframes, one
 //                                           sentence per scene naming the level at which the
-//                                           image error stops improving
+//                                           image error stops improving, and per series the
+//                                           recommended levels and the rule behind each
 //
 // The HTML refers only to files under DIR by relative paths (no network, works opened from
 // disk). Columns are found by their header names; unknown columns are ignored. Throws
@@ -19,8 +22,9 @@
 // index.html last, so a failure never leaves a half-written page.
 //
 // The rules the page states (the Pareto front, the level at which the image error stops
-// improving, the gpu/exact ratio) and the strict reading of sweep.csv are in
-// report_data.h; the plots' drawing (SVG and PNG from one list of shapes) in plot.h.
+// improving -- the knee --, the best level under a triangle budget, a dominated control stage,
+// the gpu/exact ratio) and the strict reading of sweep.csv are in report_data.h; the plots'
+// drawing (SVG and PNG from one list of shapes) in plot.h.
 #pragma once
 
 #include <string>

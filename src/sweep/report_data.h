@@ -1,6 +1,7 @@
 // src/sweep/report_data.h — what the sweep report (report.h) reads and decides, apart from
-// how it draws: DIR/sweep.csv read strictly into rows, and the three rules the report states
-// in its header (the Pareto front, the level at which the image error stops improving, the
+// how it draws: DIR/sweep.csv read strictly into rows, and the rules the report states in its
+// header (the Pareto front, the level at which the image error stops improving -- the knee --,
+// the best level under a triangle budget, the level that dominates the scene's own, the
 // gpu-vs-exact error ratio). Pure functions over plain data, so that each rule is tested by
 // hand-derived examples (tests/test_sweep_report.cpp) and not only through the HTML.
 #pragma once
