@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 
@@ -206,11 +207,14 @@ void check_mesh(const MeshDigest& golden, const MeshDigest& now, const fs::path&
 
 // ---- step 2: llvmpipe against the golden files -------------------------------------------
 
-void compare_with_gl(const Scene& scene, const CpuReference& ref, const FloatImage& golden_image, glm::ivec2 size,
-                     const fs::path& work, bool keep, SceneVerdict& v) {
+// The GL side against the golden files, with `cpu_side` (which makes `ref`) run while
+// llvmpipe draws: the two sides share nothing until the comparison.
+void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side, const CpuReference& ref,
+                     const FloatImage& golden_image, glm::ivec2 size, const fs::path& work, bool keep, SceneVerdict& v) {
     gl::SceneRenderOptions gl_options;
     gl_options.size = size;
     gl_options.capture = true;
+    gl_options.meanwhile = cpu_side;
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)  // as `tessref gl`
         gl_options.corrupt_prediction_of_batch = std::atoll(hook);
     // In a child process with its own limits, as `tessref gl` (gl_render.h).
@@ -223,7 +227,7 @@ void compare_with_gl(const Scene& scene, const CpuReference& ref, const FloatIma
     RenderResult gl_image;
     gl_image.width = r.width;
     gl_image.height = r.height;
-    gl_image.colour = r.colour;
+    gl_image.colour = std::move(r.colour);
     write_image(gl_image, (work / "gl.png").string(), ImageFormat::png, {});
     CompareOptions image_options;
     image_options.threshold = kImageThreshold;
@@ -337,13 +341,8 @@ void verify_files(const std::string& name, const Location& location, const fs::p
         return;
     }
 
-    // (1) The CPU reference against its golden files.
     const fs::path scene_path = location.scene_file(name);
     const Scene scene = load_scene(scene_path.string());
-    const CpuReference ref = cpu_reference(scene, scene_path, size);
-    v.triangles = ref.digest.triangles;
-    check_capture(golden_capture, ref, capture_file, v);
-    check_mesh(golden_mesh, ref.mesh, mesh_file, v);
     const fs::path work = keep.empty() ? fs::temp_directory_path() / ("tessref-golden-" + std::to_string(::getpid()))
                                        : keep / name;
     fs::create_directories(work);
@@ -357,21 +356,31 @@ void verify_files(const std::string& name, const Location& location, const fs::p
             if (!keep) fs::remove_all(dir, ec);
         }
     } remove_unless_kept{work, !keep.empty()};
-    write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
-    const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
-    if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
 
-    // (2) The GL backend against the golden image and the CPU capture.
+    // (1) The CPU reference against its golden files.
+    CpuReference ref;
+    const auto cpu_side = [&] {
+        ref = cpu_reference(scene, scene_path, size);
+        v.triangles = ref.digest.triangles;
+        check_capture(golden_capture, ref, capture_file, v);
+        check_mesh(golden_mesh, ref.mesh, mesh_file, v);
+        write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
+        const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
+        if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
+    };
+
+    // (2) The GL backend against the golden image and the CPU capture, drawn while (1) runs.
     // pom shading has a twin (pn-pom and terrain-pom) but its layer search and shadow trace
     // flip on the last bits of llvmpipe's dFdx tangent frame in a few pixels, beyond this
     // step's rule (45 and 44 pixels at 320x200; terrain-pom's capture passes, normals within
     // 2 ulps): tests/test_parallax.cpp holds them with their own counts, and their golden
     // files are checked on the CPU only.
     if (scene.shading.model.kind == ShadingKind::pom) {
+        cpu_side();
         v.gl_compared = false;
         return;
     }
-    compare_with_gl(scene, ref, golden_image, size, work, !keep.empty(), v);
+    compare_with_gl(scene, cpu_side, ref, golden_image, size, work, !keep.empty(), v);
 }
 
 }  // namespace
