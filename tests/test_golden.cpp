@@ -1,6 +1,7 @@
 // tessref golden: update writes golden/<scene>/ from the CPU reference; verify fails when the
 // CPU side no longer makes those files (STALE) or when llvmpipe departs from them (FAIL).
 // Every test works on a golden directory of its own, made from one small scene.
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,8 @@
 #include <nlohmann/json.hpp>
 
 #include "command_dir_test.h"
+#include "golden/golden_internal.h"
+#include "tessref/capture.h"
 #include "tessref/golden.h"
 
 namespace fs = std::filesystem;
@@ -32,6 +35,47 @@ protected:
         ASSERT_EQ(r.status, 0) << r.err;
     }
 };
+
+// capture_digest never holds the capture's text; its digests are still those of the text,
+// as a reader recomputes them with grep and sha256sum: the whole text's, and each run of a
+// patch's lines (its `patch` line and its vertices) on its own, a patch that comes back
+// getting a second entry. Enough vertices for several of its windows.
+TEST(CaptureDigest, IsTheDigestOfTheCaptureText) {
+    std::vector<tessref::CapturedVertex> capture;
+    for (std::uint32_t run = 0; run < 40; ++run) {
+        const std::uint32_t patch = run == 39 ? 3 : run;  // patch 3 comes back last
+        for (std::uint32_t k = 0; k < 3 * (run == 7 ? 100000 : 1000 + 37 * run); ++k) {
+            tessref::CapturedVertex v;
+            v.patch_id = patch;
+            v.tess_coord = {static_cast<float>(k) / 3.0f, 0.25f, 0.0f};
+            v.position = {static_cast<float>(k) * 0.1f, -1.0f / static_cast<float>(k + 1), 1e-30f};
+            v.normal = {0.0f, 1.0f, static_cast<float>(patch)};
+            v.levels.outer = {static_cast<float>(patch) + 0.5f, 2.0f, 3.0f, 4.0f};
+            capture.push_back(v);
+        }
+    }
+    const std::string text = tessref::capture_text(capture);
+    const tessref::golden::CaptureDigest digest = tessref::golden::capture_digest(capture);
+    EXPECT_EQ(digest.sha256, tessref::golden::sha256_hex(text));
+    EXPECT_EQ(digest.triangles, capture.size() / 3);
+    // The runs, cut from the text at its `patch` lines.
+    std::vector<std::string> runs;
+    for (std::size_t at = text.find("\npatch "); at != std::string::npos;) {
+        const std::size_t next = text.find("\npatch ", at + 1);
+        runs.push_back(text.substr(at + 1, next == std::string::npos ? std::string::npos : next - at));
+        at = next;
+    }
+    ASSERT_EQ(digest.patches.size(), runs.size());
+    ASSERT_EQ(runs.size(), 40u);
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+        const tessref::golden::PatchDigest& p = digest.patches[r];
+        const std::string first_line = runs[r].substr(0, runs[r].find('\n'));
+        EXPECT_EQ("patch " + std::to_string(p.patch_id) + " levels " + p.levels, first_line) << r;
+        EXPECT_EQ(p.sha256, tessref::golden::sha256_hex(runs[r]).substr(0, tessref::golden::kPatchDigits)) << r;
+        EXPECT_EQ(p.triangles, (std::count(runs[r].begin(), runs[r].end(), '\n') - 1) / 3) << r;
+    }
+    EXPECT_EQ(digest.patches.back().patch_id, 3u);
+}
 
 TEST_F(GoldenCommand, UpdateWritesTheThreeFilesAndVerifyPasses) {
     update("thesis-map-4");
