@@ -2,6 +2,8 @@
 // CPU side no longer makes those files (STALE) or when llvmpipe departs from them (FAIL).
 // Every test works on a golden directory of its own, made from one small scene.
 #include <algorithm>
+#include <cerrno>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -10,9 +12,11 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include "command_dir_test.h"
+#include "common/isolated.h"
 #include "golden/golden_internal.h"
 #include "tessref/capture.h"
 #include "tessref/golden.h"
@@ -35,6 +39,53 @@ protected:
         ASSERT_EQ(r.status, 0) << r.err;
     }
 };
+
+// run_isolated's `meanwhile` (golden verify's CPU side) runs in the parent while the child
+// works: the child here waits for a file that only the parent's meanwhile makes.
+TEST(RunIsolated, MeanwhileRunsInTheParentWhileTheChildWorks) {
+    const fs::path flag = fs::temp_directory_path() / ("tessref-meanwhile-" + std::to_string(::getpid()));
+    fs::remove(flag);
+    const std::string answer = tessref::run_isolated(
+        "a test child",
+        [&] {
+            for (int i = 0; i < 2000 && !fs::exists(flag); ++i) ::usleep(5000);  // up to 10 s
+            return std::string(fs::exists(flag) ? "saw it" : "never saw it");
+        },
+        {}, [&] { std::ofstream(flag.string()) << "x"; });
+    fs::remove(flag);
+    EXPECT_EQ(answer, "saw it");
+}
+
+// A meanwhile that throws ends the child (killed, not waited for to finish, and reaped) and
+// the exception goes on to the caller.
+TEST(RunIsolated, AThrowingMeanwhileEndsTheChild) {
+    const fs::path pid_file = fs::temp_directory_path() / ("tessref-meanwhile-pid-" + std::to_string(::getpid()));
+    fs::remove(pid_file);
+    pid_t child = 0;
+    EXPECT_THROW(tessref::run_isolated(
+                     "a test child",
+                     [&] {
+                         std::ofstream(pid_file.string() + ".part") << ::getpid();
+                         fs::rename(pid_file.string() + ".part", pid_file);  // whole when it appears
+                         ::sleep(30);
+                         std::ofstream(pid_file.string() + ".finished") << "late";  // a child not killed
+                         return std::string("late");
+                     },
+                     {},
+                     [&] {
+                         for (int i = 0; i < 2000 && !fs::exists(pid_file); ++i) ::usleep(5000);
+                         std::ifstream(pid_file.string()) >> child;
+                         throw tessref::Error("the parent's side failed");
+                     }),
+                 tessref::Error);
+    fs::remove(pid_file);
+    EXPECT_FALSE(fs::exists(pid_file.string() + ".finished"));
+    fs::remove(pid_file.string() + ".finished");
+    ASSERT_GT(child, 0);
+    errno = 0;
+    EXPECT_EQ(::kill(child, 0), -1);  // no such process: killed and reaped
+    EXPECT_EQ(errno, ESRCH);
+}
 
 // capture_digest never holds the capture's text; its digests are still those of the text,
 // as a reader recomputes them with grep and sha256sum: the whole text's, and each run of a
