@@ -1,6 +1,6 @@
 // Google Benchmark of the SPIR-V interpreter against the hand-written model it must match:
 // evaluation invocations per second of thesis_terrain.tese through the interpreter
-// (tessref/shader.h, one invocation at a time) and of thesis_evaluate (the C++ model, one
+// (tessref/shader.h, one invocation at a time and in batches) and of thesis_evaluate (the C++ model, one
 // point at a time, and in the pipeline's batches), on one patch of the thesis height map
 // (8 x 8 world units, level 16 fractional odd), at the same domain points.
 //   build/bench_shader --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
@@ -65,6 +65,33 @@ void BM_ThesisEvaluationInterpreter(benchmark::State& state) {
     state.counters["invocations/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
 }
 
+// The same invocations through Executable::evaluate's batches (kBatchLanes points each), as
+// the pipeline runs a user's evaluation shader.
+void BM_ThesisEvaluationInterpreterBatch(benchmark::State& state) {
+    const tessref::TerrainGrid& g = *scene().grid;
+    std::ifstream in(std::string(TESSREF_DATA_DIR) + "/shaders/thesis_terrain.tese");
+    std::ostringstream text;
+    text << in.rdbuf();
+    tessref::shader::Source source{tessref::ShaderStage::tess_evaluation, "thesis_terrain.tese", text.str(), ""};
+    tessref::shader::Bindings b;
+    b.set("scaleXY", static_cast<float>(g.scale_xy));
+    b.set("scaleZ", static_cast<float>(g.scale_z));
+    b.set("mvp", glm::mat4(1.0f));
+    b.bind_texture(0, &g.heightmap->texture);
+    const tessref::shader::Executable run(tessref::shader::Module::compile(source), b, {});
+    tessref::shader::ShaderPatch patch;
+    patch.vertices.resize(4);
+    for (int k = 0; k < 4; ++k) patch.vertices[static_cast<std::size_t>(k)].locations = {tessref::shader::slot(kCorners[static_cast<std::size_t>(k)])};
+    const std::vector<glm::vec3> points = domain_points();
+    std::size_t n = 0;
+    for (auto _ : state) {
+        const std::vector<tessref::shader::ShaderVertex> v = run.evaluate(patch, points, 0);
+        benchmark::DoNotOptimize(v.data());
+        n += points.size();
+    }
+    state.counters["invocations/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
+}
+
 void BM_ThesisEvaluationModel(benchmark::State& state) {
     const tessref::TerrainGrid& g = *scene().grid;
     tessref::ThesisEvaluation<float> e;
@@ -108,6 +135,7 @@ void BM_ThesisEvaluationModelBatch(benchmark::State& state) {
 }
 
 BENCHMARK(BM_ThesisEvaluationInterpreter)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ThesisEvaluationInterpreterBatch)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ThesisEvaluationModel)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ThesisEvaluationModelBatch)->Unit(benchmark::kMillisecond);
 

@@ -1,10 +1,11 @@
 // tessref/shader.h — GLSL shader stages executed on the CPU, exactly.
 //
 // A stage's GLSL (a twin of data/shaders/ or a user's file) is compiled to SPIR-V by
-// glslang, validated by SPIRV-Tools, and run by tessref's own SPIR-V interpreter, one
-// invocation at a time, with the GL stage interface the GL backend sets up: the same
-// #version and defines, loose uniforms set by name (as glUniform*), samplers read through
-// tessref::Texture at their layout(binding = N) unit, inputs and outputs matched by location.
+// glslang, validated by SPIRV-Tools, and run by tessref's own SPIR-V interpreter (an
+// evaluation shader a batch of invocations at a time, each instruction over the batch),
+// with the GL stage interface the GL backend sets up: the same #version and defines, loose
+// uniforms set by name (as glUniform*), samplers read through tessref::Texture at their
+// layout(binding = N) unit, inputs and outputs matched by location.
 //
 //   shader::Module tese = shader::Module::compile({ShaderStage::tess_evaluation, path, text});
 //   shader::Bindings b;
@@ -204,6 +205,11 @@ public:
     ShaderPatch control(std::span<const ShaderVertex> in, long long patch_id) const;
     // Tessellation evaluation at one domain point of a patch.
     ShaderVertex evaluate(const ShaderPatch& patch, glm::vec3 tess_coord, long long patch_id) const;
+    // At many domain points of one patch: result k is evaluate(patch, tess_coords[k],
+    // patch_id), bit for bit, computed a batch of points at a time (each instruction over
+    // all the batch's invocations). A warning is given once per source line of the call.
+    std::vector<ShaderVertex> evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords,
+                                       long long patch_id) const;
 
 private:
     struct State;
