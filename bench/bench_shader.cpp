@@ -6,10 +6,13 @@
 //   build/bench_shader --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
+#include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "tessref/evaluation.h"
+#include "tessref/pipeline.h"
 #include "tessref/prepare.h"
 #include "tessref/scene.h"
 #include "tessref/shader.h"
@@ -134,6 +137,44 @@ void BM_ThesisEvaluationModelBatch(benchmark::State& state) {
     state.counters["invocations/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
 }
 
+// Whole pipelines (every stage, all threads) of a scene through the model and with a user's
+// evaluation shader (the thesis twin's text with a comment added, so that it runs through
+// the interpreter): evaluation invocations (emitted vertices) per second. Argument 0:
+// data/scenes/jacksboro.toml, 1: bench/scenes/jacksboro-grid-16.toml (64 x 64 patches at
+// level 16).
+const tessref::Scene& pipeline_scene(std::int64_t which, bool user) {
+    static const std::array<std::string, 2> paths = {std::string(TESSREF_DATA_DIR) + "/scenes/jacksboro.toml",
+                                                     std::string(TESSREF_DATA_DIR) + "/../bench/scenes/jacksboro-grid-16.toml"};
+    static std::array<std::array<std::unique_ptr<tessref::Scene>, 2>, 2> scenes;
+    std::unique_ptr<tessref::Scene>& s = scenes[static_cast<std::size_t>(which)][user ? 1 : 0];
+    if (!s) {
+        s = std::make_unique<tessref::Scene>(tessref::load_scene(paths[static_cast<std::size_t>(which)]));
+        if (user) {
+            const std::filesystem::path copy = std::filesystem::temp_directory_path() / "bench_shader_user.tese";
+            std::ifstream in(std::string(TESSREF_DATA_DIR) + "/shaders/thesis_terrain.tese");
+            std::ofstream(copy) << in.rdbuf() << "// a user's copy\n";
+            s->shaders.push_back(tessref::StageShader{tessref::ShaderStage::tess_evaluation, copy.string(), copy.string(),
+                                                      tessref::Where::in_file(copy.string())});
+        }
+    }
+    return *s;
+}
+
+void pipeline_case(benchmark::State& state, bool user) {
+    const tessref::Scene& s = pipeline_scene(state.range(0), user);
+    std::size_t n = 0;
+    for (auto _ : state) {
+        const tessref::PipelineResult r = tessref::run_pipeline(s);
+        n += r.mesh.positions.size();
+        benchmark::DoNotOptimize(r.mesh.positions.data());
+    }
+    state.counters["invocations/s"] = benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsRate);
+}
+void BM_PipelineModel(benchmark::State& state) { pipeline_case(state, false); }
+void BM_PipelineUserEvaluation(benchmark::State& state) { pipeline_case(state, true); }
+
+BENCHMARK(BM_PipelineModel)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PipelineUserEvaluation)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ThesisEvaluationInterpreter)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ThesisEvaluationInterpreterBatch)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ThesisEvaluationModel)->Unit(benchmark::kMillisecond);
