@@ -189,9 +189,14 @@ std::vector<std::vector<std::uint32_t>> Batch::ways(const ExecContext& c) const 
     return out;
 }
 
-Batch::Status Batch::run(ExecContext& c) {
+Batch::Status Batch::run(ExecContext& c) { return lanes_ == 1 ? run_lanes<1>(c) : run_lanes<0>(c); }
+
+// kLanes: the lane count known at compile time (1: a control shader's invocation, a vertex,
+// a traced invocation, whose loops over the lanes then vanish), or 0: lanes_.
+template <std::uint32_t kLanes>
+Batch::Status Batch::run_lanes(ExecContext& c) {
     const Module::Impl& m = c.module;
-    const std::uint32_t L = lanes_;
+    const std::uint32_t L = kLanes != 0 ? kLanes : lanes_;
     const std::uint32_t* const words = m.words.data();
     std::uint32_t* const regs = regs_.data();
     // A register's words, lane by lane: component j of lane l is R(id)[j * L + l].

@@ -66,6 +66,8 @@ public:
     void restart();
 
 private:
+    template <std::uint32_t kLanes>
+    Status run_lanes(ExecContext& context);
     std::uint32_t* memory(ExecContext& context, std::uint32_t address, std::uint32_t words);
     void observe_store(ExecContext& context, std::uint32_t address, std::uint32_t value, std::uint32_t words);
     struct Frame {
