@@ -488,3 +488,32 @@ TEST_F(UserShaderCommand, GoldenRunsTheScenesShadersOnBothSides) {
     const RunResult verify = golden("verify", "user");
     EXPECT_EQ(verify.status, 0) << verify.out << verify.err;
 }
+
+// The shipped pn-culling scene: the PN tutorial's control shader with frustum and back-face
+// patch culling (data/shaders/pn_culling.tesc, no C++ model) runs through the interpreter,
+// and the CPU discards exactly the patches llvmpipe discards: the two captures hold the same
+// patches with the same tess coords and triangles. (Positions are compared elsewhere: PN's
+// evaluation differs from llvmpipe's by a few ulps without any culling.)
+TEST_F(UserShaderCommand, PnCullingDiscardsLlvmpipesPatches) {
+    const std::string scene = scene_path("pn-culling").string();
+    const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--capture", path("gl.txt")});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    EXPECT_NE(gl.out.find("every count as predicted"), std::string::npos) << gl.out;
+    const RunResult cpu = run({"mesh", scene, "--capture", path("cpu.txt"), "--math", "llvmpipe"});
+    ASSERT_EQ(cpu.status, 0) << cpu.err;
+    tessref::CaptureCompareOptions options;
+    options.max_position_ulps = 1u << 20;
+    options.max_normal_ulps = 1u << 20;
+    const tessref::CaptureCompareResult c = tessref::compare_captures(tessref::read_capture(path("cpu.txt")),
+                                                                      tessref::read_capture(path("gl.txt")), options);
+    EXPECT_EQ(c.missing_in_test, 0u);
+    EXPECT_EQ(c.missing_in_reference, 0u);
+    EXPECT_EQ(c.tess_coord_divergences + c.triangle_divergences + c.orientation_divergences, 0u);
+    // Of the scene's 104 patches some are culled (the icosahedron's left part beyond the
+    // frustum, the back faces of the icosahedron and the cube), most are not.
+    const tessref::Scene s = tessref::load_scene(scene);
+    EXPECT_EQ(s.patch_count(), 104u);
+    EXPECT_LT(c.reference_patches, s.patch_count());
+    EXPECT_GT(c.reference_patches, s.patch_count() / 2);
+    EXPECT_EQ(c.compared_patches, c.reference_patches);
+}
