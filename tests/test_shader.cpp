@@ -393,6 +393,29 @@ void main()
 }
 
 
+// The order of a sum of products is the math mode's (shader.h). v = (1, 1e8, -1e8, 1): 1e8
+// + 1 rounds back to 1e8 in float (its spacing there is 8), so the order decides.
+//   dot(v.xyz, 1): exact ((1 + 1e8) + -1e8) = 0; llvmpipe, from the last component,
+//   ((-1e8 + 1e8) + 1) = 1.
+//   (m * 1).x with m's first row v: exact pairwise (1 + 1e8) + (-1e8 + 1) = 1e8 - 1e8 = 0;
+//   llvmpipe from the first column ((1 + 1e8) + -1e8) + 1 = 1.
+TEST(ShaderStd450, SumsOfProductsFollowTheMathMode) {
+    const std::string body = "vec4 v = vec4(1.0, 1.0e8, -1.0e8, 1.0);\n"
+                             "mat4 m = transpose(mat4(v, v, v, v));\n"
+                             "r = vec4(dot(v.xyz, vec3(1.0)), (m * vec4(1.0)).x, 0.0, 0.0);";
+    for (const MathMode math : {MathMode::exact, MathMode::llvmpipe}) {
+        RunOptions options;
+        options.math = math;
+        Executable e(vertex_module(body), {}, options);
+        const ShaderVertex v = e.vertex({}, 0);
+        ASSERT_FALSE(v.locations.empty());
+        const glm::vec4 r = as_vec4(v.locations[0]);
+        const float expected = math == MathMode::exact ? 0.0f : 1.0f;
+        EXPECT_EQ(r.x, expected) << to_string(math);
+        EXPECT_EQ(r.y, expected) << to_string(math);
+    }
+}
+
 // ---- batched evaluation: one instruction over many invocations ----------------------------
 
 namespace batch {

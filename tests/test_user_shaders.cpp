@@ -82,15 +82,19 @@ struct TwinCase {
     const char* scene;
     const char* base;
     bool control;
-    // lab 4's normal is its evaluation shader's normalize(): correctly rounded inversesqrt in
-    // exact math, 1 / sqrt (the model's) in llvmpipe math, where lab 4 is compared.
     tessref::MathMode math = tessref::MathMode::exact;
     // PN's positions and normals are the model's in neither math mode as a whole scene: in
     // exact math the correctly rounded inversesqrt of normalize() moves a few ulps (the
-    // model rounds 1 / sqrt twice), in llvmpipe math the model's vertex shader sums the
-    // matrix product in llvmpipe's order (llvmpipe_math::transform) where the interpreter
-    // does not yet (shader.h): its levels and triangles are compared, in exact math.
+    // model rounds 1 / sqrt twice); in llvmpipe math the interpreter sums its evaluation's
+    // dot products in llvmpipe's order, the model's evaluation in glm's (202 positions and
+    // 13391 normals of 18407 vertices differ). Its levels and triangles are compared, in
+    // exact math.
     bool values = true;
+    // lab 4's normal is its evaluation shader's normalize(), which its model computes with
+    // glm (dot from the first component, 1 / sqrt): the interpreter's exact math rounds the
+    // inversesqrt once, its llvmpipe math sums the dot from the last component, as llvmpipe
+    // does. Its positions, uvs and levels are compared, in llvmpipe math.
+    bool normals = true;
 };
 
 class InterpretedTwins : public ::testing::TestWithParam<TwinCase> {};
@@ -130,14 +134,14 @@ TEST_P(InterpretedTwins, GiveTheModelsMeshBitForBit) {
     EXPECT_EQ(uvs, 0u);
     if (!c.values) return;
     EXPECT_EQ(positions, 0u);
-    EXPECT_EQ(normals, 0u);
+    if (c.normals) EXPECT_EQ(normals, 0u);
     EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Scenes, InterpretedTwins,
     ::testing::Values(TwinCase{"thesis-map-4", "thesis_terrain", true}, TwinCase{"thesis-constant-1", "thesis_terrain", false},
-                      TwinCase{"cosc422", "cosc422_terrain", true}, TwinCase{"lab4-canyon", "lab4_terrain", true, tessref::MathMode::llvmpipe},
+                      TwinCase{"cosc422", "cosc422_terrain", true}, TwinCase{"lab4-canyon", "lab4_terrain", true, tessref::MathMode::llvmpipe, true, false},
                       TwinCase{"pn-triangles", "pn_triangles", true, tessref::MathMode::exact, false}),
     [](const auto& info) {
         std::string name = info.param.scene;

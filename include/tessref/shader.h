@@ -25,13 +25,13 @@
 //     saturated to the integer type's range;
 //   - an array or vector index out of range is clamped into the range.
 // A sampler whose unit has no texture reads (0, 0, 0, 1), as GL's incomplete texture does.
-// GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it. A matrix times a vector
-// sums the columns' products as GLM does, the C++ models' order: pairwise for four columns,
-// (c0 v.x + c1 v.y) + (c2 v.z + c3 v.w), from the first column on for two and three; a dot
-// product from the first component on, in both math modes. (llvmpipe sums a dot product
-// from the last component and a matrix times a vector from the first column on, as the
-// branch that wrote src/shader/llvmpipe_math found; the llvmpipe mode does not follow
-// those orders yet.)
+// GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it. The order of a sum of
+// products follows the math mode: in `exact` mode the C++ models' (GLM's) order, a matrix
+// times a vector pairwise for four columns, (c0 v.x + c1 v.y) + (c2 v.z + c3 v.w), from the
+// first column on for two and three, a dot product from the first component on; in
+// `llvmpipe` mode llvmpipe's, a matrix times a vector from the first column on whatever
+// the count (GLSL's compiler writes it so), a dot product (and length, distance,
+// normalize, v * M built on it) from the last component to the first (NIR splits it so).
 //
 // The GLSL.std.450 functions run in one of two math modes (MathMode): `exact`, correctly
 // rounded float results (each computed in double and rounded once, see src/shader/std450.cpp

@@ -517,19 +517,12 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 break;
             }
             case spv::OpDot: {
-                // From the first component on, every product and sum rounded (shader.h).
+                // Every product and sum rounded, in the math mode's order (std450.h).
                 const std::uint32_t n = N(m.type_of[a[2]]);
                 const std::uint32_t* x = R(a[2]);
                 const std::uint32_t* y = R(a[3]);
                 std::uint32_t* out = R(a[1]);
-                for (std::uint32_t l = 0; l < L; ++l) {
-                    float sum = f(x[l]) * f(y[l]);
-                    for (std::uint32_t j = 1; j < n; ++j) {
-                        const float product = f(x[j * L + l]) * f(y[j * L + l]);
-                        sum = sum + product;
-                    }
-                    out[l] = w(sum);
-                }
+                for (std::uint32_t l = 0; l < L; ++l) out[l] = w(dot_product(x + l, y + l, n, L, c.options.math));
                 break;
             }
             case spv::OpMatrixTimesVector:
@@ -537,12 +530,15 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
             case spv::OpVectorTimesMatrix: {
                 // Left operand's columns (rows of the result) times the right operand's
                 // columns; column k of the result = sum over j of left column j * right[k][j],
-                // in GLM's order (shader.h): four columns pairwise, else from j = 0 on.
+                // in GLM's order in exact mode (shader.h): four columns pairwise, else from
+                // j = 0 on; in llvmpipe mode from j = 0 on always, as GLSL's compiler writes
+                // it. v * M is a dot product per column (dot_product's order).
                 const Type& lt = T(m.type_of[a[2]]);
                 const Type& rt = T(m.type_of[a[3]]);
                 const std::uint32_t* l_ = R(a[2]);
                 const std::uint32_t* r_ = R(a[3]);
                 std::uint32_t* out = R(a[1]);
+                const bool pairwise = c.options.math == MathMode::exact;
                 for (std::uint32_t lane = 0; lane < L; ++lane) {
                     const auto l = [&](std::uint32_t j) { return f(l_[j * L + lane]); };
                     const auto r = [&](std::uint32_t j) { return f(r_[j * L + lane]); };
@@ -550,14 +546,8 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                     if (op == spv::OpVectorTimesMatrix) {
                         // v * M: result[k] = dot(v, M column k), summed from the first component.
                         const std::uint32_t rows = lt.count;
-                        for (std::uint32_t k = 0; k < rt.count; ++k) {
-                            float sum = l(0) * r(k * rows);
-                            for (std::uint32_t j = 1; j < rows; ++j) {
-                                const float product = l(j) * r(k * rows + j);
-                                sum = sum + product;
-                            }
-                            put(k, sum);
-                        }
+                        for (std::uint32_t k = 0; k < rt.count; ++k)
+                            put(k, dot_product(l_ + lane, r_ + k * rows * L + lane, rows, L, c.options.math));
                         continue;
                     }
                     const std::uint32_t rows = T(lt.element).count;  // the left matrix's column size
@@ -566,7 +556,7 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                     for (std::uint32_t k = 0; k < results; ++k) {
                         const std::uint32_t v = k * columns;
                         for (std::uint32_t i = 0; i < rows; ++i) {
-                            if (columns == 4) {
+                            if (columns == 4 && pairwise) {
                                 const float p0 = l(i) * r(v), p1 = l(rows + i) * r(v + 1);
                                 const float p2 = l(2 * rows + i) * r(v + 2), p3 = l(3 * rows + i) * r(v + 3);
                                 const float s01 = p0 + p1, s23 = p2 + p3;

@@ -24,6 +24,11 @@ struct Std450Args {
 bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t components, const Std450Args& args,
                 std::uint32_t* out);
 
+// A dot product of n components (component i of a vector at [i * stride]), every product
+// and sum rounded: summed from the first component in exact mode, from the last in llvmpipe
+// mode, as NIR splits it. OpDot, v * M and the GLSL.std.450 functions built on a dot use it.
+float dot_product(const std::uint32_t* a, const std::uint32_t* b, std::uint32_t n, std::uint32_t stride, MathMode mode);
+
 // The instruction's name ("Acos"), for errors and traces.
 std::string std450_name(std::uint32_t op);
 
