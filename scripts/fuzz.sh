@@ -5,6 +5,8 @@
 #   scripts/fuzz.sh list                  the targets (fuzz/targets.txt)
 #   scripts/fuzz.sh TARGET [SECONDS]      fuzz TARGET for SECONDS (default 240)
 #   scripts/fuzz.sh all [SECONDS]         every target, SECONDS each
+#   scripts/fuzz.sh A,B,C [SECONDS]       those targets, one after the other (all are built
+#                                         first, so the sources may change while they run)
 #   scripts/fuzz.sh TARGET -runs=N        stop after N executions instead (any other
 #                                         libFuzzer flag after TARGET is passed on too)
 #
@@ -27,7 +29,7 @@ jobs=${FUZZ_JOBS:-1}
 targets() { grep -E '^[a-z]' "$root/fuzz/targets.txt" | awk '{print $1}'; }
 target_line() { grep -E "^$1[[:space:]]" "$root/fuzz/targets.txt"; }
 
-usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 
 [ $# -ge 1 ] || usage
 case "$1" in
@@ -108,7 +110,7 @@ fuzz_one() {
 }
 
 target=$1; shift
-list=("$target")
+IFS=, read -ra list <<<"$target"
 [ "$target" = all ] && mapfile -t list < <(targets)
 for t in "${list[@]}"; do target_line "$t" >/dev/null || { echo "fuzz.sh: unknown target '$t' (scripts/fuzz.sh list)" >&2; exit 2; }; done
 

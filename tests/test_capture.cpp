@@ -11,6 +11,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -24,6 +25,7 @@
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
+#include "common/float_text.h"
 #include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/mesh.h"
@@ -154,6 +156,62 @@ TEST_F(CaptureFiles, TextRoundTripsEveryFloatBitwise) {
     EXPECT_NE(text.find("\npatch 1 levels 3.29999995 3.29999995 3.29999995 3.29999995 7.00000238 7.00000238\n"),
               std::string::npos)
         << text;
+}
+
+// The capture text's numbers are printf's "%.9g" of each float, byte for byte: the golden
+// digests hash that text, and tools that read it (grep, awk) see what every earlier version
+// wrote. The writer is not printf (src/common/float_text.h), so it is held to printf here:
+// special values, every decade's edges, exact ties of the tenth digit (n + 1/8 above 10^6:
+// printf rounds those to even), short decimals and a million random bit patterns.
+TEST(CaptureText, FloatsAreWrittenAsPrintfWritesThem) {
+    std::vector<float> values = {0.0f, -0.0f, std::numeric_limits<float>::quiet_NaN(),
+                                 -std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                                 -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::denorm_min(),
+                                 std::numeric_limits<float>::min(), std::numeric_limits<float>::max(),
+                                 -std::numeric_limits<float>::max(), 1.0f, 0.1f, 1e-4f, 1e-5f, 99999.9999f};
+    for (int e = -45; e <= 38; ++e) {
+        const float p = static_cast<float>(std::pow(10.0, e));
+        float down = p, up = p;
+        for (int k = 0; k < 3; ++k) {
+            down = std::nextafter(down, 0.0f);
+            up = std::nextafter(up, std::numeric_limits<float>::infinity());
+            values.insert(values.end(), {down, up});
+        }
+        values.push_back(p);
+        values.push_back(static_cast<float>(9.999999995 * std::pow(10.0, e)));
+    }
+    for (int n = 1000000; n < 1000000 + 20000; ++n)
+        for (int k = 0; k < 8; ++k) values.push_back(static_cast<float>(n) + static_cast<float>(k) / 8.0f);
+    for (int i = 0; i < 100000; ++i) values.push_back(static_cast<float>(i) / 1000.0f);
+    std::uint64_t state = 0x9e3779b97f4a7c15ull;  // splitmix64: any platform, one sequence
+    for (int i = 0; i < 1000000; ++i) {
+        std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        values.push_back(std::bit_cast<float>(static_cast<std::uint32_t>(z ^ (z >> 31))));
+    }
+    std::size_t wrong = 0;
+    for (const float x : values) {
+        char expected[64], got[tessref::kFloatTextMax];
+        const int n = std::snprintf(expected, sizeof expected, "%.9g", x);
+        const std::string written(got, tessref::write_float_g9(got, x));
+        if (written != std::string(expected, static_cast<std::size_t>(n)) && wrong++ < 10)
+            ADD_FAILURE() << "bits " << std::hex << std::bit_cast<std::uint32_t>(x) << ": printf " << expected
+                          << ", written " << written;
+    }
+    EXPECT_EQ(wrong, 0u) << "of " << values.size();
+
+    // And a vertex line of capture_text is those words.
+    Capture c = two_patches();
+    c.vertices[0].tess_coord = {1234567.125f, 0.1f, -0.0f};
+    c.vertices[0].position = {std::numeric_limits<float>::denorm_min(), -3.40282e38f, 1e-5f};
+    c.vertices[0].normal = {std::nextafter(0.5f, 0.0f), 1e9f, 123456789.0f};
+    const CapturedVertex& v = c.vertices[0];
+    char line[400];
+    std::snprintf(line, sizeof line, "\n%u %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", v.patch_id, v.tess_coord.x,
+                  v.tess_coord.y, v.tess_coord.z, v.position.x, v.position.y, v.position.z, v.normal.x, v.normal.y,
+                  v.normal.z);
+    EXPECT_NE(tessref::capture_text(c.vertices).find(line), std::string::npos) << line;
 }
 
 TEST_F(CaptureFiles, PlyRoundTripsUnweldedWithoutLevels) {

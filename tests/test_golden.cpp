@@ -1,6 +1,9 @@
 // tessref golden: update writes golden/<scene>/ from the CPU reference; verify fails when the
 // CPU side no longer makes those files (STALE) or when llvmpipe departs from them (FAIL).
 // Every test works on a golden directory of its own, made from one small scene.
+#include <algorithm>
+#include <cerrno>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -9,9 +12,13 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include "command_dir_test.h"
+#include "common/isolated.h"
+#include "golden/golden_internal.h"
+#include "tessref/capture.h"
 #include "tessref/golden.h"
 
 namespace fs = std::filesystem;
@@ -32,6 +39,94 @@ protected:
         ASSERT_EQ(r.status, 0) << r.err;
     }
 };
+
+// run_isolated's `meanwhile` (golden verify's CPU side) runs in the parent while the child
+// works: the child here waits for a file that only the parent's meanwhile makes.
+TEST(RunIsolated, MeanwhileRunsInTheParentWhileTheChildWorks) {
+    const fs::path flag = fs::temp_directory_path() / ("tessref-meanwhile-" + std::to_string(::getpid()));
+    fs::remove(flag);
+    const std::string answer = tessref::run_isolated(
+        "a test child",
+        [&] {
+            for (int i = 0; i < 2000 && !fs::exists(flag); ++i) ::usleep(5000);  // up to 10 s
+            return std::string(fs::exists(flag) ? "saw it" : "never saw it");
+        },
+        {}, [&] { std::ofstream(flag.string()) << "x"; });
+    fs::remove(flag);
+    EXPECT_EQ(answer, "saw it");
+}
+
+// A meanwhile that throws ends the child (killed, not waited for to finish, and reaped) and
+// the exception goes on to the caller.
+TEST(RunIsolated, AThrowingMeanwhileEndsTheChild) {
+    const fs::path pid_file = fs::temp_directory_path() / ("tessref-meanwhile-pid-" + std::to_string(::getpid()));
+    fs::remove(pid_file);
+    pid_t child = 0;
+    EXPECT_THROW(tessref::run_isolated(
+                     "a test child",
+                     [&] {
+                         std::ofstream(pid_file.string() + ".part") << ::getpid();
+                         fs::rename(pid_file.string() + ".part", pid_file);  // whole when it appears
+                         ::sleep(30);
+                         std::ofstream(pid_file.string() + ".finished") << "late";  // a child not killed
+                         return std::string("late");
+                     },
+                     {},
+                     [&] {
+                         for (int i = 0; i < 2000 && !fs::exists(pid_file); ++i) ::usleep(5000);
+                         std::ifstream(pid_file.string()) >> child;
+                         throw tessref::Error("the parent's side failed");
+                     }),
+                 tessref::Error);
+    fs::remove(pid_file);
+    EXPECT_FALSE(fs::exists(pid_file.string() + ".finished"));
+    fs::remove(pid_file.string() + ".finished");
+    ASSERT_GT(child, 0);
+    errno = 0;
+    EXPECT_EQ(::kill(child, 0), -1);  // no such process: killed and reaped
+    EXPECT_EQ(errno, ESRCH);
+}
+
+// capture_digest never holds the capture's text; its digests are still those of the text,
+// as a reader recomputes them with grep and sha256sum: the whole text's, and each run of a
+// patch's lines (its `patch` line and its vertices) on its own, a patch that comes back
+// getting a second entry. Enough vertices for several of its windows.
+TEST(CaptureDigest, IsTheDigestOfTheCaptureText) {
+    std::vector<tessref::CapturedVertex> capture;
+    for (std::uint32_t run = 0; run < 40; ++run) {
+        const std::uint32_t patch = run == 39 ? 3 : run;  // patch 3 comes back last
+        for (std::uint32_t k = 0; k < 3 * (run == 7 ? 100000 : 1000 + 37 * run); ++k) {
+            tessref::CapturedVertex v;
+            v.patch_id = patch;
+            v.tess_coord = {static_cast<float>(k) / 3.0f, 0.25f, 0.0f};
+            v.position = {static_cast<float>(k) * 0.1f, -1.0f / static_cast<float>(k + 1), 1e-30f};
+            v.normal = {0.0f, 1.0f, static_cast<float>(patch)};
+            v.levels.outer = {static_cast<float>(patch) + 0.5f, 2.0f, 3.0f, 4.0f};
+            capture.push_back(v);
+        }
+    }
+    const std::string text = tessref::capture_text(capture);
+    const tessref::golden::CaptureDigest digest = tessref::golden::capture_digest(capture);
+    EXPECT_EQ(digest.sha256, tessref::golden::sha256_hex(text));
+    EXPECT_EQ(digest.triangles, capture.size() / 3);
+    // The runs, cut from the text at its `patch` lines.
+    std::vector<std::string> runs;
+    for (std::size_t at = text.find("\npatch "); at != std::string::npos;) {
+        const std::size_t next = text.find("\npatch ", at + 1);
+        runs.push_back(text.substr(at + 1, next == std::string::npos ? std::string::npos : next - at));
+        at = next;
+    }
+    ASSERT_EQ(digest.patches.size(), runs.size());
+    ASSERT_EQ(runs.size(), 40u);
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+        const tessref::golden::PatchDigest& p = digest.patches[r];
+        const std::string first_line = runs[r].substr(0, runs[r].find('\n'));
+        EXPECT_EQ("patch " + std::to_string(p.patch_id) + " levels " + p.levels, first_line) << r;
+        EXPECT_EQ(p.sha256, tessref::golden::sha256_hex(runs[r]).substr(0, tessref::golden::kPatchDigits)) << r;
+        EXPECT_EQ(p.triangles, (std::count(runs[r].begin(), runs[r].end(), '\n') - 1) / 3) << r;
+    }
+    EXPECT_EQ(digest.patches.back().patch_id, 3u);
+}
 
 TEST_F(GoldenCommand, UpdateWritesTheThreeFilesAndVerifyPasses) {
     update("thesis-map-4");

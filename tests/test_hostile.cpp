@@ -328,6 +328,53 @@ TEST_F(Hostile, ZeroFilledImageIsRefusedByItsFirstBytes) {
     EXPECT_TRUE(contains(map.err, "its first bytes are no image format")) << map.err;
 }
 
+// A valid signature or magic followed by a gigabyte of zeros: refused at its first bytes
+// after the magic, without walking or reading the rest (the walk took minutes 12 bytes at a
+// time; the PNM reader read the whole file before its header). The memory cap is far below
+// the file's size.
+TEST_F(Hostile, AGigabyteBehindAValidMagicIsNotRead) {
+    write_flat_png(dir_ / "ref.png", 4, 4);
+    write_file(dir_ / "sig.png", std::string("\x89PNG\r\n\x1a\n", 8));
+    fs::resize_file(dir_ / "sig.png", std::uintmax_t{1} << 30);
+    const auto png = tessref({"compare", "sig.png", "ref.png"}, 60, {}, std::uint64_t{512} << 20);
+    EXPECT_EQ(png.status, 2) << png.err;
+    EXPECT_TRUE(contains(png.err, "the bytes at 8 ('????') are no chunk type")) << png.err;
+
+    // The first chunk of a PNG is IHDR.
+    write_file(dir_ / "text.png", std::string("\x89PNG\r\n\x1a\n\0\0\0\0tEXt\0\0\0\0", 20));
+    const auto first = tessref({"compare", "text.png", "ref.png"}, 60);
+    EXPECT_EQ(first.status, 2) << first.err;
+    EXPECT_TRUE(contains(first.err, "its first chunk is 'tEXt', not IHDR")) << first.err;
+
+    for (const std::string& magic : {std::string("P5 "), std::string("P2\n# a comment\n")}) {
+        write_file(dir_ / "big.pgm", magic);
+        fs::resize_file(dir_ / "big.pgm", std::uintmax_t{1} << 30);
+        const auto pnm = tessref({"compare", "big.pgm", "ref.png"}, 60, {}, std::uint64_t{512} << 20);
+        EXPECT_EQ(pnm.status, 2) << pnm.err;
+        EXPECT_TRUE(contains(pnm.err, "its PGM header does not end within its first 64 KiB")) << magic << ": " << pnm.err;
+    }
+    // A header that goes on past 64 KiB (a comment without end).
+    write_file(dir_ / "long.pgm", "P5\n#" + std::string(std::size_t{70} << 10, 'x'));
+    const auto longer = tessref({"compare", "long.pgm", "ref.png"}, 60);
+    EXPECT_EQ(longer.status, 2) << longer.err;
+    EXPECT_TRUE(contains(longer.err, "header does not end within its first 64 KiB")) << longer.err;
+
+    // Samples are read up to what the header says: a small binary PGM with a gigabyte after
+    // its samples reads under the same cap, and a plain PGM far longer than its samples
+    // could be as text is refused.
+    for (const char* name : {"tail.pgm", "tail2.pgm"}) {
+        write_file(dir_ / name, std::string("P5 4 4 255\n") + std::string(16, '\x80'));
+        fs::resize_file(dir_ / name, std::uintmax_t{1} << 30);
+    }
+    const auto tail = tessref({"compare", "tail.pgm", "tail2.pgm", "--json"}, 60, {}, std::uint64_t{512} << 20);
+    EXPECT_EQ(tail.status, 0) << tail.err;
+    write_file(dir_ / "plain.pgm", "P2 2 2 255\n1 2 3 4\n");
+    fs::resize_file(dir_ / "plain.pgm", std::uintmax_t{4} << 20);
+    const auto plain = tessref({"compare", "plain.pgm", "ref.png"}, 60);
+    EXPECT_EQ(plain.status, 2) << plain.err;
+    EXPECT_TRUE(contains(plain.err, "samples take at most")) << plain.err;
+}
+
 // ---- 7. outputs never replace the command's own inputs -----------------------------------
 
 TEST_F(Hostile, RenderDoesNotOverwriteItsScenesTexture) {

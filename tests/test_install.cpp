@@ -79,7 +79,8 @@ TEST_F(Install, ConsumerProjectBuildsAgainstThePackageAndRuns) {
     const RunResult configure =
         run_program(TESSREF_CMAKE_COMMAND,
                     {"-S", src.string(), "-B", build.string(), "-G", TESSREF_CMAKE_GENERATOR,
-                     "-DCMAKE_MAKE_PROGRAM=" TESSREF_CMAKE_MAKE_PROGRAM, "-DCMAKE_CXX_COMPILER=" TESSREF_CXX_COMPILER,
+                     std::string("-DCMAKE_MAKE_PROGRAM=") + TESSREF_CMAKE_MAKE_PROGRAM,
+                     std::string("-DCMAKE_CXX_COMPILER=") + TESSREF_CXX_COMPILER,
                      "-DCMAKE_BUILD_TYPE=Release", "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON",
                      "-DCMAKE_PREFIX_PATH=" + prefix_.string()},
                     root_);

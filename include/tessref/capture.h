@@ -94,6 +94,10 @@ SurfaceMesh capture_mesh(std::span<const CapturedVertex> capture);
 
 // The text form above. `origin` goes into a comment line ("tessref gl", "tessref mesh").
 std::string capture_text(std::span<const CapturedVertex> capture, const std::string& origin = {});
+// The lines capture_text writes after its header lines, appended to `out`: a `patch` line
+// at the first vertex and wherever the patch id changes, and a line per vertex. The text of
+// a capture cut at its patch runs is the header and each run's lines, one after the other.
+void append_capture_lines(std::span<const CapturedVertex> capture, std::string& out);
 
 // Writes the capture to `out` as text or as a PLY (binary: PLY's little-endian form), by
 // format. Throws tessref::Error (a non-finite position cannot go to PLY; a failed stream).

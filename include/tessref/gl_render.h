@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <set>
 #include <string>
@@ -115,6 +116,10 @@ struct SceneRenderOptions {
     // The math mode of the CPU pipeline that predicts the counts (control.h MathMode):
     // llvmpipe's approximations, so that its levels are the driver's bit for bit.
     MathMode math = MathMode::llvmpipe;
+    // render_scene_isolated(): work for this process while the child draws (run_isolated's
+    // `meanwhile`, src/common/isolated.h), after the pipeline above has run. It may use
+    // oneTBB; it must not touch what the child answers into.
+    std::function<void()> meanwhile;
 };
 
 // A patch whose levels or triangle count differ between the CPU pipeline and llvmpipe.

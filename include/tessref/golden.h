@@ -23,12 +23,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "tessref/capture.h"
 #include "tessref/render.h"
 
 namespace tessref::golden {
@@ -98,10 +100,13 @@ struct MeshDigest {
 CaptureDigest parse_capture_digest(std::string_view text, const std::string& path);
 MeshDigest parse_mesh_digest(std::string_view text, const std::string& path);
 
-// Per patch, from a capture text (capture.h): what a reader of `tessref mesh --capture`
-// output can recompute with grep and sha256sum. A patch whose vertices come back in a later
-// run of lines gets one entry per run.
-std::vector<PatchDigest> patch_digests(const std::string& capture_text);
+// The digests of capture_text(capture) (capture.h), what a reader of `tessref mesh
+// --capture` output can recompute with grep and sha256sum: the SHA-256 of the whole text,
+// and per patch its levels as written, its triangles and the SHA-256 of its lines (its
+// `patch` line and its vertices; a patch whose vertices come back in a later run of lines
+// gets one entry per run). `size` is left empty. The text is never held whole: it is
+// made run by run, in parallel, a few MB at a time.
+CaptureDigest capture_digest(std::span<const CapturedVertex> capture);
 
 // ---- where the scenes and golden files are -------------------------------------------------
 

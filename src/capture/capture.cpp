@@ -14,6 +14,7 @@
 #include <unordered_map>
 
 #include "common/file_name.h"
+#include "common/float_text.h"
 #include "common/input_file.h"
 #include "common/stream_failure.h"
 #include "tessref/error.h"
@@ -136,22 +137,40 @@ std::string capture_text(std::span<const CapturedVertex> capture, const std::str
     out +=
         "# patch ID levels o0 o1 o2 o3 i0 i1: the patch's gl_TessLevelOuter/Inner, then its vertices\n"
         "# ID u v w x y z nx ny nz: one line per vertex, three per triangle, in the order emitted\n";
-    char line[400];
+    append_capture_lines(capture, out);
+    return out;
+}
+
+void append_capture_lines(std::span<const CapturedVertex> capture, std::string& out) {
+    // Each line is formatted into `line` ("%u" and "%.9g" words, src/common/float_text.h),
+    // then appended; the string grows by doubling, so its copies stay a fraction of the text.
+    char line[16 + 10 * (kFloatTextMax + 1)];
+    const auto word = [](char* p, float x) {
+        *p++ = ' ';
+        return write_float_g9(p, x);
+    };
+    const auto id = [](char* p, std::uint32_t v) { return std::to_chars(p, p + 16, v).ptr; };
     const CapturedVertex* previous = nullptr;
     for (const CapturedVertex& v : capture) {
         if (!previous || previous->patch_id != v.patch_id) {
             const TessLevels& l = v.levels;
-            std::snprintf(line, sizeof line, "patch %u levels %.9g %.9g %.9g %.9g %.9g %.9g\n", v.patch_id,
-                          l.outer[0], l.outer[1], l.outer[2], l.outer[3], l.inner[0], l.inner[1]);
-            out += line;
+            char* p = line;
+            std::memcpy(p, "patch ", 6);
+            p = id(p + 6, v.patch_id);
+            std::memcpy(p, " levels", 7);
+            p += 7;
+            for (const float x : {l.outer[0], l.outer[1], l.outer[2], l.outer[3], l.inner[0], l.inner[1]}) p = word(p, x);
+            *p++ = '\n';
+            out.append(line, p);
         }
         previous = &v;
-        std::snprintf(line, sizeof line, "%u %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", v.patch_id,
-                      v.tess_coord.x, v.tess_coord.y, v.tess_coord.z, v.position.x, v.position.y, v.position.z,
-                      v.normal.x, v.normal.y, v.normal.z);
-        out += line;
+        char* p = id(line, v.patch_id);
+        for (const float x : {v.tess_coord.x, v.tess_coord.y, v.tess_coord.z, v.position.x, v.position.y, v.position.z,
+                              v.normal.x, v.normal.y, v.normal.z})
+            p = word(p, x);
+        *p++ = '\n';
+        out.append(line, p);
     }
-    return out;
 }
 
 void write_capture(std::span<const CapturedVertex> capture, std::ostream& out, CaptureFormat format,

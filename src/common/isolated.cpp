@@ -155,7 +155,7 @@ void set_isolated_phase(const std::string& doing, const Where& where) {
 }
 
 std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
-                         const IsolationLimits& limits) {
+                         const IsolationLimits& limits, const std::function<void()>& meanwhile) {
     const double seconds = limits.seconds > 0.0 ? limits.seconds : isolation_time_limit();
     const std::uint64_t budget = limits.memory_bytes != 0 ? limits.memory_bytes : memory_limit();
     const std::uint64_t mapped = mapped_bytes();
@@ -185,6 +185,18 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
         run_child(fds[1], work, address_space);
     }
     ::close(fds[1]);
+    if (meanwhile) {
+        try {
+            meanwhile();
+        } catch (...) {
+            ::close(fds[0]);
+            ::kill(child, SIGKILL);
+            int status = 0;
+            while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+            }
+            throw;
+        }
+    }
 
     // Read the answer until the child closes the pipe (it exits), or the time is up.
     std::string answer;
@@ -231,7 +243,8 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
                         std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ") while " + doing,
                     where);
     if (answer[0] == 'E') throw error_from(answer);
-    return answer.substr(1);
+    answer.erase(0, 1);  // in place: a capture's answer is hundreds of MB, a copy as many again
+    return answer;
 }
 
 }  // namespace tessref

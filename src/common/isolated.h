@@ -42,9 +42,12 @@ struct IsolationLimits {
 double isolation_time_limit();
 
 // Runs `work` in a child process under `limits` and returns the bytes it returned. `what`
-// names the work in messages ("the GL backend (llvmpipe)").
+// names the work in messages ("the GL backend (llvmpipe)"). `meanwhile`, when given, runs
+// here in the parent while the child works (after the fork, before its answer is read; the
+// child's time limit runs through it): `golden verify` computes the CPU side of a scene
+// while llvmpipe draws it. An exception from it kills the child, reaps it and goes on.
 std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
-                         const IsolationLimits& limits = {});
+                         const IsolationLimits& limits = {}, const std::function<void()>& meanwhile = {});
 
 // In the child: what it is doing now, and the file that is about to be used (a shader),
 // for the message if it dies there. Does nothing outside run_isolated().

@@ -14,6 +14,7 @@
 #include <tuple>
 #include <vector>
 
+#include "common/parallel.h"
 #include "tessref/capture.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -102,7 +103,7 @@ std::vector<Triangle> sorted_triangles(const Capture& capture, const char* side)
         if (tri.keys[0] != tri.keys[1] && tri.keys[1] != tri.keys[2])
             tri.odd = (order[1] + 3 - order[0]) % 3 == 1 ? 0 : 1;
     }
-    std::sort(triangles.begin(), triangles.end());
+    parallel_sort(triangles.begin(), triangles.end());  // a total order (index last): any thread count, one result
     return triangles;
 }
 

@@ -1234,7 +1234,7 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         put_vector(out, r.differences);
         put_value(out, r.stats);
         return out;
-    });
+    }, {}, options.meanwhile);
     IsolatedRender result;
     Reader in{answer};
     result.renderer = in.string();

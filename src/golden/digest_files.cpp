@@ -5,11 +5,11 @@
 #include <cstdlib>
 #include <limits>
 #include <optional>
-#include <sstream>
 #include <vector>
 
 #include <openssl/evp.h>
 
+#include "common/parallel.h"
 #include "golden/golden_internal.h"
 #include "tessref/error.h"
 #include "tessref/golden.h"
@@ -17,6 +17,16 @@
 namespace tessref::golden {
 
 namespace {
+
+std::string hex_of(const unsigned char* bytes, unsigned int length) {
+    static const char* const hex_digits = "0123456789abcdef";
+    std::string hex;
+    for (unsigned int i = 0; i < length; ++i) {
+        hex += hex_digits[bytes[i] >> 4];
+        hex += hex_digits[bytes[i] & 15];
+    }
+    return hex;
+}
 
 // A float as the capture text prints it ("%.9g", "nan", "inf"): the whole word.
 std::optional<float> parse_float(std::string_view word) {
@@ -181,13 +191,7 @@ std::string sha256_hex(std::string_view bytes) {
     unsigned int length = 0;
     if (EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr) != 1)
         throw Error("SHA-256 failed (OpenSSL)");
-    static const char* const hex_digits = "0123456789abcdef";
-    std::string hex;
-    for (unsigned int i = 0; i < length; ++i) {
-        hex += hex_digits[digest[i] >> 4];
-        hex += hex_digits[digest[i] & 15];
-    }
-    return hex;
+    return hex_of(digest, length);
 }
 
 glm::ivec2 parse_size(const std::string& text, const Where& where) {
@@ -200,36 +204,77 @@ glm::ivec2 parse_size(const std::string& text, const Where& where) {
     return {static_cast<int>(*w), static_cast<int>(*h)};
 }
 
-std::vector<PatchDigest> patch_digests(const std::string& capture_text) {
-    std::vector<PatchDigest> out;
-    std::string body;
-    std::size_t vertex_lines = 0;
-    const auto finish = [&] {
-        if (out.empty()) return;
-        out.back().triangles = vertex_lines / 3;
-        out.back().sha256 = sha256_hex(body).substr(0, kPatchDigits);
-    };
-    std::istringstream lines(capture_text);
-    for (std::string line; std::getline(lines, line);) {
-        if (line.rfind("patch ", 0) == 0) {
-            finish();
-            PatchDigest p;
-            std::istringstream words(line.substr(6));
-            words >> p.patch_id;
-            const std::size_t levels = line.find(" levels ");
-            p.levels = levels == std::string::npos ? std::string() : line.substr(levels + 8);
-            out.push_back(p);
-            body.clear();
-            vertex_lines = 0;
-        } else if (out.empty() || line.empty() || line[0] == '#') {
-            continue;  // the version and comment lines
-        } else {
-            ++vertex_lines;
-        }
-        body += line + "\n";
+namespace {
+
+// A SHA-256 fed piece by piece (OpenSSL's EVP interface).
+class Sha256 {
+public:
+    Sha256() : context_(EVP_MD_CTX_new()) {
+        if (!context_ || EVP_DigestInit_ex(context_, EVP_sha256(), nullptr) != 1) fail();
     }
-    finish();
-    return out;
+    ~Sha256() { EVP_MD_CTX_free(context_); }
+    Sha256(const Sha256&) = delete;
+    Sha256& operator=(const Sha256&) = delete;
+    void add(std::string_view bytes) {
+        if (EVP_DigestUpdate(context_, bytes.data(), bytes.size()) != 1) fail();
+    }
+    std::string hex() {
+        unsigned char digest[EVP_MAX_MD_SIZE];
+        unsigned int length = 0;
+        if (EVP_DigestFinal_ex(context_, digest, &length) != 1) fail();
+        return hex_of(digest, length);
+    }
+
+private:
+    [[noreturn]] static void fail() { throw Error("SHA-256 failed (OpenSSL)"); }
+    EVP_MD_CTX* context_;
+};
+
+// Vertices formatted at once before their text joins the whole digest: about 25 MB of text.
+constexpr std::size_t kDigestWindowVertices = std::size_t(1) << 18;
+
+}  // namespace
+
+CaptureDigest capture_digest(std::span<const CapturedVertex> capture) {
+    // The runs of one patch's vertices: each is its `patch` line and its vertex lines.
+    std::vector<std::size_t> starts;
+    for (std::size_t i = 0; i < capture.size(); ++i)
+        if (i == 0 || capture[i].patch_id != capture[i - 1].patch_id) starts.push_back(i);
+    const std::size_t runs = starts.size();
+    starts.push_back(capture.size());
+
+    CaptureDigest digest;
+    digest.triangles = capture.size() / 3;
+    digest.patches.resize(runs);
+    Sha256 whole;
+    whole.add(capture_text({}));  // the header lines
+    std::vector<std::string> texts;
+    for (std::size_t first = 0; first < runs;) {
+        // A window of whole runs (at least one), formatted and digested run by run in
+        // parallel, then added to the whole text's digest in order.
+        std::size_t last = first + 1, vertices = starts[last] - starts[first];
+        while (last < runs && vertices + (starts[last + 1] - starts[last]) <= kDigestWindowVertices) {
+            vertices += starts[last + 1] - starts[last];
+            ++last;
+        }
+        texts.resize(last - first);
+        parallel_for(first, last, [&](std::size_t r) {
+            std::string& text = texts[r - first];
+            text.clear();
+            append_capture_lines(capture.subspan(starts[r], starts[r + 1] - starts[r]), text);
+            PatchDigest& p = digest.patches[r];
+            p.patch_id = capture[starts[r]].patch_id;
+            const std::string_view patch_line = std::string_view(text).substr(0, text.find('\n'));
+            const std::size_t levels = patch_line.find(" levels ");
+            if (levels != std::string_view::npos) p.levels = std::string(patch_line.substr(levels + 8));
+            p.triangles = (starts[r + 1] - starts[r]) / 3;
+            p.sha256 = sha256_hex(text).substr(0, kPatchDigits);
+        });
+        for (const std::string& text : texts) whole.add(text);
+        first = last;
+    }
+    digest.sha256 = whole.hex();
+    return digest;
 }
 
 }  // namespace tessref::golden

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 
@@ -60,10 +61,8 @@ bool has_control_character(const std::string& text) {
 struct CpuReference {
     Scene scene;  // the viewport replaced by the golden size
     RenderResult image;
-    std::vector<CapturedVertex> capture;
-    std::vector<PatchDigest> patches;
-    std::string capture_sha256;
-    std::size_t triangles = 0;
+    Capture capture;
+    CaptureDigest digest;  // of the capture's text
     MeshDigest mesh;
 };
 
@@ -77,11 +76,8 @@ CpuReference cpu_reference(const Scene& scene, const fs::path& scene_path, glm::
     ref.image = render_scene(scene, render_options);
     ref.scene = scene;
     ref.scene.camera->viewport = size;  // the viewport the pipeline saw (render.h)
-    ref.capture = capture_from_pipeline(ref.scene, *ref.image.pipeline);
-    const std::string text = capture_text(ref.capture);
-    ref.patches = patch_digests(text);
-    ref.capture_sha256 = sha256_hex(text);
-    ref.triangles = ref.capture.size() / 3;
+    ref.capture.vertices = capture_from_pipeline(ref.scene, *ref.image.pipeline);
+    ref.digest = capture_digest(ref.capture.vertices);
 
     // The mesh exactly as `tessref mesh SCENE --binary -o mesh.ply` writes it (the scene's
     // own viewport: mesh has no --size, and PN's levels follow the viewport).
@@ -105,9 +101,9 @@ std::string capture_file_text(const std::string& name, const Location& location,
         << "# capture: the SHA-256 of the whole capture text (capture.h); each `patch` line: the patch's six\n"
         << "# levels, its triangles and the first 16 hex digits of the SHA-256 of its lines of that text (its\n# `patch` line and its vertices).\n"
         << "size " << size.x << "x" << size.y << "\n"
-        << "capture patches " << ref.patches.size() << " triangles " << ref.triangles << " sha256 " << ref.capture_sha256
-        << "\n";
-    for (const PatchDigest& p : ref.patches)
+        << "capture patches " << ref.digest.patches.size() << " triangles " << ref.digest.triangles << " sha256 "
+        << ref.digest.sha256 << "\n";
+    for (const PatchDigest& p : ref.digest.patches)
         out << "patch " << p.patch_id << " levels " << p.levels << " triangles " << p.triangles << " sha256 " << p.sha256
             << "\n";
     return out.str();
@@ -137,16 +133,17 @@ constexpr std::size_t kListedPatches = 8;
 // itself.
 void check_capture(const CaptureDigest& golden, const CpuReference& ref, const fs::path& file, SceneVerdict& v) {
     const std::string where = file.string();
-    const bool whole_matches = ref.capture_sha256 == golden.sha256;
+    const std::vector<PatchDigest>& patches = ref.digest.patches;
+    const bool whole_matches = ref.digest.sha256 == golden.sha256;
     // The patch lines, paired in order (a patch that comes back in a later run of lines has
     // one line per run, on both sides).
     std::vector<std::string> differences;
     std::size_t differing = 0;  // pairs that differ
     std::uint32_t first = 0;
-    const std::size_t common = std::min(golden.patches.size(), ref.patches.size());
+    const std::size_t common = std::min(golden.patches.size(), patches.size());
     for (std::size_t i = 0; i < common; ++i) {
         const PatchDigest& g = golden.patches[i];
-        const PatchDigest& r = ref.patches[i];
+        const PatchDigest& r = patches[i];
         if (g.patch_id == r.patch_id && g.levels == r.levels && g.triangles == r.triangles && g.sha256 == r.sha256)
             continue;
         if (differing++ == 0) first = r.patch_id;
@@ -164,17 +161,16 @@ void check_capture(const CaptureDigest& golden, const CpuReference& ref, const f
         }
         differences.push_back(d);
     }
-    const std::size_t unpaired = std::max(golden.patches.size(), ref.patches.size()) - common;
-    if (differing == 0 && unpaired) first = (ref.patches.size() > common ? ref.patches : golden.patches)[common].patch_id;
-    const std::string count =
-        std::to_string(differing + unpaired) + " of " + std::to_string(ref.patches.size()) + " patches";
+    const std::size_t unpaired = std::max(golden.patches.size(), patches.size()) - common;
+    if (differing == 0 && unpaired) first = (patches.size() > common ? patches : golden.patches)[common].patch_id;
+    const std::string count = std::to_string(differing + unpaired) + " of " + std::to_string(patches.size()) + " patches";
     const auto list = [&](std::vector<std::string>& into) {
         for (const std::string& d : differences) into.push_back("  " + d);
         if (differing > differences.size())
             into.push_back("  ... and " + std::to_string(differing - differences.size()) + " more");
         if (unpaired)
             into.push_back("  the file lists " + std::to_string(golden.patches.size()) + " patch lines, the capture has " +
-                           std::to_string(ref.patches.size()));
+                           std::to_string(patches.size()));
     };
     if (whole_matches && differing + unpaired == 0) return;
     if (whole_matches) {
@@ -183,10 +179,10 @@ void check_capture(const CaptureDigest& golden, const CpuReference& ref, const f
                             count + " of its patch lines do not (edited by hand?)");
         list(v.corrupt);
     } else if (differing + unpaired == 0) {
-        v.corrupt.push_back(where + " disagrees with itself: all " + std::to_string(ref.patches.size()) +
+        v.corrupt.push_back(where + " disagrees with itself: all " + std::to_string(patches.size()) +
                             " patch lines match the reference capture, but its capture SHA-256 (" +
                             golden.sha256.substr(0, 16) + "...) is not the capture's (" +
-                            ref.capture_sha256.substr(0, 16) +
+                            ref.digest.sha256.substr(0, 16) +
                             "...): the `capture` line was edited, or the capture text's header lines changed");
     } else {
         v.stale.push_back("capture: " + count + " differ from capture.txt (first: patch " + std::to_string(first) + ")");
@@ -211,15 +207,18 @@ void check_mesh(const MeshDigest& golden, const MeshDigest& now, const fs::path&
 
 // ---- step 2: llvmpipe against the golden files -------------------------------------------
 
-void compare_with_gl(const Scene& scene, const CpuReference& ref, const FloatImage& golden_image, glm::ivec2 size,
-                     const fs::path& work, bool keep, SceneVerdict& v) {
+// The GL side against the golden files, with `cpu_side` (which makes `ref`) run while
+// llvmpipe draws: the two sides share nothing until the comparison.
+void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side, const CpuReference& ref,
+                     const FloatImage& golden_image, glm::ivec2 size, const fs::path& work, bool keep, SceneVerdict& v) {
     gl::SceneRenderOptions gl_options;
     gl_options.size = size;
     gl_options.capture = true;
+    gl_options.meanwhile = cpu_side;
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)  // as `tessref gl`
         gl_options.corrupt_prediction_of_batch = std::atoll(hook);
     // In a child process with its own limits, as `tessref gl` (gl_render.h).
-    const gl::SceneRender r = gl::render_scene_isolated(scene, gl_options).render;
+    gl::SceneRender r = gl::render_scene_isolated(scene, gl_options).render;
     v.seconds_gl = r.stats.seconds_gl + r.stats.seconds_capture;
     if (!r.batch_failure.empty()) {
         v.failures.push_back(r.batch_failure);
@@ -228,7 +227,7 @@ void compare_with_gl(const Scene& scene, const CpuReference& ref, const FloatIma
     RenderResult gl_image;
     gl_image.width = r.width;
     gl_image.height = r.height;
-    gl_image.colour = r.colour;
+    gl_image.colour = std::move(r.colour);
     write_image(gl_image, (work / "gl.png").string(), ImageFormat::png, {});
     CompareOptions image_options;
     image_options.threshold = kImageThreshold;
@@ -238,17 +237,15 @@ void compare_with_gl(const Scene& scene, const CpuReference& ref, const FloatIma
     const CompareResult image = compare_images(golden_image, test_image, image_options);
     v.max_error = image.max_error;
 
-    Capture cpu_capture;
-    cpu_capture.vertices = ref.capture;
     Capture gl_capture;
-    gl_capture.vertices = r.capture;
+    gl_capture.vertices = std::move(r.capture);  // not copied: a capture is 64 bytes a vertex
     CaptureCompareOptions capture_options;
     capture_options.max_position_ulps = kMaxPositionUlps;
     capture_options.max_normal_ulps = kMaxNormalUlps;
     capture_options.max_position_abs = kMaxPositionAbs;
     capture_options.max_normal_abs = kMaxNormalAbs;
     capture_options.max_listed = 1000000;
-    const CaptureCompareResult c = compare_captures(cpu_capture, gl_capture, capture_options);
+    const CaptureCompareResult c = compare_captures(ref.capture, gl_capture, capture_options);
     v.position_ulps = c.worst_position.ulps;
     v.normal_ulps = c.worst_normal.ulps;
     // Patches whose levels differ (the control stage's acos, see golden/README.md): their
@@ -306,8 +303,8 @@ void compare_with_gl(const Scene& scene, const CpuReference& ref, const FloatIma
         v.failures.push_back("capture: a level differs by " + std::to_string(v.level_difference) + " (more than " +
                              std::to_string(kMaxLevelDifference) + ")");
     if (!v.failures.empty() && keep) {
-        std::ofstream((work / "cpu-capture.txt").string()) << capture_text(ref.capture, "tessref golden (CPU)");
-        std::ofstream((work / "gl-capture.txt").string()) << capture_text(r.capture, "tessref golden (GL)");
+        std::ofstream((work / "cpu-capture.txt").string()) << capture_text(ref.capture.vertices, "tessref golden (CPU)");
+        std::ofstream((work / "gl-capture.txt").string()) << capture_text(gl_capture.vertices, "tessref golden (GL)");
     }
 }
 
@@ -344,13 +341,8 @@ void verify_files(const std::string& name, const Location& location, const fs::p
         return;
     }
 
-    // (1) The CPU reference against its golden files.
     const fs::path scene_path = location.scene_file(name);
     const Scene scene = load_scene(scene_path.string());
-    const CpuReference ref = cpu_reference(scene, scene_path, size);
-    v.triangles = ref.triangles;
-    check_capture(golden_capture, ref, capture_file, v);
-    check_mesh(golden_mesh, ref.mesh, mesh_file, v);
     const fs::path work = keep.empty() ? fs::temp_directory_path() / ("tessref-golden-" + std::to_string(::getpid()))
                                        : keep / name;
     fs::create_directories(work);
@@ -364,21 +356,31 @@ void verify_files(const std::string& name, const Location& location, const fs::p
             if (!keep) fs::remove_all(dir, ec);
         }
     } remove_unless_kept{work, !keep.empty()};
-    write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
-    const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
-    if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
 
-    // (2) The GL backend against the golden image and the CPU capture.
+    // (1) The CPU reference against its golden files.
+    CpuReference ref;
+    const auto cpu_side = [&] {
+        ref = cpu_reference(scene, scene_path, size);
+        v.triangles = ref.digest.triangles;
+        check_capture(golden_capture, ref, capture_file, v);
+        check_mesh(golden_mesh, ref.mesh, mesh_file, v);
+        write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
+        const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
+        if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
+    };
+
+    // (2) The GL backend against the golden image and the CPU capture, drawn while (1) runs.
     // pom shading has a twin (pn-pom and terrain-pom) but its layer search and shadow trace
     // flip on the last bits of llvmpipe's dFdx tangent frame in a few pixels, beyond this
     // step's rule (45 and 44 pixels at 320x200; terrain-pom's capture passes, normals within
     // 2 ulps): tests/test_parallax.cpp holds them with their own counts, and their golden
     // files are checked on the CPU only.
     if (scene.shading.model.kind == ShadingKind::pom) {
+        cpu_side();
         v.gl_compared = false;
         return;
     }
-    compare_with_gl(scene, ref, golden_image, size, work, !keep.empty(), v);
+    compare_with_gl(scene, cpu_side, ref, golden_image, size, work, !keep.empty(), v);
 }
 
 }  // namespace
@@ -429,8 +431,8 @@ GoldenFiles make_golden_files(const std::string& name, const Location& location,
     GoldenFiles files;
     files.capture_txt = capture_file_text(name, location, size, ref);
     files.mesh_txt = mesh_file_text(name, location, ref);
-    files.patches = ref.patches.size();
-    files.triangles = ref.triangles;
+    files.patches = ref.digest.patches.size();
+    files.triangles = ref.digest.triangles;
     files.mesh_triangles = ref.mesh.triangles;
     files.image = std::move(ref.image);
     return files;

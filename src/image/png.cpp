@@ -109,22 +109,43 @@ void read_end(Reader& r) {
 // tEXt chunk claims 1.7 GB made the reader allocate that much before failing (a fuzzer's
 // finding). Every chunk of a PNG is therefore walked first (length, type, data, CRC; the
 // lengths alone, nothing decoded) and one that runs past the end of the file is refused.
+// The walk also stops at the first bytes that are no chunk: PNG's first chunk is IHDR, and a
+// chunk type is four ASCII letters (PNG 1.2, section 3.3), so a valid signature followed by
+// a gigabyte of zeros is refused at byte 8 instead of being walked 12 bytes at a time. The
+// file is read in blocks, in order; a chunk's data is skipped by seeking only when it
+// reaches past the block in hand.
 void check_chunks(const std::string& path, const std::string& kind) {
     std::ifstream in(path, std::ios::binary);
     std::error_code ec;
     const std::uint64_t size = std::filesystem::file_size(path, ec);
     if (ec) return;
+    std::vector<unsigned char> block(std::size_t{1} << 16);
+    std::uint64_t block_start = 0, block_end = 0;  // file offsets of the bytes in `block`
     std::uint64_t offset = 8;
     while (offset < size) {
-        unsigned char head[8] = {};
-        in.seekg(static_cast<std::streamoff>(offset));
-        if (!in.read(reinterpret_cast<char*>(head), 8))
-            fail(path, kind + " is a truncated PNG: a chunk header is cut at byte " + std::to_string(offset));
+        if (offset + 8 > block_end) {  // the header is not (wholly) in the block: refill at it
+            in.clear();
+            in.seekg(static_cast<std::streamoff>(offset));
+            in.read(reinterpret_cast<char*>(block.data()), static_cast<std::streamsize>(block.size()));
+            block_start = offset;
+            block_end = offset + static_cast<std::uint64_t>(in.gcount());
+            if (block_end < offset + 8)
+                fail(path, kind + " is a truncated PNG: a chunk header is cut at byte " + std::to_string(offset));
+        }
+        const unsigned char* head = block.data() + (offset - block_start);
         const std::uint64_t length = (std::uint64_t{head[0]} << 24) | (std::uint64_t{head[1]} << 16) |
                                      (std::uint64_t{head[2]} << 8) | std::uint64_t{head[3]};
         std::string type(reinterpret_cast<const char*>(head + 4), 4);
+        const bool letters = std::all_of(type.begin(), type.end(), [](char c) {
+            return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z');
+        });
         for (char& c : type)
             if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
+        if (!letters)
+            fail(path, kind + " is a corrupt PNG: the bytes at " + std::to_string(offset) + " ('" + type +
+                           "') are no chunk type (four ASCII letters)");
+        if (offset == 8 && type != "IHDR")
+            fail(path, kind + " is a corrupt PNG: its first chunk is '" + type + "', not IHDR");
         if (length > size - offset - 8 || size - offset - 8 - length < 4)
             fail(path, kind + " is a corrupt PNG: chunk '" + type + "' at byte " + std::to_string(offset) +
                            " declares " + std::to_string(length) + " bytes, more than the file holds (" +

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <system_error>
@@ -69,13 +70,22 @@ struct Cursor {
     }
 };
 
-// The stream's bytes to its end, read in large blocks (a stream iterator costs tens of
-// instructions a byte).
-std::string whole_file(std::ifstream& in) {
-    std::string bytes;
+// A header (magic, width, height, maxval or scale, comments between them) longer than
+// this is no PNM a program wrote; only this much is read before the header is checked, so
+// a gigabyte behind a "P5" is refused without being read.
+constexpr std::size_t kHeaderBytes = std::size_t{64} << 10;
+
+// Appends up to `count` more bytes of the stream to `bytes`, read in large blocks (a
+// stream iterator costs tens of instructions a byte).
+void append_bytes(std::ifstream& in, std::string& bytes, std::uint64_t count) {
     char block[1 << 16];
-    while (in.read(block, sizeof block), in.gcount() > 0) bytes.append(block, static_cast<std::size_t>(in.gcount()));
-    return bytes;
+    while (count > 0) {
+        in.read(block, static_cast<std::streamsize>(std::min<std::uint64_t>(count, sizeof block)));
+        const auto got = static_cast<std::size_t>(in.gcount());
+        if (got == 0) return;
+        bytes.append(block, got);
+        count -= got;
+    }
 }
 
 bool whole_int(const std::string& text, long long& value) {
@@ -92,9 +102,11 @@ bool is_pnm(const std::string& head) {
 Image read_pnm(const std::string& path, const ReadOptions& options) {
     const std::string& kind = options.kind;
     std::ifstream in(path, std::ios::binary);
-    const std::string bytes = whole_file(in);
+    std::string bytes;
+    append_bytes(in, bytes, kHeaderBytes);
     if (!in.good() && !in.eof()) fail(path, "cannot read " + kind + ": the file cannot be read");
     if (!is_pnm(bytes)) fail(path, "cannot read " + kind + ": not a PNM file");
+    const bool more = bytes.size() == kHeaderBytes && in.peek() != std::ifstream::traits_type::eof();
     const char magic = bytes[1];
     const bool pfm = magic == 'f' || magic == 'F';
     const bool bitmap = magic == '1' || magic == '4';
@@ -105,6 +117,9 @@ Image read_pnm(const std::string& path, const ReadOptions& options) {
     const std::string width_token = cursor.token();
     const std::string height_token = cursor.token();
     const std::string last_token = bitmap ? std::string("1") : cursor.token();
+    if (more && cursor.at >= bytes.size())
+        fail(path, "cannot read " + kind + ": its " + format_name + " header does not end within its first " +
+                       std::to_string(kHeaderBytes >> 10) + " KiB");
     long long width = 0, height = 0;
     if (!whole_int(width_token, width) || !whole_int(height_token, height) || last_token.empty())
         fail(path, "cannot read " + kind + ": its " + format_name + " header is not 'P" + magic +
@@ -151,6 +166,29 @@ Image read_pnm(const std::string& path, const ReadOptions& options) {
     allocate_samples(image);
     const std::size_t w = static_cast<std::size_t>(header.width), h = static_cast<std::size_t>(header.height);
     const std::size_t nc = static_cast<std::size_t>(header.channels);
+    // The samples, now that the header has been accepted: a binary file's are read up to
+    // what its header says they take (anything after them is not read), a plain file's to
+    // its end.
+    if (more) {
+        const std::uint64_t sample_bytes = pfm ? 4 : bitmap ? 0 : header.type == SampleType::uint8 ? 1 : 2;
+        const std::uint64_t needed = plain ? UINT64_MAX
+                                     : magic == '4' ? std::uint64_t{(w + 7) / 8} * h
+                                                    : std::uint64_t{w} * h * nc * sample_bytes;
+        const std::uint64_t have = bytes.size() - cursor.at;
+        if (plain) {
+            // A plain sample is at most 5 digits; 32 bytes each leaves room for any
+            // whitespace a writer puts between them.
+            const std::uint64_t cap = std::uint64_t{w} * h * nc * 32 + (std::uint64_t{1} << 20);
+            std::error_code ec;
+            const std::uint64_t size = std::filesystem::file_size(path, ec);
+            if (!ec && size - cursor.at > cap)
+                fail(path, kind + " is a plain " + format_name + " of " + std::to_string(size) + " bytes; its " +
+                               std::to_string(header.width) + " x " + std::to_string(header.height) +
+                               " samples take at most " + std::to_string(cap) + " as text");
+        }
+        append_bytes(in, bytes, needed > have ? needed - have : 0);
+        if (in.bad()) fail(path, "cannot read " + kind + ": the file cannot be read");
+    }
     const std::string truncated = kind + " is truncated or corrupt: its " + std::to_string(header.width) + " x " +
                                   std::to_string(header.height) + " pixels cannot be read";
     const std::size_t available = bytes.size() - std::min(bytes.size(), cursor.at);
