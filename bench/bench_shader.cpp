@@ -144,7 +144,7 @@ void BM_ThesisEvaluationModelBatch(benchmark::State& state) {
 // level 16).
 const tessref::Scene& pipeline_scene(std::int64_t which, bool user) {
     static const std::array<std::string, 2> paths = {std::string(TESSREF_DATA_DIR) + "/scenes/jacksboro.toml",
-                                                     std::string(TESSREF_DATA_DIR) + "/../bench/scenes/jacksboro-grid-16.toml"};
+                                                     std::string(TESSREF_SOURCE_DIR) + "/bench/scenes/jacksboro-grid-16.toml"};
     static std::array<std::array<std::unique_ptr<tessref::Scene>, 2>, 2> scenes;
     std::unique_ptr<tessref::Scene>& s = scenes[static_cast<std::size_t>(which)][user ? 1 : 0];
     if (!s) {
