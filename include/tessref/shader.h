@@ -165,7 +165,10 @@ void set_default_max_instructions(std::uint64_t max_instructions);  // >= 1
 
 struct RunOptions {
     MathMode math = MathMode::exact;
-    // Instructions one invocation may execute before it is stopped with an Error.
+    // Instructions one invocation may execute before it is stopped with an Error. The
+    // invocations of an evaluation batch run together, each executing every instruction:
+    // an endless evaluation shader is stopped when its batch reaches the budget, after up to
+    // 64 times the work of one invocation.
     std::uint64_t max_instructions = default_max_instructions();
     // Where warnings (undefined behaviour met at run time, each once per source line) go;
     // nullptr: nowhere.
