@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -389,6 +390,159 @@ void main()
     EXPECT_EQ(as_vec4(patch.vertices[2].locations[0]).x, 300.0f);
     ASSERT_GT(patch.patch_locations.size(), 1u);
     EXPECT_EQ(as_vec4(patch.patch_locations[1]).x, 321.0f);
+}
+
+
+// The order of a sum of products is the math mode's (shader.h). v = (1, 1e8, -1e8, 1): 1e8
+// + 1 rounds back to 1e8 in float (its spacing there is 8), so the order decides.
+//   dot(v.xyz, 1): exact ((1 + 1e8) + -1e8) = 0; llvmpipe, from the last component,
+//   ((-1e8 + 1e8) + 1) = 1.
+//   (m * 1).x with m's first row v: exact pairwise (1 + 1e8) + (-1e8 + 1) = 1e8 - 1e8 = 0;
+//   llvmpipe from the first column ((1 + 1e8) + -1e8) + 1 = 1.
+TEST(ShaderStd450, SumsOfProductsFollowTheMathMode) {
+    const std::string body = "vec4 v = vec4(1.0, 1.0e8, -1.0e8, 1.0);\n"
+                             "mat4 m = transpose(mat4(v, v, v, v));\n"
+                             "r = vec4(dot(v.xyz, vec3(1.0)), (m * vec4(1.0)).x, 0.0, 0.0);";
+    for (const MathMode math : {MathMode::exact, MathMode::llvmpipe}) {
+        RunOptions options;
+        options.math = math;
+        Executable e(vertex_module(body), {}, options);
+        const ShaderVertex v = e.vertex({}, 0);
+        ASSERT_FALSE(v.locations.empty());
+        const glm::vec4 r = as_vec4(v.locations[0]);
+        const float expected = math == MathMode::exact ? 0.0f : 1.0f;
+        EXPECT_EQ(r.x, expected) << to_string(math);
+        EXPECT_EQ(r.y, expected) << to_string(math);
+    }
+}
+
+// ---- batched evaluation: one instruction over many invocations ----------------------------
+
+namespace batch {
+
+// An evaluation shader whose invocations part ways: branches and a loop whose trip count
+// depends on gl_TessCoord, a local array and the patch's vertices indexed per invocation
+// (one index out of range for some), a texture read, GLSL.std.450 calls, a matrix product
+// and a function with an early return.
+constexpr const char* kDivergent = R"(#version 450 core
+layout(quads, equal_spacing, ccw) in;
+layout(location = 0) in vec4 corner[];
+layout(location = 0) out vec4 r;
+layout(location = 1) out ivec4 k;
+layout(binding = 0) uniform sampler2D map;
+uniform mat4 m;
+
+float shaped(float x)
+{
+    if (x > 0.75)
+        return sqrt(x);
+    return x * x;
+}
+
+void main()
+{
+    float u = gl_TessCoord.x, v = gl_TessCoord.y;
+    int steps = int(u * 7.0);
+    float sum = 0.0;
+    float table[5] = float[5](0.5, 1.5, 2.5, 3.5, 4.5);
+    for (int i = 0; i < steps; ++i) {
+        if (i % 3 == 2)
+            continue;
+        sum += table[i];
+    }
+    vec4 c = corner[int(v * 3.99)];
+    vec4 p = u < 0.5 ? mix(c, corner[3], v) : m * c;
+    switch (steps) {
+        case 0: p.w = -1.0; break;
+        case 4: p.w = acos(v); break;
+        default: p.w = shaped(v); break;
+    }
+    r = p + vec4(sum) + texture(map, vec2(u, v));
+    k = ivec4(steps, int(v * 100.0), gl_PrimitiveID, 0);
+}
+)";
+
+Module divergent_module() {
+    Source s;
+    s.stage = ShaderStage::tess_evaluation;
+    s.path = "divergent.tese";
+    s.text = kDivergent;
+    return Module::compile(s);
+}
+
+ShaderPatch four_corners() {
+    ShaderPatch patch;
+    patch.vertices.resize(4);
+    for (int j = 0; j < 4; ++j)
+        patch.vertices[static_cast<std::size_t>(j)].locations = {slot(glm::vec4(1.0f + static_cast<float>(j), 0.5f, -2.0f, 1.0f))};
+    return patch;
+}
+
+// The coordinates of a 23 x 13 grid (299 points: several lane chunks and a partial one).
+std::vector<glm::vec3> grid_coords() {
+    std::vector<glm::vec3> out;
+    for (int i = 0; i < 23; ++i)
+        for (int j = 0; j < 13; ++j)
+            out.emplace_back(static_cast<float>(i) / 22.0f, static_cast<float>(j) / 12.0f, 0.0f);
+    return out;
+}
+
+}  // namespace batch
+
+TEST(ShaderBatch, ABatchOfInvocationsGivesEachInvocationsOwnValues) {
+    // A 2 x 2 texture, so that texture() reads a bilinear mix that varies over the domain.
+    const Texture texture = Texture::from_unorm8(2, 2, 4, std::vector<std::uint8_t>{0, 64, 128, 255, 255, 128, 64, 0,
+                                                                          32, 32, 32, 32, 200, 100, 50, 25});
+    Bindings b;
+    b.set("m", glm::mat4(glm::vec4(1.0f, 2.0f, 3.0f, 0.0f), glm::vec4(0.5f, 0.25f, 0.125f, 0.0f),
+                         glm::vec4(-1.0f, 1.0f, -1.0f, 0.0f), glm::vec4(0.1f, 0.2f, 0.3f, 1.0f)));
+    b.bind_texture(0, &texture);
+    for (const MathMode math : {MathMode::exact, MathMode::llvmpipe}) {
+        std::vector<std::string> single_warnings, batch_warnings;
+        RunOptions single_options, batch_options;
+        single_options.math = batch_options.math = math;
+        single_options.warnings = &single_warnings;
+        batch_options.warnings = &batch_warnings;
+        const Executable single(batch::divergent_module(), b, single_options);
+        const Executable batched(batch::divergent_module(), b, batch_options);
+        const ShaderPatch patch = batch::four_corners();
+        const std::vector<glm::vec3> coords = batch::grid_coords();
+        const std::vector<ShaderVertex> out = batched.evaluate(patch, coords, 11);
+        ASSERT_EQ(out.size(), coords.size());
+        std::set<std::uint32_t> steps;
+        for (std::size_t j = 0; j < coords.size(); ++j) {
+            const ShaderVertex one = single.evaluate(patch, coords[j], 11);
+            ASSERT_EQ(out[j].locations.size(), one.locations.size()) << j;
+            for (std::size_t l = 0; l < one.locations.size(); ++l)
+                EXPECT_EQ(out[j].locations[l], one.locations[l]) << "point " << j << ", location " << l;
+            EXPECT_EQ(std::bit_cast<glm::uvec4>(out[j].position), std::bit_cast<glm::uvec4>(one.position)) << j;
+            steps.insert(one.locations[1][0]);
+        }
+        EXPECT_EQ(steps.size(), 8u);  // every trip count 0..7 was met: the invocations diverged
+        // Once per line and call: the single calls warned once for each point that met it.
+        EXPECT_FALSE(batch_warnings.empty());
+        EXPECT_EQ(std::set<std::string>(batch_warnings.begin(), batch_warnings.end()),
+                  std::set<std::string>(single_warnings.begin(), single_warnings.end()));
+    }
+}
+
+TEST(ShaderBatch, ABatchRunsIntoTheBudgetAsOneInvocationWould) {
+    Source s;
+    s.stage = ShaderStage::tess_evaluation;
+    s.path = "endless.tese";
+    s.text = "#version 450 core\nlayout(triangles) in;\nlayout(location = 0) out float r;\n"
+             "void main() { float x = gl_TessCoord.x; while (x >= 0.0) { x = x * 0.5; } r = x; }\n";
+    RunOptions options;
+    options.max_instructions = 5000;
+    const Executable e(Module::compile(s), {}, options);
+    const std::vector<glm::vec3> coords = {{0.25f, 0.25f, 0.5f}, {0.0f, 0.5f, 0.5f}};
+    try {
+        e.evaluate(ShaderPatch{}, coords, 4);
+        FAIL() << "no error";
+    } catch (const Error& err) {
+        EXPECT_NE(std::string(err.what()).find("instruction budget of 5000"), std::string::npos) << err.what();
+        EXPECT_NE(std::string(err.what()).find("patch 4"), std::string::npos) << err.what();
+    }
 }
 
 }  // namespace

@@ -117,7 +117,9 @@ Counts terrain_against_model(const std::string& name, const std::string& base, c
     RunOptions options;
     options.math = math;
     const Scene scene = load_scene(scene_path(name));
-    const PipelineResult result = run_pipeline(scene);
+    PipelineOptions pipeline_options;  // the model in the same math mode
+    pipeline_options.math = math == MathMode::llvmpipe ? tessref::MathMode::llvmpipe : tessref::MathMode::exact;
+    const PipelineResult result = run_pipeline(scene, pipeline_options);
     const Executable vert(twin(ShaderStage::vertex, base + ".vert"), b, options);
     const Executable tese(twin(ShaderStage::tess_evaluation, base + ".tese"), b, options);
     const bool control = scene.control && scene.control->model != ControlModel::constant;

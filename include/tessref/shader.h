@@ -1,10 +1,11 @@
 // tessref/shader.h — GLSL shader stages executed on the CPU, exactly.
 //
 // A stage's GLSL (a twin of data/shaders/ or a user's file) is compiled to SPIR-V by
-// glslang, validated by SPIRV-Tools, and run by tessref's own SPIR-V interpreter, one
-// invocation at a time, with the GL stage interface the GL backend sets up: the same
-// #version and defines, loose uniforms set by name (as glUniform*), samplers read through
-// tessref::Texture at their layout(binding = N) unit, inputs and outputs matched by location.
+// glslang, validated by SPIRV-Tools, and run by tessref's own SPIR-V interpreter (an
+// evaluation shader a batch of invocations at a time, each instruction over the batch),
+// with the GL stage interface the GL backend sets up: the same #version and defines, loose
+// uniforms set by name (as glUniform*), samplers read through tessref::Texture at their
+// layout(binding = N) unit, inputs and outputs matched by location.
 //
 //   shader::Module tese = shader::Module::compile({ShaderStage::tess_evaluation, path, text});
 //   shader::Bindings b;
@@ -24,13 +25,13 @@
 //     saturated to the integer type's range;
 //   - an array or vector index out of range is clamped into the range.
 // A sampler whose unit has no texture reads (0, 0, 0, 1), as GL's incomplete texture does.
-// GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it. A matrix times a vector
-// sums the columns' products as GLM does, the C++ models' order: pairwise for four columns,
-// (c0 v.x + c1 v.y) + (c2 v.z + c3 v.w), from the first column on for two and three; a dot
-// product from the first component on, in both math modes. (llvmpipe sums a dot product
-// from the last component and a matrix times a vector from the first column on, as the
-// branch that wrote src/shader/llvmpipe_math found; the llvmpipe mode does not follow
-// those orders yet.)
+// GLSL mix(x, y, a) is x + a * (y - x), as llvmpipe computes it. The order of a sum of
+// products follows the math mode: in `exact` mode the C++ models' (GLM's) order, a matrix
+// times a vector pairwise for four columns, (c0 v.x + c1 v.y) + (c2 v.z + c3 v.w), from the
+// first column on for two and three, a dot product from the first component on; in
+// `llvmpipe` mode llvmpipe's, a matrix times a vector from the first column on whatever
+// the count (GLSL's compiler writes it so), a dot product (and length, distance,
+// normalize, v * M built on it) from the last component to the first (NIR splits it so).
 //
 // The GLSL.std.450 functions run in one of two math modes (MathMode): `exact`, correctly
 // rounded float results (each computed in double and rounded once, see src/shader/std450.cpp
@@ -171,7 +172,10 @@ void set_default_max_instructions(std::uint64_t max_instructions);  // >= 1
 
 struct RunOptions {
     MathMode math = MathMode::exact;
-    // Instructions one invocation may execute before it is stopped with an Error.
+    // Instructions one invocation may execute before it is stopped with an Error. The
+    // invocations of an evaluation batch run together, each executing every instruction:
+    // an endless evaluation shader is stopped when its batch reaches the budget, after up to
+    // 64 times the work of one invocation.
     std::uint64_t max_instructions = default_max_instructions();
     // Where warnings (undefined behaviour met at run time, each once per source line) go;
     // nullptr: nowhere.
@@ -211,6 +215,11 @@ public:
     ShaderPatch control(std::span<const ShaderVertex> in, long long patch_id) const;
     // Tessellation evaluation at one domain point of a patch.
     ShaderVertex evaluate(const ShaderPatch& patch, glm::vec3 tess_coord, long long patch_id) const;
+    // At many domain points of one patch: result k is evaluate(patch, tess_coords[k],
+    // patch_id), bit for bit, computed a batch of points at a time (each instruction over
+    // all the batch's invocations). A warning is given once per source line of the call.
+    std::vector<ShaderVertex> evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords,
+                                       long long patch_id) const;
 
 private:
     struct State;

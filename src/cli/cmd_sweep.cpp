@@ -5,6 +5,7 @@
 //                 [--precision gpu,exact] [--spacing equal,fractional_odd,fractional_even]
 //                 [--geomip-levels 0..4] [--error-bounds 0,0.5,1,2,4,8]
 //                 [--repeat N] [--shard I/N] [--size WxH] [--threads N]
+//                 [--shader STAGE=FILE] [--max-instructions N]
 //   tessref sweep merge DIR... -o OUT
 //
 // Every flag is checked and every scene loaded before anything runs; DIR is written into a
@@ -38,6 +39,8 @@ constexpr const char* kDefaultErrorBounds = "0,0.5,1,2,4,8";
 
 struct SweepCommandOptions {
     std::vector<std::string> scenes;
+    std::vector<std::string> shaders;  // --shader STAGE=FILE, as typed
+    std::string max_instructions;      // empty: the interpreter's default
     std::string output;
     std::string levels = kDefaultLevels;
     std::string geomip_levels = kDefaultGeomipLevels;
@@ -122,6 +125,8 @@ int run_sweep_command(const SweepCommandOptions& o) {
     p.scenes = o.scenes;
     if (p.scenes.empty()) throw Error("no scene given: tessref sweep SCENE... -o DIR", Where::in_file("command line"));
     if (o.output.empty()) throw Error("no output directory given", Where::in_file("-o"));
+    p.shaders = parse_shader_flags(o.shaders);
+    apply_max_instructions_flag(o.max_instructions);
     p.levels = sweep::parse_levels(o.levels);
     p.geomip_levels = sweep::parse_geomip_levels(o.geomip_levels);
     p.error_bounds = sweep::parse_error_bounds(o.error_bounds);
@@ -200,6 +205,7 @@ Command add_sweep_command(CLI::App& parent) {
                     "Camera-relative evaluation (render --camera-relative), comma-separated: off, on; off,on runs "
                     "every row both ways")
         ->default_str("off");
+    add_cpu_shader_options(*app, options->shaders, options->max_instructions);
     app->add_option("--repeat", options->repeat, "Runs per row; timings are the median")->default_val(3);
     app->add_option("--shard", options->shard,
                     "Run shard I of N (0 <= I < N) into DIR (default: SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN of "

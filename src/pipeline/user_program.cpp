@@ -205,9 +205,11 @@ public:
         const bool model_normals = has_normals && normals && normal_location < 0;
         std::vector<glm::vec3> position(points.size()), normal(model_normals ? points.size() : 0);
         std::vector<glm::vec2> uv(points.size());
+        std::vector<glm::vec3> tess_coords(points.size());
+        for (std::size_t k = 0; k < points.size(); ++k) tess_coords[k] = glm::vec3(points[k].u, points[k].v, points[k].w);
+        const std::vector<shader::ShaderVertex> evaluated = tese_run->evaluate(patch, tess_coords, static_cast<long long>(p));
         for (std::size_t k = 0; k < points.size(); ++k) {
-            const shader::ShaderVertex out =
-                tese_run->evaluate(patch, glm::vec3(points[k].u, points[k].v, points[k].w), static_cast<long long>(p));
+            const shader::ShaderVertex& out = evaluated[k];
             position[k] = position_location < 0 ? glm::vec3(out.position) : glm::vec3(location(out, position_location));
             uv[k] = glm::vec2(location(out, uv_location));
             const std::size_t v = first_vertex + k;

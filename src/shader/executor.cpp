@@ -1,10 +1,13 @@
-// The interpreter proper: one invocation, one instruction at a time. See executor.h and,
-// for the float and integer semantics it implements, tessref/shader.h.
+// The interpreter proper: a batch of invocations, one instruction at a time over all its
+// lanes. See executor.h and, for the float and integer semantics it implements,
+// tessref/shader.h.
 //
 // Control flow follows the branches as they are (OpSelectionMerge and OpLoopMerge only
 // declare structure); OpPhi picks the value of the block the branch came from. Calls push
 // a frame and run the callee's blocks in the same loop, so that a control shader's
-// invocation can stop at a barrier inside any function and resume there.
+// invocation can stop at a barrier inside any function and resume there. The lanes of a
+// batch share the control flow: a branch they take different ways stops the batch, and the
+// stage driver continues each way as a batch of its own (executor.h).
 #define SPV_ENABLE_UTILITY_CODE
 #include "shader/executor.h"
 
@@ -40,26 +43,91 @@ std::uint32_t to_unsigned(float x, bool& undefined) {
     return static_cast<std::uint32_t>(x);
 }
 
+// The one loop of every component-wise operation: `count` words (components times lanes),
+// each the operation on the operands' words at the same place.
+template <class F>
+inline void each1(std::uint32_t* out, const std::uint32_t* x, std::uint32_t count, F op) {
+    for (std::uint32_t k = 0; k < count; ++k) out[k] = op(x[k]);
+}
+template <class F>
+inline void each2(std::uint32_t* out, const std::uint32_t* x, const std::uint32_t* y, std::uint32_t count, F op) {
+    for (std::uint32_t k = 0; k < count; ++k) out[k] = op(x[k], y[k]);
+}
+
+// Float comparisons: Ord false with a NaN, Unord true.
+template <class F>
+inline std::uint32_t ordered(std::uint32_t p, std::uint32_t q, std::uint32_t unordered, F compare) {
+    const float x = f(p), y = f(q);
+    return std::isnan(x) || std::isnan(y) ? unordered : (compare(x, y) ? 1u : 0u);
+}
+
+// Whether every lane of a one-word register holds the same word.
+inline bool uniform(const std::uint32_t* v, std::uint32_t lanes) {
+    for (std::uint32_t l = 1; l < lanes; ++l)
+        if (v[l] != v[0]) return false;
+    return true;
+}
+
 }  // namespace
 
-Invocation::Invocation(const Module::Impl& m)
-    : regs_(m.reg_init), local_(m.local_init), pc_(m.functions.at(m.entry).first) {}
+std::vector<std::uint32_t> gather_lanes(const std::vector<std::uint32_t>& from, std::uint32_t lanes,
+                                        std::span<const std::uint32_t> pick) {
+    const std::size_t words = from.size() / lanes, n = pick.size();
+    std::vector<std::uint32_t> out(words * n);
+    for (std::size_t j = 0; j < words; ++j)
+        for (std::size_t k = 0; k < n; ++k) out[j * n + k] = from[j * lanes + pick[k]];
+    return out;
+}
 
-std::uint32_t* Invocation::memory(ExecContext& c, std::uint32_t address, std::uint32_t words) {
+std::vector<std::uint32_t> broadcast_lanes(const std::vector<std::uint32_t>& one, std::uint32_t lanes) {
+    std::vector<std::uint32_t> out(one.size() * lanes);
+    for (std::size_t j = 0; j < one.size(); ++j) std::fill_n(out.begin() + static_cast<std::ptrdiff_t>(j * lanes), lanes, one[j]);
+    return out;
+}
+
+Batch::Batch(const Module::Impl& m, std::uint32_t lanes)
+    : module_(&m),
+      lanes_(lanes),
+      regs_(broadcast_lanes(m.reg_init, lanes)),
+      local_(broadcast_lanes(m.local_init, lanes)),
+      pc_(m.functions.at(m.entry).first) {}
+
+void Batch::restart() {
+    const Module::Impl& m = *module_;
+    for (std::size_t j = 0; j < m.local_init.size(); ++j)
+        std::fill_n(local_.begin() + static_cast<std::ptrdiff_t>(j * lanes_), lanes_, m.local_init[j]);
+    stack_.clear();
+    pc_ = m.functions.at(m.entry).first;
+    label_ = previous_label_ = 0;
+    executed_ = 0;
+}
+
+Batch Batch::split(std::span<const std::uint32_t> pick) const {
+    Batch b(*this);
+    b.lanes_ = static_cast<std::uint32_t>(pick.size());
+    b.regs_ = gather_lanes(regs_, lanes_, pick);
+    b.local_ = gather_lanes(local_, lanes_, pick);
+    return b;
+}
+
+// The words of `address` in memory, lane by lane: word j of lane l is result[j * lanes + l].
+std::uint32_t* Batch::memory(ExecContext& c, std::uint32_t address, std::uint32_t words) {
     const Module::Impl& m = c.module;
     if (address < m.shared_words) {
         if (address + words > m.shared_words) throw Error("interpreter: memory access out of range (" + c.who + ")");
-        return &c.shared[address];
+        return &c.shared[static_cast<std::size_t>(address) * lanes_];
     }
     const std::uint32_t at = address - m.shared_words;
-    if (at + words > local_.size()) throw Error("interpreter: memory access out of range (" + c.who + ")");
-    return &local_[at];
+    if (static_cast<std::size_t>(at + words) * lanes_ > local_.size())
+        throw Error("interpreter: memory access out of range (" + c.who + ")");
+    return &local_[static_cast<std::size_t>(at) * lanes_];
 }
 
 // The variable a store's address falls in, named as the source names it (an array's
 // element as name[i], a word further in as +k; the unnamed gl_PerVertex block by its
-// built-in), and the kind of the stored value's scalars, for RunOptions::observer.
-void Invocation::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t value, std::uint32_t words) {
+// built-in), and the kind of the stored value's scalars, for RunOptions::observer (which
+// runs one lane: stages.cpp).
+void Batch::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t value, std::uint32_t words) {
     const Module::Impl& m = c.module;
     std::string name;
     std::uint32_t offset = 0;
@@ -88,11 +156,51 @@ void Invocation::observe_store(ExecContext& c, std::uint32_t address, std::uint3
     c.options.observer->store(name, offset, kind, std::span<const std::uint32_t>(regs_.data() + m.reg[value], words));
 }
 
-Invocation::Status Invocation::run(ExecContext& c) {
+std::vector<std::vector<std::uint32_t>> Batch::ways(const ExecContext& c) const {
     const Module::Impl& m = c.module;
+    const Instr& in = m.code[pc_];
+    const std::uint32_t* a = m.words.data() + in.at;
+    const std::uint32_t* selector = regs_.data() + static_cast<std::size_t>(m.reg[a[0]]) * lanes_;
+    // The target label of each lane.
+    std::vector<std::uint32_t> target(lanes_);
+    for (std::uint32_t l = 0; l < lanes_; ++l) {
+        if (in.op == spv::OpBranchConditional) {
+            target[l] = selector[l] ? a[1] : a[2];
+            continue;
+        }
+        target[l] = a[1];
+        for (std::uint32_t j = 2; j + 1 < in.count; j += 2)
+            if (a[j] == selector[l]) {
+                target[l] = a[j + 1];
+                break;
+            }
+    }
+    std::vector<std::uint32_t> labels;
+    std::vector<std::vector<std::uint32_t>> out;
+    for (std::uint32_t l = 0; l < lanes_; ++l) {
+        const auto at = std::find(labels.begin(), labels.end(), target[l]);
+        if (at == labels.end()) {
+            labels.push_back(target[l]);
+            out.push_back({l});
+        } else {
+            out[static_cast<std::size_t>(at - labels.begin())].push_back(l);
+        }
+    }
+    return out;
+}
+
+Batch::Status Batch::run(ExecContext& c) { return lanes_ == 1 ? run_lanes<1>(c) : run_lanes<0>(c); }
+
+// kLanes: the lane count known at compile time (1: a control shader's invocation, a vertex,
+// a traced invocation, whose loops over the lanes then vanish), or 0: lanes_.
+template <std::uint32_t kLanes>
+Batch::Status Batch::run_lanes(ExecContext& c) {
+    const Module::Impl& m = c.module;
+    const std::uint32_t L = kLanes != 0 ? kLanes : lanes_;
     const std::uint32_t* const words = m.words.data();
     std::uint32_t* const regs = regs_.data();
-    const auto R = [&](std::uint32_t id) -> std::uint32_t* { return regs + m.reg[id]; };
+    // A register's words, lane by lane: component j of lane l is R(id)[j * L + l].
+    const auto R = [&](std::uint32_t id) -> std::uint32_t* { return regs + static_cast<std::size_t>(m.reg[id]) * L; };
     const auto T = [&](std::uint32_t type_id) -> const Type& { return m.types[type_id]; };
     // Components of a scalar or vector type.
     const auto N = [&](std::uint32_t type_id) -> std::uint32_t {
@@ -115,19 +223,19 @@ Invocation::Status Invocation::run(ExecContext& c) {
                      "), clamped");
         return index < 0 ? 0 : count - 1;
     };
-    // The word offset of a chain of indices into a type; `constant` indices are literals.
+    // The integer in lane `l` of a one-word register, signed or unsigned as its type says.
+    const auto index_value = [&](std::uint32_t id, std::uint32_t l) -> std::int64_t {
+        const std::uint32_t v = R(id)[l];
+        return T(m.type_of[id]).is_signed ? static_cast<std::int64_t>(s(v)) : static_cast<std::int64_t>(v);
+    };
+    // The word offset of a chain of indices into a type, in lane `l`; `literal` indices are
+    // the instruction's words, the others registers.
     const auto offset_of = [&](const Instr& in, std::uint32_t type_id, const std::uint32_t* index, std::uint32_t n,
-                               bool literal, std::uint32_t& result_type) -> std::uint32_t {
+                               bool literal, std::uint32_t l, std::uint32_t& result_type) -> std::uint32_t {
         std::uint32_t offset = 0;
         for (std::uint32_t k = 0; k < n; ++k) {
             const Type& t = T(type_id);
-            std::int64_t i;
-            if (literal) {
-                i = index[k];
-            } else {
-                const Type& it = T(m.type_of[index[k]]);
-                i = it.is_signed ? static_cast<std::int64_t>(s(*R(index[k]))) : static_cast<std::int64_t>(*R(index[k]));
-            }
+            const std::int64_t i = literal ? static_cast<std::int64_t>(index[k]) : index_value(index[k], l);
             if (t.kind == Kind::struct_) {
                 const std::uint32_t member = clamp_index(in, i, static_cast<std::uint32_t>(t.members.size()));
                 offset += t.member_offset[member];
@@ -140,6 +248,30 @@ Invocation::Status Invocation::run(ExecContext& c) {
         }
         result_type = type_id;
         return offset;
+    };
+    // A load or store of `size` words between registers and memory, lane by lane through
+    // each lane's pointer (one contiguous copy when every lane points at the same place).
+    const auto access = [&](std::uint32_t pointer, std::uint32_t size, std::uint32_t* value, bool store) {
+        const std::uint32_t* p = R(pointer);
+        if (uniform(p, L)) {
+            std::uint32_t* at = memory(c, p[0], size);
+            if (store) std::copy_n(value, size * L, at);
+            else std::copy_n(at, size * L, value);
+            return;
+        }
+        for (std::uint32_t l = 0; l < L; ++l) {
+            std::uint32_t* at = memory(c, p[l], size);
+            for (std::uint32_t j = 0; j < size; ++j) {
+                if (store) at[j * L + l] = value[j * L + l];
+                else value[j * L + l] = at[j * L + l];
+            }
+        }
+    };
+    // A branch whose lanes disagree: stand before it, uncounted, for the driver to split.
+    const auto diverge = [&]() {
+        --pc_;
+        --executed_;
+        return Status::diverged;
     };
 
     observed_line_ = observed_file_ = 0;  // a resumed invocation tells its line again
@@ -159,6 +291,8 @@ Invocation::Status Invocation::run(ExecContext& c) {
         const std::uint32_t* a = words + in.at;
         const spv::Op op = static_cast<spv::Op>(in.op);
         ++pc_;
+        // The result's words times the lanes, for the component-wise operations.
+        const auto count = [&]() { return N(a[0]) * L; };
         switch (op) {
             case spv::OpLabel:
                 previous_label_ = label_;
@@ -178,7 +312,7 @@ Invocation::Status Invocation::run(ExecContext& c) {
                 for (; k < m.code.size() && m.code[k].op == spv::OpPhi; ++k) {
                     const Instr& phi = m.code[k];
                     const std::uint32_t* p = words + phi.at;
-                    const std::uint32_t size = T(p[0]).words;
+                    const std::uint32_t size = T(p[0]).words * L;
                     bool found = false;
                     for (std::uint32_t j = 2; j + 1 < phi.count; j += 2) {
                         if (p[j + 1] != previous_label_) continue;
@@ -193,12 +327,19 @@ Invocation::Status Invocation::run(ExecContext& c) {
                 break;
             }
             case spv::OpBranch: pc_ = m.label_at[a[0]]; break;
-            case spv::OpBranchConditional: pc_ = m.label_at[*R(a[0]) ? a[1] : a[2]]; break;
+            case spv::OpBranchConditional: {
+                const std::uint32_t* condition = R(a[0]);
+                for (std::uint32_t l = 1; l < L; ++l)
+                    if (!condition[l] != !condition[0]) return diverge();
+                pc_ = m.label_at[condition[0] ? a[1] : a[2]];
+                break;
+            }
             case spv::OpSwitch: {
-                const std::uint32_t selector = *R(a[0]);
+                const std::uint32_t* selector = R(a[0]);
+                if (!uniform(selector, L)) return diverge();
                 std::uint32_t target = a[1];
                 for (std::uint32_t j = 2; j + 1 < in.count; j += 2)
-                    if (a[j] == selector) {
+                    if (a[j] == selector[0]) {
                         target = a[j + 1];
                         break;
                     }
@@ -210,8 +351,7 @@ Invocation::Status Invocation::run(ExecContext& c) {
                 if (stack_.empty()) return Status::done;
                 const Frame frame = stack_.back();
                 stack_.pop_back();
-                if (op == spv::OpReturnValue)
-                    std::copy_n(R(a[0]), T(m.type_of[frame.result]).words, R(frame.result));
+                if (op == spv::OpReturnValue) std::copy_n(R(a[0]), T(m.type_of[frame.result]).words * L, R(frame.result));
                 pc_ = frame.return_pc;
                 label_ = frame.label;
                 break;
@@ -227,7 +367,7 @@ Invocation::Status Invocation::run(ExecContext& c) {
                 if (stack_.size() > 256) throw Error("calls nested deeper than 256 (" + c.who + ")", m.where(in));
                 for (std::uint32_t j = 0; j < callee.params.size() && 3 + j < in.count; ++j) {
                     const std::uint32_t param = callee.params[j];
-                    std::copy_n(R(a[3 + j]), T(m.type_of[param]).words, R(param));
+                    std::copy_n(R(a[3 + j]), T(m.type_of[param]).words * L, R(param));
                 }
                 stack_.push_back(Frame{pc_, a[1], label_});
                 pc_ = callee.first;
@@ -235,35 +375,49 @@ Invocation::Status Invocation::run(ExecContext& c) {
             }
             case spv::OpControlBarrier: return Status::barrier;
             case spv::OpVariable:
-                if (in.count > 3) std::copy_n(R(a[3]), T(T(a[0]).element).words, memory(c, *R(a[1]), T(T(a[0]).element).words));
+                if (in.count > 3) access(a[1], T(T(a[0]).element).words, R(a[3]), true);
                 break;
-            case spv::OpLoad: {
-                const std::uint32_t size = T(a[0]).words;
-                std::copy_n(memory(c, *R(a[2]), size), size, R(a[1]));
-                break;
-            }
+            case spv::OpLoad: access(a[2], T(a[0]).words, R(a[1]), false); break;
             case spv::OpStore: {
                 const std::uint32_t size = T(T(m.type_of[a[0]]).element).words;
-                std::copy_n(R(a[1]), size, memory(c, *R(a[0]), size));
+                access(a[0], size, R(a[1]), true);
                 if (c.options.observer) observe_store(c, *R(a[0]), a[1], size);
                 break;
             }
             case spv::OpCopyMemory: {
                 const std::uint32_t size = T(T(m.type_of[a[0]]).element).words;
-                std::copy_n(memory(c, *R(a[1]), size), size, memory(c, *R(a[0]), size));
+                std::vector<std::uint32_t> v(static_cast<std::size_t>(size) * L);
+                const std::uint32_t* from = R(a[1]);
+                const std::uint32_t* to = R(a[0]);
+                for (std::uint32_t l = 0; l < L; ++l) {
+                    const std::uint32_t* source = memory(c, from[l], size);
+                    std::uint32_t* target = memory(c, to[l], size);
+                    for (std::uint32_t j = 0; j < size; ++j) v[j] = source[j * L + l];
+                    for (std::uint32_t j = 0; j < size; ++j) target[j * L + l] = v[j];
+                }
                 break;
             }
             case spv::OpAccessChain:
             case spv::OpInBoundsAccessChain: {
+                // One walk through the type when the indices are the same in every lane
+                // (constants, uniforms), else one per lane.
+                const std::uint32_t n = in.count - 3u;
+                bool same = true;
+                for (std::uint32_t k = 0; k < n && same; ++k) same = uniform(R(a[3 + k]), L);
+                const std::uint32_t* base = R(a[2]);
+                std::uint32_t* out = R(a[1]);
                 std::uint32_t result_type = 0;
-                const std::uint32_t base = *R(a[2]);
-                const std::uint32_t offset =
-                    offset_of(in, T(m.type_of[a[2]]).element, a + 3, in.count - 3u, false, result_type);
-                *R(a[1]) = base + offset;
+                const std::uint32_t pointee = T(m.type_of[a[2]]).element;
+                if (same) {
+                    const std::uint32_t offset = offset_of(in, pointee, a + 3, n, false, 0, result_type);
+                    for (std::uint32_t l = 0; l < L; ++l) out[l] = base[l] + offset;
+                } else {
+                    for (std::uint32_t l = 0; l < L; ++l) out[l] = base[l] + offset_of(in, pointee, a + 3, n, false, l, result_type);
+                }
                 break;
             }
             case spv::OpCopyObject:
-            case spv::OpCopyLogical: std::copy_n(R(a[2]), T(a[0]).words, R(a[1])); break;
+            case spv::OpCopyLogical: std::copy_n(R(a[2]), T(a[0]).words * L, R(a[1])); break;
             case spv::OpCompositeConstruct: {
                 std::uint32_t* out = R(a[1]);
                 const std::uint32_t size = T(a[0]).words;
@@ -271,113 +425,104 @@ Invocation::Status Invocation::run(ExecContext& c) {
                 for (std::uint32_t j = 2; j < in.count; ++j) {
                     const std::uint32_t part = T(m.type_of[a[j]]).words;
                     if (at + part > size) throw Error("OpCompositeConstruct larger than its type", m.where(in));
-                    std::copy_n(R(a[j]), part, out + at);
+                    std::copy_n(R(a[j]), part * L, out + at * L);
                     at += part;
                 }
                 break;
             }
             case spv::OpCompositeExtract: {
                 std::uint32_t result_type = 0;
-                const std::uint32_t offset = offset_of(in, m.type_of[a[2]], a + 3, in.count - 3u, true, result_type);
-                std::copy_n(R(a[2]) + offset, T(a[0]).words, R(a[1]));
+                const std::uint32_t offset = offset_of(in, m.type_of[a[2]], a + 3, in.count - 3u, true, 0, result_type);
+                std::copy_n(R(a[2]) + offset * L, T(a[0]).words * L, R(a[1]));
                 break;
             }
             case spv::OpCompositeInsert: {
-                const std::uint32_t size = T(a[0]).words;
-                std::vector<std::uint32_t> v(R(a[3]), R(a[3]) + size);
                 std::uint32_t result_type = 0;
-                const std::uint32_t offset = offset_of(in, a[0], a + 4, in.count - 4u, true, result_type);
-                std::copy_n(R(a[2]), T(result_type).words, v.begin() + offset);
-                std::copy(v.begin(), v.end(), R(a[1]));
+                const std::uint32_t offset = offset_of(in, a[0], a + 4, in.count - 4u, true, 0, result_type);
+                std::uint32_t* out = R(a[1]);
+                std::copy_n(R(a[3]), T(a[0]).words * L, out);
+                std::copy_n(R(a[2]), T(result_type).words * L, out + offset * L);
                 break;
             }
             case spv::OpVectorShuffle: {
-                const std::uint32_t n1 = N(m.type_of[a[2]]);
-                std::uint32_t v[8] = {};
-                const std::uint32_t n2 = N(m.type_of[a[3]]);
-                std::copy_n(R(a[2]), n1, v);
-                std::copy_n(R(a[3]), n2, v + n1);
+                const std::uint32_t n1 = N(m.type_of[a[2]]), n2 = N(m.type_of[a[3]]);
                 std::uint32_t* out = R(a[1]);
-                for (std::uint32_t j = 4; j < in.count; ++j)
-                    out[j - 4] = a[j] == 0xffffffffu ? 0 : v[std::min(a[j], n1 + n2 - 1)];
+                for (std::uint32_t j = 4; j < in.count; ++j) {
+                    std::uint32_t* to = out + (j - 4) * L;
+                    if (a[j] == 0xffffffffu) {
+                        std::fill_n(to, L, 0u);
+                        continue;
+                    }
+                    const std::uint32_t k = std::min(a[j], n1 + n2 - 1);
+                    std::copy_n(k < n1 ? R(a[2]) + k * L : R(a[3]) + (k - n1) * L, L, to);
+                }
                 break;
             }
             case spv::OpVectorExtractDynamic: {
-                const Type& vt = T(m.type_of[a[2]]);
-                const Type& it = T(m.type_of[a[3]]);
-                const std::int64_t i = it.is_signed ? s(*R(a[3])) : static_cast<std::int64_t>(*R(a[3]));
-                *R(a[1]) = R(a[2])[clamp_index(in, i, vt.count)];
+                const std::uint32_t n = T(m.type_of[a[2]]).count;
+                const std::uint32_t* v = R(a[2]);
+                std::uint32_t* out = R(a[1]);
+                for (std::uint32_t l = 0; l < L; ++l) out[l] = v[clamp_index(in, index_value(a[3], l), n) * L + l];
                 break;
             }
             case spv::OpVectorInsertDynamic: {
-                const Type& vt = T(a[0]);
-                const Type& it = T(m.type_of[a[4]]);
-                const std::int64_t i = it.is_signed ? s(*R(a[4])) : static_cast<std::int64_t>(*R(a[4]));
-                std::uint32_t v[4];
-                std::copy_n(R(a[2]), vt.count, v);
-                v[clamp_index(in, i, vt.count)] = *R(a[3]);
-                std::copy_n(v, vt.count, R(a[1]));
+                const std::uint32_t n = T(a[0]).count;
+                std::uint32_t* out = R(a[1]);
+                std::copy_n(R(a[2]), n * L, out);
+                for (std::uint32_t l = 0; l < L; ++l) out[clamp_index(in, index_value(a[4], l), n) * L + l] = R(a[3])[l];
                 break;
             }
             case spv::OpSelect: {
                 const std::uint32_t size = T(a[0]).words;
-                const Type& ct = T(m.type_of[a[2]]);
+                const bool per_component = T(m.type_of[a[2]]).kind == Kind::vector;
                 std::uint32_t* out = R(a[1]);
                 const std::uint32_t* cond = R(a[2]);
                 const std::uint32_t* x = R(a[3]);
                 const std::uint32_t* y = R(a[4]);
-                if (ct.kind == Kind::vector) {
-                    for (std::uint32_t j = 0; j < size; ++j) out[j] = cond[j] ? x[j] : y[j];
-                } else {
-                    std::vector<std::uint32_t> v(cond[0] ? x : y, (cond[0] ? x : y) + size);
-                    std::copy(v.begin(), v.end(), out);
-                }
+                for (std::uint32_t j = 0; j < size; ++j)
+                    for (std::uint32_t l = 0; l < L; ++l) {
+                        const std::uint32_t k = j * L + l;
+                        out[k] = cond[per_component ? k : l] ? x[k] : y[k];
+                    }
                 break;
             }
 
             // ---- float arithmetic, each operation rounded on its own ---------------------
-#define TESSREF_FLOAT_BINARY(OP, EXPR)                                          \
-    case spv::OP: {                                                             \
-        const std::uint32_t n = N(a[0]);                                        \
-        const std::uint32_t* x = R(a[2]);                                       \
-        const std::uint32_t* y = R(a[3]);                                       \
-        std::uint32_t* out = R(a[1]);                                           \
-        for (std::uint32_t j = 0; j < n; ++j) {                                 \
-            const float p = f(x[j]), q = f(y[j]);                               \
-            out[j] = w(EXPR);                                                   \
-        }                                                                       \
-        break;                                                                  \
-    }
-            TESSREF_FLOAT_BINARY(OpFAdd, p + q)
-            TESSREF_FLOAT_BINARY(OpFSub, p - q)
-            TESSREF_FLOAT_BINARY(OpFMul, p * q)
-            TESSREF_FLOAT_BINARY(OpFDiv, p / q)
+            case spv::OpFAdd: each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) { return w(f(p) + f(q)); }); break;
+            case spv::OpFSub: each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) { return w(f(p) - f(q)); }); break;
+            case spv::OpFMul: each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) { return w(f(p) * f(q)); }); break;
+            case spv::OpFDiv: each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) { return w(f(p) / f(q)); }); break;
             // GLSL mod(x, y) = x - y * floor(x / y); OpFRem x - y * trunc(x / y); each step rounded.
-            TESSREF_FLOAT_BINARY(OpFMod, p - q * std::floor(p / q))
-            TESSREF_FLOAT_BINARY(OpFRem, p - q * std::trunc(p / q))
-#undef TESSREF_FLOAT_BINARY
-            case spv::OpFNegate: {
-                const std::uint32_t n = N(a[0]);
-                for (std::uint32_t j = 0; j < n; ++j) R(a[1])[j] = R(a[2])[j] ^ 0x80000000u;
+            case spv::OpFMod:
+                each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) {
+                    const float floored = std::floor(f(p) / f(q)), product = f(q) * floored;
+                    return w(f(p) - product);
+                });
                 break;
-            }
+            case spv::OpFRem:
+                each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) {
+                    const float truncated = std::trunc(f(p) / f(q)), product = f(q) * truncated;
+                    return w(f(p) - product);
+                });
+                break;
+            case spv::OpFNegate: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return p ^ 0x80000000u; }); break;
             case spv::OpVectorTimesScalar:
             case spv::OpMatrixTimesScalar: {
                 const std::uint32_t size = T(a[0]).words;
-                const float k = f(*R(a[3]));
-                for (std::uint32_t j = 0; j < size; ++j) R(a[1])[j] = w(f(R(a[2])[j]) * k);
+                const std::uint32_t* x = R(a[2]);
+                const std::uint32_t* k = R(a[3]);
+                std::uint32_t* out = R(a[1]);
+                for (std::uint32_t j = 0; j < size; ++j)
+                    for (std::uint32_t l = 0; l < L; ++l) out[j * L + l] = w(f(x[j * L + l]) * f(k[l]));
                 break;
             }
             case spv::OpDot: {
+                // Every product and sum rounded, in the math mode's order (std450.h).
                 const std::uint32_t n = N(m.type_of[a[2]]);
                 const std::uint32_t* x = R(a[2]);
                 const std::uint32_t* y = R(a[3]);
-                float sum = f(x[0]) * f(y[0]);
-                for (std::uint32_t j = 1; j < n; ++j) {
-                    const float product = f(x[j]) * f(y[j]);
-                    sum = sum + product;
-                }
-                *R(a[1]) = w(sum);
+                std::uint32_t* out = R(a[1]);
+                for (std::uint32_t l = 0; l < L; ++l) out[l] = w(dot_product(x + l, y + l, n, L, c.options.math));
                 break;
             }
             case spv::OpMatrixTimesVector:
@@ -385,79 +530,72 @@ Invocation::Status Invocation::run(ExecContext& c) {
             case spv::OpVectorTimesMatrix: {
                 // Left operand's columns (rows of the result) times the right operand's
                 // columns; column k of the result = sum over j of left column j * right[k][j],
-                // in GLM's order (shader.h): four columns pairwise, else from j = 0 on.
+                // in GLM's order in exact mode (shader.h): four columns pairwise, else from
+                // j = 0 on; in llvmpipe mode from j = 0 on always, as GLSL's compiler writes
+                // it. v * M is a dot product per column (dot_product's order).
                 const Type& lt = T(m.type_of[a[2]]);
                 const Type& rt = T(m.type_of[a[3]]);
-                const std::uint32_t* l = R(a[2]);
-                const std::uint32_t* r = R(a[3]);
-                std::vector<std::uint32_t> out(T(a[0]).words);
-                if (op == spv::OpVectorTimesMatrix) {
-                    // v * M: result[k] = dot(v, M column k), summed from the first component.
-                    const std::uint32_t rows = lt.count;
-                    for (std::uint32_t k = 0; k < rt.count; ++k) {
-                        float sum = f(l[0]) * f(r[k * rows]);
-                        for (std::uint32_t j = 1; j < rows; ++j) {
-                            const float product = f(l[j]) * f(r[k * rows + j]);
-                            sum = sum + product;
-                        }
-                        out[k] = w(sum);
+                const std::uint32_t* l_ = R(a[2]);
+                const std::uint32_t* r_ = R(a[3]);
+                std::uint32_t* out = R(a[1]);
+                const bool pairwise = c.options.math == MathMode::exact;
+                for (std::uint32_t lane = 0; lane < L; ++lane) {
+                    const auto l = [&](std::uint32_t j) { return f(l_[j * L + lane]); };
+                    const auto r = [&](std::uint32_t j) { return f(r_[j * L + lane]); };
+                    const auto put = [&](std::uint32_t j, float v) { out[j * L + lane] = w(v); };
+                    if (op == spv::OpVectorTimesMatrix) {
+                        // v * M: result[k] = dot(v, M column k), summed from the first component.
+                        const std::uint32_t rows = lt.count;
+                        for (std::uint32_t k = 0; k < rt.count; ++k)
+                            put(k, dot_product(l_ + lane, r_ + k * rows * L + lane, rows, L, c.options.math));
+                        continue;
                     }
-                } else {
                     const std::uint32_t rows = T(lt.element).count;  // the left matrix's column size
                     const std::uint32_t columns = lt.count;
                     const std::uint32_t results = op == spv::OpMatrixTimesVector ? 1 : rt.count;
                     for (std::uint32_t k = 0; k < results; ++k) {
-                        const std::uint32_t* v = r + k * columns;
+                        const std::uint32_t v = k * columns;
                         for (std::uint32_t i = 0; i < rows; ++i) {
-                            if (columns == 4) {
-                                const float p0 = f(l[i]) * f(v[0]), p1 = f(l[rows + i]) * f(v[1]);
-                                const float p2 = f(l[2 * rows + i]) * f(v[2]), p3 = f(l[3 * rows + i]) * f(v[3]);
+                            if (columns == 4 && pairwise) {
+                                const float p0 = l(i) * r(v), p1 = l(rows + i) * r(v + 1);
+                                const float p2 = l(2 * rows + i) * r(v + 2), p3 = l(3 * rows + i) * r(v + 3);
                                 const float s01 = p0 + p1, s23 = p2 + p3;
-                                out[k * rows + i] = w(s01 + s23);
+                                put(k * rows + i, s01 + s23);
                                 continue;
                             }
-                            float sum = f(l[i]) * f(v[0]);
+                            float sum = l(i) * r(v);
                             for (std::uint32_t j = 1; j < columns; ++j) {
-                                const float product = f(l[j * rows + i]) * f(v[j]);
+                                const float product = l(j * rows + i) * r(v + j);
                                 sum = sum + product;
                             }
-                            out[k * rows + i] = w(sum);
+                            put(k * rows + i, sum);
                         }
                     }
                 }
-                std::copy(out.begin(), out.end(), R(a[1]));
                 break;
             }
             case spv::OpOuterProduct: {
                 const std::uint32_t rows = N(m.type_of[a[2]]), columns = N(m.type_of[a[3]]);
+                const std::uint32_t* x = R(a[2]);
+                const std::uint32_t* y = R(a[3]);
+                std::uint32_t* out = R(a[1]);
                 for (std::uint32_t k = 0; k < columns; ++k)
                     for (std::uint32_t i = 0; i < rows; ++i)
-                        R(a[1])[k * rows + i] = w(f(R(a[2])[i]) * f(R(a[3])[k]));
+                        each2(out + (k * rows + i) * L, x + i * L, y + k * L, L,
+                              [](std::uint32_t p, std::uint32_t q) { return w(f(p) * f(q)); });
                 break;
             }
             case spv::OpTranspose: {
                 const Type& rt = T(a[0]);
                 const std::uint32_t columns = rt.count, rows = T(rt.element).count;
-                std::vector<std::uint32_t> out(columns * rows);
                 for (std::uint32_t k = 0; k < columns; ++k)
-                    for (std::uint32_t i = 0; i < rows; ++i) out[k * rows + i] = R(a[2])[i * columns + k];
-                std::copy(out.begin(), out.end(), R(a[1]));
+                    for (std::uint32_t i = 0; i < rows; ++i) std::copy_n(R(a[2]) + (i * columns + k) * L, L, R(a[1]) + (k * rows + i) * L);
                 break;
             }
 
             // ---- integers: two's complement, wrapping ------------------------------------
-#define TESSREF_INT_BINARY(OP, EXPR)                                            \
-    case spv::OP: {                                                             \
-        const std::uint32_t n = N(a[0]);                                        \
-        const std::uint32_t* x = R(a[2]);                                       \
-        const std::uint32_t* y = R(a[3]);                                       \
-        std::uint32_t* out = R(a[1]);                                           \
-        for (std::uint32_t j = 0; j < n; ++j) {                                 \
-            const std::uint32_t p = x[j], q = y[j];                             \
-            out[j] = (EXPR);                                                    \
-        }                                                                       \
-        break;                                                                  \
-    }
+#define TESSREF_INT_BINARY(OP, EXPR) \
+    case spv::OP: each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) -> std::uint32_t { return (EXPR); }); break;
             TESSREF_INT_BINARY(OpIAdd, p + q)
             TESSREF_INT_BINARY(OpISub, p - q)
             TESSREF_INT_BINARY(OpIMul, p * q)
@@ -487,178 +625,145 @@ Invocation::Status Invocation::run(ExecContext& c) {
             case spv::OpSRem:
             case spv::OpSMod:
             case spv::OpUMod: {
-                const std::uint32_t n = N(a[0]);
                 bool by_zero = false;
-                for (std::uint32_t j = 0; j < n; ++j) {
-                    const std::uint32_t p = R(a[2])[j], q = R(a[3])[j];
-                    std::uint32_t r;
+                each2(R(a[1]), R(a[2]), R(a[3]), count(), [&](std::uint32_t p, std::uint32_t q) -> std::uint32_t {
                     if (q == 0) {
                         by_zero = true;
-                        r = (op == spv::OpSDiv || op == spv::OpUDiv) ? 0xffffffffu : p;
-                    } else if (op == spv::OpUDiv) {
-                        r = p / q;
-                    } else if (op == spv::OpUMod) {
-                        r = p % q;
-                    } else if (s(p) == std::numeric_limits<std::int32_t>::min() && s(q) == -1) {
-                        r = op == spv::OpSDiv ? p : 0u;  // INT_MIN / -1 wraps; the remainder is 0
-                    } else if (op == spv::OpSDiv) {
-                        r = static_cast<std::uint32_t>(s(p) / s(q));
-                    } else {
-                        std::int32_t rem = s(p) % s(q);  // the sign of p (OpSRem)
-                        if (op == spv::OpSMod && rem != 0 && ((rem < 0) != (s(q) < 0))) rem += s(q);  // the sign of q
-                        r = static_cast<std::uint32_t>(rem);
+                        return (op == spv::OpSDiv || op == spv::OpUDiv) ? 0xffffffffu : p;
                     }
-                    R(a[1])[j] = r;
-                }
+                    if (op == spv::OpUDiv) return p / q;
+                    if (op == spv::OpUMod) return p % q;
+                    if (s(p) == std::numeric_limits<std::int32_t>::min() && s(q) == -1)
+                        return op == spv::OpSDiv ? p : 0u;  // INT_MIN / -1 wraps; the remainder is 0
+                    if (op == spv::OpSDiv) return static_cast<std::uint32_t>(s(p) / s(q));
+                    std::int32_t rem = s(p) % s(q);  // the sign of p (OpSRem)
+                    if (op == spv::OpSMod && rem != 0 && ((rem < 0) != (s(q) < 0))) rem += s(q);  // the sign of q
+                    return static_cast<std::uint32_t>(rem);
+                });
                 if (by_zero)
                     warn(in, std::string("warning: integer ") + (op == spv::OpSDiv || op == spv::OpUDiv ? "division" : "remainder") +
                                  " by zero (" + opcode_name(op) + "), result " +
                                  (op == spv::OpSDiv || op == spv::OpUDiv ? "all ones" : "the dividend"));
                 break;
             }
-            case spv::OpSNegate: {
-                const std::uint32_t n = N(a[0]);
-                for (std::uint32_t j = 0; j < n; ++j) R(a[1])[j] = 0u - R(a[2])[j];
+            case spv::OpSNegate: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return 0u - p; }); break;
+            case spv::OpNot: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return ~p; }); break;
+            case spv::OpLogicalNot: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return p ? 0u : 1u; }); break;
+            case spv::OpBitCount:
+                each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return static_cast<std::uint32_t>(std::popcount(p)); });
                 break;
-            }
-            case spv::OpNot: {
-                const std::uint32_t n = N(a[0]);
-                for (std::uint32_t j = 0; j < n; ++j) R(a[1])[j] = ~R(a[2])[j];
-                break;
-            }
-            case spv::OpLogicalNot: {
-                const std::uint32_t n = N(a[0]);
-                for (std::uint32_t j = 0; j < n; ++j) R(a[1])[j] = R(a[2])[j] ? 0u : 1u;
-                break;
-            }
-            case spv::OpBitCount: {
-                const std::uint32_t n = N(a[0]);
-                for (std::uint32_t j = 0; j < n; ++j) R(a[1])[j] = static_cast<std::uint32_t>(std::popcount(R(a[2])[j]));
-                break;
-            }
             case spv::OpAny:
             case spv::OpAll: {
                 const std::uint32_t n = N(m.type_of[a[2]]);
-                bool any = false, all = true;
-                for (std::uint32_t j = 0; j < n; ++j) {
-                    any = any || R(a[2])[j];
-                    all = all && R(a[2])[j];
+                const std::uint32_t* x = R(a[2]);
+                std::uint32_t* out = R(a[1]);
+                for (std::uint32_t l = 0; l < L; ++l) {
+                    bool any = false, all = true;
+                    for (std::uint32_t j = 0; j < n; ++j) {
+                        any = any || x[j * L + l];
+                        all = all && x[j * L + l];
+                    }
+                    out[l] = (op == spv::OpAny ? any : all) ? 1u : 0u;
                 }
-                *R(a[1]) = (op == spv::OpAny ? any : all) ? 1u : 0u;
                 break;
             }
 
             // ---- float comparisons (Ord: false with a NaN; Unord: true) -------------------
-#define TESSREF_FLOAT_COMPARE(OP, EXPR, UNORDERED)                              \
-    case spv::OP: {                                                             \
-        const std::uint32_t n = N(a[0]);                                        \
-        for (std::uint32_t j = 0; j < n; ++j) {                                 \
-            const float p = f(R(a[2])[j]), q = f(R(a[3])[j]);                   \
-            const bool nan = std::isnan(p) || std::isnan(q);                    \
-            R(a[1])[j] = nan ? (UNORDERED) : ((EXPR) ? 1u : 0u);                \
-        }                                                                       \
-        break;                                                                  \
-    }
-            TESSREF_FLOAT_COMPARE(OpFOrdEqual, p == q, 0u)
-            TESSREF_FLOAT_COMPARE(OpFOrdNotEqual, p != q, 0u)
-            TESSREF_FLOAT_COMPARE(OpFOrdLessThan, p < q, 0u)
-            TESSREF_FLOAT_COMPARE(OpFOrdGreaterThan, p > q, 0u)
-            TESSREF_FLOAT_COMPARE(OpFOrdLessThanEqual, p <= q, 0u)
-            TESSREF_FLOAT_COMPARE(OpFOrdGreaterThanEqual, p >= q, 0u)
-            TESSREF_FLOAT_COMPARE(OpFUnordEqual, p == q, 1u)
-            TESSREF_FLOAT_COMPARE(OpFUnordNotEqual, p != q, 1u)
-            TESSREF_FLOAT_COMPARE(OpFUnordLessThan, p < q, 1u)
-            TESSREF_FLOAT_COMPARE(OpFUnordGreaterThan, p > q, 1u)
-            TESSREF_FLOAT_COMPARE(OpFUnordLessThanEqual, p <= q, 1u)
-            TESSREF_FLOAT_COMPARE(OpFUnordGreaterThanEqual, p >= q, 1u)
+#define TESSREF_FLOAT_COMPARE(OP, EXPR, UNORDERED)                                                               \
+    case spv::OP:                                                                                                \
+        each2(R(a[1]), R(a[2]), R(a[3]), count(), [](std::uint32_t p, std::uint32_t q) {                         \
+            return ordered(p, q, UNORDERED, [](float x, float y) { return EXPR; });                              \
+        });                                                                                                      \
+        break;
+            TESSREF_FLOAT_COMPARE(OpFOrdEqual, x == y, 0u)
+            TESSREF_FLOAT_COMPARE(OpFOrdNotEqual, x != y, 0u)
+            TESSREF_FLOAT_COMPARE(OpFOrdLessThan, x < y, 0u)
+            TESSREF_FLOAT_COMPARE(OpFOrdGreaterThan, x > y, 0u)
+            TESSREF_FLOAT_COMPARE(OpFOrdLessThanEqual, x <= y, 0u)
+            TESSREF_FLOAT_COMPARE(OpFOrdGreaterThanEqual, x >= y, 0u)
+            TESSREF_FLOAT_COMPARE(OpFUnordEqual, x == y, 1u)
+            TESSREF_FLOAT_COMPARE(OpFUnordNotEqual, x != y, 1u)
+            TESSREF_FLOAT_COMPARE(OpFUnordLessThan, x < y, 1u)
+            TESSREF_FLOAT_COMPARE(OpFUnordGreaterThan, x > y, 1u)
+            TESSREF_FLOAT_COMPARE(OpFUnordLessThanEqual, x <= y, 1u)
+            TESSREF_FLOAT_COMPARE(OpFUnordGreaterThanEqual, x >= y, 1u)
 #undef TESSREF_FLOAT_COMPARE
-            case spv::OpIsNan:
-            case spv::OpIsInf: {
-                const std::uint32_t n = N(a[0]);
-                for (std::uint32_t j = 0; j < n; ++j) {
-                    const float p = f(R(a[2])[j]);
-                    R(a[1])[j] = (op == spv::OpIsNan ? std::isnan(p) : std::isinf(p)) ? 1u : 0u;
-                }
-                break;
-            }
+            case spv::OpIsNan: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return std::isnan(f(p)) ? 1u : 0u; }); break;
+            case spv::OpIsInf: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return std::isinf(f(p)) ? 1u : 0u; }); break;
 
             // ---- conversions ---------------------------------------------------------------
             case spv::OpConvertFToS:
             case spv::OpConvertFToU: {
-                const std::uint32_t n = N(a[0]);
                 bool undefined = false;
-                for (std::uint32_t j = 0; j < n; ++j)
-                    R(a[1])[j] = op == spv::OpConvertFToS ? to_signed(f(R(a[2])[j]), undefined)
-                                                          : to_unsigned(f(R(a[2])[j]), undefined);
+                each1(R(a[1]), R(a[2]), count(), [&](std::uint32_t p) {
+                    return op == spv::OpConvertFToS ? to_signed(f(p), undefined) : to_unsigned(f(p), undefined);
+                });
                 if (undefined) warn(in, "warning: float to integer conversion of NaN or out of range, result saturated (NaN: 0)");
                 break;
             }
-            case spv::OpConvertSToF:
-            case spv::OpConvertUToF: {
-                const std::uint32_t n = N(a[0]);
-                for (std::uint32_t j = 0; j < n; ++j)
-                    R(a[1])[j] = op == spv::OpConvertSToF ? w(static_cast<float>(s(R(a[2])[j])))
-                                                          : w(static_cast<float>(R(a[2])[j]));
-                break;
-            }
+            case spv::OpConvertSToF: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return w(static_cast<float>(s(p))); }); break;
+            case spv::OpConvertUToF: each1(R(a[1]), R(a[2]), count(), [](std::uint32_t p) { return w(static_cast<float>(p)); }); break;
             case spv::OpBitcast:
             case spv::OpSConvert:
             case spv::OpUConvert:
-            case spv::OpFConvert: std::copy_n(R(a[2]), T(a[0]).words, R(a[1])); break;
+            case spv::OpFConvert: std::copy_n(R(a[2]), T(a[0]).words * L, R(a[1])); break;
 
             // ---- GLSL.std.450 ---------------------------------------------------------------
             case spv::OpExtInst: {
                 if (a[2] != m.std450) unsupported(in, "an extended instruction set other than GLSL.std.450");
                 Std450Args args;
                 args.count = std::min<std::uint32_t>(in.count - 4u, 3);
+                args.stride = L;
                 for (std::uint32_t j = 0; j < args.count; ++j) {
                     const std::uint32_t id = a[4 + j];
                     const Type& t = T(m.type_of[id]);
-                    args.value[j] = R(id);
                     args.components[j] = t.kind == Kind::vector ? t.count : 1;
                     args.scalar[j] = t.scalar;
                 }
                 const Type& rt = T(a[0]);
-                if (!run_std450(a[3], c.options.math, rt.scalar, rt.kind == Kind::vector ? rt.count : 1, args, R(a[1])))
-                    unsupported(in, std450_name(a[3]));
+                for (std::uint32_t l = 0; l < L; ++l) {
+                    for (std::uint32_t j = 0; j < args.count; ++j) args.value[j] = R(a[4 + j]) + l;
+                    if (!run_std450(a[3], c.options.math, rt.scalar, rt.kind == Kind::vector ? rt.count : 1, args, R(a[1]) + l))
+                        unsupported(in, std450_name(a[3]));
+                }
                 break;
             }
 
             // ---- textures --------------------------------------------------------------------
             case spv::OpSampledImage:
-            case spv::OpImage: *R(a[1]) = *R(a[2]); break;
+            case spv::OpImage: std::copy_n(R(a[2]), L, R(a[1])); break;
             case spv::OpImageSampleImplicitLod:
             case spv::OpImageSampleExplicitLod: {
-                const std::uint32_t unit = *R(a[2]);
-                const Texture* texture = unit < c.units.size() ? c.units[unit] : nullptr;
-                std::uint32_t* out = R(a[1]);
-                if (!texture) {  // no texture at the unit: GL's incomplete texture reads (0, 0, 0, 1)
-                    out[0] = out[1] = out[2] = 0;
-                    out[3] = w(1.0f);
-                    break;
-                }
+                const std::uint32_t* unit = R(a[2]);
                 const std::uint32_t* st = R(a[3]);
-                const glm::vec2 coordinate(f(st[0]), f(st[1]));
-                float lod = 0.0f;
-                if (in.count > 4) {
-                    const std::uint32_t mask = a[4];
-                    if (mask & ~static_cast<std::uint32_t>(spv::ImageOperandsLodMask))
-                        unsupported(in, "image operands other than Lod (bias, offsets, gradients)");
-                    if (mask & spv::ImageOperandsLodMask) lod = f(*R(a[5]));
+                std::uint32_t* out = R(a[1]);
+                const bool with_lod = in.count > 4 && (a[4] & spv::ImageOperandsLodMask);
+                if (in.count > 4 && (a[4] & ~static_cast<std::uint32_t>(spv::ImageOperandsLodMask)))
+                    unsupported(in, "image operands other than Lod (bias, offsets, gradients)");
+                const std::uint32_t* lod = with_lod ? R(a[5]) : nullptr;
+                for (std::uint32_t l = 0; l < L; ++l) {
+                    const Texture* texture = unit[l] < c.units.size() ? c.units[unit[l]] : nullptr;
+                    glm::vec4 v(0.0f, 0.0f, 0.0f, 1.0f);  // no texture at the unit: GL's incomplete texture
+                    if (texture) {
+                        const glm::vec2 coordinate(f(st[l]), f(st[L + l]));
+                        // texture() outside a fragment shader: no derivatives, the implicit lod is 0.
+                        v = op == spv::OpImageSampleImplicitLod ? texture->texture(coordinate)
+                                                                : texture->textureLod(coordinate, lod ? f(lod[l]) : 0.0f);
+                    }
+                    for (std::uint32_t j = 0; j < 4; ++j) out[j * L + l] = w(v[static_cast<int>(j)]);
                 }
-                // texture() outside a fragment shader: no derivatives, the implicit lod is 0.
-                const glm::vec4 v = op == spv::OpImageSampleImplicitLod ? texture->texture(coordinate)
-                                                                        : texture->textureLod(coordinate, lod);
-                for (int j = 0; j < 4; ++j) out[j] = w(v[j]);
                 break;
             }
             case spv::OpImageQuerySizeLod: {
-                const std::uint32_t unit = *R(a[2]);
-                const Texture* texture = unit < c.units.size() ? c.units[unit] : nullptr;
-                if (!texture) throw Error("no texture is bound to unit " + std::to_string(unit), m.where(in));
-                const std::uint32_t lod = std::min<std::uint32_t>(*R(a[3]), static_cast<std::uint32_t>(texture->level_count() - 1));
-                R(a[1])[0] = static_cast<std::uint32_t>(texture->level(static_cast<int>(lod)).width);
-                R(a[1])[1] = static_cast<std::uint32_t>(texture->level(static_cast<int>(lod)).height);
+                for (std::uint32_t l = 0; l < L; ++l) {
+                    const std::uint32_t unit = R(a[2])[l];
+                    const Texture* texture = unit < c.units.size() ? c.units[unit] : nullptr;
+                    if (!texture) throw Error("no texture is bound to unit " + std::to_string(unit), m.where(in));
+                    const std::uint32_t lod =
+                        std::min<std::uint32_t>(R(a[3])[l], static_cast<std::uint32_t>(texture->level_count() - 1));
+                    R(a[1])[l] = static_cast<std::uint32_t>(texture->level(static_cast<int>(lod)).width);
+                    R(a[1])[L + l] = static_cast<std::uint32_t>(texture->level(static_cast<int>(lod)).height);
+                }
                 break;
             }
             default: unsupported(in, opcode_name(in.op));

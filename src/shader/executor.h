@@ -1,9 +1,21 @@
-// src/shader/executor.h — one invocation of a module, run instruction by instruction
-// (private to src/shader/; the stage drivers in stages.cpp set up its memory and read it).
+// src/shader/executor.h — a batch of invocations of a module run in lockstep, instruction
+// by instruction (private to src/shader/; the stage drivers in stages.cpp set up its memory
+// and read it).
+//
+// A batch holds `lanes` invocations (one for a control shader's invocation or a vertex; up
+// to kBatchLanes evaluation invocations of one patch). Every word of a register or of
+// memory is stored lane by lane: word j of the value in register r of lane l is
+// regs[(r + j) * lanes + l], and memory address a of lane l is memory[a * lanes + l], so an
+// instruction is one loop over its components times the lanes, which the compiler turns into
+// SIMD where the operation allows. The lanes run the same instruction as long as their
+// branches agree; where a branch parts them, run() stops before it (Status::diverged) and
+// split() makes one batch per way, each continuing on its own. Each lane computes exactly
+// what it would compute alone: the operations are the scalar ones, applied lane by lane.
 #pragma once
 
 #include <cstdint>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -11,8 +23,14 @@
 
 namespace tessref::shader {
 
-// What an invocation reads besides its own memory: the shared memory (uniforms, inputs,
-// outputs), the textures by unit, and the options.
+// The lanes of one evaluation batch: large enough that the interpreter's dispatch per
+// instruction is small beside its work, small enough that a batch's registers stay in the
+// cache (a level-16 quad patch's 289 points run as 5 batches).
+constexpr std::uint32_t kBatchLanes = 64;
+
+// What a batch reads besides its own registers: the shared memory (uniforms, inputs,
+// outputs; shared_words words per lane, laid out as the batch's lanes), the textures by
+// unit, and the options.
 struct ExecContext {
     const Module::Impl& module;
     std::vector<std::uint32_t>& shared;
@@ -22,21 +40,43 @@ struct ExecContext {
     std::set<std::uint32_t>* warned = nullptr;  // instructions that already warned
 };
 
-class Invocation {
+// The words of lanes `pick` (in that order) of a lane-interleaved array of `lanes` lanes.
+std::vector<std::uint32_t> gather_lanes(const std::vector<std::uint32_t>& from, std::uint32_t lanes,
+                                        std::span<const std::uint32_t> pick);
+// `lanes` copies of a one-lane array, interleaved.
+std::vector<std::uint32_t> broadcast_lanes(const std::vector<std::uint32_t>& one, std::uint32_t lanes);
+
+class Batch {
 public:
-    Invocation(const Module::Impl& module);
-    enum class Status : std::uint8_t { done, barrier, killed };
-    // Runs until the entry point returns, a barrier() or a discard.
+    explicit Batch(const Module::Impl& module, std::uint32_t lanes = 1);
+    enum class Status : std::uint8_t { done, barrier, killed, diverged };
+    // Runs until the entry point returns, a barrier() or a discard, or until a branch whose
+    // lanes go different ways (the batch then stands before that branch).
     Status run(ExecContext& context);
-    std::uint32_t* memory(ExecContext& context, std::uint32_t address, std::uint32_t words);
-    void observe_store(ExecContext& context, std::uint32_t address, std::uint32_t value, std::uint32_t words);
+    std::uint32_t lanes() const { return lanes_; }
+    // After Status::diverged: the lanes grouped by the way their branch goes, each group in
+    // lane order, the groups in the order of their first lane.
+    std::vector<std::vector<std::uint32_t>> ways(const ExecContext& context) const;
+    // The batch of lanes `pick` of this one, at the same instruction.
+    Batch split(std::span<const std::uint32_t> pick) const;
+    // The batch back at the entry point for another set of invocations of as many lanes:
+    // Private and Function variables as initialized, the registers kept (constants and
+    // variables' addresses never change; every other register is written before it is read,
+    // as SPIR-V's dominance rules, checked by the validator, require).
+    void restart();
 
 private:
+    template <std::uint32_t kLanes>
+    Status run_lanes(ExecContext& context);
+    std::uint32_t* memory(ExecContext& context, std::uint32_t address, std::uint32_t words);
+    void observe_store(ExecContext& context, std::uint32_t address, std::uint32_t value, std::uint32_t words);
     struct Frame {
         std::uint32_t return_pc;
         std::uint32_t result;  // the OpFunctionCall's result id
         std::uint32_t label;   // the caller's current block
     };
+    const Module::Impl* module_;
+    std::uint32_t lanes_ = 1;
     std::vector<std::uint32_t> regs_;
     std::vector<std::uint32_t> local_;
     std::vector<Frame> stack_;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <optional>
 #include <set>
 
 #include <glslang/SPIRV/spirv.hpp>
@@ -203,8 +204,8 @@ ShaderVertex Executable::vertex(std::span<const Slot> attributes, int vertex_id)
     }
     std::set<std::uint32_t> warned;
     ExecContext c{m, shared, state_->units, state_->options, who(m, -1, vertex_id), &warned};
-    Invocation invocation(m);
-    if (invocation.run(c) != Invocation::Status::done)
+    Batch invocation(m);
+    if (invocation.run(c) != Batch::Status::done)
         throw Error("the " + c.who + " stopped at a barrier or discard outside a control or fragment shader",
                     Where::in_file(m.path));
     return read_outputs(m, shared);
@@ -226,7 +227,7 @@ ShaderPatch Executable::control(std::span<const ShaderVertex> in, long long patc
                 write_vertex(v, &shared[v.address + k * v.element_words], in[k]);
     }
     // Every invocation runs to the next barrier() (or its end) before any runs past it.
-    std::vector<Invocation> invocations(static_cast<std::size_t>(vertices_out), Invocation(m));
+    std::vector<Batch> invocations(static_cast<std::size_t>(vertices_out), Batch(m));
     std::vector<bool> finished(invocations.size(), false);
     std::set<std::uint32_t> warned;
     for (std::size_t remaining = invocations.size(); remaining > 0;) {
@@ -235,10 +236,10 @@ ShaderPatch Executable::control(std::span<const ShaderVertex> in, long long patc
             if (invocation_id_address != kNone) shared[invocation_id_address] = static_cast<std::uint32_t>(i);
             if (state_->options.observer) state_->options.observer->invocation(static_cast<int>(i));
             ExecContext c{m, shared, state_->units, state_->options, who(m, patch_id, static_cast<int>(i)), &warned};
-            const Invocation::Status status = invocations[i].run(c);
-            if (status == Invocation::Status::killed)
+            const Batch::Status status = invocations[i].run(c);
+            if (status == Batch::Status::killed)
                 throw Error("the " + c.who + " executed discard outside a fragment shader", Where::in_file(m.path));
-            if (status == Invocation::Status::done) {
+            if (status == Batch::Status::done) {
                 finished[i] = true;
                 --remaining;
             }
@@ -266,14 +267,24 @@ ShaderPatch Executable::control(std::span<const ShaderVertex> in, long long patc
 }
 
 ShaderVertex Executable::evaluate(const ShaderPatch& patch, glm::vec3 tess_coord, long long patch_id) const {
+    return evaluate(patch, std::span<const glm::vec3>(&tess_coord, 1), patch_id).front();
+}
+
+// The points of the patch in batches of kBatchLanes lanes (one lane with an observer, which
+// follows one invocation); a batch whose branches part ways continues as one batch per way
+// (executor.h), the ways run in the order of their first point.
+std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords,
+                                               long long patch_id) const {
     const Module::Impl& m = state_->module.impl();
     require_stage(m, ShaderStage::tess_evaluation, "evaluate");
-    std::vector<std::uint32_t> shared = state_->shared;
+    // One lane's shared memory: everything but gl_TessCoord is the patch's.
+    std::vector<std::uint32_t> one = state_->shared;
+    std::uint32_t tess_coord_address = kNone;
     for (const Variable& v : m.variables) {
         if (!is_input(v)) continue;
-        std::uint32_t* at = &shared[v.address];
+        std::uint32_t* at = &one[v.address];
         switch (v.builtin) {
-            case spv::BuiltInTessCoord: std::memcpy(at, &tess_coord[0], 12); continue;
+            case spv::BuiltInTessCoord: tess_coord_address = v.address; continue;
             case spv::BuiltInPrimitiveId: *at = static_cast<std::uint32_t>(patch_id); continue;
             case spv::BuiltInPatchVertices: *at = static_cast<std::uint32_t>(patch.vertices.size()); continue;
             case spv::BuiltInTessLevelOuter: std::memcpy(at, patch.outer.data(), 4 * std::min<std::uint32_t>(4, m.types[v.type].words)); continue;
@@ -288,13 +299,72 @@ ShaderVertex Executable::evaluate(const ShaderPatch& patch, glm::vec3 tess_coord
                 if (p.builtin < 0) from_slot(patch.patch_locations, p.location, at + p.offset, p.words);
         }
     }
+    std::vector<ShaderVertex> out(tess_coords.size());
+    const std::size_t chunk = state_->options.observer ? 1 : kBatchLanes;
     std::set<std::uint32_t> warned;
-    ExecContext c{m, shared, state_->units, state_->options, who(m, patch_id, -1), &warned};
-    Invocation invocation(m);
-    if (invocation.run(c) != Invocation::Status::done)
-        throw Error("the " + c.who + " stopped at a barrier or discard outside a control or fragment shader",
-                    Where::in_file(m.path));
-    return read_outputs(m, shared);
+    std::vector<std::uint32_t> element;
+    struct Work {
+        Batch batch;
+        std::vector<std::uint32_t> shared;
+        std::vector<std::size_t> points;  // each lane's index in tess_coords
+    };
+    // The first batch of the patch's points is set up in full; the next batches of as many
+    // lanes reuse it (Batch::restart), with only what changes between them written again:
+    // the outputs, gl_TessCoord, Private and Function variables.
+    std::optional<Work> fresh;
+    std::vector<Work> work;  // the ways of a divergence, each a batch of its own
+    const auto run = [&](Work& w) {
+        ExecContext c{m, w.shared, state_->units, state_->options, who(m, patch_id, -1), &warned};
+        const Batch::Status status = w.batch.run(c);
+        const std::uint32_t n = w.batch.lanes();
+        if (status == Batch::Status::diverged) {
+            const std::vector<std::vector<std::uint32_t>> ways = w.batch.ways(c);
+            for (auto way = ways.rbegin(); way != ways.rend(); ++way) {  // the first way runs first
+                Work part{w.batch.split(*way), gather_lanes(w.shared, n, *way), {}};
+                for (const std::uint32_t l : *way) part.points.push_back(w.points[l]);
+                work.push_back(std::move(part));
+            }
+            return;
+        }
+        if (status != Batch::Status::done)
+            throw Error("the " + c.who + " stopped at a barrier or discard outside a control or fragment shader",
+                        Where::in_file(m.path));
+        // Each lane's outputs, gathered from the lane-interleaved memory.
+        for (const Variable& v : m.variables) {
+            if (!is_output(v)) continue;
+            element.resize(m.types[v.type].words);
+            for (std::uint32_t l = 0; l < n; ++l) {
+                for (std::size_t j = 0; j < element.size(); ++j) element[j] = w.shared[(v.address + j) * n + l];
+                read_vertex(v, element.data(), out[w.points[l]]);
+            }
+        }
+    };
+    for (std::size_t first = 0; first < tess_coords.size(); first += chunk) {
+        const std::uint32_t lanes = static_cast<std::uint32_t>(std::min(chunk, tess_coords.size() - first));
+        if (fresh && fresh->batch.lanes() == lanes) {
+            fresh->batch.restart();
+            for (const Variable& v : m.variables)
+                if (is_output(v))
+                    for (std::uint32_t j = 0; j < m.types[v.type].words; ++j)
+                        std::fill_n(fresh->shared.begin() + static_cast<std::ptrdiff_t>((v.address + j) * lanes), lanes, one[v.address + j]);
+        } else {
+            fresh.emplace(Work{Batch(m, lanes), broadcast_lanes(one, lanes), {}});
+        }
+        fresh->points.clear();
+        for (std::uint32_t l = 0; l < lanes; ++l) {
+            fresh->points.push_back(first + l);
+            if (tess_coord_address == kNone) continue;
+            for (std::uint32_t j = 0; j < 3; ++j)
+                fresh->shared[(tess_coord_address + j) * lanes + l] = std::bit_cast<std::uint32_t>(tess_coords[first + l][static_cast<int>(j)]);
+        }
+        run(*fresh);
+        while (!work.empty()) {
+            Work w = std::move(work.back());
+            work.pop_back();
+            run(w);
+        }
+    }
+    return out;
 }
 
 }  // namespace tessref::shader

@@ -15,10 +15,13 @@
 //     the interpreter's other operations keep them (in both modes).
 // Everything else (normalize, length, distance, mix, smoothstep, reflect, cross, ...) is
 // written here as GLSL defines it, in elementary operations each rounded to float on its
-// own, calling the elementary layer where the definition does, identically in both modes:
+// own, calling the elementary layer where the definition does, identically in both modes
+// but for the order of a dot product's sum:
 //   length(v) = sqrt(dot(v, v)), distance(a, b) = length(a - b),
 //   normalize(v) = v * inversesqrt(dot(v, v)), mix(x, y, a) = x + a * (y - x),
-//   dot(a, b) = ((a0 b0 + a1 b1) + a2 b2) + a3 b3, fract(x) = x - floor(x),
+//   dot(a, b) = ((a0 b0 + a1 b1) + a2 b2) + a3 b3 in exact mode, ((a3 b3 + a2 b2) + a1 b1) +
+//   a0 b0 in llvmpipe mode (NIR's order; so length, distance, normalize, reflect and
+//   faceforward follow the mode too), fract(x) = x - floor(x),
 //   smoothstep: t = clamp((x - e0) / (e1 - e0), 0, 1), t * t * (3 - 2 t).
 // min, max and clamp of a NaN return the other operand (IEEE minNum/maxNum; GLSL leaves it
 // undefined); round() rounds halves to even, as roundEven().
@@ -114,23 +117,27 @@ bool is_elementary(std::uint32_t op) {
     }
 }
 
-float dot(const std::uint32_t* a, const std::uint32_t* b, std::uint32_t n) {
-    float sum = f(a[0]) * f(b[0]);
-    for (std::uint32_t i = 1; i < n; ++i) {
-        const float product = f(a[i]) * f(b[i]);
-        sum = sum + product;
-    }
-    return sum;
-}
 
 float clampf(float x, float lo, float hi) { return std::fmin(std::fmax(x, lo), hi); }
 
 // The i-th component of an argument that may be a scalar broadcast to the result's width.
 std::uint32_t at(const Std450Args& a, int k, std::uint32_t i) {
-    return a.components[k] == 1 ? a.value[k][0] : a.value[k][i];
+    return a.components[k] == 1 ? a.value[k][0] : a.value[k][i * a.stride];
 }
 
 }  // namespace
+
+float dot_product(const std::uint32_t* a, const std::uint32_t* b, std::uint32_t n, std::uint32_t stride, MathMode mode) {
+    const auto product = [&](std::uint32_t i) { return f(a[i * stride]) * f(b[i * stride]); };
+    if (mode == MathMode::llvmpipe) {  // NIR's order: from the last component to the first
+        float sum = product(n - 1);
+        for (std::uint32_t i = n - 1; i-- > 0;) sum = sum + product(i);
+        return sum;
+    }
+    float sum = product(0);
+    for (std::uint32_t i = 1; i < n; ++i) sum = sum + product(i);
+    return sum;
+}
 
 std::string std450_name(std::uint32_t op) {
     static const char* names[] = {
@@ -148,14 +155,16 @@ std::string std450_name(std::uint32_t op) {
 }
 
 bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t n, const Std450Args& a,
-                std::uint32_t* out) {
+                std::uint32_t* result) {
+    // Component i of the result.
+    const auto out_at = [&](std::uint32_t i) -> std::uint32_t& { return result[i * a.stride]; };
     if (is_elementary(op)) {
         for (std::uint32_t i = 0; i < n; ++i)
-            out[i] = w(elementary(op, mode, f(at(a, 0, i)), a.count > 1 ? f(at(a, 1, i)) : 0.0f));
+            out_at(i) = w(elementary(op, mode, f(at(a, 0, i)), a.count > 1 ? f(at(a, 1, i)) : 0.0f));
         return true;
     }
     const auto each = [&](auto fn) {
-        for (std::uint32_t i = 0; i < n; ++i) out[i] = fn(i);
+        for (std::uint32_t i = 0; i < n; ++i) out_at(i) = fn(i);
         return true;
     };
     const auto x = [&](std::uint32_t i) { return f(at(a, 0, i)); };
@@ -220,19 +229,19 @@ bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t n, c
         case GLSLstd450Ldexp:
             return each([&](std::uint32_t i) { return w(std::ldexp(x(i), std::clamp(sy(i), -300, 300))); });
         case GLSLstd450Length: {
-            const float d = dot(a.value[0], a.value[0], a.components[0]);
-            out[0] = w(elementary(GLSLstd450Sqrt, mode, d));
+            const float d = dot_product(a.value[0], a.value[0], a.components[0], a.stride, mode);
+            out_at(0) = w(elementary(GLSLstd450Sqrt, mode, d));
             return true;
         }
         case GLSLstd450Distance: {
             std::uint32_t diff[4] = {0, 0, 0, 0};
             for (std::uint32_t i = 0; i < a.components[0] && i < 4; ++i) diff[i] = w(x(i) - y(i));
-            const float d = dot(diff, diff, std::min<std::uint32_t>(a.components[0], 4));
-            out[0] = w(elementary(GLSLstd450Sqrt, mode, d));
+            const float d = dot_product(diff, diff, std::min<std::uint32_t>(a.components[0], 4), 1, mode);
+            out_at(0) = w(elementary(GLSLstd450Sqrt, mode, d));
             return true;
         }
         case GLSLstd450Normalize: {
-            const float d = dot(a.value[0], a.value[0], a.components[0]);
+            const float d = dot_product(a.value[0], a.value[0], a.components[0], a.stride, mode);
             const float r = elementary(GLSLstd450InverseSqrt, mode, d);
             return each([&](std::uint32_t i) { return w(x(i) * r); });
         }
@@ -242,19 +251,19 @@ bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t n, c
                 const float r = y(static_cast<std::uint32_t>(p)) * x(static_cast<std::uint32_t>(q));
                 return w(l - r);
             };
-            out[0] = c(1, 2);
-            out[1] = c(2, 0);
-            out[2] = c(0, 1);
+            out_at(0) = c(1, 2);
+            out_at(1) = c(2, 0);
+            out_at(2) = c(0, 1);
             return true;
         }
         case GLSLstd450FaceForward: {
             // faceforward(N, I, Nref) = dot(Nref, I) < 0 ? N : -N
-            const float d = dot(a.value[2], a.value[1], a.components[0]);
+            const float d = dot_product(a.value[2], a.value[1], a.components[0], a.stride, mode);
             return each([&](std::uint32_t i) { return w(d < 0.0f ? x(i) : -x(i)); });
         }
         case GLSLstd450Reflect: {
             // reflect(I, N) = I - 2 * dot(N, I) * N
-            const float d = dot(a.value[1], a.value[0], a.components[0]);
+            const float d = dot_product(a.value[1], a.value[0], a.components[0], a.stride, mode);
             const float twice = 2.0f * d;
             return each([&](std::uint32_t i) {
                 const float s = twice * y(i);

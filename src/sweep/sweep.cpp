@@ -25,6 +25,7 @@
 #include "common/input_file.h"
 #include "common/temp_cleanup.h"
 #include "common/temp_name.h"
+#include "pipeline/stage_uniforms.h"
 #include "sweep/geometric_error.h"
 #include "sweep/report.h"
 #include "sweep/report_data.h"
@@ -339,6 +340,7 @@ std::vector<SweepScene> load_scenes(const SweepParameters& p) {
         SweepScene s;
         s.file = file;
         s.scene = load_scene(file);
+        s.scene.shaders = pipeline::with_shader_flags(s.scene.shaders, p.shaders);
         if (!s.scene.camera)
             throw Error("the sweep renders every row: the scene needs a [camera]", Where::at_key(file, "camera"));
         s.geomip = s.scene.evaluation.model == EvaluationModel::geomipmap;

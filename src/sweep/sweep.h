@@ -33,6 +33,7 @@
 
 #include <glm/glm.hpp>
 
+#include "tessref/scene.h"
 #include "tessref/tessellator.h"
 
 namespace tessref::sweep {
@@ -54,6 +55,9 @@ struct SweepParameters {
     std::vector<double> error_bounds{0.0, 0.5, 1.0, 2.0, 4.0, 8.0};  // pixels, each in [0, 1e6]
     int repeat = 3;                         // timings: median of this many runs (the command's default)
     glm::ivec2 size{320, 200};              // image size (replaces the cameras' viewports)
+    // --shader STAGE=FILE: over every scene's [shaders] (a user's stage runs through the
+    // interpreter, tessref/shader.h, in every row; gpu precision only).
+    std::vector<StageShader> shaders;
 };
 
 struct Shard {
