@@ -28,6 +28,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -574,6 +575,22 @@ TEST_F(SweepCommand, MergeRefusesMismatchedDuplicateMissingAndCorruptShards) {
     bad_level.replace(uniform + 9, bad_level.find(',', uniform + 9) - (uniform + 9), "x");
     write_file(dir_ / "cut/sweep.csv", bad_level);
     refused({"s0", "cut", "s2"}, "column level");
+    // Counts and indices of sweep.json that are no whole number in range (2e+82 as a shard
+    // count was undefined behaviour in the conversion to int: a fuzzer's finding).
+    write_file(dir_ / "cut/sweep.csv", csv);
+    const std::string json = read_file(dir_ / "s1/sweep.json");
+    for (const auto& [from, to, named] :
+         std::vector<std::tuple<std::string, std::string, std::string>>{
+             {"\"count\": 3", "\"count\": 2e82", "the shard count is 2e+82, not a whole number"},
+             {"\"index\": 1", "\"index\": 1.5", "the shard's index is 1.5, not a whole number"},
+             {"\"index\": 1", "\"index\": -1", "the shard's index is -1, not a whole number"}}) {
+        std::string edited = json;
+        const std::size_t at = edited.find(from);
+        ASSERT_NE(at, std::string::npos) << from << " in " << json;
+        edited.replace(at, from.size(), to);
+        write_file(dir_ / "cut/sweep.json", edited);
+        refused({"s0", "cut", "s2"}, named);
+    }
 }
 
 TEST_F(SweepCommand, BadInputExitsTwoAndWritesNothing) {

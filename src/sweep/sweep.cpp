@@ -9,10 +9,12 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -1064,6 +1066,20 @@ struct ShardDir {
     std::vector<CsvRecord> rows;  // without the header
 };
 
+// A count or index of sweep.json: a whole number from 0 to the type's maximum. nlohmann's
+// get<int>() of 2e+82 or 1.5 converts a double (out of range: undefined behaviour, a fuzzer's
+// finding) or truncates it; sweep.json never holds anything but whole numbers there.
+template <class T>
+T whole_number(const nlohmann::ordered_json& value, const std::string& what, const fs::path& file) {
+    const auto max = static_cast<std::uint64_t>(std::numeric_limits<T>::max());
+    if (value.is_number_unsigned() && value.get<std::uint64_t>() <= max) return static_cast<T>(value.get<std::uint64_t>());
+    if (value.is_number_integer() && value.get<std::int64_t>() >= 0 && static_cast<std::uint64_t>(value.get<std::int64_t>()) <= max)
+        return static_cast<T>(value.get<std::int64_t>());
+    throw Error("corrupt sweep.json: " + what + " is " + value.dump() + ", not a whole number from 0 to " +
+                    std::to_string(max),
+                Where::in_file(file.string()));
+}
+
 ShardDir read_shard(const fs::path& dir) {
     const Where where = Where::in_file(dir.string());
     if (!fs::is_directory(dir)) throw Error("not a directory", where);
@@ -1074,10 +1090,11 @@ ShardDir read_shard(const fs::path& dir) {
     try {
         const nlohmann::ordered_json j = nlohmann::ordered_json::parse(read_text(dir / "sweep.json"));
         s.parameters = j.at("sweep");
-        s.shard.index = j.at("shard").at("index").get<int>();
-        s.shard.count = j.at("shard").at("count").get<int>();
-        s.indices = j.at("row_indices").get<std::vector<std::size_t>>();
-        (void)s.parameters.at("rows").get<std::size_t>();
+        const fs::path file = dir / "sweep.json";
+        s.shard.index = whole_number<int>(j.at("shard").at("index"), "the shard's index", file);
+        s.shard.count = whole_number<int>(j.at("shard").at("count"), "the shard count", file);
+        for (const auto& index : j.at("row_indices")) s.indices.push_back(whole_number<std::size_t>(index, "a row index", file));
+        (void)whole_number<std::size_t>(s.parameters.at("rows"), "the row count", file);
     } catch (const nlohmann::json::exception& e) {
         throw Error(std::string("corrupt sweep.json: ") + e.what(), Where::in_file((dir / "sweep.json").string()));
     }
@@ -1167,7 +1184,7 @@ void merge_sweeps(const std::vector<std::string>& dirs, const std::string& out) 
         if (!seen.count(i))
             throw Error("shard " + std::to_string(i) + "/" + std::to_string(first.shard.count) + " is missing",
                         Where::in_file(dirs.front()));
-    const std::size_t total = first.parameters.at("rows").get<std::size_t>();
+    const std::size_t total = whole_number<std::size_t>(first.parameters.at("rows"), "the row count", first.dir / "sweep.json");
     std::vector<const CsvRecord*> rows(total, nullptr);
     for (const ShardDir& s : shards) {
         for (std::size_t k = 0; k < s.indices.size(); ++k) {
