@@ -275,7 +275,7 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
     const auto access = [&](std::uint32_t pointer, std::uint32_t size, std::uint32_t* value, bool store) {
         const std::uint32_t* p = R(pointer);
         std::uint32_t stride = 0;
-        if (uniform(p, L)) {
+        if (m.lane_invariant[pointer] || uniform(p, L)) {
             std::uint32_t* at = memory(c, p[0], size, stride);
             if (stride == 0) {
                 if (store) read_only(p[0]);
@@ -436,7 +436,7 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 // (constants, uniforms), else one per lane.
                 const std::uint32_t n = in.count - 3u;
                 bool same = true;
-                for (std::uint32_t k = 0; k < n && same; ++k) same = uniform(R(a[3 + k]), L);
+                for (std::uint32_t k = 0; k < n && same; ++k) same = m.lane_invariant[a[3 + k]] || uniform(R(a[3 + k]), L);
                 const std::uint32_t* base = R(a[2]);
                 std::uint32_t* out = R(a[1]);
                 std::uint32_t result_type = 0;
