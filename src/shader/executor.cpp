@@ -148,7 +148,9 @@ void Batch::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t v
         const Type& t = m.types[v.type];
         if (t.kind == Kind::array && m.types[t.element].words > 0) {
             const std::uint32_t element = m.types[t.element].words;
-            name += "[" + std::to_string(offset / element) + "]";
+            name += '[';  // appended piece by piece: GCC 12 at -O3 warns (-Wrestrict) on "[" + s + "]"
+            name += std::to_string(offset / element);
+            name += ']';
             offset %= element;
         }
         if (v.name.empty())
