@@ -137,3 +137,23 @@ TEST_F(SimdLevels, ShippedScenesRenderTheSameBytes) {
     }
     EXPECT_GE(compared, 15u);  // the shipped scenes with a camera and the bench terrain
 }
+
+// A surface with an infinite vertex (tests/data/heightfield/huge_sample.toml: a texel of
+// 3e38 times scale_z = 10) is refused by the streamed render at every level, naming it.
+TEST_F(SimdLevels, AnInfiniteVertexIsRefusedAtEveryLevel) {
+    tessref::Scene scene = tessref::load_scene(
+        (fs::path(TESSREF_SOURCE_DIR) / "tests" / "data" / "heightfield" / "huge_sample.toml").string());
+    scene.camera = tessref::load_scene((fs::path(TESSREF_SOURCE_DIR) / "data" / "scenes" / "jacksboro.toml").string())
+                       .camera;
+    const auto refusal = [&] {
+        try {
+            tessref::render_scene(scene, {});
+        } catch (const tessref::Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    const std::string base = at_level(tessref::SimdLevel::sse2, refusal);
+    EXPECT_NE(base.find("non-finite vertex"), std::string::npos) << base;
+    EXPECT_EQ(at_level(tessref::SimdLevel::avx2, refusal), base);
+}
