@@ -504,15 +504,22 @@ void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, c
         SurfaceMesh some;
         std::vector<glm::dvec3> no_faces;
         std::vector<std::uint32_t> points;
+        const std::uint8_t* const wins = c.wins.data();
         for (std::size_t p = c.first_patch; p < c.last_patch; ++p) {
             const std::size_t first = stream.vertex_base(p) - v0, end = stream.vertex_base(p + 1) - v0;
-            points.clear();
-            for (std::size_t v = first; v < end; ++v)
-                if (c.wins[v]) points.push_back(static_cast<std::uint32_t>(v - first));
-            if (points.empty()) continue;
-            stream.size(some, no_faces, points.size(), 0);
-            stream.evaluate_points(p, points, some, 0);
-            for (std::size_t j = 0; j < points.size(); ++j) c.mesh.normals[first + points[j]] = some.normals[j];
+            // The winning vertices' indices in the patch, in order, without a branch on each
+            // (about one vertex in ten wins at level 63, here and there: a branch per vertex
+            // mispredicted, and this scan of every vertex was 6 % of the render).
+            if (points.size() < end - first) points.resize(end - first);
+            std::size_t count = 0;
+            for (std::size_t v = first; v < end; ++v) {
+                points[count] = static_cast<std::uint32_t>(v - first);
+                count += wins[v] != 0;
+            }
+            if (count == 0) continue;
+            stream.size(some, no_faces, count, 0);
+            stream.evaluate_points(p, std::span<const std::uint32_t>(points.data(), count), some, 0);
+            for (std::size_t j = 0; j < count; ++j) c.mesh.normals[first + points[j]] = some.normals[j];
         }
     });
 }
