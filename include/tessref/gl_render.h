@@ -130,6 +130,10 @@ struct SceneRenderOptions {
     // draw's count already differed, the capture is kept whole as without a sink, to find
     // the patches that differ, and nothing is handed on.
     std::function<void(std::span<const CapturedVertex>)> capture_sink;
+    // render_scene_isolated(): false lets go of the CPU pipeline here as soon as the child
+    // has its copy (before `meanwhile`), for a caller that has no use for
+    // SceneRender::pipeline (then null) and needs the memory while the child draws.
+    bool return_pipeline = true;
 };
 
 // A patch whose levels or triangle count differ between the CPU pipeline and llvmpipe.

@@ -1271,7 +1271,10 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         put_vector(out, r.differences);
         put_value(out, r.stats);
         return out;
-    }, {}, options.meanwhile, [&](std::string_view bytes) {
+    }, {}, [&] {
+        if (!options.return_pipeline) options.pipeline.reset();  // the child has its own copy
+        if (options.meanwhile) options.meanwhile();
+    }, [&](std::string_view bytes) {
         // Pieces come only with a sink. The bytes are copied out of the pipe's buffer into
         // vertices of their own alignment.
         if (!options.capture_sink || bytes.size() % sizeof(CapturedVertex) != 0)

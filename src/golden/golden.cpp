@@ -23,6 +23,7 @@
 #include <set>
 #include <sstream>
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include "common/input_file.h"
@@ -103,11 +104,13 @@ CpuReference cpu_reference(const Scene& scene, const fs::path& scene_path, glm::
     RenderOptions render_options;
     render_options.size = size;
     render_options.keep_surface = true;  // the capture reads the surface
+    // The mesh first: its surface is let go before the render's, which the capture is
+    // made from, is made.
+    ref.mesh = mesh_digest(scene);
     ref.image = render_scene(scene, render_options);
     ref.scene = scene;
     ref.scene.camera->viewport = size;  // the viewport the pipeline saw (render.h)
     ref.capture = std::make_unique<PipelineCapture>(ref.scene, *ref.image.pipeline);
-    ref.mesh = mesh_digest(scene);
     return ref;
 }
 
@@ -366,6 +369,7 @@ void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side,
     gl_options.size = size;
     gl_options.capture = true;
     gl_options.meanwhile = cpu_side;
+    gl_options.return_pipeline = false;  // the CPU side has its own, in exact math
     gl_options.capture_sink = [&](std::span<const CapturedVertex> draw) {
         if (!streamed) streamed.emplace(*ref.capture, capture_options, keep ? &gl_capture : nullptr);  // after cpu_side
         streamed->add(draw);
@@ -663,6 +667,9 @@ SceneVerdict verify_scene(const std::string& name, const Location& location, con
             return v;
         }
         verify_files(name, location, keep, v);
+        // What this scene freed goes back to the system before the next scene's GL child is
+        // forked: the child's resident size counts every page the parent still holds.
+        ::malloc_trim(0);
     } catch (const Error& e) {
         v.error = e.message();
     } catch (const std::exception& e) {  // a file system error of --keep, memory
