@@ -26,6 +26,7 @@
 
 #include "shader/llvmpipe_math.h"
 #include "gl_test_context.h"
+#include "float_bits.h"
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 
@@ -35,18 +36,6 @@ namespace gl = tessref::gl;
 namespace lm = tessref::llvmpipe_math;
 
 gl::Context* context() { return gl_test_context(); }
-
-std::uint32_t bits(float f) {
-    std::uint32_t b;
-    std::memcpy(&b, &f, sizeof b);
-    return b;
-}
-
-float from_bits(std::uint32_t b) {
-    float f;
-    std::memcpy(&f, &b, sizeof f);
-    return f;
-}
 
 bool same(float a, float b) { return bits(a) == bits(b) || (std::isnan(a) && std::isnan(b)); }
 
@@ -164,6 +153,25 @@ TEST(LlvmpipeMath, TheLibmFunctionsDifferFromLlvmpipe) {
     EXPECT_LT(sin.matched, sin.compared * 3 / 4);
     const Outcome exp2 = run("exp2(x)", [](float a, float) { return std::exp2(a); }, inputs(-20.0f, 20.0f, 3));
     EXPECT_LT(exp2.matched, exp2.compared * 3 / 4);
+}
+
+TEST(LlvmpipeMath, BalancedOrderIsMesasRebalancedTree) {
+    // The shapes opt_rebalance_tree.cpp gives ((o0 + o1) + o2) + ... of n operands (traced
+    // through its tree_to_vine and vine_to_tree; four operands pair up, which is
+    // what llvmpipe's levels on jacksboro and olinda show: test_llvmpipe_levels).
+    const auto shape = [](std::uint32_t n) {
+        const std::vector<lm::BalancedStep> steps = lm::balanced_order(n);
+        std::vector<std::string> text;
+        for (std::uint32_t k = 0; k < n; ++k) text.push_back("o" + std::to_string(k));
+        for (const lm::BalancedStep& s : steps) text.push_back("(" + text[s.left] + " + " + text[s.right] + ")");
+        return text.back();
+    };
+    EXPECT_EQ(shape(2), "(o0 + o1)");
+    EXPECT_EQ(shape(3), "((o0 + o1) + o2)");
+    EXPECT_EQ(shape(4), "((o0 + o1) + (o2 + o3))");
+    EXPECT_EQ(shape(5), "((o0 + o1) + ((o2 + o3) + o4))");
+    EXPECT_EQ(shape(6), "(((o0 + o1) + (o2 + o3)) + (o4 + o5))");
+    EXPECT_EQ(shape(8), "(((o0 + o1) + (o2 + o3)) + ((o4 + o5) + (o6 + o7)))");
 }
 
 TEST(LlvmpipeMath, InverseTrigonometry) {
