@@ -18,6 +18,8 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <span>
+#include <utility>
 #include <regex>
 #include <string>
 #include <vector>
@@ -457,6 +459,169 @@ TEST(CompareCaptures, RefusesACaptureOfPartTriangles) {
     c.vertices.pop_back();
     c.source = "x.txt";
     EXPECT_THROW(tessref::compare_captures(two_patches(), c), tessref::Error);
+}
+
+// ---- the streamed comparison -------------------------------------------------------------
+
+namespace {
+
+// Patches 0..7 of a 2x2-quad grid each (8 triangles), and what the test side does to them:
+// 1 missing, 2 a position 3 ulps off, 3 a tess coord one bit off with other levels, 4 a
+// quad's tess coords in other triangles, 5 a triangle the other way round, 6 a normal off,
+// 8 only in the test; the rest the same, triangles reversed and corners rotated.
+std::pair<Capture, Capture> patches_of_every_divergence() {
+    Capture ref, test;
+    for (std::uint32_t p = 0; p < 9; ++p) {
+        std::vector<CapturedVertex> r, t;
+        const TessLevels l = levels_of(2.0f + 0.125f * static_cast<float>(p), 2.0f);
+        const auto at = [&](int i, int j) {
+            const float u = 0.5f * static_cast<float>(i), v = 0.5f * static_cast<float>(j);
+            const float x = static_cast<float>(p) + u;
+            return vertex(p, {u, v, 0.0f}, {x, v, 0.3f * x + 0.7f * v}, {0.1f * u, 0.2f, 0.9f}, l);
+        };
+        for (int i = 0; i < 2; ++i)
+            for (int j = 0; j < 2; ++j) {
+                for (const CapturedVertex& v : {at(i, j), at(i + 1, j), at(i + 1, j + 1)}) r.push_back(v);
+                for (const CapturedVertex& v : {at(i, j), at(i + 1, j + 1), at(i, j + 1)}) r.push_back(v);
+            }
+        t = r;
+        if (p == 2) t[4].position.y = std::nextafter(std::nextafter(std::nextafter(t[4].position.y, 9.0f), 9.0f), 9.0f);
+        if (p == 3) {
+            for (CapturedVertex& v : t) v.levels.outer[0] = std::nextafter(v.levels.outer[0], 9.0f);
+            t[2].tess_coord.x = std::nextafter(t[2].tess_coord.x, 9.0f);
+        }
+        if (p == 4) {  // the first quad's {00 10 11} {00 11 01} as {00 10 01} {00 11 11}: same tess coords
+            t[0] = at(0, 0), t[1] = at(1, 0), t[2] = at(0, 1);
+            t[3] = at(0, 0), t[4] = at(1, 1), t[5] = at(1, 1);
+        }
+        if (p == 5) std::swap(t[7], t[8]);
+        if (p == 6) t[10].normal.z = std::nextafter(std::nextafter(std::nextafter(std::nextafter(t[10].normal.z, 0.0f), 0.0f), 0.0f), 0.0f);
+        if (p != 8) ref.vertices.insert(ref.vertices.end(), r.begin(), r.end());
+        if (p == 1) continue;
+        for (std::size_t k = t.size() / 3; k-- > 0;)
+            for (const int c : {1, 2, 0}) test.vertices.push_back(t[3 * k + static_cast<std::size_t>(c)]);
+    }
+    return {ref, test};
+}
+
+void expect_same_result(const CaptureCompareResult& a, const CaptureCompareResult& b) {
+    EXPECT_EQ(a.reference_patches, b.reference_patches);
+    EXPECT_EQ(a.test_patches, b.test_patches);
+    EXPECT_EQ(a.compared_patches, b.compared_patches);
+    EXPECT_EQ(a.vertices_compared, b.vertices_compared);
+    EXPECT_EQ(a.failing_vertices, b.failing_vertices);
+    EXPECT_EQ(a.missing_in_test, b.missing_in_test);
+    EXPECT_EQ(a.missing_in_reference, b.missing_in_reference);
+    EXPECT_EQ(a.tess_coord_divergences, b.tess_coord_divergences);
+    EXPECT_EQ(a.tess_coord_divergences_with_equal_levels, b.tess_coord_divergences_with_equal_levels);
+    EXPECT_EQ(a.triangle_divergences, b.triangle_divergences);
+    EXPECT_EQ(a.orientation_divergences, b.orientation_divergences);
+    EXPECT_EQ(a.flipped_triangles, b.flipped_triangles);
+    EXPECT_EQ(a.value_divergences, b.value_divergences);
+    EXPECT_EQ(a.passed, b.passed);
+    for (const auto& [x, y] : {std::pair{&a.worst_position, &b.worst_position}, std::pair{&a.worst_normal, &b.worst_normal}}) {
+        EXPECT_EQ(x->ulps, y->ulps);
+        EXPECT_EQ(x->found, y->found);
+        EXPECT_EQ(x->patch_id, y->patch_id);
+        EXPECT_TRUE(same_bits(x->tess_coord, y->tess_coord));
+        EXPECT_EQ(x->component, y->component);
+        EXPECT_TRUE(same_bits(x->reference, y->reference));
+        EXPECT_TRUE(same_bits(x->test, y->test));
+    }
+    for (std::size_t k = 0; k < 4; ++k) {
+        EXPECT_EQ(a.components[k].compared, b.components[k].compared) << k;
+        EXPECT_EQ(a.components[k].max_ulps, b.components[k].max_ulps) << k;
+        EXPECT_EQ(a.components[k].max_abs, b.components[k].max_abs) << k;
+        EXPECT_EQ(a.components[k].sum_abs, b.components[k].sum_abs) << k;
+        EXPECT_EQ(a.components[k].beyond, b.components[k].beyond) << k;
+    }
+    EXPECT_EQ(a.failing_vertices_per_patch, b.failing_vertices_per_patch);
+    ASSERT_EQ(a.listed.size(), b.listed.size());
+    for (std::size_t k = 0; k < a.listed.size(); ++k) {
+        const tessref::DivergingPatch &x = a.listed[k], &y = b.listed[k];
+        EXPECT_EQ(x.patch_id, y.patch_id) << k;
+        EXPECT_EQ(x.kind, y.kind) << k;
+        EXPECT_EQ(x.reference_vertices, y.reference_vertices) << k;
+        EXPECT_EQ(x.test_vertices, y.test_vertices) << k;
+        EXPECT_EQ(x.levels_known, y.levels_known) << k;
+        EXPECT_EQ(x.level_ulps, y.level_ulps) << k;
+        EXPECT_EQ(std::memcmp(&x.reference_levels, &y.reference_levels, sizeof(TessLevels)), 0) << k;
+        EXPECT_EQ(std::memcmp(&x.test_levels, &y.test_levels, sizeof(TessLevels)), 0) << k;
+        EXPECT_TRUE(same_bits(x.tess_coord, y.tess_coord)) << k;
+        EXPECT_EQ(x.tess_coord_in_reference, y.tess_coord_in_reference) << k;
+        EXPECT_EQ(x.flipped_triangles, y.flipped_triangles) << k;
+        EXPECT_EQ(x.failing_vertices, y.failing_vertices) << k;
+        EXPECT_TRUE(same_bits(x.reference_position, y.reference_position)) << k;
+        EXPECT_TRUE(same_bits(x.test_position, y.test_position)) << k;
+        EXPECT_TRUE(same_bits(x.reference_normal, y.reference_normal)) << k;
+        EXPECT_TRUE(same_bits(x.test_normal, y.test_normal)) << k;
+        EXPECT_EQ(x.position_ulps, y.position_ulps) << k;
+        EXPECT_EQ(x.normal_ulps, y.normal_ulps) << k;
+    }
+}
+
+// The triangles of each patch of `c`, by patch id (the patch of each triangle's first corner).
+std::map<std::uint32_t, std::vector<CapturedVertex>> by_patch(const Capture& c) {
+    std::map<std::uint32_t, std::vector<CapturedVertex>> patches;
+    for (std::size_t t = 0; t < c.vertices.size() / 3; ++t)
+        patches[c.vertices[3 * t].patch_id].insert(patches[c.vertices[3 * t].patch_id].end(),
+                                                    c.vertices.begin() + static_cast<std::ptrdiff_t>(3 * t),
+                                                    c.vertices.begin() + static_cast<std::ptrdiff_t>(3 * t + 3));
+    return patches;
+}
+
+}  // namespace
+
+// The streamed comparison, fed the patches one call each or all in one call, gives what
+// compare_captures gives on the whole captures, every field, with every kind of
+// divergence among the patches (the golden verification compares llvmpipe's capture so).
+TEST(StreamedCaptureComparison, GivesTheWholeComparisonsResult) {
+    const auto [ref, test] = patches_of_every_divergence();
+    CaptureCompareOptions options;
+    options.max_position_ulps = 2;
+    options.max_normal_ulps = 2;
+    options.max_listed = 100;
+    const CaptureCompareResult whole = tessref::compare_captures(ref, test, options);
+    ASSERT_EQ(whole.missing_in_test, 1u);
+    ASSERT_EQ(whole.missing_in_reference, 1u);
+    ASSERT_EQ(whole.tess_coord_divergences, 1u);
+    ASSERT_EQ(whole.triangle_divergences, 1u);
+    ASSERT_EQ(whole.orientation_divergences, 1u);
+    ASSERT_EQ(whole.value_divergences, 2u);
+    ASSERT_EQ(whole.worst_position.ulps, 3u);
+    const auto r = by_patch(ref), t = by_patch(test);
+    std::set<std::uint32_t> ids;
+    for (const auto& [p, v] : r) ids.insert(p);
+    for (const auto& [p, v] : t) ids.insert(p);
+    const std::vector<CapturedVertex> none;
+    std::vector<tessref::StreamedCaptureComparison::PatchPair> pairs;
+    for (const std::uint32_t p : ids) {
+        tessref::StreamedCaptureComparison::PatchPair pair;
+        pair.patch = p;
+        pair.reference = r.count(p) ? r.at(p) : none;
+        pair.test = t.count(p) ? t.at(p) : none;
+        pairs.push_back(pair);
+    }
+    tessref::StreamedCaptureComparison one_call(options), call_each(options);
+    one_call.add(pairs);
+    for (const auto& pair : pairs) call_each.add(std::span(&pair, 1));
+    expect_same_result(one_call.finish(), whole);
+    expect_same_result(call_each.finish(), whole);
+}
+
+// A patch given twice, or after a higher one, would be compared without its other triangles.
+TEST(StreamedCaptureComparison, RefusesPatchesOutOfOrder) {
+    const auto [ref, test] = patches_of_every_divergence();
+    const auto r = by_patch(ref);
+    tessref::StreamedCaptureComparison compare;
+    tessref::StreamedCaptureComparison::PatchPair pair;
+    pair.patch = 3;
+    pair.reference = pair.test = r.at(3);
+    compare.add(std::span(&pair, 1));
+    EXPECT_THROW(compare.add(std::span(&pair, 1)), tessref::Error);
+    pair.patch = 2;
+    pair.reference = pair.test = r.at(2);
+    EXPECT_THROW(compare.add(std::span(&pair, 1)), tessref::Error);
 }
 
 // ---- the CPU reference's capture ---------------------------------------------------------

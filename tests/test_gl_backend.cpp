@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <span>
 #include <sstream>
 #include <regex>
 #include <string>
@@ -297,6 +298,32 @@ TEST_F(GlBackend, CaptureWritesPlyWithPatchIdsAndTessCoordsAndText) {
 // ---- bad input ----------------------------------------------------------------------------
 
 // A twin that does not compile: exit 2, the driver's log, the file and its line; no image.
+// A capture sink gets the capture the child would otherwise answer with, draw by draw in
+// order (several draws: a small --max-primitives-per-draw), and SceneRender::capture stays
+// empty: `golden verify` compares it so without holding it.
+TEST(GlCaptureSink, GetsTheWholeCaptureDrawByDrawFromTheChild) {
+    const tessref::Scene scene = tessref::load_scene(scene_path("thesis-all-10").string());
+    tessref::gl::SceneRenderOptions options;
+    options.size = {64, 40};
+    options.capture = true;
+    options.max_primitives_per_draw = 2000;
+    const tessref::gl::SceneRender whole = tessref::gl::render_scene_isolated(scene, options).render;
+    ASSERT_TRUE(whole.batch_failure.empty()) << whole.batch_failure;
+    ASSERT_FALSE(whole.capture.empty());
+    std::vector<tessref::CapturedVertex> pieces;
+    int calls = 0;
+    options.capture_sink = [&](std::span<const tessref::CapturedVertex> draw) {
+        ++calls;
+        pieces.insert(pieces.end(), draw.begin(), draw.end());
+    };
+    const tessref::gl::SceneRender streamed = tessref::gl::render_scene_isolated(scene, options).render;
+    EXPECT_TRUE(streamed.capture.empty());
+    EXPECT_GT(calls, 2);
+    ASSERT_EQ(pieces.size(), whole.capture.size());
+    EXPECT_EQ(std::memcmp(pieces.data(), whole.capture.data(), pieces.size() * sizeof(tessref::CapturedVertex)), 0);
+    EXPECT_EQ(streamed.colour.size(), whole.colour.size());
+}
+
 TEST_F(GlBackend, BrokenShaderGivesDriverLogWithFileAndLineAndExit2) {
     const fs::path data = dir_ / "data";
     fs::create_directories(data / "shaders");

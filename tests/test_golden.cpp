@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <span>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -85,6 +87,92 @@ TEST(RunIsolated, AThrowingMeanwhileEndsTheChild) {
     errno = 0;
     EXPECT_EQ(::kill(child, 0), -1);  // no such process: killed and reaped
     EXPECT_EQ(errno, ESRCH);
+}
+
+// A child that sends its result ahead in pieces (send_to_parent): on_chunk gets each piece
+// whole and in order, after meanwhile, then the answer comes as always. The pieces are
+// larger than the pipe holds (the child waits while the parent reads).
+TEST(RunIsolated, PiecesSentAheadArriveWholeAndInOrderBeforeTheAnswer) {
+    std::vector<std::string> pieces;
+    bool meanwhile_done = false, piece_before_meanwhile = false;
+    const std::string answer = tessref::run_isolated(
+        "a test child",
+        [] {
+            for (int k = 0; k < 5; ++k) tessref::send_to_parent(std::string(std::size_t(300000) * k, char('a' + k)));
+            return std::string("the answer");
+        },
+        {}, [&] { meanwhile_done = true; },
+        [&](std::string_view piece) {
+            piece_before_meanwhile = piece_before_meanwhile || !meanwhile_done;
+            pieces.emplace_back(piece);
+        });
+    EXPECT_EQ(answer, "the answer");
+    EXPECT_FALSE(piece_before_meanwhile);
+    ASSERT_EQ(pieces.size(), 5u);
+    for (int k = 0; k < 5; ++k) EXPECT_EQ(pieces[k], std::string(std::size_t(300000) * k, char('a' + k))) << k;
+}
+
+// An on_chunk that throws ends the child, which would otherwise go on sending (and wait on
+// the full pipe for ever), and the exception goes on to the caller; a child that sent pieces
+// and no answer has given no answer.
+TEST(RunIsolated, AThrowingOnChunkEndsTheChildAndPiecesAreNoAnswer) {
+    int seen = 0;
+    EXPECT_THROW(tessref::run_isolated(
+                     "a test child",
+                     [] {
+                         for (;;) tessref::send_to_parent(std::string(100000, 'x'));
+                         return std::string();
+                     },
+                     {}, {},
+                     [&](std::string_view) {
+                         if (++seen == 3) throw tessref::Error("the parent's side failed");
+                     }),
+                 tessref::Error);
+    EXPECT_EQ(seen, 3);
+    try {
+        tessref::run_isolated(
+            "a test child",
+            [] {
+                tessref::send_to_parent("whole");
+                ::_exit(0);  // no answer after the piece
+                return std::string();
+            },
+            {}, {}, [](std::string_view) {});
+        ADD_FAILURE() << "no error";
+    } catch (const tessref::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("without an answer"), std::string::npos) << e.what();
+    }
+}
+
+// The digester fed the capture in pieces cut anywhere (inside a patch's run, inside a
+// triangle, a piece of one vertex) gives capture_digest's digests of the whole.
+TEST(CaptureDigest, FedInPiecesCutAnywhereIsTheWholeCapturesDigest) {
+    std::vector<tessref::CapturedVertex> capture;
+    for (std::uint32_t run = 0; run < 12; ++run)
+        for (std::uint32_t k = 0; k < 3 * (50 + 13 * run); ++k) {
+            tessref::CapturedVertex v;
+            v.patch_id = run == 11 ? 2 : run;  // patch 2 comes back last
+            v.tess_coord = {static_cast<float>(k) / 7.0f, 0.5f, 0.0f};
+            v.position = {static_cast<float>(k), static_cast<float>(run), 1.0f};
+            v.levels.outer = {static_cast<float>(run), 2.0f, 3.0f, 4.0f};
+            capture.push_back(v);
+        }
+    const tessref::golden::CaptureDigest whole = tessref::golden::capture_digest(capture);
+    for (const std::size_t step : {std::size_t(1), std::size_t(2), std::size_t(50), std::size_t(151), capture.size()}) {
+        tessref::golden::CaptureDigester digester;
+        for (std::size_t at = 0; at < capture.size(); at += step)
+            digester.add(std::span<const tessref::CapturedVertex>(capture).subspan(at, std::min(step, capture.size() - at)));
+        const tessref::golden::CaptureDigest pieces = digester.finish();
+        EXPECT_EQ(pieces.sha256, whole.sha256) << step;
+        EXPECT_EQ(pieces.triangles, whole.triangles) << step;
+        ASSERT_EQ(pieces.patches.size(), whole.patches.size()) << step;
+        for (std::size_t r = 0; r < whole.patches.size(); ++r) {
+            EXPECT_EQ(pieces.patches[r].patch_id, whole.patches[r].patch_id) << step << " " << r;
+            EXPECT_EQ(pieces.patches[r].levels, whole.patches[r].levels) << step << " " << r;
+            EXPECT_EQ(pieces.patches[r].triangles, whole.patches[r].triangles) << step << " " << r;
+            EXPECT_EQ(pieces.patches[r].sha256, whole.patches[r].sha256) << step << " " << r;
+        }
+    }
 }
 
 // capture_digest never holds the capture's text; its digests are still those of the text,

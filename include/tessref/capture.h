@@ -43,6 +43,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -87,6 +88,40 @@ struct Capture {
 // (zero here) while its evaluation shader computes one. Throws tessref::Error when the
 // mesh's triangles are not the generator's pattern for the patch's levels.
 std::vector<CapturedVertex> capture_from_pipeline(const Scene& scene, const PipelineResult& result);
+
+// The same capture made a range of triangles at a time, for a consumer that needs only a
+// few patches of it at once (`golden verify` digests it in windows and compares it with
+// llvmpipe's patch by patch, never holding the 64 bytes a vertex of the whole). The
+// constructor checks the mesh as capture_from_pipeline does (the same Errors) and keeps
+// `result`, which must outlive it.
+class PipelineCapture {
+public:
+    PipelineCapture(const Scene& scene, const PipelineResult& result);
+    std::size_t triangles() const { return triangles_; }
+    // Appends the capture's vertices of its triangles [first, last) to `out`.
+    void append(std::size_t first, std::size_t last, std::vector<CapturedVertex>& out) const;
+    // The capture's triangles as maximal runs of one patch (the patch of a triangle's first
+    // corner, as the comparison groups them), in capture order.
+    struct Run {
+        std::uint32_t patch = 0;
+        std::size_t first = 0, last = 0;  // triangles [first, last)
+    };
+    const std::vector<Run>& runs() const { return runs_; }
+
+private:
+    // A patch's triangles laid out as its pattern's primitives from its first vertex on
+    // (no pattern: a geomipmapped terrain's triangles, taken as the mesh holds them).
+    struct Block {
+        std::size_t first = 0;  // the block's first triangle
+        std::size_t base = 0;   // its patch's first vertex
+        std::uint32_t patch = 0;
+        std::shared_ptr<const Pattern> pattern;
+    };
+    const PipelineResult& result_;
+    std::size_t triangles_ = 0;
+    std::vector<Block> blocks_;  // by first triangle
+    std::vector<Run> runs_;
+};
 
 // The capture as a SurfaceMesh: three vertices per triangle, normals, patch ids and tess
 // coords; write it with MeshWriteOptions::weld = false (write_capture does).
@@ -232,5 +267,32 @@ struct CaptureCompareResult {
 // Throws tessref::Error when a capture is not whole triangles of one patch each.
 CaptureCompareResult compare_captures(const Capture& reference, const Capture& test,
                                       const CaptureCompareOptions& options = {});
+
+// compare_captures() fed a few patches at a time, for a caller that never holds either
+// capture whole (`golden verify` compares llvmpipe's capture as its child process sends it,
+// patch by patch, against the CPU reference's, made from the pipeline). Each patch comes
+// once, in ascending id order over all calls, with all its triangles of each side (an
+// empty side: the patch is missing there); the patches of one call are compared in
+// parallel. The result is compare_captures()'s on the two captures the patches make
+// (ComponentSummary::sum_abs, there too, is summed patch by patch). Throws tessref::Error as
+// compare_captures() does, and for patches out of order.
+class StreamedCaptureComparison {
+public:
+    explicit StreamedCaptureComparison(const CaptureCompareOptions& options = {});
+    ~StreamedCaptureComparison();
+    StreamedCaptureComparison(const StreamedCaptureComparison&) = delete;
+    StreamedCaptureComparison& operator=(const StreamedCaptureComparison&) = delete;
+    struct PatchPair {
+        std::uint32_t patch = 0;
+        std::span<const CapturedVertex> reference, test;  // the patch's triangles, three vertices each
+        bool reference_has_levels = true, test_has_levels = true;
+    };
+    void add(std::span<const PatchPair> patches);
+    CaptureCompareResult finish();  // once, after the last patch
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
 
 }  // namespace tessref

@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -120,6 +121,19 @@ struct SceneRenderOptions {
     // `meanwhile`, src/common/isolated.h), after the pipeline above has run. It may use
     // oneTBB; it must not touch what the child answers into.
     std::function<void()> meanwhile;
+    // With `capture`: each capture draw's vertices are handed to this, draw by draw in patch
+    // order, instead of being kept in SceneRender::capture (which stays empty), so that a
+    // caller that compares the capture as it comes never holds it whole. render_scene_
+    // isolated() calls it here in the parent, as the child's draws arrive (after
+    // `meanwhile`). A draw whose count differs stops the capture (SceneRender::batch_failure):
+    // what was handed on by then is part of a capture that does not count. Where a drawing
+    // draw's count already differed, the capture is kept whole as without a sink, to find
+    // the patches that differ, and nothing is handed on.
+    std::function<void(std::span<const CapturedVertex>)> capture_sink;
+    // render_scene_isolated(): false lets go of the CPU pipeline here as soon as the child
+    // has its copy (before `meanwhile`), for a caller that has no use for
+    // SceneRender::pipeline (then null) and needs the memory while the child draws.
+    bool return_pipeline = true;
 };
 
 // A patch whose levels or triangle count differ between the CPU pipeline and llvmpipe.

@@ -23,6 +23,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -107,6 +108,23 @@ MeshDigest parse_mesh_digest(std::string_view text, const std::string& path);
 // gets one entry per run). `size` is left empty. The text is never held whole: it is
 // made run by run, in parallel, a few MB at a time.
 CaptureDigest capture_digest(std::span<const CapturedVertex> capture);
+
+// capture_digest() fed the capture a piece at a time, so that the capture itself need not
+// be held (`golden verify` makes it from the pipeline a window at a time): the pieces, one
+// after the other, are the capture; a patch's run of vertices may be cut between two.
+class CaptureDigester {
+public:
+    CaptureDigester();
+    ~CaptureDigester();
+    CaptureDigester(const CaptureDigester&) = delete;
+    CaptureDigester& operator=(const CaptureDigester&) = delete;
+    void add(std::span<const CapturedVertex> piece);
+    CaptureDigest finish();  // once, after the last piece
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
 
 // ---- where the scenes and golden files are -------------------------------------------------
 

@@ -33,79 +33,116 @@ constexpr std::string_view kVersionLine = "tessref-capture 1";
 // ---- the CPU reference -----------------------------------------------------------------
 
 std::vector<CapturedVertex> capture_from_pipeline(const Scene& scene, const PipelineResult& result) {
-    const SurfaceMesh& mesh = result.mesh;
-    const std::size_t triangles = mesh.triangles.size();
+    const PipelineCapture source(scene, result);
+    const std::size_t triangles = source.triangles();
     require_memory(saturating_bytes(saturating_bytes(triangles, 3), sizeof(CapturedVertex)),
                    "the capture of " + std::to_string(triangles) + " triangles");
     std::vector<CapturedVertex> capture;
     capture.reserve(triangles * 3);
+    source.append(0, triangles, capture);
+    return capture;
+}
 
-    // The pipeline lays each patch's vertices out as the pattern's points, from the patch's
-    // first vertex on, and its triangles as the pattern's primitives, in order.
-    std::vector<std::size_t> first_vertex(result.levels.size(), SIZE_MAX);
-    for (std::size_t v = mesh.patch_ids.size(); v-- > 0;)
-        if (mesh.patch_ids[v] < first_vertex.size()) first_vertex[mesh.patch_ids[v]] = v;
-
+PipelineCapture::PipelineCapture(const Scene& scene, const PipelineResult& result)
+    : result_(result), triangles_(result.mesh.triangles.size()) {
+    const SurfaceMesh& mesh = result.mesh;
+    const std::size_t triangles = triangles_;
     if (scene.evaluation.model == EvaluationModel::geomipmap) {
         // No primitive generator: the CPU built each patch's triangles (geomipmap.h), and
         // the capture is those triangles as the vertex buffer holds them, in mesh order.
-        for (std::size_t k = 0; k < triangles; ++k)
-            for (const std::uint32_t v : mesh.triangles[k]) {
+        if (triangles) blocks_.push_back({0, 0, 0, nullptr});
+        for (std::size_t t = 0; t < triangles; ++t) {
+            const std::uint32_t p = mesh.patch_ids[mesh.triangles[t][0]];
+            if (runs_.empty() || runs_.back().patch != p) runs_.push_back({p, t, t});
+            runs_.back().last = t + 1;
+        }
+    } else {
+        // The pipeline lays each patch's vertices out as the pattern's points, from the
+        // patch's first vertex on, and its triangles as the pattern's primitives, in order.
+        std::vector<std::size_t> first_vertex(result.levels.size(), SIZE_MAX);
+        for (std::size_t v = mesh.patch_ids.size(); v-- > 0;)
+            if (mesh.patch_ids[v] < first_vertex.size()) first_vertex[mesh.patch_ids[v]] = v;
+        PatternCache cache;
+        std::size_t t = 0;
+        while (t < triangles) {
+            const std::uint32_t p = mesh.patch_ids[mesh.triangles[t][0]];
+            const Where where = Where::at_patch(p);
+            if (p >= result.levels.size()) throw Error("the pipeline's mesh names a patch it has no levels for", where);
+            std::shared_ptr<const Pattern> pattern = cache.get(scene.generator, result.levels[p]);
+            const std::size_t base = first_vertex[p];
+            const std::size_t count = pattern->primitive_count();
+            if (pattern->vertices_per_primitive() != 3 || t + count > triangles)
+                throw Error("the pipeline's triangles are not the primitive generator's for the patch's levels", where);
+            for (std::size_t k = 0; k < count; ++k) {
+                const auto prim = pattern->primitive(k);
+                const std::array<std::size_t, 3> generated{base + prim[0], base + prim[1], base + prim[2]};
+                const auto& tri = mesh.triangles[t + k];
+                const bool as_generated = tri[0] == generated[0] && tri[1] == generated[1] && tri[2] == generated[2];
+                const bool reoriented = tri[0] == generated[0] && tri[1] == generated[2] && tri[2] == generated[1];
+                if (!as_generated && !reoriented)
+                    throw Error("the pipeline's triangle " + std::to_string(t + k) +
+                                    " is not the primitive generator's for the patch's levels",
+                                where);
+            }
+            blocks_.push_back({t, base, p, std::move(pattern)});
+            if (count && (runs_.empty() || runs_.back().patch != p)) runs_.push_back({p, t, t});
+            if (count) runs_.back().last = t + count;
+            t += count;
+        }
+    }
+}
+
+void PipelineCapture::append(std::size_t first, std::size_t last, std::vector<CapturedVertex>& out) const {
+    const SurfaceMesh& mesh = result_.mesh;
+    const PipelineResult& result = result_;
+    last = std::min(last, triangles_);
+    if (first >= last) return;
+    out.reserve(out.size() + 3 * (last - first));
+    // The block that holds `first`: the last one starting at or before it.
+    std::size_t b = static_cast<std::size_t>(
+        std::upper_bound(blocks_.begin(), blocks_.end(), first, [](std::size_t t, const Block& k) { return t < k.first; }) -
+        blocks_.begin() - 1);
+    for (std::size_t t = first; t < last; ++t) {
+        while (b + 1 < blocks_.size() && blocks_[b + 1].first <= t) ++b;
+        const Block& block = blocks_[b];
+        const auto& tri = mesh.triangles[t];
+        if (!block.pattern) {
+            for (const std::uint32_t v : tri) {
                 CapturedVertex c;
                 c.patch_id = mesh.patch_ids[v];
                 c.tess_coord = mesh.tess_coords[v];
                 c.position = glm::vec3(mesh.positions[v]);
                 if (!result.face_normals.empty())
-                    c.normal = glm::vec3(result.face_normals[k]);
+                    c.normal = glm::vec3(result.face_normals[t]);
                 else if (!mesh.normals.empty())
                     c.normal = glm::vec3(mesh.normals[v]);
                 c.levels = result.levels[c.patch_id];
-                capture.push_back(c);
+                out.push_back(c);
             }
-        return capture;
-    }
-
-    PatternCache cache;
-    std::size_t t = 0;
-    while (t < triangles) {
-        const std::uint32_t p = mesh.patch_ids[mesh.triangles[t][0]];
-        const Where where = Where::at_patch(p);
-        if (p >= result.levels.size()) throw Error("the pipeline's mesh names a patch it has no levels for", where);
-        const std::shared_ptr<const Pattern> pattern = cache.get(scene.generator, result.levels[p]);
-        const std::size_t base = first_vertex[p];
-        const std::size_t count = pattern->primitive_count();
-        if (pattern->vertices_per_primitive() != 3 || t + count > triangles)
-            throw Error("the pipeline's triangles are not the primitive generator's for the patch's levels", where);
-        for (std::size_t k = 0; k < count; ++k, ++t) {
-            const auto prim = pattern->primitive(k);
-            const std::array<std::size_t, 3> generated{base + prim[0], base + prim[1], base + prim[2]};
-            const auto& tri = mesh.triangles[t];
-            const bool as_generated = tri[0] == generated[0] && tri[1] == generated[1] && tri[2] == generated[2];
-            const bool reoriented = tri[0] == generated[0] && tri[1] == generated[2] && tri[2] == generated[1];
-            if (!as_generated && !reoriented)
-                throw Error("the pipeline's triangle " + std::to_string(t) +
-                                " is not the primitive generator's for the patch's levels",
-                            where);
-            for (const std::size_t v : generated) {
-                CapturedVertex c;
-                c.patch_id = p;
-                c.tess_coord = mesh.tess_coords[v];
-                c.position = glm::vec3(mesh.positions[v]);
-                if (!result.face_normals.empty()) {
-                    // The pipeline's face normal is of the re-oriented corners; the geometry
-                    // shader sees them as generated: cross(b - a, c - a) with b and c
-                    // swapped is the exact negation, but for the sign of a zero component
-                    // (x - y and y - x are both +0 when x == y).
-                    c.normal = reoriented ? -glm::vec3(result.face_normals[t]) : glm::vec3(result.face_normals[t]);
-                } else if (!mesh.normals.empty()) {
-                    c.normal = glm::vec3(mesh.normals[v]);
-                }
-                c.levels = result.levels[p];
-                capture.push_back(c);
+            continue;
+        }
+        const auto prim = block.pattern->primitive(t - block.first);
+        const std::array<std::size_t, 3> generated{block.base + prim[0], block.base + prim[1], block.base + prim[2]};
+        const bool reoriented = !(tri[1] == generated[1] && tri[2] == generated[2]);  // checked by the constructor
+        const std::uint32_t p = block.patch;
+        for (const std::size_t v : generated) {
+            CapturedVertex c;
+            c.patch_id = p;
+            c.tess_coord = mesh.tess_coords[v];
+            c.position = glm::vec3(mesh.positions[v]);
+            if (!result.face_normals.empty()) {
+                // The pipeline's face normal is of the re-oriented corners; the geometry
+                // shader sees them as generated: cross(b - a, c - a) with b and c swapped is
+                // the exact negation, but for the sign of a zero component (x - y and y - x
+                // are both +0 when x == y).
+                c.normal = reoriented ? -glm::vec3(result.face_normals[t]) : glm::vec3(result.face_normals[t]);
+            } else if (!mesh.normals.empty()) {
+                c.normal = glm::vec3(mesh.normals[v]);
             }
+            c.levels = result.levels[p];
+            out.push_back(c);
         }
     }
-    return capture;
 }
 
 // ---- writing ---------------------------------------------------------------------------

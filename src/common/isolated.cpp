@@ -30,6 +30,7 @@ struct Phase {
     int line;
 };
 Phase* g_phase = nullptr;  // non-null in the child only
+int g_answer_fd = -1;      // the child's end of the pipe, in the child only
 
 void copy_to(char* to, std::size_t size, const std::string& from) {
     const std::size_t n = std::min(size - 1, from.size());
@@ -37,7 +38,8 @@ void copy_to(char* to, std::size_t size, const std::string& from) {
     to[n] = '\0';
 }
 
-// The child's answer on the pipe: one tag byte, then the bytes.
+// The child's answer on the pipe: pieces sent ahead ('C', the length as 8 bytes, the
+// bytes; any number of them), then one tag byte and the bytes up to the end of the pipe:
 //   'R' result bytes | 'E' an Error: what \0 file \0 line \0 column \0 key \0 patch
 void put_u64(std::string& out, std::uint64_t v) { out.append(reinterpret_cast<const char*>(&v), sizeof v); }
 
@@ -147,6 +149,14 @@ double isolation_time_limit() {
     return seconds;
 }
 
+void send_to_parent(std::string_view bytes) {
+    if (g_answer_fd < 0) throw Error("send_to_parent() outside a child process of run_isolated()");
+    std::string head = "C";
+    put_u64(head, bytes.size());
+    if (!write_all(g_answer_fd, head.data(), head.size()) || !write_all(g_answer_fd, bytes.data(), bytes.size()))
+        throw Error("cannot send to the parent process: " + std::string(std::strerror(errno)));
+}
+
 void set_isolated_phase(const std::string& doing, const Where& where) {
     if (!g_phase) return;
     copy_to(g_phase->doing, sizeof g_phase->doing, doing);
@@ -155,7 +165,8 @@ void set_isolated_phase(const std::string& doing, const Where& where) {
 }
 
 std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
-                         const IsolationLimits& limits, const std::function<void()>& meanwhile) {
+                         const IsolationLimits& limits, const std::function<void()>& meanwhile,
+                         const std::function<void(std::string_view)>& on_chunk) {
     const double seconds = limits.seconds > 0.0 ? limits.seconds : isolation_time_limit();
     const std::uint64_t budget = limits.memory_bytes != 0 ? limits.memory_bytes : memory_limit();
     const std::uint64_t mapped = mapped_bytes();
@@ -182,12 +193,14 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
     if (child == 0) {
         ::close(fds[0]);
         g_phase = phase;
+        g_answer_fd = fds[1];
         run_child(fds[1], work, address_space);
     }
     ::close(fds[1]);
-    if (meanwhile) {
+    // Work of this process's (meanwhile, on_chunk) that throws ends the child unfinished.
+    const auto or_end_child = [&](const auto& parent_work) {
         try {
-            meanwhile();
+            parent_work();
         } catch (...) {
             ::close(fds[0]);
             ::kill(child, SIGKILL);
@@ -196,10 +209,32 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
             }
             throw;
         }
-    }
+    };
+    if (meanwhile) or_end_child(meanwhile);
 
-    // Read the answer until the child closes the pipe (it exits), or the time is up.
+    // Read the answer until the child closes the pipe (it exits), or the time is up. The
+    // pieces sent ahead go to on_chunk as each is complete; `at` is where the next begins.
     std::string answer;
+    std::size_t at = 0;
+    bool in_answer = false;  // past the pieces: the rest is the answer
+    const auto take_pieces = [&] {
+        while (!in_answer && at < answer.size()) {
+            if (answer[at] != 'C') {
+                in_answer = true;
+                break;
+            }
+            std::uint64_t n = 0;
+            if (answer.size() - at < 1 + sizeof n) break;
+            std::memcpy(&n, answer.data() + at + 1, sizeof n);
+            if (answer.size() - at - 1 - sizeof n < n) break;
+            if (on_chunk) or_end_child([&] { on_chunk(std::string_view(answer).substr(at + 1 + sizeof n, n)); });
+            at += 1 + sizeof n + n;
+        }
+        if (at > 0 && (in_answer || at == answer.size() || at >= (std::size_t(1) << 20))) {
+            answer.erase(0, at);
+            at = 0;
+        }
+    };
     bool timed_out = false;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     char block[1 << 16];
@@ -217,7 +252,10 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) break;
         answer.append(block, static_cast<std::size_t>(n));
+        take_pieces();
     }
+    // A piece the child did not finish is no answer.
+    if (!in_answer) answer.clear();
     ::close(fds[0]);
     if (timed_out) ::kill(child, SIGKILL);
     int status = 0;

@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include "tessref/error.h"
 
@@ -46,8 +47,19 @@ double isolation_time_limit();
 // here in the parent while the child works (after the fork, before its answer is read; the
 // child's time limit runs through it): `golden verify` computes the CPU side of a scene
 // while llvmpipe draws it. An exception from it kills the child, reaps it and goes on.
+//
+// `on_chunk`, when given, receives here, in order, every piece of bytes the child sends
+// ahead of its answer with send_to_parent(), as it arrives (after `meanwhile`): a child
+// whose result is large streams it piece by piece, and neither process holds it whole
+// (while `meanwhile` runs, the child waits once the pipe is full). An exception from it
+// kills the child, reaps it and goes on.
 std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
-                         const IsolationLimits& limits = {}, const std::function<void()>& meanwhile = {});
+                         const IsolationLimits& limits = {}, const std::function<void()>& meanwhile = {},
+                         const std::function<void(std::string_view)>& on_chunk = {});
+
+// In the child: sends `bytes` to the parent's `on_chunk` now, ahead of the answer. Throws
+// tessref::Error when the parent no longer reads. Not for use outside run_isolated().
+void send_to_parent(std::string_view bytes);
 
 // In the child: what it is doing now, and the file that is about to be used (a shader),
 // for the message if it dies there. Does nothing outside run_isolated().

@@ -1069,9 +1069,14 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     std::uint64_t largest = 0;
     for (std::size_t k = 0; k < batches.size(); ++k) largest = std::max<std::uint64_t>(largest, predicted_of(k));
     const std::uint64_t total = pipe.mesh.triangles.size();
-    require_memory(saturating_bytes(saturating_bytes(total, 3), sizeof(CapturedVertex)),
-                   "the capture of " + std::to_string(total) + " triangles", Where::at_key(scene.file, "--capture"));
-    result.capture.reserve(static_cast<std::size_t>(total) * 3);
+    // Streamed to the sink, only a draw's capture is held at once.
+    const bool to_sink = options.capture_sink && !diagnose;
+    if (!to_sink) {
+        require_memory(saturating_bytes(saturating_bytes(total, 3), sizeof(CapturedVertex)),
+                       "the capture of " + std::to_string(total) + " triangles", Where::at_key(scene.file, "--capture"));
+        result.capture.reserve(static_cast<std::size_t>(total) * 3);
+    }
+    std::vector<CapturedVertex> draw_capture;
     // One primitive of slack: an overflow still shows as written < generated, and the draw
     // is then repeated into a buffer of the size llvmpipe reported.
     std::uint64_t capacity_primitives = largest + 1;
@@ -1131,6 +1136,8 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
         }
         std::memcpy(records.data(), mapped, records.size() * sizeof(FeedbackRecord));
         gl.UnmapBuffer(GL_TRANSFORM_FEEDBACK_BUFFER);
+        std::vector<CapturedVertex>& into = to_sink ? draw_capture : result.capture;
+        if (to_sink) draw_capture.clear();
         for (const FeedbackRecord& r : records) {
             CapturedVertex v;
             // gl_PrimitiveID counts the draw's patches; a geomipmapped vertex carries its own.
@@ -1141,8 +1148,9 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
             v.normal = glm::vec3(r.normal[0], r.normal[1], r.normal[2]);
             std::memcpy(v.levels.outer.data(), r.outer, sizeof r.outer);
             std::memcpy(v.levels.inner.data(), r.inner, sizeof r.inner);
-            result.capture.push_back(v);
+            into.push_back(v);
         }
+        if (to_sink) options.capture_sink(draw_capture);
     }
     gl.Disable(GL_RASTERIZER_DISCARD);
     c.check_error("reading the capture back");
@@ -1239,12 +1247,19 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         } catch (const Error&) {
         }
     }
+    std::vector<CapturedVertex> sink_vertices;
     const std::string answer = run_isolated(kIsolatedWhat, [&] {
         set_isolated_phase("creating the OSMesa context");
         // Never destroyed: the child exits when it has answered, and a driver's teardown
         // is one more place to crash after the work is done.
         Context& context = *new Context(Context::create());
-        SceneRender r = render_scene(context, scene_in, options);
+        // The capture streamed: each draw's vertices go to the parent as they are read back.
+        SceneRenderOptions child_options = options;
+        if (options.capture_sink)
+            child_options.capture_sink = [](std::span<const CapturedVertex> v) {
+                send_to_parent(std::string_view(reinterpret_cast<const char*>(v.data()), v.size_bytes()));
+            };
+        SceneRender r = render_scene(context, scene_in, child_options);
         set_isolated_phase("sending the picture back");
         std::string out;
         put_string(out, context.renderer());
@@ -1256,7 +1271,19 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         put_vector(out, r.differences);
         put_value(out, r.stats);
         return out;
-    }, {}, options.meanwhile);
+    }, {}, [&] {
+        if (!options.return_pipeline) options.pipeline.reset();  // the child has its own copy
+        if (options.meanwhile) options.meanwhile();
+    }, [&](std::string_view bytes) {
+        // Pieces come only with a sink. The bytes are copied out of the pipe's buffer into
+        // vertices of their own alignment.
+        if (!options.capture_sink || bytes.size() % sizeof(CapturedVertex) != 0)
+            throw Error("the GL backend's child process sent a piece of capture that is not whole vertices");
+        std::vector<CapturedVertex>& v = sink_vertices;
+        v.resize(bytes.size() / sizeof(CapturedVertex));
+        if (!v.empty()) std::memcpy(static_cast<void*>(v.data()), bytes.data(), bytes.size());
+        options.capture_sink(v);
+    });
     IsolatedRender result;
     Reader in{answer};
     result.renderer = in.string();

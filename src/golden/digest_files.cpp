@@ -194,6 +194,23 @@ std::string sha256_hex(std::string_view bytes) {
     return hex_of(digest, length);
 }
 
+Sha256::Sha256() : context_(EVP_MD_CTX_new()) {
+    if (!context_ || EVP_DigestInit_ex(static_cast<EVP_MD_CTX*>(context_), EVP_sha256(), nullptr) != 1)
+        throw Error("SHA-256 failed (OpenSSL)");
+}
+Sha256::~Sha256() { EVP_MD_CTX_free(static_cast<EVP_MD_CTX*>(context_)); }
+void Sha256::add(std::string_view bytes) {
+    if (EVP_DigestUpdate(static_cast<EVP_MD_CTX*>(context_), bytes.data(), bytes.size()) != 1)
+        throw Error("SHA-256 failed (OpenSSL)");
+}
+std::string Sha256::hex() {
+    unsigned char digest[EVP_MAX_MD_SIZE];
+    unsigned int length = 0;
+    if (EVP_DigestFinal_ex(static_cast<EVP_MD_CTX*>(context_), digest, &length) != 1)
+        throw Error("SHA-256 failed (OpenSSL)");
+    return hex_of(digest, length);
+}
+
 glm::ivec2 parse_size(const std::string& text, const Where& where) {
     const std::size_t x = text.find('x');
     const std::optional<std::size_t> w = x == std::string::npos ? std::nullopt : count_of(std::string_view(text).substr(0, x));
@@ -206,75 +223,86 @@ glm::ivec2 parse_size(const std::string& text, const Where& where) {
 
 namespace {
 
-// A SHA-256 fed piece by piece (OpenSSL's EVP interface).
-class Sha256 {
-public:
-    Sha256() : context_(EVP_MD_CTX_new()) {
-        if (!context_ || EVP_DigestInit_ex(context_, EVP_sha256(), nullptr) != 1) fail();
-    }
-    ~Sha256() { EVP_MD_CTX_free(context_); }
-    Sha256(const Sha256&) = delete;
-    Sha256& operator=(const Sha256&) = delete;
-    void add(std::string_view bytes) {
-        if (EVP_DigestUpdate(context_, bytes.data(), bytes.size()) != 1) fail();
-    }
-    std::string hex() {
-        unsigned char digest[EVP_MAX_MD_SIZE];
-        unsigned int length = 0;
-        if (EVP_DigestFinal_ex(context_, digest, &length) != 1) fail();
-        return hex_of(digest, length);
-    }
-
-private:
-    [[noreturn]] static void fail() { throw Error("SHA-256 failed (OpenSSL)"); }
-    EVP_MD_CTX* context_;
-};
-
 // Vertices formatted at once before their text joins the whole digest: about 25 MB of text.
 constexpr std::size_t kDigestWindowVertices = std::size_t(1) << 18;
 
 }  // namespace
 
-CaptureDigest capture_digest(std::span<const CapturedVertex> capture) {
-    // The runs of one patch's vertices: each is its `patch` line and its vertex lines.
-    std::vector<std::size_t> starts;
-    for (std::size_t i = 0; i < capture.size(); ++i)
-        if (i == 0 || capture[i].patch_id != capture[i - 1].patch_id) starts.push_back(i);
-    const std::size_t runs = starts.size();
-    starts.push_back(capture.size());
-
-    CaptureDigest digest;
-    digest.triangles = capture.size() / 3;
-    digest.patches.resize(runs);
+struct CaptureDigester::State {
     Sha256 whole;
-    whole.add(capture_text({}));  // the header lines
+    CaptureDigest digest;
+    std::size_t vertices = 0;
+    std::vector<CapturedVertex> carry;  // the last run added: it may go on in the next piece
     std::vector<std::string> texts;
-    for (std::size_t first = 0; first < runs;) {
-        // A window of whole runs (at least one), formatted and digested run by run in
-        // parallel, then added to the whole text's digest in order.
-        std::size_t last = first + 1, vertices = starts[last] - starts[first];
-        while (last < runs && vertices + (starts[last + 1] - starts[last]) <= kDigestWindowVertices) {
-            vertices += starts[last + 1] - starts[last];
-            ++last;
+
+    // Whole runs, formatted and digested run by run in parallel a window of about
+    // kDigestWindowVertices at a time, then added to the whole text's digest in order.
+    void digest_runs(const std::vector<std::span<const CapturedVertex>>& runs) {
+        for (std::size_t first = 0; first < runs.size();) {
+            std::size_t last = first + 1, window = runs[first].size();
+            while (last < runs.size() && window + runs[last].size() <= kDigestWindowVertices) window += runs[last++].size();
+            texts.resize(last - first);
+            const std::size_t base = digest.patches.size();
+            digest.patches.resize(base + (last - first));
+            parallel_for(first, last, [&](std::size_t r) {
+                const std::span<const CapturedVertex> run = runs[r];
+                std::string& text = texts[r - first];
+                text.clear();
+                append_capture_lines(run, text);
+                PatchDigest& p = digest.patches[base + (r - first)];
+                p.patch_id = run.front().patch_id;
+                const std::string_view patch_line = std::string_view(text).substr(0, text.find('\n'));
+                const std::size_t levels = patch_line.find(" levels ");
+                if (levels != std::string_view::npos) p.levels = std::string(patch_line.substr(levels + 8));
+                p.triangles = run.size() / 3;
+                p.sha256 = sha256_hex(text).substr(0, kPatchDigits);
+            });
+            for (const std::string& text : texts) whole.add(text);
+            first = last;
         }
-        texts.resize(last - first);
-        parallel_for(first, last, [&](std::size_t r) {
-            std::string& text = texts[r - first];
-            text.clear();
-            append_capture_lines(capture.subspan(starts[r], starts[r + 1] - starts[r]), text);
-            PatchDigest& p = digest.patches[r];
-            p.patch_id = capture[starts[r]].patch_id;
-            const std::string_view patch_line = std::string_view(text).substr(0, text.find('\n'));
-            const std::size_t levels = patch_line.find(" levels ");
-            if (levels != std::string_view::npos) p.levels = std::string(patch_line.substr(levels + 8));
-            p.triangles = (starts[r + 1] - starts[r]) / 3;
-            p.sha256 = sha256_hex(text).substr(0, kPatchDigits);
-        });
-        for (const std::string& text : texts) whole.add(text);
-        first = last;
     }
-    digest.sha256 = whole.hex();
-    return digest;
+};
+
+CaptureDigester::CaptureDigester() : state_(std::make_unique<State>()) {
+    state_->whole.add(capture_text({}));  // the header lines
+}
+CaptureDigester::~CaptureDigester() = default;
+
+void CaptureDigester::add(std::span<const CapturedVertex> piece) {
+    State& s = *state_;
+    s.vertices += piece.size();
+    std::size_t i = 0;
+    // A run cut by the end of the last piece goes on here: the text has no `patch` line there.
+    if (!s.carry.empty())
+        while (i < piece.size() && piece[i].patch_id == s.carry.back().patch_id) ++i;
+    s.carry.insert(s.carry.end(), piece.begin(), piece.begin() + static_cast<std::ptrdiff_t>(i));
+    if (i == piece.size()) return;
+    // Every run that the piece ends is complete; its last run is carried to the next piece.
+    std::vector<std::span<const CapturedVertex>> runs;
+    if (!s.carry.empty()) runs.push_back(s.carry);
+    std::size_t start = i;
+    for (std::size_t k = i + 1; k < piece.size(); ++k)
+        if (piece[k].patch_id != piece[k - 1].patch_id) {
+            runs.push_back(piece.subspan(start, k - start));
+            start = k;
+        }
+    s.digest_runs(runs);
+    s.carry.assign(piece.begin() + static_cast<std::ptrdiff_t>(start), piece.end());
+}
+
+CaptureDigest CaptureDigester::finish() {
+    State& s = *state_;
+    if (!s.carry.empty()) s.digest_runs({std::span<const CapturedVertex>(s.carry)});
+    s.carry.clear();
+    s.digest.triangles = s.vertices / 3;
+    s.digest.sha256 = s.whole.hex();
+    return std::move(s.digest);
+}
+
+CaptureDigest capture_digest(std::span<const CapturedVertex> capture) {
+    CaptureDigester digester;
+    digester.add(capture);
+    return digester.finish();
 }
 
 }  // namespace tessref::golden

@@ -17,9 +17,13 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <memory>
+#include <optional>
+#include <span>
 #include <set>
 #include <sstream>
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include "common/input_file.h"
@@ -60,35 +64,66 @@ bool has_control_character(const std::string& text) {
 
 struct CpuReference {
     Scene scene;  // the viewport replaced by the golden size
-    RenderResult image;
-    Capture capture;
+    RenderResult image;  // with the pipeline's surface, from which the capture is made
+    // The capture, made from image.pipeline a window at a time: at 64 bytes a vertex it is
+    // several times the surface it is made from (390 MB for thesis-constant-64).
+    std::unique_ptr<PipelineCapture> capture;
     CaptureDigest digest;  // of the capture's text
     MeshDigest mesh;
 };
 
-// `scene` as loaded, with its own viewport.
+// Triangles made into capture vertices at once, for the digest (about 16 MB of them).
+constexpr std::size_t kCaptureWindowTriangles = std::size_t(1) << 16;
+
+// The mesh exactly as `tessref mesh SCENE --binary -o mesh.ply` writes it (the scene's own
+// viewport: mesh has no --size, and PN's levels follow the viewport), welded as it does
+// (streamed where the scene allows) and hashed as it is written, never held as bytes.
+MeshDigest mesh_digest(const Scene& scene) {
+    MeshWriteOptions mesh_options;
+    mesh_options.format = MeshFormat::ply;
+    mesh_options.binary = true;
+    Sha256Buffer sha;
+    std::ostream out(&sha);
+    MeshWriteReport stats;
+    if (surface_streams(scene)) {
+        const WeldedMesh welded = run_pipeline_welded(scene);
+        stats = write_mesh(welded, out, mesh_options);
+    } else {
+        const PipelineResult pipeline = run_pipeline(scene);
+        stats = write_mesh(pipeline.mesh, out, mesh_options);
+    }
+    out.flush();
+    return {stats.vertices, stats.triangles, sha.bytes(), sha.hex()};
+}
+
+// `scene` as loaded, with its own viewport. The capture's digest is left to
+// digest_capture(), so that `golden verify` can compare the capture with llvmpipe's first.
 CpuReference cpu_reference(const Scene& scene, const fs::path& scene_path, glm::ivec2 size) {
     CpuReference ref;
     if (!scene.camera) throw Error("the scene has no [camera]: golden images need one", Where::in_file(scene_path.string()));
     RenderOptions render_options;
     render_options.size = size;
     render_options.keep_surface = true;  // the capture reads the surface
+    // The mesh first: its surface is let go before the render's, which the capture is
+    // made from, is made.
+    ref.mesh = mesh_digest(scene);
     ref.image = render_scene(scene, render_options);
     ref.scene = scene;
     ref.scene.camera->viewport = size;  // the viewport the pipeline saw (render.h)
-    ref.capture.vertices = capture_from_pipeline(ref.scene, *ref.image.pipeline);
-    ref.digest = capture_digest(ref.capture.vertices);
-
-    // The mesh exactly as `tessref mesh SCENE --binary -o mesh.ply` writes it (the scene's
-    // own viewport: mesh has no --size, and PN's levels follow the viewport).
-    const PipelineResult pipeline = run_pipeline(scene);
-    std::ostringstream mesh_bytes;
-    MeshWriteOptions mesh_options;
-    mesh_options.format = MeshFormat::ply;
-    mesh_options.binary = true;
-    const MeshWriteReport stats = write_mesh(pipeline.mesh, mesh_bytes, mesh_options);
-    ref.mesh = {stats.vertices, stats.triangles, mesh_bytes.str().size(), sha256_hex(mesh_bytes.str())};
+    ref.capture = std::make_unique<PipelineCapture>(ref.scene, *ref.image.pipeline);
     return ref;
+}
+
+// The digests of the capture's text (capture.txt), the capture made a window at a time.
+void digest_capture(CpuReference& ref) {
+    CaptureDigester digester;
+    std::vector<CapturedVertex> window;
+    for (std::size_t t = 0; t < ref.capture->triangles(); t += kCaptureWindowTriangles) {
+        window.clear();
+        ref.capture->append(t, t + kCaptureWindowTriangles, window);
+        digester.add(window);
+    }
+    ref.digest = digester.finish();
 }
 
 std::string capture_file_text(const std::string& name, const Location& location, glm::ivec2 size,
@@ -207,19 +242,144 @@ void check_mesh(const MeshDigest& golden, const MeshDigest& now, const fs::path&
 
 // ---- step 2: llvmpipe against the golden files -------------------------------------------
 
+// llvmpipe's capture against the CPU reference's, patch by patch as the GL child sends it
+// (a draw's vertices at a time), the CPU side's patch made from the pipeline when its
+// turn comes: neither capture is held whole. The result is compare_captures()'s on the
+// two whole captures, provided llvmpipe's brings each patch's triangles together, in
+// ascending patch order, as its draws (consecutive patches each) and transform feedback
+// (primitives in the order they are generated) give them; a capture that does not is an
+// Error here.
+class StreamedGlComparison {
+public:
+    StreamedGlComparison(const PipelineCapture& cpu, const CaptureCompareOptions& options,
+                         std::vector<CapturedVertex>* keep_gl)
+        : cpu_(cpu), compare_(options), keep_gl_(keep_gl) {
+        for (const PipelineCapture::Run& r : cpu.runs()) cpu_patches_.push_back(r);
+        std::stable_sort(cpu_patches_.begin(), cpu_patches_.end(),
+                         [](const PipelineCapture::Run& a, const PipelineCapture::Run& b) { return a.patch < b.patch; });
+    }
+
+    void add(std::span<const CapturedVertex> gl) {
+        gl_vertices_ += gl.size();
+        if (keep_gl_) keep_gl_->insert(keep_gl_->end(), gl.begin(), gl.end());
+        pending_.insert(pending_.end(), gl.begin(), gl.end());
+        // Every patch that a later one follows is complete; the last may go on.
+        const std::size_t triangles = pending_.size() / 3;
+        std::size_t last_start = 0;
+        for (std::size_t t = 1; t < triangles; ++t)
+            if (pending_[3 * t].patch_id != pending_[3 * t - 3].patch_id) last_start = t;
+        if (last_start == 0) return;
+        compare_gl_patches(std::span<const CapturedVertex>(pending_).first(3 * last_start));
+        pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(3 * last_start));
+    }
+
+    CaptureCompareResult finish() {
+        if (gl_vertices_ % 3 != 0)
+            throw Error("the test capture has " + std::to_string(gl_vertices_) + " vertices, not whole triangles");
+        compare_gl_patches(pending_);
+        pending_.clear();
+        // The CPU's patches that llvmpipe did not capture.
+        flush_cpu_before(UINT32_MAX, true);
+        return compare_.finish();
+    }
+
+private:
+    // The CPU's patches below `patch` not compared yet, each against nothing (missing in
+    // the test), into pairs_; with `inclusive`, `patch` too.
+    void flush_cpu_before(std::uint32_t patch, bool inclusive) {
+        while (next_cpu_ < cpu_patches_.size() &&
+               (cpu_patches_[next_cpu_].patch < patch || (inclusive && cpu_patches_[next_cpu_].patch == patch))) {
+            add_pair(cpu_patches_[next_cpu_].patch, {});
+        }
+        compare_pairs();
+    }
+
+    // The CPU's triangles of `patch` (all its runs, in capture order) against `gl`; moves
+    // next_cpu_ past the patch's runs.
+    void add_pair(std::uint32_t patch, std::span<const CapturedVertex> gl) {
+        std::vector<CapturedVertex>& cpu = cpu_vertices_.emplace_back();
+        while (next_cpu_ < cpu_patches_.size() && cpu_patches_[next_cpu_].patch == patch) {
+            cpu_.append(cpu_patches_[next_cpu_].first, cpu_patches_[next_cpu_].last, cpu);
+            ++next_cpu_;
+        }
+        StreamedCaptureComparison::PatchPair pair;
+        pair.patch = patch;
+        pair.test = gl;
+        pairs_.push_back(pair);
+    }
+
+    void compare_pairs() {
+        for (std::size_t k = 0; k < pairs_.size(); ++k) pairs_[k].reference = cpu_vertices_[k];
+        compare_.add(pairs_);
+        pairs_.clear();
+        cpu_vertices_.clear();
+    }
+
+    // Whole patches of llvmpipe's capture, each once, in ascending order.
+    void compare_gl_patches(std::span<const CapturedVertex> gl) {
+        const std::size_t triangles = gl.size() / 3;
+        for (std::size_t first = 0; first < triangles;) {
+            const std::uint32_t patch = gl[3 * first].patch_id;
+            std::size_t last = first + 1;
+            while (last < triangles && gl[3 * last].patch_id == patch) ++last;
+            if (any_gl_ && patch <= last_gl_patch_)
+                throw Error("llvmpipe's capture gives patch " + std::to_string(patch) + " after patch " +
+                                std::to_string(last_gl_patch_) +
+                                ", where its draws and transform feedback give the patches in order",
+                            Where::at_patch(patch));
+            any_gl_ = true;
+            last_gl_patch_ = patch;
+            // The CPU's patches before this one are missing in llvmpipe's capture.
+            while (next_cpu_ < cpu_patches_.size() && cpu_patches_[next_cpu_].patch < patch)
+                add_pair(cpu_patches_[next_cpu_].patch, {});
+            add_pair(patch, gl.subspan(3 * first, 3 * (last - first)));
+            first = last;
+        }
+        compare_pairs();
+    }
+
+    const PipelineCapture& cpu_;
+    std::vector<PipelineCapture::Run> cpu_patches_;  // by patch, each patch's runs in capture order
+    std::size_t next_cpu_ = 0;
+    StreamedCaptureComparison compare_;
+    std::vector<CapturedVertex>* keep_gl_;
+    std::vector<CapturedVertex> pending_;  // llvmpipe's vertices of a patch that may go on
+    std::size_t gl_vertices_ = 0;
+    bool any_gl_ = false;
+    std::uint32_t last_gl_patch_ = 0;
+    std::vector<StreamedCaptureComparison::PatchPair> pairs_;
+    std::vector<std::vector<CapturedVertex>> cpu_vertices_;  // the reference side of pairs_
+};
+
 // The GL side against the golden files, with `cpu_side` (which makes `ref`) run while
-// llvmpipe draws: the two sides share nothing until the comparison.
-void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side, const CpuReference& ref,
+// llvmpipe draws: the two sides share nothing until the comparison, which takes llvmpipe's
+// capture draw by draw as the child sends it; `cpu_digests` runs when the child is done.
+void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side,
+                     const std::function<void()>& cpu_digests, const CpuReference& ref,
                      const FloatImage& golden_image, glm::ivec2 size, const fs::path& work, bool keep, SceneVerdict& v) {
+    CaptureCompareOptions capture_options;
+    capture_options.max_position_ulps = kMaxPositionUlps;
+    capture_options.max_normal_ulps = kMaxNormalUlps;
+    capture_options.max_position_abs = kMaxPositionAbs;
+    capture_options.max_normal_abs = kMaxNormalAbs;
+    capture_options.max_listed = 1000000;
+    std::vector<CapturedVertex> gl_capture;  // with --keep only, for a failing scene's files
+    std::optional<StreamedGlComparison> streamed;
     gl::SceneRenderOptions gl_options;
     gl_options.size = size;
     gl_options.capture = true;
     gl_options.meanwhile = cpu_side;
+    gl_options.return_pipeline = false;  // the CPU side has its own, in exact math
+    gl_options.capture_sink = [&](std::span<const CapturedVertex> draw) {
+        if (!streamed) streamed.emplace(*ref.capture, capture_options, keep ? &gl_capture : nullptr);  // after cpu_side
+        streamed->add(draw);
+    };
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)  // as `tessref gl`
         gl_options.corrupt_prediction_of_batch = std::atoll(hook);
     // In a child process with its own limits, as `tessref gl` (gl_render.h).
     gl::SceneRender r = gl::render_scene_isolated(scene, gl_options).render;
     v.seconds_gl = r.stats.seconds_gl + r.stats.seconds_capture;
+    cpu_digests();
     if (!r.batch_failure.empty()) {
         v.failures.push_back(r.batch_failure);
         return;
@@ -237,15 +397,8 @@ void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side, 
     const CompareResult image = compare_images(golden_image, test_image, image_options);
     v.max_error = image.max_error;
 
-    Capture gl_capture;
-    gl_capture.vertices = std::move(r.capture);  // not copied: a capture is 64 bytes a vertex
-    CaptureCompareOptions capture_options;
-    capture_options.max_position_ulps = kMaxPositionUlps;
-    capture_options.max_normal_ulps = kMaxNormalUlps;
-    capture_options.max_position_abs = kMaxPositionAbs;
-    capture_options.max_normal_abs = kMaxNormalAbs;
-    capture_options.max_listed = 1000000;
-    const CaptureCompareResult c = compare_captures(ref.capture, gl_capture, capture_options);
+    if (!streamed) streamed.emplace(*ref.capture, capture_options, nullptr);  // llvmpipe captured nothing
+    const CaptureCompareResult c = streamed->finish();
     v.position_ulps = c.worst_position.ulps;
     v.normal_ulps = c.worst_normal.ulps;
     // Patches whose levels differ (the control stage's acos, see golden/README.md): their
@@ -303,8 +456,9 @@ void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side, 
         v.failures.push_back("capture: a level differs by " + std::to_string(v.level_difference) + " (more than " +
                              std::to_string(kMaxLevelDifference) + ")");
     if (!v.failures.empty() && keep) {
-        std::ofstream((work / "cpu-capture.txt").string()) << capture_text(ref.capture.vertices, "tessref golden (CPU)");
-        std::ofstream((work / "gl-capture.txt").string()) << capture_text(gl_capture.vertices, "tessref golden (GL)");
+        std::ofstream((work / "cpu-capture.txt").string())
+            << capture_text(capture_from_pipeline(ref.scene, *ref.image.pipeline), "tessref golden (CPU)");
+        std::ofstream((work / "gl-capture.txt").string()) << capture_text(gl_capture, "tessref golden (GL)");
     }
 }
 
@@ -357,16 +511,24 @@ void verify_files(const std::string& name, const Location& location, const fs::p
         }
     } remove_unless_kept{work, !keep.empty()};
 
-    // (1) The CPU reference against its golden files.
+    // (1) The CPU reference against its golden files: the pipeline, the image and the mesh
+    // while llvmpipe draws (cpu_side), the capture's digests after llvmpipe's capture has
+    // been compared with it (cpu_digests), when the surface it is made from is all that
+    // is left to hold.
     CpuReference ref;
+    bool image_differs = false;
     const auto cpu_side = [&] {
         ref = cpu_reference(scene, scene_path, size);
+        write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
+        const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
+        image_differs = cpu_image.samples != golden_image.samples;
+    };
+    const auto cpu_digests = [&] {
+        digest_capture(ref);
         v.triangles = ref.digest.triangles;
         check_capture(golden_capture, ref, capture_file, v);
         check_mesh(golden_mesh, ref.mesh, mesh_file, v);
-        write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
-        const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
-        if (cpu_image.samples != golden_image.samples) v.stale.push_back("image: the CPU picture differs from image.png");
+        if (image_differs) v.stale.push_back("image: the CPU picture differs from image.png");
     };
 
     // (2) The GL backend against the golden image and the CPU capture, drawn while (1) runs.
@@ -377,10 +539,11 @@ void verify_files(const std::string& name, const Location& location, const fs::p
     // files are checked on the CPU only.
     if (scene.shading.model.kind == ShadingKind::pom) {
         cpu_side();
+        cpu_digests();
         v.gl_compared = false;
         return;
     }
-    compare_with_gl(scene, cpu_side, ref, golden_image, size, work, !keep.empty(), v);
+    compare_with_gl(scene, cpu_side, cpu_digests, ref, golden_image, size, work, !keep.empty(), v);
 }
 
 }  // namespace
@@ -428,6 +591,7 @@ GoldenFiles make_golden_files(const std::string& name, const Location& location,
     if (!fs::is_regular_file(scene_path))
         throw Error("no scene '" + name + "' (" + scene_path.string() + ")", Where::in_file(name));
     CpuReference ref = cpu_reference(load_scene(scene_path.string()), scene_path, size);
+    digest_capture(ref);
     GoldenFiles files;
     files.capture_txt = capture_file_text(name, location, size, ref);
     files.mesh_txt = mesh_file_text(name, location, ref);
@@ -503,6 +667,9 @@ SceneVerdict verify_scene(const std::string& name, const Location& location, con
             return v;
         }
         verify_files(name, location, keep, v);
+        // What this scene freed goes back to the system before the next scene's GL child is
+        // forked: the child's resident size counts every page the parent still holds.
+        ::malloc_trim(0);
     } catch (const Error& e) {
         v.error = e.message();
     } catch (const std::exception& e) {  // a file system error of --keep, memory

@@ -44,14 +44,22 @@ struct Corner {
 };
 // A convex polygon: a triangle clipped by six half-planes has at most nine corners (more only if rounding made it non-convex; add() drops those beyond the room).
 struct Polygon {
-    std::array<Corner, 32> c{};  // room for rounding-made extra corners
+    // Room for rounding-made extra corners. Not zeroed: only the first n are ever read, and
+    // zeroing 768 bytes for every clip was most of the geometric error's time.
+    std::array<Corner, 32> c;
     int n = 0;
 };
 
-// Keeps the part where a * u + b * v + k >= 0 (Sutherland-Hodgman, one edge). Heights are
-// interpolated linearly along the cut edge: T is linear on the triangle, so they are exact.
-Polygon clip(const Polygon& in, double a, double b, double k) {
-    Polygon out;
+// Keeps the part where a * u + b * v + k >= 0 (Sutherland-Hodgman, one edge), into `out`;
+// returns the result: `in` itself where no corner is cut off (most clips: a small triangle
+// inside its texel), which the loop would copy corner by corner. Heights are interpolated
+// linearly along the cut edge: T is linear on the triangle, so they are exact.
+const Polygon& clip(const Polygon& in, double a, double b, double k, Polygon& out) {
+    bool inside = true;
+    for (int i = 0; i < in.n && inside; ++i)
+        inside = a * in.c[static_cast<std::size_t>(i)].u + b * in.c[static_cast<std::size_t>(i)].v + k >= 0.0;
+    if (inside) return in;
+    out.n = 0;
     for (int i = 0; i < in.n; ++i) {
         const Corner& p = in.c[static_cast<std::size_t>(i)];
         const Corner& q = in.c[static_cast<std::size_t>((i + 1) % in.n)];
@@ -81,7 +89,7 @@ struct PatchError {
 // g(u, v) = h0 + su * (u - u0) + sv * (v - v0).
 void measure_piece(const Polygon& piece, double u0, double v0, double h0, double su, double sv, PatchError& out) {
     if (piece.n < 3) return;
-    std::array<double, 32> e{};
+    std::array<double, 32> e;  // the first piece.n are written
     for (int i = 0; i < piece.n; ++i) {
         const Corner& p = piece.c[static_cast<std::size_t>(i)];
         const double g = h0 + (p.u - u0) * su + (p.v - v0) * sv;
@@ -119,25 +127,23 @@ void measure_triangle(const TruthSurface& truth, const std::array<Corner, 3>& t,
     if (cross == 0.0) return;
     const std::size_t i0 = cell_of(truth.us, umin), i1 = cell_of(truth.us, umax);
     const std::size_t j0 = cell_of(truth.vs, vmin), j1 = cell_of(truth.vs, vmax);
-    Polygon tri;
+    Polygon tri, row_low, row_high, cell_low, cell_high, piece;  // the clips' results, reused
     tri.n = 3;
     for (std::size_t k = 0; k < 3; ++k) tri.c[k] = t[k];
     for (std::size_t j = j0; j <= j1; ++j) {
         const double v0 = truth.vs[j], v1 = truth.vs[j + 1], dv = v1 - v0;
-        const Polygon row = clip(clip(tri, 0.0, 1.0, -v0), 0.0, -1.0, v1);
+        const Polygon& row = clip(clip(tri, 0.0, 1.0, -v0, row_low), 0.0, -1.0, v1, row_high);
         if (row.n < 3) continue;
         for (std::size_t i = i0; i <= i1; ++i) {
             const double u0 = truth.us[i], u1 = truth.us[i + 1], du = u1 - u0;
-            const Polygon cell = clip(clip(row, 1.0, 0.0, -u0), -1.0, 0.0, u1);
+            const Polygon& cell = clip(clip(row, 1.0, 0.0, -u0, cell_low), -1.0, 0.0, u1, cell_high);
             if (cell.n < 3) continue;
             const double ha = truth.height(i, j), hb = truth.height(i + 1, j);
             const double hc = truth.height(i + 1, j + 1), hd = truth.height(i, j + 1);
             // The diagonal from a = (u0, v0) to c = (u1, v1): f = (u - u0) dv - (v - v0) du.
             // f >= 0: triangle (a, b, c), below the diagonal; f <= 0: triangle (a, c, d).
-            const Polygon lower = clip(cell, dv, -du, -u0 * dv + v0 * du);
-            measure_piece(lower, u0, v0, ha, (hb - ha) / du, (hc - hb) / dv, out);
-            const Polygon upper = clip(cell, -dv, du, u0 * dv - v0 * du);
-            measure_piece(upper, u0, v0, ha, (hc - hd) / du, (hd - ha) / dv, out);
+            measure_piece(clip(cell, dv, -du, -u0 * dv + v0 * du, piece), u0, v0, ha, (hb - ha) / du, (hc - hb) / dv, out);
+            measure_piece(clip(cell, -dv, du, u0 * dv - v0 * du, piece), u0, v0, ha, (hc - hd) / du, (hd - ha) / dv, out);
         }
     }
 }
