@@ -927,6 +927,11 @@ TEST(StreamedPlyWriter, AnInteriorPointALaterPatchMeetsIsNotStreamed) {
     first.positions[1].z = -1.0;
     first.positions[7].z = 1.0;
     EXPECT_FALSE(stream_pieces({first, later}, expected).has_value());
+    // The other way round: an interior point of a later piece's patch repeats an earlier
+    // patch's corner, which the streamed weld holds but an interior point does not look up.
+    SurfaceMesh inner = first;
+    for (std::uint32_t& patch : inner.patch_ids) patch = 1;
+    EXPECT_FALSE(stream_pieces({grid_patch(0, {1.0, 1.0}), inner}, expected).has_value());
     // Within one piece the weld holds every point: the same patches stream, welded.
     const std::optional<std::string> one_piece = stream_pieces({concatenated({first, later})}, expected);
     ASSERT_TRUE(one_piece.has_value());

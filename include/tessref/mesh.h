@@ -207,9 +207,9 @@ MeshWriteReport write_mesh(const WeldedMesh& welded, std::ostream& out, const Me
 // (the pipeline has them from its patterns without evaluating anything). The weld itself
 // needs, for each new copy, every earlier vertex it could equal. Within a piece the writer
 // keeps them all; across pieces only each patch's vertices on the surface of its bounding
-// box, because the others (a patch's "interior", strictly inside its box on every axis)
-// are checked, at the end, to lie outside the box of every patch of a later piece: then no later copy
-// can equal them. Tessellated terrains pass that check (a patch's interior points lie
+// box, and only those look there, because the others (a patch's "interior", strictly
+// inside its box on every axis) are checked, at the end, to lie outside the box of every
+// patch of another piece: then no copy of another piece can equal them. Tessellated terrains pass that check (a patch's interior points lie
 // strictly between its edges, and its neighbours begin at them); a surface whose patches
 // overlap (PN triangles' curved patches) does not, and is written otherwise. Also
 // written otherwise: positions that are not float values (exact precision, camera-relative

@@ -858,7 +858,7 @@ struct Box {
     }
 };
 
-// Whether no patch's interior box meets the whole box of a patch of a later piece (closed
+// Whether no patch's interior box meets the whole box of a patch of another piece (closed
 // boxes: a shared coordinate meets), proven within a budget of box tests; false when it is not, or
 // not within the budget. The interiors are binned into a grid over the two axes along
 // which the surface spreads most, cells at least as wide as every patch (so that each box
@@ -904,7 +904,7 @@ bool interiors_apart(const std::vector<Box>& interiors, const std::vector<Box>& 
             for (std::int64_t j = j0; j <= j1; ++j) {
                 if (budget-- == 0) return false;
                 const auto first = std::lower_bound(cells.begin(), cells.end(), std::pair{key(i, j), std::uint32_t{0}});
-                for (auto it = first; it != cells.end() && it->first == key(i, j) && it->second < q; ++it) {
+                for (auto it = first; it != cells.end() && it->first == key(i, j); ++it) {
                     if (budget-- == 0) return false;
                     if (piece_of[it->second] != piece_of[q] && interiors[it->second].meets(w)) return false;
                 }
@@ -1032,9 +1032,10 @@ struct StreamedPlyWriter::Impl {
         const auto shared_position = [this](std::uint32_t g) -> const glm::dvec3& { return shared_positions[g]; };
         const auto piece_position = [&piece](std::uint32_t k) -> const glm::dvec3& { return piece.positions[k]; };
         for (std::size_t i = 0; i < n; ++i) {
-            if (i + kPrefetchAhead < n) shared.prefetch(hashes[i + kPrefetchAhead]);
+            if (i + kPrefetchAhead < n && on_box[i + kPrefetchAhead]) shared.prefetch(hashes[i + kPrefetchAhead]);
             const glm::dvec3& p = piece.positions[i];
-            const std::uint32_t g = shared.find(p, hashes[i], shared_position);
+            // An interior point meets no other piece's patch (finish() proves it).
+            const std::uint32_t g = on_box[i] ? shared.find(p, hashes[i], shared_position) : PositionTable::kNone;
             if (g != PositionTable::kNone) {
                 map[i] = shared_ids[g];
                 continue;
