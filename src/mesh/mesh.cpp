@@ -1065,14 +1065,16 @@ struct StreamedPlyWriter::Impl {
             largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
         }
 
-        // The new vertices' records, blocks of them formatted in parallel, written in order.
-        const std::size_t block_count = (fresh.size() + kBlockRecords - 1) / kBlockRecords;
+        // The new vertices' records, blocks of them formatted in parallel (a piece has a few
+        // thousand: ASCII's number printing is most of its time), written in order.
+        constexpr std::size_t block_records = 512;
+        const std::size_t block_count = (fresh.size() + block_records - 1) / block_records;
         if (blocks.size() < block_count) blocks.resize(block_count);
         tessref::parallel_for(std::size_t{0}, block_count, [&](std::size_t k) {
             RecordBlock& block = blocks[k];
             block.used = 0;
-            const std::size_t end = std::min(fresh.size(), (k + 1) * kBlockRecords);
-            for (std::size_t r = k * kBlockRecords; r < end; ++r)
+            const std::size_t end = std::min(fresh.size(), (k + 1) * block_records);
+            for (std::size_t r = k * block_records; r < end; ++r)
                 block.end_record(records.vertex(piece, fresh[r], block.reserve_record()));
         });
         for (std::size_t k = 0; k < block_count; ++k) write(blocks[k].bytes.data(), blocks[k].used);
