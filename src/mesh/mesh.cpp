@@ -914,9 +914,12 @@ bool interiors_apart(const std::vector<Box>& interiors, const std::vector<Box>& 
     return true;
 }
 
+// Whether every coordinate is a finite float value (compared before the conversion, which
+// is undefined beyond float's range).
 bool is_float_point(const glm::dvec3& p) {
+    constexpr double largest = std::numeric_limits<float>::max();
     for (int c = 0; c < 3; ++c)
-        if (!std::isfinite(p[c]) || static_cast<double>(static_cast<float>(p[c])) != p[c]) return false;
+        if (!(std::abs(p[c]) <= largest) || static_cast<double>(static_cast<float>(p[c])) != p[c]) return false;
     return true;
 }
 
