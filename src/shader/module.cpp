@@ -115,6 +115,7 @@ public:
         if (function) fail("a function without OpFunctionEnd");
         if (!m_.entry) fail("no entry point");
         finish_variables();
+        find_lane_invariants();
     }
 
 private:
@@ -375,6 +376,7 @@ private:
                 variable(a[0], a[1], a[2], n > 3 ? a[3] : 0);
                 return;
             case spv::OpFunction: {
+                if (m_.fixed_regs.empty()) m_.fixed_regs.emplace_back(0, static_cast<std::uint32_t>(m_.reg_init.size()));
                 function_id = check_id(a[1]);
                 function = &m_.functions[function_id];
                 function->first = kNone;
@@ -428,6 +430,24 @@ private:
         }
     }
 
+    // Module::Impl::lane_invariant. A block comes after the blocks that dominate it, so one
+    // pass in code order sees an access chain's operands first (a later operand, through a
+    // phi, leaves it unmarked: the executor then tests the lanes).
+    void find_lane_invariants() {
+        m_.lane_invariant.assign(m_.bound, 0);
+        if (!m_.fixed_regs.empty())
+            for (std::uint32_t id = 0; id < m_.bound; ++id)
+                if (m_.reg[id] != kNone && m_.reg[id] < m_.fixed_regs.front().second) m_.lane_invariant[id] = 1;
+        for (const Variable& v : m_.variables) m_.lane_invariant[v.id] = 1;
+        for (const Instr& in : m_.code) {
+            if (in.op != spv::OpAccessChain && in.op != spv::OpInBoundsAccessChain) continue;
+            const std::uint32_t* a = &m_.words[in.at];
+            bool invariant = true;
+            for (std::uint32_t k = 2; k < in.count && invariant; ++k) invariant = m_.lane_invariant[a[k]] != 0;
+            m_.lane_invariant[a[1]] = invariant ? 1 : 0;
+        }
+    }
+
     void finish_variables() {
         if (decorations_.size() < m_.bound) decorations_.resize(m_.bound);
         std::uint64_t shared = 0, local = 0;
@@ -467,6 +487,7 @@ private:
             const bool is_local = v.storage == spv::StorageClassPrivate || v.storage == spv::StorageClassFunction;
             if (is_local) v.address += m_.shared_words;
             m_.reg_init[m_.reg[v.id]] = v.address;  // OpVariable's result: the address, fixed (no recursion)
+            if (v.storage == spv::StorageClassFunction) m_.fixed_regs.emplace_back(m_.reg[v.id], 1);
             if (v.storage != spv::StorageClassFunction) {  // a Function variable's initializer runs with OpVariable
                 if (v.init) {
                     const std::uint32_t words = type(v.type).words;

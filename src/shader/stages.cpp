@@ -89,6 +89,11 @@ struct Executable::State {
     RunOptions options;
     std::vector<std::uint32_t> shared;  // uniforms set, samplers' units; inputs and outputs zero
     std::vector<const Texture*> units;
+    // An evaluation batch's shared memory (ExecContext::lane_slot): the outputs and
+    // gl_TessCoord lane by lane, lane_words words per lane; the rest once for all lanes.
+    std::vector<std::uint32_t> lane_slot;
+    std::uint32_t lane_words = 0;
+    std::size_t location_count = 0;  // an evaluation shader's output locations (ShaderVertices)
     explicit State(Module m) : module(std::move(m)) {}
 };
 
@@ -111,6 +116,16 @@ Executable::Executable(Module module, const Bindings& bindings, RunOptions optio
                             " but the shader declares another type",
                         Where::in_file(m.path));
         std::copy(value->second.words.begin(), value->second.words.end(), state->shared.begin() + v.address);
+    }
+    if (m.stage == ShaderStage::tess_evaluation) {
+        state->lane_slot.assign(m.shared_words, kNone);
+        for (const Variable& v : m.variables) {
+            if (v.storage != spv::StorageClassOutput && v.builtin != spv::BuiltInTessCoord) continue;
+            for (std::uint32_t j = 0; j < m.types[v.type].words; ++j) state->lane_slot[v.address + j] = state->lane_words++;
+            for (const InterfacePart& p : v.parts)
+                if (v.storage == spv::StorageClassOutput && p.builtin < 0 && p.location >= 0)
+                    state->location_count = std::max(state->location_count, static_cast<std::size_t>(p.location) + 1);
+        }
     }
     for (const auto& [unit, texture] : bindings.textures()) {
         if (state->units.size() <= static_cast<std::size_t>(unit)) state->units.resize(static_cast<std::size_t>(unit) + 1);
@@ -273,8 +288,25 @@ ShaderVertex Executable::evaluate(const ShaderPatch& patch, glm::vec3 tess_coord
 // The points of the patch in batches of kBatchLanes lanes (one lane with an observer, which
 // follows one invocation); a batch whose branches part ways continues as one batch per way
 // (executor.h), the ways run in the order of their first point.
+ShaderVertex ShaderVertices::vertex(std::size_t k) const {
+    ShaderVertex v;
+    v.position = positions[k];
+    v.locations.assign(locations.begin() + static_cast<std::ptrdiff_t>(k * location_count),
+                       locations.begin() + static_cast<std::ptrdiff_t>((k + 1) * location_count));
+    return v;
+}
+
 std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords,
                                                long long patch_id) const {
+    ShaderVertices flat;
+    evaluate(patch, tess_coords, patch_id, flat);
+    std::vector<ShaderVertex> out(flat.size());
+    for (std::size_t k = 0; k < out.size(); ++k) out[k] = flat.vertex(k);
+    return out;
+}
+
+void Executable::evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords, long long patch_id,
+                          ShaderVertices& out) const {
     const Module::Impl& m = state_->module.impl();
     require_stage(m, ShaderStage::tess_evaluation, "evaluate");
     // One lane's shared memory: everything but gl_TessCoord is the patch's.
@@ -299,10 +331,11 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
                 if (p.builtin < 0) from_slot(patch.patch_locations, p.location, at + p.offset, p.words);
         }
     }
-    std::vector<ShaderVertex> out(tess_coords.size());
+    out.positions.assign(tess_coords.size(), glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    out.location_count = state_->location_count;
+    out.locations.assign(tess_coords.size() * out.location_count, Slot{});
     const std::size_t chunk = state_->options.observer ? 1 : kBatchLanes;
     std::set<std::uint32_t> warned;
-    std::vector<std::uint32_t> element;
     struct Work {
         Batch batch;
         std::vector<std::uint32_t> shared;
@@ -313,8 +346,9 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
     // the outputs, gl_TessCoord, Private and Function variables.
     std::optional<Work> fresh;
     std::vector<Work> work;  // the ways of a divergence, each a batch of its own
+    const std::string invocations = who(m, patch_id, -1);
     const auto run = [&](Work& w) {
-        ExecContext c{m, w.shared, state_->units, state_->options, who(m, patch_id, -1), &warned};
+        ExecContext c{m, w.shared, state_->units, state_->options, invocations, &warned, one.data(), &state_->lane_slot};
         const Batch::Status status = w.batch.run(c);
         const std::uint32_t n = w.batch.lanes();
         if (status == Batch::Status::diverged) {
@@ -329,13 +363,22 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
         if (status != Batch::Status::done)
             throw Error("the " + c.who + " stopped at a barrier or discard outside a control or fragment shader",
                         Where::in_file(m.path));
-        // Each lane's outputs, gathered from the lane-interleaved memory.
+        // Each lane's outputs, gathered from the lane-interleaved memory (read_vertex's
+        // parts: gl_Position, and the locations' components).
         for (const Variable& v : m.variables) {
             if (!is_output(v)) continue;
-            element.resize(m.types[v.type].words);
-            for (std::uint32_t l = 0; l < n; ++l) {
-                for (std::size_t j = 0; j < element.size(); ++j) element[j] = w.shared[(v.address + j) * n + l];
-                read_vertex(v, element.data(), out[w.points[l]]);
+            const std::uint32_t slot = state_->lane_slot[v.address];
+            for (const InterfacePart& p : v.parts) {
+                const bool position = p.builtin == spv::BuiltInPosition;
+                if (!position && (p.builtin >= 0 || p.location < 0)) continue;
+                const std::uint32_t words = position ? 4 : std::min<std::uint32_t>(p.words, 4);
+                for (std::uint32_t l = 0; l < n; ++l) {
+                    const std::size_t k = w.points[l];
+                    Slot word{};
+                    for (std::uint32_t j = 0; j < words; ++j) word[j] = w.shared[(slot + p.offset + j) * n + l];
+                    if (position) std::memcpy(&out.positions[k][0], word.data(), 16);
+                    else std::copy_n(word.begin(), words, out.locations[k * out.location_count + static_cast<std::size_t>(p.location)].begin());
+                }
             }
         }
     };
@@ -343,19 +386,21 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
         const std::uint32_t lanes = static_cast<std::uint32_t>(std::min(chunk, tess_coords.size() - first));
         if (fresh && fresh->batch.lanes() == lanes) {
             fresh->batch.restart();
-            for (const Variable& v : m.variables)
-                if (is_output(v))
-                    for (std::uint32_t j = 0; j < m.types[v.type].words; ++j)
-                        std::fill_n(fresh->shared.begin() + static_cast<std::ptrdiff_t>((v.address + j) * lanes), lanes, one[v.address + j]);
         } else {
-            fresh.emplace(Work{Batch(m, lanes), broadcast_lanes(one, lanes), {}});
+            fresh.emplace(Work{Batch(m, lanes), std::vector<std::uint32_t>(state_->lane_words * lanes), {}});
         }
+        for (const Variable& v : m.variables)
+            if (is_output(v))
+                for (std::uint32_t j = 0; j < m.types[v.type].words; ++j)
+                    std::fill_n(fresh->shared.begin() + static_cast<std::ptrdiff_t>(state_->lane_slot[v.address + j] * lanes), lanes,
+                                one[v.address + j]);
         fresh->points.clear();
         for (std::uint32_t l = 0; l < lanes; ++l) {
             fresh->points.push_back(first + l);
             if (tess_coord_address == kNone) continue;
             for (std::uint32_t j = 0; j < 3; ++j)
-                fresh->shared[(tess_coord_address + j) * lanes + l] = std::bit_cast<std::uint32_t>(tess_coords[first + l][static_cast<int>(j)]);
+                fresh->shared[(state_->lane_slot[tess_coord_address + j]) * lanes + l] =
+                    std::bit_cast<std::uint32_t>(tess_coords[first + l][static_cast<int>(j)]);
         }
         run(*fresh);
         while (!work.empty()) {
@@ -364,7 +409,6 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
             run(w);
         }
     }
-    return out;
 }
 
 }  // namespace tessref::shader
