@@ -55,6 +55,8 @@
 
 namespace tessref {
 
+struct IndexedMesh;  // mesh_io.h
+
 struct Scene;
 struct PipelineResult;
 
@@ -153,6 +155,10 @@ bool is_capture_path(const std::string& path);
 // tessref::Error naming the file and the line (text; PLY: the line or byte offset where the
 // mesh reader finds it, else the face). Memory is required before the vertices are read.
 Capture read_capture(const std::string& path);
+// read_capture() of a PLY already read (read_mesh_file with vertex attributes and
+// provenance), `path` naming it in errors: `tessref check` reads a PLY once, and checks it as
+// the mesh it is when it is not a capture.
+Capture capture_from_ply_mesh(const IndexedMesh& mesh, const std::string& path);
 
 // ---- comparison ------------------------------------------------------------------------
 

@@ -57,6 +57,7 @@
 #include <iosfwd>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -191,5 +192,56 @@ MeshWriteReport write_mesh(const SurfaceMesh& mesh, std::ostream& out,
 // The same for a mesh already welded (weld_bitwise, SurfaceWelder): the bytes and report
 // that write_mesh() of the unwelded surface gives (options.weld must be true).
 MeshWriteReport write_mesh(const WeldedMesh& welded, std::ostream& out, const MeshWriteOptions& options);
+
+// A welded PLY written as the surface arrives, so that neither the unwelded nor the welded
+// surface is ever held: the file write_mesh() writes for the pieces concatenated (the
+// same bytes and report), or nothing when the pieces break what the streaming relies on,
+// and then the caller writes the file otherwise (run_pipeline_welded() and write_mesh()).
+//
+// What it relies on, and why it is enough. A welded vertex takes its attributes from its
+// copy with the lowest patch id, then the earliest: with patch ids that never decrease
+// from copy to copy, that is its first copy, so its record is written the moment it is
+// first met, in the order the file numbers it. Its id is needed again only by the
+// triangles, which PLY lists after every vertex: the writer keeps each emitted vertex's
+// welded id (4 bytes) and asks the caller for the emitted triangles again at the end
+// (the pipeline has them from its patterns without evaluating anything). The weld itself
+// needs, for each new copy, every earlier vertex it could equal. Within a piece the writer
+// keeps them all; across pieces only each patch's vertices on the surface of its bounding
+// box, and only those look there, because the others (a patch's "interior", strictly
+// inside its box on every axis) are checked, at the end, to lie outside the box of every
+// patch of another piece: then no copy of another piece can equal them. Tessellated terrains pass that check (a patch's interior points lie
+// strictly between its edges, and its neighbours begin at them); a surface whose patches
+// overlap (PN triangles' curved patches) does not, and is written otherwise. Also
+// written otherwise: positions that are not float values (exact precision, camera-relative
+// evaluation; what float storage loses is then measured over all of them), a header whose
+// counts have fewer digits than the bounds given at the start (the vertex records are
+// written after a header of that length), and more vertices or triangles than 32-bit ids
+// name. Memory: 4 bytes per emitted vertex, the shared vertices' table (about 40 bytes
+// each: a terrain's patch borders) and a piece's formatted records.
+class StreamedPlyWriter {
+public:
+    // `out` must be a seekable stream at its start (a file); `emitted_vertices` and
+    // `emitted_triangles` are the surface's counts before welding (the header's bounds).
+    // options.format must be ply, options.weld true.
+    StreamedPlyWriter(std::ostream& out, const MeshWriteOptions& options, std::size_t emitted_vertices,
+                      std::size_t emitted_triangles);
+    ~StreamedPlyWriter();
+    StreamedPlyWriter(const StreamedPlyWriter&) = delete;
+    StreamedPlyWriter& operator=(const StreamedPlyWriter&) = delete;
+
+    // The next piece: whole patches in patch order, its triangles indexing its own vertices.
+    // false when the file cannot be streamed (see above; then add() and finish() do nothing
+    // more); throws tessref::Error for an inconsistent piece (validate()) or a stream failure.
+    bool add(const SurfaceMesh& piece);
+    // Fills `out` with the emitted triangles from index `first` on (indices of the emitted
+    // vertices, every piece's after the last); called from several threads at once.
+    using TriangleSource = std::function<void(std::size_t first, std::span<std::array<std::uint32_t, 3>> out)>;
+    // The triangles and the header; nullopt when the file could not be streamed.
+    std::optional<MeshWriteReport> finish(const TriangleSource& triangles);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace tessref

@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -195,6 +196,11 @@ public:
     // normal. Returns the vertices' indices in run_pipeline()'s mesh.
     std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out, glm::dvec3* face_normal) const;
 
+    // The triangles of run_pipeline()'s mesh from index `first` on, as emit() writes them
+    // (indexing run_pipeline()'s vertices), into `out`, from the patterns alone: nothing is
+    // evaluated. Concurrent calls are safe.
+    void triangles(std::size_t first, std::span<std::array<std::uint32_t, 3>> out) const;
+
     struct Impl;
 
 private:
@@ -214,6 +220,16 @@ PipelineResult run_pipeline(const Scene& scene, const PipelineOptions& options =
 // empty. Throws what run_pipeline() throws (the non-finite vertex error for the same first
 // vertex). options.progress is called from the calling thread; options.timings is not filled.
 WeldedMesh run_pipeline_welded(const Scene& scene, const PipelineOptions& options = {});
+// run_pipeline_welded()'s mesh written as a PLY file while it is evaluated, with neither the
+// unwelded nor the welded surface held (StreamedPlyWriter, mesh.h): the bytes and report of
+// write_mesh(run_pipeline_welded(scene, options), out, write_options). nullopt when the file
+// cannot be streamed: a scene that is not surface_streams(), exact precision, camera-relative
+// evaluation, a format other than PLY, or what StreamedPlyWriter refuses (overlapping
+// patches); `out` then holds part of a file, and the caller writes run_pipeline_welded()'s
+// mesh afresh. Throws what run_pipeline() throws. options.progress is called from the
+// calling thread, write_options.progress for the triangles ("writing").
+std::optional<MeshWriteReport> write_pipeline_ply(const Scene& scene, const PipelineOptions& options,
+                                                  const MeshWriteOptions& write_options, std::ostream& out);
 // Whether run_pipeline_welded() streams the scene: PatchStream::streams(scene), and no
 // smooth normals (geometry.h sums those over the whole surface). Elsewhere it welds
 // run_pipeline()'s mesh, holding both.

@@ -373,7 +373,12 @@ Capture read_ply_capture(const std::string& path) {
     MeshFileOptions options;
     options.vertex_attributes = true;
     options.provenance = true;
-    const IndexedMesh mesh = read_mesh_file(path, options);
+    return capture_from_ply_mesh(read_mesh_file(path, options), path);
+}
+
+}  // namespace
+
+Capture capture_from_ply_mesh(const IndexedMesh& mesh, const std::string& path) {
     const Where where = Where::in_file(path);
     if (mesh.patch_ids.empty() || mesh.tess_coords.empty() || mesh.normals.empty())
         throw Error("not a capture: the PLY's vertices lack patch_id, tess_u/tess_v/tess_w or nx/ny/nz", where);
@@ -405,8 +410,6 @@ Capture read_ply_capture(const std::string& path) {
     }
     return capture;
 }
-
-}  // namespace
 
 Capture read_capture(const std::string& path) {
     const CaptureFormat format = capture_format_from_path(path);

@@ -2,6 +2,7 @@
 // Exit status: 0 the mesh passes, 1 it has defects, 2 it cannot be read.
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <optional>
 #include <memory>
@@ -17,6 +18,7 @@
 #include "tessref/capture.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
+#include "tessref/mesh_io.h"
 
 namespace tessref::cli {
 
@@ -50,17 +52,37 @@ bool ply_with_capture_properties(const std::string& path) {
     return header.find(" patch_id\n") != std::string::npos && header.find(" tess_u\n") != std::string::npos;
 }
 
-// The capture `path` names, when it is one: a .txt, or a .ply with the capture's properties
-// whose triangles share no corner.
-std::optional<Capture> capture_to_check(const std::string& path) {
-    if (!is_capture_path(path)) return std::nullopt;
-    if (capture_format_from_path(path) == CaptureFormat::text) return read_capture(path);
-    if (!ply_with_capture_properties(path)) return std::nullopt;
+// What `path` holds, when reading it to tell was reading it: a capture (a .txt, or a .ply
+// with the capture's properties whose triangles share no corner), or a PLY with those
+// properties that is not a capture (a welded export of `tessref mesh`), read once and
+// checked as the mesh it is. Neither for any other file.
+struct CheckInput {
+    std::optional<Capture> capture;
+    std::optional<IndexedMesh> mesh;
+};
+
+CheckInput input_to_check(const std::string& path, const std::function<void(double)>& read_progress) {
+    if (!is_capture_path(path)) return {};
+    if (capture_format_from_path(path) == CaptureFormat::text) return {read_capture(path), std::nullopt};
+    if (!ply_with_capture_properties(path)) return {};
+    MeshFileOptions read_options;  // read_capture's, with the check's progress
+    read_options.vertex_attributes = true;
+    read_options.provenance = true;
+    read_options.progress = read_progress;
+    IndexedMesh mesh;
     try {
-        return read_capture(path);
+        mesh = read_mesh_file(path, read_options);
     } catch (const Error&) {
-        return std::nullopt;  // a welded export: the mesh reader reads it (and names its errors)
+        return {};  // the check's reading names what is wrong with it
     }
+    try {
+        return {capture_from_ply_mesh(mesh, path), std::nullopt};
+    } catch (const Error&) {
+    }
+    // As read_and_check_mesh() reads it: the positions, faces and provenance, no attributes.
+    mesh.normals = {};
+    mesh.uvs = {};
+    return {std::nullopt, std::move(mesh)};
 }
 
 std::string short_number(double x) {
@@ -112,7 +134,9 @@ int run_check(const CheckCommandOptions& options) {
         options.weld_tolerance.empty() ? std::nullopt : std::optional<double>(parse_distance(options.weld_tolerance, "--weld-tolerance"));
     // A capture is welded first (each patch emits its own copies of its vertices), and its
     // patches' sides are held against each other.
-    const std::optional<Capture> capture = capture_to_check(options.mesh);
+    const auto read_progress = [&progress](double fraction) { progress("check: reading", fraction); };
+    CheckInput input = input_to_check(options.mesh, read_progress);
+    const std::optional<Capture>& capture = input.capture;
     if (weld && !capture)
         throw Error("--weld-tolerance welds a capture (.txt, or .ply of --capture); " + options.mesh + " is a mesh",
                     Where::in_file("--weld-tolerance"));
@@ -121,9 +145,9 @@ int run_check(const CheckCommandOptions& options) {
     if (capture) cracks = shared_edge_cracks(*capture);
     // read_mesh_for_check() and check_mesh(), with OpenMesh's import skipped where it cannot refuse a face.
     const CheckedMesh checked =
-        capture ? check_indexed_mesh(weld_capture(*capture, weld_distance, options.mesh), check)
-                : read_and_check_mesh(options.mesh, check,
-                                      [&progress](double fraction) { progress("check: reading", fraction); });
+        capture      ? check_indexed_mesh(weld_capture(*capture, weld_distance, options.mesh), check)
+        : input.mesh ? check_indexed_mesh(std::move(*input.mesh), check)
+                     : read_and_check_mesh(options.mesh, check, read_progress);
     const IndexedMesh& mesh = checked.mesh;
     const CheckReport& report = checked.report;
     progress = StageProgress();  // clears the last stage's line

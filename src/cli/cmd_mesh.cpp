@@ -75,6 +75,31 @@ MeshWriteReport write_mesh_file(const Write& write, const AtomicOutput& output, 
     return report;
 }
 
+// write_pipeline_ply() into the output's temporary file, with progress: the pipeline's
+// errors as they are, the file's (a failed stream) at the output's name.
+std::optional<MeshWriteReport> stream_mesh_file(const Scene& scene, PipelineOptions pipeline_options,
+                                                const AtomicOutput& output, const std::string& name,
+                                                MeshWriteOptions write_options) {
+    StageProgress stage_progress;
+    write_options.progress = [&stage_progress](std::string_view stage, double fraction) {
+        stage_progress(stage, fraction);
+    };
+    std::ofstream file(output.temp_path(), std::ios::binary | std::ios::trunc);
+    if (!file) throw Error("cannot write output file", Where::in_file(name));
+    std::optional<MeshWriteReport> report;
+    try {
+        Progress progress("tessellating patches", scene.patch_count());
+        pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
+        report = write_pipeline_ply(scene, pipeline_options, write_options, file);
+    } catch (const Error& error) {
+        if (file) throw;
+        throw Error(error.what(), Where::in_file(name));  // the writer knows a stream, not its name
+    }
+    file.close();
+    if (!file) throw Error("cannot write output file: " + stream_failure(), Where::in_file(name));
+    return report;
+}
+
 // The warnings, and the line saying what was written (`captured`: triangles captured, when
 // --capture wrote them).
 void print_mesh_summary(const MeshCommandOptions& options, const Scene& scene, Precision precision,
@@ -139,6 +164,17 @@ int run_mesh(const MeshCommandOptions& options) {
     // The surface is welded as it is evaluated, never held unwelded, unless --capture or
     // --solid needs the pipeline's whole surface (or the scene cannot stream it).
     if (output && !capture_output && !options.solid && surface_streams(scene)) {
+        // A PLY is written as the surface is evaluated, where it can be (write_pipeline_ply);
+        // otherwise, and for the other formats, from the welded mesh.
+        std::optional<MeshWriteReport> streamed;
+        if (write_options.format == MeshFormat::ply) {
+            streamed = stream_mesh_file(scene, pipeline_options, *output, options.output, write_options);
+        }
+        if (streamed) {
+            output->commit();
+            print_mesh_summary(options, scene, precision, write_options.format, *streamed, nullptr);
+            return 0;
+        }
         WeldedMesh welded;
         {
             Progress progress("tessellating patches", scene.patch_count());

@@ -160,6 +160,29 @@ public:
         slots_.assign(capacity, kEmpty);
     }
 
+    // Emptied, and sized for `expected` vertices (never shrunk).
+    void clear(std::size_t expected) {
+        std::size_t capacity = slots_.size();
+        while (capacity < 2 * expected) capacity *= 2;
+        slots_.assign(capacity, kEmpty);
+        size_ = 0;
+    }
+
+    static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+    // The id stored for position `p` (whose hash is `hash`), or kNone.
+    template <typename PositionOf>
+    std::uint32_t find(const glm::dvec3& p, std::uint64_t hash, const PositionOf& position_of) const {
+        const PositionKey key = position_key(p);
+        const std::uint64_t tag = hash >> 32;
+        for (std::size_t slot = hash & mask(); slots_[slot] != kEmpty; slot = (slot + 1) & mask()) {
+            const std::uint64_t s = slots_[slot];
+            if ((s >> 32) == tag && position_key(position_of(static_cast<std::uint32_t>(s))) == key)
+                return static_cast<std::uint32_t>(s);
+        }
+        return kNone;
+    }
+
     static std::uint64_t hash(const glm::dvec3& p) {
         return static_cast<std::uint64_t>(PositionKeyHash{}(position_key(p)));
     }
@@ -583,33 +606,32 @@ constexpr std::size_t kRecordLimit = 1024;
 constexpr std::size_t kBlockRecords = std::size_t{1} << 13;
 constexpr std::size_t kBlocksAtOnce = 8;
 
-// PLY, written here: byte for byte what OpenMesh 9's PLY writer writes for the same mesh,
-// options and properties (tests/test_mesh.cpp compares the two on every attribute
-// combination, ascii and binary), straight from the welded mesh, without the kernel copy.
-void write_ply(const SurfaceMesh& mesh, const WrittenAttributes& written, const MeshWriteOptions& options,
-               std::ostream& out, const Progress& progress) {
-    const std::size_t n = mesh.positions.size();
-    const std::vector<std::array<std::uint32_t, 3>>& triangles = mesh.triangles;
-    const bool binary = options.binary;
-    const int digits = options.ascii_digits;
+// PLY's header and records, byte for byte what OpenMesh 9's PLY writer writes for the same
+// mesh, options and properties (tests/test_mesh.cpp compares the two on every attribute
+// combination, ascii and binary): write_ply() writes a welded mesh with them, and
+// StreamedPlyWriter a surface as it arrives.
+struct PlyRecords {
+    WrittenAttributes written;
+    bool binary = false;
+    int digits = 9;
 
-    std::string header = "ply\n";
-    header += binary ? "format binary_little_endian 1.0\n" : "format ascii 1.0\n";
-    header += "element vertex " + std::to_string(n) + "\n";
-    header += "property float x\nproperty float y\nproperty float z\n";
-    if (written.normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
-    if (written.uvs) header += "property float u\nproperty float v\n";
-    if (written.patch_ids) header += "property int patch_id\n";
-    if (written.tess_coords) header += "property float tess_u\nproperty float tess_v\nproperty float tess_w\n";
-    header += "element face " + std::to_string(triangles.size()) + "\n";
-    header += "property list uchar int vertex_indices\n";
-    header += "end_header\n";
+    std::string header(std::size_t vertices, std::size_t triangles) const {
+        std::string header = "ply\n";
+        header += binary ? "format binary_little_endian 1.0\n" : "format ascii 1.0\n";
+        header += "element vertex " + std::to_string(vertices) + "\n";
+        header += "property float x\nproperty float y\nproperty float z\n";
+        if (written.normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
+        if (written.uvs) header += "property float u\nproperty float v\n";
+        if (written.patch_ids) header += "property int patch_id\n";
+        if (written.tess_coords) header += "property float tess_u\nproperty float tess_v\nproperty float tess_w\n";
+        header += "element face " + std::to_string(triangles) + "\n";
+        header += "property list uchar int vertex_indices\n";
+        header += "end_header\n";
+        return header;
+    }
 
-    progress("writing", 0.0);
-    out.write(header.data(), static_cast<std::streamsize>(header.size()));
-
-    // One record (a vertex or a triangle) at q; returns its end. At most kRecordLimit bytes.
-    const auto vertex_record = [&](std::size_t v, char* q) {
+    // Vertex v of `mesh` at q; returns the record's end. At most kRecordLimit bytes.
+    char* vertex(const SurfaceMesh& mesh, std::size_t v, char* q) const {
         float values[8];
         int count = 0;
         const glm::dvec3& p = mesh.positions[v];
@@ -655,9 +677,9 @@ void write_ply(const SurfaceMesh& mesh, const WrittenAttributes& written, const 
             *q++ = '\n';
         }
         return q;
-    };
-    const auto triangle_record = [&](std::size_t t, char* q) {
-        const auto& triangle = triangles[t];
+    }
+
+    char* triangle(const std::array<std::uint32_t, 3>& triangle, char* q) const {
         if (binary) {
             *q++ = 3;
             for (const std::uint32_t index : triangle) q = store_le(q, static_cast<std::int32_t>(index));
@@ -670,17 +692,34 @@ void write_ply(const SurfaceMesh& mesh, const WrittenAttributes& written, const 
             *q++ = '\n';
         }
         return q;
-    };
+    }
+};
+
+// A buffer of formatted records, grown so that a record always fits.
+struct RecordBlock {
+    std::vector<char> bytes;
+    std::size_t used = 0;
+    char* reserve_record() {
+        if (bytes.size() - used < kRecordLimit) bytes.resize(std::max(2 * bytes.size(), std::size_t{1} << 16));
+        return bytes.data() + used;
+    }
+    void end_record(char* end) { used = static_cast<std::size_t>(end - bytes.data()); }
+};
+
+void write_ply(const SurfaceMesh& mesh, const WrittenAttributes& written, const MeshWriteOptions& options,
+               std::ostream& out, const Progress& progress) {
+    const std::size_t n = mesh.positions.size();
+    const std::vector<std::array<std::uint32_t, 3>>& triangles = mesh.triangles;
+    const PlyRecords records_of{written, options.binary, options.ascii_digits};
+    const std::string header = records_of.header(n, triangles.size());
+    progress("writing", 0.0);
+    out.write(header.data(), static_cast<std::streamsize>(header.size()));
 
     // Records n + t are triangle t. Blocks of them are formatted in parallel, a round of
     // blocks at a time, and written in order: the bytes a serial loop would write, in a
     // fraction of the time for ASCII, whose number printing is most of the export.
     const std::size_t records = n + triangles.size();
-    struct Block {
-        std::vector<char> bytes;
-        std::size_t used = 0;
-    };
-    std::vector<Block> blocks(kBlocksAtOnce);
+    std::vector<RecordBlock> blocks(kBlocksAtOnce);
     const std::size_t progress_step = std::max<std::size_t>(1, records / 128);  // a few hundred calls at most (mesh.h)
     std::size_t next_progress = 0;
     for (std::size_t first = 0; first < records; first += kBlocksAtOnce * kBlockRecords) {
@@ -690,15 +729,12 @@ void write_ply(const SurfaceMesh& mesh, const WrittenAttributes& written, const 
         }
         const std::size_t round = std::min(kBlocksAtOnce, (records - first + kBlockRecords - 1) / kBlockRecords);
         tessref::parallel_for(std::size_t{0}, round, [&](std::size_t k) {
-            Block& block = blocks[k];
+            RecordBlock& block = blocks[k];
             block.used = 0;
             const std::size_t begin = first + k * kBlockRecords, end = std::min(records, begin + kBlockRecords);
             for (std::size_t r = begin; r < end; ++r) {
-                if (block.bytes.size() - block.used < kRecordLimit)
-                    block.bytes.resize(std::max(2 * block.bytes.size(), std::size_t{1} << 16));
-                char* q = block.bytes.data() + block.used;
-                q = r < n ? vertex_record(r, q) : triangle_record(r - n, q);
-                block.used = static_cast<std::size_t>(q - block.bytes.data());
+                char* q = block.reserve_record();
+                block.end_record(r < n ? records_of.vertex(mesh, r, q) : records_of.triangle(triangles[r - n], q));
             }
         });
         for (std::size_t k = 0; k < round && out; ++k)
@@ -802,6 +838,336 @@ MeshWriteReport write_mesh(const WeldedMesh& welded, std::ostream& out, const Me
 MeshWriteReport mesh_detail::write_mesh_through_openmesh(const SurfaceMesh& mesh, std::ostream& out,
                                                          const MeshWriteOptions& options) {
     return write_mesh(mesh, out, options, true);
+}
+
+
+// ---------------------------------------------------------------------------------------
+// Streamed PLY
+
+namespace {
+
+struct Box {
+    glm::dvec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
+    bool empty() const { return lo.x > hi.x; }
+    void add(const glm::dvec3& p) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    bool meets(const Box& o) const {
+        return lo.x <= o.hi.x && o.lo.x <= hi.x && lo.y <= o.hi.y && o.lo.y <= hi.y && lo.z <= o.hi.z && o.lo.z <= hi.z;
+    }
+};
+
+// Whether no patch's interior box meets the whole box of a patch of another piece (closed
+// boxes: a shared coordinate meets), proven within a budget of box tests; false when it is not, or
+// not within the budget. The interiors are binned into a grid over the two axes along
+// which the surface spreads most, cells at least as wide as every patch (so that each box
+// lies in at most 2 x 2 cells), at most 4096 a side.
+bool interiors_apart(const std::vector<Box>& interiors, const std::vector<Box>& wholes,
+                     const std::vector<std::uint32_t>& piece_of) {
+    Box all;
+    for (const Box& b : wholes) {
+        all.add(b.lo);
+        all.add(b.hi);
+    }
+    if (all.empty()) return true;
+    const glm::dvec3 extent = all.hi - all.lo;
+    int axes[3] = {0, 1, 2};
+    std::sort(axes, axes + 3, [&](int a, int b) { return extent[a] > extent[b]; });
+    const int a = axes[0], b = axes[1];
+    double width_a = 0.0, width_b = 0.0;
+    for (const Box& w : wholes) {
+        width_a = std::max(width_a, w.hi[a] - w.lo[a]);
+        width_b = std::max(width_b, w.hi[b] - w.lo[b]);
+    }
+    const double cell_a = std::max(width_a, extent[a] / 4096.0), cell_b = std::max(width_b, extent[b] / 4096.0);
+    const auto cell = [&](double x, int axis, double size) -> std::int64_t {
+        if (!(size > 0.0)) return 0;
+        return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((x - all.lo[axis]) / size)), 0, 1 << 13);
+    };
+    const auto key = [](std::int64_t i, std::int64_t j) { return static_cast<std::uint64_t>(i) << 32 | static_cast<std::uint64_t>(j); };
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> cells;
+    for (std::size_t p = 0; p < interiors.size(); ++p) {
+        const Box& e = interiors[p];
+        if (e.empty()) continue;
+        for (std::int64_t i = cell(e.lo[a], a, cell_a); i <= cell(e.hi[a], a, cell_a); ++i)
+            for (std::int64_t j = cell(e.lo[b], b, cell_b); j <= cell(e.hi[b], b, cell_b); ++j)
+                cells.emplace_back(key(i, j), static_cast<std::uint32_t>(p));
+    }
+    std::sort(cells.begin(), cells.end());
+    std::size_t budget = 64 * wholes.size() + (std::size_t{1} << 20);
+    for (std::size_t q = 0; q < wholes.size(); ++q) {
+        const Box& w = wholes[q];
+        const std::int64_t i0 = cell(w.lo[a], a, cell_a), i1 = cell(w.hi[a], a, cell_a);
+        const std::int64_t j0 = cell(w.lo[b], b, cell_b), j1 = cell(w.hi[b], b, cell_b);
+        for (std::int64_t i = i0; i <= i1; ++i) {
+            for (std::int64_t j = j0; j <= j1; ++j) {
+                if (budget-- == 0) return false;
+                const auto first = std::lower_bound(cells.begin(), cells.end(), std::pair{key(i, j), std::uint32_t{0}});
+                for (auto it = first; it != cells.end() && it->first == key(i, j); ++it) {
+                    if (budget-- == 0) return false;
+                    if (piece_of[it->second] != piece_of[q] && interiors[it->second].meets(w)) return false;
+                }
+            }
+        }
+    }
+    return true;
+}
+
+// Whether every coordinate is a finite float value (compared before the conversion, which
+// is undefined beyond float's range).
+bool is_float_point(const glm::dvec3& p) {
+    constexpr double largest = std::numeric_limits<float>::max();
+    for (int c = 0; c < 3; ++c)
+        if (!(std::abs(p[c]) <= largest) || static_cast<double>(static_cast<float>(p[c])) != p[c]) return false;
+    return true;
+}
+
+}  // namespace
+
+struct StreamedPlyWriter::Impl {
+    Impl(std::ostream& o, const MeshWriteOptions& opts, std::size_t vertices, std::size_t triangles)
+        : out(o), options(opts), vertex_bound(vertices), triangle_bound(triangles) {}
+
+    std::ostream& out;
+    MeshWriteOptions options;
+    std::size_t vertex_bound, triangle_bound;
+    PlyRecords records;
+    bool started = false, failed = false;
+    std::size_t header_length = 0;
+    // Vertices on their patch box's surface, from every piece so far: index -> position, welded id.
+    PositionTable shared{0};
+    std::vector<glm::dvec3> shared_positions;
+    std::vector<std::uint32_t> shared_ids;
+    PositionTable local{0};               // the current piece's vertices, by piece index
+    std::vector<std::uint32_t> welded_of;  // emitted vertex -> welded vertex
+    std::vector<std::uint64_t> hashes;
+    std::vector<std::uint8_t> on_box;      // the piece's vertex lies on its patch box's surface
+    std::vector<std::uint32_t> fresh;      // the piece's vertices that are new welded vertices
+    std::vector<Box> interiors, wholes;    // per patch, in order
+    std::vector<std::uint32_t> piece_of;   // per patch: the piece it came in
+    std::uint32_t pieces = 0;
+    bool has_patch = false;
+    std::uint32_t last_patch = 0;
+    std::size_t welded = 0, emitted = 0, emitted_triangles = 0, degenerate = 0;
+    double largest = 0.0;
+    std::vector<RecordBlock> blocks;
+
+    void write(const char* data, std::size_t size) {
+        out.write(data, static_cast<std::streamsize>(size));
+        if (!out) throw Error("cannot write the mesh: " + stream_failure());
+    }
+
+    // The patches' boxes, and which vertices lie on their surfaces; false when the piece's
+    // patch ids go back.
+    bool measure_patches(const SurfaceMesh& piece) {
+        const std::size_t n = piece.positions.size();
+        on_box.resize(n);
+        for (std::size_t g0 = 0; g0 < n;) {
+            std::size_t g1 = n;
+            if (!piece.patch_ids.empty()) {
+                const std::uint32_t patch = piece.patch_ids[g0];
+                if (has_patch && patch < last_patch) return false;
+                has_patch = true;
+                last_patch = patch;
+                for (g1 = g0 + 1; g1 < n && piece.patch_ids[g1] == patch; ++g1) {}
+            }
+            Box whole, interior;
+            for (std::size_t i = g0; i < g1; ++i) whole.add(piece.positions[i]);
+            for (std::size_t i = g0; i < g1; ++i) {
+                const glm::dvec3& p = piece.positions[i];
+                const bool on = p.x == whole.lo.x || p.x == whole.hi.x || p.y == whole.lo.y || p.y == whole.hi.y ||
+                                p.z == whole.lo.z || p.z == whole.hi.z;
+                on_box[i] = on;
+                if (!on) interior.add(p);
+            }
+            wholes.push_back(whole);
+            interiors.push_back(interior);
+            piece_of.push_back(pieces);
+            g0 = g1;
+        }
+        return true;
+    }
+
+    bool add(const SurfaceMesh& piece) {
+        if (failed) return false;
+        validate(piece);
+        const std::size_t n = piece.positions.size();
+        if (n == 0) return true;  // then it has no triangles either (validated)
+        WrittenAttributes present;
+        present.normals = !piece.normals.empty();
+        present.uvs = !piece.uvs.empty();
+        present.patch_ids = !piece.patch_ids.empty();
+        present.tess_coords = !piece.tess_coords.empty();
+        if (started) {
+            const auto check = [](bool piece_has, bool welded_has, const char* name) {
+                if (piece_has != welded_has)
+                    throw Error(std::string("surface piece ") + (piece_has ? "has " : "lacks ") + name +
+                                    " unlike the pieces before it",
+                                Where::at_key(name));
+            };
+            check(present.normals, records.written.normals, "normals");
+            check(present.uvs, records.written.uvs, "uvs");
+            check(present.patch_ids, records.written.patch_ids, "patch_ids");
+            check(present.tess_coords, records.written.tess_coords, "tess_coords");
+        }
+        for (const glm::dvec3& p : piece.positions)
+            if (!is_float_point(p)) return fail();
+        if (emitted + n > std::numeric_limits<std::uint32_t>::max()) return fail();
+        if (!measure_patches(piece)) return fail();
+        ++pieces;
+        if (!started) {
+            records = PlyRecords{present, options.binary, options.ascii_digits};
+            const std::string header = records.header(vertex_bound, triangle_bound);
+            header_length = header.size();
+            write(header.data(), header.size());
+            started = true;
+        }
+
+        // The decisions, in emission order: an earlier piece's shared vertex, an earlier
+        // vertex of this piece, or a new welded vertex (whose record this copy writes).
+        hashes.resize(n);
+        for (std::size_t i = 0; i < n; ++i) hashes[i] = PositionTable::hash(piece.positions[i]);
+        welded_of.resize(emitted + n);
+        std::uint32_t* const map = welded_of.data() + emitted;
+        local.clear(n);
+        fresh.clear();
+        const auto shared_position = [this](std::uint32_t g) -> const glm::dvec3& { return shared_positions[g]; };
+        const auto piece_position = [&piece](std::uint32_t k) -> const glm::dvec3& { return piece.positions[k]; };
+        for (std::size_t i = 0; i < n; ++i) {
+            if (i + kPrefetchAhead < n && on_box[i + kPrefetchAhead]) shared.prefetch(hashes[i + kPrefetchAhead]);
+            const glm::dvec3& p = piece.positions[i];
+            // An interior point meets no other piece's patch (finish() proves it).
+            const std::uint32_t g = on_box[i] ? shared.find(p, hashes[i], shared_position) : PositionTable::kNone;
+            if (g != PositionTable::kNone) {
+                map[i] = shared_ids[g];
+                continue;
+            }
+            const auto copy = static_cast<std::uint32_t>(i);
+            const std::uint32_t first = local.find_or_insert(p, hashes[i], copy, piece_position);
+            if (first != copy) {
+                map[i] = map[first];
+                continue;
+            }
+            map[i] = static_cast<std::uint32_t>(welded++);
+            fresh.push_back(copy);
+            if (on_box[i]) {
+                shared.find_or_insert(p, hashes[i], static_cast<std::uint32_t>(shared_positions.size()), shared_position);
+                shared_positions.push_back(p);
+                shared_ids.push_back(map[i]);
+            }
+        }
+        for (const auto& triangle : piece.triangles) {
+            const std::uint32_t a = map[triangle[0]], b = map[triangle[1]], c = map[triangle[2]];
+            if (a == b || b == c || c == a) ++degenerate;
+        }
+        emitted += n;
+        emitted_triangles += piece.triangles.size();
+        for (const std::uint32_t i : fresh) {
+            const glm::dvec3& p = piece.positions[i];
+            largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+        }
+
+        // The new vertices' records, blocks of them formatted in parallel (a piece has a few
+        // thousand: ASCII's number printing is most of its time), written in order.
+        constexpr std::size_t block_records = 512;
+        const std::size_t block_count = (fresh.size() + block_records - 1) / block_records;
+        if (blocks.size() < block_count) blocks.resize(block_count);
+        tessref::parallel_for(std::size_t{0}, block_count, [&](std::size_t k) {
+            RecordBlock& block = blocks[k];
+            block.used = 0;
+            const std::size_t end = std::min(fresh.size(), (k + 1) * block_records);
+            for (std::size_t r = k * block_records; r < end; ++r)
+                block.end_record(records.vertex(piece, fresh[r], block.reserve_record()));
+        });
+        for (std::size_t k = 0; k < block_count; ++k) write(blocks[k].bytes.data(), blocks[k].used);
+        return true;
+    }
+
+    bool fail() {
+        failed = true;
+        return false;
+    }
+
+    std::optional<MeshWriteReport> finish(const TriangleSource& source) {
+        if (failed || !started) return std::nullopt;
+        if (!interiors_apart(interiors, wholes, piece_of)) return std::nullopt;
+        const std::size_t triangles = emitted_triangles - degenerate;
+        constexpr auto handles = static_cast<std::size_t>(std::numeric_limits<int>::max());
+        if (welded > handles || triangles > handles) return std::nullopt;  // write_mesh's error
+        const std::string header = records.header(welded, triangles);
+        if (header.size() != header_length) return std::nullopt;
+
+        const auto progress = [this](double fraction) {
+            if (options.progress) options.progress("writing", fraction);
+        };
+        progress(0.0);
+        std::vector<std::vector<std::array<std::uint32_t, 3>>> emitted_blocks(kBlocksAtOnce);
+        if (blocks.size() < kBlocksAtOnce) blocks.resize(kBlocksAtOnce);
+        const std::size_t step = kBlocksAtOnce * kBlockRecords;
+        const std::size_t progress_step = std::max<std::size_t>(step, emitted_triangles / 128);
+        std::size_t next_progress = progress_step;
+        for (std::size_t first = 0; first < emitted_triangles; first += step) {
+            if (first >= next_progress) {
+                progress(static_cast<double>(first) / static_cast<double>(emitted_triangles));
+                next_progress = first + progress_step;
+            }
+            const std::size_t round = std::min(kBlocksAtOnce, (emitted_triangles - first + kBlockRecords - 1) / kBlockRecords);
+            tessref::parallel_for(std::size_t{0}, round, [&](std::size_t k) {
+                const std::size_t begin = first + k * kBlockRecords;
+                std::vector<std::array<std::uint32_t, 3>>& list = emitted_blocks[k];
+                list.resize(std::min(emitted_triangles, begin + kBlockRecords) - begin);
+                source(begin, list);
+                RecordBlock& block = blocks[k];
+                block.used = 0;
+                for (const auto& triangle : list) {
+                    for (const std::uint32_t index : triangle)
+                        if (index >= emitted) throw Error("the streamed triangles name vertex " + std::to_string(index) +
+                                                          " of " + std::to_string(emitted));
+                    const std::array<std::uint32_t, 3> w{welded_of[triangle[0]], welded_of[triangle[1]],
+                                                         welded_of[triangle[2]]};
+                    if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) continue;
+                    block.end_record(records.triangle(w, block.reserve_record()));
+                }
+            });
+            for (std::size_t k = 0; k < round; ++k) write(blocks[k].bytes.data(), blocks[k].used);
+        }
+        out.seekp(0);
+        write(header.data(), header.size());
+        out.flush();
+        if (!out) throw Error("cannot write the mesh: " + stream_failure());
+        progress(1.0);
+
+        MeshWriteReport report;
+        report.emitted_vertices = emitted;
+        report.vertices = welded;
+        report.triangles = triangles;
+        report.degenerate_triangles = degenerate;
+        report.float_distinct_vertices = welded;  // every position is a float (add())
+        report.largest_coordinate = largest;
+        const auto largest_f = static_cast<float>(largest);
+        report.float_spacing = static_cast<double>(std::nextafter(largest_f, std::numeric_limits<float>::infinity())) -
+                               static_cast<double>(largest_f);
+        return report;
+    }
+};
+
+StreamedPlyWriter::StreamedPlyWriter(std::ostream& out, const MeshWriteOptions& options, std::size_t emitted_vertices,
+                                     std::size_t emitted_triangles)
+    : impl_(std::make_unique<Impl>(out, options, emitted_vertices, emitted_triangles)) {
+    check_write_options(options);
+    if (options.format != MeshFormat::ply || !options.weld)
+        throw Error("the streamed writer writes welded PLY files only");
+    errno = 0;  // stream_failure() reports only what this write's calls set
+    // Reserved, not touched: only the pages the emitted vertices fill are resident.
+    impl_->welded_of.reserve(emitted_vertices);
+}
+StreamedPlyWriter::~StreamedPlyWriter() = default;
+
+bool StreamedPlyWriter::add(const SurfaceMesh& piece) { return impl_->add(piece); }
+
+std::optional<MeshWriteReport> StreamedPlyWriter::finish(const TriangleSource& triangles) {
+    return impl_->finish(triangles);
 }
 
 }  // namespace tessref

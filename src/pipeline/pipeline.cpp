@@ -145,6 +145,7 @@ struct PatchStream::Impl {
                                                   glm::dvec3* face_normal) const = 0;
 
     Precision precision = Precision::gpu;
+    bool flip = false;  // the program reverses the pattern's triangles (1 <-> 2)
     glm::dvec3 origin{0.0};
     std::vector<TessLevels> levels;
     std::uint64_t estimated_triangles = 0;
@@ -167,6 +168,7 @@ struct StreamImpl final : PatchStream::Impl {
         if (options.camera_relative && std::is_same_v<T, float>) origin = camera_relative_origin(scene);
         program = pipeline::make_program<T>(scene, origin);
         program->use_math(options.math);
+        flip = program->flip;
         has_uvs = program->has_uvs;
         has_normals = program->has_normals;
         face_normals = scene.geometry && scene.geometry->normals == GeometryNormals::face;
@@ -459,6 +461,51 @@ WeldedMesh run_pipeline_welded(const Scene& scene, const PipelineOptions& option
     return welder.take();
 }
 
+std::optional<MeshWriteReport> write_pipeline_ply(const Scene& scene, const PipelineOptions& options,
+                                                  const MeshWriteOptions& write_options, std::ostream& out) {
+    if (scene.patch_count() == 0) throw Error("the scene has no patches", Where::in_file(scene.file));
+    // Positions that are not float values (exact precision, world positions of a
+    // camera-relative run) would have StreamedPlyWriter refuse the first piece.
+    if (!surface_streams(scene) || options.precision != Precision::gpu || options.camera_relative ||
+        write_options.format != MeshFormat::ply || !write_options.weld)
+        return std::nullopt;
+    PipelineOptions stream_options = options;
+    stream_options.timings = nullptr;
+    stream_options.progress = nullptr;
+    const PatchStream stream(scene, stream_options);
+    const std::size_t n = stream.patch_count();
+    StreamedPlyWriter writer(out, write_options, stream.vertex_base(n), stream.triangle_base(n));
+    bool streaming = true;
+    const auto write_batch = [&](const Batch& batch) {
+        if (batch.failure) std::rethrow_exception(batch.failure);
+        for (std::size_t k = 0; k < batch.used && streaming; ++k) {
+            // In patch order: the first non-finite vertex of the surface is the first one met.
+            require_finite_positions(scene, batch.pieces[k].mesh, options.precision);
+            streaming = writer.add(batch.pieces[k].mesh);
+        }
+    };
+
+    // As run_pipeline_welded(): one thread welds and writes a batch while the others
+    // evaluate the next.
+    std::size_t next_patch = 0;
+    Batch current, next;
+    plan_batch(stream, next_patch, current);
+    evaluate_batch(stream, current);
+    while (current.used > 0 && streaming) {
+        plan_batch(stream, next_patch, next);
+        tessref::parallel_for(0, 2, [&](int task) {
+            if (task == 0) write_batch(current);
+            else evaluate_batch(stream, next);
+        });
+        if (options.progress) options.progress(current.pieces[current.used - 1].last_patch, n);
+        std::swap(current, next);
+    }
+    if (!streaming) return std::nullopt;
+    return writer.finish([&stream](std::size_t first, std::span<std::array<std::uint32_t, 3>> triangles) {
+        stream.triangles(first, triangles);
+    });
+}
+
 glm::dvec3 camera_relative_origin(const Scene& scene) {
     if (!scene.camera) return glm::dvec3(0.0);
     glm::dvec3 origin = scene.camera->eye;
@@ -534,6 +581,22 @@ void PatchStream::emit_run(std::size_t first, std::size_t last, SurfaceMesh& mes
     size(mesh, face_normals ? *face_normals : none, vertex_base(last) - v0, triangle_base(last) - t0);
     for (std::size_t p = first; p < last; ++p)
         emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals);
+}
+void PatchStream::triangles(std::size_t first, std::span<std::array<std::uint32_t, 3>> out) const {
+    if (out.empty()) return;
+    const auto& base = impl_->triangle_base;
+    if (first + out.size() > base.back())
+        throw Error("triangles " + std::to_string(first) + " to " + std::to_string(first + out.size()) +
+                        " are not all in the surface",
+                    Where::at_key("triangle"));
+    std::size_t p = patch_of_triangle(first);
+    for (std::size_t k = 0; k < out.size(); ++k) {
+        const std::size_t t = first + k;
+        while (t >= base[p + 1]) ++p;
+        const auto prim = impl_->patterns[p]->primitive(t - base[p]);
+        const auto vertex = static_cast<std::uint32_t>(impl_->vertex_base[p]);
+        out[k] = {vertex + prim[0], vertex + prim[impl_->flip ? 2 : 1], vertex + prim[impl_->flip ? 1 : 2]};
+    }
 }
 std::array<std::uint32_t, 3> PatchStream::triangle(std::size_t triangle, SurfaceMesh& out,
                                                   glm::dvec3* face_normal) const {
