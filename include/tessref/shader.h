@@ -85,6 +85,16 @@ struct TessLayout {
     bool point_mode = false;
 };
 
+// A geometry shader's layout: `layout(triangles) in;` and `layout(triangle_strip,
+// max_vertices = 3) out;` (its execution modes), and `layout(invocations = N) in;`.
+enum class GeometryOutput : std::uint8_t { points, line_strip, triangle_strip };
+struct GeometryLayout {
+    int input_vertices = 3;  // points 1, lines 2, lines_adjacency 4, triangles 3, triangles_adjacency 6
+    GeometryOutput output = GeometryOutput::triangle_strip;
+    int max_vertices = 0;
+    int invocations = 1;
+};
+
 // A compiled, validated stage: immutable, cheap to copy (shared), safe to run from many
 // threads at once.
 class Module {
@@ -110,6 +120,8 @@ public:
     int output_vertices() const;
     // An evaluation shader's layout; throws tessref::Error for other stages.
     TessLayout tess_layout() const;
+    // A geometry shader's layout; throws tessref::Error for other stages.
+    GeometryLayout geometry_layout() const;
 
     struct Impl;
     const Impl& impl() const { return *impl_; }
@@ -197,6 +209,22 @@ struct ShaderPatch {
     std::array<float, 2> inner{0.0f, 0.0f};
 };
 
+// What a geometry shader made of one input primitive: every vertex EmitVertex() wrote, in
+// the order written (invocation 0's first, with layout(invocations = N)), and the primitives
+// GL assembles from them, as indices into `vertices`, `per_primitive` (1, 2 or 3) each:
+// points one by one, a line strip's lines (k, k + 1), a triangle strip's triangles
+// (k, k + 1, k + 2) for even k and (k + 1, k, k + 2) for odd k, so that every triangle keeps
+// the first one's orientation and its last vertex provokes (GL's default provoking vertex,
+// as Mesa's draw module decomposes a strip for llvmpipe). EndPrimitive() and the end
+// of an invocation end a strip; a strip too short for one primitive makes none.
+struct ShaderPrimitives {
+    GeometryOutput output = GeometryOutput::triangle_strip;
+    std::vector<ShaderVertex> vertices;
+    std::vector<std::uint32_t> indices;
+    int per_primitive() const { return output == GeometryOutput::points ? 1 : output == GeometryOutput::line_strip ? 2 : 3; }
+    std::size_t primitive_count() const { return indices.size() / static_cast<std::size_t>(per_primitive()); }
+};
+
 // A module with its uniforms and textures resolved: the stage drivers. Const and
 // thread-safe; each call runs its own invocations.
 class Executable {
@@ -221,8 +249,15 @@ public:
     std::vector<ShaderVertex> evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords,
                                        long long patch_id) const;
 
-private:
+    // Geometry: every invocation (layout(invocations = N); gl_InvocationID) of one input
+    // primitive, `in` its vertices as gl_in[] and the input blocks read them (as many as the
+    // input layout takes). gl_PrimitiveIDIn = primitive_id. A vertex emitted past
+    // max_vertices is dropped with a warning (GL leaves it undefined; llvmpipe drops it).
+    ShaderPrimitives geometry(std::span<const ShaderVertex> in, long long primitive_id) const;
+
     struct State;
+
+private:
     std::unique_ptr<const State> state_;
 };
 

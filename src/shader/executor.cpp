@@ -374,6 +374,9 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 break;
             }
             case spv::OpControlBarrier: return Status::barrier;
+            // The geometry driver (geometry.cpp) reads the outputs and runs the batch on.
+            case spv::OpEmitVertex: return Status::emit;
+            case spv::OpEndPrimitive: return Status::end_primitive;
             case spv::OpVariable:
                 if (in.count > 3) access(a[1], T(T(a[0]).element).words, R(a[3]), true);
                 break;

@@ -49,9 +49,10 @@ std::vector<std::uint32_t> broadcast_lanes(const std::vector<std::uint32_t>& one
 class Batch {
 public:
     explicit Batch(const Module::Impl& module, std::uint32_t lanes = 1);
-    enum class Status : std::uint8_t { done, barrier, killed, diverged };
-    // Runs until the entry point returns, a barrier() or a discard, or until a branch whose
-    // lanes go different ways (the batch then stands before that branch).
+    enum class Status : std::uint8_t { done, barrier, killed, diverged, emit, end_primitive };
+    // Runs until the entry point returns, a barrier() or a discard, a geometry shader's
+    // EmitVertex() or EndPrimitive() (the driver takes the outputs and runs on), or until a
+    // branch whose lanes go different ways (the batch then stands before that branch).
     Status run(ExecContext& context);
     std::uint32_t lanes() const { return lanes_; }
     // After Status::diverged: the lanes grouped by the way their branch goes, each group in
