@@ -11,6 +11,7 @@
 #include <cstring>
 #include <unistd.h>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <string>
 #include <algorithm>
@@ -25,6 +26,7 @@
 #include "tessref/pipeline.h"
 #include "tessref/prepare.h"
 #include "tessref/scene.h"
+#include "tessref/shader.h"
 
 namespace {
 
@@ -520,4 +522,109 @@ TEST_F(UserShaderCommand, PnCullingDiscardsLlvmpipesPatches) {
     EXPECT_LT(c.reference_patches, s.patch_count());
     EXPECT_GT(c.reference_patches, s.patch_count() / 2);
     EXPECT_EQ(c.compared_patches, c.reference_patches);
+}
+
+// ---- the geometry stage against llvmpipe's ------------------------------------------------
+
+namespace {
+
+// A geometry twin's normal at every vertex of every triangle of llvmpipe's capture, the
+// triangle's three captured vertices handed to the twin as llvmpipe's evaluation stage
+// handed them on: gl_Position the world position (thesis: mvp the identity in the capture
+// pass), EvaluationData from `block`. Counts the vertices whose normal (location 0) differs
+// from the captured one in any bit.
+struct GeometryAgainstCapture {
+    std::size_t vertices = 0, differing = 0;
+    std::string first;
+};
+
+GeometryAgainstCapture geometry_against_capture(const tessref::Capture& capture, const std::string& twin,
+                                                const tessref::shader::Bindings& bindings, tessref::shader::MathMode math,
+                                                const std::function<std::vector<tessref::shader::Slot>(glm::vec3)>& block) {
+    const fs::path file = kSource / "data" / "shaders" / twin;
+    tessref::shader::Source source;
+    source.stage = tessref::ShaderStage::geometry;
+    source.path = file.string();
+    source.text = read_file(file);
+    tessref::shader::RunOptions options;
+    options.math = math;
+    const tessref::shader::Executable geom(tessref::shader::Module::compile(source), bindings, options);
+    GeometryAgainstCapture n;
+    for (std::size_t t = 0; t + 2 < capture.vertices.size(); t += 3) {
+        std::vector<tessref::shader::ShaderVertex> in(3);
+        for (std::size_t i = 0; i < 3; ++i) {
+            const glm::vec3 p = capture.vertices[t + i].position;
+            in[i].position = glm::vec4(p, 1.0f);
+            in[i].locations = block(p);
+        }
+        const tessref::shader::ShaderPrimitives out = geom.geometry(in, static_cast<long long>(t / 3));
+        if (out.vertices.size() != 3) {
+            ADD_FAILURE() << twin << " emitted " << out.vertices.size() << " vertices";
+            return n;
+        }
+        for (std::size_t i = 0; i < 3; ++i) {
+            const glm::vec3 shader(tessref::shader::as_vec4(out.vertices[i].locations.at(0)));
+            const glm::vec3 gl = capture.vertices[t + i].normal;
+            ++n.vertices;
+            if (std::memcmp(&shader, &gl, sizeof shader) == 0) continue;
+            ++n.differing;
+            if (n.first.empty()) {
+                char text[200];
+                std::snprintf(text, sizeof text, "vertex %zu: interpreter (%.9g %.9g %.9g) llvmpipe (%.9g %.9g %.9g)", t + i,
+                              shader.x, shader.y, shader.z, gl.x, gl.y, gl.z);
+                n.first = text;
+            }
+        }
+    }
+    return n;
+}
+
+}  // namespace
+
+// The geometry twins run by the interpreter in the llvmpipe mode give llvmpipe's own
+// normals bit for bit (thesis normal map: normalMatrix * normalize(texel - 0.5); COSC422:
+// normalize(cross(p1 - p0, p2 - p0))), from llvmpipe's own evaluation outputs. The C++
+// models differ from llvmpipe there by up to 3 ulps (golden/README.md), and from these
+// interpreter runs by as much (ThesisTwins.GeometryNormalsAreTheModelsButForNormalize):
+// normalize as glm computes it, its dot product from the first component and 1 / sqrt,
+// is not llvmpipe's, whose dot product sums from the last component.
+TEST_F(UserShaderCommand, GeometryTwinsGiveLlvmpipesNormals) {
+    using tessref::shader::MathMode;
+    {
+        const std::string scene = scene_path("thesis-all-10").string();
+        ASSERT_EQ(run({"gl", scene, "-o", path("thesis.png"), "--capture", path("thesis.txt"), "--size", "160x100"}).status, 0);
+        const tessref::Scene s = tessref::load_scene(scene);
+        const float scale_xy = static_cast<float>(s.grid->scale_xy);
+        tessref::shader::Bindings b;
+        b.set("normalMatrix", glm::mat3(1.0f));
+        b.bind_texture(2, s.grid->normal_map.get());
+        // textureCoordinate = position.xy / scaleXY (thesis_terrain.tese; the height moves z only).
+        const auto block = [&](glm::vec3 p) {
+            return std::vector<tessref::shader::Slot>{tessref::shader::slot(glm::vec4(p.x / scale_xy, p.y / scale_xy, 0.0f, 0.0f))};
+        };
+        const tessref::Capture capture = tessref::read_capture(path("thesis.txt"));
+        const GeometryAgainstCapture llvmpipe =
+            geometry_against_capture(capture, "thesis_terrain.geom", b, MathMode::llvmpipe, block);
+        EXPECT_GT(llvmpipe.vertices, 10000u);
+        EXPECT_EQ(llvmpipe.differing, 0u) << llvmpipe.first;
+        const GeometryAgainstCapture exact = geometry_against_capture(capture, "thesis_terrain.geom", b, MathMode::exact, block);
+        std::printf("thesis-all-10 normals: llvmpipe mode %zu of %zu differ from llvmpipe's, exact mode %zu\n",
+                    llvmpipe.differing, llvmpipe.vertices, exact.differing);
+    }
+    {
+        const std::string scene = scene_path("cosc422").string();
+        ASSERT_EQ(run({"gl", scene, "-o", path("cosc422.png"), "--capture", path("cosc422.txt"), "--size", "160x100"}).status, 0);
+        // EvaluationData: worldPosition (location 0), texCoord (1, unread by the normal).
+        const auto block = [](glm::vec3 p) {
+            return std::vector<tessref::shader::Slot>{tessref::shader::slot(glm::vec4(p, 0.0f)), tessref::shader::Slot{}};
+        };
+        const tessref::Capture capture = tessref::read_capture(path("cosc422.txt"));
+        const GeometryAgainstCapture llvmpipe =
+            geometry_against_capture(capture, "cosc422_terrain.geom", {}, MathMode::llvmpipe, block);
+        EXPECT_GT(llvmpipe.vertices, 10000u);
+        EXPECT_EQ(llvmpipe.differing, 0u) << llvmpipe.first;
+        const GeometryAgainstCapture exact = geometry_against_capture(capture, "cosc422_terrain.geom", {}, MathMode::exact, block);
+        std::printf("cosc422 face normals: llvmpipe mode %zu of %zu differ from llvmpipe's, exact mode %zu\n",
+                    llvmpipe.differing, llvmpipe.vertices, exact.differing);
+    }
 }
