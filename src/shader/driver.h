@@ -22,6 +22,10 @@ struct Executable::State {
     RunOptions options;
     std::vector<std::uint32_t> shared;  // uniforms set, samplers' units; inputs and outputs zero
     std::vector<const Texture*> units;
+    // An evaluation batch's shared memory (ExecContext::lane_slot): the outputs and
+    // gl_TessCoord lane by lane, lane_words words per lane; the rest once for all lanes.
+    std::vector<std::uint32_t> lane_slot;
+    std::uint32_t lane_words = 0;
     explicit State(Module m) : module(std::move(m)) {}
 };
 

@@ -88,9 +88,14 @@ std::vector<std::uint32_t> broadcast_lanes(const std::vector<std::uint32_t>& one
 Batch::Batch(const Module::Impl& m, std::uint32_t lanes)
     : module_(&m),
       lanes_(lanes),
-      regs_(broadcast_lanes(m.reg_init, lanes)),
+      regs_(m.reg_init.size() * lanes, 0),
       local_(broadcast_lanes(m.local_init, lanes)),
-      pc_(m.functions.at(m.entry).first) {}
+      pc_(m.functions.at(m.entry).first) {
+    // Only the registers that hold a value before the first instruction (module.h).
+    for (const auto& [first, words] : m.fixed_regs)
+        for (std::uint32_t j = first; j < first + words; ++j)
+            std::fill_n(regs_.begin() + static_cast<std::ptrdiff_t>(j) * lanes, lanes, m.reg_init[j]);
+}
 
 void Batch::restart() {
     const Module::Impl& m = *module_;
@@ -110,12 +115,17 @@ Batch Batch::split(std::span<const std::uint32_t> pick) const {
     return b;
 }
 
-// The words of `address` in memory, lane by lane: word j of lane l is result[j * lanes + l].
-std::uint32_t* Batch::memory(ExecContext& c, std::uint32_t address, std::uint32_t words) {
+// The words of `address` in memory (executor.h).
+std::uint32_t* Batch::memory(ExecContext& c, std::uint32_t address, std::uint32_t words, std::uint32_t& stride) {
     const Module::Impl& m = c.module;
+    stride = lanes_;
     if (address < m.shared_words) {
         if (address + words > m.shared_words) throw Error("interpreter: memory access out of range (" + c.who + ")");
-        return &c.shared[static_cast<std::size_t>(address) * lanes_];
+        if (!c.lane_slot) return &c.shared[static_cast<std::size_t>(address) * lanes_];
+        const std::uint32_t slot = (*c.lane_slot)[address];
+        if (slot != kNone) return &c.shared[static_cast<std::size_t>(slot) * lanes_];
+        stride = 0;
+        return const_cast<std::uint32_t*>(c.invariant + address);  // only read: see `access`
     }
     const std::uint32_t at = address - m.shared_words;
     if (static_cast<std::size_t>(at + words) * lanes_ > local_.size())
@@ -189,10 +199,15 @@ std::vector<std::vector<std::uint32_t>> Batch::ways(const ExecContext& c) const 
     return out;
 }
 
-Batch::Status Batch::run(ExecContext& c) { return lanes_ == 1 ? run_lanes<1>(c) : run_lanes<0>(c); }
+Batch::Status Batch::run(ExecContext& c) {
+    if (lanes_ == 1) return run_lanes<1>(c);
+    if (lanes_ == kBatchLanes) return run_lanes<kBatchLanes>(c);
+    return run_lanes<0>(c);
+}
 
 // kLanes: the lane count known at compile time (1: a control shader's invocation, a vertex,
-// a traced invocation, whose loops over the lanes then vanish), or 0: lanes_.
+// a traced invocation, whose loops over the lanes then vanish; kBatchLanes: a full
+// evaluation batch, whose loops the compiler unrolls and vectorises), or 0: lanes_.
 template <std::uint32_t kLanes>
 Batch::Status Batch::run_lanes(ExecContext& c) {
     const Module::Impl& m = c.module;
@@ -249,21 +264,37 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
         result_type = type_id;
         return offset;
     };
+    // A store into memory the lanes share (ExecContext::invariant): inputs and uniforms,
+    // which the validator does not let a shader write.
+    const auto read_only = [&](std::uint32_t address) {
+        throw Error("interpreter: a store into read-only memory at address " + std::to_string(address) + " (" + c.who + ")",
+                    m.where(m.code[pc_ - 1]));
+    };
     // A load or store of `size` words between registers and memory, lane by lane through
     // each lane's pointer (one contiguous copy when every lane points at the same place).
     const auto access = [&](std::uint32_t pointer, std::uint32_t size, std::uint32_t* value, bool store) {
         const std::uint32_t* p = R(pointer);
+        std::uint32_t stride = 0;
         if (uniform(p, L)) {
-            std::uint32_t* at = memory(c, p[0], size);
-            if (store) std::copy_n(value, size * L, at);
-            else std::copy_n(at, size * L, value);
+            std::uint32_t* at = memory(c, p[0], size, stride);
+            if (stride == 0) {
+                if (store) read_only(p[0]);
+                for (std::uint32_t j = 0; j < size; ++j) std::fill_n(value + j * L, L, at[j]);
+            } else if (store) {
+                std::copy_n(value, size * L, at);
+            } else {
+                std::copy_n(at, size * L, value);
+            }
             return;
         }
         for (std::uint32_t l = 0; l < L; ++l) {
-            std::uint32_t* at = memory(c, p[l], size);
+            std::uint32_t* at = memory(c, p[l], size, stride);
+            if (stride == 0 && store) read_only(p[l]);
+            // Word j of this lane: at[j * L + l], or at[j] where the lanes share it.
+            const std::uint32_t step = stride ? stride : 1, lane = stride ? l : 0;
             for (std::uint32_t j = 0; j < size; ++j) {
-                if (store) at[j * L + l] = value[j * L + l];
-                else value[j * L + l] = at[j * L + l];
+                if (store) at[j * step + lane] = value[j * L + l];
+                else value[j * L + l] = at[j * step + lane];
             }
         }
     };
@@ -393,9 +424,11 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 const std::uint32_t* from = R(a[1]);
                 const std::uint32_t* to = R(a[0]);
                 for (std::uint32_t l = 0; l < L; ++l) {
-                    const std::uint32_t* source = memory(c, from[l], size);
-                    std::uint32_t* target = memory(c, to[l], size);
-                    for (std::uint32_t j = 0; j < size; ++j) v[j] = source[j * L + l];
+                    std::uint32_t from_stride = 0, to_stride = 0;
+                    const std::uint32_t* source = memory(c, from[l], size, from_stride);
+                    std::uint32_t* target = memory(c, to[l], size, to_stride);
+                    if (to_stride == 0) read_only(to[l]);
+                    for (std::uint32_t j = 0; j < size; ++j) v[j] = from_stride ? source[j * from_stride + l] : source[j];
                     for (std::uint32_t j = 0; j < size; ++j) target[j * L + l] = v[j];
                 }
                 break;
@@ -542,36 +575,51 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 const std::uint32_t* r_ = R(a[3]);
                 std::uint32_t* out = R(a[1]);
                 const bool pairwise = c.options.math == MathMode::exact;
-                for (std::uint32_t lane = 0; lane < L; ++lane) {
-                    const auto l = [&](std::uint32_t j) { return f(l_[j * L + lane]); };
-                    const auto r = [&](std::uint32_t j) { return f(r_[j * L + lane]); };
-                    const auto put = [&](std::uint32_t j, float v) { out[j * L + lane] = w(v); };
-                    if (op == spv::OpVectorTimesMatrix) {
-                        // v * M: result[k] = dot(v, M column k), summed from the first component.
-                        const std::uint32_t rows = lt.count;
+                if (op == spv::OpVectorTimesMatrix) {
+                    // v * M: result[k] = dot(v, M column k), summed from the first component.
+                    const std::uint32_t rows = lt.count;
+                    for (std::uint32_t lane = 0; lane < L; ++lane)
                         for (std::uint32_t k = 0; k < rt.count; ++k)
-                            put(k, dot_product(l_ + lane, r_ + k * rows * L + lane, rows, L, c.options.math));
-                        continue;
-                    }
-                    const std::uint32_t rows = T(lt.element).count;  // the left matrix's column size
-                    const std::uint32_t columns = lt.count;
-                    const std::uint32_t results = op == spv::OpMatrixTimesVector ? 1 : rt.count;
-                    for (std::uint32_t k = 0; k < results; ++k) {
-                        const std::uint32_t v = k * columns;
-                        for (std::uint32_t i = 0; i < rows; ++i) {
-                            if (columns == 4 && pairwise) {
-                                const float p0 = l(i) * r(v), p1 = l(rows + i) * r(v + 1);
-                                const float p2 = l(2 * rows + i) * r(v + 2), p3 = l(3 * rows + i) * r(v + 3);
+                            out[k * L + lane] = w(dot_product(l_ + lane, r_ + k * rows * L + lane, rows, L, c.options.math));
+                    break;
+                }
+                // Row i of result column k, over all lanes at once (the lanes innermost, where
+                // the compiler vectorises): left[j][i] is row (j * rows + i), right[k][j] row
+                // (k * columns + j), each a row of L lanes.
+                const std::uint32_t rows = T(lt.element).count;  // the left matrix's column size
+                const std::uint32_t columns = lt.count;
+                const std::uint32_t results = op == spv::OpMatrixTimesVector ? 1 : rt.count;
+                const auto row = [&](const std::uint32_t* base, std::uint32_t j) {
+                    return reinterpret_cast<const float*>(base + static_cast<std::size_t>(j) * L);
+                };
+                for (std::uint32_t k = 0; k < results; ++k) {
+                    const std::uint32_t v = k * columns;
+                    for (std::uint32_t i = 0; i < rows; ++i) {
+                        float* __restrict sum = reinterpret_cast<float*>(out + static_cast<std::size_t>(k * rows + i) * L);
+                        if (columns == 4 && pairwise) {
+                            const float* __restrict l0 = row(l_, i);
+                            const float* __restrict l1 = row(l_, rows + i);
+                            const float* __restrict l2 = row(l_, 2 * rows + i);
+                            const float* __restrict l3 = row(l_, 3 * rows + i);
+                            const float* __restrict r0 = row(r_, v);
+                            const float* __restrict r1 = row(r_, v + 1);
+                            const float* __restrict r2 = row(r_, v + 2);
+                            const float* __restrict r3 = row(r_, v + 3);
+                            for (std::uint32_t lane = 0; lane < L; ++lane) {
+                                const float p0 = l0[lane] * r0[lane], p1 = l1[lane] * r1[lane];
+                                const float p2 = l2[lane] * r2[lane], p3 = l3[lane] * r3[lane];
                                 const float s01 = p0 + p1, s23 = p2 + p3;
-                                put(k * rows + i, s01 + s23);
-                                continue;
+                                sum[lane] = s01 + s23;
                             }
-                            float sum = l(i) * r(v);
-                            for (std::uint32_t j = 1; j < columns; ++j) {
-                                const float product = l(j * rows + i) * r(v + j);
-                                sum = sum + product;
+                            continue;
+                        }
+                        for (std::uint32_t j = 0; j < columns; ++j) {
+                            const float* __restrict lj = row(l_, j * rows + i);
+                            const float* __restrict rj = row(r_, v + j);
+                            for (std::uint32_t lane = 0; lane < L; ++lane) {
+                                const float product = lj[lane] * rj[lane];
+                                sum[lane] = j == 0 ? product : sum[lane] + product;
                             }
-                            put(k * rows + i, sum);
                         }
                     }
                 }
@@ -724,11 +772,9 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                     args.scalar[j] = t.scalar;
                 }
                 const Type& rt = T(a[0]);
-                for (std::uint32_t l = 0; l < L; ++l) {
-                    for (std::uint32_t j = 0; j < args.count; ++j) args.value[j] = R(a[4 + j]) + l;
-                    if (!run_std450(a[3], c.options.math, rt.scalar, rt.kind == Kind::vector ? rt.count : 1, args, R(a[1]) + l))
-                        unsupported(in, std450_name(a[3]));
-                }
+                for (std::uint32_t j = 0; j < args.count; ++j) args.value[j] = R(a[4 + j]);
+                if (!run_std450(a[3], c.options.math, rt.scalar, rt.kind == Kind::vector ? rt.count : 1, args, L, R(a[1])))
+                    unsupported(in, std450_name(a[3]));
                 break;
             }
 

@@ -38,6 +38,14 @@ struct ExecContext {
     const RunOptions& options;
     std::string who;  // "tess_evaluation shader x.tese, patch 3, invocation 0": for errors
     std::set<std::uint32_t>* warned = nullptr;  // instructions that already warned
+    // Shared memory kept once for all lanes where every lane holds the same words (an
+    // evaluation batch's uniforms and patch inputs, which the shader only reads): when
+    // lane_slot is set, the word at shared address a is invariant[a] in every lane if
+    // lane_slot[a] is kNone, else word lane_slot[a] of `shared` (lane-interleaved). A
+    // variable's words are all of one kind, and consecutive in `shared`. Without lane_slot,
+    // `shared` holds every address, lane by lane.
+    const std::uint32_t* invariant = nullptr;
+    const std::vector<std::uint32_t>* lane_slot = nullptr;
 };
 
 // The words of lanes `pick` (in that order) of a lane-interleaved array of `lanes` lanes.
@@ -69,7 +77,10 @@ public:
 private:
     template <std::uint32_t kLanes>
     Status run_lanes(ExecContext& context);
-    std::uint32_t* memory(ExecContext& context, std::uint32_t address, std::uint32_t words);
+    // The words of `address`: word j of lane l at result[j * stride + l], stride the lanes;
+    // or, where every lane shares the memory (ExecContext::invariant), stride 0 and word j
+    // at result[j].
+    std::uint32_t* memory(ExecContext& context, std::uint32_t address, std::uint32_t words, std::uint32_t& stride);
     void observe_store(ExecContext& context, std::uint32_t address, std::uint32_t value, std::uint32_t words);
     struct Frame {
         std::uint32_t return_pc;

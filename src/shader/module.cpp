@@ -393,6 +393,7 @@ private:
                 variable(a[0], a[1], a[2], n > 3 ? a[3] : 0);
                 return;
             case spv::OpFunction: {
+                if (m_.fixed_regs.empty()) m_.fixed_regs.emplace_back(0, static_cast<std::uint32_t>(m_.reg_init.size()));
                 function_id = check_id(a[1]);
                 function = &m_.functions[function_id];
                 function->first = kNone;
@@ -485,6 +486,7 @@ private:
             const bool is_local = v.storage == spv::StorageClassPrivate || v.storage == spv::StorageClassFunction;
             if (is_local) v.address += m_.shared_words;
             m_.reg_init[m_.reg[v.id]] = v.address;  // OpVariable's result: the address, fixed (no recursion)
+            if (v.storage == spv::StorageClassFunction) m_.fixed_regs.emplace_back(m_.reg[v.id], 1);
             if (v.storage != spv::StorageClassFunction) {  // a Function variable's initializer runs with OpVariable
                 if (v.init) {
                     const std::uint32_t words = type(v.type).words;

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tessref/error.h"
@@ -96,6 +97,11 @@ struct Module::Impl {
     std::vector<std::uint32_t> type_of; // result type by id (0: none)
     std::vector<std::uint32_t> reg;     // register offset by id (kNone: none)
     std::vector<std::uint32_t> reg_init;  // the register file with every constant in place
+    // The runs (first word, words) of reg_init that hold a value before any instruction
+    // runs: the constants and global variables' addresses (every register allocated before
+    // the first function) and each Function variable's address. A batch sets up only these;
+    // every other register is written before it is read (executor.h, Batch::restart).
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> fixed_regs;
     std::vector<std::string> names;     // OpName by id
     std::map<std::uint32_t, std::string> strings;  // OpString
     std::uint32_t std450 = 0;           // the GLSL.std.450 import's id

@@ -105,6 +105,13 @@ Executable::Executable(Module module, const Bindings& bindings, RunOptions optio
                         Where::in_file(m.path));
         std::copy(value->second.words.begin(), value->second.words.end(), state->shared.begin() + v.address);
     }
+    if (m.stage == ShaderStage::tess_evaluation) {
+        state->lane_slot.assign(m.shared_words, kNone);
+        for (const Variable& v : m.variables) {
+            if (v.storage != spv::StorageClassOutput && v.builtin != spv::BuiltInTessCoord) continue;
+            for (std::uint32_t j = 0; j < m.types[v.type].words; ++j) state->lane_slot[v.address + j] = state->lane_words++;
+        }
+    }
     for (const auto& [unit, texture] : bindings.textures()) {
         if (state->units.size() <= static_cast<std::size_t>(unit)) state->units.resize(static_cast<std::size_t>(unit) + 1);
         state->units[static_cast<std::size_t>(unit)] = texture;
@@ -249,8 +256,9 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
     // the outputs, gl_TessCoord, Private and Function variables.
     std::optional<Work> fresh;
     std::vector<Work> work;  // the ways of a divergence, each a batch of its own
+    const std::string invocations = who(m, patch_id, -1);
     const auto run = [&](Work& w) {
-        ExecContext c{m, w.shared, state_->units, state_->options, who(m, patch_id, -1), &warned};
+        ExecContext c{m, w.shared, state_->units, state_->options, invocations, &warned, one.data(), &state_->lane_slot};
         const Batch::Status status = w.batch.run(c);
         const std::uint32_t n = w.batch.lanes();
         if (status == Batch::Status::diverged) {
@@ -269,8 +277,9 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
         for (const Variable& v : m.variables) {
             if (!is_output(v)) continue;
             element.resize(m.types[v.type].words);
+            const std::uint32_t slot = state_->lane_slot[v.address];
             for (std::uint32_t l = 0; l < n; ++l) {
-                for (std::size_t j = 0; j < element.size(); ++j) element[j] = w.shared[(v.address + j) * n + l];
+                for (std::size_t j = 0; j < element.size(); ++j) element[j] = w.shared[(slot + j) * n + l];
                 read_vertex(v, element.data(), out[w.points[l]]);
             }
         }
@@ -279,19 +288,21 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
         const std::uint32_t lanes = static_cast<std::uint32_t>(std::min(chunk, tess_coords.size() - first));
         if (fresh && fresh->batch.lanes() == lanes) {
             fresh->batch.restart();
-            for (const Variable& v : m.variables)
-                if (is_output(v))
-                    for (std::uint32_t j = 0; j < m.types[v.type].words; ++j)
-                        std::fill_n(fresh->shared.begin() + static_cast<std::ptrdiff_t>((v.address + j) * lanes), lanes, one[v.address + j]);
         } else {
-            fresh.emplace(Work{Batch(m, lanes), broadcast_lanes(one, lanes), {}});
+            fresh.emplace(Work{Batch(m, lanes), std::vector<std::uint32_t>(state_->lane_words * lanes), {}});
         }
+        for (const Variable& v : m.variables)
+            if (is_output(v))
+                for (std::uint32_t j = 0; j < m.types[v.type].words; ++j)
+                    std::fill_n(fresh->shared.begin() + static_cast<std::ptrdiff_t>(state_->lane_slot[v.address + j] * lanes), lanes,
+                                one[v.address + j]);
         fresh->points.clear();
         for (std::uint32_t l = 0; l < lanes; ++l) {
             fresh->points.push_back(first + l);
             if (tess_coord_address == kNone) continue;
             for (std::uint32_t j = 0; j < 3; ++j)
-                fresh->shared[(tess_coord_address + j) * lanes + l] = std::bit_cast<std::uint32_t>(tess_coords[first + l][static_cast<int>(j)]);
+                fresh->shared[(state_->lane_slot[tess_coord_address + j]) * lanes + l] =
+                    std::bit_cast<std::uint32_t>(tess_coords[first + l][static_cast<int>(j)]);
         }
         run(*fresh);
         while (!work.empty()) {

@@ -154,8 +154,11 @@ std::string std450_name(std::uint32_t op) {
     return "GLSL.std.450 instruction " + std::to_string(op);
 }
 
-bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t n, const Std450Args& a,
-                std::uint32_t* result) {
+namespace {
+
+// One lane of instruction `op`: run_std450 with one lane.
+bool run_lane(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t n, const Std450Args& a,
+              std::uint32_t* result) {
     // Component i of the result.
     const auto out_at = [&](std::uint32_t i) -> std::uint32_t& { return result[i * a.stride]; };
     if (is_elementary(op)) {
@@ -281,6 +284,69 @@ bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t n, c
             });
         default: return false;
     }
+}
+
+
+// The component-wise float instructions the shipped evaluation shaders use most, over all
+// lanes at once: one loop per component that the compiler vectorises (the same operations
+// as run_lane's, each rounded on its own). `op` is known at compile time.
+template <std::uint32_t kOp>
+void each_lane(std::uint32_t n, const Std450Args& a, std::uint32_t lanes, std::uint32_t* result) {
+    for (std::uint32_t i = 0; i < n; ++i) {
+        // Component i of argument k, lane by lane (a scalar argument is the same component).
+        const auto arg = [&](int k) {
+            return reinterpret_cast<const float*>(a.components[k] == 1 ? a.value[k] : a.value[k] + i * a.stride);
+        };
+        const float* __restrict x = arg(0);
+        const float* __restrict y = a.count > 1 ? arg(1) : x;
+        const float* __restrict z = a.count > 2 ? arg(2) : x;
+        float* __restrict out = reinterpret_cast<float*>(result + i * a.stride);
+        for (std::uint32_t l = 0; l < lanes; ++l) {
+            if constexpr (kOp == GLSLstd450FMix) {
+                const float difference = y[l] - x[l];
+                const float scaled = z[l] * difference;
+                out[l] = x[l] + scaled;
+            } else if constexpr (kOp == GLSLstd450FAbs) {
+                out[l] = std::fabs(x[l]);
+            } else if constexpr (kOp == GLSLstd450FMin) {
+                out[l] = std::fmin(x[l], y[l]);
+            } else if constexpr (kOp == GLSLstd450FMax) {
+                out[l] = std::fmax(x[l], y[l]);
+            } else if constexpr (kOp == GLSLstd450FClamp) {
+                out[l] = clampf(x[l], y[l], z[l]);
+            } else if constexpr (kOp == GLSLstd450Floor) {
+                out[l] = std::floor(x[l]);
+            }
+        }
+    }
+}
+
+}  // namespace
+
+bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t n, const Std450Args& a,
+                std::uint32_t lanes, std::uint32_t* result) {
+    // The lanes of a float result, each component in its own row (result and arguments
+    // never overlap: SPIR-V's ids are assigned once, each its own registers).
+    if (scalar == Kind::float_ && lanes > 1) {
+        switch (op) {
+            case GLSLstd450FMix: each_lane<GLSLstd450FMix>(n, a, lanes, result); return true;
+            case GLSLstd450FAbs: each_lane<GLSLstd450FAbs>(n, a, lanes, result); return true;
+            case GLSLstd450FMin:
+            case GLSLstd450NMin: each_lane<GLSLstd450FMin>(n, a, lanes, result); return true;
+            case GLSLstd450FMax:
+            case GLSLstd450NMax: each_lane<GLSLstd450FMax>(n, a, lanes, result); return true;
+            case GLSLstd450FClamp:
+            case GLSLstd450NClamp: each_lane<GLSLstd450FClamp>(n, a, lanes, result); return true;
+            case GLSLstd450Floor: each_lane<GLSLstd450Floor>(n, a, lanes, result); return true;
+            default: break;
+        }
+    }
+    Std450Args lane = a;
+    for (std::uint32_t l = 0; l < lanes; ++l) {
+        for (std::uint32_t k = 0; k < a.count; ++k) lane.value[k] = a.value[k] + l;
+        if (!run_lane(op, mode, scalar, n, lane, result + l)) return false;
+    }
+    return true;
 }
 
 }  // namespace tessref::shader

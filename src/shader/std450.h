@@ -19,10 +19,12 @@ struct Std450Args {
     std::uint32_t count = 0;
 };
 
-// Runs instruction `op` (GLSLstd450) in `mode`: the result's `components` words of leaf kind
-// `scalar` to out[0], out[stride], ... Returns false for an instruction the interpreter does not run.
+// Runs instruction `op` (GLSLstd450) in `mode` for `lanes` lanes (args.value[k][l] is lane
+// l's first component, as is out[l]): the result's `components` words of leaf kind
+// `scalar`, component i of lane l to out[i * stride + l]. Returns false for an instruction
+// the interpreter does not run.
 bool run_std450(std::uint32_t op, MathMode mode, Kind scalar, std::uint32_t components, const Std450Args& args,
-                std::uint32_t* out);
+                std::uint32_t lanes, std::uint32_t* out);
 
 // A dot product of n components (component i of a vector at [i * stride]), every product
 // and sum rounded: summed from the first component in exact mode, from the last in llvmpipe
