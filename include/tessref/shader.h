@@ -225,6 +225,24 @@ struct ShaderPrimitives {
     std::size_t primitive_count() const { return indices.size() / static_cast<std::size_t>(per_primitive()); }
 };
 
+// One fragment of a 2x2 quad as a fragment shader's invocation reads it.
+struct QuadFragment {
+    glm::vec4 frag_coord{0.0f, 0.0f, 0.0f, 1.0f};  // gl_FragCoord
+    std::vector<Slot> inputs;                        // the interpolated inputs, by location
+    bool covered = true;  // false: a helper invocation (gl_HelperInvocation), run for the derivatives only
+};
+
+// What a fragment shader's invocation wrote: its outputs by location (a location it did not
+// write reads zero), gl_FragDepth if written, and whether it discarded. A helper
+// invocation's result is not a fragment: `helper` says so.
+struct FragmentResult {
+    std::vector<Slot> outputs;
+    bool depth_written = false;
+    float depth = 0.0f;
+    bool discarded = false;
+    bool helper = false;
+};
+
 // A module with its uniforms and textures resolved: the stage drivers. Const and
 // thread-safe; each call runs its own invocations.
 class Executable {
@@ -254,6 +272,21 @@ public:
     // input layout takes). gl_PrimitiveIDIn = primitive_id. A vertex emitted past
     // max_vertices is dropped with a warning (GL leaves it undefined; llvmpipe drops it).
     ShaderPrimitives geometry(std::span<const ShaderVertex> in, long long primitive_id) const;
+    // Fragment: the four invocations of a 2x2 quad, as llvmpipe runs them, lanes in the order
+    // top-left, top-right, bottom-left, bottom-right (rows as the framebuffer's: the top row
+    // has the higher window y). dFdx = right minus left in the lane's row, dFdy = top minus
+    // bottom in its column (each rounded; Fine and Coarse the same, as llvmpipe computes
+    // them), fwidth = abs(dFdx) + abs(dFdy); texture()'s implicit lod from one pair of
+    // derivatives for the quad, the top-left fragment's (tessref/shading.h, fragment_lod).
+    // The quad runs in lockstep; where a branch parts its lanes each way runs on its own and
+    // the ways meet again at the branch's merge block (the end of the if, the loop's exit),
+    // so that derivatives after it are the quad's again; inside a parted branch they are
+    // undefined in GLSL and 0 here, with a warning. `if (c) discard;` parts nothing: as on
+    // llvmpipe, the discarding fragments go on as helpers (their derivatives stay
+    // available), their results discarded. gl_FrontFacing = front_facing, gl_PrimitiveID =
+    // primitive_id.
+    std::array<FragmentResult, 4> fragment(std::span<const QuadFragment, 4> quad, bool front_facing,
+                                           long long primitive_id) const;
 
     struct State;
 

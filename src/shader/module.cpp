@@ -196,6 +196,7 @@ private:
                     case spv::CapabilityGeometryPointSize:
                     case spv::CapabilityImageQuery:
                     case spv::CapabilitySampled1D:
+                    case spv::CapabilityDerivativeControl:
                         return;
                     default:
                         fail(std::string("capability ") + spv::CapabilityString(static_cast<int>(a[0])) +
@@ -218,10 +219,11 @@ private:
                     case spv::ExecutionModelTessellationControl: m_.stage = ShaderStage::tess_control; break;
                     case spv::ExecutionModelTessellationEvaluation: m_.stage = ShaderStage::tess_evaluation; break;
                     case spv::ExecutionModelGeometry: m_.stage = ShaderStage::geometry; break;
+                    case spv::ExecutionModelFragment: m_.stage = ShaderStage::fragment; break;
                     default:
                         fail(std::string("execution model ") + spv::ExecutionModelString(static_cast<int>(a[0])) +
                              " is not supported by the interpreter (vertex, tessellation control, "
-                             "tessellation evaluation and geometry are)");
+                             "tessellation evaluation, geometry and fragment are)");
                 }
                 return;
             }
