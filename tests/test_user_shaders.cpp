@@ -628,3 +628,59 @@ TEST_F(UserShaderCommand, GeometryTwinsGiveLlvmpipesNormals) {
                     llvmpipe.differing, llvmpipe.vertices, exact.differing);
     }
 }
+
+// `trace --stage geom`: the geometry shader of one primitive of a patch (its K-th triangle,
+// as `gl --capture` lists them), fed by the evaluation shader at the triangle's three tess
+// coords. In the llvmpipe mode its face normal is the one llvmpipe captured for that
+// triangle, bit for bit (GeometryTwinsGiveLlvmpipesNormals); the lines include the twin's
+// face_normal, the stores its normal.
+TEST_F(UserShaderCommand, TraceOfTheGeometryStageGivesLlvmpipesNormal) {
+    const std::string scene = scene_path("cosc422").string();
+    ASSERT_EQ(run({"gl", scene, "-o", path("gl.png"), "--size", "160x100", "--capture", path("gl.txt")}).status, 0);
+    const tessref::Capture capture = tessref::read_capture(path("gl.txt"));
+    const std::uint32_t patch = 40, primitive = 7;
+    std::vector<tessref::CapturedVertex> corners;
+    for (const tessref::CapturedVertex& v : capture.vertices)
+        if (v.patch_id == patch) corners.push_back(v);
+    ASSERT_GE(corners.size(), 3u * (primitive + 1));
+    const RunResult r = run({"trace", scene, "--patch", std::to_string(patch), "--stage", "geom", "--primitive",
+                             std::to_string(primitive), "--math", "llvmpipe", "--json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["stage"], "geometry");
+    EXPECT_EQ(j["math"], "llvmpipe");
+    EXPECT_EQ(j["primitive"], primitive);
+    const auto& vertices = j["outputs"]["vertices"];
+    ASSERT_EQ(vertices.size(), 3u) << r.out;
+    EXPECT_EQ(j["outputs"]["primitives"], nlohmann::json::parse("[[0, 1, 2]]")) << r.out;
+    for (std::size_t i = 0; i < 3; ++i) {
+        const tessref::CapturedVertex& gl = corners[3 * primitive + i];
+        const auto& n = vertices[i]["locations"]["0"];
+        EXPECT_EQ(bits(n[0].get<double>()), std::bit_cast<std::uint32_t>(gl.normal.x)) << i << " " << r.out;
+        EXPECT_EQ(bits(n[1].get<double>()), std::bit_cast<std::uint32_t>(gl.normal.y)) << i;
+        EXPECT_EQ(bits(n[2].get<double>()), std::bit_cast<std::uint32_t>(gl.normal.z)) << i;
+        // The evaluation's worldPosition as the geometry shader read it: llvmpipe's position.
+        EXPECT_EQ(bits(j["inputs"][i]["locations"]["0"][0].get<double>()), std::bit_cast<std::uint32_t>(gl.position.x)) << i;
+    }
+    bool face_normal_line = false, normal_stored = false;
+    for (const auto& line : j["lines"]) {
+        face_normal_line = face_normal_line || line["source"].get<std::string>().find("normalize(cross") != std::string::npos;
+        for (const auto& s : line["stores"]) normal_stored = normal_stored || s["name"] == "normal";
+    }
+    EXPECT_TRUE(face_normal_line) << r.out;
+    EXPECT_TRUE(normal_stored) << r.out;
+
+    const RunResult text = run({"trace", scene, "--patch", std::to_string(patch), "--stage", "geom", "--primitive",
+                                std::to_string(primitive)});
+    ASSERT_EQ(text.status, 0) << text.err;
+    EXPECT_NE(text.out.find("exact math"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("primitive 7"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("EmitVertex"), std::string::npos) << text.out;
+    // A primitive the patch does not have, a scene without a geometry stage: exit 2 naming the flag.
+    const RunResult far = run({"trace", scene, "--patch", "0", "--stage", "geom", "--primitive", "100000"});
+    EXPECT_EQ(far.status, 2);
+    EXPECT_NE(far.err.find("--primitive"), std::string::npos) << far.err;
+    const RunResult none = run({"trace", scene_path("lab4-canyon").string(), "--patch", "0", "--stage", "geom", "--primitive", "0"});
+    EXPECT_EQ(none.status, 2);
+    EXPECT_NE(none.err.find("geometry"), std::string::npos) << none.err;
+}
