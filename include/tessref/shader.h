@@ -38,6 +38,10 @@
 // for where that is exact and the exceptions), and `llvmpipe`, the approximations Mesa's
 // llvmpipe uses.
 //
+// Stages: vertex, tessellation control and evaluation, geometry (EmitVertex/EndPrimitive,
+// strips assembled as GL assembles them) and fragment (2x2 quads: derivatives, helper
+// invocations, discard, implicit lod), each through its Executable call below.
+//
 // Bad input throws tessref::Error: a GLSL compile error (glslang's log, at the file and
 // line), SPIR-V that fails validation (the validator's message), an opcode, capability or
 // execution model the interpreter does not run (naming the opcode and the source

@@ -13,7 +13,8 @@
 //  - the geometry stage's per-vertex normals (thesis normal_map, height-field normals the
 //    evaluation shader does not compute) and everything after the evaluation stage: the
 //    models, on the interpreter's positions and texture coordinates. A user's geometry or
-//    fragment shader is not run on the CPU (the interpreter runs neither stage yet).
+//    fragment shader is not run by the pipeline (the interpreter runs both stages; `trace
+//    --stage geom` runs the geometry stage here, over one triangle of a patch).
 //  - the primitive generator tessellates as the scene's [generator] says, whatever the
 //    user's evaluation shader's layout(...) in; line (GL draws with the user's: a cw where
 //    [generator] has ccw shows as an orientation divergence of the captures).
