@@ -205,6 +205,18 @@ struct ShaderVertex {
     std::vector<Slot> locations;  // indexed by location
 };
 
+// The outputs of many evaluation invocations, flat: vertex k's gl_Position is positions[k]
+// and its location j is locations[k * location_count + j], as vertex(k) hands them on (zero
+// where the shader writes none). One allocation per call instead of one per vertex.
+struct ShaderVertices {
+    std::vector<glm::vec4> positions;
+    std::size_t location_count = 0;
+    std::vector<Slot> locations;
+    std::size_t size() const { return positions.size(); }
+    const Slot& location(std::size_t k, std::size_t j) const { return locations[k * location_count + j]; }
+    ShaderVertex vertex(std::size_t k) const;
+};
+
 // A control shader's patch: its output vertices, per-patch locations and levels.
 struct ShaderPatch {
     std::vector<ShaderVertex> vertices;
@@ -270,6 +282,10 @@ public:
     // all the batch's invocations). A warning is given once per source line of the call.
     std::vector<ShaderVertex> evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords,
                                        long long patch_id) const;
+    // The same into `out` (resized; its storage reused from call to call): what the
+    // pipeline runs.
+    void evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords, long long patch_id,
+                  ShaderVertices& out) const;
 
     // Geometry: every invocation (layout(invocations = N); gl_InvocationID) of one input
     // primitive, `in` its vertices as gl_in[] and the input blocks read them (as many as the

@@ -210,16 +210,20 @@ public:
         std::vector<glm::vec2> uv(points.size());
         std::vector<glm::vec3> tess_coords(points.size());
         for (std::size_t k = 0; k < points.size(); ++k) tess_coords[k] = glm::vec3(points[k].u, points[k].v, points[k].w);
-        const std::vector<shader::ShaderVertex> evaluated = tese_run->evaluate(patch, tess_coords, static_cast<long long>(p));
+        shader::ShaderVertices evaluated;
+        tese_run->evaluate(patch, tess_coords, static_cast<long long>(p), evaluated);
+        // Location j of vertex k as a vec4 (zero where the shader writes none).
+        const auto at = [&](std::size_t k, int j) {
+            return j >= 0 && static_cast<std::size_t>(j) < evaluated.location_count ? shader::as_vec4(evaluated.location(k, static_cast<std::size_t>(j)))
+                                                                                    : glm::vec4(0.0f);
+        };
         for (std::size_t k = 0; k < points.size(); ++k) {
-            const shader::ShaderVertex& out = evaluated[k];
-            position[k] = position_location < 0 ? glm::vec3(out.position) : glm::vec3(location(out, position_location));
-            uv[k] = glm::vec2(location(out, uv_location));
+            position[k] = position_location < 0 ? glm::vec3(evaluated.positions[k]) : glm::vec3(at(k, position_location));
+            uv[k] = glm::vec2(at(k, uv_location));
             const std::size_t v = first_vertex + k;
             mesh.positions[v] = glm::dvec3(position[k]);
             if (has_uvs) mesh.uvs[v] = glm::dvec2(uv[k]);
-            if (has_normals && normals && normal_location >= 0)
-                mesh.normals[v] = glm::dvec3(glm::vec3(location(out, normal_location)));
+            if (has_normals && normals && normal_location >= 0) mesh.normals[v] = glm::dvec3(glm::vec3(at(k, normal_location)));
         }
         if (model_normals) {
             model->geometry_normals(p, points, position, uv, normal);
@@ -306,11 +310,6 @@ public:
     }
 
 private:
-    static glm::vec4 location(const shader::ShaderVertex& v, int at) {
-        if (at < 0 || static_cast<std::size_t>(at) >= v.locations.size()) return glm::vec4(0.0f);
-        return shader::as_vec4(v.locations[static_cast<std::size_t>(at)]);
-    }
-
     // The patch's vertices as the GL backend's vertex buffer holds them: a terrain's four
     // corners vec4(ground, 1) at location 0 (control.h's corner order), a PN triangle's
     // position, normal and uv at locations 0, 1, 2.

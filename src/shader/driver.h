@@ -26,6 +26,7 @@ struct Executable::State {
     // gl_TessCoord lane by lane, lane_words words per lane; the rest once for all lanes.
     std::vector<std::uint32_t> lane_slot;
     std::uint32_t lane_words = 0;
+    std::size_t location_count = 0;  // an evaluation shader's output locations (ShaderVertices)
     explicit State(Module m) : module(std::move(m)) {}
 };
 

@@ -149,7 +149,9 @@ void Batch::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t v
         const Type& t = m.types[v.type];
         if (t.kind == Kind::array && m.types[t.element].words > 0) {
             const std::uint32_t element = m.types[t.element].words;
-            name += "[" + std::to_string(offset / element) + "]";
+            name += '[';  // appended piece by piece: GCC 12 at -O3 warns (-Wrestrict) on "[" + s + "]"
+            name += std::to_string(offset / element);
+            name += ']';
             offset %= element;
         }
         if (v.name.empty())
@@ -302,7 +304,7 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
     const auto access = [&](std::uint32_t pointer, std::uint32_t size, std::uint32_t* value, bool store) {
         const std::uint32_t* p = R(pointer);
         std::uint32_t stride = 0;
-        if (uniform(p, L)) {
+        if (m.lane_invariant[pointer] || uniform(p, L)) {
             std::uint32_t* at = memory(c, p[0], size, stride);
             if (stride == 0) {
                 if (store) read_only(p[0]);
@@ -474,7 +476,7 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 // (constants, uniforms), else one per lane.
                 const std::uint32_t n = in.count - 3u;
                 bool same = true;
-                for (std::uint32_t k = 0; k < n && same; ++k) same = uniform(R(a[3 + k]), L);
+                for (std::uint32_t k = 0; k < n && same; ++k) same = m.lane_invariant[a[3 + k]] || uniform(R(a[3 + k]), L);
                 const std::uint32_t* base = R(a[2]);
                 std::uint32_t* out = R(a[1]);
                 std::uint32_t result_type = 0;

@@ -115,6 +115,7 @@ public:
         if (function) fail("a function without OpFunctionEnd");
         if (!m_.entry) fail("no entry point");
         finish_variables();
+        find_lane_invariants();
     }
 
 private:
@@ -446,6 +447,24 @@ private:
             case ShaderStage::tess_evaluation:
             case ShaderStage::geometry: return storage == spv::StorageClassInput;
             default: return false;
+        }
+    }
+
+    // Module::Impl::lane_invariant. A block comes after the blocks that dominate it, so one
+    // pass in code order sees an access chain's operands first (a later operand, through a
+    // phi, leaves it unmarked: the executor then tests the lanes).
+    void find_lane_invariants() {
+        m_.lane_invariant.assign(m_.bound, 0);
+        if (!m_.fixed_regs.empty())
+            for (std::uint32_t id = 0; id < m_.bound; ++id)
+                if (m_.reg[id] != kNone && m_.reg[id] < m_.fixed_regs.front().second) m_.lane_invariant[id] = 1;
+        for (const Variable& v : m_.variables) m_.lane_invariant[v.id] = 1;
+        for (const Instr& in : m_.code) {
+            if (in.op != spv::OpAccessChain && in.op != spv::OpInBoundsAccessChain) continue;
+            const std::uint32_t* a = &m_.words[in.at];
+            bool invariant = true;
+            for (std::uint32_t k = 2; k < in.count && invariant; ++k) invariant = m_.lane_invariant[a[k]] != 0;
+            m_.lane_invariant[a[1]] = invariant ? 1 : 0;
         }
     }
 

@@ -102,6 +102,10 @@ struct Module::Impl {
     // the first function) and each Function variable's address. A batch sets up only these;
     // every other register is written before it is read (executor.h, Batch::restart).
     std::vector<std::pair<std::uint32_t, std::uint32_t>> fixed_regs;
+    // By id: 1 where the value is the same in every lane of any batch, known before running
+    // (constants, variables' addresses, access chains into them with such indices), so that
+    // a load, store or access chain through it needs no test of its lanes.
+    std::vector<std::uint8_t> lane_invariant;
     std::vector<std::string> names;     // OpName by id
     std::map<std::uint32_t, std::string> strings;  // OpString
     std::uint32_t std450 = 0;           // the GLSL.std.450 import's id

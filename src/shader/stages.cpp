@@ -110,6 +110,9 @@ Executable::Executable(Module module, const Bindings& bindings, RunOptions optio
         for (const Variable& v : m.variables) {
             if (v.storage != spv::StorageClassOutput && v.builtin != spv::BuiltInTessCoord) continue;
             for (std::uint32_t j = 0; j < m.types[v.type].words; ++j) state->lane_slot[v.address + j] = state->lane_words++;
+            for (const InterfacePart& p : v.parts)
+                if (v.storage == spv::StorageClassOutput && p.builtin < 0 && p.location >= 0)
+                    state->location_count = std::max(state->location_count, static_cast<std::size_t>(p.location) + 1);
         }
     }
     for (const auto& [unit, texture] : bindings.textures()) {
@@ -216,8 +219,25 @@ ShaderVertex Executable::evaluate(const ShaderPatch& patch, glm::vec3 tess_coord
 // The points of the patch in batches of kBatchLanes lanes (one lane with an observer, which
 // follows one invocation); a batch whose branches part ways continues as one batch per way
 // (executor.h), the ways run in the order of their first point.
+ShaderVertex ShaderVertices::vertex(std::size_t k) const {
+    ShaderVertex v;
+    v.position = positions[k];
+    v.locations.assign(locations.begin() + static_cast<std::ptrdiff_t>(k * location_count),
+                       locations.begin() + static_cast<std::ptrdiff_t>((k + 1) * location_count));
+    return v;
+}
+
 std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords,
                                                long long patch_id) const {
+    ShaderVertices flat;
+    evaluate(patch, tess_coords, patch_id, flat);
+    std::vector<ShaderVertex> out(flat.size());
+    for (std::size_t k = 0; k < out.size(); ++k) out[k] = flat.vertex(k);
+    return out;
+}
+
+void Executable::evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords, long long patch_id,
+                          ShaderVertices& out) const {
     const Module::Impl& m = state_->module.impl();
     require_stage(m, ShaderStage::tess_evaluation, "evaluate");
     // One lane's shared memory: everything but gl_TessCoord is the patch's.
@@ -242,10 +262,11 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
                 if (p.builtin < 0) from_slot(patch.patch_locations, p.location, at + p.offset, p.words);
         }
     }
-    std::vector<ShaderVertex> out(tess_coords.size());
+    out.positions.assign(tess_coords.size(), glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));
+    out.location_count = state_->location_count;
+    out.locations.assign(tess_coords.size() * out.location_count, Slot{});
     const std::size_t chunk = state_->options.observer ? 1 : kBatchLanes;
     std::set<std::uint32_t> warned;
-    std::vector<std::uint32_t> element;
     struct Work {
         Batch batch;
         std::vector<std::uint32_t> shared;
@@ -273,14 +294,21 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
         if (status != Batch::Status::done)
             throw Error("the " + c.who + " stopped at a barrier or discard outside a control or fragment shader",
                         Where::in_file(m.path));
-        // Each lane's outputs, gathered from the lane-interleaved memory.
+        // Each lane's outputs, gathered from the lane-interleaved memory (read_vertex's
+        // parts: gl_Position, and the locations' components).
         for (const Variable& v : m.variables) {
             if (!is_output(v)) continue;
-            element.resize(m.types[v.type].words);
             const std::uint32_t slot = state_->lane_slot[v.address];
-            for (std::uint32_t l = 0; l < n; ++l) {
-                for (std::size_t j = 0; j < element.size(); ++j) element[j] = w.shared[(slot + j) * n + l];
-                read_vertex(v, element.data(), out[w.points[l]]);
+            for (const InterfacePart& p : v.parts) {
+                const bool position = p.builtin == spv::BuiltInPosition;
+                if (!position && (p.builtin >= 0 || p.location < 0)) continue;
+                const std::uint32_t words = position ? 4 : std::min<std::uint32_t>(p.words, 4);
+                for (std::uint32_t l = 0; l < n; ++l) {
+                    const std::size_t k = w.points[l];
+                    std::uint32_t* to = position ? reinterpret_cast<std::uint32_t*>(&out.positions[k][0])
+                                                 : out.locations[k * out.location_count + static_cast<std::size_t>(p.location)].data();
+                    for (std::uint32_t j = 0; j < words; ++j) to[j] = w.shared[(slot + p.offset + j) * n + l];
+                }
             }
         }
     };
@@ -311,7 +339,6 @@ std::vector<ShaderVertex> Executable::evaluate(const ShaderPatch& patch, std::sp
             run(w);
         }
     }
-    return out;
 }
 
 }  // namespace tessref::shader
