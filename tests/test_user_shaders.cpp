@@ -6,7 +6,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <unistd.h>
@@ -19,6 +21,7 @@
 #include <vector>
 
 #include "command_dir_test.h"
+#include "image/image_io.h"
 #include "run_program.h"
 #include "pipeline/program.h"
 #include "tessref/capture.h"
@@ -683,4 +686,55 @@ TEST_F(UserShaderCommand, TraceOfTheGeometryStageGivesLlvmpipesNormal) {
     const RunResult none = run({"trace", scene_path("lab4-canyon").string(), "--patch", "0", "--stage", "geom", "--primitive", "0"});
     EXPECT_EQ(none.status, 2);
     EXPECT_NE(none.err.find("geometry"), std::string::npos) << none.err;
+}
+
+// The fragment stage's quads against llvmpipe's: quad_derivatives.frag writes dFdx and
+// dFdy of floor(x) * floor(y) of the window position; llvmpipe draws cosc422 with it, and
+// the interpreter runs the same file on the quad of every drawn pixel (window rows paired
+// from y = 0, the top row the higher y): every pixel's two derivatives are llvmpipe's.
+TEST_F(UserShaderCommand, FragmentQuadDerivativesAreLlvmpipes) {
+    const fs::path frag = kUserShaders / "quad_derivatives.frag";
+    const int width = 64, height = 40;
+    const RunResult gl = run({"gl", scene_path("cosc422").string(), "-o", path("gl.png"), "--size", "64x40", "--shader",
+                              "frag=" + frag.string()});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    const tessref::image::Image picture = tessref::image::read_image(path("gl.png"));
+    ASSERT_EQ(picture.header.width, width);
+    ASSERT_EQ(picture.header.height, height);
+    tessref::shader::Source source;
+    source.stage = tessref::ShaderStage::fragment;
+    source.path = frag.string();
+    source.text = read_file(frag);
+    const tessref::shader::Executable shader(tessref::shader::Module::compile(source), {}, {});
+    std::size_t drawn = 0, same = 0;
+    std::string first;
+    for (int row = 0; row < height; ++row) {
+        for (int x = 0; x < width; ++x) {
+            const std::uint8_t* pixel = &picture.u8[static_cast<std::size_t>((row * width + x) * picture.channels)];
+            if (pixel[2] != 255) continue;  // not drawn
+            ++drawn;
+            const int y = height - 1 - row, x0 = x & ~1, y0 = y & ~1;
+            // Lanes: top-left, top-right, bottom-left, bottom-right.
+            std::array<tessref::shader::QuadFragment, 4> quad;
+            const int at[4][2] = {{x0, y0 + 1}, {x0 + 1, y0 + 1}, {x0, y0}, {x0 + 1, y0}};
+            int lane = 0;
+            for (int l = 0; l < 4; ++l) {
+                quad[static_cast<std::size_t>(l)].frag_coord =
+                    glm::vec4(static_cast<float>(at[l][0]) + 0.5f, static_cast<float>(at[l][1]) + 0.5f, 0.5f, 1.0f);
+                if (at[l][0] == x && at[l][1] == y) lane = l;
+            }
+            const auto results = shader.fragment(quad, true, 0);
+            const glm::vec4 c = tessref::shader::as_vec4(results[static_cast<std::size_t>(lane)].outputs.at(0));
+            const auto code = [](float v) { return static_cast<int>(std::lround(v * 255.0f)); };
+            if (code(c.x) == pixel[0] && code(c.y) == pixel[1]) {
+                ++same;
+            } else if (first.empty()) {
+                first = "pixel (" + std::to_string(x) + ", row " + std::to_string(row) + "): interpreter " +
+                        std::to_string(code(c.x)) + ", " + std::to_string(code(c.y)) + " llvmpipe " +
+                        std::to_string(pixel[0]) + ", " + std::to_string(pixel[1]);
+            }
+        }
+    }
+    EXPECT_GT(drawn, 500u);
+    EXPECT_EQ(same, drawn) << first;
 }
