@@ -196,3 +196,32 @@ TEST(ShaderFragment, OtherStagesRunNoFragments) {
 
 }  // namespace
 }  // namespace tessref::shader
+
+namespace tessref::shader {
+namespace {
+
+TEST(ShaderFragment, UnsupportedImageOperandsAndEndlessQuadsAreErrors) {
+    // texture() with a bias: an image operand the interpreter does not run, named with its line.
+    try {
+        run("o = texture(map, v.xy, 1.0);", quad(kValues), {}, "layout(binding = 0) uniform sampler2D map;");
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("bias"), std::string::npos) << e.what();
+        EXPECT_EQ(e.where().file, kPath);
+        EXPECT_EQ(e.where().line, 7) << e.message();
+    }
+    // A loop that never ends stops at the budget, naming the fragment's quad.
+    RunOptions options;
+    options.max_instructions = 5000;
+    const Executable e(fragment_module("float s = 0.0;\nwhile (v.x > 0.0) s += 1.0;\no = vec4(s);"), {}, options);
+    try {
+        e.fragment(quad(kValues), true, 9);
+        FAIL() << "no error";
+    } catch (const Error& error) {
+        EXPECT_NE(std::string(error.what()).find("fragment shader snippet.frag, primitive 9"), std::string::npos)
+            << error.what();
+    }
+}
+
+}  // namespace
+}  // namespace tessref::shader

@@ -198,3 +198,27 @@ TEST(ShaderGeometry, OtherStagesHaveNoGeometryLayoutAndRunNoGeometry) {
 
 }  // namespace
 }  // namespace tessref::shader
+
+namespace tessref::shader {
+namespace {
+
+TEST(ShaderGeometry, AnEndlessInvocationRunsIntoTheBudgetNamingThePrimitive) {
+    const Module m = geometry_module("layout(triangles) in;\nlayout(triangle_strip, max_vertices = 3) out;",
+                                     "float s = 0.0;\nwhile (v[0].value.x > 0.0) s += 1.0;\no = vec4(s); EmitVertex();");
+    RunOptions options;
+    options.max_instructions = 10000;
+    const Executable e(m, {}, options);
+    const std::vector<ShaderVertex> in = inputs(3);
+    try {
+        e.geometry(in, 12);
+        FAIL() << "no error";
+    } catch (const Error& error) {
+        const std::string what = error.what();
+        EXPECT_NE(what.find("geometry shader snippet.geom, primitive 12, invocation 0"), std::string::npos) << what;
+        EXPECT_NE(what.find("10000"), std::string::npos) << what;
+        EXPECT_EQ(error.where().file, kPath);
+    }
+}
+
+}  // namespace
+}  // namespace tessref::shader

@@ -334,7 +334,10 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
         return Status::diverged;
     };
 
-    observed_line_ = observed_file_ = 0;  // a resumed invocation tells its line again
+    // A resumed invocation tells its line again (a control shader's invocations take turns),
+    // but not after EmitVertex() or EndPrimitive(), where the same invocation goes on.
+    if (!keep_line_) observed_line_ = observed_file_ = 0;
+    keep_line_ = false;
     for (;;) {
         const Instr& in = m.code[pc_];
         if (c.options.observer && in.line != 0 && (in.line != observed_line_ || in.file != observed_file_)) {
@@ -443,8 +446,8 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
             }
             case spv::OpControlBarrier: return Status::barrier;
             // The geometry driver (geometry.cpp) reads the outputs and runs the batch on.
-            case spv::OpEmitVertex: return Status::emit;
-            case spv::OpEndPrimitive: return Status::end_primitive;
+            case spv::OpEmitVertex: keep_line_ = true; return Status::emit;
+            case spv::OpEndPrimitive: keep_line_ = true; return Status::end_primitive;
             case spv::OpVariable:
                 if (in.count > 3) access(a[1], T(T(a[0]).element).words, R(a[3]), true);
                 break;

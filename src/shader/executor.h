@@ -115,7 +115,8 @@ private:
     std::uint64_t executed_ = 0;
     std::uint32_t observed_line_ = 0, observed_file_ = 0;  // RunOptions::observer: the last line told
     std::uint32_t stop_label_ = 0xffffffffu;
-    bool stopping_ = false;  // entered stop_label_'s block: stop after its OpPhis
+    bool stopping_ = false;
+    bool keep_line_ = false;  // the next run() goes on where this one stopped, for the observer  // entered stop_label_'s block: stop after its OpPhis
 };
 
 }  // namespace tessref::shader
