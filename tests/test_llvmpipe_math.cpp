@@ -166,6 +166,25 @@ TEST(LlvmpipeMath, TheLibmFunctionsDifferFromLlvmpipe) {
     EXPECT_LT(exp2.matched, exp2.compared * 3 / 4);
 }
 
+TEST(LlvmpipeMath, BalancedOrderIsMesasRebalancedTree) {
+    // The shapes opt_rebalance_tree.cpp gives ((o0 + o1) + o2) + ... of n operands (traced
+    // through its tree_to_vine and vine_to_tree; four operands pair up, which is
+    // what llvmpipe's levels on jacksboro and olinda show: test_llvmpipe_levels).
+    const auto shape = [](std::uint32_t n) {
+        const std::vector<lm::BalancedStep> steps = lm::balanced_order(n);
+        std::vector<std::string> text;
+        for (std::uint32_t k = 0; k < n; ++k) text.push_back("o" + std::to_string(k));
+        for (const lm::BalancedStep& s : steps) text.push_back("(" + text[s.left] + " + " + text[s.right] + ")");
+        return text.back();
+    };
+    EXPECT_EQ(shape(2), "(o0 + o1)");
+    EXPECT_EQ(shape(3), "((o0 + o1) + o2)");
+    EXPECT_EQ(shape(4), "((o0 + o1) + (o2 + o3))");
+    EXPECT_EQ(shape(5), "((o0 + o1) + ((o2 + o3) + o4))");
+    EXPECT_EQ(shape(6), "(((o0 + o1) + (o2 + o3)) + (o4 + o5))");
+    EXPECT_EQ(shape(8), "(((o0 + o1) + (o2 + o3)) + ((o4 + o5) + (o6 + o7)))");
+}
+
 TEST(LlvmpipeMath, InverseTrigonometry) {
     const std::vector<float> x = inputs(-1.0f, 1.0f, 10);
     EXPECT_ALL_MATCH(run("acos(x)", [](float a, float) { return lm::acos(a); }, x));

@@ -106,6 +106,15 @@ T normal_tess_factor(const std::array<vec3_t<T>, 6>& vertexNormal, T threshold, 
 
     if (testangle > threshold || testangle90 > threshold || testangle2 > threshold ||
         testangle902 > threshold) {
+        if constexpr (std::is_same_v<T, float>) {
+            // Mesa's GLSL compiler rebalances this chain of additions of plain variables:
+            // llvmpipe adds (testangle + testangle90) + (testangle2 + testangle902)
+            // (llvmpipe_math.h, balanced_order), which moves the level an ulp now and then.
+            if (math == MathMode::llvmpipe) {
+                const T angles[] = {testangle, testangle90, testangle2, testangle902};
+                return llvmpipe_math::balanced_sum(angles);
+            }
+        }
         return testangle + testangle90 + testangle2 + testangle902;
     }
     return T(0);

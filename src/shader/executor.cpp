@@ -629,36 +629,34 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 const std::uint32_t rows = T(lt.element).count;  // the left matrix's column size
                 const std::uint32_t columns = lt.count;
                 const std::uint32_t results = op == spv::OpMatrixTimesVector ? 1 : rt.count;
-                const auto row = [&](const std::uint32_t* base, std::uint32_t j) {
-                    return reinterpret_cast<const float*>(base + static_cast<std::size_t>(j) * L);
-                };
+                const auto row = [&](const std::uint32_t* base, std::uint32_t j) { return base + static_cast<std::size_t>(j) * L; };
                 for (std::uint32_t k = 0; k < results; ++k) {
                     const std::uint32_t v = k * columns;
                     for (std::uint32_t i = 0; i < rows; ++i) {
-                        float* __restrict sum = reinterpret_cast<float*>(out + static_cast<std::size_t>(k * rows + i) * L);
+                        std::uint32_t* __restrict sum = out + static_cast<std::size_t>(k * rows + i) * L;
                         if (columns == 4 && pairwise) {
-                            const float* __restrict l0 = row(l_, i);
-                            const float* __restrict l1 = row(l_, rows + i);
-                            const float* __restrict l2 = row(l_, 2 * rows + i);
-                            const float* __restrict l3 = row(l_, 3 * rows + i);
-                            const float* __restrict r0 = row(r_, v);
-                            const float* __restrict r1 = row(r_, v + 1);
-                            const float* __restrict r2 = row(r_, v + 2);
-                            const float* __restrict r3 = row(r_, v + 3);
+                            const std::uint32_t* __restrict l0 = row(l_, i);
+                            const std::uint32_t* __restrict l1 = row(l_, rows + i);
+                            const std::uint32_t* __restrict l2 = row(l_, 2 * rows + i);
+                            const std::uint32_t* __restrict l3 = row(l_, 3 * rows + i);
+                            const std::uint32_t* __restrict r0 = row(r_, v);
+                            const std::uint32_t* __restrict r1 = row(r_, v + 1);
+                            const std::uint32_t* __restrict r2 = row(r_, v + 2);
+                            const std::uint32_t* __restrict r3 = row(r_, v + 3);
                             for (std::uint32_t lane = 0; lane < L; ++lane) {
-                                const float p0 = l0[lane] * r0[lane], p1 = l1[lane] * r1[lane];
-                                const float p2 = l2[lane] * r2[lane], p3 = l3[lane] * r3[lane];
+                                const float p0 = f(l0[lane]) * f(r0[lane]), p1 = f(l1[lane]) * f(r1[lane]);
+                                const float p2 = f(l2[lane]) * f(r2[lane]), p3 = f(l3[lane]) * f(r3[lane]);
                                 const float s01 = p0 + p1, s23 = p2 + p3;
-                                sum[lane] = s01 + s23;
+                                sum[lane] = w(s01 + s23);
                             }
                             continue;
                         }
                         for (std::uint32_t j = 0; j < columns; ++j) {
-                            const float* __restrict lj = row(l_, j * rows + i);
-                            const float* __restrict rj = row(r_, v + j);
+                            const std::uint32_t* __restrict lj = row(l_, j * rows + i);
+                            const std::uint32_t* __restrict rj = row(r_, v + j);
                             for (std::uint32_t lane = 0; lane < L; ++lane) {
-                                const float product = lj[lane] * rj[lane];
-                                sum[lane] = j == 0 ? product : sum[lane] + product;
+                                const float product = f(lj[lane]) * f(rj[lane]);
+                                sum[lane] = w(j == 0 ? product : f(sum[lane]) + product);
                             }
                         }
                     }

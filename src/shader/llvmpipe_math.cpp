@@ -322,4 +322,76 @@ float acosh(float x) { return log(add(x, root(sub(mul(x, x), 1.0f)))); }
 // atanh: 0.5 * log((1 + x) / (1 - x)).
 float atanh(float x) { return mul(0.5f, log(div(add(1.0f, x), sub(1.0f, x)))); }
 
+// opt_rebalance_tree.cpp on a tree of indices: nodes [0, n) are the operands, nodes n and
+// up the operations (two children each), the pseudo-root above the tree as Mesa adds it.
+std::vector<BalancedStep> balanced_order(std::uint32_t n) {
+    if (n < 2) return {};
+    constexpr std::uint32_t kNone = 0xffffffffu;
+    struct Node {
+        std::uint32_t child[2] = {kNone, kNone};
+    };
+    std::vector<Node> nodes(n);  // operands: no children
+    const auto op = [&](std::uint32_t l, std::uint32_t r) {
+        nodes.push_back(Node{{l, r}});
+        return static_cast<std::uint32_t>(nodes.size() - 1);
+    };
+    const auto is_op = [&](std::uint32_t i) { return i != kNone && nodes[i].child[0] != kNone; };
+    // The chain as written: ((o0 + o1) + o2) + ..., under the pseudo-root (0 + chain).
+    std::uint32_t chain = 0;
+    for (std::uint32_t k = 1; k < n; ++k) chain = op(chain, k);
+    const std::uint32_t zero = op(kNone, kNone);  // the pseudo-root's constant operand (a leaf)
+    nodes[zero] = Node{};
+    const std::uint32_t root = op(zero, chain);
+    // tree_to_vine: right rotations until every operation's left child is a leaf.
+    std::uint32_t size = 0, tail = root, rest = nodes[root].child[1];
+    while (rest != kNone) {
+        const std::uint32_t left = is_op(rest) ? nodes[rest].child[0] : kNone;
+        if (!is_op(left)) {
+            tail = rest;
+            rest = is_op(rest) ? nodes[rest].child[1] : kNone;
+            ++size;
+        } else {
+            nodes[rest].child[0] = nodes[left].child[1];
+            nodes[left].child[1] = rest;
+            rest = left;
+            nodes[tail].child[1] = left;
+        }
+    }
+    // vine_to_tree: left rotations in rounds of compression.
+    const auto compression = [&](std::uint32_t count) {
+        std::uint32_t scanner = root;
+        for (std::uint32_t i = 0; i < count; ++i) {
+            const std::uint32_t child = nodes[scanner].child[1];
+            nodes[scanner].child[1] = nodes[child].child[1];
+            scanner = nodes[scanner].child[1];
+            nodes[child].child[1] = nodes[scanner].child[0];
+            nodes[scanner].child[0] = child;
+        }
+    };
+    for (int m = (static_cast<int>(size) - 1) / 2, left = static_cast<int>(size) - 1; m > 0; m = left / 2) {
+        compression(static_cast<std::uint32_t>(m));
+        left -= m + 1;
+    }
+    // The rebalanced tree under the pseudo-root, as steps in post-order.
+    std::vector<BalancedStep> steps;
+    const auto emit = [&](auto& self, std::uint32_t node) -> std::uint32_t {
+        if (!is_op(node)) return node;  // an operand
+        const std::uint32_t l = self(self, nodes[node].child[0]), r = self(self, nodes[node].child[1]);
+        steps.push_back(BalancedStep{l, r});
+        return n + static_cast<std::uint32_t>(steps.size() - 1);
+    };
+    emit(emit, nodes[root].child[1]);
+    return steps;
+}
+
+float balanced_sum(std::span<const float> operands) {
+    const auto n = static_cast<std::uint32_t>(operands.size());
+    if (n == 0) return 0.0f;
+    if (n == 1) return operands[0];
+    const std::vector<BalancedStep> steps = balanced_order(n);
+    std::vector<float> value(operands.begin(), operands.end());
+    for (const BalancedStep& s : steps) value.push_back(add(value[s.left], value[s.right]));
+    return value.back();
+}
+
 }  // namespace tessref::llvmpipe_math

@@ -31,6 +31,10 @@
 // every special value and tens of thousands of sampled floats.
 #pragma once
 
+#include <cstdint>
+#include <span>
+#include <vector>
+
 #include <glm/glm.hpp>
 
 namespace tessref::llvmpipe_math {
@@ -73,6 +77,28 @@ glm::vec3 normalize(const glm::vec3& v);
 // A matrix times a vector: the columns scaled by the vector's components and added from the
 // first, ((m[0] * v.x + m[1] * v.y) + m[2] * v.z) + m[3] * v.w (glm adds the pairs).
 glm::vec4 transform(const glm::mat4& m, const glm::vec4& v);
+
+// Mesa's GLSL compiler can rebalance a chain of one associative operation before NIR sees
+// it (opt_rebalance_tree.cpp, the Day-Stout-Warren algorithm): a + b + c + d, written
+// ((a + b) + c) + d, then runs as (a + b) + (c + d). The pass takes an expression tree of
+// at least three additions (or multiplications) of one type whose leaves are variables and
+// at most one constant: no other operation, no array element or struct member among them.
+// Whether a chain reaches it in that form depends on the compiler's other passes (tree
+// grafting, inlining): the thesis control shader's sum of four angles in
+// normal_tess_factor is rebalanced (its levels on jacksboro and olinda show it, and
+// writing the angles into an array, which the pass refuses, makes llvmpipe add from the
+// left again), while the same sum of four acos results written in a vertex shader's main
+// was added from the left in every probe (gl::evaluate, 43 761 inputs). Which chains are
+// rebalanced in general is not modelled: the callers that know theirs is (thesis.cpp)
+// use this order.
+// balanced_order(n) is the order for n >= 2 operands written left to right: step k
+// combines `left` and `right`, each an operand (< n) or the result of step (index - n);
+// the last step is the result. balanced_sum adds in that order, each sum rounded.
+struct BalancedStep {
+    std::uint32_t left = 0, right = 0;
+};
+std::vector<BalancedStep> balanced_order(std::uint32_t n);
+float balanced_sum(std::span<const float> operands);
 
 float sinh(float x);
 float cosh(float x);

@@ -305,9 +305,10 @@ void Executable::evaluate(const ShaderPatch& patch, std::span<const glm::vec3> t
                 const std::uint32_t words = position ? 4 : std::min<std::uint32_t>(p.words, 4);
                 for (std::uint32_t l = 0; l < n; ++l) {
                     const std::size_t k = w.points[l];
-                    std::uint32_t* to = position ? reinterpret_cast<std::uint32_t*>(&out.positions[k][0])
-                                                 : out.locations[k * out.location_count + static_cast<std::size_t>(p.location)].data();
-                    for (std::uint32_t j = 0; j < words; ++j) to[j] = w.shared[(slot + p.offset + j) * n + l];
+                    Slot word{};
+                    for (std::uint32_t j = 0; j < words; ++j) word[j] = w.shared[(slot + p.offset + j) * n + l];
+                    if (position) std::memcpy(&out.positions[k][0], word.data(), 16);
+                    else std::copy_n(word.begin(), words, out.locations[k * out.location_count + static_cast<std::size_t>(p.location)].begin());
                 }
             }
         }

@@ -294,28 +294,26 @@ template <std::uint32_t kOp>
 void each_lane(std::uint32_t n, const Std450Args& a, std::uint32_t lanes, std::uint32_t* result) {
     for (std::uint32_t i = 0; i < n; ++i) {
         // Component i of argument k, lane by lane (a scalar argument is the same component).
-        const auto arg = [&](int k) {
-            return reinterpret_cast<const float*>(a.components[k] == 1 ? a.value[k] : a.value[k] + i * a.stride);
-        };
-        const float* __restrict x = arg(0);
-        const float* __restrict y = a.count > 1 ? arg(1) : x;
-        const float* __restrict z = a.count > 2 ? arg(2) : x;
-        float* __restrict out = reinterpret_cast<float*>(result + i * a.stride);
+        const auto arg = [&](int k) { return a.components[k] == 1 ? a.value[k] : a.value[k] + i * a.stride; };
+        const std::uint32_t* __restrict x = arg(0);
+        const std::uint32_t* __restrict y = a.count > 1 ? arg(1) : x;
+        const std::uint32_t* __restrict z = a.count > 2 ? arg(2) : x;
+        std::uint32_t* __restrict out = result + i * a.stride;
         for (std::uint32_t l = 0; l < lanes; ++l) {
             if constexpr (kOp == GLSLstd450FMix) {
-                const float difference = y[l] - x[l];
-                const float scaled = z[l] * difference;
-                out[l] = x[l] + scaled;
+                const float difference = f(y[l]) - f(x[l]);
+                const float scaled = f(z[l]) * difference;
+                out[l] = w(f(x[l]) + scaled);
             } else if constexpr (kOp == GLSLstd450FAbs) {
-                out[l] = std::fabs(x[l]);
+                out[l] = w(std::fabs(f(x[l])));
             } else if constexpr (kOp == GLSLstd450FMin) {
-                out[l] = std::fmin(x[l], y[l]);
+                out[l] = w(std::fmin(f(x[l]), f(y[l])));
             } else if constexpr (kOp == GLSLstd450FMax) {
-                out[l] = std::fmax(x[l], y[l]);
+                out[l] = w(std::fmax(f(x[l]), f(y[l])));
             } else if constexpr (kOp == GLSLstd450FClamp) {
-                out[l] = clampf(x[l], y[l], z[l]);
+                out[l] = w(clampf(f(x[l]), f(y[l]), f(z[l])));
             } else if constexpr (kOp == GLSLstd450Floor) {
-                out[l] = std::floor(x[l]);
+                out[l] = w(std::floor(f(x[l])));
             }
         }
     }
