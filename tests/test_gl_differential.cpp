@@ -35,6 +35,7 @@
 #endif
 
 #include "gl_test_context.h"
+#include "float_bits.h"
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 #include "tessref/tessellator.h"
@@ -50,18 +51,6 @@ using tessref::Winding;
 namespace gl = tessref::gl;
 
 gl::Context* context() { return gl_test_context(); }
-
-std::uint32_t bits(float f) {
-    std::uint32_t b;
-    std::memcpy(&b, &f, sizeof b);
-    return b;
-}
-
-float from_bits(std::uint32_t b) {
-    float f;
-    std::memcpy(&f, &b, sizeof f);
-    return f;
-}
 
 // A primitive as bit patterns: vertex k occupies words 3k..3k+2 (u, v, w); unused words 0.
 using Prim = std::array<std::uint32_t, 9>;

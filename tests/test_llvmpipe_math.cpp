@@ -26,6 +26,7 @@
 
 #include "shader/llvmpipe_math.h"
 #include "gl_test_context.h"
+#include "float_bits.h"
 #include "tessref/error.h"
 #include "tessref/gl_backend.h"
 
@@ -35,18 +36,6 @@ namespace gl = tessref::gl;
 namespace lm = tessref::llvmpipe_math;
 
 gl::Context* context() { return gl_test_context(); }
-
-std::uint32_t bits(float f) {
-    std::uint32_t b;
-    std::memcpy(&b, &f, sizeof b);
-    return b;
-}
-
-float from_bits(std::uint32_t b) {
-    float f;
-    std::memcpy(&f, &b, sizeof f);
-    return f;
-}
 
 bool same(float a, float b) { return bits(a) == bits(b) || (std::isnan(a) && std::isnan(b)); }
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "float_bits.h"
 #include "tessref/error.h"
 #include "tessref/shader.h"
 
@@ -54,8 +55,6 @@ Outcome run_vertex(const std::string& body, glm::vec4 a = glm::vec4(0.0f), glm::
     return out;
 }
 
-std::uint32_t bits(float x) { return std::bit_cast<std::uint32_t>(x); }
-float from_bits(std::uint32_t b) { return std::bit_cast<float>(b); }
 
 // ---- float arithmetic: each operation rounded on its own -----------------------------
 
