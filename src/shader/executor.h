@@ -114,9 +114,9 @@ private:
     std::uint32_t label_ = 0, previous_label_ = 0;
     std::uint64_t executed_ = 0;
     std::uint32_t observed_line_ = 0, observed_file_ = 0;  // RunOptions::observer: the last line told
-    std::uint32_t stop_label_ = 0xffffffffu;
-    bool stopping_ = false;
-    bool keep_line_ = false;  // the next run() goes on where this one stopped, for the observer  // entered stop_label_'s block: stop after its OpPhis
+    std::uint32_t stop_label_ = 0xffffffffu;  // stop_at()
+    bool stopping_ = false;   // entered stop_label_'s block: stop after its OpPhis
+    bool keep_line_ = false;  // the next run() goes on where this one stopped, for the observer
 };
 
 }  // namespace tessref::shader
