@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -221,6 +223,72 @@ TEST(ShaderFragment, UnsupportedImageOperandsAndEndlessQuadsAreErrors) {
         EXPECT_NE(std::string(error.what()).find("fragment shader snippet.frag, primitive 9"), std::string::npos)
             << error.what();
     }
+}
+
+}  // namespace
+}  // namespace tessref::shader
+
+namespace tessref::shader {
+namespace {
+
+// Every shipped fragment and geometry twin loads and runs (a quad, a triangle) without an
+// opcode, capability or built-in the interpreter does not run: uniforms at their defaults,
+// samplers without a texture (reading (0, 0, 0, 1)), inputs zero but for gl_FragCoord.
+TEST(ShaderFragment, EveryShippedFragmentAndGeometryTwinRuns) {
+    const std::string dir = std::string(TESSREF_DATA_DIR) + "/shaders/";
+    const std::pair<const char*, ShaderStage> twins[] = {
+        {"thesis_terrain.frag", ShaderStage::fragment},        {"thesis_terrain_single.frag", ShaderStage::fragment},
+        {"cosc422_terrain.frag", ShaderStage::fragment},       {"lab4_terrain.frag", ShaderStage::fragment},
+        {"pn_triangles.frag", ShaderStage::fragment},          {"geomip_terrain.frag", ShaderStage::fragment},
+        {"pom.frag", ShaderStage::fragment},                   {"thesis_terrain.geom", ShaderStage::geometry},
+        {"cosc422_terrain.geom", ShaderStage::geometry},
+    };
+    for (const auto& [file, stage] : twins) {
+        Source s;
+        s.stage = stage;
+        s.path = dir + file;
+        std::ifstream in(s.path);
+        std::ostringstream text;
+        text << in.rdbuf();
+        s.text = text.str();
+        ASSERT_FALSE(s.text.empty()) << s.path;
+        try {
+            const Executable e(Module::compile(s), {}, {});
+            if (stage == ShaderStage::fragment) {
+                const std::array<FragmentResult, 4> r = e.fragment(quad(kValues), true, 0);
+                EXPECT_FALSE(r[0].outputs.empty()) << file;
+            } else {
+                const std::vector<ShaderVertex> triangle(3);
+                EXPECT_EQ(e.geometry(triangle, 0).primitive_count(), 1u) << file;
+            }
+        } catch (const Error& error) {
+            ADD_FAILURE() << file << ": " << error.what();
+        }
+    }
+}
+
+}  // namespace
+}  // namespace tessref::shader
+
+namespace tessref::shader {
+namespace {
+
+TEST(ShaderFragment, TextureGradTakesTheGivenGradients) {
+    // The checkerboard of ImplicitLodComesFromTheQuadsDerivatives: gradients (0.5, 0) and
+    // (0, 0.5) give lod 1 (0.5 everywhere), gradients zero lod -inf (level 0: 1 at texel
+    // (1, 0)), whatever the quad's own derivatives (here none: every fragment at one place).
+    std::vector<float> texels(16);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) texels[static_cast<std::size_t>(y * 4 + x)] = static_cast<float>((x + y) % 2);
+    const Texture checker = Texture::from_float(4, 4, 1, texels);
+    Bindings b;
+    b.bind_texture(0, &checker);
+    const std::string declarations = "layout(binding = 0) uniform sampler2D map;";
+    const glm::vec4 at(0.375f, 0.125f, 0.0f, 0.0f);
+    const Shaded half = run("o = textureGrad(map, v.xy, vec2(0.5, 0.0), vec2(0.0, 0.5));", quad({at, at, at, at}), b, declarations);
+    for (int l = 0; l < 4; ++l) EXPECT_EQ(half.o(l).x, 0.5f) << l;
+    const Shaded zero = run("o = textureGrad(map, v.xy, vec2(0.0), vec2(0.0));", quad({at, at, at, at}), b, declarations);
+    for (int l = 0; l < 4; ++l) EXPECT_EQ(zero.o(l).x, 1.0f) << l;
 }
 
 }  // namespace

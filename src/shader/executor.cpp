@@ -825,9 +825,14 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 const std::uint32_t* st = R(a[3]);
                 std::uint32_t* out = R(a[1]);
                 const bool with_lod = in.count > 4 && (a[4] & spv::ImageOperandsLodMask);
-                if (in.count > 4 && (a[4] & ~static_cast<std::uint32_t>(spv::ImageOperandsLodMask)))
-                    unsupported(in, "image operands other than Lod (bias, offsets, gradients)");
+                // textureGrad(): each fragment's own gradients (as given: for gradients that
+                // are the quad's derivatives, as pom.frag passes, one lod for the quad).
+                const bool with_grad = in.count > 6 && (a[4] & spv::ImageOperandsGradMask);
+                if (in.count > 4 && (a[4] & ~static_cast<std::uint32_t>(spv::ImageOperandsLodMask | spv::ImageOperandsGradMask)))
+                    unsupported(in, "image operands other than Lod and Grad (bias, offsets)");
                 const std::uint32_t* lod = with_lod ? R(a[5]) : nullptr;
+                const std::uint32_t* grad_x = with_grad ? R(a[5]) : nullptr;
+                const std::uint32_t* grad_y = with_grad ? R(a[6]) : nullptr;
                 // texture() in a fragment quad: the lod from the quad's derivatives of the
                 // coordinate, one for the quad, as llvmpipe takes them (from the top-left
                 // fragment: right minus it, it minus the one below), each fragment sampled at
@@ -844,6 +849,9 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                     if (texture) {
                         const glm::vec2 coordinate(f(st[l]), f(st[L + l]));
                         if (quad_lod) v = textureGrad(texture, coordinate, dPdx, dPdy);
+                        else if (with_grad)
+                            v = textureGrad(texture, coordinate, glm::vec2(f(grad_x[l]), f(grad_x[L + l])),
+                                            glm::vec2(f(grad_y[l]), f(grad_y[L + l])));
                         else v = op == spv::OpImageSampleImplicitLod ? texture->texture(coordinate)
                                                                      : texture->textureLod(coordinate, lod ? f(lod[l]) : 0.0f);
                     }
