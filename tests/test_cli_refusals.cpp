@@ -68,6 +68,22 @@ TEST_F(CliRefusals, AnInvalidMaxMemoryEnvironmentIsRefusedAsTheFlagIs) {
     EXPECT_EQ(ok.status, 0) << ok.err;
 }
 
+// TESSREF_SIMD (common/simd.h) names a SIMD level the CPU runs, or the command refuses it
+// before any work; sse2 every x86-64 CPU runs, and it gives the default's image.
+TEST_F(CliRefusals, AnUnknownSimdLevelIsRefused) {
+    for (const std::string value : {"avx512", "SSE2", "neon", "avx2 "}) {
+        const RunResult r = shell("TESSREF_SIMD=" + shell_quote(value), {"render", kScene, "-o", "x.png", "--size", "8x6"});
+        EXPECT_EQ(r.status, 2) << value << ": " << r.err;
+        EXPECT_EQ(r.err.rfind("tessref: error: '" + value + "' is not a SIMD level (sse2 or avx2) (TESSREF_SIMD)", 0), 0u)
+            << r.err;
+        EXPECT_FALSE(fs::exists(dir_ / "x.png")) << value;
+    }
+    const RunResult base = shell("TESSREF_SIMD=sse2", {"render", kScene, "-o", "x.png", "--size", "8x6"});
+    ASSERT_EQ(base.status, 0) << base.err;
+    ASSERT_EQ(run({"render", kScene, "-o", path("y.png"), "--size", "8x6"}).status, 0);
+    EXPECT_EQ(read_file(dir_ / "x.png"), read_file(dir_ / "y.png"));
+}
+
 // A report that cannot be delivered is not a success: stdout into /dev/full is exit 2 with a
 // message, whatever the command would have returned.
 TEST_F(CliRefusals, AReportIntoAFullDiskIsExitTwo) {

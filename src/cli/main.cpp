@@ -22,6 +22,7 @@
 
 #include "cli/cli_util.h"
 #include "cli/commands.h"
+#include "common/simd.h"
 #include "common/temp_cleanup.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -154,6 +155,7 @@ int run(int argc, char** argv) {
             return kExitBadInput;
         }
         check_memory_environment();
+        tessref::check_simd_environment();
         if (!max_memory.empty()) {
             const auto bytes = tessref::parse_byte_size(max_memory);
             if (!bytes)
