@@ -314,11 +314,30 @@ TEST(ShaderErrors, UnsupportedOpcodeNamesItAndTheLine) {
 }
 
 TEST(ShaderErrors, UnsupportedExecutionModelAndTypes) {
+    // A compute shader (GLSL's front end here takes the five graphics stages only: an empty
+    // vertex shader's entry point made GLCompute, with its LocalSize).
     Source s;
-    s.stage = ShaderStage::fragment;
-    s.path = "x.frag";
-    s.text = "#version 450 core\nlayout(location = 0) out vec4 c;\nvoid main() { c = vec4(1.0); }\n";
-    EXPECT_THROW(Module::compile(s), Error);
+    s.stage = ShaderStage::vertex;
+    s.path = "x.vert";
+    s.text = "#version 450 core\nvoid main() { }\n";
+    std::vector<std::uint32_t> spirv = Module::compile(s).spirv();
+    bool patched = false;
+    for (std::size_t k = 5; k < spirv.size(); k += spirv[k] >> 16) {
+        if ((spirv[k] & 0xffffu) != 15u) continue;  // OpEntryPoint
+        spirv[k + 1] = 5u;                          // ExecutionModelGLCompute
+        // OpExecutionMode %main LocalSize 1 1 1, right after the entry point.
+        const std::size_t next = k + (spirv[k] >> 16);
+        spirv.insert(spirv.begin() + static_cast<std::ptrdiff_t>(next), {(6u << 16) | 16u, spirv[k + 2], 17u, 1u, 1u, 1u});
+        patched = true;
+        break;
+    }
+    ASSERT_TRUE(patched);
+    try {
+        Module::load(spirv, "x.comp");
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("GLCompute"), std::string::npos) << e.what();
+    }
     EXPECT_THROW(vertex_module("r.x = float(d);", "uniform double d;"), Error);
 }
 

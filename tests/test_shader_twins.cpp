@@ -319,5 +319,163 @@ TEST(PnTwins, PositionsAreTheModelsInTheLlvmpipeMode) {
     EXPECT_EQ(n.position_mismatches, 0u) << n.first;
 }
 
+// ---- the geometry twins ---------------------------------------------------------------
+
+// normalize(v) as each side rounds it: the models call glm's, v * (1 / sqrt(dot)) with the
+// dot product summed from the first component; the interpreter's exact mode rounds
+// inversesqrt once (correctly), its llvmpipe mode sums the dot product from the last
+// component, as llvmpipe does (tessref/shader.h).
+enum class NormalizeForm : std::uint8_t { glm, exact, llvmpipe };
+glm::vec3 normalize_as(glm::vec3 v, NormalizeForm form) {
+    const float x2 = v.x * v.x, y2 = v.y * v.y, z2 = v.z * v.z;
+    float d = 0.0f;
+    if (form == NormalizeForm::llvmpipe) {
+        const float zy = z2 + y2;
+        d = zy + x2;
+    } else {
+        const float xy = x2 + y2;
+        d = xy + z2;
+    }
+    const float r = form == NormalizeForm::exact ? static_cast<float>(1.0 / std::sqrt(static_cast<double>(d))) : 1.0f / std::sqrt(d);
+    return glm::vec3(v.x * r, v.y * r, v.z * r);
+}
+
+bool same_bits(glm::vec3 a, glm::vec3 b) {
+    return std::bit_cast<std::array<std::uint32_t, 3>>(a) == std::bit_cast<std::array<std::uint32_t, 3>>(b);
+}
+
+struct GeometryCounts {
+    std::size_t triangles = 0, vertices = 0;
+    std::size_t model_unexplained = 0, twin_unexplained = 0;  // not normalize_as(...) of the vector before it
+    std::size_t differing = 0;                                 // twin and model (normalize's rounding)
+    std::string first;
+};
+
+// A geometry twin against the model's geometry stage: every `stride`-th triangle of the
+// pipeline's mesh handed to the twin as the evaluation stage hands it on (gl_Position the
+// position, the EvaluationData block from `block`), in the triangle's vertex order. The
+// twin must emit one triangle of three vertices; the normal at location 0 of each must be
+// `normalized` (what the shader normalizes, then the identity normalMatrix where the twin
+// applies one) through normalize_as in the math mode's form, and the model's normal the same
+// through glm's form: so that where twin and model differ, normalize's rounding is all of it.
+using GeometryBlock = std::function<std::vector<Slot>(const SurfaceMesh&, std::uint32_t vertex)>;
+using ModelNormal = std::function<glm::vec3(const PipelineResult&, std::size_t triangle, std::uint32_t vertex)>;
+using Normalized = std::function<glm::vec3(const SurfaceMesh&, std::size_t triangle, std::uint32_t vertex, NormalizeForm)>;
+
+GeometryCounts geometry_against_model(const std::string& name, const std::string& file, const Bindings& b,
+                                      const GeometryBlock& block, const ModelNormal& model, const Normalized& normalized,
+                                      std::size_t stride, MathMode math) {
+    RunOptions options;
+    options.math = math;
+    const Scene scene = load_scene(scene_path(name));
+    PipelineOptions pipeline_options;
+    pipeline_options.math = math == MathMode::llvmpipe ? tessref::MathMode::llvmpipe : tessref::MathMode::exact;
+    const PipelineResult result = run_pipeline(scene, pipeline_options);
+    const Executable geom(twin(ShaderStage::geometry, file), b, options);
+    const SurfaceMesh& mesh = result.mesh;
+    const NormalizeForm form = math == MathMode::llvmpipe ? NormalizeForm::llvmpipe : NormalizeForm::exact;
+    GeometryCounts n;
+    for (std::size_t t = 0; t < mesh.triangles.size(); t += stride) {
+        std::vector<ShaderVertex> in(3);
+        for (int i = 0; i < 3; ++i) {
+            const std::uint32_t v = mesh.triangles[t][static_cast<std::size_t>(i)];
+            in[static_cast<std::size_t>(i)].position = glm::vec4(glm::vec3(mesh.positions[v]), 1.0f);
+            in[static_cast<std::size_t>(i)].locations = block(mesh, v);
+        }
+        const ShaderPrimitives out = geom.geometry(in, static_cast<long long>(t));
+        ++n.triangles;
+        EXPECT_EQ(out.indices, (std::vector<std::uint32_t>{0, 1, 2})) << name << " triangle " << t;
+        if (out.vertices.size() != 3) continue;
+        for (int i = 0; i < 3; ++i) {
+            const std::uint32_t v = mesh.triangles[t][static_cast<std::size_t>(i)];
+            const glm::vec3 shader(as_vec4(out.vertices[static_cast<std::size_t>(i)].locations.at(0)));
+            const glm::vec3 expected = model(result, t, v);
+            ++n.vertices;
+            n.differing += !same_bits(shader, expected);
+            const bool twin_ok = same_bits(shader, normalized(mesh, t, v, form));
+            const bool model_ok = same_bits(expected, normalized(mesh, t, v, NormalizeForm::glm));
+            n.twin_unexplained += !twin_ok;
+            n.model_unexplained += !model_ok;
+            if ((!twin_ok || !model_ok) && n.first.empty()) {
+                char text[300];
+                std::snprintf(text, sizeof text, "triangle %zu vertex %u interpreter (%.9g %.9g %.9g) model (%.9g %.9g %.9g)",
+                              t, v, shader.x, shader.y, shader.z, expected.x, expected.y, expected.z);
+                n.first = text;
+            }
+        }
+    }
+    return n;
+}
+
+// thesis_terrain.geom: EvaluationData's textureCoordinate at location 0; normalMatrix the
+// identity and the normal map at unit 2, as the GL backend sets them (stage_uniforms.cpp).
+// It normalizes texture(normalMap, uv).rgb - 0.5.
+GeometryCounts thesis_geometry_against_model(const std::string& name, std::size_t stride, MathMode math) {
+    const Scene scene = load_scene(scene_path(name));
+    const Texture* normal_map = scene.grid->normal_map.get();
+    Bindings b;
+    b.set("normalMatrix", glm::mat3(1.0f));
+    b.bind_texture(2, normal_map);
+    return geometry_against_model(
+        name, "thesis_terrain.geom", b,
+        [](const SurfaceMesh& mesh, std::uint32_t v) { return std::vector<Slot>{slot(glm::vec4(glm::vec2(mesh.uvs[v]), 0.0f, 0.0f))}; },
+        [](const PipelineResult& r, std::size_t, std::uint32_t v) { return glm::vec3(r.mesh.normals[v]); },
+        [normal_map](const SurfaceMesh& mesh, std::size_t, std::uint32_t v, NormalizeForm form) {
+            const glm::vec3 texel(normal_map->texture(glm::vec2(mesh.uvs[v])));
+            return glm::mat3(1.0f) * normalize_as(texel - glm::vec3(0.5f), form);
+        },
+        stride, math);
+}
+
+// cosc422_terrain.geom: EvaluationData's worldPosition and texCoord at locations 0 and 1; the
+// model's face normal of the triangle at each of its vertices. It normalizes
+// cross(p1 - p0, p2 - p0).
+GeometryCounts cosc422_geometry_against_model(const std::string& name, std::size_t stride, MathMode math) {
+    return geometry_against_model(
+        name, "cosc422_terrain.geom", Bindings{},
+        [](const SurfaceMesh& mesh, std::uint32_t v) {
+            return std::vector<Slot>{slot(glm::vec4(glm::vec3(mesh.positions[v]), 0.0f)),
+                                     slot(glm::vec4(glm::vec2(mesh.uvs[v]), 0.0f, 0.0f))};
+        },
+        [](const PipelineResult& r, std::size_t t, std::uint32_t) { return glm::vec3(r.face_normals[t]); },
+        [](const SurfaceMesh& mesh, std::size_t t, std::uint32_t, NormalizeForm form) {
+            const auto p = [&](int i) { return glm::vec3(mesh.positions[mesh.triangles[t][static_cast<std::size_t>(i)]]); };
+            return normalize_as(glm::cross(p(1) - p(0), p(2) - p(0)), form);
+        },
+        stride, math);
+}
+
+// The geometry twins are their models but for normalize's rounding, at every vertex: the
+// twin's normal is what the math mode's normalize makes of the very vector the model
+// normalizes with glm's. That rounding differs on a share of the vertices in both modes:
+// exact mode's correctly rounded inversesqrt against the model's 1 / sqrt, llvmpipe's dot
+// product from the last component against glm's from the first. The model is the odd one
+// against llvmpipe (GeometryTwinsGiveLlvmpipesNormals in test_user_shaders.cpp: the twins in
+// the llvmpipe mode give llvmpipe's normals bit for bit, the model up to 3 ulps off).
+TEST(ThesisTwins, GeometryNormalsAreTheModelsButForNormalize) {
+    for (const MathMode math : {MathMode::exact, MathMode::llvmpipe})
+        for (const char* name : {"thesis-normal-2", "jacksboro"}) {
+            const GeometryCounts n = thesis_geometry_against_model(name, 3, math);
+            EXPECT_GT(n.vertices, 1000u) << name;
+            EXPECT_EQ(n.twin_unexplained, 0u) << name << " " << to_string(math) << ": " << n.first;
+            EXPECT_EQ(n.model_unexplained, 0u) << name << " " << to_string(math) << ": " << n.first;
+            EXPECT_GT(n.differing, 0u) << name << " " << to_string(math);  // the forms do differ here
+            std::printf("%s %s: twin and model differ at %zu of %zu vertices, each by normalize's rounding alone\n", name,
+                        to_string(math), n.differing, n.vertices);
+        }
+}
+
+TEST(Cosc422Twins, GeometryFaceNormalsAreTheModelsButForNormalize) {
+    for (const MathMode math : {MathMode::exact, MathMode::llvmpipe})
+        for (const char* name : {"cosc422", "cosc422-eye"}) {
+            const GeometryCounts n = cosc422_geometry_against_model(name, 3, math);
+            EXPECT_GT(n.vertices, 1000u) << name;
+            EXPECT_EQ(n.twin_unexplained, 0u) << name << " " << to_string(math) << ": " << n.first;
+            EXPECT_EQ(n.model_unexplained, 0u) << name << " " << to_string(math) << ": " << n.first;
+            std::printf("%s %s: twin and model differ at %zu of %zu vertices, each by normalize's rounding alone\n", name,
+                        to_string(math), n.differing, n.vertices);
+        }
+}
+
 }  // namespace
 }  // namespace tessref::shader

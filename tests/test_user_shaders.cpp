@@ -6,11 +6,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <unistd.h>
 #include <filesystem>
+#include <functional>
 #include <set>
 #include <string>
 #include <algorithm>
@@ -18,6 +21,7 @@
 #include <vector>
 
 #include "command_dir_test.h"
+#include "image/image_io.h"
 #include "run_program.h"
 #include "pipeline/program.h"
 #include "tessref/capture.h"
@@ -25,6 +29,7 @@
 #include "tessref/pipeline.h"
 #include "tessref/prepare.h"
 #include "tessref/scene.h"
+#include "tessref/shader.h"
 
 namespace {
 
@@ -520,4 +525,219 @@ TEST_F(UserShaderCommand, PnCullingDiscardsLlvmpipesPatches) {
     EXPECT_LT(c.reference_patches, s.patch_count());
     EXPECT_GT(c.reference_patches, s.patch_count() / 2);
     EXPECT_EQ(c.compared_patches, c.reference_patches);
+}
+
+// ---- the geometry stage against llvmpipe's ------------------------------------------------
+
+namespace {
+
+// A geometry twin's normal at every vertex of every triangle of llvmpipe's capture, the
+// triangle's three captured vertices handed to the twin as llvmpipe's evaluation stage
+// handed them on: gl_Position the world position (thesis: mvp the identity in the capture
+// pass), EvaluationData from `block`. Counts the vertices whose normal (location 0) differs
+// from the captured one in any bit.
+struct GeometryAgainstCapture {
+    std::size_t vertices = 0, differing = 0;
+    std::string first;
+};
+
+GeometryAgainstCapture geometry_against_capture(const tessref::Capture& capture, const std::string& twin,
+                                                const tessref::shader::Bindings& bindings, tessref::shader::MathMode math,
+                                                const std::function<std::vector<tessref::shader::Slot>(glm::vec3)>& block) {
+    const fs::path file = kSource / "data" / "shaders" / twin;
+    tessref::shader::Source source;
+    source.stage = tessref::ShaderStage::geometry;
+    source.path = file.string();
+    source.text = read_file(file);
+    tessref::shader::RunOptions options;
+    options.math = math;
+    const tessref::shader::Executable geom(tessref::shader::Module::compile(source), bindings, options);
+    GeometryAgainstCapture n;
+    for (std::size_t t = 0; t + 2 < capture.vertices.size(); t += 3) {
+        std::vector<tessref::shader::ShaderVertex> in(3);
+        for (std::size_t i = 0; i < 3; ++i) {
+            const glm::vec3 p = capture.vertices[t + i].position;
+            in[i].position = glm::vec4(p, 1.0f);
+            in[i].locations = block(p);
+        }
+        const tessref::shader::ShaderPrimitives out = geom.geometry(in, static_cast<long long>(t / 3));
+        if (out.vertices.size() != 3) {
+            ADD_FAILURE() << twin << " emitted " << out.vertices.size() << " vertices";
+            return n;
+        }
+        for (std::size_t i = 0; i < 3; ++i) {
+            const glm::vec3 shader(tessref::shader::as_vec4(out.vertices[i].locations.at(0)));
+            const glm::vec3 gl = capture.vertices[t + i].normal;
+            ++n.vertices;
+            if (std::memcmp(&shader, &gl, sizeof shader) == 0) continue;
+            ++n.differing;
+            if (n.first.empty()) {
+                char text[200];
+                std::snprintf(text, sizeof text, "vertex %zu: interpreter (%.9g %.9g %.9g) llvmpipe (%.9g %.9g %.9g)", t + i,
+                              shader.x, shader.y, shader.z, gl.x, gl.y, gl.z);
+                n.first = text;
+            }
+        }
+    }
+    return n;
+}
+
+}  // namespace
+
+// The geometry twins run by the interpreter in the llvmpipe mode give llvmpipe's own
+// normals bit for bit (thesis normal map: normalMatrix * normalize(texel - 0.5); COSC422:
+// normalize(cross(p1 - p0, p2 - p0))), from llvmpipe's own evaluation outputs. The C++
+// models differ from llvmpipe there by up to 3 ulps (golden/README.md), and from these
+// interpreter runs by as much (ThesisTwins.GeometryNormalsAreTheModelsButForNormalize):
+// normalize as glm computes it, its dot product from the first component and 1 / sqrt,
+// is not llvmpipe's, whose dot product sums from the last component.
+TEST_F(UserShaderCommand, GeometryTwinsGiveLlvmpipesNormals) {
+    using tessref::shader::MathMode;
+    {
+        const std::string scene = scene_path("thesis-all-10").string();
+        ASSERT_EQ(run({"gl", scene, "-o", path("thesis.png"), "--capture", path("thesis.txt"), "--size", "160x100"}).status, 0);
+        const tessref::Scene s = tessref::load_scene(scene);
+        const float scale_xy = static_cast<float>(s.grid->scale_xy);
+        tessref::shader::Bindings b;
+        b.set("normalMatrix", glm::mat3(1.0f));
+        b.bind_texture(2, s.grid->normal_map.get());
+        // textureCoordinate = position.xy / scaleXY (thesis_terrain.tese; the height moves z only).
+        const auto block = [&](glm::vec3 p) {
+            return std::vector<tessref::shader::Slot>{tessref::shader::slot(glm::vec4(p.x / scale_xy, p.y / scale_xy, 0.0f, 0.0f))};
+        };
+        const tessref::Capture capture = tessref::read_capture(path("thesis.txt"));
+        const GeometryAgainstCapture llvmpipe =
+            geometry_against_capture(capture, "thesis_terrain.geom", b, MathMode::llvmpipe, block);
+        EXPECT_GT(llvmpipe.vertices, 10000u);
+        EXPECT_EQ(llvmpipe.differing, 0u) << llvmpipe.first;
+        const GeometryAgainstCapture exact = geometry_against_capture(capture, "thesis_terrain.geom", b, MathMode::exact, block);
+        std::printf("thesis-all-10 normals: llvmpipe mode %zu of %zu differ from llvmpipe's, exact mode %zu\n",
+                    llvmpipe.differing, llvmpipe.vertices, exact.differing);
+    }
+    {
+        const std::string scene = scene_path("cosc422").string();
+        ASSERT_EQ(run({"gl", scene, "-o", path("cosc422.png"), "--capture", path("cosc422.txt"), "--size", "160x100"}).status, 0);
+        // EvaluationData: worldPosition (location 0), texCoord (1, unread by the normal).
+        const auto block = [](glm::vec3 p) {
+            return std::vector<tessref::shader::Slot>{tessref::shader::slot(glm::vec4(p, 0.0f)), tessref::shader::Slot{}};
+        };
+        const tessref::Capture capture = tessref::read_capture(path("cosc422.txt"));
+        const GeometryAgainstCapture llvmpipe =
+            geometry_against_capture(capture, "cosc422_terrain.geom", {}, MathMode::llvmpipe, block);
+        EXPECT_GT(llvmpipe.vertices, 10000u);
+        EXPECT_EQ(llvmpipe.differing, 0u) << llvmpipe.first;
+        const GeometryAgainstCapture exact = geometry_against_capture(capture, "cosc422_terrain.geom", {}, MathMode::exact, block);
+        std::printf("cosc422 face normals: llvmpipe mode %zu of %zu differ from llvmpipe's, exact mode %zu\n",
+                    llvmpipe.differing, llvmpipe.vertices, exact.differing);
+    }
+}
+
+// `trace --stage geom`: the geometry shader of one primitive of a patch (its K-th triangle,
+// as `gl --capture` lists them), fed by the evaluation shader at the triangle's three tess
+// coords. In the llvmpipe mode its face normal is the one llvmpipe captured for that
+// triangle, bit for bit (GeometryTwinsGiveLlvmpipesNormals); the lines include the twin's
+// face_normal, the stores its normal.
+TEST_F(UserShaderCommand, TraceOfTheGeometryStageGivesLlvmpipesNormal) {
+    const std::string scene = scene_path("cosc422").string();
+    ASSERT_EQ(run({"gl", scene, "-o", path("gl.png"), "--size", "160x100", "--capture", path("gl.txt")}).status, 0);
+    const tessref::Capture capture = tessref::read_capture(path("gl.txt"));
+    const std::uint32_t patch = 40, primitive = 7;
+    std::vector<tessref::CapturedVertex> corners;
+    for (const tessref::CapturedVertex& v : capture.vertices)
+        if (v.patch_id == patch) corners.push_back(v);
+    ASSERT_GE(corners.size(), 3u * (primitive + 1));
+    const RunResult r = run({"trace", scene, "--patch", std::to_string(patch), "--stage", "geom", "--primitive",
+                             std::to_string(primitive), "--math", "llvmpipe", "--json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["stage"], "geometry");
+    EXPECT_EQ(j["math"], "llvmpipe");
+    EXPECT_EQ(j["primitive"], primitive);
+    const auto& vertices = j["outputs"]["vertices"];
+    ASSERT_EQ(vertices.size(), 3u) << r.out;
+    EXPECT_EQ(j["outputs"]["primitives"], nlohmann::json::parse("[[0, 1, 2]]")) << r.out;
+    for (std::size_t i = 0; i < 3; ++i) {
+        const tessref::CapturedVertex& gl = corners[3 * primitive + i];
+        const auto& n = vertices[i]["locations"]["0"];
+        EXPECT_EQ(bits(n[0].get<double>()), std::bit_cast<std::uint32_t>(gl.normal.x)) << i << " " << r.out;
+        EXPECT_EQ(bits(n[1].get<double>()), std::bit_cast<std::uint32_t>(gl.normal.y)) << i;
+        EXPECT_EQ(bits(n[2].get<double>()), std::bit_cast<std::uint32_t>(gl.normal.z)) << i;
+        // The evaluation's worldPosition as the geometry shader read it: llvmpipe's position.
+        EXPECT_EQ(bits(j["inputs"][i]["locations"]["0"][0].get<double>()), std::bit_cast<std::uint32_t>(gl.position.x)) << i;
+    }
+    bool face_normal_line = false, normal_stored = false;
+    for (const auto& line : j["lines"]) {
+        face_normal_line = face_normal_line || line["source"].get<std::string>().find("normalize(cross") != std::string::npos;
+        for (const auto& s : line["stores"]) normal_stored = normal_stored || s["name"] == "normal";
+    }
+    EXPECT_TRUE(face_normal_line) << r.out;
+    EXPECT_TRUE(normal_stored) << r.out;
+
+    const RunResult text = run({"trace", scene, "--patch", std::to_string(patch), "--stage", "geom", "--primitive",
+                                std::to_string(primitive)});
+    ASSERT_EQ(text.status, 0) << text.err;
+    EXPECT_NE(text.out.find("exact math"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("primitive 7"), std::string::npos) << text.out;
+    // The loop's EmitVertex() line once per vertex, as executed (three times).
+    std::size_t emits = 0;
+    for (std::size_t at = text.out.find("EmitVertex();"); at != std::string::npos; at = text.out.find("EmitVertex();", at + 1)) ++emits;
+    EXPECT_EQ(emits, 3u) << text.out;
+    // A primitive the patch does not have, a scene without a geometry stage: exit 2 naming the flag.
+    const RunResult far = run({"trace", scene, "--patch", "0", "--stage", "geom", "--primitive", "100000"});
+    EXPECT_EQ(far.status, 2);
+    EXPECT_NE(far.err.find("--primitive"), std::string::npos) << far.err;
+    const RunResult none = run({"trace", scene_path("lab4-canyon").string(), "--patch", "0", "--stage", "geom", "--primitive", "0"});
+    EXPECT_EQ(none.status, 2);
+    EXPECT_NE(none.err.find("geometry"), std::string::npos) << none.err;
+}
+
+// The fragment stage's quads against llvmpipe's: quad_derivatives.frag writes dFdx and
+// dFdy of floor(x) * floor(y) of the window position; llvmpipe draws cosc422 with it, and
+// the interpreter runs the same file on the quad of every drawn pixel (window rows paired
+// from y = 0, the top row the higher y): every pixel's two derivatives are llvmpipe's.
+TEST_F(UserShaderCommand, FragmentQuadDerivativesAreLlvmpipes) {
+    const fs::path frag = kUserShaders / "quad_derivatives.frag";
+    const int width = 64, height = 40;
+    const RunResult gl = run({"gl", scene_path("cosc422").string(), "-o", path("gl.png"), "--size", "64x40", "--shader",
+                              "frag=" + frag.string()});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    const tessref::image::Image picture = tessref::image::read_image(path("gl.png"));
+    ASSERT_EQ(picture.header.width, width);
+    ASSERT_EQ(picture.header.height, height);
+    tessref::shader::Source source;
+    source.stage = tessref::ShaderStage::fragment;
+    source.path = frag.string();
+    source.text = read_file(frag);
+    const tessref::shader::Executable shader(tessref::shader::Module::compile(source), {}, {});
+    std::size_t drawn = 0, same = 0;
+    std::string first;
+    for (int row = 0; row < height; ++row) {
+        for (int x = 0; x < width; ++x) {
+            const std::uint8_t* pixel = &picture.u8[static_cast<std::size_t>((row * width + x) * picture.channels)];
+            if (pixel[2] != 255) continue;  // not drawn
+            ++drawn;
+            const int y = height - 1 - row, x0 = x & ~1, y0 = y & ~1;
+            // Lanes: top-left, top-right, bottom-left, bottom-right.
+            std::array<tessref::shader::QuadFragment, 4> quad;
+            const int at[4][2] = {{x0, y0 + 1}, {x0 + 1, y0 + 1}, {x0, y0}, {x0 + 1, y0}};
+            int lane = 0;
+            for (int l = 0; l < 4; ++l) {
+                quad[static_cast<std::size_t>(l)].frag_coord =
+                    glm::vec4(static_cast<float>(at[l][0]) + 0.5f, static_cast<float>(at[l][1]) + 0.5f, 0.5f, 1.0f);
+                if (at[l][0] == x && at[l][1] == y) lane = l;
+            }
+            const auto results = shader.fragment(quad, true, 0);
+            const glm::vec4 c = tessref::shader::as_vec4(results[static_cast<std::size_t>(lane)].outputs.at(0));
+            const auto code = [](float v) { return static_cast<int>(std::lround(v * 255.0f)); };
+            if (code(c.x) == pixel[0] && code(c.y) == pixel[1]) {
+                ++same;
+            } else if (first.empty()) {
+                first = "pixel (" + std::to_string(x) + ", row " + std::to_string(row) + "): interpreter " +
+                        std::to_string(code(c.x)) + ", " + std::to_string(code(c.y)) + " llvmpipe " +
+                        std::to_string(pixel[0]) + ", " + std::to_string(pixel[1]);
+            }
+        }
+    }
+    EXPECT_GT(drawn, 500u);
+    EXPECT_EQ(same, drawn) << first;
 }

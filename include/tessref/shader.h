@@ -38,6 +38,10 @@
 // for where that is exact and the exceptions), and `llvmpipe`, the approximations Mesa's
 // llvmpipe uses.
 //
+// Stages: vertex, tessellation control and evaluation, geometry (EmitVertex/EndPrimitive,
+// strips assembled as GL assembles them) and fragment (2x2 quads: derivatives, helper
+// invocations, discard, implicit lod), each through its Executable call below.
+//
 // Bad input throws tessref::Error: a GLSL compile error (glslang's log, at the file and
 // line), SPIR-V that fails validation (the validator's message), an opcode, capability or
 // execution model the interpreter does not run (naming the opcode and the source
@@ -85,6 +89,16 @@ struct TessLayout {
     bool point_mode = false;
 };
 
+// A geometry shader's layout: `layout(triangles) in;` and `layout(triangle_strip,
+// max_vertices = 3) out;` (its execution modes), and `layout(invocations = N) in;`.
+enum class GeometryOutput : std::uint8_t { points, line_strip, triangle_strip };
+struct GeometryLayout {
+    int input_vertices = 3;  // points 1, lines 2, lines_adjacency 4, triangles 3, triangles_adjacency 6
+    GeometryOutput output = GeometryOutput::triangle_strip;
+    int max_vertices = 0;
+    int invocations = 1;
+};
+
 // A compiled, validated stage: immutable, cheap to copy (shared), safe to run from many
 // threads at once.
 class Module {
@@ -110,6 +124,8 @@ public:
     int output_vertices() const;
     // An evaluation shader's layout; throws tessref::Error for other stages.
     TessLayout tess_layout() const;
+    // A geometry shader's layout; throws tessref::Error for other stages.
+    GeometryLayout geometry_layout() const;
 
     struct Impl;
     const Impl& impl() const { return *impl_; }
@@ -209,6 +225,40 @@ struct ShaderPatch {
     std::array<float, 2> inner{0.0f, 0.0f};
 };
 
+// What a geometry shader made of one input primitive: every vertex EmitVertex() wrote, in
+// the order written (invocation 0's first, with layout(invocations = N)), and the primitives
+// GL assembles from them, as indices into `vertices`, `per_primitive` (1, 2 or 3) each:
+// points one by one, a line strip's lines (k, k + 1), a triangle strip's triangles
+// (k, k + 1, k + 2) for even k and (k + 1, k, k + 2) for odd k, so that every triangle keeps
+// the first one's orientation and its last vertex provokes (GL's default provoking vertex,
+// as Mesa's draw module decomposes a strip for llvmpipe). EndPrimitive() and the end
+// of an invocation end a strip; a strip too short for one primitive makes none.
+struct ShaderPrimitives {
+    GeometryOutput output = GeometryOutput::triangle_strip;
+    std::vector<ShaderVertex> vertices;
+    std::vector<std::uint32_t> indices;
+    int per_primitive() const { return output == GeometryOutput::points ? 1 : output == GeometryOutput::line_strip ? 2 : 3; }
+    std::size_t primitive_count() const { return indices.size() / static_cast<std::size_t>(per_primitive()); }
+};
+
+// One fragment of a 2x2 quad as a fragment shader's invocation reads it.
+struct QuadFragment {
+    glm::vec4 frag_coord{0.0f, 0.0f, 0.0f, 1.0f};  // gl_FragCoord
+    std::vector<Slot> inputs;                        // the interpolated inputs, by location
+    bool covered = true;  // false: a helper invocation (gl_HelperInvocation), run for the derivatives only
+};
+
+// What a fragment shader's invocation wrote: its outputs by location (a location it did not
+// write reads zero), gl_FragDepth if written, and whether it discarded. A helper
+// invocation's result is not a fragment: `helper` says so.
+struct FragmentResult {
+    std::vector<Slot> outputs;
+    bool depth_written = false;
+    float depth = 0.0f;
+    bool discarded = false;
+    bool helper = false;
+};
+
 // A module with its uniforms and textures resolved: the stage drivers. Const and
 // thread-safe; each call runs its own invocations.
 class Executable {
@@ -237,8 +287,30 @@ public:
     void evaluate(const ShaderPatch& patch, std::span<const glm::vec3> tess_coords, long long patch_id,
                   ShaderVertices& out) const;
 
-private:
+    // Geometry: every invocation (layout(invocations = N); gl_InvocationID) of one input
+    // primitive, `in` its vertices as gl_in[] and the input blocks read them (as many as the
+    // input layout takes). gl_PrimitiveIDIn = primitive_id. A vertex emitted past
+    // max_vertices is dropped with a warning (GL leaves it undefined; llvmpipe drops it).
+    ShaderPrimitives geometry(std::span<const ShaderVertex> in, long long primitive_id) const;
+    // Fragment: the four invocations of a 2x2 quad, as llvmpipe runs them, lanes in the order
+    // top-left, top-right, bottom-left, bottom-right (rows as the framebuffer's: the top row
+    // has the higher window y). dFdx = right minus left in the lane's row, dFdy = top minus
+    // bottom in its column (each rounded; Fine and Coarse the same, as llvmpipe computes
+    // them), fwidth = abs(dFdx) + abs(dFdy); texture()'s implicit lod from one pair of
+    // derivatives for the quad, the top-left fragment's (tessref/shading.h, fragment_lod).
+    // The quad runs in lockstep; where a branch parts its lanes each way runs on its own and
+    // the ways meet again at the branch's merge block (the end of the if, the loop's exit),
+    // so that derivatives after it are the quad's again; inside a parted branch they are
+    // undefined in GLSL and 0 here, with a warning. `if (c) discard;` parts nothing: as on
+    // llvmpipe, the discarding fragments go on as helpers (their derivatives stay
+    // available), their results discarded. gl_FrontFacing = front_facing, gl_PrimitiveID =
+    // primitive_id.
+    std::array<FragmentResult, 4> fragment(std::span<const QuadFragment, 4> quad, bool front_facing,
+                                           long long primitive_id) const;
+
     struct State;
+
+private:
     std::unique_ptr<const State> state_;
 };
 

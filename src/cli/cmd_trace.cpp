@@ -5,7 +5,7 @@
 // else the shipped twin of data/shaders/, with the uniforms, textures and inputs the CPU
 // pipeline gives it.
 //
-//   tessref trace SCENE --patch P --stage tesc|tese|vert [--tess-coord U,V | --vertex I]
+//   tessref trace SCENE --patch P --stage tesc|tese|vert|geom [--tess-coord U,V | --vertex I | --primitive K]
 //                 [--json] [--math exact|llvmpipe] [--shader STAGE=FILE]... [--max-instructions N]
 //
 // A control shader's invocations run to each barrier() before any passes it: each line
@@ -44,6 +44,7 @@ struct TraceOptions {
     std::string stage;
     std::string tess_coord;
     std::string vertex;
+    std::string primitive;
     bool json = false;
     std::string math = "exact";
     std::vector<std::string> shaders;
@@ -170,9 +171,8 @@ std::string store_name(const Store& s) {
 int run_trace(const TraceOptions& options) {
     pipeline::StageTraceRequest request;
     const std::optional<ShaderStage> stage = shader_stage_from_string(options.stage);
-    if (!stage || (*stage != ShaderStage::vertex && *stage != ShaderStage::tess_control &&
-                   *stage != ShaderStage::tess_evaluation))
-        throw Error("--stage takes vert, tesc or tese (or vertex, tess_control, tess_evaluation), not '" +
+    if (!stage || *stage == ShaderStage::fragment)
+        throw Error("--stage takes vert, tesc, tese or geom (or vertex, tess_control, tess_evaluation, geometry), not '" +
                         options.stage + "'",
                     Where::in_file("--stage"));
     request.stage = *stage;
@@ -190,6 +190,13 @@ int run_trace(const TraceOptions& options) {
         request.vertex = static_cast<int>(std::min<long long>(parse_index(options.vertex, "--vertex"), 1 << 30));
     } else if (!options.vertex.empty()) {
         throw Error("--vertex belongs to --stage vert", Where::in_file("--vertex"));
+    }
+    const bool geometry = request.stage == ShaderStage::geometry;
+    if (geometry) {
+        if (options.primitive.empty()) throw Error("--stage geom needs --primitive K", Where::in_file("--primitive"));
+        request.primitive = static_cast<std::size_t>(parse_index(options.primitive, "--primitive"));
+    } else if (!options.primitive.empty()) {
+        throw Error("--primitive belongs to --stage geom", Where::in_file("--primitive"));
     }
     const std::vector<StageShader> flags = parse_shader_flags(options.shaders);
     apply_max_instructions_flag(options.max_instructions);
@@ -223,6 +230,7 @@ int run_trace(const TraceOptions& options) {
                                  {"lines", steps}};
         if (request.stage == ShaderStage::tess_evaluation) report["tess_coord"] = vec_json(glm::vec4(request.tess_coord, 0.0f), 3);
         if (request.stage == ShaderStage::vertex) report["vertex"] = request.vertex;
+        if (geometry) report["primitive"] = request.primitive;
         const auto vertex_json = [&](const shader::ShaderVertex& v) {
             nlohmann::json locations = nlohmann::json::object();
             for (std::size_t k = 0; k < v.locations.size(); ++k)
@@ -239,6 +247,17 @@ int run_trace(const TraceOptions& options) {
                                  {"patch_locations", patch_locations},
                                  {"outer", vec_json(glm::vec4(t.patch.outer[0], t.patch.outer[1], t.patch.outer[2], t.patch.outer[3]), 4)},
                                  {"inner", vec_json(glm::vec4(t.patch.inner[0], t.patch.inner[1], 0, 0), 2)}};
+        } else if (geometry) {
+            nlohmann::json inputs = nlohmann::json::array(), vertices = nlohmann::json::array(),
+                           primitives = nlohmann::json::array();
+            for (const shader::ShaderVertex& v : t.inputs) inputs.push_back(vertex_json(v));
+            for (const shader::ShaderVertex& v : t.primitives.vertices) vertices.push_back(vertex_json(v));
+            const std::size_t per = static_cast<std::size_t>(t.primitives.per_primitive());
+            for (std::size_t k = 0; k + per <= t.primitives.indices.size(); k += per)
+                primitives.push_back(std::vector<std::uint32_t>(t.primitives.indices.begin() + static_cast<std::ptrdiff_t>(k),
+                                                                t.primitives.indices.begin() + static_cast<std::ptrdiff_t>(k + per)));
+            report["inputs"] = inputs;
+            report["outputs"] = {{"vertices", vertices}, {"primitives", primitives}};
         } else {
             report["outputs"] = vertex_json(t.vertex);
         }
@@ -249,6 +268,7 @@ int run_trace(const TraceOptions& options) {
     std::cout << "trace of the " << to_string(request.stage) << " shader " << t.shader << ", patch " << request.patch;
     if (request.stage == ShaderStage::tess_evaluation) std::cout << ", tess coord " << vec_text(glm::vec4(request.tess_coord, 0), 3);
     if (request.stage == ShaderStage::vertex) std::cout << ", vertex " << request.vertex;
+    if (geometry) std::cout << ", primitive " << request.primitive;
     std::cout << ", " << (request.math == MathMode::llvmpipe ? "llvmpipe" : "exact") << " math\n";
     for (const Step& s : recorder.steps) {
         std::string where = s.file.substr(s.file.find_last_of('/') + 1) + ":" + std::to_string(s.line);
@@ -273,6 +293,17 @@ int run_trace(const TraceOptions& options) {
             std::cout << "  invocation " << i << ":\n";
             print_vertex(t.patch.vertices[i], "    ");
         }
+    } else if (geometry) {
+        for (std::size_t i = 0; i < t.primitives.vertices.size(); ++i) {
+            std::cout << "  vertex " << i << " (EmitVertex):\n";
+            print_vertex(t.primitives.vertices[i], "    ");
+        }
+        const std::size_t per = static_cast<std::size_t>(t.primitives.per_primitive());
+        for (std::size_t k = 0; k + per <= t.primitives.indices.size(); k += per) {
+            std::cout << "  primitive " << k / per << ": vertices";
+            for (std::size_t i = 0; i < per; ++i) std::cout << " " << t.primitives.indices[k + i];
+            std::cout << "\n";
+        }
     } else {
         print_vertex(t.vertex, "  ");
     }
@@ -290,10 +321,13 @@ Command add_trace_command(CLI::App& parent) {
         "[shaders] or --shader, else the shipped GLSL twin)");
     app->add_option("scene", options->scene, "Scene file (TOML)")->required();
     app->add_option("--patch", options->patch, "The patch (0-based, as `tessref inspect` numbers them)")->required();
-    app->add_option("--stage", options->stage, "vert, tesc or tese")->required();
+    app->add_option("--stage", options->stage, "vert, tesc, tese or geom")->required();
     app->add_option("--tess-coord", options->tess_coord, "tese: gl_TessCoord's u,v (w = 1 - u - v on triangles)")
         ->type_name("U,V");
     app->add_option("--vertex", options->vertex, "vert: which of the patch's vertices (0-based)")->type_name("I");
+    app->add_option("--primitive", options->primitive,
+                    "geom: which of the patch's triangles (0-based, in the generator's order, as gl --capture lists them)")
+        ->type_name("K");
     app->add_flag("--json", options->json, "The trace as JSON");
     app->add_option("--math", options->math,
                     "GLSL's built-in functions: exact (correctly rounded) or llvmpipe (Mesa llvmpipe's, bit for bit)")

@@ -4,6 +4,7 @@
 // pipeline gives it (user_program.cpp).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <string>
 
@@ -16,10 +17,12 @@
 namespace tessref::pipeline {
 
 struct StageTraceRequest {
-    ShaderStage stage = ShaderStage::tess_evaluation;  // vertex, tess_control or tess_evaluation
+    ShaderStage stage = ShaderStage::tess_evaluation;  // vertex, tess_control, tess_evaluation or geometry
     std::size_t patch = 0;
+    std::size_t primitive = 0;         // geometry: the patch's triangle, in the generator's order (as gl --capture)
     int vertex = 0;                    // vertex: which of the patch's vertices
     glm::vec3 tess_coord{0.0f};        // tess_evaluation: gl_TessCoord (w filled in for triangles)
+    std::array<glm::vec3, 3> triangle{};  // geometry: the primitive's corners' tess coords (filled in)
     MathMode math = MathMode::exact;
 };
 
@@ -27,10 +30,14 @@ struct StageTrace {
     std::string shader;              // the file that ran (or the built-in text's name)
     shader::ShaderVertex vertex;     // vertex and evaluation: the outputs
     shader::ShaderPatch patch;       // control: the outputs and levels
+    // geometry: the triangle's vertices as the evaluation shader handed them on, and what
+    // the geometry shader emitted of them
+    std::vector<shader::ShaderVertex> inputs;
+    shader::ShaderPrimitives primitives;
     int vertices_per_patch = 0;
 };
 
-// Throws tessref::Error naming the flag (--patch, --vertex, --tess-coord, --stage) for a
+// Throws tessref::Error naming the flag (--patch, --vertex, --tess-coord, --primitive, --stage) for a
 // request the scene cannot answer, and the interpreter's errors.
 StageTrace trace_stage(const Scene& scene, const StageTraceRequest& request, shader::Observer& observer);
 

@@ -13,7 +13,8 @@
 //  - the geometry stage's per-vertex normals (thesis normal_map, height-field normals the
 //    evaluation shader does not compute) and everything after the evaluation stage: the
 //    models, on the interpreter's positions and texture coordinates. A user's geometry or
-//    fragment shader is not run on the CPU (the interpreter runs neither stage yet).
+//    fragment shader is not run by the pipeline (the interpreter runs both stages; `trace
+//    --stage geom` runs the geometry stage here, over one triangle of a patch).
 //  - the primitive generator tessellates as the scene's [generator] says, whatever the
 //    user's evaluation shader's layout(...) in; line (GL draws with the user's: a cw where
 //    [generator] has ccw shows as an orientation divergence of the captures).
@@ -31,6 +32,8 @@
 #include "pipeline/program.h"
 #include "pipeline/stage_trace.h"
 #include "pipeline/stage_uniforms.h"
+#include "tessref/capture.h"
+#include "tessref/pipeline.h"
 #include "tessref/error.h"
 #include "tessref/shader.h"
 
@@ -96,7 +99,7 @@ public:
         // backend's plan defines it for the twins, not for a user's file).
         const bool terrain_normals = em == EvaluationModel::cosc422 && scene.geometry &&
                                      scene.geometry->normals == GeometryNormals::height_field;
-        const std::string defines = terrain_normals ? "#define TERRAIN_NORMALS\n" : "";
+        defines = terrain_normals ? "#define TERRAIN_NORMALS\n" : "";
         const auto compile = [&](ShaderStage stage, const std::string& twin_file, const std::string& builtin_text) {
             shader::Source src;
             src.stage = stage;
@@ -269,10 +272,40 @@ public:
                 t.vertex = run.evaluate(patches[r.patch], r.tess_coord, static_cast<long long>(r.patch));
                 return t;
             }
-            case ShaderStage::geometry:
+            case ShaderStage::geometry: {
+                // The triangle's corners through the evaluation shader, then the geometry shader.
+                const StageShader* user_geometry = given(scene.shaders, ShaderStage::geometry);
+                const std::string twin_file = std::string(twin_base(scene.evaluation.model)) + ".geom";
+                const bool twin = scene.geometry && ((scene.evaluation.model == EvaluationModel::thesis &&
+                                                      scene.geometry->normals == GeometryNormals::normal_map) ||
+                                                     (scene.evaluation.model == EvaluationModel::cosc422 &&
+                                                      scene.geometry->normals == GeometryNormals::face));
+                if (!user_geometry && !twin)
+                    throw Error("the scene has no geometry stage (neither a geometry shader in [shaders] nor a "
+                                "[geometry] whose model has one: thesis normal_map, cosc422 face)",
+                                Where::in_file("--stage"));
+                shader::Source src;
+                src.stage = ShaderStage::geometry;
+                if (user_geometry) {
+                    src.path = user_geometry->path;
+                    src.text = read_user_shader(*user_geometry);
+                } else {
+                    src.path = data_dir() + "/shaders/" + twin_file;
+                    src.text = twin_text(twin_file);
+                    src.prefix = defines;
+                }
+                const shader::Module geom = shader::Module::compile(src);
+                t.shader = geom.path();
+                control(r.patch);
+                const std::vector<glm::vec3> corners(r.triangle.begin(), r.triangle.end());
+                t.inputs = tese_run->evaluate(patches[r.patch], corners, static_cast<long long>(r.patch));
+                const shader::Executable run(geom, bindings, traced);
+                t.primitives = run.geometry(t.inputs, static_cast<long long>(r.patch));
+                return t;
+            }
             case ShaderStage::fragment: break;
         }
-        throw Error(std::string("the CPU does not run the ") + to_string(r.stage) + " stage (vert, tesc or tese)",
+        throw Error(std::string("the CPU does not run the ") + to_string(r.stage) + " stage (vert, tesc, tese or geom)",
                     Where::in_file("--stage"));
     }
 
@@ -309,6 +342,7 @@ private:
     }
 
     const Scene& scene;
+    std::string defines;  // the GL backend's #defines for the twins
     std::unique_ptr<PatchProgram<float>> model;  // levels (when the user gave no vertex or control shader), normals
     bool model_levels = false;
     std::optional<shader::Module> vert, tesc, tese;
@@ -363,6 +397,23 @@ StageTrace trace_stage(const Scene& scene, const StageTraceRequest& request, sha
                                                                                     : "square [0, 1] x [0, 1]"),
                         Where::in_file("--tess-coord"));
         r.tess_coord.z = triangles ? (1.0f - tc.x) - tc.y : 0.0f;  // gl_TessCoord's w, as the generator computes it
+    }
+    if (r.stage == ShaderStage::geometry) {
+        // The primitive's corners as the pipeline emits them for GL (capture.h: the
+        // generator's order, each triangle's corners as emitted), with the scene's shaders.
+        PipelineOptions options;
+        options.math = request.math;
+        const std::vector<CapturedVertex> capture = capture_from_pipeline(scene, run_pipeline(scene, options));
+        std::vector<std::size_t> corners;
+        for (std::size_t k = 0; k < capture.size(); ++k)
+            if (capture[k].patch_id == request.patch) corners.push_back(k);
+        const std::size_t triangles = corners.size() / 3;
+        if (request.primitive >= triangles)
+            throw Error("primitive " + std::to_string(request.primitive) + " is not one of patch " +
+                            std::to_string(request.patch) + "'s " + std::to_string(triangles) + " triangles" +
+                            (triangles ? " (0.." + std::to_string(triangles - 1) + ")" : ""),
+                        Where::in_file("--primitive"));
+        for (std::size_t i = 0; i < 3; ++i) r.triangle[i] = capture[corners[3 * request.primitive + i]].tess_coord;
     }
     std::unique_ptr<PatchProgram<float>> model = make_model_program<float>(scene, glm::dvec3(0.0));
     UserProgram program(scene, std::move(model), interpreted_stages(scene));

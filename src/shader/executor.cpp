@@ -20,6 +20,7 @@
 #include <glslang/SPIRV/spirv.hpp>
 
 #include "shader/std450.h"
+#include "tessref/shading.h"  // textureGrad: texture() with a fragment quad's derivatives
 
 namespace tessref::shader {
 
@@ -168,12 +169,11 @@ void Batch::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t v
     c.options.observer->store(name, offset, kind, std::span<const std::uint32_t>(regs_.data() + m.reg[value], words));
 }
 
-std::vector<std::vector<std::uint32_t>> Batch::ways(const ExecContext& c) const {
+std::vector<std::uint32_t> Batch::targets(const ExecContext& c) const {
     const Module::Impl& m = c.module;
     const Instr& in = m.code[pc_];
     const std::uint32_t* a = m.words.data() + in.at;
     const std::uint32_t* selector = regs_.data() + static_cast<std::size_t>(m.reg[a[0]]) * lanes_;
-    // The target label of each lane.
     std::vector<std::uint32_t> target(lanes_);
     for (std::uint32_t l = 0; l < lanes_; ++l) {
         if (in.op == spv::OpBranchConditional) {
@@ -187,6 +187,11 @@ std::vector<std::vector<std::uint32_t>> Batch::ways(const ExecContext& c) const 
                 break;
             }
     }
+    return target;
+}
+
+std::vector<std::vector<std::uint32_t>> Batch::ways(const ExecContext& c) const {
+    const std::vector<std::uint32_t> target = targets(c);
     std::vector<std::uint32_t> labels;
     std::vector<std::vector<std::uint32_t>> out;
     for (std::uint32_t l = 0; l < lanes_; ++l) {
@@ -199,6 +204,28 @@ std::vector<std::vector<std::uint32_t>> Batch::ways(const ExecContext& c) const 
         }
     }
     return out;
+}
+
+void Batch::branch_to(std::uint32_t label) {
+    ++executed_;  // the branch, as run() would have counted it
+    pc_ = module_->label_at[label];
+}
+
+Batch Batch::join(std::span<const std::pair<const Batch*, std::vector<std::uint32_t>>> parts, std::uint32_t lanes) {
+    Batch b(*parts.front().first);
+    b.lanes_ = lanes;
+    const auto scatter = [&](std::vector<std::uint32_t> Batch::*field) {
+        const std::size_t words = (parts.front().first->*field).size() / parts.front().first->lanes_;
+        std::vector<std::uint32_t> out(words * lanes, 0);
+        for (const auto& [part, picks] : parts)
+            for (std::size_t j = 0; j < words; ++j)
+                for (std::size_t k = 0; k < picks.size(); ++k) out[j * lanes + picks[k]] = (part->*field)[j * part->lanes_ + k];
+        b.*field = std::move(out);
+    };
+    scatter(&Batch::regs_);
+    scatter(&Batch::local_);
+    for (const auto& part : parts) b.executed_ = std::max(b.executed_, part.first->executed_);
+    return b;
 }
 
 Batch::Status Batch::run(ExecContext& c) {
@@ -307,7 +334,10 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
         return Status::diverged;
     };
 
-    observed_line_ = observed_file_ = 0;  // a resumed invocation tells its line again
+    // A resumed invocation tells its line again (a control shader's invocations take turns),
+    // but not after EmitVertex() or EndPrimitive(), where the same invocation goes on.
+    if (!keep_line_) observed_line_ = observed_file_ = 0;
+    keep_line_ = false;
     for (;;) {
         const Instr& in = m.code[pc_];
         if (c.options.observer && in.line != 0 && (in.line != observed_line_ || in.file != observed_file_)) {
@@ -330,6 +360,10 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
             case spv::OpLabel:
                 previous_label_ = label_;
                 label_ = a[0];
+                if (label_ == stop_label_) {  // where the ways of a fragment quad meet (executor.h)
+                    if (m.code[pc_].op != spv::OpPhi) return Status::at_stop;
+                    stopping_ = true;
+                }
                 break;
             case spv::OpSelectionMerge:
             case spv::OpLoopMerge:
@@ -357,6 +391,10 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 }
                 for (const auto& [id, v] : values) std::copy(v.begin(), v.end(), R(id));
                 pc_ = k;
+                if (stopping_) {
+                    stopping_ = false;
+                    return Status::at_stop;
+                }
                 break;
             }
             case spv::OpBranch: pc_ = m.label_at[a[0]]; break;
@@ -407,6 +445,9 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 break;
             }
             case spv::OpControlBarrier: return Status::barrier;
+            // The geometry driver (geometry.cpp) reads the outputs and runs the batch on.
+            case spv::OpEmitVertex: keep_line_ = true; return Status::emit;
+            case spv::OpEndPrimitive: keep_line_ = true; return Status::end_primitive;
             case spv::OpVariable:
                 if (in.count > 3) access(a[1], T(T(a[0]).element).words, R(a[3]), true);
                 break;
@@ -784,17 +825,35 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 const std::uint32_t* st = R(a[3]);
                 std::uint32_t* out = R(a[1]);
                 const bool with_lod = in.count > 4 && (a[4] & spv::ImageOperandsLodMask);
-                if (in.count > 4 && (a[4] & ~static_cast<std::uint32_t>(spv::ImageOperandsLodMask)))
-                    unsupported(in, "image operands other than Lod (bias, offsets, gradients)");
+                // textureGrad(): each fragment's own gradients (as given: for gradients that
+                // are the quad's derivatives, as pom.frag passes, one lod for the quad).
+                const bool with_grad = in.count > 6 && (a[4] & spv::ImageOperandsGradMask);
+                if (in.count > 4 && (a[4] & ~static_cast<std::uint32_t>(spv::ImageOperandsLodMask | spv::ImageOperandsGradMask)))
+                    unsupported(in, "image operands other than Lod and Grad (bias, offsets)");
                 const std::uint32_t* lod = with_lod ? R(a[5]) : nullptr;
+                const std::uint32_t* grad_x = with_grad ? R(a[5]) : nullptr;
+                const std::uint32_t* grad_y = with_grad ? R(a[6]) : nullptr;
+                // texture() in a fragment quad: the lod from the quad's derivatives of the
+                // coordinate, one for the quad, as llvmpipe takes them (from the top-left
+                // fragment: right minus it, it minus the one below), each fragment sampled at
+                // its own coordinate. Elsewhere no derivatives: the implicit lod is 0.
+                const bool quad_lod = op == spv::OpImageSampleImplicitLod && c.quad && L == 4;
+                if (op == spv::OpImageSampleImplicitLod && m.stage == ShaderStage::fragment && !quad_lod)
+                    warn(in, "warning: texture() in a fragment batch that a branch parted from its quad: no "
+                             "derivatives (undefined in GLSL), lod 0");
+                const glm::vec2 dPdx = quad_lod ? glm::vec2(f(st[1]) - f(st[0]), f(st[L + 1]) - f(st[L])) : glm::vec2(0.0f);
+                const glm::vec2 dPdy = quad_lod ? glm::vec2(f(st[0]) - f(st[2]), f(st[L]) - f(st[L + 2])) : glm::vec2(0.0f);
                 for (std::uint32_t l = 0; l < L; ++l) {
                     const Texture* texture = unit[l] < c.units.size() ? c.units[unit[l]] : nullptr;
                     glm::vec4 v(0.0f, 0.0f, 0.0f, 1.0f);  // no texture at the unit: GL's incomplete texture
                     if (texture) {
                         const glm::vec2 coordinate(f(st[l]), f(st[L + l]));
-                        // texture() outside a fragment shader: no derivatives, the implicit lod is 0.
-                        v = op == spv::OpImageSampleImplicitLod ? texture->texture(coordinate)
-                                                                : texture->textureLod(coordinate, lod ? f(lod[l]) : 0.0f);
+                        if (quad_lod) v = textureGrad(texture, coordinate, dPdx, dPdy);
+                        else if (with_grad)
+                            v = textureGrad(texture, coordinate, glm::vec2(f(grad_x[l]), f(grad_x[L + l])),
+                                            glm::vec2(f(grad_y[l]), f(grad_y[L + l])));
+                        else v = op == spv::OpImageSampleImplicitLod ? texture->texture(coordinate)
+                                                                     : texture->textureLod(coordinate, lod ? f(lod[l]) : 0.0f);
                     }
                     for (std::uint32_t j = 0; j < 4; ++j) out[j * L + l] = w(v[static_cast<int>(j)]);
                 }
@@ -809,6 +868,42 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                         std::min<std::uint32_t>(R(a[3])[l], static_cast<std::uint32_t>(texture->level_count() - 1));
                     R(a[1])[l] = static_cast<std::uint32_t>(texture->level(static_cast<int>(lod)).width);
                     R(a[1])[L + l] = static_cast<std::uint32_t>(texture->level(static_cast<int>(lod)).height);
+                }
+                break;
+            }
+
+            // ---- derivatives across a fragment quad (ExecContext::quad), as llvmpipe -------
+            // Lanes: 0 top-left, 1 top-right, 2 bottom-left, 3 bottom-right. dFdx is per row
+            // (right minus left), dFdy per column (top minus bottom: window y grows upwards);
+            // llvmpipe computes the Fine and Coarse forms as these (lp_build_ddx/ddy for all
+            // three), and fwidth as abs(dFdx) + abs(dFdy).
+            case spv::OpDPdx:
+            case spv::OpDPdxFine:
+            case spv::OpDPdxCoarse:
+            case spv::OpDPdy:
+            case spv::OpDPdyFine:
+            case spv::OpDPdyCoarse:
+            case spv::OpFwidth:
+            case spv::OpFwidthFine:
+            case spv::OpFwidthCoarse: {
+                const std::uint32_t n = N(a[0]);
+                std::uint32_t* out = R(a[1]);
+                const std::uint32_t* x = R(a[2]);
+                if (!c.quad || L != 4) {
+                    warn(in, "warning: " + opcode_name(in.op) + " outside a whole 2x2 fragment quad (a branch parted "
+                             "its lanes, or not a fragment shader; undefined in GLSL): 0");
+                    std::fill_n(out, n * L, 0u);
+                    break;
+                }
+                const bool dx = op == spv::OpDPdx || op == spv::OpDPdxFine || op == spv::OpDPdxCoarse;
+                const bool dy = op == spv::OpDPdy || op == spv::OpDPdyFine || op == spv::OpDPdyCoarse;
+                for (std::uint32_t j = 0; j < n; ++j) {
+                    const std::uint32_t* v = x + j * 4;
+                    const float top = f(v[1]) - f(v[0]), bottom = f(v[3]) - f(v[2]);
+                    const float left = f(v[0]) - f(v[2]), right = f(v[1]) - f(v[3]);
+                    const float ddx[4] = {top, top, bottom, bottom}, ddy[4] = {left, right, left, right};
+                    for (std::uint32_t l = 0; l < 4; ++l)
+                        out[j * 4 + l] = w(dx ? ddx[l] : dy ? ddy[l] : std::fabs(ddx[l]) + std::fabs(ddy[l]));
                 }
                 break;
             }

@@ -46,6 +46,11 @@ struct ExecContext {
     // `shared` holds every address, lane by lane.
     const std::uint32_t* invariant = nullptr;
     const std::vector<std::uint32_t>* lane_slot = nullptr;
+    // A fragment shader's batch that holds a whole 2x2 quad, lanes in the order of
+    // fragment.cpp (top-left, top-right, bottom-left, bottom-right): derivatives and
+    // texture()'s implicit lod are taken across it. A fragment batch without it (the lanes
+    // of a quad that a branch parted) has no derivatives: they are 0, with a warning.
+    bool quad = false;
 };
 
 // The words of lanes `pick` (in that order) of a lane-interleaved array of `lanes` lanes.
@@ -57,14 +62,28 @@ std::vector<std::uint32_t> broadcast_lanes(const std::vector<std::uint32_t>& one
 class Batch {
 public:
     explicit Batch(const Module::Impl& module, std::uint32_t lanes = 1);
-    enum class Status : std::uint8_t { done, barrier, killed, diverged };
-    // Runs until the entry point returns, a barrier() or a discard, or until a branch whose
-    // lanes go different ways (the batch then stands before that branch).
+    enum class Status : std::uint8_t { done, barrier, killed, diverged, emit, end_primitive, at_stop };
+    // Runs until the entry point returns, a barrier() or a discard, a geometry shader's
+    // EmitVertex() or EndPrimitive() (the driver takes the outputs and runs on), or until a
+    // branch whose lanes go different ways (the batch then stands before that branch).
     Status run(ExecContext& context);
     std::uint32_t lanes() const { return lanes_; }
     // After Status::diverged: the lanes grouped by the way their branch goes, each group in
     // lane order, the groups in the order of their first lane.
     std::vector<std::vector<std::uint32_t>> ways(const ExecContext& context) const;
+    // After Status::diverged: the label each lane's branch goes to.
+    std::vector<std::uint32_t> targets(const ExecContext& context) const;
+    // The index in Module::Impl::code of the instruction the batch stands before.
+    std::uint32_t pc() const { return pc_; }
+    // After Status::diverged: every lane takes the branch to `label` (a fragment quad's lanes
+    // that discard there go on as helpers, fragment.cpp).
+    void branch_to(std::uint32_t label);
+    // run() stops (Status::at_stop) when it enters the block `label`, after its OpPhis, so
+    // that the ways of a parted batch meet again there (fragment.cpp); kNone: never.
+    void stop_at(std::uint32_t label) { stop_label_ = label; }
+    // The batch of `lanes` lanes whose lanes parts[k].second[i] are lane i of parts[k].first,
+    // all standing at the same instruction (after run() gave Status::at_stop for each).
+    static Batch join(std::span<const std::pair<const Batch*, std::vector<std::uint32_t>>> parts, std::uint32_t lanes);
     // The batch of lanes `pick` of this one, at the same instruction.
     Batch split(std::span<const std::uint32_t> pick) const;
     // The batch back at the entry point for another set of invocations of as many lanes:
@@ -95,6 +114,9 @@ private:
     std::uint32_t label_ = 0, previous_label_ = 0;
     std::uint64_t executed_ = 0;
     std::uint32_t observed_line_ = 0, observed_file_ = 0;  // RunOptions::observer: the last line told
+    std::uint32_t stop_label_ = 0xffffffffu;  // stop_at()
+    bool stopping_ = false;   // entered stop_label_'s block: stop after its OpPhis
+    bool keep_line_ = false;  // the next run() goes on where this one stopped, for the observer
 };
 
 }  // namespace tessref::shader

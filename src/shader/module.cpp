@@ -197,6 +197,7 @@ private:
                     case spv::CapabilityGeometryPointSize:
                     case spv::CapabilityImageQuery:
                     case spv::CapabilitySampled1D:
+                    case spv::CapabilityDerivativeControl:
                         return;
                     default:
                         fail(std::string("capability ") + spv::CapabilityString(static_cast<int>(a[0])) +
@@ -218,17 +219,36 @@ private:
                     case spv::ExecutionModelVertex: m_.stage = ShaderStage::vertex; break;
                     case spv::ExecutionModelTessellationControl: m_.stage = ShaderStage::tess_control; break;
                     case spv::ExecutionModelTessellationEvaluation: m_.stage = ShaderStage::tess_evaluation; break;
+                    case spv::ExecutionModelGeometry: m_.stage = ShaderStage::geometry; break;
+                    case spv::ExecutionModelFragment: m_.stage = ShaderStage::fragment; break;
                     default:
                         fail(std::string("execution model ") + spv::ExecutionModelString(static_cast<int>(a[0])) +
-                             " is not supported by the interpreter (vertex, tessellation control and "
-                             "tessellation evaluation are)");
+                             " is not supported by the interpreter (vertex, tessellation control, "
+                             "tessellation evaluation, geometry and fragment are)");
                 }
                 return;
             }
             case spv::OpExecutionMode: {
+                // The entry point comes first (SPIR-V's logical layout): the stage is known.
+                GeometryLayout& g = m_.geometry;
                 switch (static_cast<spv::ExecutionMode>(a[1])) {
-                    case spv::ExecutionModeOutputVertices: m_.output_vertices = static_cast<int>(a[2]); break;
-                    case spv::ExecutionModeTriangles: m_.layout.domain = Domain::triangles; m_.has_layout = true; break;
+                    case spv::ExecutionModeOutputVertices:
+                        m_.output_vertices = static_cast<int>(a[2]);
+                        g.max_vertices = static_cast<int>(a[2]);
+                        break;
+                    case spv::ExecutionModeInputPoints: g.input_vertices = 1; break;
+                    case spv::ExecutionModeInputLines: g.input_vertices = 2; break;
+                    case spv::ExecutionModeInputLinesAdjacency: g.input_vertices = 4; break;
+                    case spv::ExecutionModeInputTrianglesAdjacency: g.input_vertices = 6; break;
+                    case spv::ExecutionModeOutputPoints: g.output = GeometryOutput::points; break;
+                    case spv::ExecutionModeOutputLineStrip: g.output = GeometryOutput::line_strip; break;
+                    case spv::ExecutionModeOutputTriangleStrip: g.output = GeometryOutput::triangle_strip; break;
+                    case spv::ExecutionModeInvocations: g.invocations = static_cast<int>(a[2]); break;
+                    case spv::ExecutionModeTriangles:
+                        g.input_vertices = 3;
+                        m_.layout.domain = Domain::triangles;
+                        m_.has_layout = m_.stage == ShaderStage::tess_evaluation;
+                        break;
                     case spv::ExecutionModeQuads: m_.layout.domain = Domain::quads; m_.has_layout = true; break;
                     case spv::ExecutionModeIsolines: m_.layout.domain = Domain::isolines; m_.has_layout = true; break;
                     case spv::ExecutionModeSpacingEqual: m_.layout.spacing = Spacing::equal; break;
@@ -514,6 +534,13 @@ ShaderStage Module::stage() const { return impl_->stage; }
 const std::string& Module::path() const { return impl_->path; }
 const std::vector<std::uint32_t>& Module::spirv() const { return impl_->words; }
 int Module::output_vertices() const { return impl_->stage == ShaderStage::tess_control ? impl_->output_vertices : 0; }
+
+GeometryLayout Module::geometry_layout() const {
+    if (impl_->stage != ShaderStage::geometry)
+        throw Error("the " + std::string(to_string(impl_->stage)) + " shader has no geometry layout",
+                    Where::in_file(impl_->path));
+    return impl_->geometry;
+}
 
 TessLayout Module::tess_layout() const {
     if (impl_->stage != ShaderStage::tess_evaluation || !impl_->has_layout)

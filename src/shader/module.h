@@ -122,8 +122,9 @@ struct Module::Impl {
     std::vector<std::uint32_t> shared_init;  // uniform initializers, zero elsewhere
     std::vector<std::uint32_t> local_init;   // Private initializers
 
-    int output_vertices = 0;
+    int output_vertices = 0;           // a control shader's vertices, a geometry shader's max_vertices
     TessLayout layout;
+    GeometryLayout geometry;
     bool has_layout = false;
 
     // "file:line" of an instruction, or the module's path.
