@@ -155,16 +155,22 @@ TEST(ShaderFragment, ADerivativeInsideAPartedBranchIsZeroWithAWarning) {
     EXPECT_NE(r.warnings[0].find("snippet.frag:8"), std::string::npos) << r.warnings[0];
 }
 
+// A 4x4 one-channel checkerboard of 0 and 1 (texel (x, y) is (x + y) % 2): its level 1
+// averages each 2x2 block to 0.5.
+Texture checkerboard() {
+    std::vector<float> texels(16);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) texels[static_cast<std::size_t>(y * 4 + x)] = static_cast<float>((x + y) % 2);
+    return Texture::from_float(4, 4, 1, texels);
+}
+
 TEST(ShaderFragment, ImplicitLodComesFromTheQuadsDerivatives) {
     // A 4x4 checkerboard (0 and 1): level 1 averages every 2x2 block, 0.5 everywhere. With
     // texture coordinates half a texture apart across the quad (dPdx = (0.5, 0), dPdy =
     // (0, 0.5) in magnitude: rho = 4 * 0.5 = 2 texels per pixel) the lod is log2 2 = 1:
     // every fragment reads 0.5. With the same coordinate at every fragment (derivatives 0:
     // magnification) each reads level 0 at a texel's centre: 1 at texel (1, 0).
-    std::vector<float> texels(16);
-    for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) texels[static_cast<std::size_t>(y * 4 + x)] = static_cast<float>((x + y) % 2);
-    const Texture checker = Texture::from_float(4, 4, 1, texels);
+    const Texture checker = checkerboard();
     Bindings b;
     b.bind_texture(0, &checker);
     const std::string declarations = "layout(binding = 0) uniform sampler2D map;";
@@ -196,12 +202,6 @@ TEST(ShaderFragment, OtherStagesRunNoFragments) {
     EXPECT_THROW(e.fragment(quad(kValues), true, 0), Error);
 }
 
-}  // namespace
-}  // namespace tessref::shader
-
-namespace tessref::shader {
-namespace {
-
 TEST(ShaderFragment, UnsupportedImageOperandsAndEndlessQuadsAreErrors) {
     // texture() with a bias: an image operand the interpreter does not run, named with its line.
     try {
@@ -224,12 +224,6 @@ TEST(ShaderFragment, UnsupportedImageOperandsAndEndlessQuadsAreErrors) {
             << error.what();
     }
 }
-
-}  // namespace
-}  // namespace tessref::shader
-
-namespace tessref::shader {
-namespace {
 
 // Every shipped fragment and geometry twin loads and runs (a quad, a triangle) without an
 // opcode, capability or built-in the interpreter does not run: uniforms at their defaults,
@@ -267,20 +261,11 @@ TEST(ShaderFragment, EveryShippedFragmentAndGeometryTwinRuns) {
     }
 }
 
-}  // namespace
-}  // namespace tessref::shader
-
-namespace tessref::shader {
-namespace {
-
 TEST(ShaderFragment, TextureGradTakesTheGivenGradients) {
     // The checkerboard of ImplicitLodComesFromTheQuadsDerivatives: gradients (0.5, 0) and
     // (0, 0.5) give lod 1 (0.5 everywhere), gradients zero lod -inf (level 0: 1 at texel
     // (1, 0)), whatever the quad's own derivatives (here none: every fragment at one place).
-    std::vector<float> texels(16);
-    for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) texels[static_cast<std::size_t>(y * 4 + x)] = static_cast<float>((x + y) % 2);
-    const Texture checker = Texture::from_float(4, 4, 1, texels);
+    const Texture checker = checkerboard();
     Bindings b;
     b.bind_texture(0, &checker);
     const std::string declarations = "layout(binding = 0) uniform sampler2D map;";
