@@ -32,6 +32,7 @@
 #include <tbb/global_control.h>
 
 #include "raster/raster_internal.h"
+#include "render_compare.h"
 #include "tessref/error.h"
 #include "tessref/raster.h"
 
@@ -967,11 +968,6 @@ Mesh terrain_soup(unsigned seed, int n, int width, int height) {
             m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
         }
     return m;
-}
-
-template <class T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
 TEST(RasterDeterminism, ByteIdenticalForOneTwoAndFourThreads) {

@@ -17,6 +17,7 @@
 
 #include <tbb/global_control.h>
 
+#include "render_compare.h"
 #include "tessref/error.h"
 #include "tessref/pipeline.h"
 #include "tessref/prepare.h"
@@ -29,33 +30,6 @@ namespace fs = std::filesystem;
 namespace {
 
 const fs::path kScenes = fs::path(TESSREF_SOURCE_DIR) / "data" / "scenes";
-
-template <typename T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
-// Every per-pixel buffer and the counts, byte for byte.
-void expect_identical(const tessref::RenderResult& streamed, const tessref::RenderResult& whole) {
-    EXPECT_TRUE(same_bytes(streamed.colour, whole.colour)) << "colour";
-    EXPECT_TRUE(same_bytes(streamed.depth, whole.depth)) << "depth";
-    EXPECT_TRUE(same_bytes(streamed.patch_id, whole.patch_id)) << "patch_id";
-    EXPECT_TRUE(same_bytes(streamed.triangle_id, whole.triangle_id)) << "triangle_id";
-    EXPECT_TRUE(same_bytes(streamed.tess_coord, whole.tess_coord)) << "tess_coord";
-    EXPECT_TRUE(same_bytes(streamed.barycentric, whole.barycentric)) << "barycentric";
-    EXPECT_TRUE(same_bytes(streamed.level, whole.level)) << "level";
-    EXPECT_EQ(streamed.stats.triangles, whole.stats.triangles);
-    EXPECT_EQ(streamed.stats.vertices, whole.stats.vertices);
-    EXPECT_EQ(streamed.stats.covered_pixels, whole.stats.covered_pixels);
-    EXPECT_EQ(streamed.stats.raster.triangles_in, whole.stats.raster.triangles_in);
-    EXPECT_EQ(streamed.stats.raster.triangles_clipped, whole.stats.raster.triangles_clipped);
-    EXPECT_EQ(streamed.stats.raster.triangles_rejected, whole.stats.raster.triangles_rejected);
-    EXPECT_EQ(streamed.stats.raster.primitives, whole.stats.raster.primitives);
-    EXPECT_EQ(streamed.stats.raster.primitives_culled, whole.stats.raster.primitives_culled);
-    EXPECT_EQ(streamed.stats.raster.fragments, whole.stats.raster.fragments);
-    EXPECT_EQ(streamed.stats.raster.fragments_passed, whole.stats.raster.fragments_passed);
-    EXPECT_EQ(streamed.mvp, whole.mvp);
-}
 
 // The streamed render never keeps the surface; the materialized one does.
 void compare_paths(const tessref::Scene& scene, tessref::RenderOptions options) {
@@ -70,7 +44,7 @@ void compare_paths(const tessref::Scene& scene, tessref::RenderOptions options) 
     EXPECT_EQ(streamed.pipeline->mesh.triangles.empty(), streams) << "streamed (surface not held): " << streams;
     EXPECT_EQ(whole.pipeline->mesh.triangles.size(), whole.stats.triangles);
     EXPECT_GT(streamed.stats.covered_pixels, 0u);
-    expect_identical(streamed, whole);
+    expect_identical_renders(streamed, whole);
 }
 
 std::vector<fs::path> shipped_scenes() {
@@ -155,7 +129,7 @@ TEST(RenderStream, ThreadCountDoesNotChangeTheImage) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
         one = tessref::render_scene(scene, options);
     }
-    expect_identical(one, many);
+    expect_identical_renders(one, many);
 }
 
 // Batched draws leave the pixels one rasterize() of all the triangles leaves: a random soup

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/simd.h"
+#include "render_compare.h"
 #include "tessref/error.h"
 #include "tessref/prepare.h"
 #include "tessref/render.h"
@@ -33,11 +34,6 @@ protected:
     void TearDown() override { tessref::set_simd_level(saved_); }
     tessref::SimdLevel saved_ = tessref::simd_level();
 };
-
-template <typename T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
 
 template <typename F>
 auto at_level(tessref::SimdLevel level, F&& f) {
@@ -124,14 +120,7 @@ TEST_F(SimdLevels, ShippedScenesRenderTheSameBytes) {
         const auto render = [&] { return tessref::render_scene(scene, options); };
         const tessref::RenderResult base = at_level(tessref::SimdLevel::sse2, render);
         const tessref::RenderResult wide = at_level(tessref::SimdLevel::avx2, render);
-        EXPECT_TRUE(same_bytes(wide.colour, base.colour)) << "colour";
-        EXPECT_TRUE(same_bytes(wide.depth, base.depth)) << "depth";
-        EXPECT_TRUE(same_bytes(wide.triangle_id, base.triangle_id)) << "triangle_id";
-        EXPECT_TRUE(same_bytes(wide.barycentric, base.barycentric)) << "barycentric";
-        EXPECT_TRUE(same_bytes(wide.patch_id, base.patch_id)) << "patch_id";
-        EXPECT_TRUE(same_bytes(wide.tess_coord, base.tess_coord)) << "tess_coord";
-        EXPECT_TRUE(same_bytes(wide.level, base.level)) << "level";
-        EXPECT_EQ(wide.stats.covered_pixels, base.stats.covered_pixels);
+        expect_identical_renders(wide, base);
         EXPECT_GT(base.stats.covered_pixels, 0u);
         ++compared;
     }
