@@ -253,4 +253,28 @@ TEST_P(Rebalance, InterpreterInLlvmpipeMathIsLlvmpipe) {
 INSTANTIATE_TEST_SUITE_P(Shapes, Rebalance, ::testing::ValuesIn(kShapes),
                          [](const auto& info) { return std::string(info.param.name); });
 
+// A chain too long to walk (more than about a thousand operations) is left as written in
+// both modes, at load and at run time alike: no deep recursion, no quadratic walk.
+TEST(Rebalance, VeryLongChainsRunAsWritten) {
+    std::string sum = "a";
+    for (int k = 1; k < 3000; ++k) sum += " + b";
+    const std::string functions = "float f(float a, float b) { return " + sum + "; }\n";
+    std::uint32_t result[2] = {0, 0};
+    for (const sh::MathMode math : {sh::MathMode::exact, sh::MathMode::llvmpipe}) {
+        sh::Source source;
+        source.stage = tessref::ShaderStage::vertex;
+        source.path = "long.vert";
+        source.text = gl::evaluate_shader("f(x, y)", functions);
+        sh::RunOptions options;
+        options.math = math;
+        const sh::Executable e(sh::Module::compile(source), sh::Bindings{}, options);
+        const sh::Slot operands = {bits(1.0f), bits(0x1p-24f), 0u, 0u};
+        result[math == sh::MathMode::llvmpipe] = e.vertex(std::span<const sh::Slot>(&operands, 1), 0).locations.at(0)[0];
+    }
+    // From the left every 1 + 2^-24 rounds back to 1 (a tie, to even); balanced, the 2^-24
+    // would first add up among themselves.
+    EXPECT_EQ(result[0], bits(1.0f));
+    EXPECT_EQ(result[1], bits(1.0f));
+}
+
 }  // namespace

@@ -31,7 +31,8 @@
 //
 // NIR's algebraic pass rewrites further (for one, (a*b + c*d) + e becomes (a*b + e) + c*d
 // when e is not a product), and the link-time run can rebalance what inlining user functions
-// puts together; neither is modelled. Precise (NoContraction) chains are left as written.
+// puts together; neither is modelled. Precise (NoContraction) chains, and chains of more than
+// about a thousand operations (Finder::kMaxNodes), are left as written.
 #define SPV_ENABLE_UTILITY_CODE
 #include "shader/rebalance.h"
 
@@ -96,7 +97,7 @@ public:
             const std::uint32_t root = word(in, 1);
             if (m_.types[m_.type_of[root]].scalar != Kind::float_ || joins_parent(root)) continue;
             std::vector<Node> tree;
-            build(tree, root, in.op, m_.type_of[root], block_[i]);
+            if (!build(tree, root, in.op, m_.type_of[root], block_[i])) continue;
             std::uint32_t operations = 0;
             bool precise = false;
             for (const Node& n : tree) {
@@ -285,8 +286,12 @@ private:
                block_[use_at_[id]] == block_[def_[id]];
     }
 
-    std::uint32_t build(std::vector<Node>& tree, std::uint32_t id, std::uint16_t op, std::uint32_t type,
-                        std::uint32_t block) {
+    // The tree under `id` into `tree` (its top at tree[0]); false for a chain of more than
+    // kMaxNodes nodes, which is left as written (the walks here recurse once per level, and
+    // visit() collects a subtree's leaves at every level).
+    static constexpr std::size_t kMaxNodes = 2048;
+    bool build(std::vector<Node>& tree, std::uint32_t id, std::uint16_t op, std::uint32_t type, std::uint32_t block) {
+        if (tree.size() >= kMaxNodes) return false;
         const auto n = static_cast<std::uint32_t>(tree.size());
         tree.push_back(Node{id});
         const std::uint32_t d = id < m_.bound ? def_[id] : kNone;
@@ -294,13 +299,12 @@ private:
                                (n == 0 || (uses_[id] == 1 && !precise_[id]));
         if (!operation) {
             tree[n].leaf = leaf(id, 0);
-            return n;
+            return true;
         }
-        const std::uint32_t left = build(tree, word(m_.code[d], 2), op, type, block);
-        const std::uint32_t right = build(tree, word(m_.code[d], 3), op, type, block);
-        tree[n].child[0] = left;
-        tree[n].child[1] = right;
-        return n;
+        tree[n].child[0] = static_cast<std::uint32_t>(tree.size());
+        if (!build(tree, word(m_.code[d], 2), op, type, block)) return false;
+        tree[n].child[1] = static_cast<std::uint32_t>(tree.size());
+        return build(tree, word(m_.code[d], 3), op, type, block);
     }
 
     // Whether the pass visits the expression `id` as a whole (the comment at the top).
