@@ -183,6 +183,11 @@ const Shape kShapes[] = {
     // into the body's expression, an operand there: rebalanced. Read more than once (acos):
     // an assignment to the parameter, from the left.
     {"sqrt_argument_4", "float f(" PARAMS4 ") { return sqrt(a + b + c + d); }\n", "f(abs(x), abs(y), abs(sin(x)), abs(cos(y)))"},
+    // Likewise clamp and min (one expression of their parameter: rebalanced); length reads
+    // its parameter twice (sqrt(dot(x, x))): from the left.
+    {"clamp_argument_4", "float f(" PARAMS4 ") { return clamp(a + b + c + d, -50.0, 50.0); }\n", "f(" ARGS4 ")"},
+    {"min_argument_4", "float f(" PARAMS4 ") { return min(a + b + c + d, 1e30); }\n", "f(" ARGS4 ")"},
+    {"length_argument_4", "float f(" PARAMS4 ") { return length(a + b + c + d); }\n", "f(" ARGS4 ")"},
     {"acos_argument_4", "float f(" PARAMS4 ") { return acos(a + b + c + d); }\n",
      "f(sin(x), cos(x), -sin(y), -cos(y))"},
     // In main, an operand of another operation, x and y read twice: rebalanced.
