@@ -914,7 +914,8 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 if (in.op == kOpChain) {
                     const Chain& chain = m.chains[in.at];
                     const std::uint32_t n = chain.components * L;
-                    for (const auto& [result, left, right] : c.options.math == MathMode::llvmpipe ? chain.llvmpipe : chain.as_written) {
+                    const auto& steps = c.options.math == MathMode::llvmpipe ? chain.llvmpipe : chain.as_written;
+                    for (const auto& [result, left, right] : steps) {
                         if (chain.op == spv::OpFAdd)
                             each2(R(result), R(left), R(right), n, [](std::uint32_t p, std::uint32_t q) { return w(f(p) + f(q)); });
                         else
