@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <span>
@@ -34,11 +35,17 @@ using render_detail::window_depth;
 
 namespace render_detail {
 
-void allocate(RenderResult& r, int width, int height, bool visibility, bool provenance) {
+void allocate(RenderResult& r, int width, int height, bool visibility, bool provenance, bool colour8) {
     r.width = width;
     r.height = height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    assign_on_huge_pages(r.colour, n, r.shading.background);
+    if (colour8) {
+        glm::u8vec4 background;
+        unorm8_rgba(&r.shading.background[0], &background[0]);
+        assign_on_huge_pages(r.rgba8, n, background);
+    } else {
+        assign_on_huge_pages(r.colour, n, r.shading.background);
+    }
     if (provenance) {
         assign_on_huge_pages(r.patch_id, n, kNoPixelId);
         assign_on_huge_pages(r.tess_coord, n, glm::vec3(0.0f));
@@ -48,6 +55,12 @@ void allocate(RenderResult& r, int width, int height, bool visibility, bool prov
     assign_on_huge_pages(r.depth, n, 1.0f);
     assign_on_huge_pages(r.triangle_id, n, kNoPixelId);
     assign_on_huge_pages(r.barycentric, n, glm::vec3(0.0f));
+}
+
+void keep_colour8(RenderResult& r) {
+    r.rgba8.resize(r.colour.size());
+    to_rgba8(r, &r.rgba8[0][0]);
+    std::vector<glm::vec4>().swap(r.colour);
 }
 
 void take_visibility(RenderResult& r, Framebuffer& fb) {
@@ -274,6 +287,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
              int quad_row_end, IdRange ids, const Owns& owns, int x_begin = 0, int x_end = -1) {
     const int width = result.width, height = result.height;
     if (x_end < 0) x_end = width;
+    const bool colour8 = result.colour.empty();  // RenderOptions::colour8: the codes only
     for (int quad_row = quad_row_begin; quad_row < quad_row_end; ++quad_row) {
         const int row0 = 2 * quad_row;
         const std::uint32_t* top = &fb.triangle_id[result.index(0, row0)];
@@ -347,7 +361,11 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
             const auto count = static_cast<std::size_t>(pixel_count);
             shade(result.shading.model, std::span<const FragmentInputs>(fragments, count),
                   std::span<glm::vec4>(colours, count));
-            for (int p = 0; p < pixel_count; ++p) result.colour[pixels[p].i] = colours[p];
+            if (colour8) {
+                for (int p = 0; p < pixel_count; ++p) unorm8_rgba(&colours[p][0], &result.rgba8[pixels[p].i][0]);
+            } else {
+                for (int p = 0; p < pixel_count; ++p) result.colour[pixels[p].i] = colours[p];
+            }
         }
     }
 }
@@ -579,7 +597,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     Framebuffer fb;
     tessref::parallel_for(0, 2, [&](int k) {
         if (k == 0)
-            render_detail::allocate(result, width, height, false, options.provenance);
+            render_detail::allocate(result, width, height, false, options.provenance, options.colour8);
         else
             fb = Framebuffer::create_visibility(width, height);
     });
@@ -788,6 +806,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
         });
     }
     render_detail::take_visibility(result, fb);
+    if (options.colour8) render_detail::keep_colour8(result);
     result.stats.covered_pixels = covered_pixels(result);
     result.stats.seconds_shade = seconds_since(start);
     progress("shading", 1.0);
@@ -831,6 +850,9 @@ PixelProvenance pixel_provenance(const RenderResult& result, int x, int y) {
         throw Error("pixel " + std::to_string(x) + "," + std::to_string(y) + " is outside the " +
                         std::to_string(result.width) + "x" + std::to_string(result.height) + " image",
                     Where::at_key("pixel"));
+    if (result.colour.empty())
+        throw Error("the image was rendered without its float colour (RenderOptions::colour8)",
+                    Where::at_key("colour8"));
     if (result.patch_id.size() != result.colour.size())
         throw Error("the image was rendered without its provenance buffers (RenderOptions::provenance)",
                     Where::at_key("provenance"));
@@ -889,6 +911,10 @@ glm::vec3 level_heat_colour(float level) {
 }
 
 void render_detail::to_rgba8(const RenderResult& result, std::uint8_t* out) {
+    if (result.colour.empty()) {  // RenderOptions::colour8: the codes themselves
+        if (!result.rgba8.empty()) std::memcpy(out, result.rgba8.data(), result.rgba8.size() * sizeof(glm::u8vec4));
+        return;
+    }
     // In parallel: it sits between the render and the image write, where nothing else runs.
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, result.colour.size(), 65536),
                           [&](const tbb::blocked_range<std::size_t>& r) {
@@ -898,7 +924,7 @@ void render_detail::to_rgba8(const RenderResult& result, std::uint8_t* out) {
 }
 
 std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
-    std::vector<std::uint8_t> out(result.colour.size() * 4);
+    std::vector<std::uint8_t> out((result.colour.empty() ? result.rgba8.size() : result.colour.size()) * 4);
     render_detail::to_rgba8(result, out.data());
     return out;
 }
@@ -906,6 +932,9 @@ std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
 ImageDifference compare_images(const RenderResult& a, const RenderResult& b) {
     // The clamped R, G, B a unorm8 framebuffer would hold (before quantization), through
     // the one comparison of compare.h; coverage is what only a render knows.
+    if ((a.colour.empty() && !a.rgba8.empty()) || (b.colour.empty() && !b.rgba8.empty()))
+        throw Error("comparing renders needs their float colour (RenderOptions::colour8 kept only 8-bit codes)",
+                    Where::at_key("colour8"));
     const auto clamped_rgb = [](const RenderResult& r) {
         FloatImage image;
         image.width = r.width;
