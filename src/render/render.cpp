@@ -59,7 +59,7 @@ void allocate(RenderResult& r, int width, int height, bool visibility, bool prov
 
 void keep_colour8(RenderResult& r) {
     r.rgba8.resize(r.colour.size());
-    to_rgba8(r, &r.rgba8[0][0]);
+    to_rgba8(r, reinterpret_cast<std::uint8_t*>(r.rgba8.data()));
     std::vector<glm::vec4>().swap(r.colour);
 }
 
