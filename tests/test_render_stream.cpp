@@ -3,7 +3,7 @@
 // give every per-pixel buffer the whole-surface pass gives, bit for bit, for every shipped
 // scene, both precisions, camera-relative evaluation and any thread count. And the
 // rasterizer's batched draws (raster.h Rasterizer) against one rasterize() of the same
-// triangles.
+// triangles, and the 8-bit colour of RenderOptions::colour8 against the float colour's codes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
