@@ -632,6 +632,131 @@ TEST_F(UserShaderCommand, GeometryTwinsGiveLlvmpipesNormals) {
     }
 }
 
+// A user's geometry shader runs in the CPU pipeline (mesh --capture, render, gl's
+// prediction), batched over each patch's triangles, and what it emits is llvmpipe's:
+// face_normal.geom passes every triangle through with a face normal of its own
+// (cross/normalize), drop_steep.geom drops the triangles that lean more than a threshold
+// (fewer triangles than the generator makes, a count that hangs on the normals' last bits).
+// In llvmpipe math the CPU's capture equals `gl --capture` bit for bit, positions and
+// normals, on every vertex, and gl draws with every count as the CPU predicted.
+TEST_F(UserShaderCommand, UserGeometryShaderCaptureIsLlvmpipes) {
+    const std::string scene = scene_path("cosc422").string();
+    std::size_t triangles[2] = {0, 0};
+    int k = 0;
+    for (const char* file : {"face_normal.geom", "drop_steep.geom"}) {
+        const std::string geom = "geom=" + (kUserShaders / file).string();
+        const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--size", "160x100", "--capture", path("gl.txt"),
+                                  "--shader", geom});
+        ASSERT_EQ(gl.status, 0) << file << gl.out << gl.err;
+        EXPECT_NE(gl.out.find("every count as predicted"), std::string::npos) << gl.out;
+        const RunResult cpu = run({"mesh", scene, "--capture", path("cpu.txt"), "--math", "llvmpipe", "--shader", geom});
+        ASSERT_EQ(cpu.status, 0) << cpu.err;
+        const tessref::CaptureCompareResult c = compare(path("cpu.txt"), path("gl.txt"), 0);
+        EXPECT_EQ(c.tess_coord_divergences + c.triangle_divergences + c.orientation_divergences, 0u) << file;
+        EXPECT_GT(c.vertices_compared, 10000u) << file;
+        EXPECT_EQ(c.worst_position.ulps, 0u) << file;
+        EXPECT_EQ(c.worst_normal.ulps, 0u) << file;
+        EXPECT_EQ(c.failing_vertices, 0u) << file;
+        triangles[k++] = tessref::read_capture(path("cpu.txt")).vertices.size() / 3;
+        std::printf("%s: %zu vertices, positions and normals bit-identical to llvmpipe's on %zu\n", file,
+                    c.vertices_compared, c.vertices_compared - c.failing_vertices);
+    }
+    // The generator's 24246 triangles, all passed through; the steep ones dropped.
+    EXPECT_EQ(triangles[0], 24246u);
+    EXPECT_GT(triangles[1], 10000u);
+    EXPECT_LT(triangles[1], triangles[0]);
+}
+
+// A user's copy of a geometry twin under another name (any other text runs through the
+// interpreter) renders as the model: cosc422's face normals give the very bytes; the thesis's
+// normal-map normals differ from the model's where normalize rounds otherwise (the model's
+// glm v * (1 / sqrt(dot)) against GLSL's normalize, ShaderTwins'
+// *GeometryNormalsAreTheModelsButForNormalize), which moves a few pixels by one 8-bit step.
+TEST_F(UserShaderCommand, AUsersCopyOfAGeometryTwinRendersAsTheModel) {
+    for (const auto& [scene, twin] : {std::pair<std::string, std::string>{"cosc422", "cosc422_terrain.geom"},
+                                      std::pair<std::string, std::string>{"thesis-all-10", "thesis_terrain.geom"}}) {
+        write_file(path("copy.geom"), "// a user's copy\n" + read_file(kSource / "data" / "shaders" / twin));
+        ASSERT_EQ(run({"render", scene_path(scene).string(), "-o", path("model.png"), "--size", "320x200"}).status, 0);
+        const RunResult user = run({"render", scene_path(scene).string(), "-o", path("user.png"), "--size", "320x200",
+                                    "--shader", "geom=" + path("copy.geom")});
+        ASSERT_EQ(user.status, 0) << user.err;
+        const tessref::image::Image a = tessref::image::read_image(path("model.png"));
+        const tessref::image::Image b = tessref::image::read_image(path("user.png"));
+        ASSERT_EQ(a.u8.size(), b.u8.size());
+        std::size_t differing = 0;
+        int worst = 0;
+        for (std::size_t i = 0; i < a.u8.size(); ++i) {
+            differing += a.u8[i] != b.u8[i];
+            worst = std::max(worst, std::abs(int(a.u8[i]) - int(b.u8[i])));
+        }
+        if (scene == "cosc422") {
+            EXPECT_EQ(differing, 0u) << scene;
+        } else {
+            EXPECT_LE(worst, 1) << scene;
+            EXPECT_LE(differing, 10u) << scene;  // 2 of 64000 pixels when written
+        }
+        std::printf("%s: a user's copy of %s renders %zu samples differently from the model (at most %d)\n",
+                    scene.c_str(), twin.c_str(), differing, worst);
+    }
+    // And the mesh: the same positions, texture coordinates and triangles as the model's,
+    // bit for bit (thesis: normals within 3 ulps, the goldens' allowance for normalize).
+    const RunResult model = run({"mesh", scene_path("cosc422").string(), "--capture", path("model.txt")});
+    ASSERT_EQ(model.status, 0) << model.err;
+    write_file(path("copy.geom"), "// a user's copy\n" + read_file(kSource / "data" / "shaders" / "cosc422_terrain.geom"));
+    const RunResult user = run({"mesh", scene_path("cosc422").string(), "--capture", path("user.txt"), "--shader",
+                                "geom=" + path("copy.geom")});
+    ASSERT_EQ(user.status, 0) << user.err;
+    const tessref::CaptureCompareResult c = compare(path("model.txt"), path("user.txt"), 3);
+    EXPECT_EQ(c.tess_coord_divergences + c.triangle_divergences + c.orientation_divergences, 0u);
+    EXPECT_EQ(c.worst_position.ulps, 0u);
+    EXPECT_EQ(c.failing_vertices, 0u);
+}
+
+// A geometry shader whose output the pipeline cannot take is refused, exit 2, naming the
+// file and the layout or the location; nothing is written.
+TEST_F(UserShaderCommand, AGeometryShaderThePipelineCannotTakeIsRefused) {
+    const std::string scene = scene_path("cosc422").string();
+    const std::string body =
+        "layout(location = 0) in EvaluationData { vec3 worldPosition; vec2 texCoord; } evaluationIn[];\n"
+        "layout(location = 0) out GeometryData { vec3 faceNormal; vec2 texCoord; } geometryOut;\n"
+        "void main() { for (int i = 0; i < gl_in.length(); i++) { geometryOut.faceNormal = vec3(0.0, 1.0, 0.0); "
+        "geometryOut.texCoord = vec2(0.0); gl_Position = gl_in[i].gl_Position; EmitVertex(); } }\n";
+    const struct {
+        const char* name;
+        std::string text;
+        const char* says;
+    } cases[] = {
+        {"points.geom", "#version 450 core\nlayout(triangles) in;\nlayout(points, max_vertices = 3) out;\n" + body,
+         "layout(points) out"},
+        {"lines.geom", "#version 450 core\nlayout(triangles) in;\nlayout(line_strip, max_vertices = 3) out;\n" + body,
+         "layout(line_strip) out"},
+        {"lines_in.geom", "#version 450 core\nlayout(lines) in;\nlayout(triangle_strip, max_vertices = 3) out;\n" + body,
+         "layout(triangles) in"},
+        {"no_normal.geom",
+         "#version 450 core\nlayout(triangles) in;\nlayout(triangle_strip, max_vertices = 3) out;\n"
+         "layout(location = 0) in EvaluationData { vec3 worldPosition; vec2 texCoord; } evaluationIn[];\n"
+         "layout(location = 1) out vec2 texCoord;\n"
+         "void main() { for (int i = 0; i < 3; i++) { texCoord = evaluationIn[i].texCoord; gl_Position = gl_in[i].gl_Position; "
+         "EmitVertex(); } }\n",
+         "no output at location 0"},
+    };
+    for (const auto& c : cases) {
+        write_file(path(c.name), c.text);
+        for (const std::vector<std::string>& command :
+             {std::vector<std::string>{"render", scene, "-o", path("out.png"), "--size", "64x40"},
+              std::vector<std::string>{"mesh", scene, "-o", path("out.ply")}}) {
+            std::vector<std::string> args = command;
+            args.insert(args.end(), {"--shader", std::string("geom=") + path(c.name)});
+            const RunResult r = run(args);
+            EXPECT_EQ(r.status, 2) << c.name << r.out << r.err;
+            EXPECT_NE(r.err.find(c.says), std::string::npos) << c.name << ": " << r.err;
+            EXPECT_NE(r.err.find(c.name), std::string::npos) << r.err;
+        }
+        EXPECT_FALSE(fs::exists(path("out.png")));
+        EXPECT_FALSE(fs::exists(path("out.ply")));
+    }
+}
+
 // `trace --stage geom`: the geometry shader of one primitive of a patch (its K-th triangle,
 // as `gl --capture` lists them), fed by the evaluation shader at the triangle's three tess
 // coords. In the llvmpipe mode its face normal is the one llvmpipe captured for that

@@ -114,6 +114,12 @@ struct PipelineResult {
     // (geomip_terrain.vert: sampleHeight, morphTarget, tween) as floats; with the gpu
     // precision each position's z is geomip::morph_height of them. Empty for other models.
     std::vector<glm::vec3> geomorph;
+    // A user's geometry shader ran ([shaders] geom): the mesh's triangles are the ones it
+    // emitted, patch by patch in the order emitted, three vertices of their own each (GL's
+    // order of their corners, reversed 1 <-> 2 where `reversed`, as the pipeline reverses
+    // the generator's triangles to face up), not the generator's pattern.
+    bool geometry_shader = false;
+    bool reversed = false;
 
     // camera_relative (PipelineOptions): the point the evaluation worked relative to, and its
     // float output positions (mesh.positions[v] == origin + relative_positions[v] in double).
@@ -160,6 +166,10 @@ public:
     bool has_normals() const;   // emit() writes mesh.normals (per-vertex geometry normals)
     bool face_normals() const;  // [geometry] normals = "face": emit() writes face normals
     bool smooth_normals() const;  // [geometry] normals = "smooth": need the whole surface
+    // A user's geometry shader ran (PipelineResult::geometry_shader): its output is computed
+    // for every patch when the stream opens and held, and emit() copies it.
+    bool geometry_shader() const;
+    bool reversed() const;  // the triangles are reversed (1 <-> 2) to face up / out
     // Camera-relative evaluation (PipelineOptions::camera_relative): positions from emit()
     // are the evaluation's, relative to origin(); (0, 0, 0) otherwise.
     glm::dvec3 origin() const;

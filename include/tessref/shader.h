@@ -120,6 +120,13 @@ public:
         int unit = 0;
     };
     std::vector<Sampler> samplers() const;
+    // The user-defined outputs (not built-ins), each location with its component count (a
+    // block's members one by one), in declaration order.
+    struct Output {
+        int location = 0;
+        int components = 0;
+    };
+    std::vector<Output> outputs() const;
     // A control shader's layout(vertices = N) out; 0 for other stages.
     int output_vertices() const;
     // An evaluation shader's layout; throws tessref::Error for other stages.

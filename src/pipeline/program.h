@@ -59,6 +59,19 @@ public:
                                   std::span<const vec3_t<T>> /*position*/, std::span<const vec2_t<T>> /*uv*/,
                                   std::span<vec3_t<T>> /*normal*/) const {}
 
+    // A user's geometry shader (user_program.cpp) makes the patch's output: any number of
+    // triangles with any positions, so the surface's size is known only once it has run.
+    // geometry() runs the evaluation at every domain point of the pattern and the geometry
+    // shader over the pattern's triangles (as GL hands them on: the generator's order and
+    // orientation), and writes what it emitted as whole triangles, three vertices each, in
+    // the order emitted: positions, patch ids, tess coords, uvs and normals where has_uvs /
+    // has_normals, each triangle reversed (1 <-> 2) where flip is set, as emit() reverses the
+    // pattern's; `face_normals` one per triangle when the scene asks for face normals.
+    // Called after control() of the same patch, concurrently for different patches.
+    virtual bool geometry_shader() const { return false; }
+    virtual void geometry(std::size_t /*patch*/, const Pattern& /*pattern*/, SurfaceMesh& /*out*/,
+                          std::vector<glm::dvec3>& /*face_normals*/) const {}
+
     bool has_uvs = false;     // the evaluation writes texture coordinates
     bool has_normals = false; // the evaluation or the geometry stage writes vertex normals
     bool flip = false;        // reverse each triangle so that it faces up / out
