@@ -755,6 +755,23 @@ TEST_F(UserShaderCommand, AGeometryShaderThePipelineCannotTakeIsRefused) {
         EXPECT_FALSE(fs::exists(path("out.png")));
         EXPECT_FALSE(fs::exists(path("out.ply")));
     }
+    // Every triangle twice (48492) under a budget of 40000 that the generator's 24246 (estimated 31518) meet:
+    // the budget counts what the geometry shader emits.
+    std::string toml = read_file(scene_path("cosc422"));
+    for (std::size_t at = 0; (at = toml.find("\"../", at)) != std::string::npos;)
+        toml.replace(at, 4, "\"" + (kSource / "data").string() + "/");
+    write_file(path("budget.toml"), toml + "\n[limits]\nmax_triangles = 40000\n");
+    write_file(path("twice.geom"), "#version 450 core\nlayout(triangles) in;\nlayout(triangle_strip, max_vertices = 6) out;\n" +
+                                       body.substr(0, body.find("void main()")) +
+                                       "void main() { for (int k = 0; k < 2; k++) { for (int i = 0; i < 3; i++) { "
+                                       "geometryOut.faceNormal = vec3(0.0, 1.0, 0.0); geometryOut.texCoord = vec2(0.0); "
+                                       "gl_Position = gl_in[i].gl_Position; EmitVertex(); } EndPrimitive(); } }\n");
+    ASSERT_EQ(run({"mesh", path("budget.toml"), "-o", path("out.ply")}).status, 0);
+    fs::remove(path("out.ply"));
+    const RunResult twice = run({"mesh", path("budget.toml"), "-o", path("out.ply"), "--shader", "geom=" + path("twice.geom")});
+    EXPECT_EQ(twice.status, 2) << twice.err;
+    EXPECT_NE(twice.err.find("limits.max_triangles = 40000"), std::string::npos) << twice.err;
+    EXPECT_FALSE(fs::exists(path("out.ply")));
 }
 
 // `trace --stage geom`: the geometry shader of one primitive of a patch (its K-th triangle,

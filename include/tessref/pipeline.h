@@ -47,7 +47,8 @@ struct PipelineTimings {
     double control = 0.0;     // pass 1, vertex + control shaders, and pass 2, the budget
     double generator = 0.0;   // pass 3, patterns and output ranges
     double evaluation = 0.0;  // pass 4, evaluation (and per-vertex / per-face geometry)
-    double geometry = 0.0;    // smooth normals over the whole surface
+    double geometry = 0.0;    // smooth normals over the whole surface, or a user's geometry shader
+                              // (with the evaluation it reads: its output is made before pass 4)
 };
 
 struct PipelineOptions {

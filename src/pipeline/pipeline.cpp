@@ -205,31 +205,37 @@ struct StreamImpl final : PatchStream::Impl {
             vertex_base[p + 1] = vertex_base[p] + patterns[p]->points().size();
             triangle_base[p + 1] = triangle_base[p] + patterns[p]->primitive_count();
         }
+        time_pass(&PipelineTimings::generator);
         if (program->geometry_shader()) {
             // The geometry shader decides how many triangles each patch makes: its output
             // is computed now, patch by patch in parallel, and emit() copies it.
             geometry_shader = true;
             emitted.resize(n);
             emitted_face_normals.resize(n);
+            // The budget again, as the output grows: a geometry shader may emit more
+            // triangles than it is given (up to max_vertices - 2 for each).
+            std::atomic<std::uint64_t> total{0};
+            const auto over_budget = [&] {
+                return Error("the scene's geometry shader emits more triangles than limits.max_triangles = " +
+                                 std::to_string(scene.max_triangles),
+                             scene.max_triangles_where);
+            };
             tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t p = r.begin(); p != r.end(); ++p)
+                for (std::size_t p = r.begin(); p != r.end(); ++p) {
                     program->geometry(p, *patterns[p], emitted[p], emitted_face_normals[p]);
+                    if ((total += emitted[p].triangles.size()) > scene.max_triangles) throw over_budget();
+                }
             });
             for (std::size_t p = 0; p < n; ++p) {
                 vertex_base[p + 1] = vertex_base[p] + emitted[p].positions.size();
                 triangle_base[p + 1] = triangle_base[p] + emitted[p].triangles.size();
             }
-            // The budget again: a geometry shader may emit more triangles than it is given.
-            if (triangle_base[n] > scene.max_triangles)
-                throw Error("the scene's geometry shader emits " + std::to_string(triangle_base[n]) +
-                                " triangles, more than limits.max_triangles = " + std::to_string(scene.max_triangles),
-                            scene.max_triangles_where);
+            time_pass(&PipelineTimings::geometry);
         }
         if (vertex_base[n] > 0xffffffffu)
             throw Error("the scene emits " + std::to_string(vertex_base[n]) +
                             " vertices, more than 32-bit indices address",
                         scene.max_triangles_where);
-        time_pass(&PipelineTimings::generator);
     }
 
     void write_coords(std::size_t p, std::span<const TessCoord> coords, SurfaceMesh& mesh, std::size_t first) const {
@@ -239,8 +245,8 @@ struct StreamImpl final : PatchStream::Impl {
         }
     }
 
-    // A geometry shader's output of patch p (held since the stream opened): vertices
-    // [from, from + count) of it at mesh index first on.
+    // A geometry shader's output of patch p (held since the stream opened): its vertices
+    // `vertices`, in that order, at mesh index first on.
     void copy_emitted(std::size_t p, std::span<const std::uint32_t> vertices, SurfaceMesh& mesh, std::size_t first) const {
         const SurfaceMesh& e = emitted[p];
         for (std::size_t k = 0; k < vertices.size(); ++k) {
