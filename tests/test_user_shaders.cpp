@@ -498,6 +498,33 @@ TEST_F(UserShaderCommand, GoldenRunsTheScenesShadersOnBothSides) {
     EXPECT_EQ(verify.status, 0) << verify.out << verify.err;
 }
 
+// golden and sweep run a scene's user geometry shader too: drop_steep.geom in [shaders]
+// makes golden update record the 21303 triangles it emits (of the generator's 24246), and
+// verify, whose llvmpipe side draws with the same file, pass; a sweep's row counts them.
+TEST_F(UserShaderCommand, GoldenAndSweepRunAUsersGeometryShader) {
+    std::string toml = read_file(scene_path("cosc422"));
+    for (std::size_t at = 0; (at = toml.find("\"../", at)) != std::string::npos;)
+        toml.replace(at, 4, "\"" + (kSource / "data").string() + "/");
+    fs::create_directories(fs::path(path("scenes")));
+    write_file(fs::path(path("scenes")) / "user.toml",
+               toml + "\n[shaders]\ngeometry = \"" + (kUserShaders / "drop_steep.geom").string() + "\"\n");
+    const std::vector<std::string> where = {"--scenes", path("scenes"), "--golden", path("golden")};
+    std::vector<std::string> update = {"golden", "update", "user"};
+    update.insert(update.end(), where.begin(), where.end());
+    const RunResult updated = run(update);
+    ASSERT_EQ(updated.status, 0) << updated.err;
+    EXPECT_NE(updated.out.find("capture.txt 81 patches 21303 triangles"), std::string::npos) << updated.out;
+    std::vector<std::string> verify = {"golden", "verify", "user"};
+    verify.insert(verify.end(), where.begin(), where.end());
+    const RunResult verified = run(verify);
+    EXPECT_EQ(verified.status, 0) << verified.out << verified.err;
+
+    const RunResult sweep = run({"sweep", (fs::path(path("scenes")) / "user.toml").string(), "--levels", "2", "--size",
+                                 "64x40", "-o", path("sweep")});
+    ASSERT_EQ(sweep.status, 0) << sweep.err;
+    EXPECT_NE(read_file(fs::path(path("sweep")) / "sweep.csv").find(",81,21303,"), std::string::npos);
+}
+
 // The shipped pn-culling scene: the PN tutorial's control shader with frustum and back-face
 // patch culling (data/shaders/pn_culling.tesc, no C++ model) runs through the interpreter,
 // and the CPU discards exactly the patches llvmpipe discards: the two captures hold the same
