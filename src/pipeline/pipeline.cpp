@@ -27,6 +27,7 @@
 #include "common/parallel.h"
 #include "pipeline/program.h"
 #include "tessref/geometry.h"
+#include "tessref/limits.h"
 
 namespace tessref {
 namespace {
@@ -120,6 +121,10 @@ std::vector<std::shared_ptr<const Pattern>> patterns_of(const Scene& scene, cons
 }
 
 using Clock = std::chrono::steady_clock;
+
+// What a geometry shader's emitted vertex takes in SurfaceMesh: position, normal and uv in
+// double, tess coord, patch id, and its share of a triangle.
+constexpr std::uint64_t kEmittedVertexBytes = 3 * 8 + 3 * 8 + 2 * 8 + 3 * 4 + 4 + 4;
 
 // Pass timings (PipelineTimings), only when asked for; they change nothing else.
 struct PassTimer {
@@ -223,7 +228,13 @@ struct StreamImpl final : PatchStream::Impl {
             tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1), [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t p = r.begin(); p != r.end(); ++p) {
                     program->geometry(p, *patterns[p], emitted[p], emitted_face_normals[p]);
-                    if ((total += emitted[p].triangles.size()) > scene.max_triangles) throw over_budget();
+                    const std::uint64_t so_far = total += emitted[p].triangles.size();
+                    if (so_far > scene.max_triangles) throw over_budget();
+                    // Held until the stream closes: three vertices of their own a triangle.
+                    require_memory(saturating_bytes(so_far, 3 * kEmittedVertexBytes),
+                                   "the output of the scene's geometry shader (" + std::to_string(so_far) +
+                                       " triangles so far)",
+                                   scene.max_triangles_where);
                 }
             });
             for (std::size_t p = 0; p < n; ++p) {

@@ -93,10 +93,10 @@ std::unique_ptr<PatchProgram<T>> make_program(const Scene& scene, const glm::dve
 template <typename T>
 std::unique_ptr<PatchProgram<T>> make_model_program(const Scene& scene, const glm::dvec3& origin);
 
-// The user's vertex, control and evaluation shaders of the scene's [shaders] that the CPU
-// runs through the interpreter: those whose text is not exactly the shipped twin's (a twin
-// given as a user file keeps its C++ model). Empty for a geomipmapped terrain (no
-// tessellation stages) and for geometry and fragment shaders, which the CPU does not run.
+// The user's vertex, control, evaluation and geometry shaders of the scene's [shaders] that
+// the CPU runs through the interpreter: those whose text is not exactly the shipped twin's (a
+// twin given as a user file keeps its C++ model). Empty for a geomipmapped terrain (no
+// tessellation stages); never a fragment shader, which the pipeline does not run.
 // Throws tessref::Error when a file cannot be read.
 std::vector<StageShader> interpreted_stages(const Scene& scene);
 

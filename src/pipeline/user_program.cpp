@@ -1,5 +1,5 @@
-// user_program.cpp — a scene with a user's vertex, control or evaluation shader ([shaders],
-// `--shader STAGE=FILE`): the CPU runs those stages through the SPIR-V interpreter
+// user_program.cpp — a scene with a user's vertex, control, evaluation or geometry shader
+// ([shaders], `--shader STAGE=FILE`): the CPU runs those stages through the SPIR-V interpreter
 // (tessref/shader.h), with the twins of data/shaders/ for the stages before the
 // rasterizer that the user did not give, and the same uniforms, texture units and vertex
 // buffer as the GL backend (stage_uniforms.h, src/gl/scene_render.cpp).
@@ -10,11 +10,13 @@
 //    neither a vertex nor a control shader, the levels are the model's (the twins agree
 //    with them but for the thesis normal factor's acos in exact math, where the model calls
 //    the C library's acosf), so that only what the user changed changes.
-//  - the geometry stage's per-vertex normals (thesis normal_map, height-field normals the
-//    evaluation shader does not compute) and everything after the evaluation stage: the
-//    models, on the interpreter's positions and texture coordinates. A user's geometry or
-//    fragment shader is not run by the pipeline (the interpreter runs both stages; `trace
-//    --stage geom` runs the geometry stage here, over one triangle of a patch).
+//  - a user's geometry shader: the interpreter, over every triangle of a patch at once
+//    (geometry() below); what it emits is the surface (pipeline.cpp holds it per patch).
+//    Without one, the geometry stage's per-vertex normals (thesis normal_map, height-field
+//    normals the evaluation shader does not compute) are the models', on the interpreter's
+//    positions and texture coordinates. Everything after the geometry stage is the models';
+//    a user's fragment shader is not run by the pipeline (`trace --stage geom` runs the
+//    geometry stage here too, over one triangle of a patch).
 //  - the primitive generator tessellates as the scene's [generator] says, whatever the
 //    user's evaluation shader's layout(...) in; line (GL draws with the user's: a cw where
 //    [generator] has ccw shows as an orientation divergence of the captures).
