@@ -9,6 +9,7 @@
 // values after EmitVertex() (GL leaves them undefined; a shader that writes every output
 // before each EmitVertex(), as GL asks, sees no difference).
 #include <cstring>
+#include <optional>
 #include <set>
 
 #include "shader/driver.h"
@@ -200,9 +201,19 @@ void Executable::geometry(const ShaderVertices& in, std::span<const std::uint32_
             }
         };
         const std::size_t chunk = state_->options.observer ? 1 : kBatchLanes;
+        // As the evaluation does: the next batches of as many lanes reuse the first one's
+        // registers (Batch::restart), with the memory written afresh.
+        std::optional<Work> reused;
         for (std::size_t first = 0; first < count; first += chunk) {
             const std::uint32_t lanes = static_cast<std::uint32_t>(std::min(chunk, count - first));
-            Work fresh{Batch(m, lanes), broadcast_lanes(one, lanes), {}};
+            if (reused && reused->batch.lanes() == lanes) {
+                reused->batch.restart();
+                reused->shared = broadcast_lanes(one, lanes);
+                reused->primitives.clear();
+            } else {
+                reused.emplace(Work{Batch(m, lanes), broadcast_lanes(one, lanes), {}});
+            }
+            Work& fresh = *reused;
             for (std::uint32_t l = 0; l < lanes; ++l) {
                 const std::size_t k = first + l;
                 fresh.primitives.push_back(k);
