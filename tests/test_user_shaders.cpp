@@ -694,6 +694,40 @@ TEST_F(UserShaderCommand, UserGeometryShaderCaptureIsLlvmpipes) {
     EXPECT_LT(triangles[1], triangles[0]);
 }
 
+// The general case, a geometry shader that emits other positions than it reads:
+// shrink.geom draws every triangle shrunk toward its centroid, leaving gaps between them.
+// The CPU's render (llvmpipe math) is llvmpipe's but for a few pixels on the triangles' edges
+// (GL combines the corners in clip space, the CPU in world space and then projects; 3 of
+// 64 000 pixels when written, as many as the model's render differs by, 1), and covers
+// far fewer pixels than the whole surface does.
+TEST_F(UserShaderCommand, AGeometryShaderThatMovesVerticesRendersAsLlvmpipe) {
+    const std::string scene = scene_path("cosc422").string();
+    const std::string geom = "geom=" + (kUserShaders / "shrink.geom").string();
+    const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--size", "320x200", "--shader", geom});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    const RunResult cpu = run({"render", scene, "-o", path("cpu.png"), "--size", "320x200", "--math", "llvmpipe",
+                               "--shader", geom});
+    ASSERT_EQ(cpu.status, 0) << cpu.err;
+    const RunResult whole = run({"render", scene, "-o", path("whole.png"), "--size", "320x200", "--math", "llvmpipe"});
+    ASSERT_EQ(whole.status, 0) << whole.err;
+    const tessref::image::Image a = tessref::image::read_image(path("cpu.png"));
+    const tessref::image::Image b = tessref::image::read_image(path("gl.png"));
+    const tessref::image::Image c = tessref::image::read_image(path("whole.png"));
+    ASSERT_EQ(a.channels, 4);
+    ASSERT_EQ(a.u8.size(), b.u8.size());
+    std::size_t differing = 0, covered = 0, covered_whole = 0;
+    for (std::size_t i = 0; i < a.u8.size(); i += 4) {
+        differing += !std::equal(&a.u8[i], &a.u8[i] + 4, &b.u8[i]);
+        covered += a.u8[i + 3] != 0;
+        covered_whole += c.u8[i + 3] != 0;
+    }
+    EXPECT_LE(differing, 20u);
+    EXPECT_LT(covered, covered_whole / 2);
+    EXPECT_GT(covered, 1000u);
+    std::printf("shrink.geom: %zu of %zu pixels differ from llvmpipe's; %zu covered (the whole surface %zu)\n", differing,
+                a.u8.size() / 4, covered, covered_whole);
+}
+
 // A user's copy of a geometry twin under another name (any other text runs through the
 // interpreter) renders as the model: cosc422's face normals give the very bytes; the thesis's
 // normal-map normals differ from the model's where normalize rounds otherwise (the model's
