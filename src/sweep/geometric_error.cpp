@@ -55,18 +55,23 @@ struct Polygon {
 // inside its texel), which the loop would copy corner by corner. Heights are interpolated
 // linearly along the cut edge: T is linear on the triangle, so they are exact.
 const Polygon& clip(const Polygon& in, double a, double b, double k, Polygon& out) {
+    std::array<double, 32> f;  // each corner's a u + b v + k, once (the first in.n)
     bool inside = true;
-    for (int i = 0; i < in.n && inside; ++i)
-        inside = a * in.c[static_cast<std::size_t>(i)].u + b * in.c[static_cast<std::size_t>(i)].v + k >= 0.0;
-    if (inside) return in;
-    out.n = 0;
     for (int i = 0; i < in.n; ++i) {
         const Corner& p = in.c[static_cast<std::size_t>(i)];
-        const Corner& q = in.c[static_cast<std::size_t>((i + 1) % in.n)];
-        const double fp = a * p.u + b * p.v + k, fq = a * q.u + b * q.v + k;
-        const auto add = [&out](const Corner& c) {
-            if (out.n < static_cast<int>(out.c.size())) out.c[static_cast<std::size_t>(out.n++)] = c;
-        };
+        f[static_cast<std::size_t>(i)] = a * p.u + b * p.v + k;
+        inside = inside && f[static_cast<std::size_t>(i)] >= 0.0;
+    }
+    if (inside) return in;
+    out.n = 0;
+    const auto add = [&out](const Corner& c) {
+        if (out.n < static_cast<int>(out.c.size())) out.c[static_cast<std::size_t>(out.n++)] = c;
+    };
+    for (int i = 0; i < in.n; ++i) {
+        const int j = i + 1 == in.n ? 0 : i + 1;
+        const Corner& p = in.c[static_cast<std::size_t>(i)];
+        const Corner& q = in.c[static_cast<std::size_t>(j)];
+        const double fp = f[static_cast<std::size_t>(i)], fq = f[static_cast<std::size_t>(j)];
         if (fp >= 0.0) add(p);
         if ((fp >= 0.0) != (fq >= 0.0)) {
             const double t = fp / (fp - fq);
