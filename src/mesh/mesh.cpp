@@ -956,11 +956,10 @@ struct StreamedPlyWriter::Impl {
         if (!out) throw Error("cannot write the mesh: " + stream_failure());
     }
 
-    // The patches' boxes, and which vertices lie on their surfaces; false when the piece's
+    // The piece's patches (runs of one patch id), as vertex ranges; false when the piece's
     // patch ids go back.
-    bool measure_patches(const SurfaceMesh& piece) {
+    bool find_patches(const SurfaceMesh& piece) {
         const std::size_t n = piece.positions.size();
-        on_box.resize(n);
         patches.clear();
         for (std::size_t g0 = 0; g0 < n;) {
             std::size_t g1 = n;
@@ -971,21 +970,65 @@ struct StreamedPlyWriter::Impl {
                 last_patch = patch;
                 for (g1 = g0 + 1; g1 < n && piece.patch_ids[g1] == patch; ++g1) {}
             }
-            Box whole, interior;
-            for (std::size_t i = g0; i < g1; ++i) whole.add(piece.positions[i]);
-            for (std::size_t i = g0; i < g1; ++i) {
-                const glm::dvec3& p = piece.positions[i];
-                const bool on = p.x == whole.lo.x || p.x == whole.hi.x || p.y == whole.lo.y || p.y == whole.hi.y ||
-                                p.z == whole.lo.z || p.z == whole.hi.z;
-                on_box[i] = on;
-                if (!on) interior.add(p);
-            }
-            wholes.push_back(whole);
-            interiors.push_back(interior);
             patches.emplace_back(g0, g1);
             g0 = g1;
         }
         return true;
+    }
+
+    // What each vertex needs known before the ordered decisions, patch by patch in parallel:
+    // the patch's boxes, whether the vertex lies on its whole box's surface, its hash, its
+    // patch's first copy of it (`first_copy`), the largest coordinate; false when a
+    // position is not a float value.
+    bool measure_patches(const SurfaceMesh& piece) {
+        const std::size_t n = piece.positions.size();
+        on_box.resize(n);
+        hashes.resize(n);
+        first_copy.resize(n);
+        const std::size_t first_patch = wholes.size();
+        wholes.resize(first_patch + patches.size());
+        interiors.resize(first_patch + patches.size());
+        const auto piece_position = [&piece](std::uint32_t k) -> const glm::dvec3& { return piece.positions[k]; };
+        struct Measured {
+            bool floats = true;
+            double largest = 0.0;
+        };
+        const Measured measured = tessref::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, patches.size()), Measured{},
+            [&](const tbb::blocked_range<std::size_t>& range, Measured m) {
+                PositionTable table(0);
+                for (std::size_t g = range.begin(); g != range.end(); ++g) {
+                    const auto [g0, g1] = patches[g];
+                    Box whole, interior;
+                    for (std::size_t i = g0; i < g1; ++i) {
+                        const glm::dvec3& p = piece.positions[i];
+                        m.floats = m.floats && is_float_point(p);
+                        m.largest = std::max({m.largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+                        whole.add(p);
+                    }
+                    if (!m.floats) return m;
+                    table.clear(g1 - g0);
+                    for (std::size_t i = g0; i < g1; ++i) {
+                        const glm::dvec3& p = piece.positions[i];
+                        const bool on = p.x == whole.lo.x || p.x == whole.hi.x || p.y == whole.lo.y ||
+                                        p.y == whole.hi.y || p.z == whole.lo.z || p.z == whole.hi.z;
+                        on_box[i] = on;
+                        if (!on) interior.add(p);
+                        hashes[i] = PositionTable::hash(p);
+                        first_copy[i] = table.find_or_insert(p, hashes[i], static_cast<std::uint32_t>(i), piece_position);
+                    }
+                    wholes[first_patch + g] = whole;
+                    interiors[first_patch + g] = interior;
+                }
+                return m;
+            },
+            [](const Measured& a, const Measured& b) {
+                return Measured{a.floats && b.floats, std::max(a.largest, b.largest)};
+            });
+        // Every vertex's position is a welded vertex's (its first copy's): the largest
+        // coordinate of them all is the welded vertices' largest.
+        largest = std::max(largest, measured.largest);
+        return measured.floats;
     }
 
     bool add(const SurfaceMesh& piece) {
@@ -1010,10 +1053,8 @@ struct StreamedPlyWriter::Impl {
             check(present.patch_ids, records.written.patch_ids, "patch_ids");
             check(present.tess_coords, records.written.tess_coords, "tess_coords");
         }
-        for (const glm::dvec3& p : piece.positions)
-            if (!is_float_point(p)) return fail();
         if (emitted + n > std::numeric_limits<std::uint32_t>::max()) return fail();
-        if (!measure_patches(piece)) return fail();
+        if (!find_patches(piece) || !measure_patches(piece)) return fail();
         if (!started) {
             records = PlyRecords{present, options.binary, options.ascii_digits};
             const std::string header = records.header(vertex_bound, triangle_bound);
@@ -1026,24 +1067,9 @@ struct StreamedPlyWriter::Impl {
         // axis) equals no vertex of another patch (finish() proves it, or the stream is
         // given up), and a vertex on its patch box's surface equals no interior point of
         // its own patch (the same point is on the same box's surface or not). So a vertex's
-        // copies are copies in its own patch, or, on the box's surface, shared vertices of
-        // the patches before it. The first kind is found for every patch in parallel: the
-        // first copy in its patch of each vertex.
-        hashes.resize(n);
-        first_copy.resize(n);
-        const auto piece_position = [&piece](std::uint32_t k) -> const glm::dvec3& { return piece.positions[k]; };
-        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, patches.size()), [&](const auto& range) {
-            PositionTable table(0);
-            for (std::size_t g = range.begin(); g != range.end(); ++g) {
-                const auto [g0, g1] = patches[g];
-                table.clear(g1 - g0);
-                for (std::size_t i = g0; i < g1; ++i) {
-                    hashes[i] = PositionTable::hash(piece.positions[i]);
-                    first_copy[i] = table.find_or_insert(piece.positions[i], hashes[i], static_cast<std::uint32_t>(i),
-                                                         piece_position);
-                }
-            }
-        });
+        // copies are copies in its own patch (measure_patches() found the first of each),
+        // or, on the box's surface, shared vertices of the patches before it.
+        //
         // The decisions, in emission order, serial: a copy of an earlier vertex of its patch,
         // an earlier patch's shared vertex, or a new welded vertex (whose record this copy
         // writes), as one table of the whole surface would decide.
@@ -1073,16 +1099,19 @@ struct StreamedPlyWriter::Impl {
                 shared_ids.push_back(map[i]);
             }
         }
-        for (const auto& triangle : piece.triangles) {
-            const std::uint32_t a = map[triangle[0]], b = map[triangle[1]], c = map[triangle[2]];
-            if (a == b || b == c || c == a) ++degenerate;
-        }
+        degenerate += tessref::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, piece.triangles.size(), 4096), std::size_t{0},
+            [&](const tbb::blocked_range<std::size_t>& range, std::size_t count) {
+                for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                    const auto& triangle = piece.triangles[t];
+                    const std::uint32_t a = map[triangle[0]], b = map[triangle[1]], c = map[triangle[2]];
+                    count += a == b || b == c || c == a;
+                }
+                return count;
+            },
+            [](std::size_t a, std::size_t b) { return a + b; });
         emitted += n;
         emitted_triangles += piece.triangles.size();
-        for (const std::uint32_t i : fresh) {
-            const glm::dvec3& p = piece.positions[i];
-            largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-        }
 
         // The new vertices' records, blocks of them formatted in parallel (a piece has a few
         // thousand: ASCII's number printing is most of its time), written in order.
