@@ -165,13 +165,19 @@ void measure_triangle(const TruthSurface& truth, const TruthCells& cells, const 
     Polygon tri, row_low, row_high, cell_low, cell_high, piece;  // the clips' results, reused
     tri.n = 3;
     for (std::size_t k = 0; k < 3; ++k) tri.c[k] = t[k];
+    // A triangle inside one row (column) of cells: the row's (cell's) clips would keep every
+    // corner (v - v0 rounds to >= 0 exactly when v >= v0), so they are skipped. (Only for the
+    // triangle itself: a clipped corner may lie a rounding step outside the triangle's box.)
+    const bool one_row = j0 == j1 && vmin >= truth.vs[j0] && vmax <= truth.vs[j0 + 1] && std::isfinite(umin) &&
+                         std::isfinite(umax);  // (0 * u is NaN for an infinite u)
+    const bool one_cell = one_row && i0 == i1 && umin >= truth.us[i0] && umax <= truth.us[i0 + 1];
     for (std::size_t j = j0; j <= j1; ++j) {
         const double v0 = truth.vs[j], v1 = truth.vs[j + 1], dv = v1 - v0;
-        const Polygon& row = clip(clip(tri, 0.0, 1.0, -v0, row_low), 0.0, -1.0, v1, row_high);
+        const Polygon& row = one_row ? tri : clip(clip(tri, 0.0, 1.0, -v0, row_low), 0.0, -1.0, v1, row_high);
         if (row.n < 3) continue;
         for (std::size_t i = i0; i <= i1; ++i) {
             const double u0 = truth.us[i], u1 = truth.us[i + 1], du = u1 - u0;
-            const Polygon& cell = clip(clip(row, 1.0, 0.0, -u0, cell_low), -1.0, 0.0, u1, cell_high);
+            const Polygon& cell = one_cell ? row : clip(clip(row, 1.0, 0.0, -u0, cell_low), -1.0, 0.0, u1, cell_high);
             if (cell.n < 3) continue;
             const double ha = truth.height(i, j), hb = truth.height(i + 1, j);
             const double hc = truth.height(i + 1, j + 1), hd = truth.height(i, j + 1);
