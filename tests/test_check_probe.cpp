@@ -212,3 +212,65 @@ TEST(CheckProbe, TopologyDismissesWhatRoundingDoes) {
     for (DefectClass k : {DefectClass::probe_miss, DefectClass::probe_odd_parity, DefectClass::probe_escape})
         EXPECT_EQ(r.count(k), 0u) << describe(r);
 }
+
+// A terrain's scene holds only the triangles its vertical rays can reach (probe.cpp,
+// run_ray_probe): that must include every triangle the recast of a ray can hit, 16 scene
+// resolutions beside it (16 * 2^-20 * 8, about 1.2e-4, for this terrain 16 units wide: the
+// recast moves cos(2.4) * 1.2e-4 = -9.0e-5 along the first ground axis and 8.2e-5 along
+// the second, the golden angle). The case: a slit 1.4e-4 wide centred on the line of one column
+// (or row) of rays, between two strips 0.3 wide that no ray's line crosses. The rays of
+// that column fall into the slit and miss; each is cast again beside itself, lands 1e-5
+// or more inside a strip beside it, and hits: the probe does not see a slit that narrow, so
+// it is no probe defect (the topology still reports its boundary). A strip left out of the
+// scene (it holds no ray's line) would turn those recasts into misses. Every up axis,
+// slits across either ground axis.
+TEST(CheckProbe, RecastRaysHitTrianglesBesideTheirColumn) {
+    const int resolution = 16;
+    const glm::dvec2 offset = default_offset;
+    const double half_width = 7e-5, strip = 0.3;
+    for (int up = 0; up < 3; ++up)
+        for (int across = 0; across < 2; ++across) {
+            SCOPED_TRACE("up axis " + std::to_string(up) + ", slit across ground axis " + std::to_string(across));
+            // Along the slit's ground axis the rays run at (k + offset) * side / resolution.
+            const double at = on_ray(resolution / 2, across == 0 ? offset.x : offset.y, side, resolution);
+            const std::vector<double> cut = {0.0, at - strip, at - half_width, at + half_width, at + strip, side};
+            const std::vector<double> along = {0.0, 4.0, 12.0, side};
+            tessref::IndexedMesh mesh;
+            auto vertex = [&](std::size_t a, std::size_t b) {
+                return static_cast<std::uint32_t>(b * cut.size() + a);
+            };
+            for (double t : along)
+                for (double c : cut) {
+                    glm::dvec2 ground = across == 0 ? glm::dvec2(c, t) : glm::dvec2(t, c);
+                    glm::dvec3 p(0.0);
+                    p[(up + 1) % 3] = ground.x;
+                    p[(up + 2) % 3] = ground.y;
+                    p[up] = 0.01 * (ground.x + ground.y);
+                    mesh.positions.push_back(p);
+                }
+            for (std::size_t b = 0; b + 1 < along.size(); ++b)
+                for (std::size_t a = 0; a + 1 < cut.size(); ++a) {
+                    if (a == 2 && b == 1) continue;  // the slit
+                    const std::uint32_t v00 = vertex(a, b), v10 = vertex(a + 1, b), v11 = vertex(a + 1, b + 1),
+                                        v01 = vertex(a, b + 1);
+                    if (across == 0) {
+                        mesh.add_triangle(v00, v10, v11);
+                        mesh.add_triangle(v00, v11, v01);
+                    } else {  // the ground axes swapped: the same turn about the up axis
+                        mesh.add_triangle(v00, v11, v10);
+                        mesh.add_triangle(v00, v01, v11);
+                    }
+                }
+            CheckOptions options;
+            options.expect = Expect::open;
+            options.probe_resolution = resolution;
+            const CheckReport r = tessref::check_mesh(mesh, options);
+            ASSERT_TRUE(r.terrain_like) << describe(r);
+            ASSERT_EQ(r.up_axis, up);
+            EXPECT_EQ(r.probe.mode, "terrain");
+            EXPECT_EQ(r.count(DefectClass::boundary_loop), 1u) << describe(r);
+            EXPECT_EQ(r.probe.recast_rays, 8u) << describe(r);  // the rows from 4 to 12
+            EXPECT_EQ(r.probe.failed_rays, 0u) << describe(r);
+            EXPECT_EQ(r.count(DefectClass::probe_miss), 0u) << describe(r);
+        }
+}

@@ -62,6 +62,10 @@ public:
     // side of an edge a ray passes: 16 units in the last place of the scene's largest
     // coordinate (after the shift to its centre).
     double resolution() const;
+    // The resolution() of a scene built on `positions`, whichever triangles it holds: a
+    // caller that builds its scene from the triangles its rays can reach learns the
+    // rounding it must allow for before the build.
+    static double resolution_of(std::span<const glm::dvec3> positions);
 
 private:
     struct Impl;

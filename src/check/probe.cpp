@@ -16,6 +16,7 @@
 // of times, whatever it is made of: failures there are rounding, dismissed, not reported.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -124,41 +125,76 @@ OpenBoundary open_boundary(const CheckState& state) {
 
 constexpr double kAssociationBudget = 2e7;  // point-to-vertex distance evaluations
 
-void terrain_probe(CheckState& state, const RayScene& scene) {
-    const IndexedMesh& mesh = state.mesh;
-    CheckReport& report = state.report;
+// The terrain probe's vertical rays: one per cell of a resolution x resolution grid over the
+// bounding box of the outline (the largest closed boundary loop unless one is allowed),
+// placed `probe_offset` into its cell; only those inside the outline are cast.
+struct VerticalRays {
+    int outline = -1;
+    std::vector<glm::dvec2> polygon;  // the outline, in ground coordinates (iu, iw)
+    glm::dvec2 lo{0.0}, hi{0.0}, step{0.0}, offset{0.0};  // the outline's box; a cell
+    int resolution = 1;
+};
+
+// nullopt: the terrain has no closed outline to probe inside.
+std::optional<VerticalRays> vertical_rays(const CheckState& state) {
     const int k = state.up_axis, iu = (k + 1) % 3, iw = (k + 2) % 3;
-    int outline = state.allowed_loop;
-    if (outline < 0) {
+    VerticalRays rays;
+    rays.outline = state.allowed_loop;
+    if (rays.outline < 0) {
         double best = -1.0;
         for (std::size_t i = 0; i < state.loops.size(); ++i)
             if (state.loops[i].closed && state.loops[i].area > best) {
                 best = state.loops[i].area;
-                outline = static_cast<int>(i);
+                rays.outline = static_cast<int>(i);
             }
     }
-    if (outline < 0) {
-        report.probe.mode = "none";
-        report.probe.skipped_because = "the terrain has no closed outline";
-        return;
+    if (rays.outline < 0) return std::nullopt;
+    for (std::uint32_t v : state.loops[rays.outline].vertices)
+        rays.polygon.emplace_back(state.mesh.positions[v][iu], state.mesh.positions[v][iw]);
+    rays.lo = rays.hi = rays.polygon[0];
+    for (const glm::dvec2& p : rays.polygon) {
+        rays.lo = glm::min(rays.lo, p);
+        rays.hi = glm::max(rays.hi, p);
     }
+    rays.resolution = std::max(1, state.options.probe_resolution);
+    rays.step = (rays.hi - rays.lo) / double(rays.resolution);
+    rays.offset = state.options.probe_offset;
+    return rays;
+}
+
+// Whether any ray of the grid, or a ray recast beside it, can meet a triangle whose ground
+// bounding box is [lo, hi]. A vertical ray meets a triangle only where its ground point lies
+// in the triangle's, up to Embree's single-precision rounding; the recast moves a ray 16
+// resolutions across. So a box widened by `reach` (more than both) that holds no grid
+// point holds no ray that can hit the triangle. Non-finite or degenerate input: reachable.
+bool reachable(const VerticalRays& rays, glm::dvec2 lo, glm::dvec2 hi, double reach) {
+    const auto some_index = [&](double a, double b, double origin, double step, double offset) {
+        if (!(step > 0.0)) return true;
+        const double first = std::ceil((a - reach - origin) / step - offset);
+        const double last = std::floor((b + reach - origin) / step - offset);
+        if (!(first <= last)) return !(std::isfinite(first) && std::isfinite(last));
+        return last >= 0.0 && first <= double(rays.resolution - 1);
+    };
+    return some_index(lo.x, hi.x, rays.lo.x, rays.step.x, rays.offset.x) &&
+           some_index(lo.y, hi.y, rays.lo.y, rays.step.y, rays.offset.y);
+}
+
+void terrain_probe(CheckState& state, const RayScene& scene, const VerticalRays& rays) {
+    const IndexedMesh& mesh = state.mesh;
+    CheckReport& report = state.report;
+    const int k = state.up_axis, iu = (k + 1) % 3, iw = (k + 2) % 3;
+    const int outline = rays.outline;
     report.probe.mode = "terrain";
-    std::vector<glm::dvec2> polygon;
-    for (std::uint32_t v : state.loops[outline].vertices) polygon.emplace_back(mesh.positions[v][iu], mesh.positions[v][iw]);
-    glm::dvec2 lo = polygon[0], hi = polygon[0];
-    for (const glm::dvec2& p : polygon) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    const int resolution = std::max(1, state.options.probe_resolution);
-    const glm::dvec2 step = (hi - lo) / double(resolution);
+    const std::vector<glm::dvec2>& polygon = rays.polygon;
+    const glm::dvec2 lo = rays.lo, hi = rays.hi, step = rays.step;
+    const int resolution = rays.resolution;
     const double margin = state.tolerance + 1e-5 * std::max(hi.x - lo.x, hi.y - lo.y);
     const double height = state.bbox_max[k] - state.bbox_min[k];
     glm::dvec3 direction(0.0);
     direction[k] = -state.up_sign;
     const double start = state.up_sign > 0 ? state.bbox_max[k] + 0.01 * height + margin : state.bbox_min[k] - 0.01 * height - margin;
 
-    const glm::dvec2 offset = state.options.probe_offset;
+    const glm::dvec2 offset = rays.offset;
     glm::dvec3 across_u(0.0), across_w(0.0);
     across_u[iu] = 1.0;
     across_w[iw] = 1.0;
@@ -503,26 +539,57 @@ void run_ray_probe(CheckState& state) {
         report.probe.skipped_because = "an open mesh that is not a terrain has no inside to probe";
         return;
     }
-    // Fan-triangulate the analysed faces.
+    // The BVH's build is most of the probe's time, and a terrain's rays are vertical: they
+    // can meet only the triangles over whose ground they pass, a fraction of a fine mesh. So
+    // the terrain's scene holds only those (every triangle a ray or its recast can hit, up
+    // to rounding with room to spare: reachable()), and the first triangle, so that it is
+    // never empty. Whether a ray hits is then what it is in the whole mesh's scene, and
+    // whether is all the terrain probe asks (not which triangle, nor where): the report is
+    // the same. The scene is built on every position, so its shift and resolution() are
+    // the whole mesh's.
     const IndexedMesh& mesh = state.mesh;
+    const std::optional<VerticalRays> rays = terrain ? vertical_rays(state) : std::nullopt;
+    const int iu = (state.up_axis + 1) % 3, iw = (state.up_axis + 2) % 3;
+    const double reach = rays ? 64.0 * RayScene::resolution_of(mesh.positions) : 0.0;  // the recast's 16, and rounding
+    const bool cull = rays && std::isfinite(reach) && reach > 0.0;
+    // Fan-triangulate the analysed faces.
     std::vector<std::array<std::uint32_t, 3>> triangles;
-    triangles.reserve(report.triangle_count);
+    triangles.reserve(cull ? report.triangle_count / 2 : report.triangle_count);
+    bool any = false;
     for (std::size_t f = 0; f < mesh.face_count(); ++f) {
         if (state.face_status[f] != face_kept) continue;
         const auto face = mesh.face(f);
         // An open sheet beside closed components has no inside: the closed probe leaves it out.
         if (!state.component_is_sheet.empty() && state.component_is_sheet[state.vertex_component[face[0]]]) continue;
-        for (std::size_t k = 1; k + 1 < face.size(); ++k) triangles.push_back({face[0], face[k], face[k + 1]});
+        for (std::size_t k = 1; k + 1 < face.size(); ++k) {
+            const std::array<std::uint32_t, 3> t{face[0], face[k], face[k + 1]};
+            if (cull && any) {
+                glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+                for (std::uint32_t v : t) {
+                    const glm::dvec2 p(mesh.positions[v][iu], mesh.positions[v][iw]);
+                    lo = glm::min(lo, p);
+                    hi = glm::max(hi, p);
+                }
+                if (!reachable(*rays, lo, hi, reach)) continue;
+            }
+            triangles.push_back(t);
+            any = true;
+        }
     }
     if (triangles.empty()) {
         report.probe.skipped_because = "no faces to probe";
+        return;
+    }
+    if (terrain && !rays) {
+        report.probe.mode = "none";
+        report.probe.skipped_because = "the terrain has no closed outline";
         return;
     }
     state.progress("ray probe: building the BVH", 0.8);
     const RayScene scene(mesh.positions, triangles);
     triangles.clear();
     triangles.shrink_to_fit();
-    if (terrain) terrain_probe(state, scene);
+    if (terrain) terrain_probe(state, scene, *rays);
     else closed_probe(state, scene);
 }
 

@@ -54,6 +54,32 @@ struct RayScene::Impl {
 
 namespace {
 
+// Where Embree's single-precision coordinates are measured from, and the resolution there:
+// the centre of the positions' bounding box, and 16 ulps of the largest coordinate after
+// the shift (2^-24 is half an ulp at `largest`). Depends on the positions only.
+struct Frame {
+    glm::dvec3 shift{0.0};
+    double resolution = 0.0;
+};
+
+Frame frame_of(std::span<const glm::dvec3> positions) {
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const glm::dvec3& p : positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    Frame f;
+    if (positions.empty()) return f;
+    f.shift = 0.5 * (lo + hi);
+    double largest = 0.0;
+    for (const glm::dvec3& q : positions) {
+        const glm::dvec3 p = q - f.shift;
+        largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    }
+    f.resolution = std::ldexp(largest, -20);
+    return f;
+}
+
 // Under ThreadSanitizer, Embree builds its BVH on the calling thread: its build tasks run on
 // oneTBB workers inside the uninstrumented libembree, whose hand-offs TSan cannot see, so
 // it reported the caller's stack reused after a build as a race (RenderDeterminism,
@@ -84,12 +110,9 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
     impl_->device = rtcNewDevice(kDeviceConfig);
     if (!impl_->device) embree_failure(nullptr, "cannot create a device");
 
-    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (const glm::dvec3& p : positions) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    if (!positions.empty()) impl_->shift = 0.5 * (lo + hi);
+    const Frame frame = frame_of(positions);
+    impl_->shift = frame.shift;
+    impl_->resolution = frame.resolution;
 
     impl_->scene = rtcNewScene(impl_->device);
     if (!impl_->scene) embree_failure(impl_->device, "cannot create a scene");
@@ -109,15 +132,12 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
         rtcReleaseGeometry(geometry);
         embree_failure(impl_->device, "cannot allocate geometry buffers");
     }
-    double largest = 0.0;
     for (std::size_t i = 0; i < positions.size(); ++i) {
         const glm::dvec3 p = positions[i] - impl_->shift;
         vertices[3 * i + 0] = static_cast<float>(p.x);
         vertices[3 * i + 1] = static_cast<float>(p.y);
         vertices[3 * i + 2] = static_cast<float>(p.z);
-        largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
     }
-    impl_->resolution = std::ldexp(largest, -20);  // 16 ulps: 2^-24 is half an ulp at `largest`
     for (std::size_t i = 0; i < triangles.size(); ++i)
         for (int k = 0; k < 3; ++k) indices[3 * i + k] = triangles[i][k];
     impl_->vertices = vertices;
@@ -137,6 +157,8 @@ RayScene& RayScene::operator=(RayScene&&) noexcept = default;
 std::size_t RayScene::triangle_count() const { return impl_->triangles; }
 
 double RayScene::resolution() const { return impl_->resolution; }
+
+double RayScene::resolution_of(std::span<const glm::dvec3> positions) { return frame_of(positions).resolution; }
 
 namespace {
 

@@ -55,18 +55,23 @@ struct Polygon {
 // inside its texel), which the loop would copy corner by corner. Heights are interpolated
 // linearly along the cut edge: T is linear on the triangle, so they are exact.
 const Polygon& clip(const Polygon& in, double a, double b, double k, Polygon& out) {
+    std::array<double, 32> f;  // each corner's a u + b v + k, once (the first in.n)
     bool inside = true;
-    for (int i = 0; i < in.n && inside; ++i)
-        inside = a * in.c[static_cast<std::size_t>(i)].u + b * in.c[static_cast<std::size_t>(i)].v + k >= 0.0;
-    if (inside) return in;
-    out.n = 0;
     for (int i = 0; i < in.n; ++i) {
         const Corner& p = in.c[static_cast<std::size_t>(i)];
-        const Corner& q = in.c[static_cast<std::size_t>((i + 1) % in.n)];
-        const double fp = a * p.u + b * p.v + k, fq = a * q.u + b * q.v + k;
-        const auto add = [&out](const Corner& c) {
-            if (out.n < static_cast<int>(out.c.size())) out.c[static_cast<std::size_t>(out.n++)] = c;
-        };
+        f[static_cast<std::size_t>(i)] = a * p.u + b * p.v + k;
+        inside = inside && f[static_cast<std::size_t>(i)] >= 0.0;
+    }
+    if (inside) return in;
+    out.n = 0;
+    const auto add = [&out](const Corner& c) {
+        if (out.n < static_cast<int>(out.c.size())) out.c[static_cast<std::size_t>(out.n++)] = c;
+    };
+    for (int i = 0; i < in.n; ++i) {
+        const int j = i + 1 == in.n ? 0 : i + 1;
+        const Corner& p = in.c[static_cast<std::size_t>(i)];
+        const Corner& q = in.c[static_cast<std::size_t>(j)];
+        const double fp = f[static_cast<std::size_t>(i)], fq = f[static_cast<std::size_t>(j)];
         if (fp >= 0.0) add(p);
         if ((fp >= 0.0) != (fq >= 0.0)) {
             const double t = fp / (fp - fq);
@@ -111,39 +116,93 @@ void measure_piece(const Polygon& piece, double u0, double v0, double h0, double
     }
 }
 
-// Index of the cell [lines[i], lines[i + 1]] holding x, clamped to the cells.
-std::size_t cell_of(const std::vector<double>& lines, double x) {
-    const auto it = std::upper_bound(lines.begin(), lines.end(), x);
-    const std::ptrdiff_t i = (it - lines.begin()) - 1;
-    return static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(i, 0, static_cast<std::ptrdiff_t>(lines.size()) - 2));
-}
+// The cells between a truth axis's vertex lines: index i is [lines[i], lines[i + 1]].
+// The lines are the texel centres, evenly spaced, and the extent's two borders, so a cell is
+// found by arithmetic from the inner lines' spacing, then moved to the exact answer by
+// comparing with the lines themselves (a step at most, but for rounding): the index a
+// binary search gives, without its dozen dependent loads per look-up.
+class Cells {
+public:
+    explicit Cells(const std::vector<double>& lines) : lines_(lines), last_(lines.size() - 2) {
+        if (lines.size() >= 4) {
+            first_inner_ = lines[1];
+            per_unit_ = double(lines.size() - 3) / (lines[lines.size() - 2] - lines[1]);
+        }
+    }
+    // The cell holding x, clamped to the cells (x below the first line: 0; at or beyond
+    // the last: the last cell); for x on a line, the cell that begins there.
+    std::size_t of(double x) const {
+        std::size_t i = last_;
+        const double guess = 1.0 + std::floor((x - first_inner_) * per_unit_);
+        if (guess <= 0.0) i = 0;  // (NaN: the last cell, as a search finds no line above it)
+        else if (guess < double(last_)) i = static_cast<std::size_t>(guess);
+        while (i < last_ && lines_[i + 1] <= x) ++i;
+        while (i > 0 && lines_[i] > x) --i;
+        return i;
+    }
+
+private:
+    const std::vector<double>& lines_;
+    std::size_t last_;
+    double first_inner_ = 0.0, per_unit_ = 0.0;
+};
+
+// The truth's cells along both ground axes.
+struct TruthCells {
+    explicit TruthCells(const TruthSurface& truth) : u(truth.us), v(truth.vs) {}
+    Cells u, v;
+};
 
 // One tessellated triangle against every truth triangle under it.
-void measure_triangle(const TruthSurface& truth, const std::array<Corner, 3>& t, PatchError& out) {
+void measure_triangle(const TruthSurface& truth, const TruthCells& cells, const std::array<Corner, 3>& t, PatchError& out) {
     const double umin = std::min({t[0].u, t[1].u, t[2].u}), umax = std::max({t[0].u, t[1].u, t[2].u});
     const double vmin = std::min({t[0].v, t[1].v, t[2].v}), vmax = std::max({t[0].v, t[1].v, t[2].v});
     if (!(umax > umin) || !(vmax > vmin)) return;  // no ground area (or NaN)
     const double cross = (t[1].u - t[0].u) * (t[2].v - t[0].v) - (t[2].u - t[0].u) * (t[1].v - t[0].v);
     if (cross == 0.0) return;
-    const std::size_t i0 = cell_of(truth.us, umin), i1 = cell_of(truth.us, umax);
-    const std::size_t j0 = cell_of(truth.vs, vmin), j1 = cell_of(truth.vs, vmax);
+    const std::size_t i0 = cells.u.of(umin), i1 = cells.u.of(umax);
+    const std::size_t j0 = cells.v.of(vmin), j1 = cells.v.of(vmax);
     Polygon tri, row_low, row_high, cell_low, cell_high, piece;  // the clips' results, reused
     tri.n = 3;
     for (std::size_t k = 0; k < 3; ++k) tri.c[k] = t[k];
+    // A triangle inside one row (column) of cells: the row's (cell's) clips would keep every
+    // corner (v - v0 rounds to >= 0 exactly when v >= v0), so they are skipped. (Only for the
+    // triangle itself: a clipped corner may lie a rounding step outside the triangle's box.)
+    const bool one_row = j0 == j1 && vmin >= truth.vs[j0] && vmax <= truth.vs[j0 + 1] && std::isfinite(umin) &&
+                         std::isfinite(umax);  // (0 * u is NaN for an infinite u)
+    const bool one_cell = one_row && i0 == i1 && umin >= truth.us[i0] && umax <= truth.us[i0 + 1];
     for (std::size_t j = j0; j <= j1; ++j) {
         const double v0 = truth.vs[j], v1 = truth.vs[j + 1], dv = v1 - v0;
-        const Polygon& row = clip(clip(tri, 0.0, 1.0, -v0, row_low), 0.0, -1.0, v1, row_high);
+        const Polygon& row = one_row ? tri : clip(clip(tri, 0.0, 1.0, -v0, row_low), 0.0, -1.0, v1, row_high);
         if (row.n < 3) continue;
         for (std::size_t i = i0; i <= i1; ++i) {
             const double u0 = truth.us[i], u1 = truth.us[i + 1], du = u1 - u0;
-            const Polygon& cell = clip(clip(row, 1.0, 0.0, -u0, cell_low), -1.0, 0.0, u1, cell_high);
+            const Polygon& cell = one_cell ? row : clip(clip(row, 1.0, 0.0, -u0, cell_low), -1.0, 0.0, u1, cell_high);
             if (cell.n < 3) continue;
             const double ha = truth.height(i, j), hb = truth.height(i + 1, j);
             const double hc = truth.height(i + 1, j + 1), hd = truth.height(i, j + 1);
             // The diagonal from a = (u0, v0) to c = (u1, v1): f = (u - u0) dv - (v - v0) du.
             // f >= 0: triangle (a, b, c), below the diagonal; f <= 0: triangle (a, c, d).
-            measure_piece(clip(cell, dv, -du, -u0 * dv + v0 * du, piece), u0, v0, ha, (hb - ha) / du, (hc - hb) / dv, out);
-            measure_piece(clip(cell, -dv, du, u0 * dv - v0 * du, piece), u0, v0, ha, (hc - hd) / du, (hd - ha) / dv, out);
+            const double a = dv, b = -du, k = -u0 * dv + v0 * du;
+            const double su_below = (hb - ha) / du, sv_below = (hc - hb) / dv;
+            const double su_above = (hc - hd) / du, sv_above = (hd - ha) / dv;
+            // A cell piece wholly on one side (most, where triangles are smaller than texels)
+            // is measured as it is: the other side's clip, whose f is this one's negated
+            // (exactly: negation commutes with rounding; at most the sign of a zero
+            // differs), would keep no corner.
+            bool below = true, above = true;
+            for (int n = 0; n < cell.n; ++n) {
+                const Corner& p = cell.c[static_cast<std::size_t>(n)];
+                const double f = a * p.u + b * p.v + k;
+                below = below && f > 0.0;
+                above = above && f < 0.0;
+            }
+            if (below) measure_piece(cell, u0, v0, ha, su_below, sv_below, out);
+            else if (above) measure_piece(cell, u0, v0, ha, su_above, sv_above, out);
+            else {
+                measure_piece(clip(cell, a, b, k, piece), u0, v0, ha, su_below, sv_below, out);
+                measure_piece(clip(cell, -a, -b, u0 * dv - v0 * du, piece), u0, v0, ha, su_above, sv_above, out);
+            }
         }
     }
 }
@@ -165,10 +224,11 @@ GeometricError geometric_error(const TruthSurface& truth, const SurfaceMesh& mes
         const glm::dvec3& p = mesh.positions[v];
         return xy ? Corner{p.x, p.y, p.z} : Corner{p.x, p.z, p.y};
     };
+    const TruthCells cells(truth);
     tessref::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
         for (std::size_t t = starts[g]; t < starts[g + 1]; ++t) {
             const auto& tri = mesh.triangles[t];
-            measure_triangle(truth, {corner(tri[0]), corner(tri[1]), corner(tri[2])}, slots[g]);
+            measure_triangle(truth, cells, {corner(tri[0]), corner(tri[1]), corner(tri[2])}, slots[g]);
         }
     });
 

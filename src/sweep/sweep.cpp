@@ -25,6 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/input_file.h"
+#include "common/parallel.h"
 #include "common/temp_cleanup.h"
 #include "common/temp_name.h"
 #include "pipeline/stage_uniforms.h"
@@ -691,33 +692,49 @@ private:
         f["triangles"] = std::to_string(mesh.triangles.size());
         f["points"] = std::to_string(mesh.positions.size());
 
-        if (truth.surface) {
-            const GeometricError e = geometric_error(*truth.surface, mesh, &*scene.camera);
-            f["geo_max"] = real(e.max);
-            f["geo_rms"] = real(e.rms);
-            f["geo_max_px"] = real(e.max_px);
+        // The untimed measures, after the timed runs and side by side: the geometric error
+        // (parallel over patches), the screen edge measure (serial, in triangle order, so
+        // that its sum is the same on any thread count), the image against the truth's and
+        // the copies the row's group compares.
+        // Each writes only its own results, so they are what they would be one after the
+        // other; none overlaps a timed run, whose times stay those of the row alone.
+        std::optional<GeometricError> geometric;
+        double mean_edge = 0.0;
+        std::optional<FloatImage> picture;
+        std::optional<CompareResult> compared;
+        tessref::parallel_for(0, 4, [&](int job) {
+            if (job == 0 && truth.surface) geometric = geometric_error(*truth.surface, mesh, &*scene.camera);
+            // The surface as the rasterizer drew it (image.mvp, which holds the
+            // camera-relative origin where the run has one).
+            if (job == 1) mean_edge = mean_edge_pixels(mesh, glm::dmat4(image.mvp), p_.size);
+            if (job == 2) {
+                picture = float_image(image);
+                if (truth.image) compared = compare_images(*truth.image, *picture);
+            }
+            if (job == 3) {  // for the group's comparison of its precisions
+                pair.positions = mesh.positions;
+                pair.triangles = mesh.triangles;
+                pair.rgba = to_rgba8(image);
+            }
+        });
+        if (geometric) {
+            f["geo_max"] = real(geometric->max);
+            f["geo_rms"] = real(geometric->rms);
+            f["geo_max_px"] = real(geometric->max_px);
         }
-        // The screen measures: the surface as the rasterizer drew it (image.mvp, which holds
-        // the camera-relative origin where the run has one).
-        f["mean_edge_px"] = real(mean_edge_pixels(mesh, glm::dmat4(image.mvp), p_.size));
+        f["mean_edge_px"] = real(mean_edge);
         f["triangles_per_px"] =
             image.stats.covered_pixels
                 ? real(static_cast<double>(mesh.triangles.size()) / static_cast<double>(image.stats.covered_pixels))
                 : std::string();
-        const FloatImage picture = float_image(image);
-        std::optional<CompareResult> compared;
-        if (truth.image) {
-            compared = compare_images(*truth.image, picture);
+        if (compared) {
             f["img_rmse"] = real(compared->rmse);
             f["img_psnr"] = real(compared->psnr);
             f["img_fail_px"] = std::to_string(compared->failing_pixels);
             f["truth_image"] = truth.image_path;
         }
         if (every_picture_ || keeps_pictures(row, largest_level_))
-            write_pictures(row, scene, pipeline, render_options, image, picture, compared, f);
-        pair.positions = mesh.positions;
-        pair.triangles = mesh.triangles;
-        pair.rgba = to_rgba8(image);
+            write_pictures(row, scene, pipeline, render_options, image, *picture, compared, f);
         return f;
     }
 
