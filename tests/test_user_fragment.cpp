@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "command_dir_test.h"
 #include "image/image_io.h"
 #include "pipeline/raster_stage.h"
@@ -238,6 +240,66 @@ TEST_F(UserFragmentCommand, DiscardShowsWhatIsBehind) {
     }
     EXPECT_GT(behind, 20u);
     EXPECT_GT(background + behind, 1000u);
+}
+
+}  // namespace
+
+namespace {
+
+// `trace --stage frag --pixel X,Y`: quad_derivatives.frag's v = floor(x) * floor(y) of the
+// window position, so at image pixel (X, Y) of a 64x40 image (window y = 39 - Y) the traced
+// fragment stores v = X * (39 - Y), and its quad's dFdx (along its row) is the row's window
+// y and dFdy (top minus bottom of its column) the column's x: the output is
+// (mod(39 - Y, 256) / 255, mod(X, 256) / 255, 1, 1).
+TEST_F(UserFragmentCommand, TraceOfAPixelGivesTheHandDerivedValues) {
+    const fs::path frag = kUserShaders / "quad_derivatives.frag";
+    const int x = 33, y = 30, wy = 39 - y;
+    const RunResult r = run({"trace", scene_path("cosc422").string(), "--stage", "frag", "--pixel",
+                             std::to_string(x) + "," + std::to_string(y), "--size", "64x40", "--math", "llvmpipe",
+                             "--shader", "frag=" + frag.string(), "--json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["math"], "llvmpipe");
+    EXPECT_EQ(j["stage"], "fragment");
+    EXPECT_EQ(j["pixel"], nlohmann::json::array({x, y}));
+    EXPECT_EQ(j["quad_lane"], (x & 1) + 2 * (y & 1));
+    EXPECT_EQ(j["inputs"]["gl_FragCoord"][0], x + 0.5);
+    EXPECT_EQ(j["inputs"]["gl_FragCoord"][1], wy + 0.5);
+    bool stored = false;
+    for (const auto& line : j["lines"])
+        for (const auto& s : line["stores"])
+            if (s["name"] == "v") {
+                stored = true;
+                EXPECT_EQ(s["values"][0], static_cast<double>(x * wy));
+                EXPECT_EQ(line["line"], 10);
+            }
+    EXPECT_TRUE(stored) << r.out;
+    const auto& colour = j["outputs"]["locations"]["0"];
+    EXPECT_EQ(colour[0].get<float>(), static_cast<float>(wy % 256) / 255.0f);
+    EXPECT_EQ(colour[1].get<float>(), static_cast<float>(x % 256) / 255.0f);
+    EXPECT_EQ(colour[2].get<float>(), 1.0f);
+    EXPECT_FALSE(j["outputs"]["discarded"].get<bool>());
+
+    // The text form names the math mode and lists the line with its value.
+    const RunResult text = run({"trace", scene_path("cosc422").string(), "--stage", "frag", "--pixel",
+                                std::to_string(x) + "," + std::to_string(y), "--size", "64x40", "--shader",
+                                "frag=" + frag.string()});
+    ASSERT_EQ(text.status, 0) << text.err;
+    EXPECT_NE(text.out.find("exact math"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("v = " + std::to_string(x * wy)), std::string::npos) << text.out;
+}
+
+// A pixel no fragment covers (the sky at the top left) and one outside the image: exit 2
+// naming the pixel.
+TEST_F(UserFragmentCommand, TraceOfAnUncoveredPixelNamesIt) {
+    const RunResult sky = run({"trace", scene_path("cosc422").string(), "--stage", "frag", "--pixel", "0,0", "--size",
+                               "64x40", "--shader", "frag=" + (kUserShaders / "red.frag").string()});
+    EXPECT_EQ(sky.status, 2);
+    EXPECT_NE(sky.err.find("no fragment covers pixel 0,0"), std::string::npos) << sky.err;
+    const RunResult outside = run({"trace", scene_path("cosc422").string(), "--stage", "frag", "--pixel", "64,3",
+                                   "--size", "64x40", "--shader", "frag=" + (kUserShaders / "red.frag").string()});
+    EXPECT_EQ(outside.status, 2);
+    EXPECT_NE(outside.err.find("pixel 64,3 is outside the 64x40 image"), std::string::npos) << outside.err;
 }
 
 }  // namespace

@@ -197,6 +197,9 @@ struct RunOptions {
     // nullptr: nowhere.
     std::vector<std::string>* warnings = nullptr;
     Observer* observer = nullptr;  // not owned; nullptr: nothing is recorded
+    // Executable::fragment: the quad's lane (0 top-left .. 3 bottom-right) the observer
+    // records; the other three run unrecorded.
+    int observed_lane = 0;
 };
 
 // A vertex as one stage hands it to the next: gl_Position and the locations it wrote.

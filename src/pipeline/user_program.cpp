@@ -12,9 +12,10 @@
 //    the C library's acosf), so that only what the user changed changes.
 //  - the geometry stage's per-vertex normals (thesis normal_map, height-field normals the
 //    evaluation shader does not compute) and everything after the evaluation stage: the
-//    models, on the interpreter's positions and texture coordinates. A user's geometry or
-//    fragment shader is not run by the pipeline (the interpreter runs both stages; `trace
-//    --stage geom` runs the geometry stage here, over one triangle of a patch).
+//    models, on the interpreter's positions and texture coordinates. A user's geometry
+//    shader is not run by the pipeline (`trace --stage geom` runs it here, over one
+//    triangle of a patch); a user's fragment shader is run by the render
+//    (src/render/user_fragment.cpp), from what raster_stage_corners() gives it.
 //  - the primitive generator tessellates as the scene's [generator] says, whatever the
 //    user's evaluation shader's layout(...) in; line (GL draws with the user's: a cw where
 //    [generator] has ccw shows as an orientation divergence of the captures).
@@ -418,7 +419,7 @@ std::vector<StageShader> interpreted_stages(const Scene& scene) {
             case ShaderStage::tess_control: twin = control_twin(scene); break;
             case ShaderStage::tess_evaluation: twin = std::string(base) + ".tese"; break;
             case ShaderStage::geometry:
-            case ShaderStage::fragment: continue;  // not run on the CPU
+            case ShaderStage::fragment: continue;  // not in the pipeline (a fragment shader: the render's)
         }
         // A file whose text is exactly the shipped twin's is the twin: the C++ model, which
         // the twin is proven to compute bit for bit, is the fast path for it. Any other text

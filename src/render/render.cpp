@@ -668,7 +668,7 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
     }
     const Scene& pipeline_scene = camera.viewport != scene.camera->viewport ? resized : scene;
     if (const StageShader* fragment = user_fragment_shader(scene))  // a user's shader, not a model
-        return render_detail::render_user_fragment(scene, pipeline_scene, options, *fragment);
+        return render_detail::render_user_fragment(scene, options, *fragment);
     if (!options.keep_surface && options.mode == RenderMode::fill && PatchStream::streams(scene) &&
         !(scene.geometry && scene.geometry->normals == GeometryNormals::smooth))
         return render_streamed(scene, pipeline_scene, options);

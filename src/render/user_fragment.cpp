@@ -197,6 +197,18 @@ const StageShader* user_fragment_shader(const Scene& scene) {
 
 namespace render_detail {
 
+StageShader traced_fragment_shader(const Scene& scene) {
+    if (const StageShader* user = user_fragment_shader(scene)) return *user;
+    const std::string twin = fragment_twin(scene.shading.model.kind);
+    if (twin.empty())
+        throw Error(std::string("the scene's shading model '") + to_string(scene.shading.model.kind) +
+                        "' has no GLSL file to trace (its fragment shader is the GL backend's own text): give one "
+                        "with --shader frag=FILE",
+                    Where::at_key(scene.file, "shading.model"));
+    const std::string path = data_dir() + "/shaders/" + twin;
+    return StageShader{ShaderStage::fragment, path, "the shading model's twin", Where::in_file(path)};
+}
+
 struct UserFragmentStage::State {
     RenderResult base;  // camera, shading, mvp, pipeline, domain: what render() starts from
     Framebuffer fb;
@@ -213,6 +225,19 @@ struct UserFragmentStage::State {
 };
 
 UserFragmentStage::~UserFragmentStage() = default;
+std::uint32_t UserFragmentStage::patch_of(std::uint32_t triangle) const {
+    const SurfaceMesh& mesh = state_->base.pipeline->mesh;
+    return mesh.patch_ids[mesh.triangles[triangle][0]];
+}
+std::uint32_t UserFragmentStage::shown(int x, int row) const {
+    const std::uint32_t t = winner(x, row);
+    if (t == kNoTriangle) return kNoPixelId;
+    const int lane = (x & 1) + 2 * (row & 1);
+    if (!checked_quad(x & ~1, row & ~1, t)[static_cast<std::size_t>(lane)].discarded) return t;
+    // Behind a discarded fragment: the whole picture's depth test decides.
+    const RenderResult r = render();
+    return r.triangle_id[r.index(x, row)];
+}
 int UserFragmentStage::width() const { return state_->fb.width; }
 int UserFragmentStage::height() const { return state_->fb.height; }
 std::uint32_t UserFragmentStage::winner(int x, int row) const {
@@ -220,8 +245,7 @@ std::uint32_t UserFragmentStage::winner(int x, int row) const {
                                   static_cast<std::size_t>(x)];
 }
 
-UserFragmentStage::UserFragmentStage(const Scene& scene, const Scene& pipeline_scene, const RenderOptions& options,
-                                     const StageShader& fragment)
+UserFragmentStage::UserFragmentStage(const Scene& scene, const RenderOptions& options, const StageShader& fragment)
     : state_(std::make_unique<State>()) {
     State& s = *state_;
     const Where at = fragment.where;
@@ -246,6 +270,9 @@ UserFragmentStage::UserFragmentStage(const Scene& scene, const Scene& pipeline_s
                     Where::in_file(fragment.path));
 
     s.base.camera = camera_for(scene, options);
+    // The pipeline sees the image's viewport, as render_scene runs it.
+    Scene pipeline_scene = scene;
+    pipeline_scene.camera = s.base.camera;
     s.base.shading = scene.shading;
     s.base.mvp = glm::mat4(s.base.camera.view_projection());
     s.base.domain = scene.generator.domain;
@@ -297,7 +324,7 @@ UserFragmentStage::UserFragmentStage(const Scene& scene, const Scene& pipeline_s
 
 std::array<shader::FragmentResult, 4> UserFragmentStage::quad(int x0, int row0, std::uint32_t triangle,
                                                               std::array<shader::QuadFragment, 4>* inputs_out,
-                                                              const shader::RunOptions* options) const {
+                                                              shader::Observer* observer, int observed_lane) const {
     const State& s = *state_;
     const int width = s.fb.width, height = s.fb.height;
     const shader::ShaderVertex* c = &s.corners[3 * static_cast<std::size_t>(triangle)];
@@ -351,10 +378,13 @@ std::array<shader::FragmentResult, 4> UserFragmentStage::quad(int x0, int row0, 
         }
     }
     if (inputs_out) *inputs_out = quad;
-    const long long primitive = static_cast<long long>(s.base.pipeline->mesh.patch_ids[s.base.pipeline->mesh.triangles[triangle][0]]);
-    if (options) {
-        const shader::Executable traced(*s.module, s.bindings, *options);
-        return traced.fragment(std::span<const shader::QuadFragment, 4>(quad), setup.front, primitive);
+    const long long primitive = static_cast<long long>(patch_of(triangle));
+    if (observer) {
+        shader::RunOptions traced = s.options;
+        traced.observer = observer;
+        traced.observed_lane = observed_lane;
+        const shader::Executable run(*s.module, s.bindings, traced);
+        return run.fragment(std::span<const shader::QuadFragment, 4>(quad), setup.front, primitive);
     }
     return s.run->fragment(std::span<const shader::QuadFragment, 4>(quad), setup.front, primitive);
 }
@@ -509,9 +539,8 @@ void UserFragmentStage::resolve_behind(RenderResult& result, const std::vector<s
     });
 }
 
-RenderResult render_user_fragment(const Scene& scene, const Scene& pipeline_scene, const RenderOptions& options,
-                                  const StageShader& fragment) {
-    return UserFragmentStage(scene, pipeline_scene, options, fragment).render();
+RenderResult render_user_fragment(const Scene& scene, const RenderOptions& options, const StageShader& fragment) {
+    return UserFragmentStage(scene, options, fragment).render();
 }
 
 }  // namespace render_detail

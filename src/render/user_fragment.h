@@ -23,8 +23,8 @@ public:
     // evaluation, a wireframe, a geomipmapped terrain, flat, noperspective, centroid or sample
     // inputs), the shader's compile errors (naming its [shaders] key or flag) and the
     // interpreter's.
-    UserFragmentStage(const Scene& scene, const Scene& pipeline_scene, const RenderOptions& options,
-                      const StageShader& fragment);
+    // The image size is options.size, else the camera's viewport (render_scene's rule).
+    UserFragmentStage(const Scene& scene, const RenderOptions& options, const StageShader& fragment);
     ~UserFragmentStage();
 
     int width() const;
@@ -38,21 +38,32 @@ public:
     // replaces the stage's run options (an observer for `tessref trace`) when given.
     std::array<shader::FragmentResult, 4> quad(int x0, int row0, std::uint32_t triangle,
                                                std::array<shader::QuadFragment, 4>* inputs = nullptr,
-                                               const shader::RunOptions* options = nullptr) const;
+                                               shader::Observer* observer = nullptr, int observed_lane = 0) const;
+    // The triangle whose fragment the pixel shows after the depth test and the shader's
+    // discards (a discarded fragment leaves the pixel to what is behind it); kNoPixelId
+    // where none does.
+    std::uint32_t shown(int x, int row) const;
+    // The patch of a triangle (gl_PrimitiveID of its fragments).
+    std::uint32_t patch_of(std::uint32_t triangle) const;
     // Every pixel shaded: the image, its visibility and provenance buffers.
     RenderResult render() const;
 
     struct State;
 
 private:
+    // The pixels of `result` whose winner discarded (with other fragments there) resolved.
     // quad(), refusing a shader that writes gl_FragDepth.
     std::array<shader::FragmentResult, 4> checked_quad(int x0, int row0, std::uint32_t triangle) const;
     void resolve_behind(RenderResult& result, const std::vector<std::uint8_t>& behind) const;
     std::unique_ptr<State> state_;
 };
 
+// The fragment shader `tessref trace --stage frag` runs: the user's (user_fragment_shader),
+// else the shading model's GLSL twin. Throws tessref::Error for flat and depth shading
+// without a user's file (their shaders are the GL backend's own text, not a file).
+StageShader traced_fragment_shader(const Scene& scene);
+
 // render_scene() for a scene whose user_fragment_shader() is `fragment`.
-RenderResult render_user_fragment(const Scene& scene, const Scene& pipeline_scene, const RenderOptions& options,
-                                  const StageShader& fragment);
+RenderResult render_user_fragment(const Scene& scene, const RenderOptions& options, const StageShader& fragment);
 
 }  // namespace tessref::render_detail

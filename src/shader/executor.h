@@ -51,6 +51,9 @@ struct ExecContext {
     // texture()'s implicit lod are taken across it. A fragment batch without it (the lanes
     // of a quad that a branch parted) has no derivatives: they are 0, with a warning.
     bool quad = false;
+    // The lane whose lines and stores RunOptions::observer records (a fragment quad's traced
+    // fragment, as this batch numbers its lanes); kNone: none of this batch's lanes.
+    std::uint32_t observed_lane = 0;
 };
 
 // The words of lanes `pick` (in that order) of a lane-interleaved array of `lanes` lanes.

@@ -126,6 +126,9 @@ std::array<FragmentResult, 4> Executable::fragment(std::span<const QuadFragment,
             w.batch.stop_at(stop);
             ExecContext c{m, w.shared, state_->units, state_->options, name, &warned};
             c.quad = w.lanes.size() == 4;
+            const auto traced = std::find(w.lanes.begin(), w.lanes.end(),
+                                          static_cast<std::uint32_t>(state_->options.observed_lane));
+            c.observed_lane = traced == w.lanes.end() ? kNone : static_cast<std::uint32_t>(traced - w.lanes.begin());
             const Batch::Status status = w.batch.run(c);
             switch (status) {
                 case Batch::Status::done: read_results(w); return std::nullopt;
