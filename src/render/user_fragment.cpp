@@ -161,7 +161,9 @@ TriangleSetup setup_triangle(const std::array<glm::vec4, 3>& clip, const raster:
         x[k] = snap_subpixel(win[static_cast<std::size_t>(k)].x);
         y[k] = snap_subpixel(win[static_cast<std::size_t>(k)].y);
     }
-    const std::int64_t area = (x[0] - x[1]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[0] - y[1]);
+    // In 128 bits: a far vertex snaps to the ends of the 32-bit range (its triangle is cut
+    // by the clipper; the sign still decides the order of the whole triangle's setup).
+    const __int128 area = static_cast<__int128>(x[0] - x[1]) * (y[2] - y[0]) - static_cast<__int128>(x[2] - x[0]) * (y[0] - y[1]);
     s.front = area > 0;  // counter-clockwise in GL window coordinates
     if (area < 0) s.order = {1, 0, 2};  // rotate_fixed_position_01: the provoking vertex stays last
     for (int k = 0; k < 3; ++k) s.win[static_cast<std::size_t>(k)] = win[static_cast<std::size_t>(s.order[static_cast<std::size_t>(k)])];
@@ -507,8 +509,11 @@ void UserFragmentStage::resolve_behind(RenderResult& result, const std::vector<s
             lo_x = std::min(lo_x, win.x), hi_x = std::max(hi_x, win.x);
             lo_y = std::min(lo_y, win.y), hi_y = std::max(hi_y, win.y);
         }
-        if (bounded && !any_in(static_cast<int>(std::floor(lo_x)) - 1, static_cast<int>(std::floor(lo_y)) - 1,
-                               static_cast<int>(std::ceil(hi_x)) + 1, static_cast<int>(std::ceil(hi_y)) + 1))
+        // The box one pixel wider, clamped into the image before it is made integer.
+        const auto column = [&](float v) { return static_cast<int>(std::clamp(v, -2.0f, static_cast<float>(width) + 2.0f)); };
+        const auto row_of = [&](float v) { return static_cast<int>(std::clamp(v, -2.0f, static_cast<float>(height) + 2.0f)); };
+        if (bounded && !any_in(column(std::floor(lo_x)) - 1, row_of(std::floor(lo_y)) - 1, column(std::ceil(hi_x)) + 1,
+                               row_of(std::ceil(hi_y)) + 1))
             continue;
         const glm::vec4 positions[3] = {c[0].position, c[1].position, c[2].position};
         const std::array<std::uint32_t, 3> one{0, 1, 2};

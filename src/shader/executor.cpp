@@ -364,7 +364,7 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
             case spv::OpLabel:
                 previous_label_ = label_;
                 label_ = a[0];
-                if (label_ == stop_label_) {  // where the ways of a fragment quad meet (executor.h)
+                if (label_ == stop_label_ || label_ == exit_label_) {  // where a fragment quad's ways meet (executor.h)
                     if (m.code[pc_].op != spv::OpPhi) return Status::at_stop;
                     stopping_ = true;
                 }
