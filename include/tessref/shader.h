@@ -302,8 +302,9 @@ public:
     // them), fwidth = abs(dFdx) + abs(dFdy); texture()'s implicit lod from one pair of
     // derivatives for the quad, the top-left fragment's (tessref/shading.h, fragment_lod).
     // The quad runs in lockstep; where a branch parts its lanes each way runs on its own and
-    // the ways meet again at the branch's merge block (the end of the if, the loop's exit),
-    // so that derivatives after it are the quad's again; inside a parted branch they are
+    // the ways meet again at the branch's merge block (the end of the if, the loop's exit;
+    // lanes that break out of a loop wait at its exit for the others), so that derivatives
+    // after it are the quad's again; inside a parted branch they are
     // undefined in GLSL and 0 here, with a warning. `if (c) discard;` parts nothing: as on
     // llvmpipe, the discarding fragments go on as helpers (their derivatives stay
     // available), their results discarded. gl_FrontFacing = front_facing, gl_PrimitiveID =
