@@ -3,7 +3,7 @@
 // give every per-pixel buffer the whole-surface pass gives, bit for bit, for every shipped
 // scene, both precisions, camera-relative evaluation and any thread count. And the
 // rasterizer's batched draws (raster.h Rasterizer) against one rasterize() of the same
-// triangles.
+// triangles, and the 8-bit colour of RenderOptions::colour8 against the float colour's codes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -381,4 +381,60 @@ TEST(PatchStream, DeferredVertexNormalsAreTheEmittedOnes) {
         }
     }
     EXPECT_GE(patches_compared, 4 * 3 * 4);  // at least 4 patches of each of the 12 streams
+}
+
+// RenderOptions::colour8 keeps the image as the unorm8 codes to_rgba8 gives of the float
+// colour, byte for byte, background included, and leaves the float colour empty and every
+// other buffer as it was: streamed (each pixel converted as it is shaded) and whole, filled
+// or with lines, and ray traced. The codes come from the float render of the same options,
+// an independent path (to_rgba8 of RenderResult::colour).
+TEST(RenderStream, EightBitColourIsTheFloatColoursCodes) {
+    std::size_t compared = 0, with_background = 0;
+    for (const fs::path& path : shipped_scenes()) {
+        const tessref::Scene scene = tessref::load_scene(path.string());
+        if (!scene.camera) continue;
+        const bool streams = tessref::PatchStream::streams(scene);
+        for (int variant = 0; variant < (streams ? 5 : 1); ++variant) {
+            SCOPED_TRACE(path.filename().string() + " variant " + std::to_string(variant));
+            tessref::RenderOptions options;
+            options.size = {160, 100};
+            options.keep_surface = variant == 1;
+            if (variant == 2) options.mode = tessref::RenderMode::fill_with_wireframe;
+            if (variant == 3) options.provenance = false;
+            if (variant == 4) options.mode = tessref::RenderMode::wireframe;
+            const tessref::RenderResult floats = tessref::render_scene(scene, options);
+            options.colour8 = true;
+            const tessref::RenderResult codes = tessref::render_scene(scene, options);
+            const std::vector<std::uint8_t> expected = tessref::to_rgba8(floats);
+            ASSERT_EQ(codes.rgba8.size() * 4, expected.size());
+            EXPECT_EQ(std::memcmp(codes.rgba8.data(), expected.data(), expected.size()), 0) << "rgba8";
+            EXPECT_TRUE(codes.colour.empty());
+            EXPECT_TRUE(floats.rgba8.empty());
+            EXPECT_TRUE(same_bytes(tessref::to_rgba8(codes), expected));
+            EXPECT_TRUE(same_bytes(floats.depth, codes.depth)) << "depth";
+            EXPECT_TRUE(same_bytes(floats.triangle_id, codes.triangle_id)) << "triangle_id";
+            EXPECT_TRUE(same_bytes(floats.barycentric, codes.barycentric)) << "barycentric";
+            EXPECT_TRUE(same_bytes(floats.patch_id, codes.patch_id)) << "patch_id";
+            EXPECT_TRUE(same_bytes(floats.level, codes.level)) << "level";
+            EXPECT_GT(codes.stats.covered_pixels, 0u);
+            with_background += codes.stats.covered_pixels < 160u * 100u;
+            ++compared;
+        }
+    }
+    EXPECT_GE(compared, 14u);
+    EXPECT_GE(with_background, 10u);
+    // Ray traced: converted at the end.
+    const tessref::Scene scene = tessref::load_scene((kScenes / "jacksboro.toml").string());
+    tessref::RenderOptions options;
+    options.size = {96, 60};
+    const tessref::RenderResult floats = tessref::raytrace_scene(scene, options);
+    options.colour8 = true;
+    const tessref::RenderResult codes = tessref::raytrace_scene(scene, options);
+    const std::vector<std::uint8_t> expected = tessref::to_rgba8(floats);
+    ASSERT_EQ(codes.rgba8.size() * 4, expected.size());
+    EXPECT_EQ(std::memcmp(codes.rgba8.data(), expected.data(), expected.size()), 0);
+    EXPECT_TRUE(codes.colour.empty());
+    // What needs the float colour says so.
+    EXPECT_THROW(tessref::pixel_provenance(codes, 10, 10), tessref::Error);
+    EXPECT_THROW(tessref::compare_images(codes, floats), tessref::Error);
 }

@@ -99,6 +99,13 @@ struct RenderOptions {
     // resolve's time, mostly cache misses into the patches' tess coords and ids).
     // pixel_provenance needs them.
     bool provenance = true;
+    // Keep the image only as the 8-bit RGBA codes a PNG or TIFF holds (RenderResult::rgba8,
+    // to_rgba8's bytes) and leave the float RenderResult::colour empty: 4 bytes a pixel to
+    // clear and fill instead of 16 plus the conversion. The streamed render converts each
+    // pixel as it shades it; the other renderers convert their float image at the end. Every
+    // other buffer is the same either way. An EXR, compare_images and pixel_provenance need
+    // the float colour.
+    bool colour8 = false;
     // Called from the calling thread with a stage name and the fraction of it done; may be
     // empty.
     std::function<void(std::string_view stage, double fraction)> progress;
@@ -126,7 +133,8 @@ struct RenderResult {
                                        // relative: of the camera moved by -pipeline->origin
     // Per pixel (row 0 on top):
     std::vector<glm::vec4> colour;     // the fragment stage's output, unclamped; background
-                                       // where nothing is visible
+                                       // where nothing is visible (empty with colour8)
+    std::vector<glm::u8vec4> rgba8;    // with RenderOptions::colour8 only: colour's unorm8 codes
     std::vector<float> depth;          // window z in [0, 1]; 1 where nothing is visible
     std::vector<std::uint32_t> patch_id;     // kNoPixelId where nothing is visible
     std::vector<std::uint32_t> triangle_id;  // index into pipeline.mesh.triangles
@@ -272,7 +280,7 @@ GroundHeight ground_height(const Scene& scene, const PipelineResult& pipeline, g
 glm::vec3 level_heat_colour(float level);
 
 // GL's unorm8 conversion of the colour (clamp to [0, 1], * 255, round to nearest), RGBA,
-// row 0 on top.
+// row 0 on top: RenderResult::rgba8's bytes where the render kept only those (colour8).
 std::vector<std::uint8_t> to_rgba8(const RenderResult& result);
 
 enum class ImageFormat : std::uint8_t { png, tiff, exr };

@@ -81,6 +81,8 @@ int run_render(const RenderCommandOptions& options) {
     const std::vector<StageShader> shader_flags = parse_shader_flags(options.shaders);
     // The provenance buffers only for the channels that write them.
     render_options.provenance = aovs.patch || aovs.tesscoord || aovs.level;
+    // A PNG or TIFF holds 8-bit codes: the float colour only for an EXR.
+    render_options.colour8 = format != ImageFormat::exr;
     render_options.mode = options.wireframe           ? RenderMode::wireframe
                           : options.overlay_wireframe ? RenderMode::fill_with_wireframe
                                                       : RenderMode::fill;

@@ -111,17 +111,26 @@ void write_image(const RenderResult& result, const std::string& path, ImageForma
     image::WriteOptions options;
     options.software_tag = true;  // and no time stamp: the same render gives the same bytes
     if (format != ImageFormat::exr) {
-        // Not cleared first: every byte is written by to_rgba8, on every thread.
-        const auto pixels = std::make_unique_for_overwrite<std::uint8_t[]>(n * 4);
-        render_detail::to_rgba8(result, pixels.get());
+        // A colour8 render's codes as they are; else converted into a buffer not cleared
+        // first: every byte is written by to_rgba8, on every thread.
+        std::unique_ptr<std::uint8_t[]> converted;
+        const auto* codes = reinterpret_cast<const std::uint8_t*>(result.rgba8.data());
+        if (result.rgba8.size() != n) {
+            converted = std::make_unique_for_overwrite<std::uint8_t[]>(n * 4);
+            render_detail::to_rgba8(result, converted.get());
+            codes = converted.get();
+        }
         if (format == ImageFormat::tiff) options.compression = "zip";
         // Named and marked as the PNG's are, so that a reader (compare --ignore-alpha) knows
         // the fourth channel for alpha.
         options.channel_names = {"R", "G", "B", "A"};
         options.alpha_channel = 3;
-        image::write_image(path, {width, height, 4, image::SampleType::uint8, pixels.get()}, options);
+        image::write_image(path, {width, height, 4, image::SampleType::uint8, codes}, options);
         return;
     }
+    if (result.colour.size() != n)
+        throw Error("an EXR holds the float colour, which this render did not keep (RenderOptions::colour8)",
+                    Where::in_file(path));
 
     std::vector<std::string> names{"R", "G", "B", "A"};
     if (aovs.depth) names.push_back("Z");

@@ -234,6 +234,7 @@ RenderResult raytrace_scene(const Scene& scene, const RenderOptions& options, Ra
     result.stats.seconds_shade =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - shade_start).count();
     progress("ray tracing", 1.0);
+    if (options.colour8) render_detail::keep_colour8(result);
     if (stats_out) *stats_out = stats;
     return result;
 }

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <span>
@@ -35,11 +36,17 @@ using render_detail::window_depth;
 
 namespace render_detail {
 
-void allocate(RenderResult& r, int width, int height, bool visibility, bool provenance) {
+void allocate(RenderResult& r, int width, int height, bool visibility, bool provenance, bool colour8) {
     r.width = width;
     r.height = height;
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    assign_on_huge_pages(r.colour, n, r.shading.background);
+    if (colour8) {
+        glm::u8vec4 background;
+        unorm8_rgba(&r.shading.background[0], &background[0]);
+        assign_on_huge_pages(r.rgba8, n, background);
+    } else {
+        assign_on_huge_pages(r.colour, n, r.shading.background);
+    }
     if (provenance) {
         assign_on_huge_pages(r.patch_id, n, kNoPixelId);
         assign_on_huge_pages(r.tess_coord, n, glm::vec3(0.0f));
@@ -49,6 +56,12 @@ void allocate(RenderResult& r, int width, int height, bool visibility, bool prov
     assign_on_huge_pages(r.depth, n, 1.0f);
     assign_on_huge_pages(r.triangle_id, n, kNoPixelId);
     assign_on_huge_pages(r.barycentric, n, glm::vec3(0.0f));
+}
+
+void keep_colour8(RenderResult& r) {
+    r.rgba8.resize(r.colour.size());
+    to_rgba8(r, reinterpret_cast<std::uint8_t*>(r.rgba8.data()));
+    std::vector<glm::vec4>().swap(r.colour);
 }
 
 void take_visibility(RenderResult& r, Framebuffer& fb) {
@@ -172,7 +185,7 @@ bool project_vertices(const glm::dvec3* q, std::size_t n, const glm::mat4& m, gl
 
 #if defined(__x86_64__) && defined(__GNUC__)
 // project_vertices eight vertices at a time with AVX2 (SimdLevel::avx2): the positions
-// gathered component by component and rounded to float (vcvtpd2ps, as cvtsd2ss), each clip
+// loaded, rounded to float (vcvtpd2ps, as cvtsd2ss) and sorted by component, each clip
 // component summed as gl_position sums it, ((m0 x + m1 y) + m2 z) + m3, a rounding a step,
 // then transposed back to one vec4 a vertex. Finite: |c| < infinity, false for a NaN, as
 // std::isfinite. The loop it replaces went a vertex at a time (7 % of a level-63 render).
@@ -180,23 +193,28 @@ bool project_vertices(const glm::dvec3* q, std::size_t n, const glm::mat4& m, gl
                                                    glm::vec4* clip) {
     static_assert(sizeof(glm::dvec3) == 24 && sizeof(glm::vec4) == 16);
     const double* d = &q[0].x;
-    const __m128i stride = _mm_setr_epi32(0, 3, 6, 9);  // four vertices' x, in doubles
     const __m256d magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
     const __m256d infinity = _mm256_set1_pd(std::numeric_limits<double>::infinity());
-    const __m256d all_lanes = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-    __m256d finite = all_lanes;
+    __m256d finite = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
     std::size_t v = 0;
     for (; v + 8 <= n; v += 8) {
-        __m256 c[3];  // x, y, z of the eight vertices, in float
-        for (int k = 0; k < 3; ++k) {
-            // The masked form with every lane on: the plain one leaves GCC 12 warning of an
-            // uninitialized source.
-            const __m256d lo = _mm256_mask_i32gather_pd(_mm256_setzero_pd(), d + 3 * v + k, stride, all_lanes, 8);
-            const __m256d hi = _mm256_mask_i32gather_pd(_mm256_setzero_pd(), d + 3 * v + 12 + k, stride, all_lanes, 8);
-            finite = _mm256_and_pd(finite, _mm256_cmp_pd(_mm256_and_pd(lo, magnitude), infinity, _CMP_LT_OQ));
-            finite = _mm256_and_pd(finite, _mm256_cmp_pd(_mm256_and_pd(hi, magnitude), infinity, _CMP_LT_OQ));
-            c[k] = _mm256_set_m128(_mm256_cvtpd_ps(hi), _mm256_cvtpd_ps(lo));
+        // The 24 doubles of the eight positions in six plain loads, each rounded to float
+        // (vcvtpd2ps, as cvtsd2ss) and checked finite: (x0 y0 z0 x1), (y1 z1 x2 y2),
+        // (z2 x3 y3 z3) in the low halves, vertices 4-7 likewise in the high ones. (Gathers
+        // of each component, as this loop had, measured slower on this project's machine.)
+        __m128 f[6];
+        for (int k = 0; k < 6; ++k) {
+            const __m256d q4 = _mm256_loadu_pd(d + 3 * v + 4 * k);
+            finite = _mm256_and_pd(finite, _mm256_cmp_pd(_mm256_and_pd(q4, magnitude), infinity, _CMP_LT_OQ));
+            f[k] = _mm256_cvtpd_ps(q4);
         }
+        const __m256 a = _mm256_set_m128(f[3], f[0]), b = _mm256_set_m128(f[4], f[1]), cc = _mm256_set_m128(f[5], f[2]);
+        // Three-component structures to components, in each half (x2 y2 x3 y3, y0 z0 y1 z1).
+        const __m256 x2y2x3y3 = _mm256_shuffle_ps(b, cc, _MM_SHUFFLE(2, 1, 3, 2));
+        const __m256 y0z0y1z1 = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));
+        const __m256 c[3] = {_mm256_shuffle_ps(a, x2y2x3y3, _MM_SHUFFLE(2, 0, 3, 0)),
+                             _mm256_shuffle_ps(y0z0y1z1, x2y2x3y3, _MM_SHUFFLE(3, 1, 2, 0)),
+                             _mm256_shuffle_ps(y0z0y1z1, cc, _MM_SHUFFLE(3, 0, 3, 1))};  // x, y, z in float
         __m256 out[4];  // clip x, y, z, w of the eight vertices
         for (int r = 0; r < 4; ++r) {
             __m256 sum = _mm256_mul_ps(_mm256_set1_ps(m[0][r]), c[0]);
@@ -275,6 +293,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
              int quad_row_end, IdRange ids, const Owns& owns, int x_begin = 0, int x_end = -1) {
     const int width = result.width, height = result.height;
     if (x_end < 0) x_end = width;
+    const bool colour8 = result.colour.empty();  // RenderOptions::colour8: the codes only
     for (int quad_row = quad_row_begin; quad_row < quad_row_end; ++quad_row) {
         const int row0 = 2 * quad_row;
         const std::uint32_t* top = &fb.triangle_id[result.index(0, row0)];
@@ -348,7 +367,11 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
             const auto count = static_cast<std::size_t>(pixel_count);
             shade(result.shading.model, std::span<const FragmentInputs>(fragments, count),
                   std::span<glm::vec4>(colours, count));
-            for (int p = 0; p < pixel_count; ++p) result.colour[pixels[p].i] = colours[p];
+            if (colour8) {
+                for (int p = 0; p < pixel_count; ++p) unorm8_rgba(&colours[p][0], &result.rgba8[pixels[p].i][0]);
+            } else {
+                for (int p = 0; p < pixel_count; ++p) result.colour[pixels[p].i] = colours[p];
+            }
         }
     }
 }
@@ -580,7 +603,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     Framebuffer fb;
     tessref::parallel_for(0, 2, [&](int k) {
         if (k == 0)
-            render_detail::allocate(result, width, height, false, options.provenance);
+            render_detail::allocate(result, width, height, false, options.provenance, options.colour8);
         else
             fb = Framebuffer::create_visibility(width, height);
     });
@@ -791,6 +814,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
         });
     }
     render_detail::take_visibility(result, fb);
+    if (options.colour8) render_detail::keep_colour8(result);
     result.stats.covered_pixels = covered_pixels(result);
     result.stats.seconds_shade = seconds_since(start);
     progress("shading", 1.0);
@@ -834,6 +858,9 @@ PixelProvenance pixel_provenance(const RenderResult& result, int x, int y) {
         throw Error("pixel " + std::to_string(x) + "," + std::to_string(y) + " is outside the " +
                         std::to_string(result.width) + "x" + std::to_string(result.height) + " image",
                     Where::at_key("pixel"));
+    if (result.colour.empty())
+        throw Error("the image was rendered without its float colour (RenderOptions::colour8)",
+                    Where::at_key("colour8"));
     if (result.patch_id.size() != result.colour.size())
         throw Error("the image was rendered without its provenance buffers (RenderOptions::provenance)",
                     Where::at_key("provenance"));
@@ -892,6 +919,10 @@ glm::vec3 level_heat_colour(float level) {
 }
 
 void render_detail::to_rgba8(const RenderResult& result, std::uint8_t* out) {
+    if (result.colour.empty()) {  // RenderOptions::colour8: the codes themselves
+        if (!result.rgba8.empty()) std::memcpy(out, result.rgba8.data(), result.rgba8.size() * sizeof(glm::u8vec4));
+        return;
+    }
     // In parallel: it sits between the render and the image write, where nothing else runs.
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, result.colour.size(), 65536),
                           [&](const tbb::blocked_range<std::size_t>& r) {
@@ -901,7 +932,7 @@ void render_detail::to_rgba8(const RenderResult& result, std::uint8_t* out) {
 }
 
 std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
-    std::vector<std::uint8_t> out(result.colour.size() * 4);
+    std::vector<std::uint8_t> out((result.colour.empty() ? result.rgba8.size() : result.colour.size()) * 4);
     render_detail::to_rgba8(result, out.data());
     return out;
 }
@@ -909,6 +940,9 @@ std::vector<std::uint8_t> to_rgba8(const RenderResult& result) {
 ImageDifference compare_images(const RenderResult& a, const RenderResult& b) {
     // The clamped R, G, B a unorm8 framebuffer would hold (before quantization), through
     // the one comparison of compare.h; coverage is what only a render knows.
+    if ((a.colour.empty() && !a.rgba8.empty()) || (b.colour.empty() && !b.rgba8.empty()))
+        throw Error("comparing renders needs their float colour (RenderOptions::colour8 kept only 8-bit codes)",
+                    Where::at_key("colour8"));
     const auto clamped_rgb = [](const RenderResult& r) {
         FloatImage image;
         image.width = r.width;

@@ -173,12 +173,18 @@ inline QuadPixels quad_of(int x, int row) { return {x & ~1, row & ~1}; }
 // `visibility`, all but depth, triangle_id and barycentric, which the rasterizing renderer
 // takes from its framebuffer when done (take_visibility: the same values, moved, not
 // allocated and copied a second time); without `provenance`, not patch_id, tess_coord and
-// level (RenderOptions::provenance).
-void allocate(RenderResult& result, int width, int height, bool visibility = true, bool provenance = true);
+// level (RenderOptions::provenance); with `colour8`, rgba8 (the background's codes) instead of
+// colour (RenderOptions::colour8: the resolve converts each pixel it shades).
+void allocate(RenderResult& result, int width, int height, bool visibility = true, bool provenance = true,
+              bool colour8 = false);
+// RenderOptions::colour8 for a renderer that shaded into the float colour: its codes into
+// rgba8, and colour freed.
+void keep_colour8(RenderResult& result);
 void take_visibility(RenderResult& result, Framebuffer& fb);
 
 // to_rgba8 into `out` (4 bytes a pixel), in parallel: for a caller whose buffer is not
-// cleared first, so that its pages are first touched on every thread, not one.
+// cleared first, so that its pages are first touched on every thread, not one. A colour8
+// render's codes are copied.
 void to_rgba8(const RenderResult& result, std::uint8_t* out);
 
 // The camera with the image size applied (RenderOptions::size), and the size checked.
