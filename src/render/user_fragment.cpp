@@ -222,6 +222,7 @@ struct UserFragmentStage::State {
     shader::RunOptions options;
     std::optional<shader::Executable> run;
     std::size_t location_count = 0;
+    bool colour8 = false;  // RenderOptions::colour8: render() keeps only the 8-bit codes
     void write(RenderResult& result, int x, int row, std::uint32_t triangle, const shader::FragmentResult& r, float depth,
                glm::vec3 barycentric) const;
 };
@@ -278,6 +279,7 @@ UserFragmentStage::UserFragmentStage(const Scene& scene, const RenderOptions& op
     s.base.shading = scene.shading;
     s.base.mvp = glm::mat4(s.base.camera.view_projection());
     s.base.domain = scene.generator.domain;
+    s.colour8 = options.colour8;
     using Clock = std::chrono::steady_clock;
     const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
     auto lap = Clock::now();
@@ -459,6 +461,7 @@ RenderResult UserFragmentStage::render() const {
     std::uint64_t covered = 0;
     for (const std::uint32_t id : result.triangle_id) covered += id != kNoPixelId;
     result.stats.covered_pixels = covered;
+    if (s.colour8) keep_colour8(result);
     result.stats.seconds_shade = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
 }
