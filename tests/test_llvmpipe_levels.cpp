@@ -9,9 +9,12 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "gl_test_context.h"
 #include "tessref/error.h"
@@ -127,6 +130,57 @@ TEST_P(LlvmpipeLevels, CpuLevelsInLlvmpipeMathAreLlvmpipesOnEveryPatch) {
     // normal factor's four angles summed as Mesa rebalances the chain: llvmpipe_math.h,
     // balanced_order).
     EXPECT_EQ(llvmpipe_math.levels_and_counts, n) << differences;
+}
+
+// The scene's control twin (data/shaders/*.tesc) given as a user's file under another name,
+// so that the CPU runs it through the SPIR-V interpreter in llvmpipe math (and llvmpipe the
+// same file): its levels are llvmpipe's on every patch. The thesis twin's normal factor sums
+// four angles as Mesa's GLSL compiler rebalances the chain (src/shader/rebalance.h): added
+// from the left, 16 patches differed (jacksboro 14, olinda 2).
+const char* control_twin(const tessref::Scene& scene) {
+    if (!scene.control) return nullptr;
+    switch (scene.control->model) {
+        case tessref::ControlModel::thesis: return "thesis_terrain";
+        case tessref::ControlModel::cosc422: return "cosc422_terrain";
+        case tessref::ControlModel::lab4: return "lab4_terrain";
+        case tessref::ControlModel::pn: return "pn_triangles";
+        case tessref::ControlModel::constant: break;
+    }
+    return nullptr;
+}
+
+TEST_P(LlvmpipeLevels, InterpretedControlTwinGivesLlvmpipesLevelsOnEveryPatch) {
+    gl::Context* ctx = context();
+    if (!ctx) return;
+    tessref::Scene scene = tessref::load_scene((kScenes / (GetParam() + ".toml")).string());
+    const char* twin = control_twin(scene);
+    const bool has_control = std::any_of(scene.shaders.begin(), scene.shaders.end(), [](const tessref::StageShader& s) {
+        return s.stage == tessref::ShaderStage::tess_control;
+    });
+    if (!twin || has_control) GTEST_SKIP() << "no control twin to give as a user's file (or the scene gives its own)";
+    const fs::path dir = fs::temp_directory_path() / ("tessref-test-levels-" + std::to_string(::getpid()) + "-" + GetParam());
+    fs::create_directories(dir);
+    const fs::path copy = dir / (std::string(twin) + "_copy.tesc");
+    {
+        std::ifstream in(fs::path(TESSREF_SOURCE_DIR) / "data" / "shaders" / (std::string(twin) + ".tesc"), std::ios::binary);
+        std::ofstream out(copy, std::ios::binary);
+        out << in.rdbuf() << "// a copy\n";
+    }
+    scene.shaders.push_back(tessref::StageShader{tessref::ShaderStage::tess_control, copy.string(), copy.string(),
+                                                 tessref::Where::in_file(copy.string())});
+    gl::SceneRenderOptions options;
+    options.size = {64, 40};
+    options.capture = true;
+    const gl::SceneRender r = gl::render_scene(*ctx, scene, options);
+    fs::remove_all(dir);
+    EXPECT_TRUE(r.batch_failure.empty()) << r.batch_failure;
+    ASSERT_TRUE(r.pipeline);
+    std::string differences;
+    const Agreement agree = agreeing_patches(*r.pipeline, r.capture, scene.generator.domain, &differences);
+    const std::size_t n = r.pipeline->levels.size();
+    std::printf("[ levels   ] %-24s %5zu patches; %s.tesc interpreted, levels and triangles as llvmpipe's: %5zu\n",
+                GetParam().c_str(), n, twin, agree.levels_and_counts);
+    EXPECT_EQ(agree.levels_and_counts, n) << differences;
 }
 
 INSTANTIATE_TEST_SUITE_P(ShippedScenes, LlvmpipeLevels, ::testing::ValuesIn(shipped_scenes()),

@@ -98,8 +98,13 @@ std::string dump(const CapturedPatch& patch);
 // wrote them. The vertex stage runs where llvmpipe runs every stage before the rasterizer,
 // in the same floating-point environment (denormals flushed), so this is how llvmpipe
 // computes the expression in a control shader too. tests/test_llvmpipe_math.cpp holds
-// shader/llvmpipe_math.h to it. Throws tessref::Error when the expression does not compile.
+// shader/llvmpipe_math.h to it. `functions` (declarations, functions) goes before main,
+// for expressions that call them. Throws tessref::Error when the expression does not compile.
 std::vector<float> evaluate(Context& context, const std::string& expression,
-                            std::span<const float> x, std::span<const float> y = {});
+                            std::span<const float> x, std::span<const float> y = {},
+                            const std::string& functions = "");
+// The vertex shader evaluate() runs for `expression` and `functions`: location 0 an input
+// uvec2 `operands` (x's and y's bits), `out float result` (location 0) the expression.
+std::string evaluate_shader(const std::string& expression, const std::string& functions = "");
 
 }  // namespace tessref::gl

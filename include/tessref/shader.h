@@ -32,6 +32,9 @@
 // `llvmpipe` mode llvmpipe's, a matrix times a vector from the first column on whatever
 // the count (GLSL's compiler writes it so), a dot product (and length, distance,
 // normalize, v * M built on it) from the last component to the first (NIR splits it so).
+// A chain of + or * (a + b + c + d) runs as written in `exact` mode; in `llvmpipe` mode as
+// Mesa's GLSL compiler leaves it, rebalanced ((a + b) + (c + d)) where its
+// opt_rebalance_tree pass rebalances it (src/shader/rebalance.h has the rule).
 //
 // The GLSL.std.450 functions run in one of two math modes (MathMode): `exact`, correctly
 // rounded float results (each computed in double and rounded once, see src/shader/std450.cpp

@@ -9,8 +9,23 @@
 
 namespace tessref::gl {
 
+std::string evaluate_shader(const std::string& expression, const std::string& functions) {
+    // uintBitsToFloat hands every operand over untouched (NaN payloads, denormals); the
+    // compiler cannot fold the expression, since its operands are only known at draw time.
+    return "#version 450 core\n"
+           "layout(location = 0) in uvec2 operands;\n"
+           "out float result;\n" +
+           functions +
+           "void main() {\n"
+           "    float x = uintBitsToFloat(operands.x);\n"
+           "    float y = uintBitsToFloat(operands.y);\n"
+           "    result = " + expression + ";\n"
+           "    gl_Position = vec4(0.0);\n"
+           "}\n";
+}
+
 std::vector<float> evaluate(Context& context, const std::string& expression,
-                            std::span<const float> x, std::span<const float> y) {
+                            std::span<const float> x, std::span<const float> y, const std::string& functions) {
     if (!y.empty() && y.size() != x.size())
         throw Error("evaluate: " + std::to_string(x.size()) + " x operands but " +
                     std::to_string(y.size()) + " y operands");
@@ -21,19 +36,9 @@ std::vector<float> evaluate(Context& context, const std::string& expression,
     c.make_current();
     auto& gl = c.gl;
 
-    // uintBitsToFloat hands every operand over untouched (NaN payloads, denormals); the
-    // compiler cannot fold the expression, since its operands are only known at draw time.
     StageSource vs;
     vs.stage = GL_VERTEX_SHADER;
-    vs.text = "#version 450 core\n"
-              "layout(location = 0) in uvec2 operands;\n"
-              "out float result;\n"
-              "void main() {\n"
-              "    float x = uintBitsToFloat(operands.x);\n"
-              "    float y = uintBitsToFloat(operands.y);\n"
-              "    result = " + expression + ";\n"
-              "    gl_Position = vec4(0.0);\n"
-              "}\n";
+    vs.text = evaluate_shader(expression, functions);
     const GLuint program = link(gl, {vs}, {"result"}, "the expression program");
 
     std::vector<std::uint32_t> operands(2 * x.size(), 0u);

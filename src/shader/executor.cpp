@@ -912,7 +912,23 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
                 }
                 break;
             }
-            default: unsupported(in, opcode_name(in.op));
+            default:
+                // A chain Mesa's GLSL compiler rebalances (rebalance.h): in llvmpipe math in
+                // its order, else as written. Here, out of the switch's way of every other
+                // instruction.
+                if (in.op == kOpChain) {
+                    const Chain& chain = m.chains[in.at];
+                    const std::uint32_t n = chain.components * L;
+                    const auto& steps = c.options.math == MathMode::llvmpipe ? chain.llvmpipe : chain.as_written;
+                    for (const auto& [result, left, right] : steps) {
+                        if (chain.op == spv::OpFAdd)
+                            each2(R(result), R(left), R(right), n, [](std::uint32_t p, std::uint32_t q) { return w(f(p) + f(q)); });
+                        else
+                            each2(R(result), R(left), R(right), n, [](std::uint32_t p, std::uint32_t q) { return w(f(p) * f(q)); });
+                    }
+                    break;
+                }
+                unsupported(in, opcode_name(in.op));
         }
     }
 }

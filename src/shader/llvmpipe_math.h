@@ -83,14 +83,11 @@ glm::vec4 transform(const glm::mat4& m, const glm::vec4& v);
 // ((a + b) + c) + d, then runs as (a + b) + (c + d). The pass takes an expression tree of
 // at least three additions (or multiplications) of one type whose leaves are variables and
 // at most one constant: no other operation, no array element or struct member among them.
-// Whether a chain reaches it in that form depends on the compiler's other passes (tree
-// grafting, inlining): the thesis control shader's sum of four angles in
-// normal_tess_factor is rebalanced (its levels on jacksboro and olinda show it, and
-// writing the angles into an array, which the pass refuses, makes llvmpipe add from the
-// left again), while the same sum of four acos results written in a vertex shader's main
-// was added from the left in every probe (gl::evaluate, 43 761 inputs). Which chains are
-// rebalanced in general is not modelled: the callers that know theirs is (thesis.cpp)
-// use this order.
+// Which chains reach it in that form depends on where it runs (after built-ins are inlined
+// and variables grafted, before user functions are inlined; at a return or an operand, not
+// at an assignment's top): src/shader/rebalance.h states the rule, and the interpreter's
+// llvmpipe mode applies it to every chain of a user's shader. The thesis control model
+// (thesis.cpp) sums its normal factor's four angles in this order, as its twin's chain is.
 // balanced_order(n) is the order for n >= 2 operands written left to right: step k
 // combines `left` and `right`, each an operand (< n) or the result of step (index - n);
 // the last step is the result. balanced_sum adds in that order, each sum rounded.

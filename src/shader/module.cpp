@@ -9,6 +9,8 @@
 #include <glslang/SPIRV/doc.h>
 #include <glslang/SPIRV/spirv.hpp>
 
+#include "shader/rebalance.h"
+
 namespace tessref::shader {
 
 std::string opcode_name(std::uint32_t op) {
@@ -116,6 +118,7 @@ public:
         if (!m_.entry) fail("no entry point");
         finish_variables();
         find_lane_invariants();
+        find_rebalanced_chains(m_);
     }
 
 private:

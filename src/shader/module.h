@@ -14,6 +14,7 @@
 // Function variable and every value has one fixed place.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -82,6 +83,19 @@ struct Instr {
     std::uint32_t file = 0;      // OpString id of the file, 0 unknown
 };
 
+// A chain of one associative float operation that Mesa's GLSL compiler rebalances
+// (rebalance.h): the instruction at its root runs the whole chain (kOpChain), the chain's
+// other instructions are OpNop. Each step is (result, left, right) by id; the chain's own
+// intermediate results are its registers. `as_written` is the source's order, `llvmpipe`
+// Mesa's; which one runs follows RunOptions::math.
+struct Chain {
+    std::uint16_t op = 0;            // spv::OpFAdd or spv::OpFMul
+    std::uint32_t components = 1;    // of the result: a scalar or a vector
+    std::vector<std::array<std::uint32_t, 3>> as_written, llvmpipe;
+};
+// The opcode of an Instr that runs Module::Impl::chains[at] (no SPIR-V opcode is this large).
+constexpr std::uint16_t kOpChain = 0xffff;
+
 struct Function {
     std::uint32_t first = 0;     // index in code of its first OpLabel
     std::vector<std::uint32_t> params;
@@ -111,6 +125,7 @@ struct Module::Impl {
     std::uint32_t std450 = 0;           // the GLSL.std.450 import's id
 
     std::vector<Instr> code;
+    std::vector<Chain> chains;               // kOpChain's operands
     std::vector<std::uint32_t> label_at;     // by label id: index in code
     std::map<std::uint32_t, Function> functions;
     std::uint32_t entry = 0;
