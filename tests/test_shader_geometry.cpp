@@ -220,5 +220,59 @@ TEST(ShaderGeometry, AnEndlessInvocationRunsIntoTheBudgetNamingThePrimitive) {
     }
 }
 
+TEST(ShaderGeometry, ABatchOfPrimitivesGivesEachPrimitivesOwnResult) {
+    // The pipeline's call: 150 primitives over a shared vertex array (more than two full
+    // batches), through a shader whose lanes part ways: primitives whose first value is
+    // even emit nothing, the others one triangle, or two strips when the value is 1 mod 4,
+    // and a loop runs as many times as the value mod 5. Each primitive's result must be
+    // the one-primitive call's, bit for bit, vertex for vertex.
+    const Module m = geometry_module("layout(triangles, invocations = 2) in;\nlayout(triangle_strip, max_vertices = 6) out;",
+                                     "int k = int(v[0].value.x);\n"
+                                     "if (k % 2 == 0) return;\n"
+                                     "float s = 0.0;\n"
+                                     "for (int j = 0; j < k % 5; j++) s += sqrt(v[j % 3].value.x);\n"
+                                     "for (int i = 0; i < 3; i++) {\n"
+                                     "    gl_Position = gl_in[i].gl_Position * s;\n"
+                                     "    o = vec4(v[i].value.x, s, float(gl_InvocationID), float(gl_PrimitiveIDIn));\n"
+                                     "    EmitVertex();\n"
+                                     "}\n"
+                                     "EndPrimitive();\n"
+                                     "if (k % 4 == 1) {\n"
+                                     "    for (int i = 2; i >= 0; i--) { gl_Position = gl_in[i].gl_Position; o = v[i].value; EmitVertex(); }\n"
+                                     "}");
+    constexpr std::size_t kPrimitives = 150, kVertices = 160;
+    ShaderVertices flat;
+    flat.location_count = 1;
+    for (std::size_t k = 0; k < kVertices; ++k) {
+        flat.positions.push_back(glm::vec4(static_cast<float>(k), 0.25f * static_cast<float>(k), 1.0f, 1.0f));
+        flat.locations.push_back(slot(glm::vec4(static_cast<float>(k % 37), 0.0f, 0.0f, 0.0f)));
+    }
+    std::vector<std::uint32_t> indices;
+    for (std::size_t p = 0; p < kPrimitives; ++p)
+        for (std::size_t j = 0; j < 3; ++j) indices.push_back(static_cast<std::uint32_t>((p * 7 + j * 3) % kVertices));
+    const Executable e(m, {}, RunOptions{});
+    std::vector<ShaderPrimitives> batched;
+    e.geometry(flat, indices, 9, batched);
+    ASSERT_EQ(batched.size(), kPrimitives);
+    std::size_t emitting = 0, twice = 0;
+    for (std::size_t p = 0; p < kPrimitives; ++p) {
+        const std::vector<ShaderVertex> in = {flat.vertex(indices[3 * p]), flat.vertex(indices[3 * p + 1]),
+                                              flat.vertex(indices[3 * p + 2])};
+        const ShaderPrimitives one = e.geometry(in, 9);
+        ASSERT_EQ(batched[p].vertices.size(), one.vertices.size()) << "primitive " << p;
+        EXPECT_EQ(batched[p].indices, one.indices) << "primitive " << p;
+        for (std::size_t k = 0; k < one.vertices.size(); ++k) {
+            EXPECT_EQ(batched[p].vertices[k].position, one.vertices[k].position) << "primitive " << p;
+            EXPECT_EQ(batched[p].vertices[k].locations, one.vertices[k].locations) << "primitive " << p;
+        }
+        emitting += one.vertices.empty() ? 0 : 1;
+        twice += one.primitive_count() == 4 ? 1 : 0;  // two invocations of two triangles
+    }
+    // The three ways were all taken.
+    EXPECT_GT(emitting, 0u);
+    EXPECT_LT(emitting, kPrimitives);
+    EXPECT_GT(twice, 0u);
+}
+
 }  // namespace
 }  // namespace tessref::shader

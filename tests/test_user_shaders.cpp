@@ -498,6 +498,33 @@ TEST_F(UserShaderCommand, GoldenRunsTheScenesShadersOnBothSides) {
     EXPECT_EQ(verify.status, 0) << verify.out << verify.err;
 }
 
+// golden and sweep run a scene's user geometry shader too: drop_steep.geom in [shaders]
+// makes golden update record the 21303 triangles it emits (of the generator's 24246), and
+// verify, whose llvmpipe side draws with the same file, pass; a sweep's row counts them.
+TEST_F(UserShaderCommand, GoldenAndSweepRunAUsersGeometryShader) {
+    std::string toml = read_file(scene_path("cosc422"));
+    for (std::size_t at = 0; (at = toml.find("\"../", at)) != std::string::npos;)
+        toml.replace(at, 4, "\"" + (kSource / "data").string() + "/");
+    fs::create_directories(fs::path(path("scenes")));
+    write_file(fs::path(path("scenes")) / "user.toml",
+               toml + "\n[shaders]\ngeometry = \"" + (kUserShaders / "drop_steep.geom").string() + "\"\n");
+    const std::vector<std::string> where = {"--scenes", path("scenes"), "--golden", path("golden")};
+    std::vector<std::string> update = {"golden", "update", "user"};
+    update.insert(update.end(), where.begin(), where.end());
+    const RunResult updated = run(update);
+    ASSERT_EQ(updated.status, 0) << updated.err;
+    EXPECT_NE(updated.out.find("capture.txt 81 patches 21303 triangles"), std::string::npos) << updated.out;
+    std::vector<std::string> verify = {"golden", "verify", "user"};
+    verify.insert(verify.end(), where.begin(), where.end());
+    const RunResult verified = run(verify);
+    EXPECT_EQ(verified.status, 0) << verified.out << verified.err;
+
+    const RunResult sweep = run({"sweep", (fs::path(path("scenes")) / "user.toml").string(), "--levels", "2", "--size",
+                                 "64x40", "-o", path("sweep")});
+    ASSERT_EQ(sweep.status, 0) << sweep.err;
+    EXPECT_NE(read_file(fs::path(path("sweep")) / "sweep.csv").find(",81,21303,"), std::string::npos);
+}
+
 // The shipped pn-culling scene: the PN tutorial's control shader with frustum and back-face
 // patch culling (data/shaders/pn_culling.tesc, no C++ model) runs through the interpreter,
 // and the CPU discards exactly the patches llvmpipe discards: the two captures hold the same
@@ -630,6 +657,182 @@ TEST_F(UserShaderCommand, GeometryTwinsGiveLlvmpipesNormals) {
         std::printf("cosc422 face normals: llvmpipe mode %zu of %zu differ from llvmpipe's, exact mode %zu\n",
                     llvmpipe.differing, llvmpipe.vertices, exact.differing);
     }
+}
+
+// A user's geometry shader runs in the CPU pipeline (mesh --capture, render, gl's
+// prediction), batched over each patch's triangles, and what it emits is llvmpipe's:
+// face_normal.geom passes every triangle through with a face normal of its own
+// (cross/normalize), drop_steep.geom drops the triangles that lean more than a threshold
+// (fewer triangles than the generator makes, a count that hangs on the normals' last bits).
+// In llvmpipe math the CPU's capture equals `gl --capture` bit for bit, positions and
+// normals, on every vertex, and gl draws with every count as the CPU predicted.
+TEST_F(UserShaderCommand, UserGeometryShaderCaptureIsLlvmpipes) {
+    const std::string scene = scene_path("cosc422").string();
+    std::size_t triangles[2] = {0, 0};
+    int k = 0;
+    for (const char* file : {"face_normal.geom", "drop_steep.geom"}) {
+        const std::string geom = "geom=" + (kUserShaders / file).string();
+        const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--size", "160x100", "--capture", path("gl.txt"),
+                                  "--shader", geom});
+        ASSERT_EQ(gl.status, 0) << file << gl.out << gl.err;
+        EXPECT_NE(gl.out.find("every count as predicted"), std::string::npos) << gl.out;
+        const RunResult cpu = run({"mesh", scene, "--capture", path("cpu.txt"), "--math", "llvmpipe", "--shader", geom});
+        ASSERT_EQ(cpu.status, 0) << cpu.err;
+        const tessref::CaptureCompareResult c = compare(path("cpu.txt"), path("gl.txt"), 0);
+        EXPECT_EQ(c.tess_coord_divergences + c.triangle_divergences + c.orientation_divergences, 0u) << file;
+        EXPECT_GT(c.vertices_compared, 10000u) << file;
+        EXPECT_EQ(c.worst_position.ulps, 0u) << file;
+        EXPECT_EQ(c.worst_normal.ulps, 0u) << file;
+        EXPECT_EQ(c.failing_vertices, 0u) << file;
+        triangles[k++] = tessref::read_capture(path("cpu.txt")).vertices.size() / 3;
+        std::printf("%s: %zu vertices, positions and normals bit-identical to llvmpipe's on %zu\n", file,
+                    c.vertices_compared, c.vertices_compared - c.failing_vertices);
+    }
+    // The generator's 24246 triangles, all passed through; the steep ones dropped.
+    EXPECT_EQ(triangles[0], 24246u);
+    EXPECT_GT(triangles[1], 10000u);
+    EXPECT_LT(triangles[1], triangles[0]);
+}
+
+// The general case, a geometry shader that emits other positions than it reads:
+// shrink.geom draws every triangle shrunk toward its centroid, leaving gaps between them.
+// The CPU's render (llvmpipe math) is llvmpipe's but for a few pixels on the triangles' edges
+// (GL combines the corners in clip space, the CPU in world space and then projects; 3 of
+// 64 000 pixels when written, as many as the model's render differs by, 1), and covers
+// far fewer pixels than the whole surface does.
+TEST_F(UserShaderCommand, AGeometryShaderThatMovesVerticesRendersAsLlvmpipe) {
+    const std::string scene = scene_path("cosc422").string();
+    const std::string geom = "geom=" + (kUserShaders / "shrink.geom").string();
+    const RunResult gl = run({"gl", scene, "-o", path("gl.png"), "--size", "320x200", "--shader", geom});
+    ASSERT_EQ(gl.status, 0) << gl.out << gl.err;
+    const RunResult cpu = run({"render", scene, "-o", path("cpu.png"), "--size", "320x200", "--math", "llvmpipe",
+                               "--shader", geom});
+    ASSERT_EQ(cpu.status, 0) << cpu.err;
+    const RunResult whole = run({"render", scene, "-o", path("whole.png"), "--size", "320x200", "--math", "llvmpipe"});
+    ASSERT_EQ(whole.status, 0) << whole.err;
+    const tessref::image::Image a = tessref::image::read_image(path("cpu.png"));
+    const tessref::image::Image b = tessref::image::read_image(path("gl.png"));
+    const tessref::image::Image c = tessref::image::read_image(path("whole.png"));
+    ASSERT_EQ(a.channels, 4);
+    ASSERT_EQ(a.u8.size(), b.u8.size());
+    std::size_t differing = 0, covered = 0, covered_whole = 0;
+    for (std::size_t i = 0; i < a.u8.size(); i += 4) {
+        differing += !std::equal(&a.u8[i], &a.u8[i] + 4, &b.u8[i]);
+        covered += a.u8[i + 3] != 0;
+        covered_whole += c.u8[i + 3] != 0;
+    }
+    EXPECT_LE(differing, 20u);
+    EXPECT_LT(covered, covered_whole / 2);
+    EXPECT_GT(covered, 1000u);
+    std::printf("shrink.geom: %zu of %zu pixels differ from llvmpipe's; %zu covered (the whole surface %zu)\n", differing,
+                a.u8.size() / 4, covered, covered_whole);
+}
+
+// A user's copy of a geometry twin under another name (any other text runs through the
+// interpreter) renders as the model: cosc422's face normals give the very bytes; the thesis's
+// normal-map normals differ from the model's where normalize rounds otherwise (the model's
+// glm v * (1 / sqrt(dot)) against GLSL's normalize, ShaderTwins'
+// *GeometryNormalsAreTheModelsButForNormalize), which moves a few pixels by one 8-bit step.
+TEST_F(UserShaderCommand, AUsersCopyOfAGeometryTwinRendersAsTheModel) {
+    for (const auto& [scene, twin] : {std::pair<std::string, std::string>{"cosc422", "cosc422_terrain.geom"},
+                                      std::pair<std::string, std::string>{"thesis-all-10", "thesis_terrain.geom"}}) {
+        write_file(path("copy.geom"), "// a user's copy\n" + read_file(kSource / "data" / "shaders" / twin));
+        ASSERT_EQ(run({"render", scene_path(scene).string(), "-o", path("model.png"), "--size", "320x200"}).status, 0);
+        const RunResult user = run({"render", scene_path(scene).string(), "-o", path("user.png"), "--size", "320x200",
+                                    "--shader", "geom=" + path("copy.geom")});
+        ASSERT_EQ(user.status, 0) << user.err;
+        const tessref::image::Image a = tessref::image::read_image(path("model.png"));
+        const tessref::image::Image b = tessref::image::read_image(path("user.png"));
+        ASSERT_EQ(a.u8.size(), b.u8.size());
+        std::size_t differing = 0;
+        int worst = 0;
+        for (std::size_t i = 0; i < a.u8.size(); ++i) {
+            differing += a.u8[i] != b.u8[i];
+            worst = std::max(worst, std::abs(int(a.u8[i]) - int(b.u8[i])));
+        }
+        if (scene == "cosc422") {
+            EXPECT_EQ(differing, 0u) << scene;
+        } else {
+            EXPECT_LE(worst, 1) << scene;
+            EXPECT_LE(differing, 10u) << scene;  // 2 of 64000 pixels when written
+        }
+        std::printf("%s: a user's copy of %s renders %zu samples differently from the model (at most %d)\n",
+                    scene.c_str(), twin.c_str(), differing, worst);
+    }
+    // And the mesh: the same positions, texture coordinates and triangles as the model's,
+    // bit for bit (thesis: normals within 3 ulps, the goldens' allowance for normalize).
+    const RunResult model = run({"mesh", scene_path("cosc422").string(), "--capture", path("model.txt")});
+    ASSERT_EQ(model.status, 0) << model.err;
+    write_file(path("copy.geom"), "// a user's copy\n" + read_file(kSource / "data" / "shaders" / "cosc422_terrain.geom"));
+    const RunResult user = run({"mesh", scene_path("cosc422").string(), "--capture", path("user.txt"), "--shader",
+                                "geom=" + path("copy.geom")});
+    ASSERT_EQ(user.status, 0) << user.err;
+    const tessref::CaptureCompareResult c = compare(path("model.txt"), path("user.txt"), 3);
+    EXPECT_EQ(c.tess_coord_divergences + c.triangle_divergences + c.orientation_divergences, 0u);
+    EXPECT_EQ(c.worst_position.ulps, 0u);
+    EXPECT_EQ(c.failing_vertices, 0u);
+}
+
+// A geometry shader whose output the pipeline cannot take is refused, exit 2, naming the
+// file and the layout or the location; nothing is written.
+TEST_F(UserShaderCommand, AGeometryShaderThePipelineCannotTakeIsRefused) {
+    const std::string scene = scene_path("cosc422").string();
+    const std::string body =
+        "layout(location = 0) in EvaluationData { vec3 worldPosition; vec2 texCoord; } evaluationIn[];\n"
+        "layout(location = 0) out GeometryData { vec3 faceNormal; vec2 texCoord; } geometryOut;\n"
+        "void main() { for (int i = 0; i < gl_in.length(); i++) { geometryOut.faceNormal = vec3(0.0, 1.0, 0.0); "
+        "geometryOut.texCoord = vec2(0.0); gl_Position = gl_in[i].gl_Position; EmitVertex(); } }\n";
+    const struct {
+        const char* name;
+        std::string text;
+        const char* says;
+    } cases[] = {
+        {"points.geom", "#version 450 core\nlayout(triangles) in;\nlayout(points, max_vertices = 3) out;\n" + body,
+         "layout(points) out"},
+        {"lines.geom", "#version 450 core\nlayout(triangles) in;\nlayout(line_strip, max_vertices = 3) out;\n" + body,
+         "layout(line_strip) out"},
+        {"lines_in.geom", "#version 450 core\nlayout(lines) in;\nlayout(triangle_strip, max_vertices = 3) out;\n" + body,
+         "layout(triangles) in"},
+        {"no_normal.geom",
+         "#version 450 core\nlayout(triangles) in;\nlayout(triangle_strip, max_vertices = 3) out;\n"
+         "layout(location = 0) in EvaluationData { vec3 worldPosition; vec2 texCoord; } evaluationIn[];\n"
+         "layout(location = 1) out vec2 texCoord;\n"
+         "void main() { for (int i = 0; i < 3; i++) { texCoord = evaluationIn[i].texCoord; gl_Position = gl_in[i].gl_Position; "
+         "EmitVertex(); } }\n",
+         "no output at location 0"},
+    };
+    for (const auto& c : cases) {
+        write_file(path(c.name), c.text);
+        for (const std::vector<std::string>& command :
+             {std::vector<std::string>{"render", scene, "-o", path("out.png"), "--size", "64x40"},
+              std::vector<std::string>{"mesh", scene, "-o", path("out.ply")}}) {
+            std::vector<std::string> args = command;
+            args.insert(args.end(), {"--shader", std::string("geom=") + path(c.name)});
+            const RunResult r = run(args);
+            EXPECT_EQ(r.status, 2) << c.name << r.out << r.err;
+            EXPECT_NE(r.err.find(c.says), std::string::npos) << c.name << ": " << r.err;
+            EXPECT_NE(r.err.find(c.name), std::string::npos) << r.err;
+        }
+        EXPECT_FALSE(fs::exists(path("out.png")));
+        EXPECT_FALSE(fs::exists(path("out.ply")));
+    }
+    // Every triangle twice (48492) under a budget of 40000 that the generator's 24246 (estimated 31518) meet:
+    // the budget counts what the geometry shader emits.
+    std::string toml = read_file(scene_path("cosc422"));
+    for (std::size_t at = 0; (at = toml.find("\"../", at)) != std::string::npos;)
+        toml.replace(at, 4, "\"" + (kSource / "data").string() + "/");
+    write_file(path("budget.toml"), toml + "\n[limits]\nmax_triangles = 40000\n");
+    write_file(path("twice.geom"), "#version 450 core\nlayout(triangles) in;\nlayout(triangle_strip, max_vertices = 6) out;\n" +
+                                       body.substr(0, body.find("void main()")) +
+                                       "void main() { for (int k = 0; k < 2; k++) { for (int i = 0; i < 3; i++) { "
+                                       "geometryOut.faceNormal = vec3(0.0, 1.0, 0.0); geometryOut.texCoord = vec2(0.0); "
+                                       "gl_Position = gl_in[i].gl_Position; EmitVertex(); } EndPrimitive(); } }\n");
+    ASSERT_EQ(run({"mesh", path("budget.toml"), "-o", path("out.ply")}).status, 0);
+    fs::remove(path("out.ply"));
+    const RunResult twice = run({"mesh", path("budget.toml"), "-o", path("out.ply"), "--shader", "geom=" + path("twice.geom")});
+    EXPECT_EQ(twice.status, 2) << twice.err;
+    EXPECT_NE(twice.err.find("limits.max_triangles = 40000"), std::string::npos) << twice.err;
+    EXPECT_FALSE(fs::exists(path("out.ply")));
 }
 
 // `trace --stage geom`: the geometry shader of one primitive of a patch (its K-th triangle,

@@ -47,7 +47,8 @@ struct PipelineTimings {
     double control = 0.0;     // pass 1, vertex + control shaders, and pass 2, the budget
     double generator = 0.0;   // pass 3, patterns and output ranges
     double evaluation = 0.0;  // pass 4, evaluation (and per-vertex / per-face geometry)
-    double geometry = 0.0;    // smooth normals over the whole surface
+    double geometry = 0.0;    // smooth normals over the whole surface, or a user's geometry shader
+                              // (with the evaluation it reads: its output is made before pass 4)
 };
 
 struct PipelineOptions {
@@ -114,6 +115,12 @@ struct PipelineResult {
     // (geomip_terrain.vert: sampleHeight, morphTarget, tween) as floats; with the gpu
     // precision each position's z is geomip::morph_height of them. Empty for other models.
     std::vector<glm::vec3> geomorph;
+    // A user's geometry shader ran ([shaders] geom): the mesh's triangles are the ones it
+    // emitted, patch by patch in the order emitted, three vertices of their own each (GL's
+    // order of their corners, reversed 1 <-> 2 where `reversed`, as the pipeline reverses
+    // the generator's triangles to face up), not the generator's pattern.
+    bool geometry_shader = false;
+    bool reversed = false;
 
     // camera_relative (PipelineOptions): the point the evaluation worked relative to, and its
     // float output positions (mesh.positions[v] == origin + relative_positions[v] in double).
@@ -160,6 +167,10 @@ public:
     bool has_normals() const;   // emit() writes mesh.normals (per-vertex geometry normals)
     bool face_normals() const;  // [geometry] normals = "face": emit() writes face normals
     bool smooth_normals() const;  // [geometry] normals = "smooth": need the whole surface
+    // A user's geometry shader ran (PipelineResult::geometry_shader): its output is computed
+    // for every patch when the stream opens and held, and emit() copies it.
+    bool geometry_shader() const;
+    bool reversed() const;  // the triangles are reversed (1 <-> 2) to face up / out
     // Camera-relative evaluation (PipelineOptions::camera_relative): positions from emit()
     // are the evaluation's, relative to origin(); (0, 0, 0) otherwise.
     glm::dvec3 origin() const;

@@ -123,6 +123,13 @@ public:
         int unit = 0;
     };
     std::vector<Sampler> samplers() const;
+    // The user-defined outputs (not built-ins), each location with its component count (a
+    // block's members one by one), in declaration order.
+    struct Output {
+        int location = 0;
+        int components = 0;
+    };
+    std::vector<Output> outputs() const;
     // A control shader's layout(vertices = N) out; 0 for other stages.
     int output_vertices() const;
     // An evaluation shader's layout; throws tessref::Error for other stages.
@@ -298,6 +305,12 @@ public:
     // input layout takes). gl_PrimitiveIDIn = primitive_id. A vertex emitted past
     // max_vertices is dropped with a warning (GL leaves it undefined; llvmpipe drops it).
     ShaderPrimitives geometry(std::span<const ShaderVertex> in, long long primitive_id) const;
+    // Over many input primitives at once, as the pipeline runs it: primitive k's vertices are
+    // in.vertex(indices[k * n + j]) for j < n, n the input layout's vertex count; out[k] is
+    // geometry() of those vertices, bit for bit, computed a batch of primitives at a time
+    // (each instruction over all the batch's invocations, as evaluate() batches points).
+    void geometry(const ShaderVertices& in, std::span<const std::uint32_t> indices, long long primitive_id,
+                  std::vector<ShaderPrimitives>& out) const;
     // Fragment: the four invocations of a 2x2 quad, as llvmpipe runs them, lanes in the order
     // top-left, top-right, bottom-left, bottom-right (rows as the framebuffer's: the top row
     // has the higher window y). dFdx = right minus left in the lane's row, dFdy = top minus

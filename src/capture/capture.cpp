@@ -47,9 +47,11 @@ PipelineCapture::PipelineCapture(const Scene& scene, const PipelineResult& resul
     : result_(result), triangles_(result.mesh.triangles.size()) {
     const SurfaceMesh& mesh = result.mesh;
     const std::size_t triangles = triangles_;
-    if (scene.evaluation.model == EvaluationModel::geomipmap) {
+    if (scene.evaluation.model == EvaluationModel::geomipmap || result.geometry_shader) {
         // No primitive generator: the CPU built each patch's triangles (geomipmap.h), and
         // the capture is those triangles as the vertex buffer holds them, in mesh order.
+        // Or a user's geometry shader emitted them, in mesh order too (in GL's corner
+        // order once the pipeline's reversal is undone).
         if (triangles) blocks_.push_back({0, 0, 0, nullptr});
         for (std::size_t t = 0; t < triangles; ++t) {
             const std::uint32_t p = mesh.patch_ids[mesh.triangles[t][0]];
@@ -107,7 +109,9 @@ void PipelineCapture::append(std::size_t first, std::size_t last, std::vector<Ca
         const Block& block = blocks_[b];
         const auto& tri = mesh.triangles[t];
         if (!block.pattern) {
-            for (const std::uint32_t v : tri) {
+            const std::array<std::uint32_t, 3> corners =
+                result.reversed ? std::array<std::uint32_t, 3>{tri[0], tri[2], tri[1]} : tri;
+            for (const std::uint32_t v : corners) {
                 CapturedVertex c;
                 c.patch_id = mesh.patch_ids[v];
                 c.tess_coord = mesh.tess_coords[v];

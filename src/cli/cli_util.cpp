@@ -531,7 +531,7 @@ void add_math_option(CLI::App& app, std::string& math) {
 
 void add_cpu_shader_options(CLI::App& app, std::vector<std::string>& shaders, std::string& max_instructions) {
     app.add_option("--shader", shaders, "A GLSL file of your own for one stage (repeatable; over the scene's [shaders]): STAGE is "
-                    "vertex|vert, tess_control|tesc or tess_evaluation|tese, which the CPU runs through its SPIR-V "
+                    "vertex|vert, tess_control|tesc, tess_evaluation|tese or geometry|geom, which the CPU runs through its SPIR-V "
                     "interpreter with the twins' uniforms and textures (docs/CLI.md: Your shaders on the CPU)")
         ->type_name("STAGE=FILE")
         ->allow_extra_args(false);

@@ -323,7 +323,13 @@ std::string count_note(const Plan& plan) {
 // The capture program: the same stages, no fragment shader; the evaluation shader also hands
 // on gl_TessCoord, gl_PrimitiveID and the world position, and the geometry shader (if any)
 // passes them through with each EmitVertex (the twins' main and EmitVertex are renamed by the
-// preprocessor and wrapped, the twins' text is not changed).
+// preprocessor and wrapped, the twins' text is not changed). The geometry stage's capture
+// records, for the e-th vertex an invocation emits, the tess coord, patch and evaluated
+// position of its input vertex e mod 3 (a pass-through shader's own corner; a shader that
+// emits more vertices than it reads, its corners again), and the normal expression as the
+// emitting shader computed it: a user's geometry shader in place of a twin must declare
+// the twin's output block (geometryOut.gNormal / faceNormal), as the CPU reads it by
+// location (src/pipeline/user_program.cpp).
 std::vector<StageSource> capture_stages(const Plan& plan) {
     std::vector<StageSource> stages;
     const std::string normal = plan.normal_expression.empty() ? "vec3(0.0)" : plan.normal_expression;
@@ -363,11 +369,11 @@ std::vector<StageSource> capture_stages(const Plan& plan) {
                 "out vec3 tessref_cap_normal;\nint tessref_emitted = 0;\nvoid tessref_emit();\n"
                 "#define EmitVertex() tessref_emit()\n";
             c.suffix = "#undef EmitVertex\nvoid tessref_emit()\n{\n"
-                       "    tessref_cap_tess_coord = tessref_te_tess_coord[tessref_emitted];\n"
-                       "    tessref_cap_patch_id = tessref_te_patch_id[tessref_emitted];\n"
-                       "    tessref_cap_position = tessref_te_position[tessref_emitted];\n"
-                       "    tessref_cap_outer = tessref_te_outer[tessref_emitted];\n"
-                       "    tessref_cap_inner = tessref_te_inner[tessref_emitted];\n"
+                       "    tessref_cap_tess_coord = tessref_te_tess_coord[tessref_emitted % 3];\n"
+                       "    tessref_cap_patch_id = tessref_te_patch_id[tessref_emitted % 3];\n"
+                       "    tessref_cap_position = tessref_te_position[tessref_emitted % 3];\n"
+                       "    tessref_cap_outer = tessref_te_outer[tessref_emitted % 3];\n"
+                       "    tessref_cap_inner = tessref_te_inner[tessref_emitted % 3];\n"
                        "    tessref_cap_normal = " + normal + ";\n"
                        "    EmitVertex();\n    tessref_emitted = tessref_emitted + 1;\n}\n";
         }

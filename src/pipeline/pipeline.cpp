@@ -27,6 +27,7 @@
 #include "common/parallel.h"
 #include "pipeline/program.h"
 #include "tessref/geometry.h"
+#include "tessref/limits.h"
 
 namespace tessref {
 namespace {
@@ -121,6 +122,10 @@ std::vector<std::shared_ptr<const Pattern>> patterns_of(const Scene& scene, cons
 
 using Clock = std::chrono::steady_clock;
 
+// What a geometry shader's emitted vertex takes in SurfaceMesh: position, normal and uv in
+// double, tess coord, patch id, and its share of a triangle.
+constexpr std::uint64_t kEmittedVertexBytes = 3 * 8 + 3 * 8 + 2 * 8 + 3 * 4 + 4 + 4;
+
 // Pass timings (PipelineTimings), only when asked for; they change nothing else.
 struct PassTimer {
     PipelineTimings* timings;
@@ -153,6 +158,10 @@ struct PatchStream::Impl {
     std::vector<std::shared_ptr<const Pattern>> patterns;
     std::vector<std::size_t> vertex_base, triangle_base;
     bool has_uvs = false, has_normals = false, face_normals = false, smooth_normals = false;
+    // A user's geometry shader: per patch, what it emitted (PatchProgram::geometry).
+    bool geometry_shader = false;
+    std::vector<SurfaceMesh> emitted;
+    std::vector<std::vector<glm::dvec3>> emitted_face_normals;
 };
 
 namespace {
@@ -201,11 +210,43 @@ struct StreamImpl final : PatchStream::Impl {
             vertex_base[p + 1] = vertex_base[p] + patterns[p]->points().size();
             triangle_base[p + 1] = triangle_base[p] + patterns[p]->primitive_count();
         }
+        time_pass(&PipelineTimings::generator);
+        if (program->geometry_shader()) {
+            // The geometry shader decides how many triangles each patch makes: its output
+            // is computed now, patch by patch in parallel, and emit() copies it.
+            geometry_shader = true;
+            emitted.resize(n);
+            emitted_face_normals.resize(n);
+            // The budget again, as the output grows: a geometry shader may emit more
+            // triangles than it is given (up to max_vertices - 2 for each).
+            std::atomic<std::uint64_t> total{0};
+            const auto over_budget = [&] {
+                return Error("the scene's geometry shader emits more triangles than limits.max_triangles = " +
+                                 std::to_string(scene.max_triangles),
+                             scene.max_triangles_where);
+            };
+            tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t p = r.begin(); p != r.end(); ++p) {
+                    program->geometry(p, *patterns[p], emitted[p], emitted_face_normals[p]);
+                    const std::uint64_t so_far = total += emitted[p].triangles.size();
+                    if (so_far > scene.max_triangles) throw over_budget();
+                    // Held until the stream closes: three vertices of their own a triangle.
+                    require_memory(saturating_bytes(so_far, 3 * kEmittedVertexBytes),
+                                   "the output of the scene's geometry shader (" + std::to_string(so_far) +
+                                       " triangles so far)",
+                                   scene.max_triangles_where);
+                }
+            });
+            for (std::size_t p = 0; p < n; ++p) {
+                vertex_base[p + 1] = vertex_base[p] + emitted[p].positions.size();
+                triangle_base[p + 1] = triangle_base[p] + emitted[p].triangles.size();
+            }
+            time_pass(&PipelineTimings::geometry);
+        }
         if (vertex_base[n] > 0xffffffffu)
             throw Error("the scene emits " + std::to_string(vertex_base[n]) +
                             " vertices, more than 32-bit indices address",
                         scene.max_triangles_where);
-        time_pass(&PipelineTimings::generator);
     }
 
     void write_coords(std::size_t p, std::span<const TessCoord> coords, SurfaceMesh& mesh, std::size_t first) const {
@@ -215,8 +256,35 @@ struct StreamImpl final : PatchStream::Impl {
         }
     }
 
+    // A geometry shader's output of patch p (held since the stream opened): its vertices
+    // `vertices`, in that order, at mesh index first on.
+    void copy_emitted(std::size_t p, std::span<const std::uint32_t> vertices, SurfaceMesh& mesh, std::size_t first) const {
+        const SurfaceMesh& e = emitted[p];
+        for (std::size_t k = 0; k < vertices.size(); ++k) {
+            const std::size_t v = vertices[k];
+            mesh.positions[first + k] = e.positions[v];
+            mesh.patch_ids[first + k] = e.patch_ids[v];
+            mesh.tess_coords[first + k] = e.tess_coords[v];
+            if (has_uvs) mesh.uvs[first + k] = e.uvs[v];
+            if (has_normals) mesh.normals[first + k] = e.normals[v];
+        }
+    }
+
     void emit(std::size_t p, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
               std::vector<glm::dvec3>* normals_out, bool vertex_normals) const override {
+        if (geometry_shader) {
+            const SurfaceMesh& e = emitted[p];
+            std::vector<std::uint32_t> all(e.positions.size());
+            for (std::size_t v = 0; v < all.size(); ++v) all[v] = static_cast<std::uint32_t>(v);
+            copy_emitted(p, all, mesh, first_vertex);
+            const auto base = static_cast<std::uint32_t>(first_vertex);
+            for (std::size_t t = 0; t < e.triangles.size(); ++t)
+                mesh.triangles[first_triangle + t] = {base + e.triangles[t][0], base + e.triangles[t][1], base + e.triangles[t][2]};
+            if (face_normals && normals_out)
+                std::copy(emitted_face_normals[p].begin(), emitted_face_normals[p].end(),
+                          normals_out->begin() + static_cast<std::ptrdiff_t>(first_triangle));
+            return;
+        }
         const Pattern& pattern = *patterns[p];
         program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals);
         write_coords(p, pattern.points(), mesh, first_vertex);
@@ -248,6 +316,20 @@ struct StreamImpl final : PatchStream::Impl {
                                           glm::dvec3* normal_out) const override {
         const std::size_t p = static_cast<std::size_t>(
             std::upper_bound(triangle_base.begin(), triangle_base.end(), triangle) - triangle_base.begin() - 1);
+        if (geometry_shader) {
+            const std::array<std::uint32_t, 3> tri = emitted[p].triangles[triangle - triangle_base[p]];
+            out.positions.resize(3);
+            out.patch_ids.resize(3);
+            out.tess_coords.resize(3);
+            out.uvs.resize(has_uvs ? 3 : 0);
+            out.normals.resize(has_normals ? 3 : 0);
+            out.triangles.assign(1, {0, 1, 2});
+            copy_emitted(p, tri, out, 0);
+            if (face_normals && normal_out) *normal_out = emitted_face_normals[p][triangle - triangle_base[p]];
+            for (glm::dvec3& position : out.positions) position += origin;
+            const auto first = static_cast<std::uint32_t>(vertex_base[p]);
+            return {first + tri[0], first + tri[1], first + tri[2]};
+        }
         const auto prim = patterns[p]->primitive(triangle - triangle_base[p]);
         std::array<std::uint32_t, 3> points{prim[0], prim[1], prim[2]};
         if (program->flip) std::swap(points[1], points[2]);
@@ -269,6 +351,7 @@ struct StreamImpl final : PatchStream::Impl {
 
     void evaluate_points(std::size_t p, std::span<const std::uint32_t> indices, SurfaceMesh& mesh,
                          std::size_t first) const override {
+        if (geometry_shader) return copy_emitted(p, indices, mesh, first);
         const Pattern& pattern = *patterns[p];
         const auto all = domain_points<T>(pattern);
         const auto coords = pattern.points();
@@ -360,6 +443,8 @@ PipelineResult run(const Scene& scene, const PipelineOptions& options) {
     }
 
     result.levels = stream.levels();
+    result.geometry_shader = stream.geometry_shader();
+    result.reversed = stream.reversed();
     result.estimated_triangles = stream.estimated_triangles();
     result.distinct_patterns = stream.distinct_patterns();
     result.stages.control = scene.control.has_value();
@@ -560,6 +645,8 @@ bool PatchStream::has_normals() const { return impl_->has_normals; }
 bool PatchStream::face_normals() const { return impl_->face_normals; }
 bool PatchStream::smooth_normals() const { return impl_->smooth_normals; }
 glm::dvec3 PatchStream::origin() const { return impl_->origin; }
+bool PatchStream::geometry_shader() const { return impl_->geometry_shader; }
+bool PatchStream::reversed() const { return impl_->flip; }
 void PatchStream::size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals, std::size_t vertices,
                        std::size_t triangles) const {
     mesh.positions.resize(vertices);
@@ -593,6 +680,12 @@ void PatchStream::triangles(std::size_t first, std::span<std::array<std::uint32_
     for (std::size_t k = 0; k < out.size(); ++k) {
         const std::size_t t = first + k;
         while (t >= base[p + 1]) ++p;
+        const auto vertex0 = static_cast<std::uint32_t>(impl_->vertex_base[p]);
+        if (impl_->geometry_shader) {
+            const auto& tri = impl_->emitted[p].triangles[t - base[p]];
+            out[k] = {vertex0 + tri[0], vertex0 + tri[1], vertex0 + tri[2]};
+            continue;
+        }
         const auto prim = impl_->patterns[p]->primitive(t - base[p]);
         const auto vertex = static_cast<std::uint32_t>(impl_->vertex_base[p]);
         out[k] = {vertex + prim[0], vertex + prim[impl_->flip ? 2 : 1], vertex + prim[impl_->flip ? 1 : 2]};

@@ -59,6 +59,19 @@ public:
                                   std::span<const vec3_t<T>> /*position*/, std::span<const vec2_t<T>> /*uv*/,
                                   std::span<vec3_t<T>> /*normal*/) const {}
 
+    // A user's geometry shader (user_program.cpp) makes the patch's output: any number of
+    // triangles with any positions, so the surface's size is known only once it has run.
+    // geometry() runs the evaluation at every domain point of the pattern and the geometry
+    // shader over the pattern's triangles (as GL hands them on: the generator's order and
+    // orientation), and writes what it emitted as whole triangles, three vertices each, in
+    // the order emitted: positions, patch ids, tess coords, uvs and normals where has_uvs /
+    // has_normals, each triangle reversed (1 <-> 2) where flip is set, as emit() reverses the
+    // pattern's; `face_normals` one per triangle when the scene asks for face normals.
+    // Called after control() of the same patch, concurrently for different patches.
+    virtual bool geometry_shader() const { return false; }
+    virtual void geometry(std::size_t /*patch*/, const Pattern& /*pattern*/, SurfaceMesh& /*out*/,
+                          std::vector<glm::dvec3>& /*face_normals*/) const {}
+
     bool has_uvs = false;     // the evaluation writes texture coordinates
     bool has_normals = false; // the evaluation or the geometry stage writes vertex normals
     bool flip = false;        // reverse each triangle so that it faces up / out
@@ -80,11 +93,11 @@ std::unique_ptr<PatchProgram<T>> make_program(const Scene& scene, const glm::dve
 template <typename T>
 std::unique_ptr<PatchProgram<T>> make_model_program(const Scene& scene, const glm::dvec3& origin);
 
-// The user's vertex, control and evaluation shaders of the scene's [shaders] that the CPU
-// runs through the interpreter: those whose text is not exactly the shipped twin's (a twin
-// given as a user file keeps its C++ model). Empty for a geomipmapped terrain (no
-// tessellation stages) and for geometry and fragment shaders, which the pipeline does not
-// run (a user's fragment shader is the render's: src/render/user_fragment.cpp).
+// The user's vertex, control, evaluation and geometry shaders of the scene's [shaders] that
+// the CPU runs through the interpreter: those whose text is not exactly the shipped twin's (a
+// twin given as a user file keeps its C++ model). Empty for a geomipmapped terrain (no
+// tessellation stages); never a fragment shader, which the pipeline does not run (a user's
+// fragment shader is the render's: src/render/user_fragment.cpp).
 // Throws tessref::Error when a file cannot be read.
 std::vector<StageShader> interpreted_stages(const Scene& scene);
 

@@ -1,5 +1,5 @@
-// user_program.cpp — a scene with a user's vertex, control or evaluation shader ([shaders],
-// `--shader STAGE=FILE`): the CPU runs those stages through the SPIR-V interpreter
+// user_program.cpp — a scene with a user's vertex, control, evaluation or geometry shader
+// ([shaders], `--shader STAGE=FILE`): the CPU runs those stages through the SPIR-V interpreter
 // (tessref/shader.h), with the twins of data/shaders/ for the stages before the
 // rasterizer that the user did not give, and the same uniforms, texture units and vertex
 // buffer as the GL backend (stage_uniforms.h, src/gl/scene_render.cpp).
@@ -10,12 +10,14 @@
 //    neither a vertex nor a control shader, the levels are the model's (the twins agree
 //    with them but for the thesis normal factor's acos in exact math, where the model calls
 //    the C library's acosf), so that only what the user changed changes.
-//  - the geometry stage's per-vertex normals (thesis normal_map, height-field normals the
-//    evaluation shader does not compute) and everything after the evaluation stage: the
-//    models, on the interpreter's positions and texture coordinates. A user's geometry
-//    shader is not run by the pipeline (`trace --stage geom` runs it here, over one
-//    triangle of a patch); a user's fragment shader is run by the render
-//    (src/render/user_fragment.cpp), from what raster_stage_corners() gives it.
+//  - a user's geometry shader: the interpreter, over every triangle of a patch at once
+//    (geometry() below); what it emits is the surface (pipeline.cpp holds it per patch).
+//    Without one, the geometry stage's per-vertex normals (thesis normal_map, height-field
+//    normals the evaluation shader does not compute) are the models', on the interpreter's
+//    positions and texture coordinates. Everything after the geometry stage is the models';
+//    a user's fragment shader is run by the render (src/render/user_fragment.cpp), from
+//    what raster_stage_corners() gives it (`trace --stage geom` runs the geometry stage
+//    here too, over one triangle of a patch).
 //  - the primitive generator tessellates as the scene's [generator] says, whatever the
 //    user's evaluation shader's layout(...) in; line (GL draws with the user's: a cw where
 //    [generator] has ccw shows as an orientation divergence of the captures).
@@ -73,6 +75,26 @@ std::string control_twin(const Scene& scene) {
     return "";
 }
 
+// The scene's geometry twin, the file the GL backend draws its [geometry] with: "" where
+// the model has no geometry shader (its normals, if any, come from the evaluation shader or
+// the C++ geometry stage alone).
+std::string geometry_twin(const Scene& scene) {
+    if (!scene.geometry) return "";
+    const GeometryNormals n = scene.geometry->normals;
+    if (scene.evaluation.model == EvaluationModel::thesis && n == GeometryNormals::normal_map) return "thesis_terrain.geom";
+    if (scene.evaluation.model == EvaluationModel::cosc422 && n == GeometryNormals::face) return "cosc422_terrain.geom";
+    return "";
+}
+
+const char* layout_name(shader::GeometryOutput o) {
+    switch (o) {
+        case shader::GeometryOutput::points: return "points";
+        case shader::GeometryOutput::line_strip: return "line_strip";
+        case shader::GeometryOutput::triangle_strip: return "triangle_strip";
+    }
+    return "?";
+}
+
 const StageShader* given(const std::vector<StageShader>& user, ShaderStage stage) {
     for (const StageShader& s : user)
         if (s.stage == stage) return &s;
@@ -126,6 +148,7 @@ public:
             tesc.emplace(compile(ShaderStage::tess_control, "", kConstantControlShader));
         tese.emplace(compile(ShaderStage::tess_evaluation, base + ".tese", ""));
         model_levels = !given(user, ShaderStage::vertex) && !given(user, ShaderStage::tess_control);
+        if (given(user, ShaderStage::geometry)) geom.emplace(compile(ShaderStage::geometry, "", ""));
 
         // The GL capture pass's uniforms: the thesis's mvp the identity (gl_Position is the
         // world position there).
@@ -153,8 +176,75 @@ public:
         has_uvs = model->has_uvs;
         has_normals = model->has_normals;
         flip = model->flip;
+        if (geom) geometry_interface(*given(user, ShaderStage::geometry));
         patches.assign(scene.patch_count(), {});
         executables();
+    }
+
+    bool geometry_shader() const override { return geom.has_value(); }
+
+    // The patch's triangles through the evaluation and the user's geometry shader, batched
+    // over the whole patch (program.h PatchProgram::geometry). The geometry stage runs in
+    // world space: gl_in[i].gl_Position is vec4(the evaluated world position, 1) (the
+    // thesis's own gl_Position in the capture pass, mvp the identity; the other models'
+    // EvaluationData position), and an emitted vertex's gl_Position.xyz is its world
+    // position, which the renderer projects with the camera as it projects every surface.
+    // A geometry shader that passes gl_in[].gl_Position on, or combines it affinely (a
+    // midpoint, a shrunken copy), draws what GL draws (up to rounding for the combinations);
+    // one that works in clip space itself (a perspective divide, an offset in pixels) does not.
+    void geometry(std::size_t p, const Pattern& pattern, SurfaceMesh& out, std::vector<glm::dvec3>& face_normals) const override {
+        const shader::ShaderPatch& patch = patches[p];
+        const std::span<const TessCoord> points = pattern.points();
+        std::vector<glm::vec3> tess_coords(points.size());
+        for (std::size_t k = 0; k < points.size(); ++k) tess_coords[k] = glm::vec3(points[k].u, points[k].v, points[k].w);
+        shader::ShaderVertices evaluated;
+        tese_run->evaluate(patch, tess_coords, static_cast<long long>(p), evaluated);
+        for (std::size_t k = 0; k < points.size(); ++k) {
+            const glm::vec4 world = position_location < 0 || static_cast<std::size_t>(position_location) >= evaluated.location_count
+                                        ? evaluated.positions[k]
+                                        : shader::as_vec4(evaluated.location(k, static_cast<std::size_t>(position_location)));
+            evaluated.positions[k] = glm::vec4(glm::vec3(world), 1.0f);
+        }
+        std::vector<shader::ShaderPrimitives> primitives;
+        geom_run->geometry(evaluated, pattern.indices(), static_cast<long long>(p), primitives);
+        std::size_t triangles = 0;
+        for (const shader::ShaderPrimitives& prims : primitives) triangles += prims.primitive_count();
+        out = SurfaceMesh{};
+        out.positions.reserve(3 * triangles);
+        out.patch_ids.assign(3 * triangles, static_cast<std::uint32_t>(p));
+        out.tess_coords.reserve(3 * triangles);
+        if (has_uvs) out.uvs.reserve(3 * triangles);
+        if (has_normals) out.normals.reserve(3 * triangles);
+        out.triangles.reserve(triangles);
+        face_normals.clear();
+        const std::span<const std::uint32_t> indices = pattern.indices();
+        const auto at = [](const shader::ShaderVertex& v, int location) {
+            return location >= 0 && static_cast<std::size_t>(location) < v.locations.size()
+                       ? shader::as_vec4(v.locations[static_cast<std::size_t>(location)])
+                       : glm::vec4(0.0f);
+        };
+        for (std::size_t k = 0; k < primitives.size(); ++k) {
+            const shader::ShaderPrimitives& prims = primitives[k];
+            for (std::size_t t = 0; t < prims.primitive_count(); ++t) {
+                const auto first = static_cast<std::uint32_t>(out.positions.size());
+                for (std::size_t c = 0; c < 3; ++c) {
+                    const std::uint32_t e = prims.indices[3 * t + c];
+                    const shader::ShaderVertex& v = prims.vertices[e];
+                    out.positions.emplace_back(glm::vec3(v.position));
+                    // The tess coord of the input vertex the emitted one follows in order
+                    // (emitted vertex e after input vertex e mod 3), as the GL capture's
+                    // wrapper of EmitVertex() records it (src/gl/scene_render.cpp).
+                    const TessCoord& tc = points[indices[3 * k + e % 3]];
+                    out.tess_coords.emplace_back(tc.u, tc.v, tc.w);
+                    if (has_uvs) out.uvs.emplace_back(glm::vec2(at(v, geometry_uv_location)));
+                    if (has_normals) out.normals.emplace_back(glm::vec3(at(v, geometry_normal_location)));
+                }
+                if (face_normals_from_geometry)  // the provoking vertex's, the last (GL's default)
+                    face_normals.emplace_back(glm::vec3(at(prims.vertices[prims.indices[3 * t + 2]], geometry_normal_location)));
+                out.triangles.push_back(flip ? std::array<std::uint32_t, 3>{first, first + 2, first + 1}
+                                             : std::array<std::uint32_t, 3>{first, first + 1, first + 2});
+            }
+        }
     }
 
     void use_math(MathMode math) override {
@@ -342,12 +432,8 @@ private:
     // normal_map, cosc422 face); none without either.
     std::optional<shader::Source> geometry_source() const {
         const StageShader* user_geometry = given(scene.shaders, ShaderStage::geometry);
-        const std::string twin_file = std::string(twin_base(scene.evaluation.model)) + ".geom";
-        const bool twin = scene.geometry && ((scene.evaluation.model == EvaluationModel::thesis &&
-                                              scene.geometry->normals == GeometryNormals::normal_map) ||
-                                             (scene.evaluation.model == EvaluationModel::cosc422 &&
-                                              scene.geometry->normals == GeometryNormals::face));
-        if (!user_geometry && !twin) return std::nullopt;
+        const std::string twin_file = geometry_twin(scene);
+        if (!user_geometry && twin_file.empty()) return std::nullopt;
         shader::Source src;
         src.stage = ShaderStage::geometry;
         if (user_geometry) {
@@ -390,16 +476,70 @@ private:
         vert_run.emplace(*vert, bindings, options);
         if (tesc) tesc_run.emplace(*tesc, bindings, options);
         tese_run.emplace(*tese, bindings, options);
+        if (geom) geom_run.emplace(*geom, bindings, options);
+    }
+
+    // Where the user's geometry shader hands on what the render and the mesh read, by
+    // location, as GL links it to the fragment stage: after a model's geometry twin, its
+    // GeometryData block (location 0 the normal, 1 the texture coordinate: the fragment
+    // twins read gNormal / faceNormal and the coordinate there); elsewhere the evaluation
+    // shader's locations, which the fragment twins read and a geometry shader in between
+    // must hand on. Refuses a layout or outputs the pipeline cannot take.
+    void geometry_interface(const StageShader& user) {
+        const shader::GeometryLayout layout = geom->geometry_layout();
+        const std::string who = "the geometry shader " + user.path + " (" + user.origin + ")";
+        if (layout.input_vertices != 3)
+            throw Error(who + " takes primitives of " + std::to_string(layout.input_vertices) +
+                            " vertices; the primitive generator hands it triangles: layout(triangles) in;",
+                        Where::in_file(user.path));
+        if (layout.output != shader::GeometryOutput::triangle_strip)
+            throw Error(who + " emits layout(" + layout_name(layout.output) + ") out; the pipeline (render, mesh, capture) "
+                            "takes triangles only: layout(triangle_strip, max_vertices = N) out;",
+                        Where::in_file(user.path));
+        if (scene.generator.domain == Domain::isolines || scene.generator.point_mode)
+            throw Error(who + " needs triangles, but the scene's [generator] makes " +
+                            (scene.generator.point_mode ? std::string("points") : std::string("isolines")),
+                        Where::at_key(scene.file, "generator"));
+        if (scene.geometry && scene.geometry->normals == GeometryNormals::smooth)
+            throw Error(who + " replaces the geometry stage, but [geometry] normals = \"smooth\" is the C++ stage's "
+                            "sum over the whole surface, which has no shader to replace",
+                        Where::at_key(scene.file, "geometry.normals"));
+        const bool twin = !geometry_twin(scene).empty();
+        geometry_normal_location = twin ? 0 : normal_location;
+        geometry_uv_location = twin ? 1 : uv_location;
+        face_normals_from_geometry = scene.geometry && scene.geometry->normals == GeometryNormals::face;
+        if (has_normals && !face_normals_from_geometry && geometry_normal_location < 0)
+            throw Error(who + " replaces the geometry stage, but the scene's per-vertex normals ([geometry] normals = \"" +
+                            to_string(scene.geometry->normals) + "\") come from the C++ geometry stage, "
+                            "which reads the evaluation's domain points",
+                        Where::at_key(scene.file, "geometry.normals"));
+        const std::vector<shader::Module::Output> outputs = geom->outputs();
+        const auto require = [&](bool needed, int location, int components, const char* what) {
+            if (!needed) return;
+            const bool written = std::any_of(outputs.begin(), outputs.end(), [&](const shader::Module::Output& o) {
+                return o.location == location && o.components >= components;
+            });
+            if (!written)
+                throw Error(who + " has no output at location " + std::to_string(location) + " of " +
+                                std::to_string(components) + " components, where the fragment stage reads " + what +
+                                " (layout(location = " + std::to_string(location) + ") out ...)",
+                            Where::in_file(user.path));
+        };
+        require(has_normals || face_normals_from_geometry, geometry_normal_location, 3, "the normal");
+        require(has_uvs && geometry_uv_location >= 0, geometry_uv_location, 2, "the texture coordinate");
     }
 
     const Scene& scene;
     std::string defines;  // the GL backend's #defines for the twins
     std::unique_ptr<PatchProgram<float>> model;  // levels (when the user gave no vertex or control shader), normals
     bool model_levels = false;
-    std::optional<shader::Module> vert, tesc, tese;
+    std::optional<shader::Module> vert, tesc, tese, geom;
     shader::Bindings bindings;
     shader::RunOptions options;
-    std::optional<shader::Executable> vert_run, tesc_run, tese_run;
+    std::optional<shader::Executable> vert_run, tesc_run, tese_run, geom_run;
+    int geometry_normal_location = -1;  // a user's geometry shader: where its outputs are read
+    int geometry_uv_location = -1;
+    bool face_normals_from_geometry = false;  // [geometry] normals = "face": the provoking vertex's normal
     int position_location = -1;  // -1: gl_Position.xyz
     int normal_location = -1;    // -1: the model's geometry stage
     int uv_location = -1;
@@ -418,7 +558,7 @@ std::vector<StageShader> interpreted_stages(const Scene& scene) {
             case ShaderStage::vertex: twin = std::string(base) + ".vert"; break;
             case ShaderStage::tess_control: twin = control_twin(scene); break;
             case ShaderStage::tess_evaluation: twin = std::string(base) + ".tese"; break;
-            case ShaderStage::geometry:
+            case ShaderStage::geometry: twin = geometry_twin(scene); break;
             case ShaderStage::fragment: continue;  // not in the pipeline (a fragment shader: the render's)
         }
         // A file whose text is exactly the shipped twin's is the twin: the C++ model, which
@@ -477,6 +617,10 @@ RasterStageCorners raster_stage_corners(const Scene& scene, const SurfaceMesh& m
         throw Error("a user's fragment shader after a geomipmapped terrain is not run on the CPU (it has no "
                     "tessellation stages for the interpreter to run)",
                     Where::at_key(scene.file, "evaluation.model"));
+    if (const StageShader* g = given(scene.shaders, ShaderStage::geometry))
+        throw Error("a user's fragment shader after a user's geometry shader is not run by render yet (the surface is "
+                    "the geometry shader's triangles, whose corners the fragment stage would need as emitted)",
+                    g->where);
     UserProgram program(scene, make_model_program<float>(scene, glm::dvec3(0.0)), interpreted_stages(scene), false);
     program.use_math(math);
     RasterStageCorners out;

@@ -588,6 +588,8 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     pipe->distinct_patterns = stream.distinct_patterns();
     pipe->origin = origin;
     pipe->stages = {scene.control.has_value(), true, scene.geometry.has_value()};
+    pipe->geometry_shader = stream.geometry_shader();
+    pipe->reversed = stream.reversed();
     result.pipeline = pipe;
     result.stream = shared_stream;
     result.stats.triangles = stream.triangle_base(n);

@@ -560,6 +560,15 @@ std::vector<std::string> Module::uniform_names() const {
     return names;
 }
 
+std::vector<Module::Output> Module::outputs() const {
+    std::vector<Output> out;
+    for (const Variable& v : impl_->variables)
+        if (v.storage == spv::StorageClassOutput)
+            for (const InterfacePart& p : v.parts)
+                if (p.builtin < 0 && p.location >= 0) out.push_back({p.location, static_cast<int>(p.words)});
+    return out;
+}
+
 std::vector<Module::Sampler> Module::samplers() const {
     std::vector<Sampler> out;
     for (const Variable& v : impl_->variables)
