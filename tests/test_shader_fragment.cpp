@@ -145,6 +145,21 @@ TEST(ShaderFragment, TheWaysOfABranchMeetAgainForDerivatives) {
     EXPECT_TRUE(loop.warnings.empty());
 }
 
+TEST(ShaderFragment, ALoopLeftByBreakMeetsAgainAfterIt) {
+    // The fragments break out of the loop at i = v.y: after 1, 3, 2 and 5 iterations, so
+    // s = 1, 3, 2, 5. The lanes that break wait at the loop's end for the others (as
+    // llvmpipe's masked lanes do), so after it the quad is whole: dFdx 3 - 1 = 2 (top),
+    // 5 - 2 = 3 (bottom); dFdy (top minus bottom) 1 - 2 = -1 (left), 3 - 5 = -2 (right).
+    const Shaded r = run("float s = 0.0;\nfor (int i = 0; i < 10; i++) {\n    if (float(i) >= v.y) break;\n    s += 1.0;\n}\n"
+                         "o = vec4(dFdx(s), dFdy(s), s, 0.0);",
+                         quad(kValues));
+    EXPECT_EQ(r.o(0), glm::vec4(2.0f, -1.0f, 1.0f, 0.0f));
+    EXPECT_EQ(r.o(1), glm::vec4(2.0f, -2.0f, 3.0f, 0.0f));
+    EXPECT_EQ(r.o(2), glm::vec4(3.0f, -1.0f, 2.0f, 0.0f));
+    EXPECT_EQ(r.o(3), glm::vec4(3.0f, -2.0f, 5.0f, 0.0f));
+    EXPECT_TRUE(r.warnings.empty()) << (r.warnings.empty() ? "" : r.warnings[0]);
+}
+
 TEST(ShaderFragment, ADerivativeInsideAPartedBranchIsZeroWithAWarning) {
     // Inside the if only the right column runs: no quad, no derivative (undefined in GLSL).
     const Shaded r = run("o = vec4(5.0);\nif (v.x > 2.0) o.x = dFdx(v.x);", quad(kValues));

@@ -163,7 +163,16 @@ struct RenderResult {
 // larger of its window-z change over one pixel in x and in y) plus 2^-20: the offset
 // glPolygonOffset(1, units) would give the filled pass, so that edges on the visible surface
 // show and edges behind it do not.
+//
+// A scene whose [shaders] (or `--shader frag=FILE`) names a fragment shader other than its
+// shading model's twin (user_fragment_shader) is shaded by that shader on the CPU's SPIR-V
+// interpreter (src/render/user_fragment.cpp): fill mode, gpu precision, without
+// camera-relative evaluation; Error otherwise.
 RenderResult render_scene(const Scene& scene, const RenderOptions& options = {});
+
+// The scene's fragment shader that render_scene runs instead of its shading model: the
+// [shaders] fragment entry whose text is not the model's GLSL twin; nullptr when none.
+const StageShader* user_fragment_shader(const Scene& scene);
 
 // What render_scene does after the pipeline: renders a surface that run_pipeline(scene)
 // produced (with the camera's viewport set to the image size when options.size is given,

@@ -207,6 +207,9 @@ struct RunOptions {
     // nullptr: nowhere.
     std::vector<std::string>* warnings = nullptr;
     Observer* observer = nullptr;  // not owned; nullptr: nothing is recorded
+    // Executable::fragment: the quad's lane (0 top-left .. 3 bottom-right) the observer
+    // records; the other three run unrecorded.
+    int observed_lane = 0;
 };
 
 // A vertex as one stage hands it to the next: gl_Position and the locations it wrote.
@@ -315,8 +318,9 @@ public:
     // them), fwidth = abs(dFdx) + abs(dFdy); texture()'s implicit lod from one pair of
     // derivatives for the quad, the top-left fragment's (tessref/shading.h, fragment_lod).
     // The quad runs in lockstep; where a branch parts its lanes each way runs on its own and
-    // the ways meet again at the branch's merge block (the end of the if, the loop's exit),
-    // so that derivatives after it are the quad's again; inside a parted branch they are
+    // the ways meet again at the branch's merge block (the end of the if, the loop's exit;
+    // lanes that break out of a loop wait at its exit for the others), so that derivatives
+    // after it are the quad's again; inside a parted branch they are
     // undefined in GLSL and 0 here, with a warning. `if (c) discard;` parts nothing: as on
     // llvmpipe, the discarding fragments go on as helpers (their derivatives stay
     // available), their results discarded. gl_FrontFacing = front_facing, gl_PrimitiveID =

@@ -103,6 +103,10 @@ int run_render(const RenderCommandOptions& options) {
     render_options.progress = [&stage_progress](std::string_view stage, double fraction) {
         stage_progress(stage, fraction);
     };
+    if (options.raytrace && user_fragment_shader(scene))
+        throw Error("--raytrace shades with the scene's shading model: a user's fragment shader runs in the "
+                    "rasterized render only",
+                    Where::in_file("--raytrace"));
     RaytraceStats raytrace_stats;
     const RenderResult result = options.raytrace ? raytrace_scene(scene, render_options, &raytrace_stats)
                                                  : render_scene(scene, render_options);
@@ -114,8 +118,11 @@ int run_render(const RenderCommandOptions& options) {
         std::cerr << "tessref: warning: " << result.stats.triangles
                   << " triangles: ids above 16777216 are not exact in the float channel triangle_id\n";
 
-    std::cout << options.output << ": " << result.width << "x" << result.height << ", "
-              << to_string(result.shading.model.kind) << " shading, ";
+    std::cout << options.output << ": " << result.width << "x" << result.height << ", ";
+    if (const StageShader* fragment = options.raytrace ? nullptr : user_fragment_shader(scene))
+        std::cout << "fragment shader " << fragment->path << " (interpreted), ";
+    else
+        std::cout << to_string(result.shading.model.kind) << " shading, ";
     if (options.raytrace) {
         std::cout << "ray-traced height field of " << raytrace_stats.grid_columns << "x" << raytrace_stats.grid_rows
                   << " vertices (" << raytrace_stats.triangles << " triangles), ";

@@ -7,9 +7,12 @@
 //
 //   tessref trace SCENE --patch P --stage tesc|tese|vert|geom [--tess-coord U,V | --vertex I | --primitive K]
 //                 [--json] [--math exact|llvmpipe] [--shader STAGE=FILE]... [--max-instructions N]
+//   tessref trace SCENE --pixel X,Y --stage frag [--size WxH] [--json] [--math ...] [--shader ...]...
 //
 // A control shader's invocations run to each barrier() before any passes it: each line
 // says which invocation ran it, and the outputs are every invocation's, with the levels.
+// A fragment shader runs as render runs it (src/render/user_fragment.h): the quad of the
+// fragment that the pixel shows, that fragment's lane traced.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -30,7 +33,9 @@
 #include "common/input_file.h"
 #include "pipeline/stage_trace.h"
 #include "tessref/error.h"
+#include "render/user_fragment.h"
 #include "tessref/prepare.h"
+#include "tessref/render.h"
 #include "tessref/scene.h"
 #include "tessref/shader.h"
 
@@ -45,6 +50,8 @@ struct TraceOptions {
     std::string tess_coord;
     std::string vertex;
     std::string primitive;
+    std::string pixel;
+    std::string size;
     bool json = false;
     std::string math = "exact";
     std::vector<std::string> shaders;
@@ -168,13 +175,115 @@ std::string store_name(const Store& s) {
     return n;
 }
 
+// "X,Y": an image pixel, columns from the left and rows from the top, from 0.
+glm::ivec2 parse_pixel(const std::string& text) {
+    const std::size_t comma = text.find(',');
+    const std::optional<long long> x = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(0, comma));
+    const std::optional<long long> y = comma == std::string::npos ? std::nullopt : parse_integer(text.substr(comma + 1));
+    if (!x || !y || *x < 0 || *y < 0 || *x > 16383 || *y > 16383)
+        throw Error("pixel '" + text + "' is not X,Y (e.g. 640,400; 0,0 is the top left)", Where::in_file("--pixel"));
+    return {static_cast<int>(*x), static_cast<int>(*y)};
+}
+
+// --stage frag: the fragment shader's invocation of the fragment that pixel X,Y shows.
+int run_fragment_trace(const TraceOptions& options) {
+    for (const auto& [value, flag] : {std::pair{&options.patch, "--patch"}, {&options.tess_coord, "--tess-coord"},
+                                      {&options.vertex, "--vertex"}, {&options.primitive, "--primitive"}})
+        if (!value->empty()) throw Error(std::string(flag) + " does not belong to --stage frag (it takes --pixel X,Y)",
+                                         Where::in_file(flag));
+    if (options.pixel.empty()) throw Error("--stage frag needs --pixel X,Y", Where::in_file("--pixel"));
+    const glm::ivec2 pixel = parse_pixel(options.pixel);
+    RenderOptions render_options;
+    render_options.math = parse_math_flag(options.math);
+    if (!options.size.empty()) render_options.size = parse_image_size(options.size);
+    const std::vector<StageShader> flags = parse_shader_flags(options.shaders);
+    apply_max_instructions_flag(options.max_instructions);
+    Scene scene = load_scene(options.scene);
+    apply_shader_flags(scene, flags);
+    const StageShader fragment = render_detail::traced_fragment_shader(scene);
+    if (!scene.camera) throw Error("tracing a fragment needs a [camera] in the scene", Where::at_key(scene.file, "camera"));
+    const glm::ivec2 size = options.size.empty() ? scene.camera->viewport : render_options.size;
+    if (pixel.x >= size.x || pixel.y >= size.y)
+        throw Error("pixel " + options.pixel + " is outside the " + std::to_string(size.x) + "x" + std::to_string(size.y) +
+                        " image",
+                    Where::in_file("--pixel"));
+    const render_detail::UserFragmentStage stage(scene, render_options, fragment);
+    const std::uint32_t triangle = stage.shown(pixel.x, pixel.y);
+    if (triangle == kNoPixelId)
+        throw Error("no fragment covers pixel " + options.pixel + " (the background shows there" +
+                        (stage.winner(pixel.x, pixel.y) == kNoPixelId ? ")" : ": every fragment there discards)"),
+                    Where::in_file("--pixel"));
+    const int lane = (pixel.x & 1) + 2 * (pixel.y & 1);
+    Recorder recorder;
+    std::array<shader::QuadFragment, 4> inputs;
+    const std::array<shader::FragmentResult, 4> results =
+        stage.quad(pixel.x & ~1, pixel.y & ~1, triangle, &inputs, &recorder, lane);
+    const shader::QuadFragment& in = inputs[static_cast<std::size_t>(lane)];
+    const shader::FragmentResult& out = results[static_cast<std::size_t>(lane)];
+    const std::uint32_t patch = stage.patch_of(triangle);
+    const char* math = render_options.math == MathMode::llvmpipe ? "llvmpipe" : "exact";
+    Sources sources;
+    if (options.json) {
+        nlohmann::json steps = nlohmann::json::array();
+        for (const Step& st : recorder.steps) {
+            nlohmann::json stores = nlohmann::json::array();
+            for (const Store& sto : st.stores) {
+                nlohmann::json values = nlohmann::json::array();
+                for (std::uint32_t w : sto.words) values.push_back(number_json(sto.kind, w));
+                stores.push_back({{"name", sto.name}, {"offset", sto.offset}, {"values", values}});
+            }
+            steps.push_back({{"file", utf8_for_json(st.file)}, {"line", st.line},
+                             {"source", utf8_for_json(trimmed(sources.line(st.file, st.line)))}, {"stores", stores}});
+        }
+        nlohmann::json in_locations = nlohmann::json::object(), out_locations = nlohmann::json::object();
+        for (std::size_t k = 0; k < in.inputs.size(); ++k) in_locations[std::to_string(k)] = vec_json(shader::as_vec4(in.inputs[k]), 4);
+        for (std::size_t k = 0; k < out.outputs.size(); ++k)
+            out_locations[std::to_string(k)] = vec_json(shader::as_vec4(out.outputs[k]), 4);
+        const nlohmann::json report = {{"scene", utf8_for_json(options.scene)},
+                                       {"stage", to_string(ShaderStage::fragment)},
+                                       {"shader", utf8_for_json(fragment.path)},
+                                       {"pixel", {pixel.x, pixel.y}},
+                                       {"size", {size.x, size.y}},
+                                       {"triangle", triangle},
+                                       {"patch", patch},
+                                       {"quad_lane", lane},
+                                       {"math", math},
+                                       {"inputs", {{"gl_FragCoord", vec_json(in.frag_coord, 4)}, {"locations", in_locations}}},
+                                       {"lines", steps},
+                                       {"outputs", {{"locations", out_locations}, {"discarded", out.discarded}}}};
+        std::cout << report.dump(2) << "\n";
+        return 0;
+    }
+    std::cout << "trace of the fragment shader " << fragment.path << ", pixel " << pixel.x << "," << pixel.y << " of "
+              << size.x << "x" << size.y << " (triangle " << triangle << " of patch " << patch << ", lane " << lane
+              << " of its 2x2 quad), " << math << " math\n";
+    std::cout << "inputs:\n  gl_FragCoord = " << vec_text(in.frag_coord, 4) << "\n";
+    for (std::size_t k = 0; k < in.inputs.size(); ++k)
+        std::cout << "  location " << k << " = " << vec_text(shader::as_vec4(in.inputs[k]), 4) << "\n";
+    for (const Step& st : recorder.steps) {
+        const std::string where = st.file.substr(st.file.find_last_of('/') + 1) + ":" + std::to_string(st.line);
+        std::cout << where << "  " << trimmed(sources.line(st.file, st.line)) << "\n";
+        for (const Store& sto : st.stores)
+            std::cout << std::string(where.size(), ' ') << "    " << store_name(sto) << " = " << values_text(sto.kind, sto.words) << "\n";
+    }
+    std::cout << "outputs:\n";
+    if (out.discarded) std::cout << "  (discarded)\n";
+    for (std::size_t k = 0; k < out.outputs.size(); ++k)
+        std::cout << "  location " << k << " = " << vec_text(shader::as_vec4(out.outputs[k]), 4) << "\n";
+    return 0;
+}
+
 int run_trace(const TraceOptions& options) {
     pipeline::StageTraceRequest request;
     const std::optional<ShaderStage> stage = shader_stage_from_string(options.stage);
-    if (!stage || *stage == ShaderStage::fragment)
-        throw Error("--stage takes vert, tesc, tese or geom (or vertex, tess_control, tess_evaluation, geometry), not '" +
-                        options.stage + "'",
+    if (!stage)
+        throw Error("--stage takes vert, tesc, tese, geom or frag (or vertex, tess_control, tess_evaluation, geometry, "
+                    "fragment), not '" + options.stage + "'",
                     Where::in_file("--stage"));
+    if (*stage == ShaderStage::fragment) return run_fragment_trace(options);
+    for (const auto& [value, flag] : {std::pair{&options.pixel, "--pixel"}, {&options.size, "--size"}})
+        if (!value->empty()) throw Error(std::string(flag) + " belongs to --stage frag", Where::in_file(flag));
+    if (options.patch.empty()) throw Error("--stage " + options.stage + " needs --patch P", Where::in_file("--patch"));
     request.stage = *stage;
     request.patch = static_cast<std::size_t>(parse_index(options.patch, "--patch"));
     request.math = parse_math_flag(options.math);
@@ -318,10 +427,14 @@ Command add_trace_command(CLI::App& parent) {
         "trace",
         "Run one invocation of one of a scene's shader stages through tessref's SPIR-V interpreter and list every "
         "source line it executes, in order, with the values it stores, then the stage's outputs (the user's file of "
-        "[shaders] or --shader, else the shipped GLSL twin)");
+        "[shaders] or --shader, else the shipped GLSL twin); for a fragment shader, the fragment a pixel shows");
     app->add_option("scene", options->scene, "Scene file (TOML)")->required();
-    app->add_option("--patch", options->patch, "The patch (0-based, as `tessref inspect` numbers them)")->required();
-    app->add_option("--stage", options->stage, "vert, tesc, tese or geom")->required();
+    app->add_option("--patch", options->patch, "The patch (0-based, as `tessref inspect` numbers them)");
+    app->add_option("--stage", options->stage, "vert, tesc, tese, geom or frag")->required();
+    app->add_option("--pixel", options->pixel,
+                    "frag: the image pixel (0,0 top left) whose fragment is traced, the one it shows after the depth test")
+        ->type_name("X,Y");
+    app->add_option("--size", options->size, "frag: the image size (default the camera's viewport)")->type_name("WxH");
     app->add_option("--tess-coord", options->tess_coord, "tese: gl_TessCoord's u,v (w = 1 - u - v on triangles)")
         ->type_name("U,V");
     app->add_option("--vertex", options->vertex, "vert: which of the patch's vertices (0-based)")->type_name("I");
@@ -339,7 +452,8 @@ Command add_trace_command(CLI::App& parent) {
     app->add_option("--max-instructions", options->max_instructions,
                     "Instructions the invocation may run before it is stopped (default 10000000)")
         ->type_name("N");
-    app->footer("Example: tessref trace data/scenes/thesis-all-10.toml --patch 17 --stage tese --tess-coord 0.5,0.25");
+    app->footer("Examples: tessref trace data/scenes/thesis-all-10.toml --patch 17 --stage tese --tess-coord 0.5,0.25\n"
+                "          tessref trace data/scenes/cosc422.toml --stage frag --pixel 640,500 --math llvmpipe");
     return {app, [options] { return run_trace(*options); }};
 }
 

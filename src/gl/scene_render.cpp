@@ -443,7 +443,7 @@ struct Uniforms final : pipeline::UniformSink {
         gl->Uniform1f(at(name), static_cast<float>(v));
         check(name, "float");
     }
-    void d(const char* name, double v) const {
+    void d(const char* name, double v) const override {
         if (listed(name)) return;
         gl->Uniform1d(at(name), v);
         check(name, "double");
@@ -475,79 +475,12 @@ struct Uniforms final : pipeline::UniformSink {
     }
 };
 
-void geomip_shading_uniforms(const Uniforms& u, const GeomipLightmapShading& g) {
-    u.i("materialCount", static_cast<int>(g.materials.size()));
-    for (std::size_t i = 0; i < g.materials.size(); ++i)
-        u.f(("materialRepeat[" + std::to_string(i) + "]").c_str(), g.materials[i].repeat);
-    u.v2("lightMapScale", g.lightMapScale);
-    u.v2("lightMapOffset", g.lightMapOffset);
-    u.i("cloudsEnabled", g.clouds ? 1 : 0);
-    u.f("cloudRepeat", g.cloudRepeat);
-    u.v2("cloudOffset", g.cloudOffset);
-}
-
-void shading_uniforms(const Uniforms& u, const ShadingModel& s) {
-    switch (s.kind) {
-        case ShadingKind::flat: u.v4("colour", s.flat.colour); break;
-        case ShadingKind::depth:
-            u.i("windowMapping", s.depth.mapping == DepthMapping::window ? 1 : 0);
-            // The fragment shader's double uniforms hold the floats of shading.h exactly widened.
-            u.d("nearPlane", s.depth.near_plane);
-            u.d("farPlane", s.depth.far_plane);
-            break;
-        case ShadingKind::thesis_single:
-        case ShadingKind::thesis_multi:
-            u.v3("lightPosition", s.thesis.lightPosition);
-            u.v3("diffuseMaterial", s.thesis.diffuseMaterial);
-            u.v3("ambientMaterial", s.thesis.ambientMaterial);
-            u.v3("specularMaterial", s.thesis.specularMaterial);
-            u.f("shininess", s.thesis.shininess);
-            u.m4("rotationMatrix", s.rotationMatrix);
-            break;
-        case ShadingKind::lab4:
-            u.v3("cameraPosition", s.lab4.cameraPosition);
-            u.v3("lightDirection", s.lab4.lightDirection);
-            u.v3("sandColour", s.lab4.sandColour);
-            u.v3("rockColour", s.lab4.rockColour);
-            u.f("sandHeight", s.lab4.sandHeight);
-            u.f("blendWidth", s.lab4.blendWidth);
-            break;
-        case ShadingKind::cosc422:
-            u.v3("lightDirection", s.cosc422.lightDirection);
-            u.f("ambient", s.cosc422.ambient);
-            break;
-        case ShadingKind::pn:
-            u.v3("v3CameraPosition", s.pn.v3CameraPosition);
-            u.v3("v3LightDirection", s.pn.v3LightDirection);
-            u.v3("v3DiffuseColour", s.pn.v3DiffuseColour);
-            u.f("fShininess", s.pn.fShininess);
-            break;
-        case ShadingKind::pom:
-            u.v3("v3CameraPosition", s.pom.v3CameraPosition);
-            u.v3("v3LightDirection", s.pom.v3LightDirection);
-            u.v3("v3DiffuseColour", s.pom.v3DiffuseColour);
-            u.f("fShininess", s.pom.fShininess);
-            u.i("iParallaxMode", static_cast<int>(s.pom.parallax.mode));
-            u.f("fBumpScale", s.pom.parallax.fBumpScale);
-            u.f("fMinLayers", s.pom.parallax.fMinLayers);
-            u.f("fMaxLayers", s.pom.parallax.fMaxLayers);
-            u.f("fShadowLayers", s.pom.parallax.fShadowLayers);
-            u.i("bSelfShadow", s.pom.bSelfShadow ? 1 : 0);
-            u.f("fUvRepeat", s.pom.fUvRepeat);
-            break;
-        case ShadingKind::geomip_lightmap: geomip_shading_uniforms(u, s.geomip); break;
-    }
-}
-
 // Every uniform tessref sets for the scene, through `u` (set, or listed).
 void each_uniform(const Uniforms& u, const Scene& scene, const ShadingModel& shading, const pipeline::StageMatrices& m,
                   glm::ivec2 viewport) {
     pipeline::set_stage_uniforms(u, scene, m, viewport);
-    shading_uniforms(u, shading);
+    pipeline::set_shading_uniforms(u, shading);
 }
-
-// Below, with the texture upload: every texture the program samples, with its unit.
-void each_texture(const Scene& scene, const RenderShading& shading, const pipeline::TextureBinder& bind);
 
 }  // namespace
 
@@ -572,7 +505,7 @@ std::vector<std::string> unset_uniform_warnings(const Scene& scene, const shader
     // Samplers are bound by unit, not by name (the twins' layout(binding = N)): one at a unit
     // no texture is bound to samples GL's unbound texture, 0, as silently.
     std::set<int> units;
-    each_texture(scene, scene.shading, [&](int unit, const Texture* t, const std::string&) {
+    pipeline::bind_program_textures(scene, scene.shading, [&](int unit, const Texture* t, const std::string&) {
         if (t) units.insert(unit);
     });
     for (const shader::Module::Sampler& sampler : stage.samplers())
@@ -681,30 +614,8 @@ struct BoundTextures {
     }
 };
 
-// Every texture the scene's program samples, with its unit: the one list the GL binds and
-// unset_uniform_warnings() reads. A null texture (a slot the scene leaves empty) binds nothing.
-void each_texture(const Scene& scene, const RenderShading& shading, const pipeline::TextureBinder& bind) {
-    pipeline::bind_stage_textures(scene, bind);
-    if (shading.model.kind == ShadingKind::geomip_lightmap) {  // geomip_terrain.frag's bindings
-        const GeomipLightmapShading& g = shading.model.geomip;
-        bind(4, g.lightMap.get(), "lightMap");
-        for (std::size_t i = 0; i < g.materials.size(); ++i) {
-            bind(5 + static_cast<int>(i), g.materials[i].texture.get(), "materials[" + std::to_string(i) + "]");
-            bind(9 + static_cast<int>(i), g.materials[i].alpha.get(), "alphaMaps[" + std::to_string(i) + "]");
-        }
-        bind(13, g.clouds.get(), "clouds");
-    }
-    const auto names = sampler_names(shading.model.kind);
-    for (std::size_t i = 0; i < names.size(); ++i) {
-        const auto* slot = sampler_slot(shading.model.textures, names[i]);
-        if (!slot || !*slot) continue;
-        const int unit = names[i] == "heightMap" ? 0 : 4 + static_cast<int>(i);
-        bind(unit, slot->get(), std::string(names[i]));
-    }
-}
-
 void bind_textures(BoundTextures& b, const Scene& scene, const RenderShading& shading) {
-    each_texture(scene, shading, [&](int unit, const Texture* t, const std::string& what) { b.bind(unit, t, what); });
+    pipeline::bind_program_textures(scene, shading, [&](int unit, const Texture* t, const std::string& what) { b.bind(unit, t, what); });
 }
 
 // ---- vertex data -----------------------------------------------------------------------

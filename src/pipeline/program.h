@@ -96,7 +96,8 @@ std::unique_ptr<PatchProgram<T>> make_model_program(const Scene& scene, const gl
 // The user's vertex, control, evaluation and geometry shaders of the scene's [shaders] that
 // the CPU runs through the interpreter: those whose text is not exactly the shipped twin's (a
 // twin given as a user file keeps its C++ model). Empty for a geomipmapped terrain (no
-// tessellation stages); never a fragment shader, which the pipeline does not run.
+// tessellation stages); never a fragment shader, which the pipeline does not run (a user's
+// fragment shader is the render's: src/render/user_fragment.cpp).
 // Throws tessref::Error when a file cannot be read.
 std::vector<StageShader> interpreted_stages(const Scene& scene);
 

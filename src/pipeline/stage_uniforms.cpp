@@ -1,5 +1,5 @@
-// stage_uniforms.cpp — the uniforms, texture units and twin texts of the stages before the
-// rasterizer, one list for the GL backend and the CPU interpreter (stage_uniforms.h).
+// stage_uniforms.cpp — the uniforms, texture units and twin texts of a scene's stages, one
+// list for the GL backend and the CPU interpreter (stage_uniforms.h).
 #include "pipeline/stage_uniforms.h"
 
 #include <algorithm>
@@ -8,6 +8,7 @@
 
 #include "common/input_file.h"
 #include "tessref/error.h"
+#include "tessref/shader.h"
 
 namespace tessref::pipeline {
 
@@ -87,7 +88,80 @@ void geomip_uniforms(const UniformSink& u, const Scene& scene, const StageMatric
     u.f("scaleZ", scene.grid->scale_z);  // the pipeline's float(settings.scale_z)
 }
 
+void geomip_shading_uniforms(const UniformSink& u, const GeomipLightmapShading& g) {
+    u.i("materialCount", static_cast<int>(g.materials.size()));
+    for (std::size_t i = 0; i < g.materials.size(); ++i)
+        u.f(("materialRepeat[" + std::to_string(i) + "]").c_str(), g.materials[i].repeat);
+    u.v2("lightMapScale", g.lightMapScale);
+    u.v2("lightMapOffset", g.lightMapOffset);
+    u.i("cloudsEnabled", g.clouds ? 1 : 0);
+    u.f("cloudRepeat", g.cloudRepeat);
+    u.v2("cloudOffset", g.cloudOffset);
+}
+
 }  // namespace
+
+void set_shading_uniforms(const UniformSink& u, const ShadingModel& s) {
+    switch (s.kind) {
+        case ShadingKind::flat: u.v4("colour", s.flat.colour); break;
+        case ShadingKind::depth:
+            u.i("windowMapping", s.depth.mapping == DepthMapping::window ? 1 : 0);
+            // The fragment shader's double uniforms hold the floats of shading.h exactly widened.
+            u.d("nearPlane", s.depth.near_plane);
+            u.d("farPlane", s.depth.far_plane);
+            break;
+        case ShadingKind::thesis_single:
+        case ShadingKind::thesis_multi:
+            u.v3("lightPosition", s.thesis.lightPosition);
+            u.v3("diffuseMaterial", s.thesis.diffuseMaterial);
+            u.v3("ambientMaterial", s.thesis.ambientMaterial);
+            u.v3("specularMaterial", s.thesis.specularMaterial);
+            u.f("shininess", s.thesis.shininess);
+            u.m4("rotationMatrix", s.rotationMatrix);
+            break;
+        case ShadingKind::lab4:
+            u.v3("cameraPosition", s.lab4.cameraPosition);
+            u.v3("lightDirection", s.lab4.lightDirection);
+            u.v3("sandColour", s.lab4.sandColour);
+            u.v3("rockColour", s.lab4.rockColour);
+            u.f("sandHeight", s.lab4.sandHeight);
+            u.f("blendWidth", s.lab4.blendWidth);
+            break;
+        case ShadingKind::cosc422:
+            u.v3("lightDirection", s.cosc422.lightDirection);
+            u.f("ambient", s.cosc422.ambient);
+            break;
+        case ShadingKind::pn:
+            u.v3("v3CameraPosition", s.pn.v3CameraPosition);
+            u.v3("v3LightDirection", s.pn.v3LightDirection);
+            u.v3("v3DiffuseColour", s.pn.v3DiffuseColour);
+            u.f("fShininess", s.pn.fShininess);
+            break;
+        case ShadingKind::pom:
+            u.v3("v3CameraPosition", s.pom.v3CameraPosition);
+            u.v3("v3LightDirection", s.pom.v3LightDirection);
+            u.v3("v3DiffuseColour", s.pom.v3DiffuseColour);
+            u.f("fShininess", s.pom.fShininess);
+            u.i("iParallaxMode", static_cast<int>(s.pom.parallax.mode));
+            u.f("fBumpScale", s.pom.parallax.fBumpScale);
+            u.f("fMinLayers", s.pom.parallax.fMinLayers);
+            u.f("fMaxLayers", s.pom.parallax.fMaxLayers);
+            u.f("fShadowLayers", s.pom.parallax.fShadowLayers);
+            u.i("bSelfShadow", s.pom.bSelfShadow ? 1 : 0);
+            u.f("fUvRepeat", s.pom.fUvRepeat);
+            break;
+        case ShadingKind::geomip_lightmap: geomip_shading_uniforms(u, s.geomip); break;
+    }
+}
+
+void BindingsSink::i(const char* name, int v) const { b.set(name, v); }
+void BindingsSink::f(const char* name, double v) const { b.set(name, static_cast<float>(v)); }
+void BindingsSink::d(const char* name, double v) const { b.set(name, static_cast<float>(v)); }
+void BindingsSink::v2(const char* name, glm::vec2 v) const { b.set(name, v); }
+void BindingsSink::v3(const char* name, glm::vec3 v) const { b.set(name, v); }
+void BindingsSink::v4(const char* name, glm::vec4 v) const { b.set(name, v); }
+void BindingsSink::m3(const char* name, const glm::mat3& m) const { b.set(name, m); }
+void BindingsSink::m4(const char* name, const glm::mat4& m) const { b.set(name, m); }
 
 StageMatrices stage_matrices(const Scene& scene) {
     StageMatrices m;
@@ -123,6 +197,26 @@ void bind_stage_textures(const Scene& scene, const TextureBinder& bind) {
     }
     if (scene.control && scene.control->model == ControlModel::thesis && scene.control->tessellation_map)
         bind(1, scene.control->tessellation_map.get(), "tessellationMap");
+}
+
+void bind_program_textures(const Scene& scene, const RenderShading& shading, const TextureBinder& bind) {
+    bind_stage_textures(scene, bind);
+    if (shading.model.kind == ShadingKind::geomip_lightmap) {  // geomip_terrain.frag's bindings
+        const GeomipLightmapShading& g = shading.model.geomip;
+        bind(4, g.lightMap.get(), "lightMap");
+        for (std::size_t i = 0; i < g.materials.size(); ++i) {
+            bind(5 + static_cast<int>(i), g.materials[i].texture.get(), "materials[" + std::to_string(i) + "]");
+            bind(9 + static_cast<int>(i), g.materials[i].alpha.get(), "alphaMaps[" + std::to_string(i) + "]");
+        }
+        bind(13, g.clouds.get(), "clouds");
+    }
+    const auto names = sampler_names(shading.model.kind);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        const auto* slot = sampler_slot(shading.model.textures, names[i]);
+        if (!slot || !*slot) continue;
+        const int unit = names[i] == "heightMap" ? 0 : 4 + static_cast<int>(i);
+        bind(unit, slot->get(), std::string(names[i]));
+    }
 }
 
 const char* const kConstantControlShader = R"(#version 450 core

@@ -1,9 +1,9 @@
-// stage_uniforms.h — what a scene's shaders before the rasterizer read from the
-// application, by the GLSL twins' names: the uniforms, the texture units, the twins'
-// texts. The one list that both sides set: the GL backend through glUniform* and its
-// texture units (src/gl/scene_render.cpp), the CPU through shader::Bindings when it runs a
-// user's stages with the interpreter (user_program.cpp). The fragment stage's uniforms
-// stay with the GL backend: the CPU runs no fragment shader.
+// stage_uniforms.h — what a scene's shaders read from the application, by the GLSL twins'
+// names: the uniforms, the texture units, the twins' texts. The one list that both sides
+// set: the GL backend through glUniform* and its texture units (src/gl/scene_render.cpp),
+// the CPU through shader::Bindings when it runs a user's stages with the interpreter
+// (user_program.cpp for the stages before the rasterizer, src/render/user_fragment.cpp for
+// a user's fragment shader).
 #pragma once
 
 #include <functional>
@@ -15,6 +15,10 @@
 #include "tessref/scene.h"
 #include "tessref/texture.h"
 
+namespace tessref::shader {
+class Bindings;
+}
+
 namespace tessref::pipeline {
 
 // Where the values go; a name the program does not declare is ignored by both sides.
@@ -22,11 +26,28 @@ struct UniformSink {
     virtual ~UniformSink() = default;
     virtual void i(const char* name, int v) const = 0;
     virtual void f(const char* name, double v) const = 0;  // set as float
+    virtual void d(const char* name, double v) const = 0;  // a double uniform (the depth model's planes)
     virtual void v2(const char* name, glm::vec2 v) const = 0;
     virtual void v3(const char* name, glm::vec3 v) const = 0;
     virtual void v4(const char* name, glm::vec4 v) const = 0;
     virtual void m3(const char* name, const glm::mat3& m) const = 0;
     virtual void m4(const char* name, const glm::mat4& m) const = 0;
+};
+
+// shader::Bindings (the interpreter's uniforms) as a UniformSink: the GL backend's list, set
+// into the interpreter's state. A double uniform is set as a float (the interpreter runs no
+// 64-bit types).
+struct BindingsSink final : UniformSink {
+    shader::Bindings& b;
+    explicit BindingsSink(shader::Bindings& bindings) : b(bindings) {}
+    void i(const char* name, int v) const override;
+    void f(const char* name, double v) const override;
+    void d(const char* name, double v) const override;
+    void v2(const char* name, glm::vec2 v) const override;
+    void v3(const char* name, glm::vec3 v) const override;
+    void v4(const char* name, glm::vec4 v) const override;
+    void m3(const char* name, const glm::mat3& m) const override;
+    void m4(const char* name, const glm::mat4& m) const override;
 };
 
 // The matrices as the CPU pipeline rounds them (program.h: mat4_t<float>(camera.view_projection())).
@@ -40,10 +61,18 @@ StageMatrices stage_matrices(const Scene& scene);  // identity without a camera
 // The evaluation model's and the control model's uniforms (constantLevel included).
 void set_stage_uniforms(const UniformSink& u, const Scene& scene, const StageMatrices& m, glm::ivec2 viewport);
 
+// The fragment stage's uniforms: the shading model's (shading.h), by its twin's names.
+void set_shading_uniforms(const UniformSink& u, const ShadingModel& shading);
+
 // The textures those stages sample, at the twins' layout(binding = N): 0 heightMap,
 // 1 tessellationMap, 2 normalMap. `what` names the texture in errors.
 using TextureBinder = std::function<void(int unit, const Texture* texture, const std::string& what)>;
 void bind_stage_textures(const Scene& scene, const TextureBinder& bind);
+// Every texture the scene's program samples, fragment stage included, with its unit: the
+// stages' above, 4.. the shading model's samplers in the order of shading.h's
+// sampler_names (heightMap at 0), geomip_terrain.frag's 4..13. A null texture (a slot the
+// scene leaves empty) is passed on as null; the caller binds nothing for it.
+void bind_program_textures(const Scene& scene, const RenderShading& shading, const TextureBinder& bind);
 
 // The constant control stage for the twins whose vertex shader hands on VertexData and
 // whose evaluation shader reads ControlData (thesis): GL has no constant control shader of

@@ -15,8 +15,9 @@
 //    Without one, the geometry stage's per-vertex normals (thesis normal_map, height-field
 //    normals the evaluation shader does not compute) are the models', on the interpreter's
 //    positions and texture coordinates. Everything after the geometry stage is the models';
-//    a user's fragment shader is not run by the pipeline (`trace --stage geom` runs the
-//    geometry stage here too, over one triangle of a patch).
+//    a user's fragment shader is run by the render (src/render/user_fragment.cpp), from
+//    what raster_stage_corners() gives it (`trace --stage geom` runs the geometry stage
+//    here too, over one triangle of a patch).
 //  - the primitive generator tessellates as the scene's [generator] says, whatever the
 //    user's evaluation shader's layout(...) in; line (GL draws with the user's: a cw where
 //    [generator] has ccw shows as an orientation divergence of the captures).
@@ -31,7 +32,9 @@
 
 #include "common/data_dir.h"
 #include "common/input_file.h"
+#include "common/parallel.h"
 #include "pipeline/program.h"
+#include "pipeline/raster_stage.h"
 #include "pipeline/stage_trace.h"
 #include "pipeline/stage_uniforms.h"
 #include "tessref/capture.h"
@@ -98,22 +101,13 @@ const StageShader* given(const std::vector<StageShader>& user, ShaderStage stage
     return nullptr;
 }
 
-// shader::Bindings as a UniformSink: the GL backend's list, set into the interpreter's state.
-struct BindingsSink final : UniformSink {
-    shader::Bindings& b;
-    explicit BindingsSink(shader::Bindings& bindings) : b(bindings) {}
-    void i(const char* name, int v) const override { b.set(name, v); }
-    void f(const char* name, double v) const override { b.set(name, static_cast<float>(v)); }
-    void v2(const char* name, glm::vec2 v) const override { b.set(name, v); }
-    void v3(const char* name, glm::vec3 v) const override { b.set(name, v); }
-    void v4(const char* name, glm::vec4 v) const override { b.set(name, v); }
-    void m3(const char* name, const glm::mat3& m) const override { b.set(name, m); }
-    void m4(const char* name, const glm::mat4& m) const override { b.set(name, m); }
-};
-
 class UserProgram final : public PatchProgram<float> {
 public:
-    UserProgram(const Scene& s, std::unique_ptr<PatchProgram<float>> model_program, const std::vector<StageShader>& user)
+    // capture_pass: the uniforms of the GL backend's capture pass (the thesis's mvp the
+    // identity, so that gl_Position is the world position the mesh keeps); otherwise those
+    // of its draw (raster_stage_corners: gl_Position in clip space).
+    UserProgram(const Scene& s, std::unique_ptr<PatchProgram<float>> model_program, const std::vector<StageShader>& user,
+                bool capture_pass = true)
         : scene(s), model(std::move(model_program)) {
         const EvaluationModel em = scene.evaluation.model;
         const std::string base = twin_base(em);
@@ -160,7 +154,7 @@ public:
         // world position there).
         BindingsSink sink(bindings);
         set_stage_uniforms(sink, scene, stage_matrices(scene), scene.camera ? scene.camera->viewport : glm::ivec2(1280, 800));
-        if (em == EvaluationModel::thesis) bindings.set("mvp", glm::mat4(1.0f));
+        if (em == EvaluationModel::thesis && capture_pass) bindings.set("mvp", glm::mat4(1.0f));
         bind_stage_textures(scene, [&](int unit, const Texture* t, const std::string&) { bindings.bind_texture(unit, t); });
 
         // Where the evaluation shader hands on what the mesh keeps (the twins' EvaluationData).
@@ -364,27 +358,12 @@ public:
             }
             case ShaderStage::geometry: {
                 // The triangle's corners through the evaluation shader, then the geometry shader.
-                const StageShader* user_geometry = given(scene.shaders, ShaderStage::geometry);
-                const std::string twin_file = std::string(twin_base(scene.evaluation.model)) + ".geom";
-                const bool twin = scene.geometry && ((scene.evaluation.model == EvaluationModel::thesis &&
-                                                      scene.geometry->normals == GeometryNormals::normal_map) ||
-                                                     (scene.evaluation.model == EvaluationModel::cosc422 &&
-                                                      scene.geometry->normals == GeometryNormals::face));
-                if (!user_geometry && !twin)
+                const std::optional<shader::Source> src = geometry_source();
+                if (!src)
                     throw Error("the scene has no geometry stage (neither a geometry shader in [shaders] nor a "
                                 "[geometry] whose model has one: thesis normal_map, cosc422 face)",
                                 Where::in_file("--stage"));
-                shader::Source src;
-                src.stage = ShaderStage::geometry;
-                if (user_geometry) {
-                    src.path = user_geometry->path;
-                    src.text = read_user_shader(*user_geometry);
-                } else {
-                    src.path = data_dir() + "/shaders/" + twin_file;
-                    src.text = twin_text(twin_file);
-                    src.prefix = defines;
-                }
-                const shader::Module geom = shader::Module::compile(src);
+                const shader::Module geom = shader::Module::compile(*src);
                 t.shader = geom.path();
                 control(r.patch);
                 const std::vector<glm::vec3> corners(r.triangle.begin(), r.triangle.end());
@@ -399,7 +378,75 @@ public:
                     Where::in_file("--stage"));
     }
 
+    // Every triangle's corners of `mesh` (this program's pipeline result) as the last stage
+    // before the rasterizer hands them on: three a triangle, in the order GL draws them (the
+    // primitive generator's, before the mesh's flip), each with gl_Position and the locations
+    // written by the evaluation shader, or by the geometry shader where the scene has one.
+    std::vector<shader::ShaderVertex> corners(const SurfaceMesh& mesh) {
+        for (std::size_t p = 0; p < patches.size(); ++p) control(p);  // the patches the evaluation reads
+        // Each patch's vertices are one run of the mesh (the generator's points, in order).
+        struct Run {
+            std::size_t patch, first, last;
+        };
+        std::vector<Run> runs;
+        for (std::size_t v = 0; v < mesh.patch_ids.size(); ++v) {
+            if (runs.empty() || runs.back().patch != mesh.patch_ids[v]) runs.push_back({mesh.patch_ids[v], v, v});
+            runs.back().last = v + 1;
+        }
+        std::vector<shader::ShaderVertex> evaluated(mesh.patch_ids.size());
+        tessref::parallel_for(std::size_t{0}, runs.size(), [&](std::size_t r) {
+            const Run& run = runs[r];
+            std::vector<glm::vec3> tess_coords(run.last - run.first);
+            for (std::size_t v = run.first; v < run.last; ++v) tess_coords[v - run.first] = glm::vec3(mesh.tess_coords[v]);
+            shader::ShaderVertices out;
+            tese_run->evaluate(patches[run.patch], tess_coords, static_cast<long long>(run.patch), out);
+            for (std::size_t k = 0; k < out.size(); ++k) evaluated[run.first + k] = out.vertex(k);
+        });
+        std::vector<shader::ShaderVertex> corners(mesh.triangles.size() * 3);
+        const std::optional<shader::Source> geometry = geometry_source();
+        std::optional<shader::Executable> geom;
+        if (geometry) geom.emplace(shader::Module::compile(*geometry), bindings, options);
+        tessref::parallel_for(std::size_t{0}, mesh.triangles.size(), [&](std::size_t t) {
+            const auto& tri = mesh.triangles[t];
+            const std::array<std::uint32_t, 3> gl = flip ? std::array<std::uint32_t, 3>{tri[0], tri[2], tri[1]} : tri;
+            if (!geom) {
+                for (std::size_t k = 0; k < 3; ++k) corners[3 * t + k] = evaluated[gl[k]];
+                return;
+            }
+            const std::array<shader::ShaderVertex, 3> in{evaluated[gl[0]], evaluated[gl[1]], evaluated[gl[2]]};
+            const long long patch = static_cast<long long>(mesh.patch_ids[tri[0]]);
+            const shader::ShaderPrimitives made = geom->geometry(in, patch);
+            if (made.output != shader::GeometryOutput::triangle_strip || made.primitive_count() != 1)
+                throw Error("the geometry shader made " + std::to_string(made.primitive_count()) +
+                                " primitives of patch " + std::to_string(patch) +
+                                "'s triangle: a user's fragment shader is run after a geometry stage that emits one "
+                                "triangle per triangle only",
+                            Where::in_file(geom->module().path()));
+            for (std::size_t k = 0; k < 3; ++k) corners[3 * t + k] = made.vertices[made.indices[k]];
+        });
+        return corners;
+    }
+
 private:
+    // The scene's geometry stage: a user's geometry shader, or the model's twin (thesis
+    // normal_map, cosc422 face); none without either.
+    std::optional<shader::Source> geometry_source() const {
+        const StageShader* user_geometry = given(scene.shaders, ShaderStage::geometry);
+        const std::string twin_file = geometry_twin(scene);
+        if (!user_geometry && twin_file.empty()) return std::nullopt;
+        shader::Source src;
+        src.stage = ShaderStage::geometry;
+        if (user_geometry) {
+            src.path = user_geometry->path;
+            src.text = read_user_shader(*user_geometry);
+        } else {
+            src.path = data_dir() + "/shaders/" + twin_file;
+            src.text = twin_text(twin_file);
+            src.prefix = defines;
+        }
+        return src;
+    }
+
     // The patch's vertices as the GL backend's vertex buffer holds them: a terrain's four
     // corners vec4(ground, 1) at location 0 (control.h's corner order), a PN triangle's
     // position, normal and uv at locations 0, 1, 2.
@@ -512,7 +559,7 @@ std::vector<StageShader> interpreted_stages(const Scene& scene) {
             case ShaderStage::tess_control: twin = control_twin(scene); break;
             case ShaderStage::tess_evaluation: twin = std::string(base) + ".tese"; break;
             case ShaderStage::geometry: twin = geometry_twin(scene); break;
-            case ShaderStage::fragment: continue;  // not run on the CPU
+            case ShaderStage::fragment: continue;  // not in the pipeline (a fragment shader: the render's)
         }
         // A file whose text is exactly the shipped twin's is the twin: the C++ model, which
         // the twin is proven to compute bit for bit, is the fast path for it. Any other text
@@ -563,6 +610,23 @@ StageTrace trace_stage(const Scene& scene, const StageTraceRequest& request, sha
     UserProgram program(scene, std::move(model), interpreted_stages(scene));
     program.use_math(request.math);
     return program.trace(r, observer);
+}
+
+RasterStageCorners raster_stage_corners(const Scene& scene, const SurfaceMesh& mesh, MathMode math) {
+    if (!twin_base(scene.evaluation.model))
+        throw Error("a user's fragment shader after a geomipmapped terrain is not run on the CPU (it has no "
+                    "tessellation stages for the interpreter to run)",
+                    Where::at_key(scene.file, "evaluation.model"));
+    if (const StageShader* g = given(scene.shaders, ShaderStage::geometry))
+        throw Error("a user's fragment shader after a user's geometry shader is not run by render yet (the surface is "
+                    "the geometry shader's triangles, whose corners the fragment stage would need as emitted)",
+                    g->where);
+    UserProgram program(scene, make_model_program<float>(scene, glm::dvec3(0.0)), interpreted_stages(scene), false);
+    program.use_math(math);
+    RasterStageCorners out;
+    out.corners = program.corners(mesh);
+    out.flipped = program.flip;
+    return out;
 }
 
 std::unique_ptr<PatchProgram<float>> make_user_program(const Scene& scene, std::unique_ptr<PatchProgram<float>> model,

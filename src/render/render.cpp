@@ -22,6 +22,7 @@
 #include "common/unorm8.h"
 
 #include "render/render_internal.h"
+#include "render/user_fragment.h"
 #include "tessref/compare.h"
 #include "tessref/error.h"
 #include "tessref/limits.h"
@@ -691,6 +692,8 @@ RenderResult render_scene(const Scene& scene, const RenderOptions& options) {
         resized.camera = camera;
     }
     const Scene& pipeline_scene = camera.viewport != scene.camera->viewport ? resized : scene;
+    if (const StageShader* fragment = user_fragment_shader(scene))  // a user's shader, not a model
+        return render_detail::render_user_fragment(scene, options, *fragment);
     if (!options.keep_surface && options.mode == RenderMode::fill && PatchStream::streams(scene) &&
         !(scene.geometry && scene.geometry->normals == GeometryNormals::smooth))
         return render_streamed(scene, pipeline_scene, options);

@@ -137,7 +137,7 @@ std::uint32_t* Batch::memory(ExecContext& c, std::uint32_t address, std::uint32_
 // The variable a store's address falls in, named as the source names it (an array's
 // element as name[i], a word further in as +k; the unnamed gl_PerVertex block by its
 // built-in), and the kind of the stored value's scalars, for RunOptions::observer (which
-// runs one lane: stages.cpp).
+// records one lane, ExecContext::observed_lane).
 void Batch::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t value, std::uint32_t words) {
     const Module::Impl& m = c.module;
     std::string name;
@@ -166,7 +166,10 @@ void Batch::observe_store(ExecContext& c, std::uint32_t address, std::uint32_t v
     const Type* t = &m.types[m.type_of[value]];
     while (t->kind == Kind::vector || t->kind == Kind::matrix || t->kind == Kind::array) t = &m.types[t->element];
     const char kind = t->kind == Kind::bool_ ? 'b' : t->kind == Kind::int_ ? (t->is_signed ? 'i' : 'u') : 'f';
-    c.options.observer->store(name, offset, kind, std::span<const std::uint32_t>(regs_.data() + m.reg[value], words));
+    std::vector<std::uint32_t> stored(words);
+    for (std::uint32_t j = 0; j < words; ++j)
+        stored[j] = regs_[static_cast<std::size_t>(m.reg[value] + j) * lanes_ + c.observed_lane];
+    c.options.observer->store(name, offset, kind, stored);
 }
 
 std::vector<std::uint32_t> Batch::targets(const ExecContext& c) const {
@@ -340,7 +343,8 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
     keep_line_ = false;
     for (;;) {
         const Instr& in = m.code[pc_];
-        if (c.options.observer && in.line != 0 && (in.line != observed_line_ || in.file != observed_file_)) {
+        if (c.options.observer && c.observed_lane != kNone && in.line != 0 &&
+            (in.line != observed_line_ || in.file != observed_file_)) {
             observed_line_ = in.line;
             observed_file_ = in.file;
             const auto file = m.strings.find(in.file);
@@ -360,7 +364,7 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
             case spv::OpLabel:
                 previous_label_ = label_;
                 label_ = a[0];
-                if (label_ == stop_label_) {  // where the ways of a fragment quad meet (executor.h)
+                if (label_ == stop_label_ || label_ == exit_label_) {  // where a fragment quad's ways meet (executor.h)
                     if (m.code[pc_].op != spv::OpPhi) return Status::at_stop;
                     stopping_ = true;
                 }
@@ -455,7 +459,8 @@ Batch::Status Batch::run_lanes(ExecContext& c) {
             case spv::OpStore: {
                 const std::uint32_t size = T(T(m.type_of[a[0]]).element).words;
                 access(a[0], size, R(a[1]), true);
-                if (c.options.observer) observe_store(c, *R(a[0]), a[1], size);
+                if (c.options.observer && c.observed_lane != kNone)
+                    observe_store(c, R(a[0])[c.observed_lane], a[1], size);
                 break;
             }
             case spv::OpCopyMemory: {

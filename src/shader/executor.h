@@ -51,6 +51,9 @@ struct ExecContext {
     // texture()'s implicit lod are taken across it. A fragment batch without it (the lanes
     // of a quad that a branch parted) has no derivatives: they are 0, with a warning.
     bool quad = false;
+    // The lane whose lines and stores RunOptions::observer records (a fragment quad's traced
+    // fragment, as this batch numbers its lanes); kNone: none of this batch's lanes.
+    std::uint32_t observed_lane = 0;
 };
 
 // The words of lanes `pick` (in that order) of a lane-interleaved array of `lanes` lanes.
@@ -78,9 +81,15 @@ public:
     // After Status::diverged: every lane takes the branch to `label` (a fragment quad's lanes
     // that discard there go on as helpers, fragment.cpp).
     void branch_to(std::uint32_t label);
-    // run() stops (Status::at_stop) when it enters the block `label`, after its OpPhis, so
-    // that the ways of a parted batch meet again there (fragment.cpp); kNone: never.
-    void stop_at(std::uint32_t label) { stop_label_ = label; }
+    // run() stops (Status::at_stop) when it enters the block `label`, or the block `exit`,
+    // after its OpPhis, so that the ways of a parted batch meet again there (fragment.cpp:
+    // `exit` is the merge block of the loop a way may break out of); kNone: never.
+    void stop_at(std::uint32_t label, std::uint32_t exit = 0xffffffffu) {
+        stop_label_ = label;
+        exit_label_ = exit;
+    }
+    // The block the batch is in (after Status::at_stop: the one it stopped at).
+    std::uint32_t block() const { return label_; }
     // The batch of `lanes` lanes whose lanes parts[k].second[i] are lane i of parts[k].first,
     // all standing at the same instruction (after run() gave Status::at_stop for each).
     static Batch join(std::span<const std::pair<const Batch*, std::vector<std::uint32_t>>> parts, std::uint32_t lanes);
@@ -115,6 +124,7 @@ private:
     std::uint64_t executed_ = 0;
     std::uint32_t observed_line_ = 0, observed_file_ = 0;  // RunOptions::observer: the last line told
     std::uint32_t stop_label_ = 0xffffffffu;  // stop_at()
+    std::uint32_t exit_label_ = 0xffffffffu;  // stop_at()
     bool stopping_ = false;   // entered stop_label_'s block: stop after its OpPhis
     bool keep_line_ = false;  // the next run() goes on where this one stopped, for the observer
 };
