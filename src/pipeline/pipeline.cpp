@@ -312,18 +312,23 @@ struct StreamImpl final : PatchStream::Impl {
         }
     }
 
+    // `out` sized for one triangle (0, 1, 2) and the attributes the surface has.
+    void one_triangle(SurfaceMesh& out) const {
+        out.positions.resize(3);
+        out.patch_ids.resize(3);
+        out.tess_coords.resize(3);
+        out.uvs.resize(has_uvs ? 3 : 0);
+        out.normals.resize(has_normals ? 3 : 0);
+        out.triangles.assign(1, {0, 1, 2});
+    }
+
     std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out,
                                           glm::dvec3* normal_out) const override {
         const std::size_t p = static_cast<std::size_t>(
             std::upper_bound(triangle_base.begin(), triangle_base.end(), triangle) - triangle_base.begin() - 1);
         if (geometry_shader) {
             const std::array<std::uint32_t, 3> tri = emitted[p].triangles[triangle - triangle_base[p]];
-            out.positions.resize(3);
-            out.patch_ids.resize(3);
-            out.tess_coords.resize(3);
-            out.uvs.resize(has_uvs ? 3 : 0);
-            out.normals.resize(has_normals ? 3 : 0);
-            out.triangles.assign(1, {0, 1, 2});
+            one_triangle(out);
             copy_emitted(p, tri, out, 0);
             if (face_normals && normal_out) *normal_out = emitted_face_normals[p][triangle - triangle_base[p]];
             for (glm::dvec3& position : out.positions) position += origin;
@@ -333,12 +338,7 @@ struct StreamImpl final : PatchStream::Impl {
         const auto prim = patterns[p]->primitive(triangle - triangle_base[p]);
         std::array<std::uint32_t, 3> points{prim[0], prim[1], prim[2]};
         if (program->flip) std::swap(points[1], points[2]);
-        out.positions.resize(3);
-        out.patch_ids.resize(3);
-        out.tess_coords.resize(3);
-        out.uvs.resize(has_uvs ? 3 : 0);
-        out.normals.resize(has_normals ? 3 : 0);
-        out.triangles.assign(1, {0, 1, 2});
+        one_triangle(out);
         evaluate_points(p, points, out, 0);
         if (face_normals && normal_out) {
             const vec3_t<T> p0(out.positions[0]), p1(out.positions[1]), p2(out.positions[2]);
