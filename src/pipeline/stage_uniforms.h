@@ -114,4 +114,17 @@ std::vector<StageShader> with_shader_flags(const std::vector<StageShader>& scene
 // its line when it holds a NUL byte (GL reads the source as a C string, up to it).
 std::string read_user_shader(const StageShader& user);
 
+// The shipped twin (a file name in data/shaders/) of the scene's model for `stage`: the text
+// whose C++ model is proven to compute it bit for bit. "" where the model has none (the
+// constant control stage, a geometry stage the C++ models compute alone, the flat and depth
+// shading, geomipmap's tessellation stages).
+std::string twin_file(const Scene& scene, ShaderStage stage);
+
+// The text of a twin file (data/shaders/`file`).
+std::string twin_text(const std::string& file);
+
+// Whether `user` holds exactly the text of its stage's twin: the C++ model (or the built-in
+// shading) is then the fast path for it, and the interpreter does not run it.
+bool is_twin(const Scene& scene, const StageShader& user);
+
 }  // namespace tessref::pipeline

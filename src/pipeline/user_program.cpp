@@ -46,10 +46,6 @@ namespace tessref::pipeline {
 
 namespace {
 
-std::string twin_text(const std::string& file) {
-    return read_input_file(data_dir() + "/shaders/" + file, "shader file", kShaderFileBytes);
-}
-
 // The twins' base name of an evaluation model (none for geomipmap: no tessellation).
 const char* twin_base(EvaluationModel m) {
     switch (m) {
@@ -86,6 +82,23 @@ std::string geometry_twin(const Scene& scene) {
     return "";
 }
 
+// The shading model's fragment twin, whose text keeps the built-in shading; "" for the
+// models whose fragment shader is the GL backend's own text (flat, depth).
+std::string fragment_twin(ShadingKind kind) {
+    switch (kind) {
+        case ShadingKind::thesis_single: return "thesis_terrain_single.frag";
+        case ShadingKind::thesis_multi: return "thesis_terrain.frag";
+        case ShadingKind::lab4: return "lab4_terrain.frag";
+        case ShadingKind::cosc422: return "cosc422_terrain.frag";
+        case ShadingKind::pn: return "pn_triangles.frag";
+        case ShadingKind::pom: return "pom.frag";
+        case ShadingKind::geomip_lightmap: return "geomip_terrain.frag";
+        case ShadingKind::flat:
+        case ShadingKind::depth: break;
+    }
+    return "";
+}
+
 const char* layout_name(shader::GeometryOutput o) {
     switch (o) {
         case shader::GeometryOutput::points: return "points";
@@ -116,16 +129,16 @@ public:
         const bool terrain_normals = em == EvaluationModel::cosc422 && scene.geometry &&
                                      scene.geometry->normals == GeometryNormals::height_field;
         defines = terrain_normals ? "#define TERRAIN_NORMALS\n" : "";
-        const auto compile = [&](ShaderStage stage, const std::string& twin_file, const std::string& builtin_text) {
+        const auto compile = [&](ShaderStage stage, const std::string& twin, const std::string& builtin_text) {
             shader::Source src;
             src.stage = stage;
             const StageShader* u = given(user, stage);
             if (u) {
                 src.path = u->path;
                 src.text = read_user_shader(*u);
-            } else if (!twin_file.empty()) {
-                src.path = data_dir() + "/shaders/" + twin_file;
-                src.text = twin_text(twin_file);
+            } else if (!twin.empty()) {
+                src.path = data_dir() + "/shaders/" + twin;
+                src.text = twin_text(twin);
                 src.prefix = defines;
                 if (stage == ShaderStage::tess_evaluation) src.text = with_generator(src.text, scene.generator, src.path);
             } else {
@@ -432,16 +445,16 @@ private:
     // normal_map, cosc422 face); none without either.
     std::optional<shader::Source> geometry_source() const {
         const StageShader* user_geometry = given(scene.shaders, ShaderStage::geometry);
-        const std::string twin_file = geometry_twin(scene);
-        if (!user_geometry && twin_file.empty()) return std::nullopt;
+        const std::string twin = geometry_twin(scene);
+        if (!user_geometry && twin.empty()) return std::nullopt;
         shader::Source src;
         src.stage = ShaderStage::geometry;
         if (user_geometry) {
             src.path = user_geometry->path;
             src.text = read_user_shader(*user_geometry);
         } else {
-            src.path = data_dir() + "/shaders/" + twin_file;
-            src.text = twin_text(twin_file);
+            src.path = data_dir() + "/shaders/" + twin;
+            src.text = twin_text(twin);
             src.prefix = defines;
         }
         return src;
@@ -553,21 +566,35 @@ std::vector<StageShader> interpreted_stages(const Scene& scene) {
     const char* base = twin_base(scene.evaluation.model);
     if (!base) return out;  // geomipmap: no tessellation stages to run
     for (const StageShader& s : scene.shaders) {
-        std::string twin;
-        switch (s.stage) {
-            case ShaderStage::vertex: twin = std::string(base) + ".vert"; break;
-            case ShaderStage::tess_control: twin = control_twin(scene); break;
-            case ShaderStage::tess_evaluation: twin = std::string(base) + ".tese"; break;
-            case ShaderStage::geometry: twin = geometry_twin(scene); break;
-            case ShaderStage::fragment: continue;  // not in the pipeline (a fragment shader: the render's)
-        }
+        if (s.stage == ShaderStage::fragment) continue;  // not in the pipeline (a fragment shader: the render's)
         // A file whose text is exactly the shipped twin's is the twin: the C++ model, which
         // the twin is proven to compute bit for bit, is the fast path for it. Any other text
         // (a changed constant, a comment) runs through the interpreter.
-        if (!twin.empty() && read_user_shader(s) == twin_text(twin)) continue;
+        if (is_twin(scene, s)) continue;
         out.push_back(s);
     }
     return out;
+}
+
+std::string twin_file(const Scene& scene, ShaderStage stage) {
+    const char* base = twin_base(scene.evaluation.model);
+    switch (stage) {
+        case ShaderStage::vertex: return base ? std::string(base) + ".vert" : "";
+        case ShaderStage::tess_control: return control_twin(scene);
+        case ShaderStage::tess_evaluation: return base ? std::string(base) + ".tese" : "";
+        case ShaderStage::geometry: return geometry_twin(scene);
+        case ShaderStage::fragment: return fragment_twin(scene.shading.model.kind);
+    }
+    return "";
+}
+
+std::string twin_text(const std::string& file) {
+    return read_input_file(data_dir() + "/shaders/" + file, "shader file", kShaderFileBytes);
+}
+
+bool is_twin(const Scene& scene, const StageShader& user) {
+    const std::string twin = twin_file(scene, user.stage);
+    return !twin.empty() && read_user_shader(user) == twin_text(twin);
 }
 
 StageTrace trace_stage(const Scene& scene, const StageTraceRequest& request, shader::Observer& observer) {

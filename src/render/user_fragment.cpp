@@ -51,7 +51,6 @@
 #include <vector>
 
 #include "common/data_dir.h"
-#include "common/input_file.h"
 #include "common/parallel.h"
 #include "pipeline/raster_stage.h"
 #include "pipeline/stage_uniforms.h"
@@ -64,23 +63,6 @@
 namespace tessref {
 
 namespace {
-
-// The shading model's GLSL twin (data/shaders/), whose text keeps the built-in shading; ""
-// for the models whose fragment shader is the GL backend's own text (flat, depth).
-const char* fragment_twin(ShadingKind kind) {
-    switch (kind) {
-        case ShadingKind::thesis_single: return "thesis_terrain_single.frag";
-        case ShadingKind::thesis_multi: return "thesis_terrain.frag";
-        case ShadingKind::lab4: return "lab4_terrain.frag";
-        case ShadingKind::cosc422: return "cosc422_terrain.frag";
-        case ShadingKind::pn: return "pn_triangles.frag";
-        case ShadingKind::pom: return "pom.frag";
-        case ShadingKind::geomip_lightmap: return "geomip_terrain.frag";
-        case ShadingKind::flat:
-        case ShadingKind::depth: break;
-    }
-    return "";
-}
 
 // The decorations llvmpipe interpolates otherwise than perspective-correct at the pixel
 // centre (SPIR-V's Flat, NoPerspective, Centroid, Sample) on an input that is not a built-in
@@ -190,10 +172,7 @@ const StageShader* user_fragment_shader(const Scene& scene) {
                                  [](const StageShader& s) { return s.stage == ShaderStage::fragment; });
     if (it == scene.shaders.end()) return nullptr;
     // The twin's own text keeps the built-in shading model, which it is proven to compute.
-    const std::string twin = fragment_twin(scene.shading.model.kind);
-    if (!twin.empty() && pipeline::read_user_shader(*it) ==
-                             read_input_file(data_dir() + "/shaders/" + twin, "shader file", kShaderFileBytes))
-        return nullptr;
+    if (pipeline::is_twin(scene, *it)) return nullptr;
     return &*it;
 }
 
@@ -201,7 +180,7 @@ namespace render_detail {
 
 StageShader traced_fragment_shader(const Scene& scene) {
     if (const StageShader* user = user_fragment_shader(scene)) return *user;
-    const std::string twin = fragment_twin(scene.shading.model.kind);
+    const std::string twin = pipeline::twin_file(scene, ShaderStage::fragment);
     if (twin.empty())
         throw Error(std::string("the scene's shading model '") + to_string(scene.shading.model.kind) +
                         "' has no GLSL file to trace (its fragment shader is the GL backend's own text): give one "
