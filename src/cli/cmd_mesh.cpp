@@ -53,51 +53,48 @@ struct MeshCommandOptions {
     std::string max_instructions;      // empty: the interpreter's default
 };
 
-// Writes the mesh file through `write` into the output's temporary file, with progress.
+// Which of the writer's errors are reported at the output's name, the writer knowing a
+// stream, not its name: those that name no file (a whole mesh's writer), or those thrown
+// once the stream has failed (a streamed writer, whose other errors are the pipeline's and
+// stay as they are).
+enum class NameErrors { without_file, after_stream_failure };
+
+// Writes the mesh file through `write` into the output's temporary file, with progress;
+// returns what `write` returns.
 template <typename Write>
-MeshWriteReport write_mesh_file(const Write& write, const AtomicOutput& output, const std::string& name,
-                                MeshWriteOptions write_options) {
+auto write_mesh_file(const Write& write, const AtomicOutput& output, const std::string& name,
+                     MeshWriteOptions write_options, NameErrors rule = NameErrors::without_file) {
     StageProgress stage_progress;
     write_options.progress = [&stage_progress](std::string_view stage, double fraction) {
         stage_progress(stage, fraction);
     };
     std::ofstream file(output.temp_path(), std::ios::binary | std::ios::trunc);
     if (!file) throw Error("cannot write output file", Where::in_file(name));
-    MeshWriteReport report;
+    decltype(write(file, write_options)) report;
     try {
         report = write(file, write_options);
     } catch (const Error& error) {
-        if (!error.where().file.empty()) throw;
-        throw Error(error.what(), Where::in_file(name));  // the writer knows a stream, not its name
+        const bool named = rule == NameErrors::without_file ? !error.where().file.empty() : bool(file);
+        if (named) throw;
+        throw Error(error.what(), Where::in_file(name));
     }
     file.close();
     if (!file) throw Error("cannot write output file: " + stream_failure(), Where::in_file(name));
     return report;
 }
 
-// write_pipeline_ply() into the output's temporary file, with progress: the pipeline's
-// errors as they are, the file's (a failed stream) at the output's name.
+// write_pipeline_ply() into the output's temporary file, with progress: nothing (and no
+// file content) where the scene does not stream.
 std::optional<MeshWriteReport> stream_mesh_file(const Scene& scene, PipelineOptions pipeline_options,
                                                 const AtomicOutput& output, const std::string& name,
-                                                MeshWriteOptions write_options) {
-    StageProgress stage_progress;
-    write_options.progress = [&stage_progress](std::string_view stage, double fraction) {
-        stage_progress(stage, fraction);
-    };
-    std::ofstream file(output.temp_path(), std::ios::binary | std::ios::trunc);
-    if (!file) throw Error("cannot write output file", Where::in_file(name));
-    std::optional<MeshWriteReport> report;
-    try {
-        Progress progress("tessellating patches", scene.patch_count());
-        pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
-        report = write_pipeline_ply(scene, pipeline_options, write_options, file);
-    } catch (const Error& error) {
-        if (file) throw;
-        throw Error(error.what(), Where::in_file(name));  // the writer knows a stream, not its name
-    }
-    file.close();
-    if (!file) throw Error("cannot write output file: " + stream_failure(), Where::in_file(name));
-    return report;
+                                                const MeshWriteOptions& write_options) {
+    return write_mesh_file(
+        [&](std::ostream& file, const MeshWriteOptions& o) {
+            Progress progress("tessellating patches", scene.patch_count());
+            pipeline_options.progress = [&progress](std::size_t done, std::size_t) { progress.set(done); };
+            return write_pipeline_ply(scene, pipeline_options, o, file);
+        },
+        output, name, write_options, NameErrors::after_stream_failure);
 }
 
 // The warnings, and the line saying what was written (`captured`: triangles captured, when
