@@ -6,19 +6,53 @@
 #include <cstring>
 
 #include <glslang/SPIRV/GLSL.std.450.h>
-#include <glslang/SPIRV/doc.h>
 #include <glslang/SPIRV/spirv.hpp>
+#include <spirv-tools/libspirv.hpp>
 
 #include "shader/rebalance.h"
 
 namespace tessref::shader {
 
+// The names come from SPIRV-Tools, not from glslang's SPIRV/doc.cpp: linking that file
+// costs every tessref process a 7 MB table that its static constructors build at start-up
+// (about 4 ms, more than half of `tessref --version`), for three names in error messages.
 std::string opcode_name(std::uint32_t op) {
-    const char* name = spv::OpcodeString(static_cast<int>(op));
-    // glslang's table spells some names with their "Op" and some without.
-    if (name && std::strcmp(name, "Bad") != 0) return std::strncmp(name, "Op", 2) == 0 ? name : std::string("Op") + name;
+    const char* name = spvOpcodeString(op);  // without its "Op"; "unknown" for no opcode
+    if (name && std::strcmp(name, "unknown") != 0) return std::string("Op") + name;
     return "opcode " + std::to_string(op);
 }
+
+namespace {
+
+// The spelling of an operand of `OpCapability value` (kind capability) or of `OpEntryPoint
+// value %1 "main"` (kind execution model) as SPIRV-Tools' disassembler writes it: the
+// public API has no name lookup for operands, and this runs only on the way to an error.
+// The number where the disassembler knows no such value.
+std::string operand_name(spv::Op op, std::uint32_t value) {
+    std::vector<std::uint32_t> words = {spv::MagicNumber, 0x00010000u, 0, 2, 0};
+    if (op == spv::OpCapability) {
+        words.insert(words.end(), {2u << 16 | spv::OpCapability, value});
+    } else {
+        std::uint32_t main_name = 0;  // "main" and its terminating NUL: two words
+        std::memcpy(&main_name, "main", 4);
+        words.insert(words.end(), {5u << 16 | spv::OpEntryPoint, value, 1, main_name, 0});
+    }
+    std::string text;
+    spvtools::SpirvTools tools(SPV_ENV_UNIVERSAL_1_6);
+    tools.SetMessageConsumer([](spv_message_level_t, const char*, const spv_position_t&, const char*) {});
+    const std::string instruction = op == spv::OpCapability ? "OpCapability " : "OpEntryPoint ";
+    if (tools.Disassemble(words, &text, SPV_BINARY_TO_TEXT_OPTION_NO_HEADER)) {
+        const std::size_t at = text.find(instruction);
+        if (at != std::string::npos) {
+            const std::size_t begin = at + instruction.size();
+            const std::size_t end = text.find_first_of(" \n", begin);
+            if (end > begin) return text.substr(begin, end - begin);
+        }
+    }
+    return std::to_string(value);
+}
+
+}  // namespace
 
 Where Module::Impl::where(const Instr& instr) const {
     const auto file = strings.find(instr.file);
@@ -203,7 +237,7 @@ private:
                     case spv::CapabilityDerivativeControl:
                         return;
                     default:
-                        fail(std::string("capability ") + spv::CapabilityString(static_cast<int>(a[0])) +
+                        fail(std::string("capability ") + operand_name(spv::OpCapability, a[0]) +
                              " is not supported by the interpreter");
                 }
             }
@@ -225,7 +259,7 @@ private:
                     case spv::ExecutionModelGeometry: m_.stage = ShaderStage::geometry; break;
                     case spv::ExecutionModelFragment: m_.stage = ShaderStage::fragment; break;
                     default:
-                        fail(std::string("execution model ") + spv::ExecutionModelString(static_cast<int>(a[0])) +
+                        fail(std::string("execution model ") + operand_name(spv::OpEntryPoint, a[0]) +
                              " is not supported by the interpreter (vertex, tessellation control, "
                              "tessellation evaluation, geometry and fragment are)");
                 }
