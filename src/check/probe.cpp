@@ -552,30 +552,36 @@ void run_ray_probe(CheckState& state) {
     const int iu = (state.up_axis + 1) % 3, iw = (state.up_axis + 2) % 3;
     const double reach = rays ? 64.0 * RayScene::resolution_of(mesh.positions) : 0.0;  // the recast's 16, and rounding
     const bool cull = rays && std::isfinite(reach) && reach > 0.0;
-    // Fan-triangulate the analysed faces.
-    std::vector<std::array<std::uint32_t, 3>> triangles;
-    triangles.reserve(cull ? report.triangle_count / 2 : report.triangle_count);
-    bool any = false;
-    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-        if (state.face_status[f] != face_kept) continue;
-        const auto face = mesh.face(f);
+    // Fan-triangulate the analysed faces, in fixed chunks in parallel, joined in face order.
+    // The first triangle is kept whether a ray reaches it or not.
+    const auto probed = [&](std::size_t f) {
         // An open sheet beside closed components has no inside: the closed probe leaves it out.
-        if (!state.component_is_sheet.empty() && state.component_is_sheet[state.vertex_component[face[0]]]) continue;
-        for (std::size_t k = 1; k + 1 < face.size(); ++k) {
-            const std::array<std::uint32_t, 3> t{face[0], face[k], face[k + 1]};
-            if (cull && any) {
-                glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-                for (std::uint32_t v : t) {
-                    const glm::dvec2 p(mesh.positions[v][iu], mesh.positions[v][iw]);
-                    lo = glm::min(lo, p);
-                    hi = glm::max(hi, p);
+        return state.face_status[f] == face_kept &&
+               (state.component_is_sheet.empty() || !state.component_is_sheet[state.vertex_component[mesh.face(f)[0]]]);
+    };
+    std::size_t first_face = 0;
+    while (first_face < mesh.face_count() && !probed(first_face)) ++first_face;
+    using Triangle = std::array<std::uint32_t, 3>;
+    auto parts = map_chunks<std::vector<Triangle>>(mesh.face_count(), 1 << 15, [&](std::size_t f0, std::size_t f1, auto& out) {
+        for (std::size_t f = f0; f < f1; ++f) {
+            if (!probed(f)) continue;
+            const auto face = mesh.face(f);
+            for (std::size_t k = 1; k + 1 < face.size(); ++k) {
+                const Triangle t{face[0], face[k], face[k + 1]};
+                if (cull && !(f == first_face && k == 1)) {
+                    glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+                    for (std::uint32_t v : t) {
+                        const glm::dvec2 p(mesh.positions[v][iu], mesh.positions[v][iw]);
+                        lo = glm::min(lo, p);
+                        hi = glm::max(hi, p);
+                    }
+                    if (!reachable(*rays, lo, hi, reach)) continue;
                 }
-                if (!reachable(*rays, lo, hi, reach)) continue;
+                out.push_back(t);
             }
-            triangles.push_back(t);
-            any = true;
         }
-    }
+    });
+    std::vector<Triangle> triangles = concatenate(std::move(parts));
     if (triangles.empty()) {
         report.probe.skipped_because = "no faces to probe";
         return;
