@@ -68,7 +68,8 @@ void classify_faces(CheckState& state) {
     state.face_status.resize(mesh.face_count());
     state.vertex_referenced.assign(vertex_count, 0);
     struct ChunkResult {
-        std::vector<Defect> defects;
+        std::vector<Defect> defects;  // the chunk's first max_locations
+        std::size_t count = 0;
         std::size_t bad_face = SIZE_MAX;  // the chunk's first face with an index beyond the vertices
         std::uint32_t bad_vertex = 0;
     };
@@ -98,6 +99,7 @@ void classify_faces(CheckState& state) {
             else if (repeated) state.face_status[f] = face_repeated_vertex;
             else if (!all_finite) state.face_status[f] = face_non_finite;
             if (state.face_status[f] == face_kept) continue;
+            if (out.count++ >= state.options.max_locations) continue;
 
             Defect d;
             glm::dvec3 centre(0.0);
@@ -124,8 +126,13 @@ void classify_faces(CheckState& state) {
             throw Error("face " + std::to_string(r.bad_face) + " refers to vertex " + std::to_string(r.bad_vertex) +
                             ", but the mesh has " + std::to_string(vertex_count) + " vertices",
                         Where::in_file(mesh.source));
-    for (ChunkResult& r : results)
-        for (Defect& d : r.defects) state.add_defect(DefectClass::degenerate_face, std::move(d));
+    // Counts are exact; only the first max_locations locations are kept, in face order.
+    DefectReport& degenerate = state.report.defects[int(DefectClass::degenerate_face)];
+    for (ChunkResult& r : results) {
+        degenerate.count += r.count;
+        for (Defect& d : r.defects)
+            if (degenerate.locations.size() < state.options.max_locations) degenerate.locations.push_back(std::move(d));
+    }
 }
 
 void report_refused_faces(CheckState& state, const std::vector<std::uint32_t>& refused_faces) {
