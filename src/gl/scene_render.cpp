@@ -85,6 +85,10 @@ StageSource file_stage(GLenum stage, const std::string& file) {
     s.text = read_shader(file);
     return s;
 }
+// The shading model's fragment twin (the one table of twin files: pipeline::twin_file).
+StageSource fragment_twin_stage(const Scene& scene) {
+    return file_stage(GL_FRAGMENT_SHADER, pipeline::twin_file(scene, ShaderStage::fragment));
+}
 StageSource text_stage(GLenum stage, const char* text) {
     StageSource s;
     s.stage = stage;
@@ -110,15 +114,14 @@ Plan geomip_plan(const Scene& scene, const RenderShading& shading) {
     switch (shading.model.kind) {
         case ShadingKind::flat: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kFlatFragmentShader)); break;
         case ShadingKind::depth: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kDepthFragmentShader)); break;
-        case ShadingKind::thesis_single: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain_single.frag")); break;
-        case ShadingKind::thesis_multi: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain.frag")); break;
         case ShadingKind::geomip_lightmap:
             if (shading.model.geomip.materials.size() > kGeomipMaxMaterials)
                 throw Error("tessref gl: geomip_terrain.frag blends at most " + std::to_string(kGeomipMaxMaterials) +
                                 " materials, the scene has " + std::to_string(shading.model.geomip.materials.size()),
                             Where::at_key(scene.file, "shading.materials"));
-            plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "geomip_terrain.frag"));
-            break;
+            [[fallthrough]];
+        case ShadingKind::thesis_single:
+        case ShadingKind::thesis_multi: plan.stages.push_back(fragment_twin_stage(scene)); break;
         case ShadingKind::lab4:
         case ShadingKind::cosc422:
         case ShadingKind::pn:
@@ -138,40 +141,29 @@ Plan geomip_plan(const Scene& scene, const RenderShading& shading) {
 Plan plan_for(const Scene& scene, const RenderShading& shading) {
     Plan plan;
     const EvaluationModel em = scene.evaluation.model;
-    std::string base;
     switch (em) {
         case EvaluationModel::thesis:
-            base = "thesis_terrain";
             plan.position_expression = "gl_Position.xyz";  // mvp = identity in the capture pass
             plan.identity_mvp_for_capture = true;
             break;
         case EvaluationModel::cosc422:
-            base = "cosc422_terrain";
             plan.position_expression = "evaluationOut.worldPosition";
             break;
         case EvaluationModel::lab4:
-            base = "lab4_terrain";
             plan.position_expression = "evaluationOut.worldPosition";
             plan.normal_expression = "evaluationOut.normal";
             break;
         case EvaluationModel::pn:
-            base = "pn_triangles";
             plan.position_expression = "evaluationOut.v3PositionOut";
             plan.normal_expression = "evaluationOut.v3NormalOut";
             break;
         case EvaluationModel::geomipmap: return geomip_plan(scene, shading);
     }
-    plan.stages.push_back(file_stage(GL_VERTEX_SHADER, base + ".vert"));
+    plan.stages.push_back(file_stage(GL_VERTEX_SHADER, pipeline::twin_file(scene, ShaderStage::vertex)));
 
     // Control: the model's twin; constant (or none, levels 1): a pass-through shader or none.
     if (scene.control && scene.control->model != ControlModel::constant) {
-        switch (scene.control->model) {
-            case ControlModel::thesis: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "thesis_terrain.tesc")); break;
-            case ControlModel::cosc422: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "cosc422_terrain.tesc")); break;
-            case ControlModel::lab4: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "lab4_terrain.tesc")); break;
-            case ControlModel::pn: plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, "pn_triangles.tesc")); break;
-            case ControlModel::constant: break;
-        }
+        plan.stages.push_back(file_stage(GL_TESS_CONTROL_SHADER, pipeline::twin_file(scene, ShaderStage::tess_control)));
         plan.has_control_shader = true;
     } else if (em == EvaluationModel::thesis) {
         plan.stages.push_back(text_stage(GL_TESS_CONTROL_SHADER, pipeline::kConstantControlShader));
@@ -182,17 +174,17 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
                     Where::at_key(scene.file, "control.model"));
     }
 
-    StageSource tese = file_stage(GL_TESS_EVALUATION_SHADER, base + ".tese");
+    StageSource tese = file_stage(GL_TESS_EVALUATION_SHADER, pipeline::twin_file(scene, ShaderStage::tess_evaluation));
     tese.text = pipeline::with_generator(tese.text, scene.generator, tese.path);
     plan.stages.push_back(std::move(tese));
 
     if (scene.geometry) {
         const GeometryNormals n = scene.geometry->normals;
         if (em == EvaluationModel::thesis && n == GeometryNormals::normal_map) {
-            plan.stages.push_back(file_stage(GL_GEOMETRY_SHADER, "thesis_terrain.geom"));
+            plan.stages.push_back(file_stage(GL_GEOMETRY_SHADER, pipeline::twin_file(scene, ShaderStage::geometry)));
             plan.normal_expression = "geometryOut.gNormal";
         } else if (em == EvaluationModel::cosc422 && n == GeometryNormals::face) {
-            plan.stages.push_back(file_stage(GL_GEOMETRY_SHADER, "cosc422_terrain.geom"));
+            plan.stages.push_back(file_stage(GL_GEOMETRY_SHADER, pipeline::twin_file(scene, ShaderStage::geometry)));
             plan.normal_expression = "geometryOut.faceNormal";
         } else if (em == EvaluationModel::cosc422 && n == GeometryNormals::height_field) {
             // No geometry stage: cosc422_terrain.tese computes the normal per vertex, as the
@@ -218,11 +210,11 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
     switch (shading.model.kind) {
         case ShadingKind::flat: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kFlatFragmentShader)); break;
         case ShadingKind::depth: plan.stages.push_back(text_stage(GL_FRAGMENT_SHADER, kDepthFragmentShader)); break;
-        case ShadingKind::thesis_single: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain_single.frag")); break;
-        case ShadingKind::thesis_multi: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "thesis_terrain.frag")); break;
-        case ShadingKind::lab4: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "lab4_terrain.frag")); break;
-        case ShadingKind::cosc422: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "cosc422_terrain.frag")); break;
-        case ShadingKind::pn: plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pn_triangles.frag")); break;
+        case ShadingKind::thesis_single:
+        case ShadingKind::thesis_multi:
+        case ShadingKind::lab4:
+        case ShadingKind::cosc422:
+        case ShadingKind::pn: plan.stages.push_back(fragment_twin_stage(scene)); break;
         case ShadingKind::geomip_lightmap:
             throw Error("tessref gl: shading model geomip_lightmap shades a geomipmapped terrain: it needs "
                         "evaluation model geomipmap",
@@ -238,7 +230,7 @@ Plan plan_for(const Scene& scene, const RenderShading& shading) {
                                                 : std::string(" without [geometry]")) +
                                 ")",
                             Where::at_key(scene.file, "shading.model"));
-            plan.stages.push_back(file_stage(GL_FRAGMENT_SHADER, "pom.frag"));
+            plan.stages.push_back(fragment_twin_stage(scene));
             break;
     }
     for (StageSource& s : plan.stages) s.prefix = plan.defines + s.prefix;
