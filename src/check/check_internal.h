@@ -43,8 +43,9 @@ struct HalfEdgeEntry {
     bool forward() const { return face_and_direction & 1u; }
 };
 
-// A table the step that makes it writes whole: allocated without being cleared first, since
-// clearing a large one on one thread costs as much as a parallel pass that fills it.
+// A table the step that makes it writes whole: allocated without being cleared first (a
+// std::vector clears it on one thread: for the half-edges of a 2.4 M triangle mesh, 57 MB,
+// that was 1.7 % of the check's profile, before the parallel pass wrote it all again).
 template <class T>
 class Table {
     static_assert(std::is_trivially_copyable_v<T>);
