@@ -162,10 +162,14 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
 
     tessref::Framebuffer batched = tessref::Framebuffer::create(173, 97);
     tessref::Rasterizer rasterizer(batched, settings);
-    // The same draws into a visibility framebuffer (depth, ids and weights only).
+    // The same draws into a visibility framebuffer (depth and ids only): each draw's weights
+    // are the drawn rectangles' (per tile, until the next draw), gathered here where the
+    // draw's own triangles are visible.
     tessref::Framebuffer visible = tessref::Framebuffer::create_visibility(173, 97);
-    ASSERT_TRUE(visible.colour.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
+    ASSERT_TRUE(visible.colour.empty() && visible.fragment_count.empty() && visible.front_facing.empty() &&
+                visible.barycentric.empty());
     tessref::Rasterizer visible_rasterizer(visible, settings);
+    std::vector<glm::vec3> visible_weights(visible.depth.size(), glm::vec3(0.0f));
     // Uneven chunks, each indexing its own vertices from 0, two or three per draw.
     std::vector<std::vector<glm::vec4>> chunk_positions;
     std::vector<std::vector<std::array<std::uint32_t, 3>>> chunk_triangles;
@@ -182,25 +186,33 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     }
     for (std::size_t c = 0; c < chunk_first.size();) {
         std::vector<tessref::RasterChunk> draw;
+        const std::uint32_t draw_first = chunk_first[c];
         for (std::size_t k = 0; k < 2 + c % 2 && c < chunk_first.size(); ++k, ++c)
             draw.push_back({chunk_positions[c], chunk_triangles[c], chunk_first[c]});
+        const std::uint32_t draw_end = c < chunk_first.size() ? chunk_first[c] : static_cast<std::uint32_t>(triangles.size());
         rasterizer.draw(draw);
         const tessref::Framebuffer before = visible;
         visible_rasterizer.draw(draw);
         // drawn(): whole 2x2 quads inside the image, no pixel in two, and every pixel whose
-        // depth, triangle or weights the draw changed inside one.
+        // depth or triangle the draw changed inside one (a fragment that passes the depth
+        // test LESS changes the depth: its weights change nowhere else).
         std::vector<int> owner(visible.depth.size(), 0);
         for (const tessref::Rasterizer::Rect& r : visible_rasterizer.drawn()) {
             EXPECT_TRUE(r.x % 2 == 0 && r.row % 2 == 0 && r.width > 0 && r.height > 0);
             EXPECT_TRUE((r.width % 2 == 0 || r.x + r.width == 173) && (r.height % 2 == 0 || r.row + r.height == 97));
             ASSERT_TRUE(r.x + r.width <= 173 && r.row + r.height <= 97);
+            ASSERT_NE(r.weights.base, nullptr);
             for (int y = r.row; y < r.row + r.height; ++y)
-                for (int x = r.x; x < r.x + r.width; ++x) ++owner[static_cast<std::size_t>(y) * 173 + static_cast<std::size_t>(x)];
+                for (int x = r.x; x < r.x + r.width; ++x) {
+                    const std::size_t i = static_cast<std::size_t>(y) * 173 + static_cast<std::size_t>(x);
+                    ++owner[i];
+                    const std::uint32_t id = visible.triangle_id[i];
+                    if (id != tessref::kNoTriangle && id >= draw_first && id < draw_end) visible_weights[i] = r.weights.at(x, y);
+                }
         }
         for (std::size_t i = 0; i < owner.size(); ++i) {
             EXPECT_LE(owner[i], 1) << "pixel " << i << " in two rectangles";
-            const bool changed = visible.triangle_id[i] != before.triangle_id[i] || visible.depth[i] != before.depth[i] ||
-                                 visible.barycentric[i] != before.barycentric[i];
+            const bool changed = visible.triangle_id[i] != before.triangle_id[i] || visible.depth[i] != before.depth[i];
             if (changed) EXPECT_EQ(owner[i], 1) << "pixel " << i << " changed outside drawn()";
         }
     }
@@ -224,7 +236,8 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     EXPECT_EQ(many.fragments_passed, one.fragments_passed);
     EXPECT_TRUE(same_bytes(visible.triangle_id, whole.triangle_id));
     EXPECT_TRUE(same_bytes(visible.depth, whole.depth));
-    EXPECT_TRUE(same_bytes(visible.barycentric, whole.barycentric));
+    EXPECT_TRUE(same_bytes(visible_weights, whole.barycentric));
+    EXPECT_TRUE(visible.barycentric.empty());
     EXPECT_TRUE(same_bytes(visible.barycentric_dx, whole.barycentric_dx));
     EXPECT_TRUE(same_bytes(visible.barycentric_dy, whole.barycentric_dy));
     EXPECT_TRUE(visible.colour.empty() && visible.fragment_count.empty() && visible.front_facing.empty());
@@ -289,6 +302,7 @@ TEST(RenderStream, ProvenanceMatchesTheWholeSurface) {
                 if (!a.covered) continue;
                 ++covered;
                 EXPECT_EQ(a.vertices, b.vertices);
+                EXPECT_EQ(a.barycentric, b.barycentric);
                 EXPECT_EQ(a.vertex_tess_coords, b.vertex_tess_coords);
                 EXPECT_EQ(a.world_position, b.world_position);
                 EXPECT_EQ(a.normal, b.normal);
@@ -301,8 +315,9 @@ TEST(RenderStream, ProvenanceMatchesTheWholeSurface) {
     }
 }
 
-// RenderOptions::provenance off leaves patch_id, tess_coord and level empty and changes no
-// other buffer, streamed or whole, filled or with lines; pixel_provenance then refuses.
+// RenderOptions::provenance off leaves patch_id, tess_coord, barycentric and level empty and
+// changes no other buffer, streamed or whole, filled or with lines; pixel_provenance then
+// refuses.
 TEST(RenderStream, WithoutProvenanceTheOtherBuffersAreTheSame) {
     for (const char* name : {"thesis-all-10.toml", "jacksboro.toml", "pn-triangles.toml", "terrain-pom.toml"}) {
         for (const tessref::RenderMode mode :
@@ -319,16 +334,56 @@ TEST(RenderStream, WithoutProvenanceTheOtherBuffersAreTheSame) {
                 options.provenance = false;
                 const tessref::RenderResult without = tessref::render_scene(scene, options);
                 EXPECT_EQ(with.patch_id.size(), 160u * 100u);
+                EXPECT_EQ(with.barycentric.size(), 160u * 100u);
                 EXPECT_TRUE(without.patch_id.empty() && without.tess_coord.empty() && without.level.empty());
+                EXPECT_TRUE(without.barycentric.empty()) << "barycentric";
                 EXPECT_GT(with.stats.covered_pixels, 0u);
                 EXPECT_TRUE(same_bytes(with.colour, without.colour)) << "colour";
                 EXPECT_TRUE(same_bytes(with.depth, without.depth)) << "depth";
                 EXPECT_TRUE(same_bytes(with.triangle_id, without.triangle_id)) << "triangle_id";
-                EXPECT_TRUE(same_bytes(with.barycentric, without.barycentric)) << "barycentric";
                 EXPECT_EQ(with.stats.covered_pixels, without.stats.covered_pixels);
                 EXPECT_THROW(tessref::pixel_provenance(without, 80, 50), tessref::Error);
             }
         }
+    }
+}
+
+// The weights a render with provenance keeps (RenderResult::barycentric, which `tessref
+// inspect --pixel` prints) are those one rasterize() of the whole surface writes into its
+// Framebuffer, byte for byte, where the streamed render keeps its weights per tile for one
+// draw only: the surface of run_pipeline, projected as the renderer projects it (float mvp,
+// ((m0 x + m1 y) + m2 z) + m3), in one pass. Streamed and whole, several batches.
+TEST(RenderStream, WeightsAreOneRasterizePassesWeights) {
+    for (const char* name : {"thesis-all-10.toml", "jacksboro.toml", "pn-triangles.toml", "thesis-constant-64.toml"}) {
+        SCOPED_TRACE(name);
+        tessref::Scene scene = tessref::load_scene((kScenes / name).string());
+        scene.camera->viewport = {320, 200};
+        const tessref::PipelineResult pipe = tessref::run_pipeline(scene, {});
+        tessref::RenderOptions options;
+        const tessref::RenderResult streamed = tessref::render_scene(scene, options);
+        options.keep_surface = true;
+        const tessref::RenderResult whole = tessref::render_scene(scene, options);
+        ASSERT_TRUE(streamed.stream && streamed.pipeline->mesh.triangles.empty());
+
+        const glm::mat4 m = streamed.mvp;
+        std::vector<glm::vec4> clip;
+        for (const glm::dvec3& position : pipe.mesh.positions) {
+            const glm::vec3 p(position);
+            glm::vec4 sum = m[0] * p.x;
+            sum += m[1] * p.y;
+            sum += m[2] * p.z;
+            sum += m[3];
+            clip.push_back(sum);
+        }
+        tessref::Framebuffer fb = tessref::Framebuffer::create(320, 200);
+        tessref::RasterInput input;
+        input.positions = clip;
+        input.triangles = pipe.mesh.triangles;
+        tessref::rasterize(fb, input, {});
+        EXPECT_TRUE(same_bytes(streamed.triangle_id, fb.triangle_id)) << "triangle_id";
+        EXPECT_TRUE(same_bytes(streamed.barycentric, fb.barycentric)) << "streamed";
+        EXPECT_TRUE(same_bytes(whole.barycentric, fb.barycentric)) << "whole";
+        EXPECT_GT(streamed.stats.covered_pixels, 1000u);
     }
 }
 

@@ -132,10 +132,12 @@ struct Framebuffer {
 
     // Throws tessref::Error for a size outside 1..16384 or varying_count outside 0..16.
     static Framebuffer create(int width, int height, int varying_count = 0);
-    // Only what a renderer resolves its pixels from: depth, triangle_id and barycentric (and
-    // the quad differences when asked for); every other buffer stays empty and the
-    // Rasterizer class (not rasterize(), which refuses it) leaves it so. A quarter of the
-    // memory to clear and fault in for each image.
+    // Only what a batched draw's depth test needs and a renderer resolves its pixels by:
+    // depth and triangle_id (and the quad differences when asked for). Every other buffer
+    // stays empty and the Rasterizer class (not rasterize(), which refuses it) leaves it so;
+    // the weights, needed only between a draw and the resolve of what it drew, the
+    // Rasterizer keeps per tile for the last draw (Rasterizer::Rect::weights). 8 bytes a
+    // pixel to clear and fault in for each image, where create() has 57.
     static Framebuffer create_visibility(int width, int height);
     void clear();  // every buffer to its cleared value
 
@@ -166,8 +168,26 @@ RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSet
 // the pixels one rasterize() of all the triangles in that order would. The framebuffer
 // gets triangle_id (the chunk's first_id + the triangle's index in it), depth, colour,
 // barycentric (and barycentric_dx/dy with quad_derivatives), front_facing and
-// fragment_count as a draw writes them; patch_id, tess_coord and varyings are left to the
-// caller, which knows its vertices (render.cpp resolves them after each draw).
+// fragment_count as a draw writes them, those it has; patch_id, tess_coord and varyings
+// are left to the caller, which knows its vertices (render.cpp resolves them after each
+// draw). A framebuffer without barycentric (create_visibility) gets its weights per tile
+// instead, for the last draw only: Rect::weights.
+
+// The perspective-correct weights a draw wrote into part of the image: pixel (x, row) (row
+// 0 on top) at base[(row - row0) * stride + (x - x0)].
+struct WeightsView {
+    const glm::vec3* base = nullptr;
+    std::size_t stride = 0;
+    int x0 = 0, row0 = 0;
+
+    const glm::vec3& at(int x, int row) const {
+        return base[static_cast<std::size_t>(row - row0) * stride + static_cast<std::size_t>(x - x0)];
+    }
+    // A framebuffer's own barycentric buffer (which it must have).
+    static WeightsView of(const Framebuffer& fb) {
+        return {fb.barycentric.data(), static_cast<std::size_t>(fb.width), 0, 0};
+    }
+};
 struct RasterChunk {
     std::span<const glm::vec4> positions;  // gl_Position of the vertices the triangles index
     std::span<const std::array<std::uint32_t, 3>> triangles;
@@ -187,9 +207,12 @@ public:
     // The parts of the image the last draw changed: rectangles (x, row from the top, width,
     // height; whole 2x2 quads, so no quad straddles two), one per tile where a fragment passed,
     // around the boxes of the triangles drawn there, outside which no pixel's depth, triangle
-    // or weights changed.
+    // or weights changed. `weights` holds the weights of the rectangle's pixels that the last
+    // draw wrote (the pixels whose triangle_id is one of its triangles'; the others' are
+    // undefined where the framebuffer has no barycentric of its own) until the next draw.
     struct Rect {
         int x, row, width, height;
+        WeightsView weights;
     };
     std::vector<Rect> drawn() const;
 

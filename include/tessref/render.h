@@ -92,12 +92,14 @@ struct RenderOptions {
     // result keeps the levels only. The image and every per-pixel buffer are the same
     // either way (tests/test_render_stream.cpp).
     bool keep_surface = false;
-    // Fill RenderResult's provenance buffers patch_id, tess_coord and level. Off, they stay
-    // empty and the image, depth, triangle ids and weights are the same: the resolve then
-    // reads only what the fragment stage needs of each triangle (a PNG needs no more; on the
-    // 64 x 64-patch level-16 bench terrain the provenance reads were a third of the
-    // resolve's time, mostly cache misses into the patches' tess coords and ids).
-    // pixel_provenance needs them.
+    // Fill RenderResult's provenance buffers patch_id, tess_coord, barycentric and level.
+    // Off, they stay empty and the image, depth and triangle ids are the same: the resolve
+    // then reads only what the fragment stage needs of each triangle (a PNG needs no more; on
+    // the 64 x 64-patch level-16 bench terrain the provenance reads were a third of the
+    // resolve's time, mostly cache misses into the patches' tess coords and ids), and the
+    // streamed render keeps no whole-image weights at all (the rasterizer's per tile, for
+    // one draw: a 12-byte buffer a pixel less to clear). pixel_provenance needs them. The
+    // ray-traced and user-fragment renders fill them either way.
     bool provenance = true;
     // Keep the image only as the 8-bit RGBA codes a PNG or TIFF holds (RenderResult::rgba8,
     // to_rgba8's bytes) and leave the float RenderResult::colour empty: 4 bytes a pixel to
@@ -140,6 +142,7 @@ struct RenderResult {
     std::vector<std::uint32_t> triangle_id;  // index into pipeline.mesh.triangles
     std::vector<glm::vec3> tess_coord;       // interpolated gl_TessCoord
     std::vector<glm::vec3> barycentric;      // perspective-correct weights of the triangle
+                                             // (RenderOptions::provenance only)
     std::vector<float> level;                // see LEVEL above; NaN where nothing is visible
     // What produced it (kept for pixel_provenance; null for a ray-traced image). A streamed
     // render (RenderOptions::keep_surface off) keeps the levels here, an empty mesh, and the

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -280,7 +281,6 @@ Framebuffer Framebuffer::create_visibility(int width, int height) {
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     assign_on_huge_pages(fb.depth, n, 1.0f);
     assign_on_huge_pages(fb.triangle_id, n, kNoTriangle);
-    assign_on_huge_pages(fb.barycentric, n, glm::vec3(0.0f));
     return fb;
 }
 
@@ -442,6 +442,12 @@ struct Context {
     int tiles_y;
     std::uint32_t* source;  // per pixel: the input triangle of the visible primitive
     bool all_buffers = true;  // false: a visibility framebuffer (no colour, count, facing)
+    // Where a passing fragment's weights go: pixel (px, py) at weights[(py - weights_y0) *
+    // weights_stride + (px - weights_x0)]; the framebuffer's barycentric, or the buffer of
+    // the tile being rasterized (Rasterizer::State::TileWeights).
+    glm::vec3* weights = nullptr;
+    std::size_t weights_stride = 0;
+    int weights_x0 = 0, weights_y0 = 0;
 };
 
 // LLVM fuses llvmpipe's viewport multiply-add only where the CPU has FMA.
@@ -844,7 +850,8 @@ inline bool fragment(Context& ctx, int px, int py, float z, std::uint32_t source
     if (!pass) return false;
     ++stats.fragments_passed;
     if (s.depth_write) fb.depth[idx] = z;
-    fb.barycentric[idx] = weights();
+    ctx.weights[static_cast<std::size_t>(py - ctx.weights_y0) * ctx.weights_stride +
+                static_cast<std::size_t>(px - ctx.weights_x0)] = weights();
     if (ctx.all_buffers) {
         fb.colour[idx] = s.colour;
         fb.front_facing[idx] = front ? 1 : 0;
@@ -1041,6 +1048,44 @@ struct Rasterizer::State {
             framebuffer.barycentric_dx.resize(framebuffer.depth.size(), glm::vec3(0.0f));
             framebuffer.barycentric_dy.resize(framebuffer.depth.size(), glm::vec3(0.0f));
         }
+        if (framebuffer.barycentric.empty()) {
+            tile_weights.emplace();
+            tile_weights->of_tile.resize(tile_stats.size());
+        } else {
+            ctx.weights = framebuffer.barycentric.data();
+            ctx.weights_stride = static_cast<std::size_t>(framebuffer.width);
+        }
+    }
+
+    // A framebuffer without barycentric (create_visibility): the weights of the last flush
+    // in one buffer per tile it drew in, taken from a pool of free ones and given back at the
+    // next flush. They are needed only between a draw and the resolve of what it drew, so a
+    // render clears and faults in a buffer per tile a batch touches instead of 12 bytes for
+    // every pixel of the image (at 1280x800, 12 MB: 12 % of the CPU time of a level-16
+    // render of the bench terrain).
+    struct TileWeights {
+        static constexpr std::size_t kSize = std::size_t{kTileSize} * kTileSize;  // row stride kTileSize
+        std::vector<std::unique_ptr<glm::vec3[]>> of_tile;  // per tile: null where the flush drew nothing
+        std::vector<std::unique_ptr<glm::vec3[]>> free;
+    };
+
+    // Gives every tile that has items among the chunks [0, used) a weights buffer.
+    void assign_tile_weights() {
+        TileWeights& w = *tile_weights;
+        for (std::unique_ptr<glm::vec3[]>& buffer : w.of_tile)
+            if (buffer) w.free.push_back(std::move(buffer));
+        for (std::size_t t = 0; t < w.of_tile.size(); ++t) {
+            bool items = false;
+            for (std::size_t c = 0; c < used && !items; ++c) items = chunks[c].tile_start[t + 1] > chunks[c].tile_start[t];
+            if (!items) continue;
+            if (w.free.empty()) {
+                // Not cleared: a pixel's weights are read only where its fragment wrote them.
+                w.of_tile[t] = std::make_unique_for_overwrite<glm::vec3[]>(TileWeights::kSize);
+            } else {
+                w.of_tile[t] = std::move(w.free.back());
+                w.free.pop_back();
+            }
+        }
     }
 
     // Rasterizes the set-up chunks [0, used) into the tiles, then forgets them.
@@ -1048,11 +1093,19 @@ struct Rasterizer::State {
         if (used == 0) return;
         const int tile_count = ctx.tiles_x * ctx.tiles_y;
         drawn.assign(static_cast<std::size_t>(tile_count), PixelBox{});
+        if (tile_weights) assign_tile_weights();
         tessref::parallel_for(0, tile_count, [&](int tile) {
             RasterStats& stats = tile_stats[static_cast<std::size_t>(tile)];
             const std::uint64_t passed = stats.fragments_passed;
             PixelBox touched;
-            raster_tile(ctx, tile, chunks, used, stats, touched);
+            Context tile_ctx = ctx;
+            if (tile_weights) {
+                tile_ctx.weights = tile_weights->of_tile[static_cast<std::size_t>(tile)].get();
+                tile_ctx.weights_stride = kTileSize;
+                tile_ctx.weights_x0 = tile % ctx.tiles_x * kTileSize;
+                tile_ctx.weights_y0 = tile / ctx.tiles_x * kTileSize;
+            }
+            raster_tile(tile_ctx, tile, chunks, used, stats, touched);
             if (stats.fragments_passed != passed) drawn[static_cast<std::size_t>(tile)] = touched;
         });
         for (std::size_t c = 0; c < used; ++c) {
@@ -1084,6 +1137,7 @@ struct Rasterizer::State {
     std::vector<RasterStats> tile_stats;
     // Per tile: where the last flush's items lie, if a fragment of theirs passed (else empty).
     std::vector<PixelBox> drawn;
+    std::optional<TileWeights> tile_weights;  // a framebuffer without barycentric
 };
 
 namespace {
@@ -1147,8 +1201,10 @@ RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSet
 Rasterizer::Rasterizer(Framebuffer& fb, const RasterSettings& settings) {
     if (fb.width < 1 || fb.height < 1 ||
         fb.depth.size() != static_cast<std::size_t>(fb.width) * static_cast<std::size_t>(fb.height) ||
-        fb.triangle_id.size() != fb.depth.size() || fb.barycentric.size() != fb.depth.size())
-        throw Error("framebuffer is not allocated (use Framebuffer::create)", Where::at_key("framebuffer"));
+        fb.triangle_id.size() != fb.depth.size() ||
+        (!fb.barycentric.empty() && fb.barycentric.size() != fb.depth.size()))
+        throw Error("framebuffer is not allocated (use Framebuffer::create or create_visibility)",
+                    Where::at_key("framebuffer"));
     state_ = std::make_unique<State>(fb, settings, fb.triangle_id.data());
 }
 Rasterizer::~Rasterizer() = default;
@@ -1184,12 +1240,17 @@ RasterStats Rasterizer::stats() const { return state_->stats(); }
 std::vector<Rasterizer::Rect> Rasterizer::drawn() const {
     const State& s = *state_;
     std::vector<Rect> out;
-    for (const PixelBox& box : s.drawn) {
+    for (std::size_t tile = 0; tile < s.drawn.size(); ++tile) {
+        const PixelBox& box = s.drawn[tile];
         if (box.x1 < box.x0) continue;
         // Whole 2x2 quads: tiles start on even pixels, so the quads stay inside the tile.
         const int x = box.x0 & ~1, row = box.y0 & ~1;
         const int x_end = std::min((box.x1 | 1) + 1, s.ctx.fb.width), row_end = std::min((box.y1 | 1) + 1, s.ctx.fb.height);
-        out.push_back({x, row, x_end - x, row_end - row});
+        const auto t = static_cast<int>(tile);
+        const WeightsView weights = s.tile_weights ? WeightsView{s.tile_weights->of_tile[tile].get(), kTileSize,
+                                                                 t % s.ctx.tiles_x * kTileSize, t / s.ctx.tiles_x * kTileSize}
+                                                   : WeightsView::of(s.ctx.fb);
+        out.push_back({x, row, x_end - x, row_end - row, weights});
     }
     return out;
 }

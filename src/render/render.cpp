@@ -50,12 +50,12 @@ void allocate(RenderResult& r, int width, int height, bool visibility, bool prov
     if (provenance) {
         assign_on_huge_pages(r.patch_id, n, kNoPixelId);
         assign_on_huge_pages(r.tess_coord, n, glm::vec3(0.0f));
+        assign_on_huge_pages(r.barycentric, n, glm::vec3(0.0f));
         assign_on_huge_pages(r.level, n, std::numeric_limits<float>::quiet_NaN());
     }
     if (!visibility) return;
     assign_on_huge_pages(r.depth, n, 1.0f);
     assign_on_huge_pages(r.triangle_id, n, kNoPixelId);
-    assign_on_huge_pages(r.barycentric, n, glm::vec3(0.0f));
 }
 
 void keep_colour8(RenderResult& r) {
@@ -67,7 +67,6 @@ void keep_colour8(RenderResult& r) {
 void take_visibility(RenderResult& r, Framebuffer& fb) {
     r.depth = std::move(fb.depth);
     r.triangle_id = std::move(fb.triangle_id);
-    r.barycentric = std::move(fb.barycentric);
 }
 
 SceneCamera camera_for(const Scene& scene, const RenderOptions& options) {
@@ -284,13 +283,14 @@ struct IdRange {
 
 // The visible-surface buffers of RenderResult and the fragment stage's colour, for the pixels of
 // quad rows [quad_row_begin, quad_row_end) and columns [x_begin, x_end) (even) whose visible triangle (id) is in a view that
-// owns(id) returns, with the triangle's index in it (null: not this pass's). Quad by quad (2x2 pixels,
-// as llvmpipe shades): the pixels of a quad that show the same triangle share its
-// derivatives and level.
+// owns(id) returns, with the triangle's index in it (null: not this pass's), and whose weights
+// `weights` holds. Quad by quad (2x2 pixels, as llvmpipe shades): the pixels of a quad that
+// show the same triangle share its derivatives and level.
 template <typename Owns>
-void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<TessLevels>& levels, Domain domain,
-             const FragmentNeeds& needs, bool derivatives, bool line_derivatives, bool provenance, int quad_row_begin,
-             int quad_row_end, IdRange ids, const Owns& owns, int x_begin = 0, int x_end = -1) {
+void resolve(RenderResult& result, const Framebuffer& fb, const WeightsView& weights,
+             const std::vector<TessLevels>& levels, Domain domain, const FragmentNeeds& needs, bool derivatives,
+             bool line_derivatives, bool provenance, int quad_row_begin, int quad_row_end, IdRange ids,
+             const Owns& owns, int x_begin = 0, int x_end = -1) {
     const int width = result.width, height = result.height;
     if (x_end < 0) x_end = width;
     const bool colour8 = result.colour.empty();  // RenderOptions::colour8: the codes only
@@ -305,6 +305,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
             // the triangles' derivatives are then computed together.
             struct Pixel {
                 std::size_t i;
+                int x, row;
                 const SurfaceView* view;
                 std::uint32_t triangle;
                 int k;  // its triangle among the quad's
@@ -329,7 +330,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                         if (derivatives && !line_derivatives) triangles[k] = view->quad_triangle(tri);
                         ++triangle_count;
                     }
-                    pixels[pixel_count++] = {i, view, tri, k};
+                    pixels[pixel_count++] = {i, x, row, view, tri, k};
                 }
             }
             Derivatives quad[4];
@@ -340,11 +341,12 @@ void resolve(RenderResult& result, const Framebuffer& fb, const std::vector<Tess
                                                 quad);
             FragmentInputs fragments[4];  // the inputs a model does not read at their defaults
             for (int p = 0; p < pixel_count; ++p) {
-                const auto [i, view_of, tri, k] = pixels[p];
+                const auto [i, x, row, view_of, tri, k] = pixels[p];
                 const SurfaceView& view = *view_of;
-                const glm::vec3 b = fb.barycentric[i];
+                const glm::vec3 b = weights.at(x, row);
                 if (provenance) {
                     const auto& t = view.mesh.triangles[tri];
+                    result.barycentric[i] = b;
                     result.patch_id[i] = view.mesh.patch_ids[t[0]];
                     result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] + b[1] * view.mesh.tess_coords[t[1]] +
                                            b[2] * view.mesh.tess_coords[t[2]];
@@ -599,9 +601,12 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     result.stats.seconds_pipeline = seconds_since(start);
 
     const auto buffers_start = Clock::now();
-    // The framebuffer's depth, ids and weights become the result's at the end. The two sets
-    // of buffers are filled on two threads: at 1280x800 they are 36 MB whose first touch
-    // (the kernel clearing every page) had one core idle for about a tenth of the render.
+    // The framebuffer's depth and ids become the result's at the end; its weights the
+    // rasterizer keeps per tile for one draw (Rasterizer::Rect::weights), and the result has
+    // them only with the provenance buffers, written by the resolve. The two sets of buffers
+    // are filled on two threads: their first touch is the kernel clearing every page, which
+    // on one thread (36 MB at 1280x800 when the weights were whole-image) had one core idle
+    // for about a tenth of the render.
     Framebuffer fb;
     tessref::parallel_for(0, 2, [&](int k) {
         if (k == 0)
@@ -663,7 +668,8 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         if (defer_normals && needs.normal) complete_normals(stream, batch_chunks, ids, fb, result, drawn);
         tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
             const Rasterizer::Rect& rect = drawn[r];
-            resolve(result, fb, pipe->levels, domain, needs, derivatives, false, options.provenance, rect.row / 2,
+            resolve(result, fb, rect.weights, pipe->levels, domain, needs, derivatives, false, options.provenance,
+                    rect.row / 2,
                     (rect.row + rect.height + 1) / 2, ids.range(),
                     [&](std::uint32_t id) -> std::pair<const SurfaceView*, std::uint32_t> {
                         const auto [k, tri] = ids.find(id);
@@ -788,7 +794,8 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     const Domain domain = scene.generator.domain;
     result.domain = domain;
     tessref::parallel_for(tbb::blocked_range<int>(0, (height + 1) / 2), [&](const tbb::blocked_range<int>& rows) {
-        resolve(result, fb, pipe.levels, domain, needs, derivatives, line_derivatives, options.provenance, rows.begin(),
+        resolve(result, fb, WeightsView::of(fb), pipe.levels, domain, needs, derivatives, line_derivatives,
+                options.provenance, rows.begin(),
                 rows.end(), IdRange{0, static_cast<std::uint32_t>(mesh.triangles.size())},
                 [&view](std::uint32_t id) { return std::pair{&view, id}; });
     });
@@ -828,10 +835,10 @@ std::uint64_t estimate_render_memory(glm::ivec2 size, RenderMode mode, bool rayt
     // Per pixel, from the buffers each phase holds at once. A render that materializes the
     // surface (wireframe, smooth normals, a geomipmapped terrain, keep_surface) keeps a full
     // Framebuffer, 57 bytes a pixel, and the RenderResult, 56, while shading; the streamed
-    // fill render holds only a visibility framebuffer (depth, id, weights: 20 bytes) that
-    // becomes part of the 56-byte result (36 without the provenance buffers a PNG does not
-    // need, RenderOptions::provenance). The estimate takes the larger and errs high for
-    // the streamed render. Measured peaks, `/usr/bin/time -f %M tessref render SCENE --size S
+    // fill render holds only a visibility framebuffer (depth and id: 8 bytes, its weights
+    // per tile for one draw) that becomes part of the 56-byte result (12 for a PNG, without
+    // the provenance buffers and with 8-bit colour: RenderOptions::provenance, colour8). The
+    // estimate takes the larger and errs high for the streamed render. Measured peaks, `/usr/bin/time -f %M tessref render SCENE --size S
     // -o x.png --threads 1` (maximum resident set), 2048x2048 and 4096x4096:
     // data/scenes/thesis-map-4.toml (streamed) 189 and 670 MiB, 40 bytes/pixel above a base
     // of about 29 MiB; data/scenes/jacksboro-geomipmap.toml (materialized) 349 and 1275 MiB,

@@ -170,10 +170,10 @@ struct QuadPixels {
 inline QuadPixels quad_of(int x, int row) { return {x & ~1, row & ~1}; }
 
 // Resizes and clears the per-pixel buffers of `result` for a width x height image; without
-// `visibility`, all but depth, triangle_id and barycentric, which the rasterizing renderer
-// takes from its framebuffer when done (take_visibility: the same values, moved, not
-// allocated and copied a second time); without `provenance`, not patch_id, tess_coord and
-// level (RenderOptions::provenance); with `colour8`, rgba8 (the background's codes) instead of
+// `visibility`, all but depth and triangle_id, which the rasterizing renderer takes from its
+// framebuffer when done (take_visibility: the same values, moved, not allocated and copied a
+// second time); without `provenance`, not patch_id, tess_coord, barycentric and level
+// (RenderOptions::provenance); with `colour8`, rgba8 (the background's codes) instead of
 // colour (RenderOptions::colour8: the resolve converts each pixel it shades).
 void allocate(RenderResult& result, int width, int height, bool visibility = true, bool provenance = true,
               bool colour8 = false);

@@ -505,7 +505,8 @@ void UserFragmentStage::resolve_behind(RenderResult& result, const std::vector<s
             for (int row = r.row; row < std::min(r.row + r.height, height); ++row)
                 for (int x = r.x; x < std::min(r.x + r.width, width); ++x) {
                     const std::size_t i = result.index(x, row);
-                    if (behind[i] && scratch.triangle_id[i] == t) fragments[i].push_back({t, scratch.depth[i], scratch.barycentric[i]});
+                    if (behind[i] && scratch.triangle_id[i] == t)
+                        fragments[i].push_back({t, scratch.depth[i], r.weights.at(x, row)});
                 }
     }
     tessref::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
