@@ -13,6 +13,7 @@
 #include "run_program.h"
 #include "scratch_dir.h"
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -505,6 +506,101 @@ TEST(MeshReaders, PlyBinaryFixedRecordsOfMixedTypes) {
         // One byte short: refused before any record is read.
         expect_refused(scratch("fixed_cut.ply", s.substr(0, s.size() - 1)), "truncated file");
     }
+}
+
+// A binary PLY as `tessref mesh --binary` lays it out (float x y z among other scalars, then
+// only triangles of a one-byte count and int indices) is read with its records in parallel.
+// It must read as the same mesh written as ASCII PLY (the serial reading of text), over
+// more records than one parallel chunk holds; and a bad value in it is still named with its
+// record and byte offset, as the serial reading names it.
+TEST(MeshReaders, PlainBinaryPlyReadsAsItsAsciiTwinAndNamesBadRecords) {
+    constexpr int n = 150;  // n x n vertices, 2 (n-1)^2 triangles: 22 500 and 44 402
+    const std::string properties =
+        "property float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+        "property int patch_id\nproperty float tess_u\nproperty float tess_v\nproperty float tess_w\n";
+    const int faces = 2 * (n - 1) * (n - 1);
+    const std::string counts = "element vertex " + std::to_string(n * n) + "\n" + properties + "element face " +
+                               std::to_string(faces) + "\nproperty list uchar int vertex_indices\nend_header\n";
+    std::string binary = "ply\nformat binary_little_endian 1.0\n" + counts;
+    std::string ascii = "ply\nformat ascii 1.0\n" + counts;
+    const std::size_t header = binary.size(), record = 40;
+    const auto text = [](float v) {
+        char buffer[32];
+        std::snprintf(buffer, sizeof buffer, "%.9g ", v);  // 9 digits: the text reads back as this float
+        return std::string(buffer);
+    };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float values[3] = {0.1f * i, 0.3f * j, std::sin(0.05f * float(i * j))};
+            const float normal[3] = {0.0f, 0.6f, 0.8f}, tess[3] = {i / float(n), j / float(n), 0.25f};
+            const std::uint32_t patch = std::uint32_t(j / 10 * 15 + i / 10);
+            for (float v : values) binary += f32(v), ascii += text(v);
+            for (float v : normal) binary += f32(v), ascii += text(v);
+            binary += le32(patch), ascii += std::to_string(patch) + " ";
+            for (float v : tess) binary += f32(v), ascii += text(v);
+            ascii += "\n";
+        }
+    ASSERT_EQ(binary.size(), header + record * n * n);
+    for (int j = 0; j + 1 < n; ++j)
+        for (int i = 0; i + 1 < n; ++i) {
+            const int a = j * n + i;
+            const std::array<std::array<int, 3>, 2> triangles{{{a, a + 1, a + n + 1}, {a, a + n + 1, a + n}}};
+            for (const auto& t : triangles) {
+                binary += '\3';
+                ascii += "3";
+                for (int k = 0; k < 3; ++k) binary += le32(std::uint32_t(t[k])), ascii += " " + std::to_string(t[k]);
+                ascii += "\n";
+            }
+        }
+    tessref::MeshFileOptions all;
+    all.vertex_attributes = true;
+    all.provenance = true;
+    const fs::path binary_path = scratch("plain_le.ply", binary);
+    const IndexedMesh b = tessref::read_mesh_file(binary_path.string(), all);
+    const IndexedMesh a = tessref::read_mesh_file(scratch("plain_ascii.ply", ascii).string(), all);
+    ASSERT_EQ(b.vertex_count(), std::size_t(n * n));
+    ASSERT_EQ(b.face_count(), std::size_t(faces));
+    EXPECT_EQ(b.positions, a.positions);
+    EXPECT_EQ(b.normals, a.normals);
+    EXPECT_EQ(b.uvs, a.uvs);
+    EXPECT_EQ(b.patch_ids, a.patch_ids);
+    EXPECT_EQ(b.tess_coords, a.tess_coords);
+    EXPECT_EQ(b.face_start, a.face_start);
+    EXPECT_EQ(b.face_vertices, a.face_vertices);
+    EXPECT_TRUE(b.reader_notes.empty() && a.reader_notes.empty());
+
+    // Bad records near the end, in a later chunk than the first: named as the serial reading
+    // names them, by their number and byte offset.
+    const auto with = [&](std::size_t at, const std::string& bytes) {
+        std::string s = binary;
+        s.replace(at, bytes.size(), bytes);
+        return s;
+    };
+    const std::size_t v = n * n - 7, face_offset = header + record * n * n, f = faces - 3;
+    expect_refused(scratch("plain_inf.ply", with(header + record * v + 4, f32(INFINITY))),
+                   "vertex " + std::to_string(v) + " at byte offset " + std::to_string(header + record * v) +
+                       " has a non-finite coordinate (y = inf)");
+    const tessref::Error normal = [&] {
+        try {
+            tessref::read_mesh_file(scratch("plain_nan_normal.ply", with(header + record * v + 16, f32(NAN))).string(), all);
+        } catch (const tessref::Error& e) {
+            return e;
+        }
+        return tessref::Error("no error");
+    }();
+    EXPECT_TRUE(contains(normal.what(), "vertex " + std::to_string(v) + " at byte offset " +
+                                            std::to_string(header + record * v) + " has a non-finite normal"))
+        << normal.what();
+    expect_refused(scratch("plain_patch.ply", with(header + record * v + 24, le32(std::uint32_t(-1)))),
+                   "vertex " + std::to_string(v) + " at byte offset " + std::to_string(header + record * v) +
+                       " has patch_id -1, not a whole number >= 0");
+    expect_refused(scratch("plain_index.ply", with(face_offset + 13 * f + 5, le32(std::uint32_t(n * n)))),
+                   "face " + std::to_string(f) + " at byte offset " + std::to_string(face_offset + 13 * f + 5) +
+                       " refers to vertex " + std::to_string(n * n) + ", but the file has " + std::to_string(n * n) +
+                       " vertices");
+    expect_refused(scratch("plain_negative.ply", with(face_offset + 13 * f + 9, le32(std::uint32_t(-2)))),
+                   "face " + std::to_string(f) + " at byte offset " + std::to_string(face_offset + 13 * f + 9) +
+                       " refers to vertex -2");
 }
 
 TEST(MeshReaders, ObjCornerFormsNegativeIndicesAndOtherStatements) {

@@ -1,5 +1,6 @@
 // check_mesh(): runs the steps of src/check/ in order over one CheckState and decides.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 #include <functional>
@@ -57,52 +58,80 @@ namespace {
 
 using namespace check_detail;
 
+// Why each face is left out of the topology, if it is, and which vertices the faces use.
+// In parallel, in fixed chunks whose defects are added in face order; an index beyond the
+// vertices (only a mesh built in memory has one: the readers refuse it) is reported for the
+// first such face, as a serial pass would.
 void classify_faces(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
-    state.face_status.assign(mesh.face_count(), face_kept);
-    state.vertex_referenced.assign(mesh.vertex_count(), 0);
-    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-        const auto face = mesh.face(f);
-        bool finite = true;
-        for (std::uint32_t v : face) {
-            if (v >= mesh.vertex_count())
-                throw Error("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) + ", but the mesh has " +
-                                std::to_string(mesh.vertex_count()) + " vertices",
-                            Where::in_file(mesh.source));
-            state.vertex_referenced[v] = 1;
-            const glm::dvec3& p = mesh.positions[v];
-            finite = finite && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-        }
-        bool repeated = false;
-        for (std::size_t i = 0; i < face.size() && !repeated; ++i)
-            for (std::size_t j = i + 1; j < face.size(); ++j)
-                if (face[i] == face[j]) {
-                    repeated = true;
-                    break;
+    const std::size_t vertex_count = mesh.vertex_count();
+    state.face_status.resize(mesh.face_count());
+    state.vertex_referenced.assign(vertex_count, 0);
+    struct ChunkResult {
+        std::vector<Defect> defects;  // the chunk's first max_locations
+        std::size_t count = 0;
+        std::size_t bad_face = SIZE_MAX;  // the chunk's first face with an index beyond the vertices
+        std::uint32_t bad_vertex = 0;
+    };
+    const auto finite = [](const glm::dvec3& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); };
+    auto results = map_chunks<ChunkResult>(mesh.face_count(), 1 << 14, [&](std::size_t f0, std::size_t f1, ChunkResult& out) {
+        for (std::size_t f = f0; f < f1; ++f) {
+            const auto face = mesh.face(f);
+            state.face_status[f] = face_kept;
+            bool all_finite = true;
+            for (std::uint32_t v : face) {
+                if (v >= vertex_count) {
+                    out.bad_face = f;
+                    out.bad_vertex = v;
+                    return;
                 }
-        if (face.size() < 3) state.face_status[f] = face_too_few_vertices;
-        else if (repeated) state.face_status[f] = face_repeated_vertex;
-        else if (!finite) state.face_status[f] = face_non_finite;
-        if (state.face_status[f] == face_kept) continue;
-
-        Defect d;
-        glm::dvec3 centre(0.0);
-        std::size_t finite_corners = 0;
-        for (std::uint32_t v : face) {
-            const glm::dvec3& p = mesh.positions[v];
-            if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
-                centre += p;
-                ++finite_corners;
+                std::atomic_ref<std::uint8_t>(state.vertex_referenced[v]).store(1, std::memory_order_relaxed);
+                all_finite = all_finite && finite(mesh.positions[v]);
             }
+            bool repeated = false;
+            for (std::size_t i = 0; i < face.size() && !repeated; ++i)
+                for (std::size_t j = i + 1; j < face.size(); ++j)
+                    if (face[i] == face[j]) {
+                        repeated = true;
+                        break;
+                    }
+            if (face.size() < 3) state.face_status[f] = face_too_few_vertices;
+            else if (repeated) state.face_status[f] = face_repeated_vertex;
+            else if (!all_finite) state.face_status[f] = face_non_finite;
+            if (state.face_status[f] == face_kept) continue;
+            if (out.count++ >= state.options.max_locations) continue;
+
+            Defect d;
+            glm::dvec3 centre(0.0);
+            std::size_t finite_corners = 0;
+            for (std::uint32_t v : face) {
+                const glm::dvec3& p = mesh.positions[v];
+                if (finite(p)) {
+                    centre += p;
+                    ++finite_corners;
+                }
+            }
+            d.position = finite_corners ? centre / double(finite_corners) : glm::dvec3(0.0);
+            d.faces = {static_cast<std::uint32_t>(f)};
+            d.vertices.assign(face.begin(), face.end());
+            d.detail = "face " + std::to_string(f) +
+                       (state.face_status[f] == face_too_few_vertices ? " has fewer than three vertices"
+                        : state.face_status[f] == face_repeated_vertex ? " repeats a vertex"
+                                                                        : " has a vertex with non-finite coordinates");
+            out.defects.push_back(std::move(d));
         }
-        d.position = finite_corners ? centre / double(finite_corners) : glm::dvec3(0.0);
-        d.faces = {static_cast<std::uint32_t>(f)};
-        d.vertices.assign(face.begin(), face.end());
-        d.detail = "face " + std::to_string(f) +
-                   (state.face_status[f] == face_too_few_vertices ? " has fewer than three vertices"
-                    : state.face_status[f] == face_repeated_vertex ? " repeats a vertex"
-                                                                    : " has a vertex with non-finite coordinates");
-        state.add_defect(DefectClass::degenerate_face, std::move(d));
+    });
+    for (const ChunkResult& r : results)
+        if (r.bad_face != SIZE_MAX)
+            throw Error("face " + std::to_string(r.bad_face) + " refers to vertex " + std::to_string(r.bad_vertex) +
+                            ", but the mesh has " + std::to_string(vertex_count) + " vertices",
+                        Where::in_file(mesh.source));
+    // Counts are exact; only the first max_locations locations are kept, in face order.
+    DefectReport& degenerate = state.report.defects[int(DefectClass::degenerate_face)];
+    for (ChunkResult& r : results) {
+        degenerate.count += r.count;
+        for (Defect& d : r.defects)
+            if (degenerate.locations.size() < state.options.max_locations) degenerate.locations.push_back(std::move(d));
     }
 }
 
@@ -178,13 +207,26 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     state.progress("topology", 0.0);
     classify_faces(state);
 
-    // The bounding box of the vertices the faces use.
+    // The bounding box of the vertices the faces use (minima and maxima are exact, so the
+    // chunks' boxes join into the box a serial pass finds).
+    struct Box {
+        bool any = false;
+        glm::dvec3 lo{0.0}, hi{0.0};
+    };
+    const auto boxes = map_chunks<Box>(mesh.vertex_count(), 1 << 15, [&](std::size_t v0, std::size_t v1, Box& box) {
+        for (std::size_t v = v0; v < v1; ++v) {
+            const glm::dvec3& p = mesh.positions[v];
+            if (!state.vertex_referenced[v] || !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+            box.lo = box.any ? glm::min(box.lo, p) : p;
+            box.hi = box.any ? glm::max(box.hi, p) : p;
+            box.any = true;
+        }
+    });
     bool any = false;
-    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
-        const glm::dvec3& p = mesh.positions[v];
-        if (!state.vertex_referenced[v] || !std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-        state.bbox_min = any ? glm::min(state.bbox_min, p) : p;
-        state.bbox_max = any ? glm::max(state.bbox_max, p) : p;
+    for (const Box& box : boxes) {
+        if (!box.any) continue;
+        state.bbox_min = any ? glm::min(state.bbox_min, box.lo) : box.lo;
+        state.bbox_max = any ? glm::max(state.bbox_max, box.hi) : box.hi;
         any = true;
     }
     state.diagonal = glm::distance(state.bbox_min, state.bbox_max);
@@ -208,16 +250,16 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     find_non_manifold_vertices(state);
     state.progress("topology", 0.4);
     find_components(state);
+    state.corner_faces.release();
+    state.corner_start.release();
     check_orientation(state);
     // Only this step adds refused_face defects, and no later step reads them; after the
     // orientation, whose flipped faces explain some refusals (report_refused_faces).
     report_refused_faces(state, refused_faces(state));
     state.progress("coincident vertices", 0.45);
     find_coincident_vertices(state);
-    state.half_edges.clear();
-    state.half_edges.shrink_to_fit();
-    state.half_edge_start.clear();
-    state.half_edge_start.shrink_to_fit();
+    state.half_edges.release();
+    state.half_edge_start.release();
     state.progress("geometry", 0.5);
     analyse_face_geometry(state);
     trace_boundary_loops(state);
@@ -229,16 +271,13 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     attach_faces(state);
     name_patches(state);
 
-    std::size_t kept_faces = 0;
-    std::vector<std::uint8_t> in_kept(mesh.vertex_count(), 0);
-    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-        if (state.face_status[f] != face_kept) continue;
-        ++kept_faces;
-        for (std::uint32_t v : mesh.face(f)) in_kept[v] = 1;
-    }
+    // The vertices of kept faces are those find_components numbered.
+    const auto kept_faces = static_cast<std::size_t>(std::count(state.face_status.begin(), state.face_status.end(), std::uint8_t{face_kept}));
+    const auto kept_vertices = static_cast<std::size_t>(
+        mesh.vertex_count() - std::count(state.vertex_component.begin(), state.vertex_component.end(), kNoIndex));
     report.topology_excluded_faces = mesh.face_count() - kept_faces;
-    report.euler_characteristic = static_cast<long long>(std::count(in_kept.begin(), in_kept.end(), std::uint8_t{1})) -
-                                  static_cast<long long>(report.edge_count) + static_cast<long long>(kept_faces);
+    report.euler_characteristic = static_cast<long long>(kept_vertices) - static_cast<long long>(report.edge_count) +
+                                  static_cast<long long>(kept_faces);
     report.manifold = report.count(DefectClass::non_manifold_edge) == 0 && report.count(DefectClass::non_manifold_vertex) == 0;
     report.consistently_oriented =
         report.count(DefectClass::inconsistent_orientation) == 0 && report.count(DefectClass::inverted_volume) == 0;

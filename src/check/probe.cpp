@@ -15,6 +15,7 @@
 // terrain's outline), the surface is a closed cycle that every line crosses an even number
 // of times, whatever it is made of: failures there are rounding, dismissed, not reported.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -162,21 +163,39 @@ std::optional<VerticalRays> vertical_rays(const CheckState& state) {
     return rays;
 }
 
-// Whether any ray of the grid, or a ray recast beside it, can meet a triangle whose ground
-// bounding box is [lo, hi]. A vertical ray meets a triangle only where its ground point lies
-// in the triangle's, up to Embree's single-precision rounding; the recast moves a ray 16
-// resolutions across. So a box widened by `reach` (more than both) that holds no grid
-// point holds no ray that can hit the triangle. Non-finite or degenerate input: reachable.
-bool reachable(const VerticalRays& rays, glm::dvec2 lo, glm::dvec2 hi, double reach) {
-    const auto some_index = [&](double a, double b, double origin, double step, double offset) {
+// Whether any ray of the grid, or a ray recast beside it, can meet the triangle whose ground
+// shadow has the corners t. A vertical ray meets a triangle only where its ground point lies
+// in the triangle's shadow, up to Embree's single-precision rounding (a few resolutions);
+// the recast moves a ray 16 resolutions across. So a triangle farther than `reach` (more
+// than both) from every grid point can be hit by no ray. First the cheap test, the grid
+// points in the shadow's box widened by `reach`; then, for the few there, their distance to
+// the shadow itself (which leaves out about half of what the box lets in: a triangle fills
+// half its box). Non-finite or degenerate input, or a large triangle: reachable.
+bool reachable(const VerticalRays& rays, const std::array<glm::dvec2, 3>& t, double reach) {
+    const glm::dvec2 lo = glm::min(glm::min(t[0], t[1]), t[2]), hi = glm::max(glm::max(t[0], t[1]), t[2]);
+    double first[2], last[2];
+    for (int a = 0; a < 2; ++a) {
+        const double step = rays.step[a];
         if (!(step > 0.0)) return true;
-        const double first = std::ceil((a - reach - origin) / step - offset);
-        const double last = std::floor((b + reach - origin) / step - offset);
-        if (!(first <= last)) return !(std::isfinite(first) && std::isfinite(last));
-        return last >= 0.0 && first <= double(rays.resolution - 1);
-    };
-    return some_index(lo.x, hi.x, rays.lo.x, rays.step.x, rays.offset.x) &&
-           some_index(lo.y, hi.y, rays.lo.y, rays.step.y, rays.offset.y);
+        first[a] = std::ceil((lo[a] - reach - rays.lo[a]) / step - rays.offset[a]);
+        last[a] = std::floor((hi[a] + reach - rays.lo[a]) / step - rays.offset[a]);
+        if (!(first[a] <= last[a])) return !(std::isfinite(first[a]) && std::isfinite(last[a]));
+        if (last[a] < 0.0 || first[a] > double(rays.resolution - 1)) return false;
+        first[a] = std::max(first[a], 0.0);
+        last[a] = std::min(last[a], double(rays.resolution - 1));
+    }
+    if ((last[0] - first[0] + 1) * (last[1] - first[1] + 1) > 64) return true;
+    const auto cross = [](glm::dvec2 a, glm::dvec2 b) { return a.x * b.y - a.y * b.x; };
+    for (double j = first[1]; j <= last[1]; ++j)
+        for (double i = first[0]; i <= last[0]; ++i) {
+            // The ray's ground point, as terrain_probe() places it.
+            const glm::dvec2 g(rays.lo.x + (i + rays.offset.x) * rays.step.x, rays.lo.y + (j + rays.offset.y) * rays.step.y);
+            const double d0 = cross(t[1] - t[0], g - t[0]), d1 = cross(t[2] - t[1], g - t[1]), d2 = cross(t[0] - t[2], g - t[2]);
+            if ((d0 >= 0.0 && d1 >= 0.0 && d2 >= 0.0) || (d0 <= 0.0 && d1 <= 0.0 && d2 <= 0.0)) return true;  // inside
+            for (int k = 0; k < 3; ++k)
+                if (distance_2d_to_segment(g, t[k], t[(k + 1) % 3]) <= reach) return true;
+        }
+    return false;
 }
 
 void terrain_probe(CheckState& state, const RayScene& scene, const VerticalRays& rays) {
@@ -552,30 +571,32 @@ void run_ray_probe(CheckState& state) {
     const int iu = (state.up_axis + 1) % 3, iw = (state.up_axis + 2) % 3;
     const double reach = rays ? 64.0 * RayScene::resolution_of(mesh.positions) : 0.0;  // the recast's 16, and rounding
     const bool cull = rays && std::isfinite(reach) && reach > 0.0;
-    // Fan-triangulate the analysed faces.
-    std::vector<std::array<std::uint32_t, 3>> triangles;
-    triangles.reserve(cull ? report.triangle_count / 2 : report.triangle_count);
-    bool any = false;
-    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-        if (state.face_status[f] != face_kept) continue;
-        const auto face = mesh.face(f);
+    // Fan-triangulate the analysed faces, in fixed chunks in parallel, joined in face order.
+    // The first triangle is kept whether a ray reaches it or not.
+    const auto probed = [&](std::size_t f) {
         // An open sheet beside closed components has no inside: the closed probe leaves it out.
-        if (!state.component_is_sheet.empty() && state.component_is_sheet[state.vertex_component[face[0]]]) continue;
-        for (std::size_t k = 1; k + 1 < face.size(); ++k) {
-            const std::array<std::uint32_t, 3> t{face[0], face[k], face[k + 1]};
-            if (cull && any) {
-                glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-                for (std::uint32_t v : t) {
-                    const glm::dvec2 p(mesh.positions[v][iu], mesh.positions[v][iw]);
-                    lo = glm::min(lo, p);
-                    hi = glm::max(hi, p);
+        return state.face_status[f] == face_kept &&
+               (state.component_is_sheet.empty() || !state.component_is_sheet[state.vertex_component[mesh.face(f)[0]]]);
+    };
+    std::size_t first_face = 0;
+    while (first_face < mesh.face_count() && !probed(first_face)) ++first_face;
+    using Triangle = std::array<std::uint32_t, 3>;
+    auto parts = map_chunks<std::vector<Triangle>>(mesh.face_count(), 1 << 15, [&](std::size_t f0, std::size_t f1, auto& out) {
+        for (std::size_t f = f0; f < f1; ++f) {
+            if (!probed(f)) continue;
+            const auto face = mesh.face(f);
+            for (std::size_t k = 1; k + 1 < face.size(); ++k) {
+                const Triangle t{face[0], face[k], face[k + 1]};
+                if (cull && !(f == first_face && k == 1)) {
+                    std::array<glm::dvec2, 3> shadow;
+                    for (int c = 0; c < 3; ++c) shadow[c] = {mesh.positions[t[c]][iu], mesh.positions[t[c]][iw]};
+                    if (!reachable(*rays, shadow, reach)) continue;
                 }
-                if (!reachable(*rays, lo, hi, reach)) continue;
+                out.push_back(t);
             }
-            triangles.push_back(t);
-            any = true;
         }
-    }
+    });
+    std::vector<Triangle> triangles = concatenate(std::move(parts));
     if (triangles.empty()) {
         report.probe.skipped_because = "no faces to probe";
         return;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 #include <queue>
+#include <span>
 #include <string>
 
 #include "check/check_internal.h"
@@ -59,7 +60,7 @@ void build_half_edges(CheckState& state) {
     if (face_count >= (std::size_t(1) << 31))
         throw Error("mesh too large to check: more than 2^31 faces", Where::in_file(mesh.source));
 
-    std::vector<std::uint32_t> counts(vertex_count + 1, 0);
+    std::vector<std::uint32_t> counts(vertex_count, 0);
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, kFaceChunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
@@ -70,17 +71,19 @@ void build_half_edges(CheckState& state) {
             }
         }
     });
-    state.half_edge_start.assign(vertex_count + 1, 0);
+    // Each group's start; the counts become the cursors of the scatter.
+    state.half_edge_start.allocate(vertex_count + 1);
     std::uint64_t total = 0;
     for (std::size_t v = 0; v < vertex_count; ++v) {
         state.half_edge_start[v] = static_cast<std::uint32_t>(total);
         total += counts[v];
+        counts[v] = state.half_edge_start[v];
     }
     state.half_edge_start[vertex_count] = static_cast<std::uint32_t>(total);
     std::vector<std::uint32_t>& cursor = counts;
-    std::copy(state.half_edge_start.begin(), state.half_edge_start.end(), cursor.begin());
 
-    state.half_edges.resize(total);
+    // Every slot is written below: the table is not cleared first.
+    state.half_edges.allocate(total);
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, kFaceChunk), [&](const auto& r) {
         for (std::size_t f = r.begin(); f != r.end(); ++f) {
             if (state.face_status[f] != face_kept) continue;
@@ -223,18 +226,24 @@ void classify_edges(CheckState& state) {
 void find_non_manifold_vertices(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     const std::size_t vertex_count = mesh.vertex_count();
-    // Faces around each vertex (kept faces only).
-    std::vector<std::uint32_t> start(vertex_count + 1, 0);
-    for (std::size_t f = 0; f < mesh.face_count(); ++f)
-        if (state.face_status[f] == face_kept)
-            for (std::uint32_t v : mesh.face(f)) ++start[v + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    std::vector<std::uint32_t> corner_faces(start.back());
+    // The kept faces at each vertex, in face order.
+    state.corner_start.allocate(vertex_count + 1);
     {
-        std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
+        std::vector<std::uint32_t> counts(vertex_count, 0);
         for (std::size_t f = 0; f < mesh.face_count(); ++f)
             if (state.face_status[f] == face_kept)
-                for (std::uint32_t v : mesh.face(f)) corner_faces[cursor[v]++] = static_cast<std::uint32_t>(f);
+                for (std::uint32_t v : mesh.face(f)) ++counts[v];
+        std::uint32_t total = 0;
+        for (std::size_t v = 0; v < vertex_count; ++v) {
+            state.corner_start[v] = total;
+            total += counts[v];
+            counts[v] = state.corner_start[v];
+        }
+        state.corner_start[vertex_count] = total;
+        state.corner_faces.allocate(total);
+        for (std::size_t f = 0; f < mesh.face_count(); ++f)
+            if (state.face_status[f] == face_kept)
+                for (std::uint32_t v : mesh.face(f)) state.corner_faces[counts[v]++] = static_cast<std::uint32_t>(f);
     }
 
     // A fan: faces around v connected through edges at v. More than one fan: the surface
@@ -251,16 +260,18 @@ void find_non_manifold_vertices(CheckState& state) {
         std::vector<std::uint64_t> by_neighbour;
         std::vector<std::uint32_t> parent;
         for (std::size_t v = v0; v < v1; ++v) {
-            const std::uint32_t b = start[v], e = start[v + 1];
-            if (e - b < 2) continue;
+            const std::span<const std::uint32_t> faces(state.corner_faces.begin() + state.corner_start[v],
+                                                       state.corner_faces.begin() + state.corner_start[v + 1]);
+            const auto count = static_cast<std::uint32_t>(faces.size());
+            if (count < 2) continue;
             by_neighbour.clear();
-            for (std::uint32_t i = b; i < e; ++i) {
-                const auto face = mesh.face(corner_faces[i]);
+            for (std::uint32_t i = 0; i < count; ++i) {
+                const auto face = mesh.face(faces[i]);
                 const std::size_t n = face.size();
                 std::size_t k = 0;
                 while (face[k] != v) ++k;
-                by_neighbour.push_back(std::uint64_t(face[(k + n - 1) % n]) << 32 | (i - b));
-                by_neighbour.push_back(std::uint64_t(face[(k + 1) % n]) << 32 | (i - b));
+                by_neighbour.push_back(std::uint64_t(face[(k + n - 1) % n]) << 32 | i);
+                by_neighbour.push_back(std::uint64_t(face[(k + 1) % n]) << 32 | i);
             }
             if (by_neighbour.size() <= 32) {
                 for (std::size_t i = 1; i < by_neighbour.size(); ++i) {
@@ -272,13 +283,13 @@ void find_non_manifold_vertices(CheckState& state) {
             } else {
                 std::sort(by_neighbour.begin(), by_neighbour.end());
             }
-            parent.resize(e - b);
+            parent.resize(count);
             std::iota(parent.begin(), parent.end(), 0u);
             auto find = [&](std::uint32_t x) {
                 while (parent[x] != x) x = parent[x] = parent[parent[x]];
                 return x;
             };
-            std::uint32_t fans = e - b;
+            std::uint32_t fans = count;
             for (std::size_t i = 1; i < by_neighbour.size(); ++i) {
                 if (by_neighbour[i] >> 32 != by_neighbour[i - 1] >> 32) continue;
                 const std::uint32_t x = find(static_cast<std::uint32_t>(by_neighbour[i])),
@@ -289,14 +300,13 @@ void find_non_manifold_vertices(CheckState& state) {
                 }
             }
             if (fans <= 1) continue;
-            for (std::uint32_t i = b; i < e; ++i)
-                out.fans.emplace_back(std::uint64_t(v) << 32 | corner_faces[i], find(i - b));
+            for (std::uint32_t i = 0; i < count; ++i) out.fans.emplace_back(std::uint64_t(v) << 32 | faces[i], find(i));
             ++out.count;
             if (out.defects.size() >= cap) continue;
             Defect d;
             d.position = mesh.positions[v];
             d.vertices = {static_cast<std::uint32_t>(v)};
-            for (std::uint32_t i = b; i < e && d.faces.size() < 32; ++i) d.faces.push_back(corner_faces[i]);
+            for (std::uint32_t i = 0; i < count && d.faces.size() < 32; ++i) d.faces.push_back(faces[i]);
             d.measure = fans;
             d.detail = "vertex " + std::to_string(v) + " joins " + std::to_string(fans) + " separate fans of faces";
             out.defects.push_back(std::move(d));
@@ -321,16 +331,14 @@ void find_components(CheckState& state) {
             for (std::size_t k = 1; k < face.size(); ++k) sets.unite(face[0], face[k]);
         }
     });
-    std::vector<std::uint8_t> in_kept_face(mesh.vertex_count(), 0);
-    for (std::size_t f = 0; f < mesh.face_count(); ++f)
-        if (state.face_status[f] == face_kept)
-            for (std::uint32_t v : mesh.face(f)) in_kept_face[v] = 1;
+    // A vertex is in a kept face where the corner table files a face under it.
+    const auto in_kept_face = [&](std::uint32_t v) { return state.corner_start[v + 1] != state.corner_start[v]; };
     // Roots are the smallest vertex of their set, so numbering roots in vertex order numbers
     // components by their smallest vertex.
     state.vertex_component.assign(mesh.vertex_count(), kNoIndex);
     std::uint32_t components = 0;
     for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
-        if (!in_kept_face[v]) continue;
+        if (!in_kept_face(v)) continue;
         const std::uint32_t root = sets.find(v);
         if (root == v) state.vertex_component[v] = components++;
         else state.vertex_component[v] = state.vertex_component[root];

@@ -219,8 +219,12 @@ public:
     std::string_view text;
     const MeshFileOptions& options;
     IndexedMesh mesh;
-    std::vector<glm::dvec3> exact;  // the file's coordinates, where rounding lost something
-    bool rounded = false;           // some coordinate is not a float in the file
+    bool rounded = false;  // some coordinate is not a float in the file
+
+    // The file's coordinates of vertex v. Until a coordinate loses something to the
+    // rounding, each is its float (mesh.positions), and only then is a copy of the file's
+    // values kept: a file of float coordinates (every binary export) writes no second array.
+    glm::dvec3 exact(std::size_t v) const { return rounded ? exact_[v] : mesh.positions[v]; }
 
     Error error(const std::string& what, std::size_t line = 0) const {
         return Error(what, Where::in_file(path, line));
@@ -257,7 +261,7 @@ public:
     }
     void reserve(std::uint64_t vertices, std::uint64_t faces) {
         mesh.positions.reserve(vertices);
-        exact.reserve(vertices);
+        reserved_vertices_ = vertices;
         mesh.face_start.reserve(faces + 1);
         mesh.face_vertices.reserve(saturating_bytes(faces, 3));
     }
@@ -266,6 +270,7 @@ public:
         const std::size_t id = mesh.positions.size();
         const std::size_t line = place.line;
         if (id >= kMaxVertices) throw error("more vertices than tessref can number (" + str(kMaxVertices) + ")", line);
+        bool lost = false;
         for (int k = 0; k < 3; ++k) {
             if (!std::isfinite(xyz[k].exact))
                 throw error("vertex " + str(id) + place.text() + " has a non-finite coordinate (" + "xyz"[k] + " = " +
@@ -275,10 +280,16 @@ public:
                 throw error("vertex " + str(id) + place.text() + " has a coordinate beyond float range (" + "xyz"[k] + " = " +
                                 number_text(xyz[k].exact) + ")",
                             line);
-            rounded = rounded || double(xyz[k].value) != xyz[k].exact;
+            lost = lost || double(xyz[k].value) != xyz[k].exact;
+        }
+        if (lost && !rounded) {
+            // The first coordinate rounding changed: the vertices before it are their floats.
+            exact_.reserve(std::max<std::size_t>(reserved_vertices_, id + 1));
+            exact_.assign(mesh.positions.begin(), mesh.positions.end());
+            rounded = true;
         }
         mesh.positions.emplace_back(xyz[0].value, xyz[1].value, xyz[2].value);
-        exact.emplace_back(xyz[0].exact, xyz[1].exact, xyz[2].exact);
+        if (rounded) exact_.emplace_back(xyz[0].exact, xyz[1].exact, xyz[2].exact);
         return static_cast<std::uint32_t>(id);
     }
 
@@ -297,7 +308,7 @@ public:
     void merged_corner(std::uint32_t vertex, const glm::dvec3& file_value) {
         if (merged_corners_++ == 0)
             corner_example_ = "a corner at " + point_text(file_value) + " reads as vertex " + str(vertex) + " at " +
-                              point_text(exact[vertex]);
+                              point_text(exact(vertex));
     }
 
     // The reader note for coordinates that rounding to float made equal.
@@ -313,8 +324,9 @@ public:
             std::uint32_t axis;
             auto operator<=>(const Coordinate&) const = default;
         };
-        std::vector<Coordinate> coordinates(3 * exact.size());
-        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, exact.size(), 1 << 14), [&](const auto& r) {
+        const std::size_t vertices = mesh.positions.size();
+        std::vector<Coordinate> coordinates(3 * vertices);
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertices, 1 << 14), [&](const auto& r) {
             for (std::size_t v = r.begin(); v != r.end(); ++v)
                 for (std::uint32_t k = 0; k < 3; ++k)
                     coordinates[3 * v + k] = {FloatPointKey::bits(static_cast<float>(mesh.positions[v][k])),
@@ -328,7 +340,7 @@ public:
             const Coordinate& c = coordinates[i];
             if (c.bits != coordinates[run].bits) run = i;
             const Coordinate& first = coordinates[run];
-            if (exact[c.vertex][c.axis] == exact[first.vertex][first.axis]) continue;
+            if (exact(c.vertex)[c.axis] == exact(first.vertex)[first.axis]) continue;
             ++merged;
             if (!first_merged || std::tie(c.vertex, c.axis) < std::tie(first_merged->vertex, first_merged->axis)) {
                 first_merged = &c;
@@ -338,9 +350,9 @@ public:
         std::string example;
         if (first_merged) {
             const std::uint32_t v = first_merged->vertex, k = first_merged->axis;
-            example = "vertex " + str(v) + " " + "xyz"[k] + " = " + number_text(exact[v][k]) + " reads as " +
+            example = "vertex " + str(v) + " " + "xyz"[k] + " = " + number_text(exact(v)[k]) + " reads as " +
                       number_text(static_cast<float>(mesh.positions[v][k])) + ", the same float as " +
-                      number_text(exact[first_of_its_float->vertex][first_of_its_float->axis]);
+                      number_text(exact(first_of_its_float->vertex)[first_of_its_float->axis]);
         }
         if (merged > 0)
             mesh.reader_notes.push_back("coordinates are read as float and lose precision: " + str(merged) +
@@ -365,6 +377,8 @@ public:
     }
 
 private:
+    std::vector<glm::dvec3> exact_;  // only once `rounded`
+    std::size_t reserved_vertices_ = 0;
     std::size_t next_progress_ = 0;
     std::uint64_t merged_corners_ = 0;
     std::string corner_example_;

@@ -1,4 +1,6 @@
 // read_ply.cpp — PLY files: ascii, binary little or big endian (mesh_io.h, read_mesh_file).
+#include <atomic>
+
 #include "mesh/read_internal.h"
 
 namespace tessref::mesh_read {
@@ -229,6 +231,109 @@ void store_vertex(Reading& r, const PlyRoles& roles, const std::vector<Real>& re
                                         finite(roles.tess_w, "tess coord"));
 }
 
+// A binary PLY laid out as tessref, OpenMesh and most writers write one: the vertex element,
+// then the face element and nothing else; vertex records of scalars only, with float x, y
+// and z; faces of a one-byte count and 32-bit indices, every one a triangle (the file's size
+// says so: exactly 13 bytes a face). Every record then has a known place, and the records
+// are read in parallel. Anything the serial reading would refuse (a non-finite value, a
+// patch id that is not a whole number, a count other than 3, an index beyond the vertices)
+// makes this return false with the mesh left as it was, and the serial reading below names
+// what it found where.
+bool read_plain_binary_ply(Reading& r, const PlyHeader& h, const PlyRoles& roles, bool big) {
+    if (h.format == PlyFormat::ascii || h.elements.size() != 2) return false;
+    const PlyElement& ve = h.elements[0];
+    const PlyElement& fe = h.elements[1];
+    if (ve.name != "vertex" || fe.name != "face" || fe.properties.size() != 1) return false;
+    const PlyProperty& list = fe.properties[0];
+    if (!list.list || (list.name != "vertex_indices" && list.name != "vertex_index") || size_of(list.count_type) != 1 ||
+        (list.type != Scalar::i32 && list.type != Scalar::u32))
+        return false;
+    std::vector<std::size_t> at;
+    std::size_t record = 0;
+    for (const PlyProperty& p : ve.properties) {
+        if (p.list) return false;
+        at.push_back(record);
+        record += size_of(p.type);
+    }
+    for (int role : {roles.x, roles.y, roles.z})
+        if (ve.properties[role].type != Scalar::f32) return false;
+    const std::uint64_t vertices = ve.count, faces = fe.count;
+    const std::size_t face_offset = h.body_offset + vertices * record;
+    if (r.text.size() != face_offset + faces * 13) return false;
+
+    IndexedMesh& mesh = r.mesh;
+    const auto* bytes = reinterpret_cast<const unsigned char*>(r.text.data());
+    mesh.positions.resize(vertices);
+    if (roles.nx >= 0) mesh.normals.resize(vertices);
+    if (roles.u >= 0) mesh.uvs.resize(vertices);
+    if (roles.patch_id >= 0) mesh.patch_ids.resize(vertices);
+    if (roles.tess_u >= 0) mesh.tess_coords.resize(vertices);
+    mesh.face_start.resize(faces + 1);
+    mesh.face_vertices.resize(3 * faces);
+    std::atomic<bool> clean = true;
+    // A property as store_vertex() takes it: through double, then rounded to float.
+    const auto value = [&](const unsigned char* record_bytes, int role) {
+        return load_scalar(record_bytes + at[role], ve.properties[role].type, big);
+    };
+    const auto as_float = [](double v) { return static_cast<float>(v); };
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertices, 1 << 14), [&](const auto& range) {
+        bool ok = true;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const unsigned char* p = bytes + h.body_offset + i * record;
+            const glm::vec3 xyz(load<float>(p + at[roles.x], big), load<float>(p + at[roles.y], big),
+                                load<float>(p + at[roles.z], big));
+            ok = ok && std::isfinite(xyz.x) && std::isfinite(xyz.y) && std::isfinite(xyz.z);
+            mesh.positions[i] = glm::dvec3(xyz);
+            if (roles.nx >= 0) {
+                const glm::vec3 n(as_float(value(p, roles.nx)), as_float(value(p, roles.ny)), as_float(value(p, roles.nz)));
+                ok = ok && std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z);
+                mesh.normals[i] = n;
+            }
+            if (roles.u >= 0) {
+                const glm::vec2 uv(as_float(value(p, roles.u)), as_float(value(p, roles.v)));
+                ok = ok && std::isfinite(uv.x) && std::isfinite(uv.y);
+                mesh.uvs[i] = uv;
+            }
+            if (roles.patch_id >= 0) {
+                const double id = value(p, roles.patch_id);
+                ok = ok && id >= 0.0 && id <= double(std::numeric_limits<std::uint32_t>::max()) && id == std::floor(id);
+                mesh.patch_ids[i] = ok ? static_cast<std::uint32_t>(id) : 0;
+            }
+            if (roles.tess_u >= 0) {
+                const glm::vec3 t(as_float(value(p, roles.tess_u)), as_float(value(p, roles.tess_v)),
+                                  as_float(value(p, roles.tess_w)));
+                ok = ok && std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z);
+                mesh.tess_coords[i] = t;
+            }
+        }
+        if (!ok) clean.store(false, std::memory_order_relaxed);
+    });
+    const bool signed_index = list.type == Scalar::i32;
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, faces, 1 << 14), [&](const auto& range) {
+        bool ok = true;
+        for (std::size_t f = range.begin(); f != range.end(); ++f) {
+            const unsigned char* p = bytes + face_offset + 13 * f;
+            ok = ok && p[0] == 3;
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t bits = load<std::uint32_t>(p + 1 + 4 * k, big);
+                const std::int64_t index = signed_index ? std::int64_t(static_cast<std::int32_t>(bits)) : std::int64_t(bits);
+                ok = ok && index >= 0 && static_cast<std::uint64_t>(index) < vertices;
+                mesh.face_vertices[3 * f + k] = bits;
+            }
+            mesh.face_start[f + 1] = static_cast<std::uint32_t>(3 * (f + 1));
+        }
+        if (!ok) clean.store(false, std::memory_order_relaxed);
+    });
+    if (clean.load()) return true;
+    for (auto* v : {&mesh.normals, &mesh.tess_coords}) v->clear();
+    mesh.positions.clear();
+    mesh.uvs.clear();
+    mesh.patch_ids.clear();
+    mesh.face_start.assign(1, 0);
+    mesh.face_vertices.clear();
+    return false;
+}
+
 }  // namespace
 
 void read_ply(Reading& r) {
@@ -243,6 +348,7 @@ void read_ply(Reading& r) {
     if (vroles.u >= 0) r.mesh.uvs.reserve(vertex_count);
     if (vroles.patch_id >= 0) r.mesh.patch_ids.reserve(vertex_count);
     if (vroles.tess_u >= 0) r.mesh.tess_coords.reserve(vertex_count);
+    if (read_plain_binary_ply(r, h, vroles, big)) return;
 
     Tokens tokens(r.text, h.body_offset, h.body_line);
     std::size_t offset = h.body_offset;  // binary

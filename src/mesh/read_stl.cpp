@@ -17,7 +17,7 @@ public:
         if (const auto it = ids_.find(key); it != ids_.end()) {
             const glm::dvec3 file_value(xyz[0].exact, xyz[1].exact, xyz[2].exact);
             // -0 and +0 are one vertex in OpenMesh and admesh too: no precision lost there.
-            if (file_value != r_.exact[it->second]) r_.merged_corner(it->second, file_value);
+            if (file_value != r_.exact(it->second)) r_.merged_corner(it->second, file_value);
             return it->second;
         }
         const std::uint32_t id = r_.add_vertex(xyz, place);
