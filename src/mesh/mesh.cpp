@@ -858,12 +858,13 @@ struct Box {
     }
 };
 
-// Whether no patch's interior box meets the whole box of another patch (closed boxes: a
-// shared coordinate meets), proven within a budget of box tests; false when it is not, or
+// Whether no patch's interior box meets the whole box of a patch of another piece (closed
+// boxes: a shared coordinate meets), proven within a budget of box tests; false when it is not, or
 // not within the budget. The interiors are binned into a grid over the two axes along
 // which the surface spreads most, cells at least as wide as every patch (so that each box
 // lies in at most 2 x 2 cells), at most 4096 a side.
-bool interiors_apart(const std::vector<Box>& interiors, const std::vector<Box>& wholes) {
+bool interiors_apart(const std::vector<Box>& interiors, const std::vector<Box>& wholes,
+                     const std::vector<std::uint32_t>& piece_of) {
     Box all;
     for (const Box& b : wholes) {
         all.add(b.lo);
@@ -905,7 +906,7 @@ bool interiors_apart(const std::vector<Box>& interiors, const std::vector<Box>& 
                 const auto first = std::lower_bound(cells.begin(), cells.end(), std::pair{key(i, j), std::uint32_t{0}});
                 for (auto it = first; it != cells.end() && it->first == key(i, j); ++it) {
                     if (budget-- == 0) return false;
-                    if (it->second != q && interiors[it->second].meets(w)) return false;
+                    if (piece_of[it->second] != piece_of[q] && interiors[it->second].meets(w)) return false;
                 }
             }
         }
@@ -938,13 +939,14 @@ struct StreamedPlyWriter::Impl {
     PositionTable shared{0};
     std::vector<glm::dvec3> shared_positions;
     std::vector<std::uint32_t> shared_ids;
-    std::vector<std::uint32_t> first_copy; // the piece's vertex -> its patch's first copy of it
+    PositionTable local{0};               // the current piece's vertices, by piece index
     std::vector<std::uint32_t> welded_of;  // emitted vertex -> welded vertex
     std::vector<std::uint64_t> hashes;
     std::vector<std::uint8_t> on_box;      // the piece's vertex lies on its patch box's surface
     std::vector<std::uint32_t> fresh;      // the piece's vertices that are new welded vertices
     std::vector<Box> interiors, wholes;    // per patch, in order
-    std::vector<std::pair<std::size_t, std::size_t>> patches;  // the piece's: its vertex range each
+    std::vector<std::uint32_t> piece_of;   // per patch: the piece it came in
+    std::uint32_t pieces = 0;
     bool has_patch = false;
     std::uint32_t last_patch = 0;
     std::size_t welded = 0, emitted = 0, emitted_triangles = 0, degenerate = 0;
@@ -956,11 +958,11 @@ struct StreamedPlyWriter::Impl {
         if (!out) throw Error("cannot write the mesh: " + stream_failure());
     }
 
-    // The piece's patches (runs of one patch id), as vertex ranges; false when the piece's
+    // The patches' boxes, and which vertices lie on their surfaces; false when the piece's
     // patch ids go back.
-    bool find_patches(const SurfaceMesh& piece) {
+    bool measure_patches(const SurfaceMesh& piece) {
         const std::size_t n = piece.positions.size();
-        patches.clear();
+        on_box.resize(n);
         for (std::size_t g0 = 0; g0 < n;) {
             std::size_t g1 = n;
             if (!piece.patch_ids.empty()) {
@@ -970,65 +972,21 @@ struct StreamedPlyWriter::Impl {
                 last_patch = patch;
                 for (g1 = g0 + 1; g1 < n && piece.patch_ids[g1] == patch; ++g1) {}
             }
-            patches.emplace_back(g0, g1);
+            Box whole, interior;
+            for (std::size_t i = g0; i < g1; ++i) whole.add(piece.positions[i]);
+            for (std::size_t i = g0; i < g1; ++i) {
+                const glm::dvec3& p = piece.positions[i];
+                const bool on = p.x == whole.lo.x || p.x == whole.hi.x || p.y == whole.lo.y || p.y == whole.hi.y ||
+                                p.z == whole.lo.z || p.z == whole.hi.z;
+                on_box[i] = on;
+                if (!on) interior.add(p);
+            }
+            wholes.push_back(whole);
+            interiors.push_back(interior);
+            piece_of.push_back(pieces);
             g0 = g1;
         }
         return true;
-    }
-
-    // What each vertex needs known before the ordered decisions, patch by patch in parallel:
-    // the patch's boxes, whether the vertex lies on its whole box's surface, its hash, its
-    // patch's first copy of it (`first_copy`), the largest coordinate; false when a
-    // position is not a float value.
-    bool measure_patches(const SurfaceMesh& piece) {
-        const std::size_t n = piece.positions.size();
-        on_box.resize(n);
-        hashes.resize(n);
-        first_copy.resize(n);
-        const std::size_t first_patch = wholes.size();
-        wholes.resize(first_patch + patches.size());
-        interiors.resize(first_patch + patches.size());
-        const auto piece_position = [&piece](std::uint32_t k) -> const glm::dvec3& { return piece.positions[k]; };
-        struct Measured {
-            bool floats = true;
-            double largest = 0.0;
-        };
-        const Measured measured = tessref::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, patches.size()), Measured{},
-            [&](const tbb::blocked_range<std::size_t>& range, Measured m) {
-                PositionTable table(0);
-                for (std::size_t g = range.begin(); g != range.end(); ++g) {
-                    const auto [g0, g1] = patches[g];
-                    Box whole, interior;
-                    for (std::size_t i = g0; i < g1; ++i) {
-                        const glm::dvec3& p = piece.positions[i];
-                        m.floats = m.floats && is_float_point(p);
-                        m.largest = std::max({m.largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-                        whole.add(p);
-                    }
-                    if (!m.floats) return m;
-                    table.clear(g1 - g0);
-                    for (std::size_t i = g0; i < g1; ++i) {
-                        const glm::dvec3& p = piece.positions[i];
-                        const bool on = p.x == whole.lo.x || p.x == whole.hi.x || p.y == whole.lo.y ||
-                                        p.y == whole.hi.y || p.z == whole.lo.z || p.z == whole.hi.z;
-                        on_box[i] = on;
-                        if (!on) interior.add(p);
-                        hashes[i] = PositionTable::hash(p);
-                        first_copy[i] = table.find_or_insert(p, hashes[i], static_cast<std::uint32_t>(i), piece_position);
-                    }
-                    wholes[first_patch + g] = whole;
-                    interiors[first_patch + g] = interior;
-                }
-                return m;
-            },
-            [](const Measured& a, const Measured& b) {
-                return Measured{a.floats && b.floats, std::max(a.largest, b.largest)};
-            });
-        // Every vertex's position is a welded vertex's (its first copy's): the largest
-        // coordinate of them all is the welded vertices' largest.
-        largest = std::max(largest, measured.largest);
-        return measured.floats;
     }
 
     bool add(const SurfaceMesh& piece) {
@@ -1053,8 +1011,11 @@ struct StreamedPlyWriter::Impl {
             check(present.patch_ids, records.written.patch_ids, "patch_ids");
             check(present.tess_coords, records.written.tess_coords, "tess_coords");
         }
+        for (const glm::dvec3& p : piece.positions)
+            if (!is_float_point(p)) return fail();
         if (emitted + n > std::numeric_limits<std::uint32_t>::max()) return fail();
-        if (!find_patches(piece) || !measure_patches(piece)) return fail();
+        if (!measure_patches(piece)) return fail();
+        ++pieces;
         if (!started) {
             records = PlyRecords{present, options.binary, options.ascii_digits};
             const std::string header = records.header(vertex_bound, triangle_bound);
@@ -1063,55 +1024,49 @@ struct StreamedPlyWriter::Impl {
             started = true;
         }
 
-        // Which copies are one point. A patch's interior point (inside its box on every
-        // axis) equals no vertex of another patch (finish() proves it, or the stream is
-        // given up), and a vertex on its patch box's surface equals no interior point of
-        // its own patch (the same point is on the same box's surface or not). So a vertex's
-        // copies are copies in its own patch (measure_patches() found the first of each),
-        // or, on the box's surface, shared vertices of the patches before it.
-        //
-        // The decisions, in emission order, serial: a copy of an earlier vertex of its patch,
-        // an earlier patch's shared vertex, or a new welded vertex (whose record this copy
-        // writes), as one table of the whole surface would decide.
+        // The decisions, in emission order: an earlier piece's shared vertex, an earlier
+        // vertex of this piece, or a new welded vertex (whose record this copy writes).
+        hashes.resize(n);
+        for (std::size_t i = 0; i < n; ++i) hashes[i] = PositionTable::hash(piece.positions[i]);
         welded_of.resize(emitted + n);
         std::uint32_t* const map = welded_of.data() + emitted;
+        local.clear(n);
         fresh.clear();
         const auto shared_position = [this](std::uint32_t g) -> const glm::dvec3& { return shared_positions[g]; };
+        const auto piece_position = [&piece](std::uint32_t k) -> const glm::dvec3& { return piece.positions[k]; };
         for (std::size_t i = 0; i < n; ++i) {
             if (i + kPrefetchAhead < n && on_box[i + kPrefetchAhead]) shared.prefetch(hashes[i + kPrefetchAhead]);
-            if (first_copy[i] != i) {
-                map[i] = map[first_copy[i]];
+            const glm::dvec3& p = piece.positions[i];
+            // An interior point meets no other piece's patch (finish() proves it).
+            const std::uint32_t g = on_box[i] ? shared.find(p, hashes[i], shared_position) : PositionTable::kNone;
+            if (g != PositionTable::kNone) {
+                map[i] = shared_ids[g];
                 continue;
             }
-            const glm::dvec3& p = piece.positions[i];
-            if (on_box[i]) {
-                const std::uint32_t g = shared.find(p, hashes[i], shared_position);
-                if (g != PositionTable::kNone) {
-                    map[i] = shared_ids[g];
-                    continue;
-                }
+            const auto copy = static_cast<std::uint32_t>(i);
+            const std::uint32_t first = local.find_or_insert(p, hashes[i], copy, piece_position);
+            if (first != copy) {
+                map[i] = map[first];
+                continue;
             }
             map[i] = static_cast<std::uint32_t>(welded++);
-            fresh.push_back(static_cast<std::uint32_t>(i));
+            fresh.push_back(copy);
             if (on_box[i]) {
                 shared.find_or_insert(p, hashes[i], static_cast<std::uint32_t>(shared_positions.size()), shared_position);
                 shared_positions.push_back(p);
                 shared_ids.push_back(map[i]);
             }
         }
-        degenerate += tessref::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, piece.triangles.size(), 4096), std::size_t{0},
-            [&](const tbb::blocked_range<std::size_t>& range, std::size_t count) {
-                for (std::size_t t = range.begin(); t != range.end(); ++t) {
-                    const auto& triangle = piece.triangles[t];
-                    const std::uint32_t a = map[triangle[0]], b = map[triangle[1]], c = map[triangle[2]];
-                    count += a == b || b == c || c == a;
-                }
-                return count;
-            },
-            [](std::size_t a, std::size_t b) { return a + b; });
+        for (const auto& triangle : piece.triangles) {
+            const std::uint32_t a = map[triangle[0]], b = map[triangle[1]], c = map[triangle[2]];
+            if (a == b || b == c || c == a) ++degenerate;
+        }
         emitted += n;
         emitted_triangles += piece.triangles.size();
+        for (const std::uint32_t i : fresh) {
+            const glm::dvec3& p = piece.positions[i];
+            largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+        }
 
         // The new vertices' records, blocks of them formatted in parallel (a piece has a few
         // thousand: ASCII's number printing is most of its time), written in order.
@@ -1136,7 +1091,7 @@ struct StreamedPlyWriter::Impl {
 
     std::optional<MeshWriteReport> finish(const TriangleSource& source) {
         if (failed || !started) return std::nullopt;
-        if (!interiors_apart(interiors, wholes)) return std::nullopt;
+        if (!interiors_apart(interiors, wholes, piece_of)) return std::nullopt;
         const std::size_t triangles = emitted_triangles - degenerate;
         constexpr auto handles = static_cast<std::size_t>(std::numeric_limits<int>::max());
         if (welded > handles || triangles > handles) return std::nullopt;  // write_mesh's error
