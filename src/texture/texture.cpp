@@ -205,8 +205,10 @@ template <int C>
 // The functions that reach lerp_gpu (std::fma) are built twice on x86-64, with and without
 // FMA instructions, and chosen at load: std::fma is then one instruction instead of a libm
 // call (fma is exactly rounded either way: the same values). What they inline is compiled
-// for each clone's target.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+// for each clone's target. Not under ThreadSanitizer: the clones' resolver runs while the
+// dynamic loader relocates the executable, before TSan's runtime is set up, and GCC
+// instruments it, so every sanitized program crashed before main.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 #define TESSREF_FMA_CLONES __attribute__((target_clones("fma", "default")))
 #else
 #define TESSREF_FMA_CLONES
