@@ -175,6 +175,36 @@ std::string store_name(const Store& s) {
     return n;
 }
 
+// The executed lines as the JSON report's "lines" (each with its invocation where a stage
+// runs several per trace: the control stage).
+nlohmann::json steps_json(const std::vector<Step>& steps, Sources& sources, bool with_invocation) {
+    nlohmann::json lines = nlohmann::json::array();
+    for (const Step& s : steps) {
+        nlohmann::json stores = nlohmann::json::array();
+        for (const Store& st : s.stores) {
+            nlohmann::json values = nlohmann::json::array();
+            for (std::uint32_t w : st.words) values.push_back(number_json(st.kind, w));
+            stores.push_back({{"name", st.name}, {"offset", st.offset}, {"values", values}});
+        }
+        nlohmann::json j = {{"file", utf8_for_json(s.file)}, {"line", s.line},
+                            {"source", utf8_for_json(trimmed(sources.line(s.file, s.line)))}, {"stores", stores}};
+        if (with_invocation) j["invocation"] = s.invocation;
+        lines.push_back(j);
+    }
+    return lines;
+}
+
+// The executed lines as text: "file:line  source", then each store indented under it.
+void print_steps(const std::vector<Step>& steps, Sources& sources, bool with_invocation) {
+    for (const Step& s : steps) {
+        std::string where = s.file.substr(s.file.find_last_of('/') + 1) + ":" + std::to_string(s.line);
+        if (with_invocation) where = "[" + std::to_string(s.invocation) + "] " + where;
+        std::cout << where << "  " << trimmed(sources.line(s.file, s.line)) << "\n";
+        for (const Store& st : s.stores)
+            std::cout << std::string(where.size(), ' ') << "    " << store_name(st) << " = " << values_text(st.kind, st.words) << "\n";
+    }
+}
+
 // "X,Y": an image pixel, columns from the left and rows from the top, from 0.
 glm::ivec2 parse_pixel(const std::string& text) {
     const std::size_t comma = text.find(',');
@@ -224,17 +254,7 @@ int run_fragment_trace(const TraceOptions& options) {
     const char* math = render_options.math == MathMode::llvmpipe ? "llvmpipe" : "exact";
     Sources sources;
     if (options.json) {
-        nlohmann::json steps = nlohmann::json::array();
-        for (const Step& st : recorder.steps) {
-            nlohmann::json stores = nlohmann::json::array();
-            for (const Store& sto : st.stores) {
-                nlohmann::json values = nlohmann::json::array();
-                for (std::uint32_t w : sto.words) values.push_back(number_json(sto.kind, w));
-                stores.push_back({{"name", sto.name}, {"offset", sto.offset}, {"values", values}});
-            }
-            steps.push_back({{"file", utf8_for_json(st.file)}, {"line", st.line},
-                             {"source", utf8_for_json(trimmed(sources.line(st.file, st.line)))}, {"stores", stores}});
-        }
+        const nlohmann::json steps = steps_json(recorder.steps, sources, false);
         nlohmann::json in_locations = nlohmann::json::object(), out_locations = nlohmann::json::object();
         for (std::size_t k = 0; k < in.inputs.size(); ++k) in_locations[std::to_string(k)] = vec_json(shader::as_vec4(in.inputs[k]), 4);
         for (std::size_t k = 0; k < out.outputs.size(); ++k)
@@ -260,12 +280,7 @@ int run_fragment_trace(const TraceOptions& options) {
     std::cout << "inputs:\n  gl_FragCoord = " << vec_text(in.frag_coord, 4) << "\n";
     for (std::size_t k = 0; k < in.inputs.size(); ++k)
         std::cout << "  location " << k << " = " << vec_text(shader::as_vec4(in.inputs[k]), 4) << "\n";
-    for (const Step& st : recorder.steps) {
-        const std::string where = st.file.substr(st.file.find_last_of('/') + 1) + ":" + std::to_string(st.line);
-        std::cout << where << "  " << trimmed(sources.line(st.file, st.line)) << "\n";
-        for (const Store& sto : st.stores)
-            std::cout << std::string(where.size(), ' ') << "    " << store_name(sto) << " = " << values_text(sto.kind, sto.words) << "\n";
-    }
+    print_steps(recorder.steps, sources, false);
     std::cout << "outputs:\n";
     if (out.discarded) std::cout << "  (discarded)\n";
     for (std::size_t k = 0; k < out.outputs.size(); ++k)
@@ -318,19 +333,7 @@ int run_trace(const TraceOptions& options) {
     Sources sources;
 
     if (options.json) {
-        nlohmann::json steps = nlohmann::json::array();
-        for (const Step& s : recorder.steps) {
-            nlohmann::json stores = nlohmann::json::array();
-            for (const Store& st : s.stores) {
-                nlohmann::json values = nlohmann::json::array();
-                for (std::uint32_t w : st.words) values.push_back(number_json(st.kind, w));
-                stores.push_back({{"name", st.name}, {"offset", st.offset}, {"values", values}});
-            }
-            nlohmann::json j = {{"file", utf8_for_json(s.file)}, {"line", s.line},
-                                {"source", utf8_for_json(trimmed(sources.line(s.file, s.line)))}, {"stores", stores}};
-            if (control) j["invocation"] = s.invocation;
-            steps.push_back(j);
-        }
+        const nlohmann::json steps = steps_json(recorder.steps, sources, control);
         nlohmann::json report = {{"scene", utf8_for_json(options.scene)},
                                  {"stage", to_string(request.stage)},
                                  {"shader", utf8_for_json(t.shader)},
@@ -379,13 +382,7 @@ int run_trace(const TraceOptions& options) {
     if (request.stage == ShaderStage::vertex) std::cout << ", vertex " << request.vertex;
     if (geometry) std::cout << ", primitive " << request.primitive;
     std::cout << ", " << (request.math == MathMode::llvmpipe ? "llvmpipe" : "exact") << " math\n";
-    for (const Step& s : recorder.steps) {
-        std::string where = s.file.substr(s.file.find_last_of('/') + 1) + ":" + std::to_string(s.line);
-        if (control) where = "[" + std::to_string(s.invocation) + "] " + where;
-        std::cout << where << "  " << trimmed(sources.line(s.file, s.line)) << "\n";
-        for (const Store& st : s.stores)
-            std::cout << std::string(where.size(), ' ') << "    " << store_name(st) << " = " << values_text(st.kind, st.words) << "\n";
-    }
+    print_steps(recorder.steps, sources, control);
     const auto print_vertex = [](const shader::ShaderVertex& v, const std::string& indent) {
         std::cout << indent << "gl_Position = " << vec_text(v.position, 4) << "\n";
         for (std::size_t k = 0; k < v.locations.size(); ++k)
