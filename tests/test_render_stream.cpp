@@ -280,6 +280,34 @@ TEST(Rasterizer, VertexIndexOutsideTheChunkIsAnError) {
     EXPECT_THROW(rasterizer.draw(draw), tessref::Error);
 }
 
+// A draw whose chunks are made in its tasks (the streamed render evaluates them there) and
+// one of whose makers throws: the exception leaves the draw, which draws nothing, and the
+// rasterizer draws on as before.
+TEST(Rasterizer, AChunkThatCannotBeMadeDrawsNothing) {
+    tessref::Framebuffer fb = tessref::Framebuffer::create_visibility(64, 64);
+    tessref::Rasterizer rasterizer(fb, {});
+    const std::vector<glm::vec4> positions{{-1.0f, -1.0f, 0.0f, 1.0f}, {1.0f, -1.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 0.0f, 1.0f}};
+    const std::vector<std::array<std::uint32_t, 3>> triangles{{0, 1, 2}};
+    const tessref::Framebuffer before = fb;
+    EXPECT_THROW(rasterizer.draw(4,
+                                 [&](std::size_t c) -> tessref::RasterChunk {
+                                     if (c == 2) throw tessref::Error("no chunk 2", tessref::Where::at_key("chunk"));
+                                     return {positions, triangles, static_cast<std::uint32_t>(c)};
+                                 }),
+                 tessref::Error);
+    EXPECT_TRUE(same_bytes(fb.triangle_id, before.triangle_id));
+    EXPECT_TRUE(same_bytes(fb.depth, before.depth));
+    EXPECT_EQ(rasterizer.stats().fragments, 0u);
+    EXPECT_TRUE(rasterizer.drawn().empty());
+    // The next draw makes its chunks c = 0, 1, 2 in any order and draws them in that order:
+    // the same triangle three times at depth 0, LESS: the first one, id 10, stays.
+    rasterizer.draw(3, [&](std::size_t c) -> tessref::RasterChunk {
+        return {positions, triangles, static_cast<std::uint32_t>(10 + c)};
+    });
+    EXPECT_EQ(fb.triangle_id[32 * 64 + 32], 10u);
+    EXPECT_GT(rasterizer.stats().fragments_passed, 0u);
+}
+
 // pixel_provenance of a streamed render evaluates its triangle again: the same vertices,
 // world position, normal (face normals too), uv and level source as with the whole surface.
 TEST(RenderStream, ProvenanceMatchesTheWholeSurface) {

@@ -54,6 +54,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -203,6 +204,13 @@ public:
     Rasterizer& operator=(const Rasterizer&) = delete;
     // Throws tessref::Error on a vertex index outside its chunk.
     void draw(std::span<const RasterChunk> chunks);
+    // draw() of `count` chunks that make(c) produces, each on the thread that then sets it
+    // up, in the same task: a streamed renderer evaluates chunk c's vertices there, so the
+    // vertices are still in that core's cache when they are prepared and box-tested, and
+    // the draw has one barrier where evaluating all the chunks, then drawing them had two.
+    // The spans make(c) returns are read only in that task; an exception from make leaves
+    // the draw with nothing drawn.
+    void draw(std::size_t count, const std::function<RasterChunk(std::size_t)>& make);
     RasterStats stats() const;  // of every draw so far
     // The parts of the image the last draw changed: rectangles (x, row from the top, width,
     // height; whole 2x2 quads, so no quad straddles two), one per tile where a fragment passed,

@@ -118,7 +118,10 @@ struct RenderStats {
     std::uint64_t vertices = 0;
     std::uint64_t covered_pixels = 0;   // pixels with a visible surface
     RasterStats raster{};               // of the fill (or line) pass
-    double seconds_pipeline = 0.0;      // wall-clock per phase (informative only)
+    // Wall-clock per phase (informative only). The streamed render evaluates each batch's
+    // chunks in the draw's own tasks: its pipeline time is the stream's passes 1 to 3 (levels,
+    // patterns), and the evaluation counts as raster time.
+    double seconds_pipeline = 0.0;
     double seconds_raster = 0.0;
     double seconds_shade = 0.0;
 };

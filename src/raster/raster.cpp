@@ -1210,11 +1210,15 @@ Rasterizer::Rasterizer(Framebuffer& fb, const RasterSettings& settings) {
 Rasterizer::~Rasterizer() = default;
 
 void Rasterizer::draw(std::span<const RasterChunk> chunks) {
+    draw(chunks.size(), [&](std::size_t c) { return chunks[c]; });
+}
+
+void Rasterizer::draw(std::size_t count, const std::function<RasterChunk(std::size_t)>& make) {
     State& s = *state_;
     const std::size_t used = s.used;
-    if (s.chunks.size() < used + chunks.size()) s.chunks.resize(used + chunks.size());
-    tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t c) {
-        const RasterChunk& chunk = chunks[c];
+    if (s.chunks.size() < used + count) s.chunks.resize(used + count);
+    tessref::parallel_for(std::size_t{0}, count, [&](std::size_t c) {
+        const RasterChunk chunk = make(c);
         thread_local PreparedVertices vertices;
         vertices.resize(chunk.positions.size());
         vertices.prepare(chunk.positions, 0, chunk.positions.size(), s.ctx.viewport, s.fused);
@@ -1231,7 +1235,7 @@ void Rasterizer::draw(std::span<const RasterChunk> chunks) {
         setup_chunk(s.ctx, chunk.positions, vertices, chunk.triangles, 0, chunk.triangles.size(), chunk.first_id,
                     s.chunks[used + c]);
     });
-    s.used += chunks.size();
+    s.used += count;
     s.flush();
 }
 

@@ -447,26 +447,23 @@ std::size_t plan_batch(const PatchStream& stream, std::size_t& next_patch, std::
     return used;
 }
 
-// Evaluates and projects the chunks' patches (pass 4 of the pipeline, then gl_Position),
-// noting per chunk whether every vertex is finite.
-void evaluate_batch(const PatchStream& stream, std::span<PatchChunk> chunks, const glm::mat4& mvp,
+// Evaluates and projects a chunk's patches (pass 4 of the pipeline, then gl_Position),
+// noting whether every vertex is finite.
+void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp,
                     PatchStream::VertexNormals normals_mode) {
-    tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t k) {
-        PatchChunk& c = chunks[k];
-        SurfaceMesh& m = c.mesh;
-        stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode);
-        const std::size_t vertices = m.positions.size();
-        if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(vertices, 0);
-        c.clip.resize(vertices);
-        // The renderer's gl_Position of the evaluation's float position.
+    SurfaceMesh& m = c.mesh;
+    stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode);
+    const std::size_t vertices = m.positions.size();
+    if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(vertices, 0);
+    c.clip.resize(vertices);
+    // The renderer's gl_Position of the evaluation's float position.
 #if defined(__x86_64__) && defined(__GNUC__)
-        if (simd_level() == SimdLevel::avx2) {
-            c.finite = project_vertices_avx2(m.positions.data(), vertices, mvp, c.clip.data());
-            return;
-        }
+    if (simd_level() == SimdLevel::avx2) {
+        c.finite = project_vertices_avx2(m.positions.data(), vertices, mvp, c.clip.data());
+        return;
+    }
 #endif
-        c.finite = project_vertices(m.positions.data(), vertices, mvp, c.clip.data());
-    });
+    c.finite = project_vertices(m.positions.data(), vertices, mvp, c.clip.data());
 }
 
 // A triangle id of a batch: its chunk and its index there; the chunk count for an id outside
@@ -634,7 +631,6 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
 
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
     std::vector<PatchChunk> chunks;
-    std::vector<RasterChunk> views;
     const std::size_t batch_size =
         std::max(kStreamBatchTriangles, kStreamBatchTrianglesPerThread * static_cast<std::size_t>(worker_threads()));
     std::size_t next_patch = 0;
@@ -642,7 +638,16 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         auto lap = Clock::now();
         const std::size_t used = plan_batch(stream, next_patch, batch_size, chunks);
         const std::span<PatchChunk> batch_chunks(chunks.data(), used);
-        evaluate_batch(stream, batch_chunks, mvp, normals_mode);
+        // Each chunk is evaluated, projected and set up in one task (Rasterizer::draw with
+        // make): its vertices are prepared and box-tested while they are in that core's
+        // cache, and the batch waits at one barrier where evaluating, then drawing waited
+        // at two. A chunk with a non-finite vertex draws nothing: the render stops below.
+        rasterizer.draw(used, [&](std::size_t k) -> RasterChunk {
+            PatchChunk& c = batch_chunks[k];
+            evaluate_chunk(stream, c, mvp, normals_mode);
+            if (!c.finite) return {};
+            return {c.clip, c.mesh.triangles, c.first_triangle};
+        });
         for (const PatchChunk& c : batch_chunks) {
             if (!c.finite) {
                 // The materialized pipeline names the first non-finite vertex (and throws).
@@ -650,11 +655,6 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
                 throw Error("the surface has a non-finite vertex", Where::in_file(scene.file));
             }
         }
-        views.clear();
-        for (const PatchChunk& c : batch_chunks) views.push_back({c.clip, c.mesh.triangles, c.first_triangle});
-        result.stats.seconds_pipeline += seconds_since(lap);
-        lap = Clock::now();
-        rasterizer.draw(views);
         result.stats.seconds_raster += seconds_since(lap);
         lap = Clock::now();
 
