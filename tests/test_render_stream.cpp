@@ -436,20 +436,35 @@ TEST(PatchStream, DeferredVertexNormalsAreTheEmittedOnes) {
             for (std::size_t p = 0; p < n; p += std::max<std::size_t>(1, n / 16)) {
                 const std::size_t vertices = stream.vertex_base(p + 1) - stream.vertex_base(p);
                 const std::size_t triangles = stream.triangle_base(p + 1) - stream.triangle_base(p);
-                tessref::SurfaceMesh now, later, some;
-                std::vector<glm::dvec3> faces;
+                tessref::SurfaceMesh now, later, some, lean;
+                std::vector<glm::dvec3> faces, lean_faces;
                 stream.size(now, faces, vertices, triangles);
                 stream.size(later, faces, vertices, triangles);
+                stream.size(lean, lean_faces, vertices, triangles);
                 const glm::dvec3 untouched(std::numeric_limits<double>::quiet_NaN());
                 std::fill(later.normals.begin(), later.normals.end(), untouched);
+                std::fill(lean.normals.begin(), lean.normals.end(), untouched);
+                std::fill(lean.tess_coords.begin(), lean.tess_coords.end(), glm::vec3(-1.0f));
+                std::fill(lean.patch_ids.begin(), lean.patch_ids.end(), 0xdeadbeefu);
                 stream.emit(p, now, 0, 0, &faces);
                 stream.emit(p, later, 0, 0, &faces, PatchStream::VertexNormals::later);
+                // Provenance::later as well (the renderer without provenance buffers): the
+                // vertices' patch ids and tess coords are not written, all the rest is.
+                stream.emit(p, lean, 0, 0, &lean_faces, PatchStream::VertexNormals::later,
+                            PatchStream::Provenance::later);
                 for (const glm::dvec3& normal : later.normals) ASSERT_TRUE(std::isnan(normal.x));
                 EXPECT_TRUE(same_bytes(later.positions, now.positions));
                 EXPECT_TRUE(same_bytes(later.uvs, now.uvs));
                 EXPECT_TRUE(same_bytes(later.tess_coords, now.tess_coords));
                 EXPECT_TRUE(same_bytes(later.patch_ids, now.patch_ids));
                 EXPECT_TRUE(same_bytes(later.triangles, now.triangles));
+                for (const glm::dvec3& normal : lean.normals) ASSERT_TRUE(std::isnan(normal.x));
+                for (const glm::vec3& c : lean.tess_coords) ASSERT_EQ(c, glm::vec3(-1.0f));
+                for (const std::uint32_t id : lean.patch_ids) ASSERT_EQ(id, 0xdeadbeefu);
+                EXPECT_TRUE(same_bytes(lean.positions, now.positions));
+                EXPECT_TRUE(same_bytes(lean.uvs, now.uvs));
+                EXPECT_TRUE(same_bytes(lean.triangles, now.triangles));
+                EXPECT_TRUE(same_bytes(lean_faces, faces));
                 // Every other vertex, backwards: evaluate_points takes any subset in any order.
                 std::vector<std::uint32_t> points;
                 for (std::size_t v = vertices; v-- > 0;)

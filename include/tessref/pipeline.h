@@ -188,14 +188,20 @@ public:
     // normals for the vertices that need one (the renderer: those of triangles that win a
     // pixel, a tenth of them on a finely tessellated terrain), saving the geometry stage's
     // texture fetch for the rest.
+    // Provenance::later: mesh.patch_ids and mesh.tess_coords (where each vertex came from)
+    // may be left as they are, for a caller that reads them for a few vertices at most, from
+    // evaluate_points() or triangle() (the renderer without provenance buffers: 16 of the
+    // about 70 bytes a vertex that emit() writes on a terrain).
     enum class VertexNormals { now, later };
+    enum class Provenance { now, later };
     void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-              std::vector<glm::dvec3>* face_normals, VertexNormals normals = VertexNormals::now) const;
+              std::vector<glm::dvec3>* face_normals, VertexNormals normals = VertexNormals::now,
+              Provenance provenance = Provenance::now) const;
     // size() and emit() for the run of patches [first, last) as one mesh: its vertices and
     // triangles from index 0, the triangles indexing the run's own vertices; face normals
     // into *face_normals when face_normals() and the pointer is not null.
     void emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh, std::vector<glm::dvec3>* face_normals,
-                  VertexNormals normals = VertexNormals::now) const;
+                  VertexNormals normals = VertexNormals::now, Provenance provenance = Provenance::now) const;
     // The evaluation at some of a patch's domain points (indices into pattern(patch).points()),
     // written like emit()'s vertices at mesh index first on (normals included); no triangles.
     void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,

@@ -143,7 +143,7 @@ struct PassTimer {
 struct PatchStream::Impl {
     virtual ~Impl() = default;
     virtual void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-                      std::vector<glm::dvec3>* face_normals, bool vertex_normals) const = 0;
+                      std::vector<glm::dvec3>* face_normals, bool vertex_normals, bool provenance) const = 0;
     virtual void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
                                  std::size_t first) const = 0;
     virtual std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out,
@@ -271,7 +271,7 @@ struct StreamImpl final : PatchStream::Impl {
     }
 
     void emit(std::size_t p, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-              std::vector<glm::dvec3>* normals_out, bool vertex_normals) const override {
+              std::vector<glm::dvec3>* normals_out, bool vertex_normals, bool provenance) const override {
         if (geometry_shader) {
             const SurfaceMesh& e = emitted[p];
             std::vector<std::uint32_t> all(e.positions.size());
@@ -287,7 +287,7 @@ struct StreamImpl final : PatchStream::Impl {
         }
         const Pattern& pattern = *patterns[p];
         program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals);
-        write_coords(p, pattern.points(), mesh, first_vertex);
+        if (provenance) write_coords(p, pattern.points(), mesh, first_vertex);
         // The pattern's triangles (a scene's domain makes triangles: three indices each) moved
         // to the patch's vertices, reversed (1 <-> 2) where the program flips them: a loop per
         // orientation, with nothing else in it.
@@ -658,16 +658,17 @@ void PatchStream::size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals,
     if (impl_->face_normals) face_normals.resize(triangles);
 }
 void PatchStream::emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-                       std::vector<glm::dvec3>* face_normals, VertexNormals normals) const {
-    impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals, normals == VertexNormals::now);
+                       std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance) const {
+    impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals, normals == VertexNormals::now,
+                provenance == Provenance::now);
 }
 void PatchStream::emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh,
-                           std::vector<glm::dvec3>* face_normals, VertexNormals normals) const {
+                           std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance) const {
     const std::size_t v0 = vertex_base(first), t0 = triangle_base(first);
     std::vector<glm::dvec3> none;
     size(mesh, face_normals ? *face_normals : none, vertex_base(last) - v0, triangle_base(last) - t0);
     for (std::size_t p = first; p < last; ++p)
-        emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals);
+        emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals, provenance);
 }
 void PatchStream::triangles(std::size_t first, std::span<std::array<std::uint32_t, 3>> out) const {
     if (out.empty()) return;

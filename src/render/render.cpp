@@ -450,9 +450,9 @@ std::size_t plan_batch(const PatchStream& stream, std::size_t& next_patch, std::
 // Evaluates and projects a chunk's patches (pass 4 of the pipeline, then gl_Position),
 // noting whether every vertex is finite.
 void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp,
-                    PatchStream::VertexNormals normals_mode) {
+                    PatchStream::VertexNormals normals_mode, PatchStream::Provenance provenance) {
     SurfaceMesh& m = c.mesh;
-    stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode);
+    stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode, provenance);
     const std::size_t vertices = m.positions.size();
     if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(vertices, 0);
     c.clip.resize(vertices);
@@ -628,6 +628,8 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     const std::uint64_t pixels = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
     const bool defer_normals = stream.has_normals() && result.stats.triangles > kDeferNormalsTrianglesPerPixel * pixels;
     const auto normals_mode = defer_normals ? PatchStream::VertexNormals::later : PatchStream::VertexNormals::now;
+    // Each vertex's patch id and tess coord are read only for the provenance buffers.
+    const auto provenance = options.provenance ? PatchStream::Provenance::now : PatchStream::Provenance::later;
 
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
     std::vector<PatchChunk> chunks;
@@ -644,7 +646,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         // at two. A chunk with a non-finite vertex draws nothing: the render stops below.
         rasterizer.draw(used, [&](std::size_t k) -> RasterChunk {
             PatchChunk& c = batch_chunks[k];
-            evaluate_chunk(stream, c, mvp, normals_mode);
+            evaluate_chunk(stream, c, mvp, normals_mode, provenance);
             if (!c.finite) return {};
             return {c.clip, c.mesh.triangles, c.first_triangle};
         });
