@@ -156,7 +156,7 @@ struct SceneRenderStats {
     std::size_t draws = 0;
     double seconds_pipeline = 0.0;  // the CPU pipeline (predictions)
     double seconds_gl = 0.0;        // the GL draws, the read-back included
-    double seconds_capture = 0.0;
+    double seconds_capture = 0.0;  // the capture draws and read-back, not the time spent in capture_sink
 };
 
 struct SceneRender {
