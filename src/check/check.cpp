@@ -243,7 +243,6 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
 
     build_vertex_tables(state);
     state.progress("topology", 0.15);
-    find_duplicate_faces(state);
     classify_edges(state);
     report.closed = state.boundary.empty();
     state.progress("topology", 0.3);

@@ -190,8 +190,7 @@ private:
 
 // Steps of check_mesh(), in the order they run.
 void build_vertex_tables(CheckState& state);  // the corner table and the half-edge table
-void find_duplicate_faces(CheckState& state);
-void classify_edges(CheckState& state);
+void classify_edges(CheckState& state);  // and finds the duplicate faces
 void find_non_manifold_vertices(CheckState& state);
 void find_components(CheckState& state);
 void check_orientation(CheckState& state);

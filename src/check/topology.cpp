@@ -176,49 +176,45 @@ void build_vertex_tables(CheckState& state) {
     });
 }
 
-void find_duplicate_faces(CheckState& state) {
+namespace {
+
+// Marks the faces repeating others, found on the edge whose half-edges are [b, e): for each
+// pair of faces there over the same vertex set, the later one records the earliest it
+// repeats in duplicate_of, and its half-edge here is marked in `repeats` (relative to b).
+void find_duplicates_on_edge(const CheckState& state, std::uint32_t b, std::uint32_t e,
+                             std::vector<std::uint32_t>& duplicate_of, std::vector<std::uint8_t>& repeats) {
     const IndexedMesh& mesh = state.mesh;
-    // Two faces over the same vertex set share every edge, so comparing the faces met on
-    // each edge finds every duplicate; the earliest face of a set is the original.
-    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), kNoIndex);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kVertexChunk), [&](const auto& r) {
-        for_each_edge_in(state, r.begin(), r.end(), [&](std::uint32_t, std::uint32_t, std::uint32_t b, std::uint32_t e) {
-            for (std::uint32_t i = b; i < e; ++i)
-                for (std::uint32_t j = i + 1; j < e; ++j) {
-                    std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
-                    if (f == g) continue;
-                    const auto x = mesh.face(f), y = mesh.face(g);
-                    // Two triangles on this edge hold both its vertices (a kept face repeats
-                    // none), so their third vertices decide, and so do the xors of all three.
-                    if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
-                                                       : !same_vertex_set(mesh, f, g))
-                        continue;
-                    if (f > g) std::swap(f, g);
-                    std::atomic_ref<std::uint32_t> slot(duplicate_of[g]);
-                    std::uint32_t current = slot.load(std::memory_order_relaxed);
-                    while (f < current && !slot.compare_exchange_weak(current, f, std::memory_order_relaxed)) {
-                    }
-                }
-        });
-    });
-    for (std::uint32_t g = 0; g < mesh.face_count(); ++g) {
-        if (duplicate_of[g] == kNoIndex) continue;
-        state.face_status[g] = face_duplicate;
-        Defect d;
-        const auto face = mesh.face(g);
-        glm::dvec3 centre(0.0);
-        for (std::uint32_t v : face) centre += mesh.positions[v];
-        d.position = centre / double(face.size());
-        d.faces = {duplicate_of[g], g};
-        d.vertices.assign(face.begin(), face.end());
-        d.detail = "face " + std::to_string(g) + " repeats face " + std::to_string(duplicate_of[g]) +
-                   (std::ranges::equal(mesh.face(duplicate_of[g]), face) ? "" : " (same vertices, other order)");
-        state.add_defect(DefectClass::duplicate_face, std::move(d));
-    }
+    repeats.assign(e - b, 0);
+    for (std::uint32_t i = b; i < e; ++i)
+        for (std::uint32_t j = i + 1; j < e; ++j) {
+            std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
+            if (f == g) continue;
+            const auto x = mesh.face(f), y = mesh.face(g);
+            // Two triangles on this edge hold both its vertices (a kept face repeats
+            // none), so their third vertices decide, and so do the xors of all three.
+            if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
+                                               : !same_vertex_set(mesh, f, g))
+                continue;
+            repeats[(f > g ? i : j) - b] = 1;
+            if (f > g) std::swap(f, g);
+            std::atomic_ref<std::uint32_t> slot(duplicate_of[g]);
+            std::uint32_t current = slot.load(std::memory_order_relaxed);
+            while (f < current && !slot.compare_exchange_weak(current, f, std::memory_order_relaxed)) {
+            }
+        }
 }
 
+}  // namespace
+
+// Duplicate faces, and each edge as boundary, manifold, inconsistent or non-manifold, in one
+// pass over the half-edge table. Two faces over the same vertex set share every edge, so
+// comparing the faces met on each edge finds every duplicate; the earliest face of a set is
+// the original. And since a face's duplicates are on every edge of it, an edge's kept faces
+// (those that repeat no other) are known from the edge's own half-edges, before the faces
+// are marked.
 void classify_edges(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
+    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), kNoIndex);
     struct ChunkResult {
         std::size_t edges = 0;
         std::vector<BoundaryHalfEdge> boundary;
@@ -229,10 +225,16 @@ void classify_edges(CheckState& state) {
     const std::size_t cap = state.options.max_locations;
     auto results = map_chunks<ChunkResult>(mesh.vertex_count(), kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
         std::vector<std::uint32_t> kept;
+        std::vector<std::uint8_t> repeats;
         for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t b, std::uint32_t e) {
             kept.clear();
-            for (std::uint32_t i = b; i < e; ++i)
-                if (state.face_status[state.half_edges[i].face()] == face_kept) kept.push_back(i);
+            if (e - b == 1) {
+                kept.push_back(b);
+            } else {
+                find_duplicates_on_edge(state, b, e, duplicate_of, repeats);
+                for (std::uint32_t i = b; i < e; ++i)
+                    if (!repeats[i - b]) kept.push_back(i);
+            }
             if (kept.empty()) return;
             ++out.edges;
             const glm::dvec3 mid = 0.5 * (mesh.positions[lo] + mesh.positions[hi]);
@@ -270,6 +272,21 @@ void classify_edges(CheckState& state) {
             }
         });
     });
+    for (std::uint32_t g = 0; g < mesh.face_count(); ++g) {
+        if (duplicate_of[g] == kNoIndex) continue;
+        state.face_status[g] = face_duplicate;
+        Defect d;
+        const auto face = mesh.face(g);
+        glm::dvec3 centre(0.0);
+        for (std::uint32_t v : face) centre += mesh.positions[v];
+        d.position = centre / double(face.size());
+        d.faces = {duplicate_of[g], g};
+        d.vertices.assign(face.begin(), face.end());
+        d.detail = "face " + std::to_string(g) + " repeats face " + std::to_string(duplicate_of[g]) +
+                   (std::ranges::equal(mesh.face(duplicate_of[g]), face) ? "" : " (same vertices, other order)");
+        state.add_defect(DefectClass::duplicate_face, std::move(d));
+    }
+
     std::size_t edges = 0;
     for (ChunkResult& r : results) {
         edges += r.edges;
@@ -302,7 +319,7 @@ void find_non_manifold_vertices(CheckState& state) {
         std::vector<std::pair<std::uint64_t, std::uint32_t>> fans;  // (vertex << 32 | face, fan)
     };
     const std::size_t cap = state.options.max_locations;
-    // The corner table was made before find_duplicate_faces: a duplicate found since is left
+    // The corner table was made before classify_edges: a duplicate found since is left
     // out here (the face it repeats stays, so every vertex keeps a kept face).
     const bool has_duplicates = state.report.count(DefectClass::duplicate_face) != 0;
     auto results = map_chunks<ChunkResult>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
