@@ -1341,3 +1341,20 @@ TEST(CheckTables, CornerAndHalfEdgeTablesAreTheSerialOnes) {
         });
     }
 }
+
+// classify_edges finds the duplicate faces in its own pass, and leaves out of each edge the
+// face that repeats an earlier one, not the earlier one: a square of two triangles whose
+// first is listed again the other way round is consistently oriented (face 2, reversed, is
+// the duplicate; were face 0 left out instead, the diagonal would run 0 -> 2 in both faces).
+TEST(CheckTables, AnEdgeKeepsTheOriginalOfADuplicate) {
+    IndexedMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    for (std::vector<std::uint32_t> face : {std::vector<std::uint32_t>{0, 1, 2}, {0, 2, 3}, {2, 1, 0}}) mesh.add_face(face);
+    const CheckReport r = tessref::check_mesh(mesh, quick());
+    ASSERT_EQ(r.count(DefectClass::duplicate_face), 1u);
+    EXPECT_EQ(r.of(DefectClass::duplicate_face).locations[0].faces, (std::vector<std::uint32_t>{0, 2}));
+    EXPECT_EQ(r.count(DefectClass::inconsistent_orientation), 0u);
+    EXPECT_EQ(r.edge_count, 5u);
+    EXPECT_EQ(r.boundary_edge_count, 4u);
+    EXPECT_TRUE(r.manifold);
+}
