@@ -1316,7 +1316,7 @@ TEST(CheckTables, CornerAndHalfEdgeTablesAreTheSerialOnes) {
     for (int threads : {1, 2, 3, 4}) {
         SCOPED_TRACE(threads);
         tbb::task_arena arena(threads);
-        arena.execute([&] {
+        tessref::execute(arena, [&] {
             CheckReport report;
             CheckOptions options;
             CheckState state{mesh, options, report};
