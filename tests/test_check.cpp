@@ -1358,3 +1358,46 @@ TEST(CheckTables, AnEdgeKeepsTheOriginalOfADuplicate) {
     EXPECT_EQ(r.boundary_edge_count, 4u);
     EXPECT_TRUE(r.manifold);
 }
+
+// Components are numbered by their smallest vertex, chunk by chunk of the vertices in
+// parallel: 5000 inside-out tetrahedra whose vertices are shuffled (20000 vertices, two
+// chunks and more) each report their own number and first face, as the numbering in vertex
+// order gives them.
+TEST(CheckTables, ComponentsAreNumberedByTheirSmallestVertex) {
+    constexpr std::uint32_t tetrahedra = 5000;
+    std::vector<std::uint32_t> shuffled(4 * tetrahedra);
+    std::iota(shuffled.begin(), shuffled.end(), 0u);
+    std::uint64_t random = 11;
+    for (std::size_t i = shuffled.size(); i > 1; --i) {
+        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
+        std::swap(shuffled[i - 1], shuffled[(random >> 33) % i]);
+    }
+    IndexedMesh mesh;
+    mesh.positions.resize(shuffled.size());
+    const glm::dvec3 corner[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> smallest;  // (smallest vertex, tetrahedron)
+    for (std::uint32_t t = 0; t < tetrahedra; ++t) {
+        const std::uint32_t* v = &shuffled[4 * t];
+        for (int k = 0; k < 4; ++k) mesh.positions[v[k]] = corner[k] + glm::dvec3(3.0 * (t % 100), 3.0 * (t / 100), 0.0);
+        // Wound inward: the outward faces (0 2 1), (0 1 3), (0 3 2), (1 2 3) reversed.
+        for (const auto& f : {std::array<int, 3>{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}}) {
+            const std::vector<std::uint32_t> face{v[f[0]], v[f[1]], v[f[2]]};
+            mesh.add_face(face);
+        }
+        smallest.emplace_back(*std::min_element(v, v + 4), t);
+    }
+    std::sort(smallest.begin(), smallest.end());
+    CheckOptions options = quick();
+    options.ray_probe = false;
+    options.max_locations = tetrahedra;
+    const CheckReport r = tessref::check_mesh(mesh, options);
+    EXPECT_EQ(r.component_count, tetrahedra);
+    ASSERT_EQ(r.count(DefectClass::inverted_volume), tetrahedra);
+    const auto& locations = r.of(DefectClass::inverted_volume).locations;
+    ASSERT_EQ(locations.size(), tetrahedra);
+    std::size_t wrong = 0;
+    for (std::uint32_t c = 0; c < tetrahedra; ++c)
+        wrong += locations[c].detail.find("closed component " + std::to_string(c) + " (4 faces, starting at face " +
+                                          std::to_string(4 * smallest[c].second) + ")") == std::string::npos;
+    EXPECT_EQ(wrong, 0u) << locations[0].detail;
+}

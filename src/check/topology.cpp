@@ -408,15 +408,34 @@ void find_components(CheckState& state) {
     // A vertex is in a kept face where the corner table files a face under it.
     const auto in_kept_face = [&](std::uint32_t v) { return state.corner_start[v + 1] != state.corner_start[v]; };
     // Roots are the smallest vertex of their set, so numbering roots in vertex order numbers
-    // components by their smallest vertex.
-    state.vertex_component.assign(mesh.vertex_count(), kNoIndex);
-    std::uint32_t components = 0;
-    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
-        if (!in_kept_face(v)) continue;
-        const std::uint32_t root = sets.find(v);
-        if (root == v) state.vertex_component[v] = components++;
-        else state.vertex_component[v] = state.vertex_component[root];
-    }
+    // components by their smallest vertex: each chunk of vertices counts its roots, numbers
+    // them from the chunk's first number, then every vertex takes its root's number.
+    const std::size_t vertex_count = mesh.vertex_count();
+    std::vector<std::uint32_t> root(vertex_count);
+    const auto roots = map_chunks<std::uint32_t>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, std::uint32_t& count) {
+        for (std::size_t v = v0; v < v1; ++v) {
+            root[v] = in_kept_face(static_cast<std::uint32_t>(v)) ? sets.find(static_cast<std::uint32_t>(v)) : kNoIndex;
+            count += root[v] == v;
+        }
+    });
+    std::vector<std::uint32_t> first_number(roots.size() + 1, 0);
+    for (std::size_t c = 0; c < roots.size(); ++c) first_number[c + 1] = first_number[c] + roots[c];
+    state.vertex_component.resize(vertex_count);
+    const auto for_each_chunk = [&](auto&& fn) {
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, roots.size(), 1), [&](const auto& r) {
+            for (std::size_t c = r.begin(); c != r.end(); ++c) fn(c, c * kVertexChunk, std::min(vertex_count, (c + 1) * kVertexChunk));
+        });
+    };
+    for_each_chunk([&](std::size_t c, std::size_t v0, std::size_t v1) {
+        std::uint32_t number = first_number[c];
+        for (std::size_t v = v0; v < v1; ++v)
+            if (root[v] == v) state.vertex_component[v] = number++;
+    });
+    for_each_chunk([&](std::size_t, std::size_t v0, std::size_t v1) {
+        for (std::size_t v = v0; v < v1; ++v)
+            if (root[v] != v) state.vertex_component[v] = root[v] == kNoIndex ? kNoIndex : state.vertex_component[root[v]];
+    });
+    const std::uint32_t components = first_number.back();
     state.report.component_count = components;
     state.component_has_boundary.assign(components, 0);
     for (const BoundaryHalfEdge& h : state.boundary) state.component_has_boundary[state.vertex_component[h.from]] = 1;
