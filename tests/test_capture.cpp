@@ -469,7 +469,9 @@ namespace {
 // 1 missing, 2 a position 3 ulps off, 3 a tess coord one bit off with other levels, 4 a
 // quad's tess coords in other triangles, 5 a triangle the other way round, 6 a normal off,
 // 8 only in the test; the rest the same, triangles reversed and corners rotated.
-std::pair<Capture, Capture> patches_of_every_divergence() {
+// `reference_order`: the test's triangles and corners as the reference has them, where the
+// tess coords allow (llvmpipe's usual capture), instead of reversed and rotated.
+std::pair<Capture, Capture> patches_of_every_divergence(bool reference_order = false) {
     Capture ref, test;
     for (std::uint32_t p = 0; p < 9; ++p) {
         std::vector<CapturedVertex> r, t;
@@ -498,6 +500,10 @@ std::pair<Capture, Capture> patches_of_every_divergence() {
         if (p == 6) t[10].normal.z = std::nextafter(std::nextafter(std::nextafter(std::nextafter(t[10].normal.z, 0.0f), 0.0f), 0.0f), 0.0f);
         if (p != 8) ref.vertices.insert(ref.vertices.end(), r.begin(), r.end());
         if (p == 1) continue;
+        if (reference_order) {
+            test.vertices.insert(test.vertices.end(), t.begin(), t.end());
+            continue;
+        }
         for (std::size_t k = t.size() / 3; k-- > 0;)
             for (const int c : {1, 2, 0}) test.vertices.push_back(t[3 * k + static_cast<std::size_t>(c)]);
     }
@@ -576,37 +582,42 @@ std::map<std::uint32_t, std::vector<CapturedVertex>> by_patch(const Capture& c) 
 // compare_captures gives on the whole captures, every field, with every kind of
 // divergence among the patches (the golden verification compares llvmpipe's capture so).
 TEST(StreamedCaptureComparison, GivesTheWholeComparisonsResult) {
-    const auto [ref, test] = patches_of_every_divergence();
-    CaptureCompareOptions options;
-    options.max_position_ulps = 2;
-    options.max_normal_ulps = 2;
-    options.max_listed = 100;
-    const CaptureCompareResult whole = tessref::compare_captures(ref, test, options);
-    ASSERT_EQ(whole.missing_in_test, 1u);
-    ASSERT_EQ(whole.missing_in_reference, 1u);
-    ASSERT_EQ(whole.tess_coord_divergences, 1u);
-    ASSERT_EQ(whole.triangle_divergences, 1u);
-    ASSERT_EQ(whole.orientation_divergences, 1u);
-    ASSERT_EQ(whole.value_divergences, 2u);
-    ASSERT_EQ(whole.worst_position.ulps, 3u);
-    const auto r = by_patch(ref), t = by_patch(test);
-    std::set<std::uint32_t> ids;
-    for (const auto& [p, v] : r) ids.insert(p);
-    for (const auto& [p, v] : t) ids.insert(p);
-    const std::vector<CapturedVertex> none;
-    std::vector<tessref::StreamedCaptureComparison::PatchPair> pairs;
-    for (const std::uint32_t p : ids) {
-        tessref::StreamedCaptureComparison::PatchPair pair;
-        pair.patch = p;
-        pair.reference = r.count(p) ? r.at(p) : none;
-        pair.test = t.count(p) ? t.at(p) : none;
-        pairs.push_back(pair);
+    // Also with the test in the reference's order, where the streamed comparison makes and
+    // sorts the triangles of a patch whose tess coords match vertex for vertex only once.
+    for (const bool reference_order : {false, true}) {
+        SCOPED_TRACE(reference_order ? "the test in the reference's order" : "the test reversed and rotated");
+        const auto [ref, test] = patches_of_every_divergence(reference_order);
+        CaptureCompareOptions options;
+        options.max_position_ulps = 2;
+        options.max_normal_ulps = 2;
+        options.max_listed = 100;
+        const CaptureCompareResult whole = tessref::compare_captures(ref, test, options);
+        ASSERT_EQ(whole.missing_in_test, 1u);
+        ASSERT_EQ(whole.missing_in_reference, 1u);
+        ASSERT_EQ(whole.tess_coord_divergences, 1u);
+        ASSERT_EQ(whole.triangle_divergences, 1u);
+        ASSERT_EQ(whole.orientation_divergences, 1u);
+        ASSERT_EQ(whole.value_divergences, 2u);
+        ASSERT_EQ(whole.worst_position.ulps, 3u);
+        const auto r = by_patch(ref), t = by_patch(test);
+        std::set<std::uint32_t> ids;
+        for (const auto& [p, v] : r) ids.insert(p);
+        for (const auto& [p, v] : t) ids.insert(p);
+        const std::vector<CapturedVertex> none;
+        std::vector<tessref::StreamedCaptureComparison::PatchPair> pairs;
+        for (const std::uint32_t p : ids) {
+            tessref::StreamedCaptureComparison::PatchPair pair;
+            pair.patch = p;
+            pair.reference = r.count(p) ? r.at(p) : none;
+            pair.test = t.count(p) ? t.at(p) : none;
+            pairs.push_back(pair);
+        }
+        tessref::StreamedCaptureComparison one_call(options), call_each(options);
+        one_call.add(pairs);
+        for (const auto& pair : pairs) call_each.add(std::span(&pair, 1));
+        expect_same_result(one_call.finish(), whole);
+        expect_same_result(call_each.finish(), whole);
     }
-    tessref::StreamedCaptureComparison one_call(options), call_each(options);
-    one_call.add(pairs);
-    for (const auto& pair : pairs) call_each.add(std::span(&pair, 1));
-    expect_same_result(one_call.finish(), whole);
-    expect_same_result(call_each.finish(), whole);
 }
 
 // A patch given twice, or after a higher one, would be compared without its other triangles.

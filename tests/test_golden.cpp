@@ -144,6 +144,54 @@ TEST(RunIsolated, AThrowingOnChunkEndsTheChildAndPiecesAreNoAnswer) {
     }
 }
 
+// start_isolated() and finish(): two children at once, each working from its start (the
+// first waits for a file only the second makes, so it could not answer if the second
+// started only when the first was finished), each answering its own finish().
+TEST(RunIsolated, TwoChildrenStartedAtOnceWorkAtOnceAndAnswerTheirOwn) {
+    const fs::path flag = fs::temp_directory_path() / ("tessref-two-children-" + std::to_string(::getpid()));
+    fs::remove(flag);
+    tessref::IsolatedChild first = tessref::start_isolated("a test child", [&] {
+        for (int i = 0; i < 2000 && !fs::exists(flag); ++i) ::usleep(5000);  // up to 10 s
+        return std::string(fs::exists(flag) ? "first saw the second" : "first alone");
+    });
+    tessref::IsolatedChild second = tessref::start_isolated("a test child", [&] {
+        std::ofstream(flag.string()) << "x";
+        return std::string("second");
+    });
+    EXPECT_TRUE(first.started());
+    EXPECT_EQ(first.finish(), "first saw the second");
+    EXPECT_FALSE(first.started());
+    EXPECT_THROW(first.finish(), tessref::Error);  // once only
+    EXPECT_EQ(second.finish(), "second");
+    fs::remove(flag);
+}
+
+// A started child whose IsolatedChild goes away unfinished (an exception on the way, the
+// caller done) is killed and reaped, not left running.
+TEST(RunIsolated, AChildNeverFinishedIsKilledAndReaped) {
+    const fs::path pid_file = fs::temp_directory_path() / ("tessref-unfinished-pid-" + std::to_string(::getpid()));
+    fs::remove(pid_file);
+    pid_t child = 0;
+    {
+        tessref::IsolatedChild c = tessref::start_isolated("a test child", [&] {
+            std::ofstream(pid_file.string() + ".part") << ::getpid();
+            fs::rename(pid_file.string() + ".part", pid_file);
+            ::sleep(30);
+            std::ofstream(pid_file.string() + ".finished") << "late";
+            return std::string("late");
+        });
+        for (int i = 0; i < 2000 && !fs::exists(pid_file); ++i) ::usleep(5000);
+        std::ifstream(pid_file.string()) >> child;
+    }
+    ASSERT_GT(child, 0);
+    errno = 0;
+    EXPECT_EQ(::kill(child, 0), -1);  // no such process: killed and reaped
+    EXPECT_EQ(errno, ESRCH);
+    EXPECT_FALSE(fs::exists(pid_file.string() + ".finished"));
+    fs::remove(pid_file);
+    fs::remove(pid_file.string() + ".finished");
+}
+
 // The digester fed the capture in pieces cut anywhere (inside a patch's run, inside a
 // triangle, a piece of one vertex) gives capture_digest's digests of the whole.
 TEST(CaptureDigest, FedInPiecesCutAnywhereIsTheWholeCapturesDigest) {
@@ -497,6 +545,59 @@ TEST(GoldenLocation, TheDefaultsNameWhatTheShippedFilesName) {
     EXPECT_NE(file.find("# Regenerate: tessref golden update jacksboro\n"), std::string::npos);
     const tessref::golden::Location mine{"my scenes", "out"};
     EXPECT_EQ(mine.update_command("a b"), "tessref golden update 'a b' --golden out --scenes 'my scenes'");
+}
+
+// Several scenes in one run, where each scene's GL child starts while the scene before it
+// is completed, give each scene the row it gets alone, whatever the scenes around it are:
+// drawn by llvmpipe, checked on the CPU only (pom), missing a file, or not loadable.
+TEST_F(GoldenCommand, ScenesVerifiedTogetherGetTheRowsTheyGetAlone) {
+    // A scene directory of its own beside the data's folders (the scenes name their
+    // files relative to themselves), with one scene file that does not load.
+    const fs::path data = fs::path(TESSREF_SOURCE_DIR) / "data";
+    for (const char* folder : {"heightmaps", "textures", "tessmaps", "shaders"}) fs::create_directory_symlink(data / folder, dir_ / folder);
+    fs::create_directories(dir_ / "scenes");
+    const std::vector<std::string> order{"terrain-pom", "thesis-constant-1", "broken", "thesis-map-4", "jacksboro-geomipmap"};
+    for (const std::string& scene : order)
+        if (scene != "broken") fs::copy_file(data / "scenes" / (scene + ".toml"), dir_ / "scenes" / (scene + ".toml"));
+    const auto golden_args = [&](const std::string& action, const std::vector<std::string>& names) {
+        std::vector<std::string> a{"golden", action};
+        a.insert(a.end(), names.begin(), names.end());
+        for (const std::string& x : {std::string("--golden"), path("golden"), std::string("--scenes"), path("scenes")})
+            a.push_back(x);
+        return run(a);
+    };
+    const auto updated = golden_args("update", {"terrain-pom", "thesis-constant-1", "thesis-map-4", "jacksboro-geomipmap"});
+    ASSERT_EQ(updated.status, 0) << updated.err;
+    fs::copy(dir_ / "golden" / "thesis-constant-1", dir_ / "golden" / "broken");
+    write_file(dir_ / "scenes" / "broken.toml", "[generator\n");
+    fs::remove(dir_ / "golden" / "thesis-map-4" / "mesh.txt");
+
+    // A scene's row and the notes under it, without the GL s column (a time) and the
+    // name column's width (the longest name's).
+    const auto row_of = [](const std::string& out, const std::string& scene) {
+        std::smatch m;
+        if (!std::regex_search(out, m, std::regex("\n(" + scene + " [^\n]*)\n((?:    [^\n]*\n)*)"))) return std::string();
+        const std::string row = std::regex_replace(m[1].str(), std::regex(" +[0-9.]+(  [A-Z-]+)$"), "$1");
+        return std::regex_replace(row, std::regex(" +"), " ") + "\n" + m[2].str();  // the name column's width
+    };
+    const auto together = golden_args("verify", order);
+    EXPECT_EQ(together.status, 2) << together.out << together.err;
+    EXPECT_NE(together.out.find("golden verify: llvmpipe"), std::string::npos) << together.out;
+    for (const std::string& scene : order) {
+        const auto alone = golden_args("verify", {scene});
+        const std::string row = row_of(alone.out, scene);
+        EXPECT_FALSE(row.empty()) << alone.out;
+        EXPECT_EQ(row_of(together.out, scene), row) << scene << "\ntogether:\n" << together.out << "alone:\n" << alone.out;
+    }
+    EXPECT_EQ(table_verdict(together.out, "terrain-pom"), "CPU-ONLY") << together.out;
+    EXPECT_EQ(table_verdict(together.out, "thesis-constant-1"), "PASS") << together.out;
+    EXPECT_EQ(table_verdict(together.out, "broken"), "ERROR") << together.out;
+    EXPECT_EQ(table_verdict(together.out, "thesis-map-4"), "MISSING") << together.out;
+    EXPECT_EQ(table_verdict(together.out, "jacksboro-geomipmap"), "PASS") << together.out;
+    // A run whose first scene llvmpipe does not draw still names the renderer.
+    const auto pom_first = golden_args("verify", {"terrain-pom"});
+    EXPECT_EQ(pom_first.status, 0) << pom_first.out << pom_first.err;
+    EXPECT_NE(pom_first.out.find("golden verify: llvmpipe"), std::string::npos) << pom_first.out;
 }
 
 // Fixed-width columns that never run together, and a legend saying what each header means.

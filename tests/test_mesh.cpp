@@ -971,6 +971,64 @@ TEST(StreamedPlyWriter, PositionsThatAreNotFloatsAreNotStreamed) {
     EXPECT_FALSE(writer.add(patch));
 }
 
+// A stream that takes `room` bytes and then fails, as a full disk does.
+class FullAfter : public std::streambuf {
+public:
+    explicit FullAfter(std::size_t room) : room_(room) {}
+    std::string taken;
+
+protected:
+    std::streamsize xsputn(const char* s, std::streamsize n) override {
+        const auto fits = static_cast<std::streamsize>(std::min<std::size_t>(room_ - taken.size(), static_cast<std::size_t>(n)));
+        taken.append(s, static_cast<std::size_t>(fits));
+        return fits;
+    }
+    int_type overflow(int_type c) override {
+        if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+        if (taken.size() >= room_) return traits_type::eof();
+        taken.push_back(traits_type::to_char_type(c));
+        return c;
+    }
+    pos_type seekoff(off_type, std::ios_base::seekdir, std::ios_base::openmode) override { return pos_type(off_type(-1)); }
+    pos_type seekpos(pos_type, std::ios_base::openmode) override { return pos_type(off_type(-1)); }
+
+private:
+    std::size_t room_;
+};
+
+// The records are written on a thread of their own while the next pieces are welded: a
+// write that fails there is the same Error as a failed write on the caller's thread, from
+// the next add() or from finish(), whatever the moment of the failure; the file that
+// fits streams as before. 200 patches, apart (no two share a point: the header written
+// first has the final counts), so that most failures come while pieces are added.
+TEST(StreamedPlyWriter, AWriteThatFailsIsAnErrorFromAddOrFinish) {
+    std::vector<SurfaceMesh> pieces;
+    for (std::uint32_t p = 0; p < 200; ++p) pieces.push_back(grid_patch(p, {3.0 * (p % 20), 3.0 * (p / 20)}));
+    const SurfaceMesh whole = concatenated(pieces);
+    MeshWriteOptions options;
+    options.binary = true;
+    std::ostringstream reference;
+    tessref::write_mesh(whole, reference, options);
+    const std::string expected = reference.str();
+    const auto triangles = [&whole](std::size_t first, std::span<std::array<std::uint32_t, 3>> out) {
+        std::copy_n(whole.triangles.begin() + static_cast<std::ptrdiff_t>(first), out.size(), out.begin());
+    };
+    ASSERT_NE(expected.find("element vertex 1800\n"), std::string::npos);
+    for (const std::size_t room : {std::size_t(600), expected.size() / 3, expected.size() - 10}) {
+        FullAfter full(room);
+        std::ostream out(&full);
+        tessref::StreamedPlyWriter writer(out, options, whole.positions.size(), whole.triangles.size());
+        try {
+            for (const SurfaceMesh& piece : pieces) ASSERT_TRUE(writer.add(piece));
+            (void)writer.finish(triangles);
+            ADD_FAILURE() << "no error with room for " << room << " of " << expected.size() << " bytes";
+        } catch (const tessref::Error& e) {
+            EXPECT_NE(std::string(e.what()).find("cannot write the mesh"), std::string::npos) << e.what();
+        }
+        EXPECT_TRUE(full.taken == expected.substr(0, room)) << room;  // in order, up to the failure
+    }
+}
+
 TEST(StreamedExport, NonFiniteVertexIsTheSameErrorAsRunPipelines) {
     // tests/data/heightfield/huge_sample.toml: one texel that scale_z carries past the float range.
     const tessref::Scene scene =

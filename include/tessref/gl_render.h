@@ -156,7 +156,7 @@ struct SceneRenderStats {
     std::size_t draws = 0;
     double seconds_pipeline = 0.0;  // the CPU pipeline (predictions)
     double seconds_gl = 0.0;        // the GL draws, the read-back included
-    double seconds_capture = 0.0;
+    double seconds_capture = 0.0;  // the capture draws and read-back, not the time spent in capture_sink
 };
 
 struct SceneRender {
@@ -194,6 +194,28 @@ struct IsolatedRender {
     std::string renderer;  // GL_RENDERER of the child's context
 };
 IsolatedRender render_scene_isolated(const Scene& scene, const SceneRenderOptions& options = {});
+
+// render_scene_isolated() in two halves (isolated.h's IsolatedChild): start runs the CPU
+// pipeline here and starts the child, which draws at once; finish() runs options.meanwhile,
+// hands the capture to options.capture_sink and returns the render. Whatever those two
+// functions use must live until finish(). A render not finished (destroyed, an exception
+// on the way) has its child killed and reaped. Start only while no other thread of this
+// process runs work (the child is forked).
+class PendingRender {
+public:
+    PendingRender(PendingRender&&) noexcept;
+    PendingRender& operator=(PendingRender&&) noexcept;
+    ~PendingRender();
+    IsolatedRender finish();  // once only
+
+    struct State;
+
+private:
+    explicit PendingRender(std::unique_ptr<State> state);
+    friend PendingRender start_render_scene_isolated(const Scene&, const SceneRenderOptions&);
+    std::unique_ptr<State> state_;
+};
+PendingRender start_render_scene_isolated(const Scene& scene, const SceneRenderOptions& options = {});
 // GL_RENDERER, from a context made in a child process as above.
 std::string renderer_isolated();
 

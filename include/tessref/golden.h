@@ -23,6 +23,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -176,6 +177,7 @@ struct SceneVerdict {
     std::uint64_t level_ulps = 0;
     double level_difference = 0.0;  // the largest |reference level - GL level| of those patches
     double seconds_gl = 0.0;
+    std::string renderer;  // GL_RENDERER of the context that drew the scene; empty: none did
     // False for a scene not compared with GL (only the CPU side was checked).
     bool gl_compared = true;
     // Why the verdict is not PASS, one list per kind: each line says what and where.
@@ -193,5 +195,11 @@ struct SceneVerdict {
 // verdict. `keep` (when not empty): keep the scene's pictures, and for a failing scene the
 // diff picture and both captures, under keep/<name>/.
 SceneVerdict verify_scene(const std::string& name, const Location& location, const std::filesystem::path& keep);
+// verify_scene() of each of `names` in order, each verdict handed to `done` as soon as it
+// is known. The next scene's GL child draws while this scene's CPU side is computed, so the
+// scenes take less time together than one after the other; every verdict is the one
+// verify_scene() gives.
+void verify_scenes(const std::vector<std::string>& names, const Location& location,
+                   const std::filesystem::path& keep, const std::function<void(SceneVerdict)>& done);
 
 }  // namespace tessref::golden

@@ -126,27 +126,36 @@ int run_verify(const GoldenOptions& options) {
     const golden::Location location = options.location();
     const std::vector<std::string> names = options.scenes.empty() ? golden::all_scenes(location) : options.scenes;
     const fs::path keep = options.keep;
-    const std::string renderer = gl::renderer_isolated();
+    // GL_RENDERER names llvmpipe in the header: from the first scene's own GL child (one
+    // process start fewer), else from a child of its own.
+    std::string renderer;
+    const auto know_renderer = [&](const golden::SceneVerdict& v) {
+        if (renderer.empty()) renderer = v.renderer.empty() ? gl::renderer_isolated() : v.renderer;
+    };
     std::size_t name_width = 5;
     for (const std::string& n : names) name_width = std::max(name_width, n.size());
-    if (!options.json) {
+    const auto header = [&] {
         std::cout << "golden verify: " << renderer << " against " << options.golden_dir << "/\n"
                   << std::left << std::setw(static_cast<int>(name_width)) << "scene" << std::right;
         for (const Column& c : columns()) std::cout << " " << std::setw(c.width) << c.header;
         std::cout << "  verdict\n";
-    }
+    };
     std::vector<golden::SceneVerdict> verdicts;
     golden::Verdict worst = golden::Verdict::pass;
-    for (const std::string& name : names) {
-        verdicts.push_back(golden::verify_scene(name, location, keep));
+    golden::verify_scenes(names, location, keep, [&](golden::SceneVerdict verdict) {
+        verdicts.push_back(std::move(verdict));
         const golden::SceneVerdict& v = verdicts.back();
+        if (verdicts.size() == 1) {
+            know_renderer(v);
+            if (!options.json) header();
+        }
         worst = std::max(worst, v.verdict());
         // A scene that could not be verified is also an error message on stderr, as every
         // command reports bad input; the run goes on.
         for (const std::string& e : v.missing) std::cerr << "tessref: error: " << e << "\n";
         if (!v.corrupt.empty()) std::cerr << "tessref: error: " << v.corrupt.front() << "\n";
         if (!v.error.empty()) std::cerr << "tessref: error: " << v.error << "\n";
-        if (options.json) continue;
+        if (options.json) return;
         const bool measured = v.verdict() != golden::Verdict::missing && v.verdict() != golden::Verdict::error &&
                               v.triangles != 0;
         const bool gl = measured && v.gl_compared && v.seconds_gl > 0;
@@ -177,6 +186,10 @@ int run_verify(const GoldenOptions& options) {
         if (!v.error.empty()) notes("error: ", {v.error});
         notes("stale: ", v.stale);
         notes("fails: ", v.failures);
+    });
+    if (verdicts.empty()) {  // no scene: the header all the same
+        know_renderer({});
+        if (!options.json) header();
     }
     if (options.json) {
         nlohmann::json j;

@@ -164,22 +164,50 @@ void set_isolated_phase(const std::string& doing, const Where& where) {
     g_phase->line = where.line;
 }
 
-std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
-                         const IsolationLimits& limits, const std::function<void()>& meanwhile,
-                         const std::function<void(std::string_view)>& on_chunk) {
-    const double seconds = limits.seconds > 0.0 ? limits.seconds : isolation_time_limit();
-    const std::uint64_t budget = limits.memory_bytes != 0 ? limits.memory_bytes : memory_limit();
+struct IsolatedChild::State {
+    std::string what;
+    double seconds = 0.0;
+    std::uint64_t budget = 0;
+    Phase* phase = nullptr;  // a shared page, unmapped with the state
+    int fd = -1;             // the pipe's read end
+    pid_t child = -1;        // reaped: -1
+
+    ~State() {
+        if (fd >= 0) ::close(fd);
+        if (child > 0) {
+            ::kill(child, SIGKILL);
+            reap();
+        }
+        if (phase) ::munmap(phase, sizeof(Phase));
+    }
+    int reap() {
+        int status = 0;
+        while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+        }
+        child = -1;
+        return status;
+    }
+};
+
+IsolatedChild::IsolatedChild(std::unique_ptr<State> state) : state_(std::move(state)) {}
+IsolatedChild::IsolatedChild() = default;
+IsolatedChild::IsolatedChild(IsolatedChild&&) noexcept = default;
+IsolatedChild& IsolatedChild::operator=(IsolatedChild&&) noexcept = default;
+IsolatedChild::~IsolatedChild() = default;
+
+IsolatedChild start_isolated(const std::string& what, const std::function<std::string()>& work,
+                             const IsolationLimits& limits) {
+    auto st = std::make_unique<IsolatedChild::State>();
+    st->what = what;
+    st->seconds = limits.seconds > 0.0 ? limits.seconds : isolation_time_limit();
+    st->budget = limits.memory_bytes != 0 ? limits.memory_bytes : memory_limit();
     const std::uint64_t mapped = mapped_bytes();
-    const std::uint64_t address_space = mapped > UINT64_MAX - budget ? UINT64_MAX : mapped + budget;
+    const std::uint64_t address_space = mapped > UINT64_MAX - st->budget ? UINT64_MAX : mapped + st->budget;
 
     void* shared = ::mmap(nullptr, sizeof(Phase), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
     if (shared == MAP_FAILED) throw Error(what + ": cannot map a page for the child process: " + std::strerror(errno));
-    struct Unmap {
-        void* p;
-        ~Unmap() { ::munmap(p, sizeof(Phase)); }
-    } unmap{shared};
-    Phase* phase = new (shared) Phase{};
-    copy_to(phase->doing, sizeof phase->doing, "starting");
+    st->phase = new (shared) Phase{};
+    copy_to(st->phase->doing, sizeof st->phase->doing, "starting");
 
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0) throw Error(what + ": cannot make a pipe: " + std::strerror(errno));
@@ -192,25 +220,23 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
     }
     if (child == 0) {
         ::close(fds[0]);
-        g_phase = phase;
+        g_phase = st->phase;
         g_answer_fd = fds[1];
         run_child(fds[1], work, address_space);
     }
     ::close(fds[1]);
-    // Work of this process's (meanwhile, on_chunk) that throws ends the child unfinished.
-    const auto or_end_child = [&](const auto& parent_work) {
-        try {
-            parent_work();
-        } catch (...) {
-            ::close(fds[0]);
-            ::kill(child, SIGKILL);
-            int status = 0;
-            while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
-            }
-            throw;
-        }
-    };
-    if (meanwhile) or_end_child(meanwhile);
+    st->fd = fds[0];
+    st->child = child;
+    return IsolatedChild(std::move(st));
+}
+
+std::string IsolatedChild::finish(const std::function<void()>& meanwhile,
+                                  const std::function<void(std::string_view)>& on_chunk) {
+    if (!state_) throw Error("IsolatedChild::finish() of a child that was not started or is finished");
+    // However this ends, the state goes with it: an exception kills and reaps the child.
+    const std::unique_ptr<State> st = std::move(state_);
+    const std::string& what = st->what;
+    if (meanwhile) meanwhile();
 
     // Read the answer until the child closes the pipe (it exits), or the time is up. The
     // pieces sent ahead go to on_chunk as each is complete; `at` is where the next begins.
@@ -227,7 +253,7 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
             if (answer.size() - at < 1 + sizeof n) break;
             std::memcpy(&n, answer.data() + at + 1, sizeof n);
             if (answer.size() - at - 1 - sizeof n < n) break;
-            if (on_chunk) or_end_child([&] { on_chunk(std::string_view(answer).substr(at + 1 + sizeof n, n)); });
+            if (on_chunk) on_chunk(std::string_view(answer).substr(at + 1 + sizeof n, n));
             at += 1 + sizeof n + n;
         }
         if (at > 0 && (in_answer || at == answer.size() || at >= (std::size_t(1) << 20))) {
@@ -236,7 +262,7 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
         }
     };
     bool timed_out = false;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(st->seconds);
     char block[1 << 16];
     for (;;) {
         const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
@@ -244,11 +270,11 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
             timed_out = true;
             break;
         }
-        struct pollfd p {fds[0], POLLIN, 0};
+        struct pollfd p {st->fd, POLLIN, 0};
         const int ready = ::poll(&p, 1, static_cast<int>(std::min<long long>(left.count(), 1000)));
         if (ready < 0 && errno == EINTR) continue;
         if (ready <= 0) continue;
-        const ssize_t n = ::read(fds[0], block, sizeof block);
+        const ssize_t n = ::read(st->fd, block, sizeof block);
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) break;
         answer.append(block, static_cast<std::size_t>(n));
@@ -256,24 +282,24 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
     }
     // A piece the child did not finish is no answer.
     if (!in_answer) answer.clear();
-    ::close(fds[0]);
-    if (timed_out) ::kill(child, SIGKILL);
-    int status = 0;
-    while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
-    }
+    ::close(st->fd);
+    st->fd = -1;
+    if (timed_out) ::kill(st->child, SIGKILL);
+    const int status = st->reap();
 
-    const std::string doing = phase->doing;
+    const std::string doing = st->phase->doing;
     Where where;
-    if (phase->file[0]) where = Where::in_file(phase->file, static_cast<std::size_t>(std::max(0, phase->line)));
+    if (st->phase->file[0])
+        where = Where::in_file(st->phase->file, static_cast<std::size_t>(std::max(0, st->phase->line)));
     char limit_text[64];
-    std::snprintf(limit_text, sizeof limit_text, "%g s", seconds);
+    std::snprintf(limit_text, sizeof limit_text, "%g s", st->seconds);
     if (timed_out)
         throw Error(what + " ran past its time limit of " + limit_text + " while " + doing +
                         " (raise it with TESSREF_GL_TIME_LIMIT=SECONDS)",
                     where);
     if (WIFSIGNALED(status))
         throw Error(what + " was killed by " + signal_text(WTERMSIG(status)) + " while " + doing +
-                        "; its memory limit was " + format_bytes(budget) +
+                        "; its memory limit was " + format_bytes(st->budget) +
                         " (a driver that runs out of memory crashes; raise it with --max-memory or TESSREF_MAX_MEMORY)",
                     where);
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || answer.empty())
@@ -283,6 +309,12 @@ std::string run_isolated(const std::string& what, const std::function<std::strin
     if (answer[0] == 'E') throw error_from(answer);
     answer.erase(0, 1);  // in place: a capture's answer is hundreds of MB, a copy as many again
     return answer;
+}
+
+std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
+                         const IsolationLimits& limits, const std::function<void()>& meanwhile,
+                         const std::function<void(std::string_view)>& on_chunk) {
+    return start_isolated(what, work, limits).finish(meanwhile, on_chunk);
 }
 
 }  // namespace tessref

@@ -24,6 +24,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -56,6 +57,42 @@ double isolation_time_limit();
 std::string run_isolated(const std::string& what, const std::function<std::string()>& work,
                          const IsolationLimits& limits = {}, const std::function<void()>& meanwhile = {},
                          const std::function<void(std::string_view)>& on_chunk = {});
+
+// run_isolated() in two halves: start_isolated() forks the child, which starts its work at
+// once; finish() runs `meanwhile`, takes the pieces and the answer, reaps the child and
+// throws as run_isolated() does. Between the two the caller may do anything, start other
+// children included: `golden verify` starts the next scene's llvmpipe child before it
+// computes this scene's CPU side, so that the one core llvmpipe's compiler and tessellation
+// use is never the only one busy. A child's time limit counts from the start of finish();
+// one that fills its pipe waits there until finish() reads it. A child not finished (its
+// IsolatedChild destroyed, an exception on the way) is killed and reaped.
+// Fork only while no other thread of this process runs: the child gets the forking thread
+// alone, and a lock another thread held stays held in the child for ever.
+class IsolatedChild {
+public:
+    IsolatedChild();
+    IsolatedChild(IsolatedChild&&) noexcept;
+    IsolatedChild& operator=(IsolatedChild&&) noexcept;
+    IsolatedChild(const IsolatedChild&) = delete;
+    IsolatedChild& operator=(const IsolatedChild&) = delete;
+    ~IsolatedChild();
+
+    bool started() const { return state_ != nullptr; }
+    // Once only; afterwards started() is false.
+    std::string finish(const std::function<void()>& meanwhile = {},
+                       const std::function<void(std::string_view)>& on_chunk = {});
+
+    struct State;
+
+private:
+    explicit IsolatedChild(std::unique_ptr<State> state);
+    friend IsolatedChild start_isolated(const std::string&, const std::function<std::string()>&,
+                                        const IsolationLimits&);
+    std::unique_ptr<State> state_;
+};
+
+IsolatedChild start_isolated(const std::string& what, const std::function<std::string()>& work,
+                             const IsolationLimits& limits = {});
 
 // In the child: sends `bytes` to the parent's `on_chunk` now, ahead of the answer. Throws
 // tessref::Error when the parent no longer reads. Not for use outside run_isolated().

@@ -227,10 +227,25 @@ PatchOutcome compare_patch(std::uint32_t patch, const Side& r, const Side& t, co
         return o;
     }
 
+    // Both sides' triangles one and the same (the caller found their tess coords equal,
+    // vertex for vertex in the same order): the same multisets, triangles and ways round,
+    // so only the values below remain to compare.
+    const bool same_triangles = r.tris.data() == t.tris.data() && r.tris.size() == t.tris.size();
+    if (same_triangles) {
+        bool triangles_domain = false;
+        for (const Triangle& tri : r.tris)
+            for (const Bits& b : tri.keys) triangles_domain = triangles_domain || std::bit_cast<float>(b[2]) != 0.0f;
+        d.levels_known = r.has_levels && t.has_levels;
+        d.reference_levels = r.vertex(r.tris.front(), 0).levels;
+        d.test_levels = t.vertex(t.tris.front(), 0).levels;
+        if (d.levels_known) d.level_ulps = level_ulps(d.reference_levels, d.test_levels, triangles_domain);
+    }
+
     // The multisets of tess coords.
     std::vector<Bits> ref_keys, test_keys;
     bool triangles_domain = false;
     for (const auto& [tris, keys] : {std::pair{r.tris, &ref_keys}, std::pair{t.tris, &test_keys}}) {
+        if (same_triangles) break;
         keys->reserve(3 * tris.size());
         for (const Triangle& tri : tris)
             for (const Bits& b : tri.keys) {
@@ -239,10 +254,12 @@ PatchOutcome compare_patch(std::uint32_t patch, const Side& r, const Side& t, co
             }
         std::sort(keys->begin(), keys->end());
     }
-    d.levels_known = r.has_levels && t.has_levels;
-    d.reference_levels = r.vertex(r.tris.front(), 0).levels;
-    d.test_levels = t.vertex(t.tris.front(), 0).levels;
-    if (d.levels_known) d.level_ulps = level_ulps(d.reference_levels, d.test_levels, triangles_domain);
+    if (!same_triangles) {
+        d.levels_known = r.has_levels && t.has_levels;
+        d.reference_levels = r.vertex(r.tris.front(), 0).levels;
+        d.test_levels = t.vertex(t.tris.front(), 0).levels;
+        if (d.levels_known) d.level_ulps = level_ulps(d.reference_levels, d.test_levels, triangles_domain);
+    }
     if (ref_keys != test_keys) {
         d.kind = PatchDivergence::tess_coords;
         o.equal_levels = d.levels_known && d.level_ulps == 0;
@@ -256,7 +273,7 @@ PatchOutcome compare_patch(std::uint32_t patch, const Side& r, const Side& t, co
     }
 
     // The triangles, as sets of tess coords.
-    for (std::size_t k = 0; k < r.tris.size(); ++k) {
+    for (std::size_t k = 0; k < r.tris.size() && !same_triangles; ++k) {
         const Triangle &a = r.tris[k], &b = t.tris[k];
         if (a.keys == b.keys) continue;
         d.kind = PatchDivergence::triangles;
@@ -267,7 +284,7 @@ PatchOutcome compare_patch(std::uint32_t patch, const Side& r, const Side& t, co
     }
 
     // The way round of each triangle's corners.
-    for (std::size_t k = 0; k < r.tris.size(); ++k) {
+    for (std::size_t k = 0; k < r.tris.size() && !same_triangles; ++k) {
         const Triangle &a = r.tris[k], &b = t.tris[k];
         if (a.odd < 0 || a.odd == b.odd) continue;
         if (d.flipped_triangles++ == 0) d.tess_coord = vec_of(a.keys[0]);
@@ -447,8 +464,17 @@ void StreamedCaptureComparison::add(std::span<const PatchPair> patches) {
     }
     parallel_for(std::size_t{0}, patches.size(), [&](std::size_t k) {
         const PatchPair& p = patches[k];
+        // The usual case: llvmpipe gave the patch's vertices in the reference's order, with
+        // the same tess coords. Then the test's triangles, sorted, are the reference's
+        // (triangles_of makes them from the tess coords and the order alone), made and
+        // sorted once for both sides.
+        const bool same_order = p.reference.size() == p.test.size() &&
+                                std::equal(p.reference.begin(), p.reference.end(), p.test.begin(),
+                                           [](const CapturedVertex& a, const CapturedVertex& b) {
+                                               return a.patch_id == b.patch_id && bits_of(a.tess_coord) == bits_of(b.tess_coord);
+                                           });
         std::vector<Triangle> r = triangles_of(p.reference, ref_first[k], {}, "reference");
-        std::vector<Triangle> t = triangles_of(p.test, test_first[k], {}, "test");
+        std::vector<Triangle> t = same_order ? std::vector<Triangle>{} : triangles_of(p.test, test_first[k], {}, "test");
         for (const auto& [tris, side] : {std::pair{&r, "reference"}, std::pair{&t, "test"}})
             for (const Triangle& tri : *tris)
                 if (tri.patch != p.patch)
@@ -458,7 +484,7 @@ void StreamedCaptureComparison::add(std::span<const PatchPair> patches) {
         std::sort(r.begin(), r.end());
         std::sort(t.begin(), t.end());
         outcomes[k] = compare_patch(p.patch, {r, p.reference, p.reference_has_levels},
-                                    {t, p.test, p.test_has_levels}, s.options);
+                                    {same_order ? r : t, p.test, p.test_has_levels}, s.options);
     });
     for (PatchOutcome& o : outcomes) accumulate(s.result, o, s.options);
 }

@@ -980,6 +980,7 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
     const std::uint64_t total = pipe.mesh.triangles.size();
     // Streamed to the sink, only a draw's capture is held at once.
     const bool to_sink = options.capture_sink && !diagnose;
+    double sink_seconds = 0.0;  // in the sink, left out of seconds_capture
     if (!to_sink) {
         require_memory(saturating_bytes(saturating_bytes(total, 3), sizeof(CapturedVertex)),
                        "the capture of " + std::to_string(total) + " triangles", Where::at_key(scene.file, "--capture"));
@@ -1059,11 +1060,15 @@ SceneRender render_scene(Context& context, const Scene& scene_in, const SceneRen
             std::memcpy(v.levels.inner.data(), r.inner, sizeof r.inner);
             into.push_back(v);
         }
-        if (to_sink) options.capture_sink(draw_capture);
+        if (to_sink) {  // not llvmpipe's time: the caller's, or waiting for it (a pipe)
+            const auto handed = Clock::now();
+            options.capture_sink(draw_capture);
+            sink_seconds += seconds_since(handed);
+        }
     }
     gl.Disable(GL_RASTERIZER_DISCARD);
     c.check_error("reading the capture back");
-    result.stats.seconds_capture = seconds_since(start);
+    result.stats.seconds_capture = seconds_since(start) - sink_seconds;
     if (diagnose) result.differences = patch_differences(pipe, per_patch, result.capture, scene.generator.domain);
     if (!options.capture) result.capture.clear();
     return result;
@@ -1127,7 +1132,20 @@ const std::string kIsolatedWhat = "the GL backend (Mesa llvmpipe, in a child pro
 
 }  // namespace
 
-IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOptions& options_in) {
+struct PendingRender::State {
+    SceneRenderOptions options;
+    RenderShading shading{};
+    std::vector<StageShader> user_shaders;
+    std::vector<std::string> warnings;
+    IsolatedChild child;
+};
+
+PendingRender::PendingRender(std::unique_ptr<State> state) : state_(std::move(state)) {}
+PendingRender::PendingRender(PendingRender&&) noexcept = default;
+PendingRender& PendingRender::operator=(PendingRender&&) noexcept = default;
+PendingRender::~PendingRender() = default;
+
+PendingRender start_render_scene_isolated(const Scene& scene_in, const SceneRenderOptions& options_in) {
     if (!scene_in.camera) throw Error("tessref gl needs a [camera] in the scene", Where::at_key(scene_in.file, "camera"));
     // The CPU pipeline runs here, on every core (oneTBB is not for the child), at the
     // image's viewport as render_scene() would run it.
@@ -1156,8 +1174,8 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         } catch (const Error&) {
         }
     }
-    std::vector<CapturedVertex> sink_vertices;
-    const std::string answer = run_isolated(kIsolatedWhat, [&] {
+    auto st = std::make_unique<PendingRender::State>();
+    st->child = start_isolated(kIsolatedWhat, [&] {
         set_isolated_phase("creating the OSMesa context");
         // Never destroyed: the child exits when it has answered, and a driver's teardown
         // is one more place to crash after the work is done.
@@ -1180,10 +1198,21 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         put_vector(out, r.differences);
         put_value(out, r.stats);
         return out;
-    }, {}, [&] {
-        if (!options.return_pipeline) options.pipeline.reset();  // the child has its own copy
-        if (options.meanwhile) options.meanwhile();
-    }, [&](std::string_view bytes) {
+    });
+    if (!options.return_pipeline) options.pipeline.reset();  // the child has its own copy
+    st->shading = scene_in.shading;
+    st->user_shaders = user_shaders(scene_in, options);
+    st->warnings = std::move(warnings);
+    st->options = std::move(options);
+    return PendingRender(std::move(st));
+}
+
+IsolatedRender PendingRender::finish() {
+    if (!state_) throw Error("PendingRender::finish() of a render that was not started or is finished");
+    const std::unique_ptr<State> st = std::move(state_);
+    const SceneRenderOptions& options = st->options;
+    std::vector<CapturedVertex> sink_vertices;
+    const std::string answer = st->child.finish(options.meanwhile, [&](std::string_view bytes) {
         // Pieces come only with a sink. The bytes are copied out of the pipe's buffer into
         // vertices of their own alignment.
         if (!options.capture_sink || bytes.size() % sizeof(CapturedVertex) != 0)
@@ -1193,6 +1222,7 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
         if (!v.empty()) std::memcpy(static_cast<void*>(v.data()), bytes.data(), bytes.size());
         options.capture_sink(v);
     });
+
     IsolatedRender result;
     Reader in{answer};
     result.renderer = in.string();
@@ -1205,11 +1235,15 @@ IsolatedRender render_scene_isolated(const Scene& scene_in, const SceneRenderOpt
     r.differences = in.vector<PatchDifference>();
     r.stats = in.value<SceneRenderStats>();
     r.stats.seconds_pipeline += options.pipeline_seconds;
-    r.shading = scene_in.shading;
+    r.shading = st->shading;
     r.pipeline = options.pipeline;
-    r.user_shaders = user_shaders(scene_in, options);
-    r.warnings = std::move(warnings);
+    r.user_shaders = std::move(st->user_shaders);
+    r.warnings = std::move(st->warnings);
     return result;
+}
+
+IsolatedRender render_scene_isolated(const Scene& scene, const SceneRenderOptions& options) {
+    return start_render_scene_isolated(scene, options).finish();
 }
 
 std::string renderer_isolated() {

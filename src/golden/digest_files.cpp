@@ -233,10 +233,14 @@ struct CaptureDigester::State {
     CaptureDigest digest;
     std::size_t vertices = 0;
     std::vector<CapturedVertex> carry;  // the last run added: it may go on in the next piece
-    std::vector<std::string> texts;
+    std::vector<std::string> texts;    // the window being formatted
+    std::vector<std::string> pending;  // the window before it: its first pending_count texts
+    std::size_t pending_count = 0;     // are not yet in the whole digest
 
     // Whole runs, formatted and digested run by run in parallel a window of about
-    // kDigestWindowVertices at a time, then added to the whole text's digest in order.
+    // kDigestWindowVertices at a time. The whole text's digest, which must take the text in
+    // order on one thread, takes each window's text while the next window is formatted
+    // (one more task of that parallel loop), so that it keeps no core waiting.
     void digest_runs(const std::vector<std::span<const CapturedVertex>>& runs) {
         for (std::size_t first = 0; first < runs.size();) {
             std::size_t last = first + 1, window = runs[first].size();
@@ -244,12 +248,17 @@ struct CaptureDigester::State {
             texts.resize(last - first);
             const std::size_t base = digest.patches.size();
             digest.patches.resize(base + (last - first));
-            parallel_for(first, last, [&](std::size_t r) {
+            parallel_for(std::size_t(0), last - first + 1, [&](std::size_t i) {
+                if (i == 0) {
+                    add_pending();
+                    return;
+                }
+                const std::size_t r = first + i - 1;
                 const std::span<const CapturedVertex> run = runs[r];
-                std::string& text = texts[r - first];
+                std::string& text = texts[i - 1];
                 text.clear();
                 append_capture_lines(run, text);
-                PatchDigest& p = digest.patches[base + (r - first)];
+                PatchDigest& p = digest.patches[base + (i - 1)];
                 p.patch_id = run.front().patch_id;
                 const std::string_view patch_line = std::string_view(text).substr(0, text.find('\n'));
                 const std::size_t levels = patch_line.find(" levels ");
@@ -257,9 +266,14 @@ struct CaptureDigester::State {
                 p.triangles = run.size() / 3;
                 p.sha256 = sha256_hex(text).substr(0, kPatchDigits);
             });
-            for (const std::string& text : texts) whole.add(text);
+            std::swap(texts, pending);  // the strings keep their capacity for the window after next
+            pending_count = last - first;
             first = last;
         }
+    }
+    void add_pending() {
+        for (std::size_t i = 0; i < pending_count; ++i) whole.add(pending[i]);
+        pending_count = 0;
     }
 };
 
@@ -293,6 +307,7 @@ void CaptureDigester::add(std::span<const CapturedVertex> piece) {
 CaptureDigest CaptureDigester::finish() {
     State& s = *state_;
     if (!s.carry.empty()) s.digest_runs({std::span<const CapturedVertex>(s.carry)});
+    s.add_pending();
     s.carry.clear();
     s.digest.triangles = s.vertices / 3;
     s.digest.sha256 = s.whole.hex();

@@ -351,35 +351,95 @@ private:
     std::vector<std::vector<CapturedVertex>> cpu_vertices_;  // the reference side of pairs_
 };
 
-// The GL side against the golden files, with `cpu_side` (which makes `ref`) run while
-// llvmpipe draws: the two sides share nothing until the comparison, which takes llvmpipe's
-// capture draw by draw as the child sends it; `cpu_digests` runs when the child is done.
-void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side,
-                     const std::function<void()>& cpu_digests, const CpuReference& ref,
-                     const FloatImage& golden_image, glm::ivec2 size, const fs::path& work, bool keep, SceneVerdict& v) {
+// One scene on its way through verify: prepare_scene() reads its golden files, loads it and
+// starts llvmpipe's child; complete_scene() computes the CPU side while that child draws,
+// compares, and gives the verdict. `golden verify` prepares the next scene before it
+// completes this one (verify_scenes()). Never moved once prepared: the GL options'
+// functions point at it.
+struct PreparedScene {
+    SceneVerdict v;
+    bool ready = false;  // the golden files read and the scene loaded: complete_scene() has work
+    fs::path keep;
+    fs::path capture_file, mesh_file, scene_path;
+    fs::path work;  // the pictures' directory, made by complete_scene()
+    CaptureDigest golden_capture;
+    MeshDigest golden_mesh;
+    FloatImage golden_image;
+    glm::ivec2 size{};
+    Scene scene;
+    std::optional<gl::PendingRender> gl;  // unset: the scene is checked on the CPU only
+    // Step 1's results, made while llvmpipe draws.
+    CpuReference ref;
+    bool image_differs = false;
+    // Step 2's comparison, fed as llvmpipe's capture arrives.
+    std::optional<StreamedGlComparison> streamed;
+    std::vector<CapturedVertex> gl_capture;  // with --keep only, for a failing scene's files
+
+    // (1) The CPU reference against its golden files: the pipeline, the image and the mesh
+    // while llvmpipe draws (cpu_side), the capture's digests after llvmpipe's capture has
+    // been compared with it (cpu_digests), when the surface it is made from is all that
+    // is left to hold.
+    void cpu_side() {
+        ref = cpu_reference(scene, scene_path, size);
+        write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
+        const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
+        image_differs = cpu_image.samples != golden_image.samples;
+    }
+    void cpu_digests() {
+        digest_capture(ref);
+        v.triangles = ref.digest.triangles;
+        check_capture(golden_capture, ref, capture_file, v);
+        check_mesh(golden_mesh, ref.mesh, mesh_file, v);
+        if (image_differs) v.stale.push_back("image: the CPU picture differs from image.png");
+    }
+};
+
+CaptureCompareOptions capture_compare_options() {
     CaptureCompareOptions capture_options;
     capture_options.max_position_ulps = kMaxPositionUlps;
     capture_options.max_normal_ulps = kMaxNormalUlps;
     capture_options.max_position_abs = kMaxPositionAbs;
     capture_options.max_normal_abs = kMaxNormalAbs;
     capture_options.max_listed = 1000000;
-    std::vector<CapturedVertex> gl_capture;  // with --keep only, for a failing scene's files
-    std::optional<StreamedGlComparison> streamed;
+    return capture_options;
+}
+
+// (2) Starts the GL backend on the scene: its child draws it at the golden size with its
+// capture, from now on; the CPU side runs when complete_scene() finishes the render.
+void start_gl(PreparedScene& p) {
     gl::SceneRenderOptions gl_options;
-    gl_options.size = size;
+    gl_options.size = p.size;
     gl_options.capture = true;
-    gl_options.meanwhile = cpu_side;
+    gl_options.meanwhile = [&p] { p.cpu_side(); };
     gl_options.return_pipeline = false;  // the CPU side has its own, in exact math
-    gl_options.capture_sink = [&](std::span<const CapturedVertex> draw) {
-        if (!streamed) streamed.emplace(*ref.capture, capture_options, keep ? &gl_capture : nullptr);  // after cpu_side
-        streamed->add(draw);
+    gl_options.capture_sink = [&p](std::span<const CapturedVertex> draw) {
+        if (!p.streamed)  // after cpu_side, which made the CPU capture
+            p.streamed.emplace(*p.ref.capture, capture_compare_options(), p.keep.empty() ? nullptr : &p.gl_capture);
+        p.streamed->add(draw);
     };
     if (const char* hook = std::getenv("TESSREF_GL_CORRUPT_BATCH"); hook && *hook)  // as `tessref gl`
         gl_options.corrupt_prediction_of_batch = std::atoll(hook);
     // In a child process with its own limits, as `tessref gl` (gl_render.h).
-    gl::SceneRender r = gl::render_scene_isolated(scene, gl_options).render;
+    p.gl = gl::start_render_scene_isolated(p.scene, gl_options);
+}
+
+// The GL side against the golden files, with the CPU side (which makes `ref`) run while
+// llvmpipe draws: the two sides share nothing until the comparison, which takes llvmpipe's
+// capture draw by draw as the child sends it; the digests run when the child is done.
+void compare_with_gl(PreparedScene& p) {
+    SceneVerdict& v = p.v;
+    const CpuReference& ref = p.ref;
+    const FloatImage& golden_image = p.golden_image;
+    const fs::path& work = p.work;
+    const bool keep = !p.keep.empty();
+    std::optional<StreamedGlComparison>& streamed = p.streamed;
+    const std::vector<CapturedVertex>& gl_capture = p.gl_capture;
+    gl::IsolatedRender isolated = p.gl->finish();
+    p.gl.reset();
+    gl::SceneRender& r = isolated.render;
+    v.renderer = isolated.renderer;
     v.seconds_gl = r.stats.seconds_gl + r.stats.seconds_capture;
-    cpu_digests();
+    p.cpu_digests();
     if (!r.batch_failure.empty()) {
         v.failures.push_back(r.batch_failure);
         return;
@@ -397,7 +457,7 @@ void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side,
     const CompareResult image = compare_images(golden_image, test_image, image_options);
     v.max_error = image.max_error;
 
-    if (!streamed) streamed.emplace(*ref.capture, capture_options, nullptr);  // llvmpipe captured nothing
+    if (!streamed) streamed.emplace(*ref.capture, capture_compare_options(), nullptr);  // llvmpipe captured nothing
     const CaptureCompareResult c = streamed->finish();
     v.position_ulps = c.worst_position.ulps;
     v.normal_ulps = c.worst_normal.ulps;
@@ -462,88 +522,119 @@ void compare_with_gl(const Scene& scene, const std::function<void()>& cpu_side,
     }
 }
 
-// Steps 1 and 2 on golden files that are there; a tessref::Error thrown here is the
-// scene's CORRUPT (reading a golden file) or ERROR (anything after).
-void verify_files(const std::string& name, const Location& location, const fs::path& keep, SceneVerdict& v) {
-    const fs::path dir = location.golden / name;
-    const fs::path capture_file = dir / "capture.txt", mesh_file = dir / "mesh.txt", image_file = dir / "image.png";
-    CaptureDigest golden_capture;
-    MeshDigest golden_mesh;
-    FloatImage golden_image;
-    glm::ivec2 size{};
+// Reads the scene's golden files, loads it and starts llvmpipe on it. Never throws for the
+// scene's own input: a golden file that is not there is MISSING, one that cannot be read
+// CORRUPT, anything else the scene's ERROR, in the verdict (then `ready` stays false).
+std::unique_ptr<PreparedScene> prepare_scene(const std::string& name, const Location& location, const fs::path& keep) {
+    auto prepared = std::make_unique<PreparedScene>();
+    PreparedScene& p = *prepared;
+    SceneVerdict& v = p.v;
+    v.scene = name;
+    p.keep = keep;
     try {
-        golden_capture = parse_capture_digest(read_golden_text(capture_file), capture_file.string());
-        size = parse_size(golden_capture.size, Where::in_file(capture_file.string()));
-        // The size comes from a file: the whole verification's memory at that size is asked
-        // for before anything is drawn (limits.h). Held at once: the CPU render, the golden,
-        // CPU and GL pictures as floats with their codes (20 bytes a pixel each), the GL
-        // colour in the child, on the pipe and in the parent (16 bytes a pixel each), the
-        // failing-pixel mask.
-        const std::uint64_t pixels = static_cast<std::uint64_t>(size.x) * static_cast<std::uint64_t>(size.y);
-        require_memory(estimate_render_memory(size, RenderMode::fill, false, ImageFormat::png, {}) +
-                           saturating_bytes(pixels, 3 * 20 + 3 * 16 + 1),
-                       "verifying a golden image of " + std::to_string(size.x) + "x" + std::to_string(size.y) + " pixels",
-                       Where::in_file(capture_file.string()));
-        golden_mesh = parse_mesh_digest(read_golden_text(mesh_file), mesh_file.string());
-        golden_image = read_float_image(image_file.string());
-        if (golden_image.width != size.x || golden_image.height != size.y)
-            throw Error("image.png is " + std::to_string(golden_image.width) + "x" + std::to_string(golden_image.height) +
-                            " but capture.txt says " + golden_capture.size,
-                        Where::in_file(image_file.string()));
-    } catch (const Error& e) {
-        v.corrupt.push_back(e.message());
-        return;
-    }
-
-    const fs::path scene_path = location.scene_file(name);
-    const Scene scene = load_scene(scene_path.string());
-    const fs::path work = keep.empty() ? fs::temp_directory_path() / ("tessref-golden-" + std::to_string(::getpid()))
-                                       : keep / name;
-    fs::create_directories(work);
-    // The pictures go through PNG files, as `compare` reads them; without --keep they are
-    // removed however this function leaves (an early return, an exception).
-    struct RemoveUnlessKept {
-        const fs::path& dir;
-        bool keep;
-        ~RemoveUnlessKept() {
+        check_scene_name(name);
+        p.scene_path = location.scene_file(name);
+        if (!fs::is_regular_file(p.scene_path))
+            throw Error("no scene '" + name + "' (" + p.scene_path.string() + ")", Where::in_file(name));
+        for (const char* file : {"image.png", "capture.txt", "mesh.txt"}) {
+            const fs::path path = location.golden / name / file;
             std::error_code ec;
-            if (!keep) fs::remove_all(dir, ec);
+            if (!fs::exists(fs::symlink_status(path, ec)))
+                v.missing.push_back(path.string() + " is not there (run `" + location.update_command(name) +
+                                    "` to make it)");
         }
-    } remove_unless_kept{work, !keep.empty()};
-
-    // (1) The CPU reference against its golden files: the pipeline, the image and the mesh
-    // while llvmpipe draws (cpu_side), the capture's digests after llvmpipe's capture has
-    // been compared with it (cpu_digests), when the surface it is made from is all that
-    // is left to hold.
-    CpuReference ref;
-    bool image_differs = false;
-    const auto cpu_side = [&] {
-        ref = cpu_reference(scene, scene_path, size);
-        write_image(ref.image, (work / "cpu.png").string(), ImageFormat::png, {});
-        const FloatImage cpu_image = read_float_image((work / "cpu.png").string());
-        image_differs = cpu_image.samples != golden_image.samples;
-    };
-    const auto cpu_digests = [&] {
-        digest_capture(ref);
-        v.triangles = ref.digest.triangles;
-        check_capture(golden_capture, ref, capture_file, v);
-        check_mesh(golden_mesh, ref.mesh, mesh_file, v);
-        if (image_differs) v.stale.push_back("image: the CPU picture differs from image.png");
-    };
-
-    // (2) The GL backend against the golden image and the CPU capture, drawn while (1) runs.
-    // pom shading has a twin (pn-pom and terrain-pom) but its layer search and shadow trace
-    // flip on the last bits of llvmpipe's dFdx tangent frame in a few pixels, beyond this
-    // step's rule (45 and 44 pixels at 320x200; terrain-pom's capture passes, normals within
-    // 2 ulps): tests/test_parallax.cpp holds them with their own counts, and their golden
-    // files are checked on the CPU only.
-    if (scene.shading.model.kind == ShadingKind::pom) {
-        cpu_side();
-        cpu_digests();
-        v.gl_compared = false;
-        return;
+        if (!v.missing.empty()) {
+            // The files that are there are still read: one that cannot be (a FIFO, a
+            // directory) is named too.
+            for (const char* file : {"capture.txt", "mesh.txt"}) {
+                const fs::path path = location.golden / name / file;
+                std::error_code ec;
+                if (!fs::exists(fs::symlink_status(path, ec))) continue;
+                try {
+                    (void)read_golden_text(path);
+                } catch (const Error& e) {
+                    v.corrupt.push_back(e.message());
+                }
+            }
+            return prepared;
+        }
+        const fs::path dir = location.golden / name;
+        p.capture_file = dir / "capture.txt";
+        p.mesh_file = dir / "mesh.txt";
+        const fs::path image_file = dir / "image.png";
+        try {
+            p.golden_capture = parse_capture_digest(read_golden_text(p.capture_file), p.capture_file.string());
+            p.size = parse_size(p.golden_capture.size, Where::in_file(p.capture_file.string()));
+            // The size comes from a file: the whole verification's memory at that size is
+            // asked for before anything is drawn (limits.h). Held at once: the CPU render,
+            // the golden, CPU and GL pictures as floats with their codes (20 bytes a pixel
+            // each), the GL colour in the child, on the pipe and in the parent (16 bytes a
+            // pixel each), the failing-pixel mask.
+            const std::uint64_t pixels = static_cast<std::uint64_t>(p.size.x) * static_cast<std::uint64_t>(p.size.y);
+            require_memory(estimate_render_memory(p.size, RenderMode::fill, false, ImageFormat::png, {}) +
+                               saturating_bytes(pixels, 3 * 20 + 3 * 16 + 1),
+                           "verifying a golden image of " + std::to_string(p.size.x) + "x" + std::to_string(p.size.y) +
+                               " pixels",
+                           Where::in_file(p.capture_file.string()));
+            p.golden_mesh = parse_mesh_digest(read_golden_text(p.mesh_file), p.mesh_file.string());
+            p.golden_image = read_float_image(image_file.string());
+            if (p.golden_image.width != p.size.x || p.golden_image.height != p.size.y)
+                throw Error("image.png is " + std::to_string(p.golden_image.width) + "x" +
+                                std::to_string(p.golden_image.height) + " but capture.txt says " + p.golden_capture.size,
+                            Where::in_file(image_file.string()));
+        } catch (const Error& e) {
+            v.corrupt.push_back(e.message());
+            return prepared;
+        }
+        p.scene = load_scene(p.scene_path.string());
+        p.ready = true;
+        // pom shading has a twin (pn-pom and terrain-pom) but its layer search and shadow
+        // trace flip on the last bits of llvmpipe's dFdx tangent frame in a few pixels,
+        // beyond this step's rule (45 and 44 pixels at 320x200; terrain-pom's capture
+        // passes, normals within 2 ulps): tests/test_parallax.cpp holds them with their own
+        // counts, and their golden files are checked on the CPU only.
+        if (p.scene.shading.model.kind != ShadingKind::pom) start_gl(p);
+    } catch (const Error& e) {
+        v.error = e.message();
+        p.ready = false;
+    } catch (const std::exception& e) {  // memory
+        v.error = e.what();
+        p.ready = false;
     }
-    compare_with_gl(scene, cpu_side, cpu_digests, ref, golden_image, size, work, !keep.empty(), v);
+    return prepared;
+}
+
+// Steps 1 and 2 of a prepared scene; its verdict.
+SceneVerdict complete_scene(PreparedScene& p) {
+    SceneVerdict& v = p.v;
+    if (!p.ready) return std::move(v);
+    try {
+        p.work = p.keep.empty() ? fs::temp_directory_path() / ("tessref-golden-" + std::to_string(::getpid()))
+                                : p.keep / v.scene;
+        fs::create_directories(p.work);
+        // The pictures go through PNG files, as `compare` reads them; without --keep they are
+        // removed however this function leaves (an early return, an exception).
+        struct RemoveUnlessKept {
+            const fs::path& dir;
+            bool keep;
+            ~RemoveUnlessKept() {
+                std::error_code ec;
+                if (!keep) fs::remove_all(dir, ec);
+            }
+        } remove_unless_kept{p.work, !p.keep.empty()};
+        if (!p.gl) {
+            p.cpu_side();
+            p.cpu_digests();
+            v.gl_compared = false;
+        } else {
+            compare_with_gl(p);
+        }
+    } catch (const Error& e) {
+        v.error = e.message();
+    } catch (const std::exception& e) {  // a file system error of --keep, memory
+        v.error = e.what();
+    }
+    return std::move(v);
 }
 
 }  // namespace
@@ -636,46 +727,28 @@ Verdict SceneVerdict::verdict() const {
     return gl_compared ? Verdict::pass : Verdict::cpu_only;
 }
 
-SceneVerdict verify_scene(const std::string& name, const Location& location, const fs::path& keep) {
-    SceneVerdict v;
-    v.scene = name;
-    try {
-        check_scene_name(name);
-        const fs::path scene_path = location.scene_file(name);
-        if (!fs::is_regular_file(scene_path))
-            throw Error("no scene '" + name + "' (" + scene_path.string() + ")", Where::in_file(name));
-        for (const char* file : {"image.png", "capture.txt", "mesh.txt"}) {
-            const fs::path path = location.golden / name / file;
-            std::error_code ec;
-            if (!fs::exists(fs::symlink_status(path, ec)))
-                v.missing.push_back(path.string() + " is not there (run `" + location.update_command(name) +
-                                    "` to make it)");
-        }
-        if (!v.missing.empty()) {
-            // The files that are there are still read: one that cannot be (a FIFO, a
-            // directory) is named too.
-            for (const char* file : {"capture.txt", "mesh.txt"}) {
-                const fs::path path = location.golden / name / file;
-                std::error_code ec;
-                if (!fs::exists(fs::symlink_status(path, ec))) continue;
-                try {
-                    (void)read_golden_text(path);
-                } catch (const Error& e) {
-                    v.corrupt.push_back(e.message());
-                }
-            }
-            return v;
-        }
-        verify_files(name, location, keep, v);
-        // What this scene freed goes back to the system before the next scene's GL child is
-        // forked: the child's resident size counts every page the parent still holds.
+void verify_scenes(const std::vector<std::string>& names, const Location& location, const fs::path& keep,
+                   const std::function<void(SceneVerdict)>& done) {
+    // The next scene's llvmpipe child starts before this scene's CPU side: llvmpipe compiles
+    // the shaders and tessellates on one thread, so a scene alone keeps one of two cores
+    // busy most of its time; two scenes at once keep both. Each child is forked between the
+    // scenes' parallel work, never during it (isolated.h).
+    std::unique_ptr<PreparedScene> next = names.empty() ? nullptr : prepare_scene(names[0], location, keep);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        const std::unique_ptr<PreparedScene> now = std::move(next);
+        if (i + 1 < names.size()) next = prepare_scene(names[i + 1], location, keep);
+        SceneVerdict v = complete_scene(*now);
+        // What this scene freed goes back to the system before the scene after next has its
+        // GL child forked: the child's resident size counts every page the parent still holds.
         ::malloc_trim(0);
-    } catch (const Error& e) {
-        v.error = e.message();
-    } catch (const std::exception& e) {  // a file system error of --keep, memory
-        v.error = e.what();
+        done(std::move(v));
     }
-    return v;
+}
+
+SceneVerdict verify_scene(const std::string& name, const Location& location, const fs::path& keep) {
+    SceneVerdict verdict;
+    verify_scenes({name}, location, keep, [&](SceneVerdict v) { verdict = std::move(v); });
+    return verdict;
 }
 
 }  // namespace tessref::golden

@@ -8,10 +8,14 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <ostream>
+#include <thread>
 #include <utility>
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -706,6 +710,90 @@ struct RecordBlock {
     void end_record(char* end) { used = static_cast<std::size_t>(end - bytes.data()); }
 };
 
+// Writes rounds of record blocks to a stream, in order, on a thread of its own, so that
+// the kernel's copying of a large file into its pages (a third of a streamed export's CPU
+// time, on the thread that also welds) runs beside the welding and formatting of what
+// comes next. At most two rounds wait (a few MiB); a round's blocks come back, their
+// capacity kept, for a later round. Only this thread touches the stream between the
+// first write() and drain().
+class BackgroundWriter {
+public:
+    explicit BackgroundWriter(std::ostream& out) : out_(out), thread_([this] { run(); }) {}
+    ~BackgroundWriter() {  // what is still queued is dropped (an error on the way out)
+        {
+            const std::lock_guard<std::mutex> lock(mutex_);
+            stop_ = true;
+        }
+        changed_.notify_all();
+        thread_.join();
+    }
+    BackgroundWriter(const BackgroundWriter&) = delete;
+    BackgroundWriter& operator=(const BackgroundWriter&) = delete;
+
+    // Queues the first `count` blocks of `blocks` and hands back blocks to fill next (at
+    // least `count` of them); throws the Error of a write that failed before.
+    std::vector<RecordBlock> write(std::vector<RecordBlock> blocks, std::size_t count) {
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [&] { return queue_.size() < 2 || !error_.empty(); });
+        if (!error_.empty()) throw Error("cannot write the mesh: " + error_);
+        queue_.push_back({std::move(blocks), count});
+        std::vector<RecordBlock> next;
+        if (!spare_.empty()) {
+            next = std::move(spare_.back());
+            spare_.pop_back();
+        }
+        lock.unlock();
+        changed_.notify_all();
+        if (next.size() < count) next.resize(count);
+        return next;
+    }
+
+    // Waits until every queued block is written; throws the Error of a write that failed.
+    void drain() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [&] { return (queue_.empty() && !writing_) || !error_.empty(); });
+        if (!error_.empty()) throw Error("cannot write the mesh: " + error_);
+    }
+
+private:
+    struct Round {
+        std::vector<RecordBlock> blocks;
+        std::size_t count = 0;
+    };
+
+    void run() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        for (;;) {
+            changed_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+            if (stop_) return;
+            Round round = std::move(queue_.front());
+            queue_.pop_front();
+            writing_ = true;
+            lock.unlock();
+            std::string failure;
+            for (std::size_t k = 0; k < round.count && failure.empty(); ++k) {
+                out_.write(round.blocks[k].bytes.data(), static_cast<std::streamsize>(round.blocks[k].used));
+                if (!out_) failure = stream_failure();
+            }
+            lock.lock();
+            writing_ = false;
+            if (!failure.empty()) error_ = failure;
+            spare_.push_back(std::move(round.blocks));
+            changed_.notify_all();
+            if (!error_.empty()) return;
+        }
+    }
+
+    std::ostream& out_;
+    std::mutex mutex_;
+    std::condition_variable changed_;
+    std::deque<Round> queue_;
+    std::vector<std::vector<RecordBlock>> spare_;
+    bool writing_ = false, stop_ = false;
+    std::string error_;
+    std::thread thread_;  // last: started once the members above exist
+};
+
 void write_ply(const SurfaceMesh& mesh, const WrittenAttributes& written, const MeshWriteOptions& options,
                std::ostream& out, const Progress& progress) {
     const std::size_t n = mesh.positions.size();
@@ -952,6 +1040,7 @@ struct StreamedPlyWriter::Impl {
     std::size_t welded = 0, emitted = 0, emitted_triangles = 0, degenerate = 0;
     double largest = 0.0;
     std::vector<RecordBlock> blocks;
+    std::optional<BackgroundWriter> writer;  // the records after the header, until finish()
 
     void write(const char* data, std::size_t size) {
         out.write(data, static_cast<std::streamsize>(size));
@@ -1021,6 +1110,8 @@ struct StreamedPlyWriter::Impl {
             const std::string header = records.header(vertex_bound, triangle_bound);
             header_length = header.size();
             write(header.data(), header.size());
+            out.flush();  // before the writer's thread takes the stream
+            writer.emplace(out);
             started = true;
         }
 
@@ -1080,23 +1171,33 @@ struct StreamedPlyWriter::Impl {
             for (std::size_t r = k * block_records; r < end; ++r)
                 block.end_record(records.vertex(piece, fresh[r], block.reserve_record()));
         });
-        for (std::size_t k = 0; k < block_count; ++k) write(blocks[k].bytes.data(), blocks[k].used);
+        blocks = writer->write(std::move(blocks), block_count);
         return true;
     }
 
+    // The caller writes the file otherwise once this gives up: the writer's thread lets go
+    // of the stream first.
     bool fail() {
         failed = true;
+        stop_writing();
         return false;
+    }
+    void stop_writing() {
+        if (!writer) return;
+        writer->drain();
+        writer.reset();
     }
 
     std::optional<MeshWriteReport> finish(const TriangleSource& source) {
         if (failed || !started) return std::nullopt;
-        if (!interiors_apart(interiors, wholes, piece_of)) return std::nullopt;
         const std::size_t triangles = emitted_triangles - degenerate;
         constexpr auto handles = static_cast<std::size_t>(std::numeric_limits<int>::max());
-        if (welded > handles || triangles > handles) return std::nullopt;  // write_mesh's error
         const std::string header = records.header(welded, triangles);
-        if (header.size() != header_length) return std::nullopt;
+        if (!interiors_apart(interiors, wholes, piece_of) || welded > handles || triangles > handles ||  // write_mesh's error
+            header.size() != header_length) {
+            fail();
+            return std::nullopt;
+        }
 
         const auto progress = [this](double fraction) {
             if (options.progress) options.progress("writing", fraction);
@@ -1130,8 +1231,10 @@ struct StreamedPlyWriter::Impl {
                     block.end_record(records.triangle(w, block.reserve_record()));
                 }
             });
-            for (std::size_t k = 0; k < round; ++k) write(blocks[k].bytes.data(), blocks[k].used);
+            blocks = writer->write(std::move(blocks), round);
+            if (blocks.size() < kBlocksAtOnce) blocks.resize(kBlocksAtOnce);
         }
+        stop_writing();
         out.seekp(0);
         write(header.data(), header.size());
         out.flush();
