@@ -42,7 +42,9 @@
 #include <OpenImageIO/imagebuf.h>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
+#include "check/check_internal.h"
 #include "tessref/check.h"
 #include "tessref/error.h"
 #include "tessref/pipeline.h"
@@ -1247,4 +1249,155 @@ TEST(CheckCommand, PictureMarksTheDefects) {
     std::size_t files = 0;
     for (const auto& entry : fs::directory_iterator(dir)) files += entry.path().extension() == ".png";
     EXPECT_EQ(files, 1u);
+}
+
+// ---------------------------------------------------------------------------------------
+// The check's tables
+
+// The corner table and the half-edge table, made by parts of the faces in parallel, against
+// the serial way: every kept face in face order, each entry appended to its vertex, the
+// half-edge groups then sorted by (other vertex, face << 1 | forward). On a grid whose
+// vertices are shuffled (each face's vertices far apart in the list), with a non-manifold
+// edge, duplicate faces (same and other corner order), isolated vertices, a quad and a
+// pentagon, faces left out (a repeated vertex, two vertices) and a fan of 64 faces, on 1, 2,
+// 3 and 4 threads (1 to 4 parts; more than one part needs more faces than a chunk).
+TEST(CheckTables, CornerAndHalfEdgeTablesAreTheSerialOnes) {
+    using namespace tessref::check_detail;
+    constexpr std::uint32_t n = 200;  // n x n vertices
+    std::vector<std::uint32_t> shuffled(n * n + 40);
+    std::iota(shuffled.begin(), shuffled.end(), 0u);
+    std::uint64_t random = 7;
+    for (std::size_t i = shuffled.size(); i > 1; --i) {
+        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
+        std::swap(shuffled[i - 1], shuffled[(random >> 33) % i]);
+    }
+    IndexedMesh mesh;
+    mesh.positions.resize(shuffled.size());
+    for (std::uint32_t i = 0; i < shuffled.size(); ++i) mesh.positions[shuffled[i]] = glm::dvec3(i % n, i / n, 0.0);
+    const auto at = [&](std::uint32_t x, std::uint32_t y) { return shuffled[y * n + x]; };
+    const auto add = [&](std::vector<std::uint32_t> face) { mesh.add_face(face); };
+    for (std::uint32_t y = 0; y + 1 < n; ++y)
+        for (std::uint32_t x = 0; x + 1 < n; ++x) {
+            if (x == 5 && y == 5) {
+                add({at(x, y), at(x + 1, y), at(x + 1, y + 1), at(x, y + 1)});  // a quad
+                continue;
+            }
+            add({at(x, y), at(x + 1, y), at(x + 1, y + 1)});
+            add({at(x, y), at(x + 1, y + 1), at(x, y + 1)});
+        }
+    add({at(0, 0), at(1, 0), shuffled[n * n]});                               // a third face on edge (0,0)-(1,0)
+    add({at(7, 7), at(8, 8), at(8, 7)});                                      // a duplicate, other order
+    add({at(9, 9), at(10, 9), at(10, 10)});                                   // a duplicate, same order
+    add({at(20, 20), at(20, 20), at(21, 20)});                                // a repeated vertex: left out
+    add({at(30, 30), at(31, 30)});                                            // two vertices: left out
+    add({shuffled[n * n + 1], shuffled[n * n + 2], shuffled[n * n + 3], shuffled[n * n + 4], shuffled[n * n + 5]});
+    for (std::uint32_t k = 0; k < 64; ++k)  // a fan of 64 faces around vertex 0 (its 128 half-edges filed there)
+        add({0u, at(40 + k % 50, 100 + k / 50), at(41 + k % 50, 100 + k / 50)});
+    ASSERT_GT(mesh.face_count(), std::size_t(4) << 14);
+
+    std::vector<std::uint8_t> status(mesh.face_count(), face_kept);
+    status[mesh.face_count() - 66] = face_too_few_vertices;
+    status[mesh.face_count() - 67] = face_repeated_vertex;
+
+    // The serial tables.
+    std::vector<std::vector<std::uint32_t>> corners(mesh.vertex_count());
+    std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> groups(mesh.vertex_count());
+    for (std::uint32_t f = 0; f < mesh.face_count(); ++f) {
+        if (status[f] != face_kept) continue;
+        const auto face = mesh.face(f);
+        for (std::size_t k = 0; k < face.size(); ++k) {
+            const std::uint32_t a = face[k], b = face[(k + 1) % face.size()];
+            corners[a].push_back(f);
+            groups[std::min(a, b)].emplace_back(std::max(a, b), f << 1 | (a < b ? 1u : 0u));
+        }
+    }
+    for (auto& group : groups) std::sort(group.begin(), group.end());
+
+    for (int threads : {1, 2, 3, 4}) {
+        SCOPED_TRACE(threads);
+        tbb::task_arena arena(threads);
+        tessref::execute(arena, [&] {
+            CheckReport report;
+            CheckOptions options;
+            CheckState state{mesh, options, report};
+            state.face_status = status;
+            build_vertex_tables(state);
+            ASSERT_EQ(state.corner_start.size(), mesh.vertex_count() + 1);
+            ASSERT_EQ(state.half_edge_start.size(), mesh.vertex_count() + 1);
+            std::size_t corner_mismatches = 0, group_mismatches = 0;
+            for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+                const std::vector<std::uint32_t> corner(state.corner_faces.begin() + state.corner_start[v],
+                                                        state.corner_faces.begin() + state.corner_start[v + 1]);
+                corner_mismatches += corner != corners[v];
+                std::vector<std::pair<std::uint32_t, std::uint32_t>> group;
+                for (std::uint32_t i = state.half_edge_start[v]; i < state.half_edge_start[v + 1]; ++i)
+                    group.emplace_back(state.half_edges[i].other, state.half_edges[i].face_and_direction);
+                group_mismatches += group != groups[v];
+            }
+            EXPECT_EQ(corner_mismatches, 0u);
+            EXPECT_EQ(group_mismatches, 0u);
+            EXPECT_EQ(state.corner_start[mesh.vertex_count()], state.corner_faces.size());
+            EXPECT_EQ(state.half_edge_start[mesh.vertex_count()], state.half_edges.size());
+        });
+    }
+}
+
+// classify_edges finds the duplicate faces in its own pass, and leaves out of each edge the
+// face that repeats an earlier one, not the earlier one: a square of two triangles whose
+// first is listed again the other way round is consistently oriented (face 2, reversed, is
+// the duplicate; were face 0 left out instead, the diagonal would run 0 -> 2 in both faces).
+TEST(CheckTables, AnEdgeKeepsTheOriginalOfADuplicate) {
+    IndexedMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    for (std::vector<std::uint32_t> face : {std::vector<std::uint32_t>{0, 1, 2}, {0, 2, 3}, {2, 1, 0}}) mesh.add_face(face);
+    const CheckReport r = tessref::check_mesh(mesh, quick());
+    ASSERT_EQ(r.count(DefectClass::duplicate_face), 1u);
+    EXPECT_EQ(r.of(DefectClass::duplicate_face).locations[0].faces, (std::vector<std::uint32_t>{0, 2}));
+    EXPECT_EQ(r.count(DefectClass::inconsistent_orientation), 0u);
+    EXPECT_EQ(r.edge_count, 5u);
+    EXPECT_EQ(r.boundary_edge_count, 4u);
+    EXPECT_TRUE(r.manifold);
+}
+
+// Components are numbered by their smallest vertex, chunk by chunk of the vertices in
+// parallel: 5000 inside-out tetrahedra whose vertices are shuffled (20000 vertices, two
+// chunks and more) each report their own number and first face, as the numbering in vertex
+// order gives them.
+TEST(CheckTables, ComponentsAreNumberedByTheirSmallestVertex) {
+    constexpr std::uint32_t tetrahedra = 5000;
+    std::vector<std::uint32_t> shuffled(4 * tetrahedra);
+    std::iota(shuffled.begin(), shuffled.end(), 0u);
+    std::uint64_t random = 11;
+    for (std::size_t i = shuffled.size(); i > 1; --i) {
+        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
+        std::swap(shuffled[i - 1], shuffled[(random >> 33) % i]);
+    }
+    IndexedMesh mesh;
+    mesh.positions.resize(shuffled.size());
+    const glm::dvec3 corner[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> smallest;  // (smallest vertex, tetrahedron)
+    for (std::uint32_t t = 0; t < tetrahedra; ++t) {
+        const std::uint32_t* v = &shuffled[4 * t];
+        for (int k = 0; k < 4; ++k) mesh.positions[v[k]] = corner[k] + glm::dvec3(3.0 * (t % 100), 3.0 * (t / 100), 0.0);
+        // Wound inward: the outward faces (0 2 1), (0 1 3), (0 3 2), (1 2 3) reversed.
+        for (const auto& f : {std::array<int, 3>{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}}) {
+            const std::vector<std::uint32_t> face{v[f[0]], v[f[1]], v[f[2]]};
+            mesh.add_face(face);
+        }
+        smallest.emplace_back(*std::min_element(v, v + 4), t);
+    }
+    std::sort(smallest.begin(), smallest.end());
+    CheckOptions options = quick();
+    options.ray_probe = false;
+    options.max_locations = tetrahedra;
+    const CheckReport r = tessref::check_mesh(mesh, options);
+    EXPECT_EQ(r.component_count, tetrahedra);
+    ASSERT_EQ(r.count(DefectClass::inverted_volume), tetrahedra);
+    const auto& locations = r.of(DefectClass::inverted_volume).locations;
+    ASSERT_EQ(locations.size(), tetrahedra);
+    std::size_t wrong = 0;
+    for (std::uint32_t c = 0; c < tetrahedra; ++c)
+        wrong += locations[c].detail.find("closed component " + std::to_string(c) + " (4 faces, starting at face " +
+                                          std::to_string(4 * smallest[c].second) + ")") == std::string::npos;
+    EXPECT_EQ(wrong, 0u) << locations[0].detail;
 }

@@ -241,9 +241,8 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     report.unreferenced_vertices = static_cast<std::size_t>(
         std::count(state.vertex_referenced.begin(), state.vertex_referenced.end(), std::uint8_t{0}));
 
-    build_half_edges(state);
+    build_vertex_tables(state);
     state.progress("topology", 0.15);
-    find_duplicate_faces(state);
     classify_edges(state);
     report.closed = state.boundary.empty();
     state.progress("topology", 0.3);

@@ -93,8 +93,9 @@ struct CheckState {
     // Half-edges of kept faces, grouped by their smaller vertex, sorted within a group.
     Table<std::uint32_t> half_edge_start;  // vertex_count + 1
     Table<HalfEdgeEntry> half_edges;
-    // The kept faces at each vertex, in face order (corner_faces[corner_start[v] ..
-    // corner_start[v + 1]]): made by find_non_manifold_vertices, used up by find_components.
+    // The faces at each vertex that classify_faces kept, in face order (corner_faces[
+    // corner_start[v] .. corner_start[v + 1]]): made by build_vertex_tables, read by
+    // find_non_manifold_vertices and find_components.
     Table<std::uint32_t> corner_start;  // vertex_count + 1
     Table<std::uint32_t> corner_faces;
 
@@ -188,9 +189,8 @@ private:
 };
 
 // Steps of check_mesh(), in the order they run.
-void build_half_edges(CheckState& state);
-void find_duplicate_faces(CheckState& state);
-void classify_edges(CheckState& state);
+void build_vertex_tables(CheckState& state);  // the corner table and the half-edge table
+void classify_edges(CheckState& state);  // and finds the duplicate faces
 void find_non_manifold_vertices(CheckState& state);
 void find_components(CheckState& state);
 void check_orientation(CheckState& state);

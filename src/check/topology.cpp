@@ -8,6 +8,7 @@
 #include <queue>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "check/check_internal.h"
 #include "tessref/error.h"
@@ -18,6 +19,8 @@ namespace {
 
 constexpr std::size_t kVertexChunk = 1 << 14;
 constexpr std::size_t kFaceChunk = 1 << 14;
+// At most this many runs of faces fill the vertex tables (build_vertex_tables).
+constexpr std::size_t kMaxTableParts = 4;
 
 bool same_vertex_set(const IndexedMesh& mesh, std::uint32_t f, std::uint32_t g) {
     const auto a = mesh.face(f);
@@ -53,104 +56,165 @@ void for_each_edge_in(const CheckState& state, std::size_t v0, std::size_t v1, F
 
 }  // namespace
 
-void build_half_edges(CheckState& state) {
+void build_vertex_tables(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     const std::size_t vertex_count = mesh.vertex_count();
     const std::size_t face_count = mesh.face_count();
     if (face_count >= (std::size_t(1) << 31))
         throw Error("mesh too large to check: more than 2^31 faces", Where::in_file(mesh.source));
 
-    std::vector<std::uint32_t> counts(vertex_count, 0);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, kFaceChunk), [&](const auto& r) {
-        for (std::size_t f = r.begin(); f != r.end(); ++f) {
-            if (state.face_status[f] != face_kept) continue;
-            const auto face = mesh.face(f);
-            for (std::size_t k = 0; k < face.size(); ++k) {
-                const std::uint32_t a = face[k], b = face[(k + 1) % face.size()];
-                std::atomic_ref<std::uint32_t>(counts[std::min(a, b)]).fetch_add(1, std::memory_order_relaxed);
-            }
-        }
-    });
-    // Each group's start; the counts become the cursors of the scatter.
-    state.half_edge_start.allocate(vertex_count + 1);
-    std::uint64_t total = 0;
-    for (std::size_t v = 0; v < vertex_count; ++v) {
-        state.half_edge_start[v] = static_cast<std::uint32_t>(total);
-        total += counts[v];
-        counts[v] = state.half_edge_start[v];
-    }
-    state.half_edge_start[vertex_count] = static_cast<std::uint32_t>(total);
-    std::vector<std::uint32_t>& cursor = counts;
-
-    // Every slot is written below: the table is not cleared first.
-    state.half_edges.allocate(total);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, face_count, kFaceChunk), [&](const auto& r) {
-        for (std::size_t f = r.begin(); f != r.end(); ++f) {
-            if (state.face_status[f] != face_kept) continue;
-            const auto face = mesh.face(f);
-            for (std::size_t k = 0; k < face.size(); ++k) {
-                const std::uint32_t a = face[k], b = face[(k + 1) % face.size()];
-                const std::uint32_t lo = std::min(a, b), hi = std::max(a, b);
-                const std::uint32_t slot =
-                    std::atomic_ref<std::uint32_t>(cursor[lo]).fetch_add(1, std::memory_order_relaxed);
-                state.half_edges[slot] = {hi, static_cast<std::uint32_t>(f) << 1 | (a < b ? 1u : 0u)};
-            }
-        }
-    });
-    // Sorting each group fixes the order the atomic scatter left undetermined.
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, kVertexChunk), [&](const auto& r) {
-        for (std::size_t v = r.begin(); v != r.end(); ++v)
-            std::sort(state.half_edges.begin() + state.half_edge_start[v],
-                      state.half_edges.begin() + state.half_edge_start[v + 1],
-                      [](const HalfEdgeEntry& x, const HalfEdgeEntry& y) {
-                          return x.other != y.other ? x.other < y.other : x.face_and_direction < y.face_and_direction;
-                      });
-    });
-}
-
-void find_duplicate_faces(CheckState& state) {
-    const IndexedMesh& mesh = state.mesh;
-    // Two faces over the same vertex set share every edge, so comparing the faces met on
-    // each edge finds every duplicate; the earliest face of a set is the original.
-    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), kNoIndex);
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count(), kVertexChunk), [&](const auto& r) {
-        for_each_edge_in(state, r.begin(), r.end(), [&](std::uint32_t, std::uint32_t, std::uint32_t b, std::uint32_t e) {
-            for (std::uint32_t i = b; i < e; ++i)
-                for (std::uint32_t j = i + 1; j < e; ++j) {
-                    std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
-                    if (f == g) continue;
-                    const auto x = mesh.face(f), y = mesh.face(g);
-                    // Two triangles on this edge hold both its vertices (a kept face repeats
-                    // none), so their third vertices decide, and so do the xors of all three.
-                    if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
-                                                       : !same_vertex_set(mesh, f, g))
-                        continue;
-                    if (f > g) std::swap(f, g);
-                    std::atomic_ref<std::uint32_t> slot(duplicate_of[g]);
-                    std::uint32_t current = slot.load(std::memory_order_relaxed);
-                    while (f < current && !slot.compare_exchange_weak(current, f, std::memory_order_relaxed)) {
-                    }
-                }
+    // Both tables are counting sorts of the kept faces by vertex. The faces are cut into
+    // `parts` runs, each counted and filed by one task with counters of its own, so no
+    // counter is shared between threads (an atomic increment costs several plain ones).
+    // Part p files its entries after those of parts 0 .. p-1 at every vertex, so a vertex's
+    // entries come out in face order whatever the number of parts: the corner table is the
+    // one a serial pass makes, and the half-edge groups, sorted afterwards, are too. The
+    // counters take 8 bytes a vertex for each part, so the parts are few.
+    const std::size_t parts = std::clamp<std::size_t>(
+        std::min<std::size_t>(static_cast<std::size_t>(tessref::worker_threads()), kMaxTableParts), 1,
+        face_count / kFaceChunk + 1);
+    const std::size_t part_faces = (face_count + parts - 1) / parts;
+    // Per part and vertex: the part's corners and half-edges there, then where the part
+    // files its next one (corners[p * vertex_count + v], half[p * vertex_count + v]).
+    Table<std::uint32_t> corners, half;
+    corners.allocate(parts * vertex_count);
+    half.allocate(parts * vertex_count);
+    const auto for_each_part = [&](auto&& fn) {
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, parts, 1), [&](const auto& r) {
+            for (std::size_t p = r.begin(); p != r.end(); ++p)
+                fn(corners.begin() + p * vertex_count, half.begin() + p * vertex_count, p * part_faces,
+                   std::min(face_count, (p + 1) * part_faces));
         });
+    };
+    for_each_part([&](std::uint32_t* corner, std::uint32_t* half_edge, std::size_t f0, std::size_t f1) {
+        std::fill(corner, corner + vertex_count, 0u);
+        std::fill(half_edge, half_edge + vertex_count, 0u);
+        for (std::size_t f = f0; f < f1; ++f) {
+            if (state.face_status[f] != face_kept) continue;
+            const auto face = mesh.face(f);
+            for (std::size_t k = 0; k < face.size(); ++k) {
+                const std::uint32_t a = face[k], b = face[k + 1 == face.size() ? 0 : k + 1];
+                ++corner[a];
+                ++half_edge[std::min(a, b)];
+            }
+        }
     });
-    for (std::uint32_t g = 0; g < mesh.face_count(); ++g) {
-        if (duplicate_of[g] == kNoIndex) continue;
-        state.face_status[g] = face_duplicate;
-        Defect d;
-        const auto face = mesh.face(g);
-        glm::dvec3 centre(0.0);
-        for (std::uint32_t v : face) centre += mesh.positions[v];
-        d.position = centre / double(face.size());
-        d.faces = {duplicate_of[g], g};
-        d.vertices.assign(face.begin(), face.end());
-        d.detail = "face " + std::to_string(g) + " repeats face " + std::to_string(duplicate_of[g]) +
-                   (std::ranges::equal(mesh.face(duplicate_of[g]), face) ? "" : " (same vertices, other order)");
-        state.add_defect(DefectClass::duplicate_face, std::move(d));
-    }
+
+    // Each vertex's starts, and each part's first slots there; chunks of vertices in
+    // parallel once their totals are known.
+    struct Totals {
+        std::uint64_t corners = 0, half_edges = 0;
+    };
+    const auto totals = map_chunks<Totals>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, Totals& total) {
+        for (std::size_t p = 0; p < parts; ++p)
+            for (std::size_t v = v0; v < v1; ++v) {
+                total.corners += corners[p * vertex_count + v];
+                total.half_edges += half[p * vertex_count + v];
+            }
+    });
+    std::vector<Totals> chunk_start(totals.size() + 1);
+    for (std::size_t c = 0; c < totals.size(); ++c)
+        chunk_start[c + 1] = {chunk_start[c].corners + totals[c].corners, chunk_start[c].half_edges + totals[c].half_edges};
+    state.corner_start.allocate(vertex_count + 1);
+    state.half_edge_start.allocate(vertex_count + 1);
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, totals.size(), 1), [&](const auto& r) {
+        for (std::size_t c = r.begin(); c != r.end(); ++c) {
+            auto next_corner = static_cast<std::uint32_t>(chunk_start[c].corners);
+            auto next_half_edge = static_cast<std::uint32_t>(chunk_start[c].half_edges);
+            for (std::size_t v = c * kVertexChunk; v < std::min(vertex_count, (c + 1) * kVertexChunk); ++v) {
+                state.corner_start[v] = next_corner;
+                state.half_edge_start[v] = next_half_edge;
+                for (std::size_t p = 0; p < parts; ++p) {
+                    const std::size_t i = p * vertex_count + v;
+                    next_corner += std::exchange(corners[i], next_corner);
+                    next_half_edge += std::exchange(half[i], next_half_edge);
+                }
+            }
+        }
+    });
+    state.corner_start[vertex_count] = static_cast<std::uint32_t>(chunk_start.back().corners);
+    state.half_edge_start[vertex_count] = static_cast<std::uint32_t>(chunk_start.back().half_edges);
+
+    // Every slot is written below: the tables are not cleared first.
+    state.corner_faces.allocate(chunk_start.back().corners);
+    state.half_edges.allocate(chunk_start.back().half_edges);
+    for_each_part([&](std::uint32_t* corner, std::uint32_t* half_edge, std::size_t f0, std::size_t f1) {
+        for (std::size_t f = f0; f < f1; ++f) {
+            if (state.face_status[f] != face_kept) continue;
+            const auto face = mesh.face(f);
+            for (std::size_t k = 0; k < face.size(); ++k) {
+                const std::uint32_t a = face[k], b = face[k + 1 == face.size() ? 0 : k + 1];
+                state.corner_faces[corner[a]++] = static_cast<std::uint32_t>(f);
+                const std::uint32_t lo = std::min(a, b), hi = std::max(a, b);
+                state.half_edges[half_edge[lo]++] = {hi, static_cast<std::uint32_t>(f) << 1 | (a < b ? 1u : 0u)};
+            }
+        }
+    });
+    corners.release();
+    half.release();
+
+    // Each group sorted by the other vertex (then face): a vertex has a few half-edges,
+    // sorted by insertion; the apex of a large fan has many.
+    const auto before = [](const HalfEdgeEntry& x, const HalfEdgeEntry& y) {
+        return x.other != y.other ? x.other < y.other : x.face_and_direction < y.face_and_direction;
+    };
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, kVertexChunk), [&](const auto& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v) {
+            HalfEdgeEntry* const group = state.half_edges.begin() + state.half_edge_start[v];
+            const std::uint32_t size = state.half_edge_start[v + 1] - state.half_edge_start[v];
+            if (size > 32) {
+                std::sort(group, group + size, before);
+                continue;
+            }
+            for (std::uint32_t i = 1; i < size; ++i) {
+                const HalfEdgeEntry h = group[i];
+                std::uint32_t j = i;
+                for (; j > 0 && before(h, group[j - 1]); --j) group[j] = group[j - 1];
+                group[j] = h;
+            }
+        }
+    });
 }
 
+namespace {
+
+// Marks the faces repeating others, found on the edge whose half-edges are [b, e): for each
+// pair of faces there over the same vertex set, the later one records the earliest it
+// repeats in duplicate_of, and its half-edge here is marked in `repeats` (relative to b).
+void find_duplicates_on_edge(const CheckState& state, std::uint32_t b, std::uint32_t e,
+                             std::vector<std::uint32_t>& duplicate_of, std::vector<std::uint8_t>& repeats) {
+    const IndexedMesh& mesh = state.mesh;
+    repeats.assign(e - b, 0);
+    for (std::uint32_t i = b; i < e; ++i)
+        for (std::uint32_t j = i + 1; j < e; ++j) {
+            std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
+            if (f == g) continue;
+            const auto x = mesh.face(f), y = mesh.face(g);
+            // Two triangles on this edge hold both its vertices (a kept face repeats
+            // none), so their third vertices decide, and so do the xors of all three.
+            if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
+                                               : !same_vertex_set(mesh, f, g))
+                continue;
+            repeats[(f > g ? i : j) - b] = 1;
+            if (f > g) std::swap(f, g);
+            std::atomic_ref<std::uint32_t> slot(duplicate_of[g]);
+            std::uint32_t current = slot.load(std::memory_order_relaxed);
+            while (f < current && !slot.compare_exchange_weak(current, f, std::memory_order_relaxed)) {
+            }
+        }
+}
+
+}  // namespace
+
+// Duplicate faces, and each edge as boundary, manifold, inconsistent or non-manifold, in one
+// pass over the half-edge table. Two faces over the same vertex set share every edge, so
+// comparing the faces met on each edge finds every duplicate; the earliest face of a set is
+// the original. And since a face's duplicates are on every edge of it, an edge's kept faces
+// (those that repeat no other) are known from the edge's own half-edges, before the faces
+// are marked.
 void classify_edges(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
+    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), kNoIndex);
     struct ChunkResult {
         std::size_t edges = 0;
         std::vector<BoundaryHalfEdge> boundary;
@@ -161,10 +225,16 @@ void classify_edges(CheckState& state) {
     const std::size_t cap = state.options.max_locations;
     auto results = map_chunks<ChunkResult>(mesh.vertex_count(), kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
         std::vector<std::uint32_t> kept;
+        std::vector<std::uint8_t> repeats;
         for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t b, std::uint32_t e) {
             kept.clear();
-            for (std::uint32_t i = b; i < e; ++i)
-                if (state.face_status[state.half_edges[i].face()] == face_kept) kept.push_back(i);
+            if (e - b == 1) {
+                kept.push_back(b);
+            } else {
+                find_duplicates_on_edge(state, b, e, duplicate_of, repeats);
+                for (std::uint32_t i = b; i < e; ++i)
+                    if (!repeats[i - b]) kept.push_back(i);
+            }
             if (kept.empty()) return;
             ++out.edges;
             const glm::dvec3 mid = 0.5 * (mesh.positions[lo] + mesh.positions[hi]);
@@ -202,6 +272,21 @@ void classify_edges(CheckState& state) {
             }
         });
     });
+    for (std::uint32_t g = 0; g < mesh.face_count(); ++g) {
+        if (duplicate_of[g] == kNoIndex) continue;
+        state.face_status[g] = face_duplicate;
+        Defect d;
+        const auto face = mesh.face(g);
+        glm::dvec3 centre(0.0);
+        for (std::uint32_t v : face) centre += mesh.positions[v];
+        d.position = centre / double(face.size());
+        d.faces = {duplicate_of[g], g};
+        d.vertices.assign(face.begin(), face.end());
+        d.detail = "face " + std::to_string(g) + " repeats face " + std::to_string(duplicate_of[g]) +
+                   (std::ranges::equal(mesh.face(duplicate_of[g]), face) ? "" : " (same vertices, other order)");
+        state.add_defect(DefectClass::duplicate_face, std::move(d));
+    }
+
     std::size_t edges = 0;
     for (ChunkResult& r : results) {
         edges += r.edges;
@@ -226,26 +311,6 @@ void classify_edges(CheckState& state) {
 void find_non_manifold_vertices(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     const std::size_t vertex_count = mesh.vertex_count();
-    // The kept faces at each vertex, in face order.
-    state.corner_start.allocate(vertex_count + 1);
-    {
-        std::vector<std::uint32_t> counts(vertex_count, 0);
-        for (std::size_t f = 0; f < mesh.face_count(); ++f)
-            if (state.face_status[f] == face_kept)
-                for (std::uint32_t v : mesh.face(f)) ++counts[v];
-        std::uint32_t total = 0;
-        for (std::size_t v = 0; v < vertex_count; ++v) {
-            state.corner_start[v] = total;
-            total += counts[v];
-            counts[v] = state.corner_start[v];
-        }
-        state.corner_start[vertex_count] = total;
-        state.corner_faces.allocate(total);
-        for (std::size_t f = 0; f < mesh.face_count(); ++f)
-            if (state.face_status[f] == face_kept)
-                for (std::uint32_t v : mesh.face(f)) state.corner_faces[counts[v]++] = static_cast<std::uint32_t>(f);
-    }
-
     // A fan: faces around v connected through edges at v. More than one fan: the surface
     // is pinched at v (two cones touching at their tips, a bow tie).
     struct ChunkResult {
@@ -254,14 +319,23 @@ void find_non_manifold_vertices(CheckState& state) {
         std::vector<std::pair<std::uint64_t, std::uint32_t>> fans;  // (vertex << 32 | face, fan)
     };
     const std::size_t cap = state.options.max_locations;
+    // The corner table was made before classify_edges: a duplicate found since is left
+    // out here (the face it repeats stays, so every vertex keeps a kept face).
+    const bool has_duplicates = state.report.count(DefectClass::duplicate_face) != 0;
     auto results = map_chunks<ChunkResult>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
         // neighbour << 32 | local face: one integer compare a step, and a vertex's few
         // entries sorted by insertion.
         std::vector<std::uint64_t> by_neighbour;
-        std::vector<std::uint32_t> parent;
+        std::vector<std::uint32_t> parent, kept;
         for (std::size_t v = v0; v < v1; ++v) {
-            const std::span<const std::uint32_t> faces(state.corner_faces.begin() + state.corner_start[v],
-                                                       state.corner_faces.begin() + state.corner_start[v + 1]);
+            std::span<const std::uint32_t> faces(state.corner_faces.begin() + state.corner_start[v],
+                                                 state.corner_faces.begin() + state.corner_start[v + 1]);
+            if (has_duplicates) {
+                kept.clear();
+                for (std::uint32_t f : faces)
+                    if (state.face_status[f] == face_kept) kept.push_back(f);
+                faces = kept;
+            }
             const auto count = static_cast<std::uint32_t>(faces.size());
             if (count < 2) continue;
             by_neighbour.clear();
@@ -334,15 +408,34 @@ void find_components(CheckState& state) {
     // A vertex is in a kept face where the corner table files a face under it.
     const auto in_kept_face = [&](std::uint32_t v) { return state.corner_start[v + 1] != state.corner_start[v]; };
     // Roots are the smallest vertex of their set, so numbering roots in vertex order numbers
-    // components by their smallest vertex.
-    state.vertex_component.assign(mesh.vertex_count(), kNoIndex);
-    std::uint32_t components = 0;
-    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
-        if (!in_kept_face(v)) continue;
-        const std::uint32_t root = sets.find(v);
-        if (root == v) state.vertex_component[v] = components++;
-        else state.vertex_component[v] = state.vertex_component[root];
-    }
+    // components by their smallest vertex: each chunk of vertices counts its roots, numbers
+    // them from the chunk's first number, then every vertex takes its root's number.
+    const std::size_t vertex_count = mesh.vertex_count();
+    std::vector<std::uint32_t> root(vertex_count);
+    const auto roots = map_chunks<std::uint32_t>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, std::uint32_t& count) {
+        for (std::size_t v = v0; v < v1; ++v) {
+            root[v] = in_kept_face(static_cast<std::uint32_t>(v)) ? sets.find(static_cast<std::uint32_t>(v)) : kNoIndex;
+            count += root[v] == v;
+        }
+    });
+    std::vector<std::uint32_t> first_number(roots.size() + 1, 0);
+    for (std::size_t c = 0; c < roots.size(); ++c) first_number[c + 1] = first_number[c] + roots[c];
+    state.vertex_component.resize(vertex_count);
+    const auto for_each_chunk = [&](auto&& fn) {
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, roots.size(), 1), [&](const auto& r) {
+            for (std::size_t c = r.begin(); c != r.end(); ++c) fn(c, c * kVertexChunk, std::min(vertex_count, (c + 1) * kVertexChunk));
+        });
+    };
+    for_each_chunk([&](std::size_t c, std::size_t v0, std::size_t v1) {
+        std::uint32_t number = first_number[c];
+        for (std::size_t v = v0; v < v1; ++v)
+            if (root[v] == v) state.vertex_component[v] = number++;
+    });
+    for_each_chunk([&](std::size_t, std::size_t v0, std::size_t v1) {
+        for (std::size_t v = v0; v < v1; ++v)
+            if (root[v] != v) state.vertex_component[v] = root[v] == kNoIndex ? kNoIndex : state.vertex_component[root[v]];
+    });
+    const std::uint32_t components = first_number.back();
     state.report.component_count = components;
     state.component_has_boundary.assign(components, 0);
     for (const BoundaryHalfEdge& h : state.boundary) state.component_has_boundary[state.vertex_component[h.from]] = 1;
