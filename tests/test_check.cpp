@@ -1254,6 +1254,21 @@ TEST(CheckCommand, PictureMarksTheDefects) {
 // ---------------------------------------------------------------------------------------
 // The check's tables
 
+// 0 .. count - 1 in an order of their own (a Fisher-Yates shuffle by a 64-bit LCG from
+// `seed`): vertex numbers that follow no grid or face order.
+namespace {
+std::vector<std::uint32_t> shuffled_ids(std::uint32_t count, std::uint64_t seed) {
+    std::vector<std::uint32_t> ids(count);
+    std::iota(ids.begin(), ids.end(), 0u);
+    std::uint64_t random = seed;
+    for (std::size_t i = ids.size(); i > 1; --i) {
+        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
+        std::swap(ids[i - 1], ids[(random >> 33) % i]);
+    }
+    return ids;
+}
+}  // namespace
+
 // The corner table and the half-edge table, made by parts of the faces in parallel, against
 // the serial way: every kept face in face order, each entry appended to its vertex, the
 // half-edge groups then sorted by (other vertex, face << 1 | forward). On a grid whose
@@ -1264,13 +1279,7 @@ TEST(CheckCommand, PictureMarksTheDefects) {
 TEST(CheckTables, CornerAndHalfEdgeTablesAreTheSerialOnes) {
     using namespace tessref::check_detail;
     constexpr std::uint32_t n = 200;  // n x n vertices
-    std::vector<std::uint32_t> shuffled(n * n + 40);
-    std::iota(shuffled.begin(), shuffled.end(), 0u);
-    std::uint64_t random = 7;
-    for (std::size_t i = shuffled.size(); i > 1; --i) {
-        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
-        std::swap(shuffled[i - 1], shuffled[(random >> 33) % i]);
-    }
+    const std::vector<std::uint32_t> shuffled = shuffled_ids(n * n + 40, 7);
     IndexedMesh mesh;
     mesh.positions.resize(shuffled.size());
     for (std::uint32_t i = 0; i < shuffled.size(); ++i) mesh.positions[shuffled[i]] = glm::dvec3(i % n, i / n, 0.0);
@@ -1365,13 +1374,7 @@ TEST(CheckTables, AnEdgeKeepsTheOriginalOfADuplicate) {
 // order gives them.
 TEST(CheckTables, ComponentsAreNumberedByTheirSmallestVertex) {
     constexpr std::uint32_t tetrahedra = 5000;
-    std::vector<std::uint32_t> shuffled(4 * tetrahedra);
-    std::iota(shuffled.begin(), shuffled.end(), 0u);
-    std::uint64_t random = 11;
-    for (std::size_t i = shuffled.size(); i > 1; --i) {
-        random = random * 6364136223846793005ULL + 1442695040888963407ULL;
-        std::swap(shuffled[i - 1], shuffled[(random >> 33) % i]);
-    }
+    const std::vector<std::uint32_t> shuffled = shuffled_ids(4 * tetrahedra, 11);
     IndexedMesh mesh;
     mesh.positions.resize(shuffled.size());
     const glm::dvec3 corner[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
