@@ -1166,7 +1166,7 @@ PendingRender start_render_scene_isolated(const Scene& scene_in, const SceneRend
     // a warning (the stage compiled by the interpreter, which lists its uniforms; a stage it
     // cannot compile is left to GL's own errors).
     std::vector<std::string> warnings;
-    for (const StageShader& s : user_shaders(scene_in, options)) {
+    for (const StageShader& s : scene.shaders) {
         const StageSource source = user_stage(s);
         try {
             const shader::Module module = shader::Module::compile({s.stage, source.path, source.text, source.prefix});
@@ -1201,7 +1201,7 @@ PendingRender start_render_scene_isolated(const Scene& scene_in, const SceneRend
     });
     if (!options.return_pipeline) options.pipeline.reset();  // the child has its own copy
     st->shading = scene_in.shading;
-    st->user_shaders = user_shaders(scene_in, options);
+    st->user_shaders = std::move(scene.shaders);
     st->warnings = std::move(warnings);
     st->options = std::move(options);
     return PendingRender(std::move(st));
