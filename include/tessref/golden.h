@@ -190,15 +190,13 @@ struct SceneVerdict {
     Verdict verdict() const;
 };
 
-// Verifies one scene (step 1, the CPU side, then step 2, llvmpipe through the GL backend;
-// golden/README.md). Never throws for the scene's own input: what went wrong is in the
-// verdict. `keep` (when not empty): keep the scene's pictures, and for a failing scene the
-// diff picture and both captures, under keep/<name>/.
-SceneVerdict verify_scene(const std::string& name, const Location& location, const std::filesystem::path& keep);
-// verify_scene() of each of `names` in order, each verdict handed to `done` as soon as it
-// is known. The next scene's GL child draws while this scene's CPU side is computed, so the
-// scenes take less time together than one after the other; every verdict is the one
-// verify_scene() gives.
+// Verifies each of `names` in order (per scene: step 1, the CPU side, then step 2, llvmpipe
+// through the GL backend; golden/README.md) and hands each scene's verdict to `done` as soon
+// as it is known. Never throws for a scene's own input: what went wrong is in its verdict.
+// `keep` (when not empty): keep each scene's pictures, and for a failing scene the diff
+// picture and both captures, under keep/<name>/. The next scene's GL child draws while this
+// scene's CPU side is computed, so the scenes take less time together than one after the
+// other; a scene's verdict does not depend on the scenes around it.
 void verify_scenes(const std::vector<std::string>& names, const Location& location,
                    const std::filesystem::path& keep, const std::function<void(SceneVerdict)>& done);
 

@@ -536,8 +536,9 @@ std::unique_ptr<PreparedScene> prepare_scene(const std::string& name, const Loca
         p.scene_path = location.scene_file(name);
         if (!fs::is_regular_file(p.scene_path))
             throw Error("no scene '" + name + "' (" + p.scene_path.string() + ")", Where::in_file(name));
+        const fs::path dir = location.golden / name;
         for (const char* file : {"image.png", "capture.txt", "mesh.txt"}) {
-            const fs::path path = location.golden / name / file;
+            const fs::path path = dir / file;
             std::error_code ec;
             if (!fs::exists(fs::symlink_status(path, ec)))
                 v.missing.push_back(path.string() + " is not there (run `" + location.update_command(name) +
@@ -547,7 +548,7 @@ std::unique_ptr<PreparedScene> prepare_scene(const std::string& name, const Loca
             // The files that are there are still read: one that cannot be (a FIFO, a
             // directory) is named too.
             for (const char* file : {"capture.txt", "mesh.txt"}) {
-                const fs::path path = location.golden / name / file;
+                const fs::path path = dir / file;
                 std::error_code ec;
                 if (!fs::exists(fs::symlink_status(path, ec))) continue;
                 try {
@@ -558,7 +559,6 @@ std::unique_ptr<PreparedScene> prepare_scene(const std::string& name, const Loca
             }
             return prepared;
         }
-        const fs::path dir = location.golden / name;
         p.capture_file = dir / "capture.txt";
         p.mesh_file = dir / "mesh.txt";
         const fs::path image_file = dir / "image.png";
@@ -743,12 +743,6 @@ void verify_scenes(const std::vector<std::string>& names, const Location& locati
         ::malloc_trim(0);
         done(std::move(v));
     }
-}
-
-SceneVerdict verify_scene(const std::string& name, const Location& location, const fs::path& keep) {
-    SceneVerdict verdict;
-    verify_scenes({name}, location, keep, [&](SceneVerdict v) { verdict = std::move(v); });
-    return verdict;
 }
 
 }  // namespace tessref::golden
