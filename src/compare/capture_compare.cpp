@@ -229,37 +229,27 @@ PatchOutcome compare_patch(std::uint32_t patch, const Side& r, const Side& t, co
 
     // Both sides' triangles one and the same (the caller found their tess coords equal,
     // vertex for vertex in the same order): the same multisets, triangles and ways round,
-    // so only the values below remain to compare.
+    // so no multiset is built (both stay empty, so equal) and only the values below remain
+    // to compare.
     const bool same_triangles = r.tris.data() == t.tris.data() && r.tris.size() == t.tris.size();
-    if (same_triangles) {
-        bool triangles_domain = false;
-        for (const Triangle& tri : r.tris)
-            for (const Bits& b : tri.keys) triangles_domain = triangles_domain || std::bit_cast<float>(b[2]) != 0.0f;
-        d.levels_known = r.has_levels && t.has_levels;
-        d.reference_levels = r.vertex(r.tris.front(), 0).levels;
-        d.test_levels = t.vertex(t.tris.front(), 0).levels;
-        if (d.levels_known) d.level_ulps = level_ulps(d.reference_levels, d.test_levels, triangles_domain);
-    }
 
     // The multisets of tess coords.
     std::vector<Bits> ref_keys, test_keys;
     bool triangles_domain = false;
     for (const auto& [tris, keys] : {std::pair{r.tris, &ref_keys}, std::pair{t.tris, &test_keys}}) {
-        if (same_triangles) break;
-        keys->reserve(3 * tris.size());
+        if (!same_triangles) keys->reserve(3 * tris.size());
         for (const Triangle& tri : tris)
             for (const Bits& b : tri.keys) {
-                keys->push_back(b);
+                if (!same_triangles) keys->push_back(b);
                 triangles_domain = triangles_domain || std::bit_cast<float>(b[2]) != 0.0f;
             }
         std::sort(keys->begin(), keys->end());
+        if (same_triangles) break;  // the test's triangles are the reference's
     }
-    if (!same_triangles) {
-        d.levels_known = r.has_levels && t.has_levels;
-        d.reference_levels = r.vertex(r.tris.front(), 0).levels;
-        d.test_levels = t.vertex(t.tris.front(), 0).levels;
-        if (d.levels_known) d.level_ulps = level_ulps(d.reference_levels, d.test_levels, triangles_domain);
-    }
+    d.levels_known = r.has_levels && t.has_levels;
+    d.reference_levels = r.vertex(r.tris.front(), 0).levels;
+    d.test_levels = t.vertex(t.tris.front(), 0).levels;
+    if (d.levels_known) d.level_ulps = level_ulps(d.reference_levels, d.test_levels, triangles_domain);
     if (ref_keys != test_keys) {
         d.kind = PatchDivergence::tess_coords;
         o.equal_levels = d.levels_known && d.level_ulps == 0;
