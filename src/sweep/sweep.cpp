@@ -697,13 +697,15 @@ private:
         // The untimed measures, after the timed runs and side by side: the geometric error
         // (parallel over patches), the screen edge measure (its sum serial, in triangle
         // order, so that it is the same on any thread count) and the image against the
-        // truth's.
+        // truth's, then the row's pictures (their serial parts, the PNG files and the
+        // difference picture, beside the other two).
         // Each writes only its own results, so they are what they would be one after the
         // other; none overlaps a timed run, whose times stay those of the row alone.
         std::optional<GeometricError> geometric;
         double mean_edge = 0.0;
         std::optional<FloatImage> picture;
         std::optional<CompareResult> compared;
+        Fields pictures;  // the pictures' columns
         tessref::parallel_for(0, 3, [&](int job) {
             if (job == 0 && truth.surface) geometric = geometric_error(*truth.surface, mesh, &*scene.camera);
             // The surface as the rasterizer drew it (image.mvp, which holds the
@@ -713,6 +715,8 @@ private:
                 picture = float_image(image);
                 if (truth.image) compared = compare_images(*truth.image, *picture);
                 pair.rgba = to_rgba8(image);  // for the group's comparison of its precisions
+                if (every_picture_ || keeps_pictures(row, largest_level_))
+                    write_pictures(row, scene, pipeline, render_options, image, *picture, compared, pictures);
             }
         });
         if (geometric) {
@@ -731,8 +735,7 @@ private:
             f["img_fail_px"] = std::to_string(compared->failing_pixels);
             f["truth_image"] = truth.image_path;
         }
-        if (every_picture_ || keeps_pictures(row, largest_level_))
-            write_pictures(row, scene, pipeline, render_options, image, *picture, compared, f);
+        f.merge(pictures);
         // The group's comparison takes the row's positions and triangles; nothing else holds
         // the result now (the image's reference is dropped first).
         image = RenderResult{};
