@@ -328,3 +328,46 @@ TEST(CheckProbe, SceneFrameAndCopyAreTheSerialOnes) {
     EXPECT_EQ(hit.triangle, 0u);
     EXPECT_NEAR(hit.t, 40.0, 1e-4);  // from z = 100 down to 60, up to float rounding
 }
+
+// The terrain probe and the escape rays ask only whether a ray hits, and ask Embree's
+// occlusion query: it must answer what the nearest-hit query's `hit` does, also for rays
+// exactly through vertices and along edges of a rough terrain's welded grid, where
+// single-precision rounding decides which triangles a ray meets, and for rays beside the
+// terrain, through its outline, and from below.
+TEST(CheckProbe, OcclusionAnswersAsTheNearestHit) {
+    const int n = 24;
+    std::mt19937 random(3);
+    std::uniform_real_distribution<double> height(0.0, top);
+    std::vector<glm::dvec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    const double step = side / n;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) positions.emplace_back(i * step, j * step, height(random));
+    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    const tessref::RayScene scene(positions, triangles);
+    std::size_t hits = 0, misses = 0;
+    const auto same = [&](const glm::dvec3& origin, const glm::dvec3& direction) {
+        const bool hit = scene.intersect(origin, direction).hit;
+        EXPECT_EQ(scene.occluded(origin, direction), hit) << origin.x << " " << origin.y << " " << origin.z;
+        (hit ? hits : misses) += 1;
+    };
+    // Through every vertex and the middle of every edge, straight down and from below.
+    for (int j = 0; j <= 2 * n; ++j)
+        for (int i = 0; i <= 2 * n; ++i) {
+            same({i * step / 2, j * step / 2, 2 * top}, {0.0, 0.0, -1.0});
+            same({i * step / 2, j * step / 2, -top}, {0.0, 0.0, 1.0});
+        }
+    // Random vertical rays over and beside the terrain, and slanted ones.
+    std::uniform_real_distribution<double> ground(-1.0, side + 1.0);
+    for (int k = 0; k < 20000; ++k) {
+        same({ground(random), ground(random), 2 * top}, {0.0, 0.0, -1.0});
+        same({ground(random), ground(random), 2 * top}, glm::normalize(glm::dvec3(ground(random), ground(random), -side)));
+    }
+    EXPECT_GT(hits, 10000u);
+    EXPECT_GT(misses, 1000u);
+}
