@@ -830,6 +830,36 @@ TEST_F(CaptureCommand, CheckWeldsACaptureAsTheExporterDoes) {
     EXPECT_EQ(mesh.out.find("welded"), std::string::npos) << mesh.out;
 }
 
+// A PLY with the capture's properties is a capture when read_ply_capture would take it: every
+// face a triangle whose corners all carry one patch id. That holds for two triangles of one
+// patch that share corners (a capture need not keep its corners apart), which `check` then
+// welds (6 corners into 4 vertices); it fails for the same square whose triangles mix
+// patches 0 and 1, a welded mesh `check` checks as it is. `check` reads such a PLY first
+// without its normals and decides from the faces and patch ids alone.
+TEST_F(CaptureCommand, CheckTellsACaptureFromAWeldedMeshByItsPatches) {
+    const std::string header =
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+        "property float nx\nproperty float ny\nproperty float nz\nproperty int patch_id\nproperty float tess_u\n"
+        "property float tess_v\nproperty float tess_w\nelement face 2\nproperty list uchar int vertex_indices\n"
+        "end_header\n";
+    const auto square = [&](int upper_patch) {
+        const std::string p = std::to_string(upper_patch);
+        return header + "0 0 0 0 0 1 0 0 0 1\n1 0 0 0 0 1 0 1 0 0\n1 1 0 0 0 1 " + p + " 0 1 0\n0 1 0 0 0 1 " + p +
+               " 0 0 1\n3 0 1 2\n3 0 2 3\n";
+    };
+    write_file(path("one.ply"), square(0));
+    write_file(path("two.ply"), square(1));
+    RunResult r = run({"check", path("one.ply")});
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("capture " + path("one.ply") + ": 2 triangles, their 6 corners welded bitwise into 4 vertices"),
+              std::string::npos)
+        << r.out;
+    r = run({"check", path("two.ply")});
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_EQ(r.out.find("welded"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("4 vertices, 2 faces"), std::string::npos) << r.out;
+}
+
 // Patch 0 (x 0..1) at level 1; patch 1 (x 1..2) splits its u = 0 side, the one it shares
 // with patch 0's u = 1 side, at v = 0.5 (outer[0] = 2): patch 0 puts 2 vertices on the edge,
 // patch 1 puts 3, and the surface cracks there (a T-junction once welded).

@@ -1368,6 +1368,51 @@ TEST(CheckTables, AnEdgeKeepsTheOriginalOfADuplicate) {
     EXPECT_TRUE(r.manifold);
 }
 
+// A duplicate face is found on each of its edges, filed under the edges' smaller vertices,
+// so on a shuffled grid (40 000 vertices, three chunks) in several chunks: each is reported
+// once, in face order, naming the earliest face over its vertex set, also when a face is
+// listed four times (every copy names the first, not the copy before it).
+TEST(CheckTables, DuplicatesNameTheirEarliestFaceAcrossChunks) {
+    constexpr std::uint32_t n = 200;
+    const std::vector<std::uint32_t> shuffled = shuffled_ids(n * n, 13);
+    IndexedMesh mesh;
+    mesh.positions.resize(shuffled.size());
+    for (std::uint32_t i = 0; i < shuffled.size(); ++i) mesh.positions[shuffled[i]] = glm::dvec3(i % n, i / n, 0.0);
+    const auto at = [&](std::uint32_t x, std::uint32_t y) { return shuffled[y * n + x]; };
+    for (std::uint32_t y = 0; y + 1 < n; ++y)
+        for (std::uint32_t x = 0; x + 1 < n; ++x) {
+            mesh.add_triangle(at(x, y), at(x + 1, y), at(x + 1, y + 1));
+            mesh.add_triangle(at(x, y), at(x + 1, y + 1), at(x, y + 1));
+        }
+    // The first triangle of cell (x, y) is face 2 (y (n - 1) + x).
+    const auto first_of = [&](std::uint32_t x, std::uint32_t y) { return 2 * (y * (n - 1) + x); };
+    std::vector<std::vector<std::uint32_t>> expected;  // {original, copy} in copy order
+    const auto copy = [&](std::uint32_t x, std::uint32_t y, int turn) {
+        const std::uint32_t original = first_of(x, y);
+        const auto f = mesh.face(original);
+        const std::uint32_t a = f[0], b = f[1], c = f[2];
+        const std::uint32_t copy_id = static_cast<std::uint32_t>(mesh.face_count());
+        if (turn == 0) mesh.add_triangle(b, c, a);
+        else if (turn == 1) mesh.add_triangle(c, a, b);
+        else mesh.add_triangle(a, c, b);  // the other way round
+        expected.push_back({original, copy_id});
+    };
+    copy(3, 3, 0);
+    copy(150, 20, 2);
+    copy(3, 3, 1);
+    copy(60, 190, 0);
+    copy(3, 3, 2);
+    copy(198, 198, 1);
+    const CheckReport r = tessref::check_mesh(mesh, quick(Expect::open));
+    ASSERT_EQ(r.count(DefectClass::duplicate_face), expected.size());
+    const auto& found = r.of(DefectClass::duplicate_face).locations;
+    ASSERT_EQ(found.size(), expected.size());
+    for (std::size_t k = 0; k < expected.size(); ++k) EXPECT_EQ(found[k].faces, expected[k]) << k;
+    EXPECT_EQ(r.topology_excluded_faces, expected.size());
+    EXPECT_TRUE(r.manifold);
+    EXPECT_EQ(r.count(DefectClass::inconsistent_orientation), 0u);
+}
+
 // Components are numbered by their smallest vertex, chunk by chunk of the vertices in
 // parallel: 5000 inside-out tetrahedra whose vertices are shuffled (20000 vertices, two
 // chunks and more) each report their own number and first face, as the numbering in vertex

@@ -16,11 +16,14 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "tessref/check.h"
+#include "tessref/raycast.h"
 #include "tessref/solid.h"
 
 using tessref::CheckOptions;
@@ -273,4 +276,98 @@ TEST(CheckProbe, RecastRaysHitTrianglesBesideTheirColumn) {
             EXPECT_EQ(r.probe.failed_rays, 0u) << describe(r);
             EXPECT_EQ(r.count(DefectClass::probe_miss), 0u) << describe(r);
         }
+}
+
+// The probe's scene holds every position of the mesh, so its frame (the centre it shifts to
+// and the resolution) and its copy into Embree's buffer are computed in parallel chunks; they
+// must be the serial pass's, bit for bit, whatever the chunks. Here 300 000 positions (many
+// chunks), NaN among them (ignored: a NaN is never below or above anything), the extremes
+// late in the list, and one triangle near the end whose hit needs its copied corners.
+TEST(CheckProbe, SceneFrameAndCopyAreTheSerialOnes) {
+    std::vector<glm::dvec3> positions;
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> coordinate(-3.0, 5.0);
+    for (int i = 0; i < 300000; ++i) positions.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+    const double nan = std::nan("");
+    positions[5] = {nan, 1.0, 2.0};
+    positions[123456] = {0.0, nan, nan};
+    positions[299990] = {-40.0, 0.0, 0.0};  // the box's lowest x, in the last chunk
+    positions[200001] = {0.0, 0.0, 90.0};   // its highest z
+    // The serial definition (raycast.h: 16 ulps of the largest coordinate after the shift to
+    // the box's centre, 2^-20 of it), written out here.
+    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (const glm::dvec3& p : positions)
+        for (int k = 0; k < 3; ++k)
+            if (!std::isnan(p[k])) {
+                lo[k] = std::min(lo[k], p[k]);
+                hi[k] = std::max(hi[k], p[k]);
+            }
+    const glm::dvec3 centre = 0.5 * (lo + hi);
+    double largest = 0.0;
+    for (const glm::dvec3& p : positions)
+        for (int k = 0; k < 3; ++k)
+            if (!std::isnan(p[k])) largest = std::max(largest, std::abs(p[k] - centre[k]));
+    // lo about (-40, -3, -3), hi about (5, 5, 90): the planted extremes, not a NaN.
+    EXPECT_NEAR(centre.x, -17.5, 1e-3);
+    EXPECT_NEAR(centre.z, 43.5, 1e-3);
+    const double expected = std::ldexp(largest, -20);
+    EXPECT_EQ(tessref::RayScene::resolution_of(positions), expected);
+
+    // A triangle of the last positions, far from the others (z = 60): a vertical ray through
+    // it hits at the height a serial copy puts it, in single precision after the shift.
+    const std::size_t n = positions.size();
+    positions[n - 3] = {0.0, 0.0, 60.0};
+    positions[n - 2] = {1.0, 0.0, 60.0};
+    positions[n - 1] = {0.0, 1.0, 60.0};
+    const std::array<std::uint32_t, 3> triangle{static_cast<std::uint32_t>(n - 3), static_cast<std::uint32_t>(n - 2),
+                                               static_cast<std::uint32_t>(n - 1)};
+    const tessref::RayScene scene(positions, std::span(&triangle, 1));
+    EXPECT_EQ(scene.resolution(), tessref::RayScene::resolution_of(positions));
+    const tessref::RayHit hit = scene.intersect({0.25, 0.25, 100.0}, {0.0, 0.0, -1.0});
+    ASSERT_TRUE(hit.hit);
+    EXPECT_EQ(hit.triangle, 0u);
+    EXPECT_NEAR(hit.t, 40.0, 1e-4);  // from z = 100 down to 60, up to float rounding
+}
+
+// The terrain probe and the escape rays ask only whether a ray hits, and ask Embree's
+// occlusion query: it must answer what the nearest-hit query's `hit` does, also for rays
+// exactly through vertices and along edges of a rough terrain's welded grid, where
+// single-precision rounding decides which triangles a ray meets, and for rays beside the
+// terrain, through its outline, and from below.
+TEST(CheckProbe, OcclusionAnswersAsTheNearestHit) {
+    const int n = 24;
+    std::mt19937 random(3);
+    std::uniform_real_distribution<double> height(0.0, top);
+    std::vector<glm::dvec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    const double step = side / n;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) positions.emplace_back(i * step, j * step, height(random));
+    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    const tessref::RayScene scene(positions, triangles);
+    std::size_t hits = 0, misses = 0;
+    const auto same = [&](const glm::dvec3& origin, const glm::dvec3& direction) {
+        const bool hit = scene.intersect(origin, direction).hit;
+        EXPECT_EQ(scene.occluded(origin, direction), hit) << origin.x << " " << origin.y << " " << origin.z;
+        (hit ? hits : misses) += 1;
+    };
+    // Through every vertex and the middle of every edge, straight down and from below.
+    for (int j = 0; j <= 2 * n; ++j)
+        for (int i = 0; i <= 2 * n; ++i) {
+            same({i * step / 2, j * step / 2, 2 * top}, {0.0, 0.0, -1.0});
+            same({i * step / 2, j * step / 2, -top}, {0.0, 0.0, 1.0});
+        }
+    // Random vertical rays over and beside the terrain, and slanted ones.
+    std::uniform_real_distribution<double> ground(-1.0, side + 1.0);
+    for (int k = 0; k < 20000; ++k) {
+        same({ground(random), ground(random), 2 * top}, {0.0, 0.0, -1.0});
+        same({ground(random), ground(random), 2 * top}, glm::normalize(glm::dvec3(ground(random), ground(random), -side)));
+    }
+    EXPECT_GT(hits, 10000u);
+    EXPECT_GT(misses, 1000u);
 }

@@ -399,14 +399,21 @@ void find_t_junctions(CheckState& state) {
     }
     std::sort(vertices.begin(), vertices.end());
     vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
-    std::vector<glm::dvec3> flat_positions(mesh.vertex_count());
-    for (std::uint32_t v : vertices) flat_positions[v] = flat(mesh.positions[v]);
+    // The boundary vertices' flat positions, by their rank in `vertices` (ascending ids, so
+    // the grid's cells list them in the order of their ids): a table over every vertex of
+    // the mesh would be fresh pages for a few thousand entries, on one thread.
+    std::vector<glm::dvec3> flat_positions(vertices.size());
+    std::vector<std::uint32_t> ranks(vertices.size());
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+        flat_positions[i] = flat(mesh.positions[vertices[i]]);
+        ranks[i] = static_cast<std::uint32_t>(i);
+    }
 
     const double mean_length = total_length / double(boundary.size());
     const double cell = std::max({mean_length, 4.0 * tolerance, 1e-12 * std::max(1.0, state.diagonal)});
     glm::dvec3 origin = flat(state.bbox_min);
     // (Seen from above, the up coordinate is zero everywhere, so the grid is one cell thick.)
-    const PointGrid grid(flat_positions, vertices, origin, cell);
+    const PointGrid grid(flat_positions, ranks, origin, cell);
 
     struct Found {
         std::uint32_t vertex, edge;
@@ -415,16 +422,17 @@ void find_t_junctions(CheckState& state) {
     auto parts = map_chunks<std::vector<Found>>(boundary.size(), 1 << 12, [&](std::size_t e0, std::size_t e1, std::vector<Found>& out) {
         for (std::size_t e = e0; e < e1; ++e) {
             const BoundaryHalfEdge& h = boundary[e];
-            const glm::dvec3 a = flat_positions[h.from], b = flat_positions[h.to];
+            const glm::dvec3 a = flat(mesh.positions[h.from]), b = flat(mesh.positions[h.to]);
             const double length = glm::distance(a, b);
             if (length <= 2.0 * tolerance) continue;
             const glm::i64vec3 c0 = grid.cell_of(glm::min(a, b) - glm::dvec3(tolerance));
             const glm::i64vec3 c1 = grid.cell_of(glm::max(a, b) + glm::dvec3(tolerance));
             const std::int64_t cells = (c1.x - c0.x + 1) * (c1.y - c0.y + 1) * (c1.z - c0.z + 1);
             const auto own = mesh.face(h.face);
-            auto test = [&](std::uint32_t v) {
+            auto test = [&](std::uint32_t rank) {
+                const std::uint32_t v = vertices[rank];
                 if (std::find(own.begin(), own.end(), v) != own.end()) return;  // another face's edge only
-                const glm::dvec3 p = flat_positions[v];
+                const glm::dvec3 p = flat_positions[rank];
                 const SegmentDistance s = segment_distance(p, a, b);
                 if (s.distance > tolerance) return;
                 // Strictly inside the edge: farther than the tolerance from both ends.
@@ -434,7 +442,7 @@ void find_t_junctions(CheckState& state) {
             };
             if (cells > 4096) {
                 // A very long edge against a fine grid: test every boundary vertex instead.
-                for (std::uint32_t v : vertices) test(v);
+                for (std::uint32_t rank : ranks) test(rank);
                 continue;
             }
             for (std::int64_t x = c0.x; x <= c1.x; ++x)

@@ -246,7 +246,10 @@ void terrain_probe(CheckState& state, const RayScene& scene, const VerticalRays&
                     origin[k] = start;
                     origin[iu] = u;
                     origin[iw] = w;
-                    if (scene.intersect(origin, direction).hit) continue;
+                    // Whether the ray hits, not where: Embree's occlusion query tests each
+                    // triangle as the nearest-hit query does (the same watertight test, from
+                    // an unbounded ray), so it answers the same, and stops at the first hit.
+                    if (scene.occluded(origin, direction)) continue;
                     // Rays grazing the outline may slip past its edge in single precision.
                     double near_outline = std::numeric_limits<double>::infinity();
                     for (std::size_t e = 0; e < polygon.size(); ++e)
@@ -255,7 +258,7 @@ void terrain_probe(CheckState& state, const RayScene& scene, const VerticalRays&
                     // A miss is a hole only if a ray beside it, off any edge this one may have
                     // slipped past, misses too (as it does in any crack wider than that step).
                     ++rows[j].recast;
-                    if (scene.intersect(beside(origin, across_u, across_w, 1, scene.resolution()), direction).hit) continue;
+                    if (scene.occluded(beside(origin, across_u, across_w, 1, scene.resolution()), direction)) continue;
                     rows[j].failures.push_back({k, i, j});
                 }
             }
@@ -432,7 +435,7 @@ glm::dvec3 escape_direction(std::size_t n) {
 std::vector<std::size_t> escaping(const RayScene& scene, const std::vector<glm::dvec3>& inside) {
     std::vector<std::uint8_t> escaped(inside.size(), 0);
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, inside.size(), 256), [&](const auto& r) {
-        for (std::size_t n = r.begin(); n != r.end(); ++n) escaped[n] = !scene.intersect(inside[n], escape_direction(n)).hit;
+        for (std::size_t n = r.begin(); n != r.end(); ++n) escaped[n] = !scene.occluded(inside[n], escape_direction(n));
     });
     std::vector<std::size_t> escapes;
     for (std::size_t n = 0; n < inside.size(); ++n)

@@ -178,13 +178,16 @@ void build_vertex_tables(CheckState& state) {
 
 namespace {
 
-// Marks the faces repeating others, found on the edge whose half-edges are [b, e): for each
-// pair of faces there over the same vertex set, the later one records the earliest it
-// repeats in duplicate_of, and its half-edge here is marked in `repeats` (relative to b).
+// Finds the faces repeating others on the edge whose half-edges are [b, e): a face there
+// over the same vertex set as an earlier one has its half-edge marked in `repeats`
+// (relative to b), and (the face, the earliest face there it repeats) is added to
+// `duplicates`: at most one pair a half-edge, however many copies of a face there are.
 void find_duplicates_on_edge(const CheckState& state, std::uint32_t b, std::uint32_t e,
-                             std::vector<std::uint32_t>& duplicate_of, std::vector<std::uint8_t>& repeats) {
+                             std::vector<std::pair<std::uint32_t, std::uint32_t>>& duplicates,
+                             std::vector<std::uint8_t>& repeats, std::vector<std::uint32_t>& earliest) {
     const IndexedMesh& mesh = state.mesh;
     repeats.assign(e - b, 0);
+    earliest.assign(e - b, kNoIndex);
     for (std::uint32_t i = b; i < e; ++i)
         for (std::uint32_t j = i + 1; j < e; ++j) {
             std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
@@ -195,13 +198,12 @@ void find_duplicates_on_edge(const CheckState& state, std::uint32_t b, std::uint
             if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
                                                : !same_vertex_set(mesh, f, g))
                 continue;
-            repeats[(f > g ? i : j) - b] = 1;
-            if (f > g) std::swap(f, g);
-            std::atomic_ref<std::uint32_t> slot(duplicate_of[g]);
-            std::uint32_t current = slot.load(std::memory_order_relaxed);
-            while (f < current && !slot.compare_exchange_weak(current, f, std::memory_order_relaxed)) {
-            }
+            const std::uint32_t later = (f > g ? i : j) - b;
+            repeats[later] = 1;
+            earliest[later] = std::min({earliest[later], f, g});
         }
+    for (std::uint32_t i = b; i < e; ++i)
+        if (repeats[i - b]) duplicates.emplace_back(state.half_edges[i].face(), earliest[i - b]);
 }
 
 }  // namespace
@@ -214,8 +216,8 @@ void find_duplicates_on_edge(const CheckState& state, std::uint32_t b, std::uint
 // are marked.
 void classify_edges(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
-    std::vector<std::uint32_t> duplicate_of(mesh.face_count(), kNoIndex);
     struct ChunkResult {
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> duplicates;  // (face, a face it repeats)
         std::size_t edges = 0;
         std::vector<BoundaryHalfEdge> boundary;
         std::vector<Defect> non_manifold;
@@ -226,12 +228,13 @@ void classify_edges(CheckState& state) {
     auto results = map_chunks<ChunkResult>(mesh.vertex_count(), kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
         std::vector<std::uint32_t> kept;
         std::vector<std::uint8_t> repeats;
+        std::vector<std::uint32_t> earliest;
         for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t b, std::uint32_t e) {
             kept.clear();
             if (e - b == 1) {
                 kept.push_back(b);
             } else {
-                find_duplicates_on_edge(state, b, e, duplicate_of, repeats);
+                find_duplicates_on_edge(state, b, e, out.duplicates, repeats, earliest);
                 for (std::uint32_t i = b; i < e; ++i)
                     if (!repeats[i - b]) kept.push_back(i);
             }
@@ -272,18 +275,25 @@ void classify_edges(CheckState& state) {
             }
         });
     });
-    for (std::uint32_t g = 0; g < mesh.face_count(); ++g) {
-        if (duplicate_of[g] == kNoIndex) continue;
+    // Each repeat was found on each of its edges, perhaps in several chunks: sorted, a face's
+    // first pair names the earliest face it repeats, and the faces come in face order. (No
+    // table over every face: a clean mesh has no pair at all.)
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> duplicates;
+    for (ChunkResult& r : results) duplicates.insert(duplicates.end(), r.duplicates.begin(), r.duplicates.end());
+    std::sort(duplicates.begin(), duplicates.end());
+    for (std::size_t k = 0; k < duplicates.size(); ++k) {
+        if (k > 0 && duplicates[k].first == duplicates[k - 1].first) continue;
+        const auto [g, original] = duplicates[k];
         state.face_status[g] = face_duplicate;
         Defect d;
         const auto face = mesh.face(g);
         glm::dvec3 centre(0.0);
         for (std::uint32_t v : face) centre += mesh.positions[v];
         d.position = centre / double(face.size());
-        d.faces = {duplicate_of[g], g};
+        d.faces = {original, g};
         d.vertices.assign(face.begin(), face.end());
-        d.detail = "face " + std::to_string(g) + " repeats face " + std::to_string(duplicate_of[g]) +
-                   (std::ranges::equal(mesh.face(duplicate_of[g]), face) ? "" : " (same vertices, other order)");
+        d.detail = "face " + std::to_string(g) + " repeats face " + std::to_string(original) +
+                   (std::ranges::equal(mesh.face(original), face) ? "" : " (same vertices, other order)");
         state.add_defect(DefectClass::duplicate_face, std::move(d));
     }
 

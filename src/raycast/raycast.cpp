@@ -7,6 +7,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "common/parallel.h"
 #include "tessref/error.h"
 
 namespace tessref {
@@ -62,20 +63,40 @@ struct Frame {
     double resolution = 0.0;
 };
 
+// In parallel chunks: minima and maxima are exact and ignore a NaN whichever order they
+// meet it in, so the chunks' results join into the serial pass's, bit for bit. (A terrain
+// probe's scene holds a fifth of a 1.2 M-vertex mesh's triangles but every position: on one
+// thread these passes and the copy into Embree's buffer were about a fifth of its build's
+// CPU time.)
+constexpr std::size_t kPositionChunk = 1 << 15;
+
 Frame frame_of(std::span<const glm::dvec3> positions) {
-    glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (const glm::dvec3& p : positions) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
     Frame f;
     if (positions.empty()) return f;
-    f.shift = 0.5 * (lo + hi);
-    double largest = 0.0;
-    for (const glm::dvec3& q : positions) {
-        const glm::dvec3 p = q - f.shift;
-        largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-    }
+    struct Box {
+        glm::dvec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
+    };
+    const Box box = parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, positions.size(), kPositionChunk), Box{},
+        [&](const tbb::blocked_range<std::size_t>& r, Box b) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                b.lo = glm::min(b.lo, positions[i]);
+                b.hi = glm::max(b.hi, positions[i]);
+            }
+            return b;
+        },
+        [](const Box& a, const Box& b) { return Box{glm::min(a.lo, b.lo), glm::max(a.hi, b.hi)}; });
+    f.shift = 0.5 * (box.lo + box.hi);
+    const double largest = parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, positions.size(), kPositionChunk), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double largest) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const glm::dvec3 p = positions[i] - f.shift;
+                largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+            }
+            return largest;
+        },
+        [](double a, double b) { return std::max(a, b); });
     f.resolution = std::ldexp(largest, -20);
     return f;
 }
@@ -132,14 +153,19 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
         rtcReleaseGeometry(geometry);
         embree_failure(impl_->device, "cannot allocate geometry buffers");
     }
-    for (std::size_t i = 0; i < positions.size(); ++i) {
-        const glm::dvec3 p = positions[i] - impl_->shift;
-        vertices[3 * i + 0] = static_cast<float>(p.x);
-        vertices[3 * i + 1] = static_cast<float>(p.y);
-        vertices[3 * i + 2] = static_cast<float>(p.z);
-    }
-    for (std::size_t i = 0; i < triangles.size(); ++i)
-        for (int k = 0; k < 3; ++k) indices[3 * i + k] = triangles[i][k];
+    const glm::dvec3 shift = impl_->shift;
+    parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), kPositionChunk), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const glm::dvec3 p = positions[i] - shift;
+            vertices[3 * i + 0] = static_cast<float>(p.x);
+            vertices[3 * i + 1] = static_cast<float>(p.y);
+            vertices[3 * i + 2] = static_cast<float>(p.z);
+        }
+    });
+    parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), kPositionChunk), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            for (int k = 0; k < 3; ++k) indices[3 * i + k] = triangles[i][k];
+    });
     impl_->vertices = vertices;
     impl_->indices = indices;
     rtcCommitGeometry(geometry);
