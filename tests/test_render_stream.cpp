@@ -416,7 +416,7 @@ TEST(RenderStream, WeightsAreOneRasterizePassesWeights) {
 }
 
 // PatchStream::emit with VertexNormals::later writes everything but the vertex normals, and
-// evaluate_points gives each vertex the normal emit() writes with VertexNormals::now: the
+// later_normals gives each vertex the normal emit() writes with VertexNormals::now: the
 // streamed render relies on both to compute normals only where a triangle wins a pixel.
 // Normal-map, height-field (at lab 4's mip level) and PN normals, both precisions and
 // camera-relative evaluation.
@@ -465,15 +465,41 @@ TEST(PatchStream, DeferredVertexNormalsAreTheEmittedOnes) {
                 EXPECT_TRUE(same_bytes(lean.uvs, now.uvs));
                 EXPECT_TRUE(same_bytes(lean.triangles, now.triangles));
                 EXPECT_TRUE(same_bytes(lean_faces, faces));
-                // Every other vertex, backwards: evaluate_points takes any subset in any order.
+                // Every other vertex, backwards: later_normals takes any subset in any order,
+                // writes those vertices' normals and no other.
                 std::vector<std::uint32_t> points;
                 for (std::size_t v = vertices; v-- > 0;)
                     if (v % 2 == 0) points.push_back(static_cast<std::uint32_t>(v));
-                stream.size(some, faces, points.size(), 0);
-                stream.evaluate_points(p, points, some, 0);
-                for (std::size_t j = 0; j < points.size(); ++j)
-                    ASSERT_EQ(std::memcmp(&some.normals[j], &now.normals[points[j]], sizeof(glm::dvec3)), 0)
-                        << "patch " << p << " vertex " << points[j];
+                stream.later_normals(p, points, later, 0);
+                stream.later_normals(p, points, lean, 0);
+                for (std::size_t v = 0; v < vertices; ++v) {
+                    if (v % 2 != 0) {
+                        ASSERT_TRUE(std::isnan(later.normals[v].x) && std::isnan(lean.normals[v].x)) << "vertex " << v;
+                        continue;
+                    }
+                    ASSERT_EQ(std::memcmp(&later.normals[v], &now.normals[v], sizeof(glm::dvec3)), 0)
+                        << "patch " << p << " vertex " << v;
+                    ASSERT_EQ(std::memcmp(&lean.normals[v], &now.normals[v], sizeof(glm::dvec3)), 0)
+                        << "patch " << p << " vertex " << v;
+                }
+                // In a run of patches (emit_run, as the streamed render emits a chunk), the
+                // patch's vertices from its place in the run on.
+                if (p + 1 < n) {
+                    const std::size_t first = stream.vertex_base(p + 1) - stream.vertex_base(p);
+                    const std::size_t next = stream.vertex_base(p + 2) - stream.vertex_base(p + 1);
+                    stream.emit_run(p, p + 2, some, nullptr, PatchStream::VertexNormals::later, PatchStream::Provenance::later);
+                    std::fill(some.normals.begin(), some.normals.end(), untouched);
+                    std::vector<std::uint32_t> all(next);
+                    for (std::size_t v = 0; v < next; ++v) all[v] = static_cast<std::uint32_t>(v);
+                    stream.later_normals(p + 1, all, some, first);
+                    tessref::SurfaceMesh alone;
+                    stream.size(alone, faces, next, stream.triangle_base(p + 2) - stream.triangle_base(p + 1));
+                    stream.emit(p + 1, alone, 0, 0, nullptr);
+                    for (std::size_t v = 0; v < first; ++v) ASSERT_TRUE(std::isnan(some.normals[v].x));
+                    for (std::size_t v = 0; v < next; ++v)
+                        ASSERT_EQ(std::memcmp(&some.normals[first + v], &alone.normals[v], sizeof(glm::dvec3)), 0)
+                            << "patch " << p + 1 << " vertex " << v;
+                }
                 ++patches_compared;
             }
         }

@@ -146,6 +146,8 @@ struct PatchStream::Impl {
                       std::vector<glm::dvec3>* face_normals, bool vertex_normals, bool provenance) const = 0;
     virtual void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
                                  std::size_t first) const = 0;
+    virtual void later_normals(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                               std::size_t first) const = 0;
     virtual std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out,
                                                   glm::dvec3* face_normal) const = 0;
 
@@ -366,6 +368,28 @@ struct StreamImpl final : PatchStream::Impl {
             }
             program->evaluate(p, std::span<const DomainPoint<T>>(points.data(), count), mesh, first + k0, true);
             write_coords(p, std::span<const TessCoord>(tess.data(), count), mesh, first + k0);
+        }
+    }
+    void later_normals(std::size_t p, std::span<const std::uint32_t> indices, SurfaceMesh& mesh,
+                       std::size_t first) const override {
+        if (!has_normals) return;
+        if (geometry_shader) {
+            // emit() copied the geometry shader's normals already (it has no later).
+            const SurfaceMesh& e = emitted[p];
+            for (const std::uint32_t i : indices) mesh.normals[first + i] = e.normals[i];
+            return;
+        }
+        const auto all = domain_points<T>(*patterns[p]);
+        std::array<DomainPoint<T>, 64> points;
+        std::array<std::uint32_t, 64> vertices;
+        for (std::size_t k0 = 0; k0 < indices.size(); k0 += points.size()) {
+            const std::size_t count = std::min(points.size(), indices.size() - k0);
+            for (std::size_t k = 0; k < count; ++k) {
+                points[k] = all[indices[k0 + k]];
+                vertices[k] = static_cast<std::uint32_t>(first + indices[k0 + k]);
+            }
+            program->later_normals(p, std::span<const DomainPoint<T>>(points.data(), count),
+                                   std::span<const std::uint32_t>(vertices.data(), count), mesh);
         }
     }
 };
@@ -698,9 +722,9 @@ std::array<std::uint32_t, 3> PatchStream::triangle(std::size_t triangle, Surface
         throw Error("triangle " + std::to_string(triangle) + " is not in the surface", Where::at_key("triangle"));
     return impl_->triangle(triangle, out, face_normal);
 }
-void PatchStream::evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
-                                  std::size_t first) const {
-    impl_->evaluate_points(patch, points, mesh, first);
+void PatchStream::later_normals(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                                std::size_t first) const {
+    impl_->later_normals(patch, points, mesh, first);
 }
 
 }  // namespace tessref

@@ -127,6 +127,27 @@ void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> 
 }
 
 template <typename T>
+void TerrainProgram<T>::later_normals(std::size_t p, std::span<const DomainPoint<T>> points,
+                                      std::span<const std::uint32_t> vertices, SurfaceMesh& mesh) const {
+    if (!geometry_vertex_normals) return;
+    std::array<vec3_t<T>, kBlock> position;
+    std::array<vec2_t<T>, kBlock> textureCoordinate;
+    std::array<vec3_t<T>, kBlock> normal;
+    for (std::size_t k0 = 0; k0 < points.size(); k0 += kBlock) {
+        const std::size_t count = std::min(kBlock, points.size() - k0);
+        for (std::size_t k = 0; k < count; ++k) {
+            const std::uint32_t v = vertices[k0 + k];
+            position[k] = vec3_t<T>(mesh.positions[v]);
+            textureCoordinate[k] = vec2_t<T>(mesh.uvs[v]);
+        }
+        vertex_normals(p, points.subspan(k0, count), std::span<const vec3_t<T>>(position.data(), count),
+                       std::span<const vec2_t<T>>(textureCoordinate.data(), count),
+                       std::span<vec3_t<T>>(normal.data(), count));
+        for (std::size_t k = 0; k < count; ++k) mesh.normals[vertices[k0 + k]] = glm::dvec3(normal[k]);
+    }
+}
+
+template <typename T>
 void TerrainProgram<T>::vertex_normals(std::size_t p, std::span<const DomainPoint<T>> tc,
                                        std::span<const vec3_t<T>> position,
                                        std::span<const vec2_t<T>> textureCoordinate,

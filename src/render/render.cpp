@@ -501,8 +501,8 @@ private:
 
 // The deferred vertex normals of the vertices the resolve reads: every pixel of the whole
 // quads it visits in the rectangles the draw changed (a superset does no harm) marks its
-// triangle's vertices; then their normals are evaluated chunk by chunk by
-// PatchStream::evaluate_points, so every value is the one emit() would have written.
+// triangle's vertices; then their normals are computed chunk by chunk by
+// PatchStream::later_normals, so every value is the one emit() would have written.
 void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, const BatchIds& ids,
                       const Framebuffer& fb, const RenderResult& result,
                       const std::vector<Rasterizer::Rect>& drawn) {
@@ -524,8 +524,6 @@ void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, c
     tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t k) {
         PatchChunk& c = chunks[k];
         const std::size_t v0 = stream.vertex_base(c.first_patch);
-        SurfaceMesh some;
-        std::vector<glm::dvec3> no_faces;
         std::vector<std::uint32_t> points;
         const std::uint8_t* const wins = c.wins.data();
         for (std::size_t p = c.first_patch; p < c.last_patch; ++p) {
@@ -540,9 +538,7 @@ void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, c
                 count += wins[v] != 0;
             }
             if (count == 0) continue;
-            stream.size(some, no_faces, count, 0);
-            stream.evaluate_points(p, std::span<const std::uint32_t>(points.data(), count), some, 0);
-            for (std::size_t j = 0; j < count; ++j) c.mesh.normals[first + points[j]] = some.normals[j];
+            stream.later_normals(p, std::span<const std::uint32_t>(points.data(), count), c.mesh, first);
         }
     });
 }
@@ -619,9 +615,9 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     const glm::mat4 mvp = result.mvp;
     // The geometry stage's vertex normals (a normal-map fetch or a height-field difference
     // each) only for the vertices of triangles that win a pixel: at level 63 on the bench
-    // terrain about 1 vertex in 10. They are computed between the draw and the resolve, by
-    // the same evaluation (PatchStream::evaluate_points), so every value is the one emit()
-    // would have written. Only where triangles far outnumber pixels: with fewer, most
+    // terrain about 1 vertex in 10. They are computed between the draw and the resolve from
+    // the positions and uvs emit() wrote (PatchStream::later_normals), so every value is the
+    // one emit() would have written. Only where triangles far outnumber pixels: with fewer, most
     // vertices win a pixel and marking them costs more than it saves (measured on the bench
     // terrain at 1280x800: level 63, 32 triangles a pixel, 30 % less time deferred; level 16,
     // 2.3 a pixel, 7 % more).
