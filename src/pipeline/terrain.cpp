@@ -130,16 +130,17 @@ template <typename T>
 void TerrainProgram<T>::later_normals(std::size_t p, std::span<const DomainPoint<T>> points,
                                       std::span<const std::uint32_t> vertices, SurfaceMesh& mesh) const {
     if (!geometry_vertex_normals) return;
-    std::array<vec3_t<T>, kBlock> position;
+    // A normal-map normal reads the texture coordinate alone: the positions (scattered
+    // loads, the vertices are the few that won a pixel) only for height-field normals.
+    const bool positions = scene.geometry->normals == GeometryNormals::height_field;
+    std::array<vec3_t<T>, kBlock> position{};
     std::array<vec2_t<T>, kBlock> textureCoordinate;
     std::array<vec3_t<T>, kBlock> normal;
     for (std::size_t k0 = 0; k0 < points.size(); k0 += kBlock) {
         const std::size_t count = std::min(kBlock, points.size() - k0);
-        for (std::size_t k = 0; k < count; ++k) {
-            const std::uint32_t v = vertices[k0 + k];
-            position[k] = vec3_t<T>(mesh.positions[v]);
-            textureCoordinate[k] = vec2_t<T>(mesh.uvs[v]);
-        }
+        for (std::size_t k = 0; k < count; ++k) textureCoordinate[k] = vec2_t<T>(mesh.uvs[vertices[k0 + k]]);
+        if (positions)
+            for (std::size_t k = 0; k < count; ++k) position[k] = vec3_t<T>(mesh.positions[vertices[k0 + k]]);
         vertex_normals(p, points.subspan(k0, count), std::span<const vec3_t<T>>(position.data(), count),
                        std::span<const vec2_t<T>>(textureCoordinate.data(), count),
                        std::span<vec3_t<T>>(normal.data(), count));
