@@ -71,6 +71,23 @@ TEST(RenderStream, EveryShippedSceneMatchesTheWholeSurfacePass) {
     EXPECT_GE(compared, 14u);  // the shipped scenes with a camera
 }
 
+// Patches of more than half a chunk's triangles (level 63: 7938 each) are streamed a patch a
+// chunk, drawn and resolved from the pattern's own triangles (PatchStream::shared_triangles)
+// and, at 31 triangles a pixel, with deferred vertex normals; reversed, they are copied as
+// before. Both match the whole surface's pass.
+TEST(RenderStream, ChunksOfOnePatchMatchTheWholeSurfacePass) {
+    for (const auto winding : {tessref::Winding::ccw, tessref::Winding::cw}) {
+        SCOPED_TRACE(winding == tessref::Winding::ccw ? "ccw" : "cw");
+        tessref::Scene scene = tessref::load_scene((kScenes / "thesis-all-10.toml").string());
+        scene.control->model = tessref::ControlModel::constant;
+        scene.control->constant.level = 63.0;
+        scene.generator.winding = winding;
+        tessref::RenderOptions options;
+        options.size = {320, 200};
+        compare_paths(scene, options);
+    }
+}
+
 TEST(RenderStream, ExactPrecisionAndCameraRelativeMatch) {
     for (const char* name : {"thesis-all-10.toml", "cosc422-eye.toml", "lab4-canyon.toml", "pn-triangles.toml"}) {
         SCOPED_TRACE(name);
@@ -505,6 +522,85 @@ TEST(PatchStream, DeferredVertexNormalsAreTheEmittedOnes) {
         }
     }
     EXPECT_GE(patches_compared, 4 * 3 * 4);  // at least 4 patches of each of the 12 streams
+}
+
+// PatchStream::shared_triangles, where a patch has them, are the triangles emit() writes less
+// the patch's first vertex, and emit with Triangles::shared writes everything else as it
+// does with Triangles::write and leaves mesh.triangles alone: the streamed render draws and
+// resolves a chunk of one patch from the pattern's own indices. A reversed surface, a
+// geometry shader's output and a pattern without triangles have none (a culled patch's
+// are empty too). Every shipped scene that
+// streams, at most 16 patches each; both kinds of patch occur.
+TEST(PatchStream, SharedTrianglesAreTheEmittedOnes) {
+    using tessref::PatchStream;
+    std::size_t shared_patches = 0, other_patches = 0;
+    std::vector<std::pair<std::string, tessref::Scene>> scenes;
+    for (const fs::path& path : shipped_scenes())
+        scenes.emplace_back(path.filename().string(), tessref::load_scene(path.string()));
+    // No shipped terrain is reversed: one made so (clockwise output, the grid facing up).
+    tessref::Scene cw = tessref::load_scene((kScenes / "thesis-all-10.toml").string());
+    cw.generator.winding = tessref::Winding::cw;
+    scenes.emplace_back("thesis-all-10 clockwise", cw);
+    for (const auto& [name, scene] : scenes) {
+        if (!PatchStream::streams(scene)) continue;
+        SCOPED_TRACE(name);
+        const PatchStream stream(scene, {});
+        const std::size_t n = stream.patch_count();
+        for (std::size_t p = 0; p < n; p += std::max<std::size_t>(1, n / 16)) {
+            const std::size_t vertices = stream.vertex_base(p + 1) - stream.vertex_base(p);
+            const std::size_t triangles = stream.triangle_base(p + 1) - stream.triangle_base(p);
+            const auto shared = stream.shared_triangles(p);
+            if (triangles == 0) continue;  // a culled patch: nothing to share, nothing to refuse
+            if (shared.empty()) {
+                ++other_patches;
+                EXPECT_TRUE(stream.reversed() || stream.geometry_shader() ||
+                            stream.pattern(p).vertices_per_primitive() != 3)
+                    << "patch " << p;
+                tessref::SurfaceMesh mesh;
+                std::vector<glm::dvec3> faces;
+                stream.size(mesh, faces, vertices, triangles);
+                EXPECT_THROW(stream.emit(p, mesh, 0, 0, &faces, PatchStream::VertexNormals::now,
+                                         PatchStream::Provenance::now, PatchStream::Triangles::shared),
+                             tessref::Error);
+                continue;
+            }
+            ++shared_patches;
+            // At an offset, as in a run: the emitted indices are the shared ones plus it.
+            const std::size_t offset = 5;
+            tessref::SurfaceMesh now, lean;
+            std::vector<glm::dvec3> faces, lean_faces;
+            stream.size(now, faces, offset + vertices, triangles);
+            stream.size(lean, lean_faces, offset + vertices, triangles);
+            const std::array<std::uint32_t, 3> untouched{7, 7, 7};
+            std::fill(lean.triangles.begin(), lean.triangles.end(), untouched);
+            stream.emit(p, now, offset, 0, &faces);
+            stream.emit(p, lean, offset, 0, &lean_faces, PatchStream::VertexNormals::now, PatchStream::Provenance::now,
+                        PatchStream::Triangles::shared);
+            ASSERT_EQ(shared.size(), triangles);
+            for (std::size_t t = 0; t < triangles; ++t) {
+                for (int k = 0; k < 3; ++k)
+                    ASSERT_EQ(shared[t][k] + offset, now.triangles[t][k]) << "patch " << p << " triangle " << t;
+                ASSERT_EQ(lean.triangles[t], untouched);
+            }
+            EXPECT_TRUE(same_bytes(lean.positions, now.positions));
+            EXPECT_TRUE(same_bytes(lean.uvs, now.uvs));
+            EXPECT_TRUE(same_bytes(lean.normals, now.normals));
+            EXPECT_TRUE(same_bytes(lean.tess_coords, now.tess_coords));
+            EXPECT_TRUE(same_bytes(lean.patch_ids, now.patch_ids));
+            EXPECT_TRUE(same_bytes(lean_faces, faces));
+        }
+        // A run of one patch with Triangles::shared: no triangles, the face normals all there.
+        if (!stream.shared_triangles(0).empty()) {
+            tessref::SurfaceMesh run;
+            std::vector<glm::dvec3> faces;
+            stream.emit_run(0, 1, run, &faces, PatchStream::VertexNormals::now, PatchStream::Provenance::now,
+                            PatchStream::Triangles::shared);
+            EXPECT_TRUE(run.triangles.empty());
+            EXPECT_EQ(faces.size(), stream.face_normals() ? stream.triangle_base(1) : 0u);
+        }
+    }
+    EXPECT_GT(shared_patches, 100u);
+    EXPECT_GT(other_patches, 0u);
 }
 
 // RenderOptions::colour8 keeps the image as the unorm8 codes to_rgba8 gives of the float

@@ -192,16 +192,27 @@ public:
     // may be left as they are, for a caller that reads them for a few vertices at most, from
     // triangle() (the renderer without provenance buffers: 16 of the
     // about 70 bytes a vertex that emit() writes on a terrain).
+    // Triangles::shared (only for a patch whose shared_triangles() is not empty): mesh.triangles
+    // is left as it is, for a caller that reads shared_triangles(patch) instead (the streamed
+    // render of a chunk of one patch: at level 63 the copy was 5 % of the render).
     enum class VertexNormals { now, later };
     enum class Provenance { now, later };
+    enum class Triangles { write, shared };
     void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
               std::vector<glm::dvec3>* face_normals, VertexNormals normals = VertexNormals::now,
-              Provenance provenance = Provenance::now) const;
+              Provenance provenance = Provenance::now, Triangles triangles = Triangles::write) const;
     // size() and emit() for the run of patches [first, last) as one mesh: its vertices and
     // triangles from index 0, the triangles indexing the run's own vertices; face normals
-    // into *face_normals when face_normals() and the pointer is not null.
+    // into *face_normals when face_normals() and the pointer is not null. Triangles::shared:
+    // mesh.triangles is left empty.
     void emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh, std::vector<glm::dvec3>* face_normals,
-                  VertexNormals normals = VertexNormals::now, Provenance provenance = Provenance::now) const;
+                  VertexNormals normals = VertexNormals::now, Provenance provenance = Provenance::now,
+                  Triangles triangles = Triangles::write) const;
+    // Patch p's triangles as emit() writes them less first_vertex (indexing the patch's own
+    // vertices from 0), where they are its pattern's indices as they are, shared by every
+    // patch of the pattern and held by the stream: not reversed (reversed() false) and no
+    // geometry shader. Empty otherwise.
+    std::span<const std::array<std::uint32_t, 3>> shared_triangles(std::size_t patch) const;
 
     // The vertex normals that emit(..., VertexNormals::later) left out, for some of patch's
     // vertices: `points` are indices into pattern(patch).points() of vertices that emit wrote
