@@ -578,8 +578,10 @@ TEST(PatchStream, SharedTrianglesAreTheEmittedOnes) {
                         PatchStream::Triangles::shared);
             ASSERT_EQ(shared.size(), triangles);
             for (std::size_t t = 0; t < triangles; ++t) {
-                for (int k = 0; k < 3; ++k)
+                for (int k = 0; k < 3; ++k) {
+                    ASSERT_LT(shared[t][k], vertices) << "patch " << p << " triangle " << t;
                     ASSERT_EQ(shared[t][k] + offset, now.triangles[t][k]) << "patch " << p << " triangle " << t;
+                }
                 ASSERT_EQ(lean.triangles[t], untouched);
             }
             EXPECT_TRUE(same_bytes(lean.positions, now.positions));

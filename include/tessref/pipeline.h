@@ -211,7 +211,8 @@ public:
     // Patch p's triangles as emit() writes them less first_vertex (indexing the patch's own
     // vertices from 0), where they are its pattern's indices as they are, shared by every
     // patch of the pattern and held by the stream: not reversed (reversed() false) and no
-    // geometry shader. Empty otherwise.
+    // geometry shader. Empty otherwise. Every index is below the patch's vertex count
+    // (pattern(patch).points().size(): the generator's indices name its own points).
     std::span<const std::array<std::uint32_t, 3>> shared_triangles(std::size_t patch) const;
 
     // The vertex normals that emit(..., VertexNormals::later) left out, for some of patch's

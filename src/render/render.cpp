@@ -412,6 +412,7 @@ struct PatchChunk {
     // (PatchStream::shared_triangles): emit() copied and offset every one of them, most of
     // which the box test rejects (5 % of the render at level 63, 8192 triangles a patch).
     std::span<const std::array<std::uint32_t, 3>> triangles;
+    bool shared_triangles = false;  // triangles are the pattern's (below its point count)
     std::vector<glm::dvec3> face_normals;
     std::vector<glm::vec4> clip;
     // Per vertex, with deferred vertex normals: whether a triangle of it won a pixel in this
@@ -464,6 +465,7 @@ void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& m
     stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode, provenance,
                     shared.empty() ? PatchStream::Triangles::write : PatchStream::Triangles::shared);
     c.triangles = shared.empty() ? std::span<const std::array<std::uint32_t, 3>>(m.triangles) : shared;
+    c.shared_triangles = !shared.empty();
     const std::size_t vertices = m.positions.size();
     if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(vertices, 0);
     c.clip.resize(vertices);
@@ -655,7 +657,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             PatchChunk& c = batch_chunks[k];
             evaluate_chunk(stream, c, mvp, normals_mode, provenance);
             if (!c.finite) return {};
-            return {c.clip, c.triangles, c.first_triangle};
+            return {c.clip, c.triangles, c.first_triangle, c.shared_triangles};
         });
         for (const PatchChunk& c : batch_chunks) {
             if (!c.finite) {
