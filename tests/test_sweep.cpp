@@ -31,6 +31,7 @@
 #include <tuple>
 #include <vector>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
 #include "command_dir_test.h"
@@ -247,6 +248,44 @@ TEST(SweepScreenMeasures, VisiblePixelsAndMeanEdgeLengthByHand) {
     EXPECT_EQ(tessref::sweep::mean_edge_pixels({}, identity, viewport), 0.0);
 }
 
+// mean_edge_pixels() works on chunks of triangles in parallel, with every vertex's clip
+// coordinates computed once, then sums the edges serially in triangle order: it must give
+// the very number (not a close one) of the plain loop over every edge's visible_pixels(),
+// here for a perspective camera, many chunks and a partial last one, vertices shared by
+// many triangles, and edges partly, wholly and not at all on screen.
+TEST(SweepScreenMeasures, MeanEdgeLengthIsThePlainSerialSumBitForBit) {
+    using tessref::sweep::visible_pixels;
+    const glm::dmat4 vp = glm::perspective(0.9, 1.6, 0.5, 400.0) *
+                          glm::lookAt(glm::dvec3(-30.0, -40.0, 25.0), glm::dvec3(0.0), glm::dvec3(0.0, 0.0, 1.0));
+    const glm::ivec2 viewport(320, 200);
+    tessref::SurfaceMesh mesh;
+    const int n = 301;  // a 301 x 301 vertex grid: 180000 triangles
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            mesh.positions.push_back({(i - 150) * 0.37, (j - 150) * 0.29, 3.0 * std::sin(i * 0.11) * std::cos(j * 0.07)});
+    for (int j = 0; j + 1 < n; ++j)
+        for (int i = 0; i + 1 < n; ++i) {
+            const auto v = static_cast<std::uint32_t>(j * n + i);
+            mesh.triangles.push_back({v, v + 1, v + static_cast<std::uint32_t>(n) + 1});
+            mesh.triangles.push_back({v, v + static_cast<std::uint32_t>(n) + 1, v + static_cast<std::uint32_t>(n)});
+        }
+    double sum = 0.0;
+    std::size_t edges = 0, hidden = 0;
+    for (const auto& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const double px = visible_pixels(vp, viewport, mesh.positions[t[k]], mesh.positions[t[(k + 1) % 3]]);
+            if (px > 0.0) {
+                sum += px;
+                ++edges;
+            } else {
+                ++hidden;
+            }
+        }
+    ASSERT_GT(edges, 1000u);
+    ASSERT_GT(hidden, 1000u);  // the camera sees part of the grid only
+    EXPECT_EQ(tessref::sweep::mean_edge_pixels(mesh, vp, viewport), sum / static_cast<double>(edges));
+}
+
 TEST(SweepPipelineTimings, FilledWithoutChangingTheOutput) {
     const tessref::Scene scene = tessref::load_scene((kSource / "data/scenes/thesis-distance-4.toml").string());
     for (const auto precision : {tessref::Precision::gpu, tessref::Precision::exact}) {
@@ -431,6 +470,36 @@ TEST_F(SweepCommand, RowsColumnsAndOrder) {
     ASSERT_EQ(sweep({a, "--levels", "1..4", "-o", "four"}).status, 0);
     for (const auto& row : read_csv(dir_ / "four/sweep.csv").rows)
         EXPECT_EQ(row.at("image").empty(), row.at("level") == "3") << row.at("level");
+}
+
+// gpu_exact_max_pos is the largest distance between the two precisions' vertices of the
+// same index, computed here from the pipeline's own results for the uniform rows: a
+// comparison that looked at no vertices (empty or moved-from arrays) would print 0.
+TEST_F(SweepCommand, GpuExactMaxPosIsTheLargestVertexDistance) {
+    const std::string a = terrain("bump");
+    ASSERT_EQ(sweep({a, "--levels", "2,3", "--precision", "gpu,exact", "--spacing", "equal", "-o", "out"}).status, 0);
+    tessref::Scene scene = tessref::load_scene((dir_ / a).string());
+    scene.generator.spacing = tessref::Spacing::equal;
+    int checked = 0;
+    for (const auto& row : read_csv(dir_ / "out/sweep.csv").rows) {
+        if (row.at("model") != "uniform") continue;
+        scene.control->model = tessref::ControlModel::constant;
+        scene.control->constant.level = std::stod(row.at("level"));
+        tessref::PipelineOptions gpu, exact;
+        gpu.precision = tessref::Precision::gpu;
+        exact.precision = tessref::Precision::exact;
+        const tessref::PipelineResult g = tessref::run_pipeline(scene, gpu), e = tessref::run_pipeline(scene, exact);
+        ASSERT_EQ(g.mesh.positions.size(), e.mesh.positions.size());
+        double m = 0.0;
+        for (std::size_t v = 0; v < g.mesh.positions.size(); ++v)
+            m = std::max(m, glm::length(g.mesh.positions[v] - e.mesh.positions[v]));
+        ASSERT_GT(m, 0.0);  // float and double heights differ on this map
+        char text[40];
+        std::snprintf(text, sizeof text, "%.9g", m);
+        EXPECT_EQ(row.at("gpu_exact_max_pos"), text) << row.at("level") << " " << row.at("precision");
+        ++checked;
+    }
+    EXPECT_EQ(checked, 4);
 }
 
 // --camera-relative off,on runs every row both ways: the off rows of a scene first, then

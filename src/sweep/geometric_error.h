@@ -79,7 +79,8 @@ double visible_pixels(const glm::dmat4& view_projection, glm::ivec2 viewport, co
 // The mean projected edge length: visible_pixels() of every edge of every triangle (an edge
 // two triangles share counts twice), averaged over the edges with a visible part; 0 when
 // none has one. The sweep's mean_edge_px column (docs/SWEEP.md), to hold against the 3-6
-// pixels per triangle edge that hardware-tessellated terrains aim at.
+// pixels per triangle edge that hardware-tessellated terrains aim at. The edges are measured
+// in parallel and summed serially in triangle order: the same number on any thread count.
 double mean_edge_pixels(const SurfaceMesh& mesh, const glm::dmat4& view_projection, glm::ivec2 viewport);
 
 }  // namespace tessref::sweep

@@ -659,7 +659,9 @@ private:
         using Clock = std::chrono::steady_clock;
         const auto ms = [](Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); };
         std::array<std::vector<double>, 6> times;
-        std::shared_ptr<const PipelineResult> pipeline;
+        // Not const: once the row is done, its positions and triangles move to the group's
+        // comparison (no copy of the row's largest arrays).
+        std::shared_ptr<PipelineResult> pipeline;
         RenderResult image;
         RenderOptions render_options;
         render_options.size = p_.size;
@@ -674,7 +676,7 @@ private:
             image = RenderResult{};
             pipeline.reset();
             const Clock::time_point t0 = Clock::now();
-            pipeline = std::make_shared<const PipelineResult>(run_pipeline(scene, options));
+            pipeline = std::make_shared<PipelineResult>(run_pipeline(scene, options));
             const Clock::time_point t1 = Clock::now();
             image = render_surface(scene, pipeline, render_options);
             const Clock::time_point t2 = Clock::now();
@@ -693,16 +695,18 @@ private:
         f["points"] = std::to_string(mesh.positions.size());
 
         // The untimed measures, after the timed runs and side by side: the geometric error
-        // (parallel over patches), the screen edge measure (serial, in triangle order, so
-        // that its sum is the same on any thread count), the image against the truth's and
-        // the copies the row's group compares.
+        // (parallel over patches), the screen edge measure (its sum serial, in triangle
+        // order, so that it is the same on any thread count) and the image against the
+        // truth's, then the row's pictures (their serial parts, the PNG files and the
+        // difference picture, beside the other two).
         // Each writes only its own results, so they are what they would be one after the
         // other; none overlaps a timed run, whose times stay those of the row alone.
         std::optional<GeometricError> geometric;
         double mean_edge = 0.0;
         std::optional<FloatImage> picture;
         std::optional<CompareResult> compared;
-        tessref::parallel_for(0, 4, [&](int job) {
+        Fields pictures;  // the pictures' columns
+        tessref::parallel_for(0, 3, [&](int job) {
             if (job == 0 && truth.surface) geometric = geometric_error(*truth.surface, mesh, &*scene.camera);
             // The surface as the rasterizer drew it (image.mvp, which holds the
             // camera-relative origin where the run has one).
@@ -710,11 +714,9 @@ private:
             if (job == 2) {
                 picture = float_image(image);
                 if (truth.image) compared = compare_images(*truth.image, *picture);
-            }
-            if (job == 3) {  // for the group's comparison of its precisions
-                pair.positions = mesh.positions;
-                pair.triangles = mesh.triangles;
-                pair.rgba = to_rgba8(image);
+                pair.rgba = to_rgba8(image);  // for the group's comparison of its precisions
+                if (every_picture_ || keeps_pictures(row, largest_level_))
+                    write_pictures(row, scene, pipeline, render_options, image, *picture, compared, pictures);
             }
         });
         if (geometric) {
@@ -733,8 +735,12 @@ private:
             f["img_fail_px"] = std::to_string(compared->failing_pixels);
             f["truth_image"] = truth.image_path;
         }
-        if (every_picture_ || keeps_pictures(row, largest_level_))
-            write_pictures(row, scene, pipeline, render_options, image, *picture, compared, f);
+        f.merge(pictures);
+        // The group's comparison takes the row's positions and triangles; nothing else holds
+        // the result now (the image's reference is dropped first).
+        image = RenderResult{};
+        pair.positions = std::move(pipeline->mesh.positions);
+        pair.triangles = std::move(pipeline->mesh.triangles);
         return f;
     }
 
