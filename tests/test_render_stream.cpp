@@ -71,6 +71,23 @@ TEST(RenderStream, EveryShippedSceneMatchesTheWholeSurfacePass) {
     EXPECT_GE(compared, 14u);  // the shipped scenes with a camera
 }
 
+// Patches of more than half a chunk's triangles (level 63: 7938 each) are streamed a patch a
+// chunk, drawn and resolved from the pattern's own triangles (PatchStream::shared_triangles)
+// and, at 31 triangles a pixel, with deferred vertex normals; reversed, they are copied as
+// before. Both match the whole surface's pass.
+TEST(RenderStream, ChunksOfOnePatchMatchTheWholeSurfacePass) {
+    for (const auto winding : {tessref::Winding::ccw, tessref::Winding::cw}) {
+        SCOPED_TRACE(winding == tessref::Winding::ccw ? "ccw" : "cw");
+        tessref::Scene scene = tessref::load_scene((kScenes / "thesis-all-10.toml").string());
+        scene.control->model = tessref::ControlModel::constant;
+        scene.control->constant.level = 63.0;
+        scene.generator.winding = winding;
+        tessref::RenderOptions options;
+        options.size = {320, 200};
+        compare_paths(scene, options);
+    }
+}
+
 TEST(RenderStream, ExactPrecisionAndCameraRelativeMatch) {
     for (const char* name : {"thesis-all-10.toml", "cosc422-eye.toml", "lab4-canyon.toml", "pn-triangles.toml"}) {
         SCOPED_TRACE(name);
@@ -416,7 +433,7 @@ TEST(RenderStream, WeightsAreOneRasterizePassesWeights) {
 }
 
 // PatchStream::emit with VertexNormals::later writes everything but the vertex normals, and
-// evaluate_points gives each vertex the normal emit() writes with VertexNormals::now: the
+// later_normals gives each vertex the normal emit() writes with VertexNormals::now: the
 // streamed render relies on both to compute normals only where a triangle wins a pixel.
 // Normal-map, height-field (at lab 4's mip level) and PN normals, both precisions and
 // camera-relative evaluation.
@@ -465,20 +482,127 @@ TEST(PatchStream, DeferredVertexNormalsAreTheEmittedOnes) {
                 EXPECT_TRUE(same_bytes(lean.uvs, now.uvs));
                 EXPECT_TRUE(same_bytes(lean.triangles, now.triangles));
                 EXPECT_TRUE(same_bytes(lean_faces, faces));
-                // Every other vertex, backwards: evaluate_points takes any subset in any order.
+                // Every other vertex, backwards: later_normals takes any subset in any order,
+                // writes those vertices' normals and no other.
                 std::vector<std::uint32_t> points;
                 for (std::size_t v = vertices; v-- > 0;)
                     if (v % 2 == 0) points.push_back(static_cast<std::uint32_t>(v));
-                stream.size(some, faces, points.size(), 0);
-                stream.evaluate_points(p, points, some, 0);
-                for (std::size_t j = 0; j < points.size(); ++j)
-                    ASSERT_EQ(std::memcmp(&some.normals[j], &now.normals[points[j]], sizeof(glm::dvec3)), 0)
-                        << "patch " << p << " vertex " << points[j];
+                stream.later_normals(p, points, later, 0);
+                stream.later_normals(p, points, lean, 0);
+                for (std::size_t v = 0; v < vertices; ++v) {
+                    if (v % 2 != 0) {
+                        ASSERT_TRUE(std::isnan(later.normals[v].x) && std::isnan(lean.normals[v].x)) << "vertex " << v;
+                        continue;
+                    }
+                    ASSERT_EQ(std::memcmp(&later.normals[v], &now.normals[v], sizeof(glm::dvec3)), 0)
+                        << "patch " << p << " vertex " << v;
+                    ASSERT_EQ(std::memcmp(&lean.normals[v], &now.normals[v], sizeof(glm::dvec3)), 0)
+                        << "patch " << p << " vertex " << v;
+                }
+                // In a run of patches (emit_run, as the streamed render emits a chunk), the
+                // patch's vertices from its place in the run on.
+                if (p + 1 < n) {
+                    const std::size_t first = stream.vertex_base(p + 1) - stream.vertex_base(p);
+                    const std::size_t next = stream.vertex_base(p + 2) - stream.vertex_base(p + 1);
+                    stream.emit_run(p, p + 2, some, nullptr, PatchStream::VertexNormals::later, PatchStream::Provenance::later);
+                    std::fill(some.normals.begin(), some.normals.end(), untouched);
+                    std::vector<std::uint32_t> all(next);
+                    for (std::size_t v = 0; v < next; ++v) all[v] = static_cast<std::uint32_t>(v);
+                    stream.later_normals(p + 1, all, some, first);
+                    tessref::SurfaceMesh alone;
+                    stream.size(alone, faces, next, stream.triangle_base(p + 2) - stream.triangle_base(p + 1));
+                    stream.emit(p + 1, alone, 0, 0, nullptr);
+                    for (std::size_t v = 0; v < first; ++v) ASSERT_TRUE(std::isnan(some.normals[v].x));
+                    for (std::size_t v = 0; v < next; ++v)
+                        ASSERT_EQ(std::memcmp(&some.normals[first + v], &alone.normals[v], sizeof(glm::dvec3)), 0)
+                            << "patch " << p + 1 << " vertex " << v;
+                }
                 ++patches_compared;
             }
         }
     }
     EXPECT_GE(patches_compared, 4 * 3 * 4);  // at least 4 patches of each of the 12 streams
+}
+
+// PatchStream::shared_triangles, where a patch has them, are the triangles emit() writes less
+// the patch's first vertex, and emit with Triangles::shared writes everything else as it
+// does with Triangles::write and leaves mesh.triangles alone: the streamed render draws and
+// resolves a chunk of one patch from the pattern's own indices. A reversed surface, a
+// geometry shader's output and a pattern without triangles have none (a culled patch's
+// are empty too). Every shipped scene that
+// streams, at most 16 patches each; both kinds of patch occur.
+TEST(PatchStream, SharedTrianglesAreTheEmittedOnes) {
+    using tessref::PatchStream;
+    std::size_t shared_patches = 0, other_patches = 0;
+    std::vector<std::pair<std::string, tessref::Scene>> scenes;
+    for (const fs::path& path : shipped_scenes())
+        scenes.emplace_back(path.filename().string(), tessref::load_scene(path.string()));
+    // No shipped terrain is reversed: one made so (clockwise output, the grid facing up).
+    tessref::Scene cw = tessref::load_scene((kScenes / "thesis-all-10.toml").string());
+    cw.generator.winding = tessref::Winding::cw;
+    scenes.emplace_back("thesis-all-10 clockwise", cw);
+    for (const auto& [name, scene] : scenes) {
+        if (!PatchStream::streams(scene)) continue;
+        SCOPED_TRACE(name);
+        const PatchStream stream(scene, {});
+        const std::size_t n = stream.patch_count();
+        for (std::size_t p = 0; p < n; p += std::max<std::size_t>(1, n / 16)) {
+            const std::size_t vertices = stream.vertex_base(p + 1) - stream.vertex_base(p);
+            const std::size_t triangles = stream.triangle_base(p + 1) - stream.triangle_base(p);
+            const auto shared = stream.shared_triangles(p);
+            if (triangles == 0) continue;  // a culled patch: nothing to share, nothing to refuse
+            if (shared.empty()) {
+                ++other_patches;
+                EXPECT_TRUE(stream.reversed() || stream.geometry_shader() ||
+                            stream.pattern(p).vertices_per_primitive() != 3)
+                    << "patch " << p;
+                tessref::SurfaceMesh mesh;
+                std::vector<glm::dvec3> faces;
+                stream.size(mesh, faces, vertices, triangles);
+                EXPECT_THROW(stream.emit(p, mesh, 0, 0, &faces, PatchStream::VertexNormals::now,
+                                         PatchStream::Provenance::now, PatchStream::Triangles::shared),
+                             tessref::Error);
+                continue;
+            }
+            ++shared_patches;
+            // At an offset, as in a run: the emitted indices are the shared ones plus it.
+            const std::size_t offset = 5;
+            tessref::SurfaceMesh now, lean;
+            std::vector<glm::dvec3> faces, lean_faces;
+            stream.size(now, faces, offset + vertices, triangles);
+            stream.size(lean, lean_faces, offset + vertices, triangles);
+            const std::array<std::uint32_t, 3> untouched{7, 7, 7};
+            std::fill(lean.triangles.begin(), lean.triangles.end(), untouched);
+            stream.emit(p, now, offset, 0, &faces);
+            stream.emit(p, lean, offset, 0, &lean_faces, PatchStream::VertexNormals::now, PatchStream::Provenance::now,
+                        PatchStream::Triangles::shared);
+            ASSERT_EQ(shared.size(), triangles);
+            for (std::size_t t = 0; t < triangles; ++t) {
+                for (int k = 0; k < 3; ++k) {
+                    ASSERT_LT(shared[t][k], vertices) << "patch " << p << " triangle " << t;
+                    ASSERT_EQ(shared[t][k] + offset, now.triangles[t][k]) << "patch " << p << " triangle " << t;
+                }
+                ASSERT_EQ(lean.triangles[t], untouched);
+            }
+            EXPECT_TRUE(same_bytes(lean.positions, now.positions));
+            EXPECT_TRUE(same_bytes(lean.uvs, now.uvs));
+            EXPECT_TRUE(same_bytes(lean.normals, now.normals));
+            EXPECT_TRUE(same_bytes(lean.tess_coords, now.tess_coords));
+            EXPECT_TRUE(same_bytes(lean.patch_ids, now.patch_ids));
+            EXPECT_TRUE(same_bytes(lean_faces, faces));
+        }
+        // A run of one patch with Triangles::shared: no triangles, the face normals all there.
+        if (!stream.shared_triangles(0).empty()) {
+            tessref::SurfaceMesh run;
+            std::vector<glm::dvec3> faces;
+            stream.emit_run(0, 1, run, &faces, PatchStream::VertexNormals::now, PatchStream::Provenance::now,
+                            PatchStream::Triangles::shared);
+            EXPECT_TRUE(run.triangles.empty());
+            EXPECT_EQ(faces.size(), stream.face_normals() ? stream.triangle_base(1) : 0u);
+        }
+    }
+    EXPECT_GT(shared_patches, 100u);
+    EXPECT_GT(other_patches, 0u);
 }
 
 // RenderOptions::colour8 keeps the image as the unorm8 codes to_rgba8 gives of the float

@@ -286,7 +286,7 @@ TEST(TessellatorProperties, OuterTriangleSetIndependentOfOtherEdges) {
 }
 
 // Property 8: every component lies in [0, 1] and c + (1 - c) == 1 exactly (in float,
-// what gl_TessCoord holds).
+// what gl_TessCoord holds), and every index names one of the points.
 TEST(TessellatorProperties, ComponentsInUnitIntervalAndComplementExact) {
     std::mt19937 rng(8);
     for (Precision prec : kPrecisions)
@@ -308,6 +308,9 @@ TEST(TessellatorProperties, ComponentsInUnitIntervalAndComplementExact) {
                             ASSERT_GE(c, 0.0);
                             ASSERT_LE(c, 1.0);
                         }
+                    // Every primitive names the pattern's own points: the streamed render
+                    // draws a pattern's indices without scanning them (RasterChunk).
+                    for (const std::uint32_t index : p.indices()) ASSERT_LT(index, p.points().size());
                 }
 }
 

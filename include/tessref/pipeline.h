@@ -184,28 +184,45 @@ public:
     // triangles at first_triangle on, indexing from first_vertex, and their face normals
     // into face_normals[first_triangle...] when face_normals() and the pointer is not null.
     // The caller sizes the arrays. Concurrent calls for different patches are safe.
-    // VertexNormals::later: mesh.normals is left as it is; evaluate_points() gives the same
+    // VertexNormals::later: mesh.normals is left as it is; later_normals() gives the same
     // normals for the vertices that need one (the renderer: those of triangles that win a
     // pixel, a tenth of them on a finely tessellated terrain), saving the geometry stage's
     // texture fetch for the rest.
     // Provenance::later: mesh.patch_ids and mesh.tess_coords (where each vertex came from)
     // may be left as they are, for a caller that reads them for a few vertices at most, from
-    // evaluate_points() or triangle() (the renderer without provenance buffers: 16 of the
+    // triangle() (the renderer without provenance buffers: 16 of the
     // about 70 bytes a vertex that emit() writes on a terrain).
+    // Triangles::shared (only for a patch whose shared_triangles() is not empty): mesh.triangles
+    // is left as it is, for a caller that reads shared_triangles(patch) instead (the streamed
+    // render of a chunk of one patch: at level 63 the copy was 5 % of the render).
     enum class VertexNormals { now, later };
     enum class Provenance { now, later };
+    enum class Triangles { write, shared };
     void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
               std::vector<glm::dvec3>* face_normals, VertexNormals normals = VertexNormals::now,
-              Provenance provenance = Provenance::now) const;
+              Provenance provenance = Provenance::now, Triangles triangles = Triangles::write) const;
     // size() and emit() for the run of patches [first, last) as one mesh: its vertices and
     // triangles from index 0, the triangles indexing the run's own vertices; face normals
-    // into *face_normals when face_normals() and the pointer is not null.
+    // into *face_normals when face_normals() and the pointer is not null. Triangles::shared:
+    // mesh.triangles is left empty.
     void emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh, std::vector<glm::dvec3>* face_normals,
-                  VertexNormals normals = VertexNormals::now, Provenance provenance = Provenance::now) const;
-    // The evaluation at some of a patch's domain points (indices into pattern(patch).points()),
-    // written like emit()'s vertices at mesh index first on (normals included); no triangles.
-    void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
-                         std::size_t first) const;
+                  VertexNormals normals = VertexNormals::now, Provenance provenance = Provenance::now,
+                  Triangles triangles = Triangles::write) const;
+    // Patch p's triangles as emit() writes them less first_vertex (indexing the patch's own
+    // vertices from 0), where they are its pattern's indices as they are, shared by every
+    // patch of the pattern and held by the stream: not reversed (reversed() false) and no
+    // geometry shader. Empty otherwise. Every index is below the patch's vertex count
+    // (pattern(patch).points().size(): the generator's indices name its own points).
+    std::span<const std::array<std::uint32_t, 3>> shared_triangles(std::size_t patch) const;
+
+    // The vertex normals that emit(..., VertexNormals::later) left out, for some of patch's
+    // vertices: `points` are indices into pattern(patch).points() of vertices that emit wrote
+    // at mesh index first + point (as emit_run writes a run's patches), and each gets
+    // mesh.normals[first + point], the value emit(..., VertexNormals::now) writes. A terrain
+    // computes them from the positions and uvs emit wrote there (no second evaluation);
+    // other surfaces evaluate the points again. Concurrent calls for different vertices are safe.
+    void later_normals(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                       std::size_t first) const;
 
     // One triangle of run_pipeline()'s mesh on its own: `out` gets its three vertices as
     // run_pipeline()'s mesh holds them (world positions), in the triangle's order, and the

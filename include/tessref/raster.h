@@ -193,6 +193,11 @@ struct RasterChunk {
     std::span<const glm::vec4> positions;  // gl_Position of the vertices the triangles index
     std::span<const std::array<std::uint32_t, 3>> triangles;
     std::uint32_t first_id = 0;            // id of triangles[0]; the others follow it
+    // The caller's triangles index below positions.size() by construction (the streamed
+    // render's chunk of one patch: its pattern's own indices, PatchStream::shared_triangles):
+    // the draw does not scan them for an index out of range, which it otherwise does for
+    // every chunk (3 % of a level-63 render, the same pattern's indices each time).
+    bool indices_in_range = false;
 };
 
 class Rasterizer {

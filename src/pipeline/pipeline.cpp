@@ -143,9 +143,12 @@ struct PassTimer {
 struct PatchStream::Impl {
     virtual ~Impl() = default;
     virtual void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-                      std::vector<glm::dvec3>* face_normals, bool vertex_normals, bool provenance) const = 0;
+                      std::vector<glm::dvec3>* face_normals, bool vertex_normals, bool provenance,
+                      bool triangles) const = 0;
     virtual void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
                                  std::size_t first) const = 0;
+    virtual void later_normals(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                               std::size_t first) const = 0;
     virtual std::array<std::uint32_t, 3> triangle(std::size_t triangle, SurfaceMesh& out,
                                                   glm::dvec3* face_normal) const = 0;
 
@@ -271,7 +274,8 @@ struct StreamImpl final : PatchStream::Impl {
     }
 
     void emit(std::size_t p, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-              std::vector<glm::dvec3>* normals_out, bool vertex_normals, bool provenance) const override {
+              std::vector<glm::dvec3>* normals_out, bool vertex_normals, bool provenance,
+              bool write_triangles) const override {
         if (geometry_shader) {
             const SurfaceMesh& e = emitted[p];
             std::vector<std::uint32_t> all(e.positions.size());
@@ -300,12 +304,16 @@ struct StreamImpl final : PatchStream::Impl {
                 mesh.triangles[first_triangle + t] = {base + prim[0], base + prim[flip ? 2 : 1], base + prim[flip ? 1 : 2]};
             }
         };
-        if (program->flip) move.template operator()<true>();
-        else move.template operator()<false>();
+        if (write_triangles) {
+            if (program->flip) move.template operator()<true>();
+            else move.template operator()<false>();
+        }
         if (face_normals && normals_out) {
             for (std::size_t t = 0; t < count; ++t) {
                 // The geometry shader's face normal, from the vertices as the evaluation wrote them.
-                const std::array<std::uint32_t, 3>& tri = mesh.triangles[first_triangle + t];
+                const std::uint32_t* prim = indices + 3 * t;
+                const std::array<std::uint32_t, 3> tri{base + prim[0], base + prim[program->flip ? 2 : 1],
+                                                       base + prim[program->flip ? 1 : 2]};
                 const vec3_t<T> p0(mesh.positions[tri[0]]), p1(mesh.positions[tri[1]]), p2(mesh.positions[tri[2]]);
                 (*normals_out)[first_triangle + t] = glm::dvec3(face_normal<T>(p0, p1, p2));
             }
@@ -366,6 +374,28 @@ struct StreamImpl final : PatchStream::Impl {
             }
             program->evaluate(p, std::span<const DomainPoint<T>>(points.data(), count), mesh, first + k0, true);
             write_coords(p, std::span<const TessCoord>(tess.data(), count), mesh, first + k0);
+        }
+    }
+    void later_normals(std::size_t p, std::span<const std::uint32_t> indices, SurfaceMesh& mesh,
+                       std::size_t first) const override {
+        if (!has_normals) return;
+        if (geometry_shader) {
+            // emit() copied the geometry shader's normals already (it has no later).
+            const SurfaceMesh& e = emitted[p];
+            for (const std::uint32_t i : indices) mesh.normals[first + i] = e.normals[i];
+            return;
+        }
+        const auto all = domain_points<T>(*patterns[p]);
+        std::array<DomainPoint<T>, 64> points;
+        std::array<std::uint32_t, 64> vertices;
+        for (std::size_t k0 = 0; k0 < indices.size(); k0 += points.size()) {
+            const std::size_t count = std::min(points.size(), indices.size() - k0);
+            for (std::size_t k = 0; k < count; ++k) {
+                points[k] = all[indices[k0 + k]];
+                vertices[k] = static_cast<std::uint32_t>(first + indices[k0 + k]);
+            }
+            program->later_normals(p, std::span<const DomainPoint<T>>(points.data(), count),
+                                   std::span<const std::uint32_t>(vertices.data(), count), mesh);
         }
     }
 };
@@ -658,17 +688,32 @@ void PatchStream::size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals,
     if (impl_->face_normals) face_normals.resize(triangles);
 }
 void PatchStream::emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
-                       std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance) const {
+                       std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance,
+                       Triangles triangles) const {
+    if (triangles == Triangles::shared && shared_triangles(patch).empty())
+        throw Error("patch " + std::to_string(patch) + "'s triangles are not its pattern's to share",
+                    Where::at_key("triangles"));
     impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals, normals == VertexNormals::now,
-                provenance == Provenance::now);
+                provenance == Provenance::now, triangles == Triangles::write);
 }
 void PatchStream::emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh,
-                           std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance) const {
+                           std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance,
+                           Triangles triangles) const {
     const std::size_t v0 = vertex_base(first), t0 = triangle_base(first);
     std::vector<glm::dvec3> none;
-    size(mesh, face_normals ? *face_normals : none, vertex_base(last) - v0, triangle_base(last) - t0);
+    const bool shared = triangles == Triangles::shared;
+    size(mesh, face_normals ? *face_normals : none, vertex_base(last) - v0, shared ? 0 : triangle_base(last) - t0);
+    if (shared && face_normals && impl_->face_normals) face_normals->resize(triangle_base(last) - t0);
     for (std::size_t p = first; p < last; ++p)
-        emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals, provenance);
+        emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals, provenance, triangles);
+}
+std::span<const std::array<std::uint32_t, 3>> PatchStream::shared_triangles(std::size_t patch) const {
+    if (impl_->flip || impl_->geometry_shader) return {};
+    const Pattern& pattern = *impl_->patterns.at(patch);
+    if (pattern.vertices_per_primitive() != 3) return {};
+    // Three indices a triangle, contiguous: the layout of std::array<std::uint32_t, 3>.
+    static_assert(sizeof(std::array<std::uint32_t, 3>) == 3 * sizeof(std::uint32_t));
+    return {reinterpret_cast<const std::array<std::uint32_t, 3>*>(pattern.indices().data()), pattern.primitive_count()};
 }
 void PatchStream::triangles(std::size_t first, std::span<std::array<std::uint32_t, 3>> out) const {
     if (out.empty()) return;
@@ -698,9 +743,9 @@ std::array<std::uint32_t, 3> PatchStream::triangle(std::size_t triangle, Surface
         throw Error("triangle " + std::to_string(triangle) + " is not in the surface", Where::at_key("triangle"));
     return impl_->triangle(triangle, out, face_normal);
 }
-void PatchStream::evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
-                                  std::size_t first) const {
-    impl_->evaluate_points(patch, points, mesh, first);
+void PatchStream::later_normals(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
+                                std::size_t first) const {
+    impl_->later_normals(patch, points, mesh, first);
 }
 
 }  // namespace tessref

@@ -48,6 +48,22 @@ public:
     virtual void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                           std::size_t first_vertex, bool normals) const = 0;
 
+    // The per-vertex normals that evaluate() left out (normals false) for some of the points
+    // it evaluated: point k was written at mesh index vertices[k], and its normal goes to
+    // mesh.normals[vertices[k]], the value evaluate() with normals true writes. This default
+    // evaluates the points again; a program whose normals follow from the position and
+    // texture coordinate it wrote computes only the normals (TerrainProgram).
+    virtual void later_normals(std::size_t patch, std::span<const DomainPoint<T>> points,
+                               std::span<const std::uint32_t> vertices, SurfaceMesh& mesh) const {
+        if (!has_normals) return;
+        SurfaceMesh some;
+        some.positions.resize(points.size());
+        if (has_uvs) some.uvs.resize(points.size());
+        some.normals.resize(points.size());
+        evaluate(patch, points, some, 0, true);
+        for (std::size_t k = 0; k < points.size(); ++k) mesh.normals[vertices[k]] = some.normals[k];
+    }
+
     // The math mode of the control stage's transcendentals (control.h MathMode); set once,
     // before the first control(). Models without transcendentals ignore it.
     virtual void use_math(MathMode) {}

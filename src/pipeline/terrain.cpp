@@ -127,6 +127,28 @@ void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> 
 }
 
 template <typename T>
+void TerrainProgram<T>::later_normals(std::size_t p, std::span<const DomainPoint<T>> points,
+                                      std::span<const std::uint32_t> vertices, SurfaceMesh& mesh) const {
+    if (!geometry_vertex_normals) return;
+    // A normal-map normal reads the texture coordinate alone: the positions (scattered
+    // loads, the vertices are the few that won a pixel) only for height-field normals.
+    const bool positions = scene.geometry->normals == GeometryNormals::height_field;
+    std::array<vec3_t<T>, kBlock> position{};
+    std::array<vec2_t<T>, kBlock> textureCoordinate;
+    std::array<vec3_t<T>, kBlock> normal;
+    for (std::size_t k0 = 0; k0 < points.size(); k0 += kBlock) {
+        const std::size_t count = std::min(kBlock, points.size() - k0);
+        for (std::size_t k = 0; k < count; ++k) textureCoordinate[k] = vec2_t<T>(mesh.uvs[vertices[k0 + k]]);
+        if (positions)
+            for (std::size_t k = 0; k < count; ++k) position[k] = vec3_t<T>(mesh.positions[vertices[k0 + k]]);
+        vertex_normals(p, points.subspan(k0, count), std::span<const vec3_t<T>>(position.data(), count),
+                       std::span<const vec2_t<T>>(textureCoordinate.data(), count),
+                       std::span<vec3_t<T>>(normal.data(), count));
+        for (std::size_t k = 0; k < count; ++k) mesh.normals[vertices[k0 + k]] = glm::dvec3(normal[k]);
+    }
+}
+
+template <typename T>
 void TerrainProgram<T>::vertex_normals(std::size_t p, std::span<const DomainPoint<T>> tc,
                                        std::span<const vec3_t<T>> position,
                                        std::span<const vec2_t<T>> textureCoordinate,

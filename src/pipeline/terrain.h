@@ -38,6 +38,11 @@ public:
                            normal.subspan(k0, count));
         }
     }
+    // From the positions and texture coordinates evaluate() wrote (the evaluation's own
+    // values, widened to double and so narrowed back exactly): the normal map's fetch or the
+    // height field's differences, without evaluating the surface again.
+    void later_normals(std::size_t patch, std::span<const DomainPoint<T>> points, std::span<const std::uint32_t> vertices,
+                       SurfaceMesh& mesh) const override;
     void use_math(MathMode math) override {
         thesisControl.math = math;
         lab4Control.math = math;

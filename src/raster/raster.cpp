@@ -1224,7 +1224,7 @@ void Rasterizer::draw(std::size_t count, const std::function<RasterChunk(std::si
         vertices.prepare(chunk.positions, 0, chunk.positions.size(), s.ctx.viewport, s.fused);
         // Whether an index is out of range first (a loop without an exit), then the first one
         // only when there is one.
-        if (any_index_at_least(chunk.triangles, chunk.positions.size())) {
+        if (!chunk.indices_in_range && any_index_at_least(chunk.triangles, chunk.positions.size())) {
             for (const auto& tri : chunk.triangles)
                 for (const std::uint32_t v : tri)
                     if (v >= chunk.positions.size())

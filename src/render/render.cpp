@@ -96,23 +96,26 @@ double seconds_since(Clock::time_point start) {
 // chunk's and positions the evaluation's, relative to origin when camera-relative).
 struct SurfaceView {
     const SurfaceMesh& mesh;
+    // mesh.triangles, or for a streamed chunk of one patch the pattern's own
+    // (PatchStream::shared_triangles), which emit() then does not copy.
+    std::span<const std::array<std::uint32_t, 3>> triangles;
     const std::vector<glm::dvec3>& face_normals;  // per triangle with [geometry] normals = "face"
     const std::vector<glm::vec4>& clip;
     bool use_face_normals = false;
     glm::dvec3 origin{0.0};  // added to mesh positions (in double) to make world positions
 
     std::array<glm::dvec4, 3> clip_corners(std::uint32_t triangle) const {
-        const auto& t = mesh.triangles[triangle];
+        const auto& t = triangles[triangle];
         return {glm::dvec4(clip[t[0]]), glm::dvec4(clip[t[1]]), glm::dvec4(clip[t[2]])};
     }
     // texCoord of the triangle at weights b, in float as a varying is interpolated.
     glm::vec2 uv_at(std::uint32_t triangle, const glm::vec3& b) const {
-        const auto& t = mesh.triangles[triangle];
+        const auto& t = triangles[triangle];
         return b[0] * glm::vec2(mesh.uvs[t[0]]) + b[1] * glm::vec2(mesh.uvs[t[1]]) + b[2] * glm::vec2(mesh.uvs[t[2]]);
     }
     glm::vec3 world(std::uint32_t vertex) const { return glm::vec3(mesh.positions[vertex] + origin); }
     render_detail::QuadTriangle quad_triangle(std::uint32_t triangle) const {
-        const auto& t = mesh.triangles[triangle];
+        const auto& t = triangles[triangle];
         return {{clip[t[0]], clip[t[1]], clip[t[2]]},
                 {glm::vec2(mesh.uvs[t[0]]), glm::vec2(mesh.uvs[t[1]]), glm::vec2(mesh.uvs[t[2]])}};
     }
@@ -123,7 +126,7 @@ struct SurfaceView {
 // derivatives are the caller's: quad_derivatives).
 void fragment_inputs(const SurfaceView& s, const FragmentNeeds& needs, std::uint32_t triangle, const glm::vec3& b,
                      float depth, FragmentInputs& f) {
-    const auto& t = s.mesh.triangles[triangle];
+    const auto& t = s.triangles[triangle];
     f.depth = depth;
     if (needs.worldPosition) f.worldPosition = b[0] * s.world(t[0]) + b[1] * s.world(t[1]) + b[2] * s.world(t[2]);
     if (needs.normal) {
@@ -265,9 +268,9 @@ float level_of(const TessLevels& levels, Domain domain, const std::array<glm::ve
     return domain == Domain::quads ? std::max(levels.inner[0], levels.inner[1]) : levels.inner[0];
 }
 
-float level_of(const SurfaceMesh& mesh, const std::vector<TessLevels>& levels, Domain domain, std::uint32_t triangle,
-               std::string* source = nullptr) {
-    const auto& t = mesh.triangles.at(triangle);
+// The same for the triangle of mesh's vertices t.
+float level_of(const SurfaceMesh& mesh, const std::vector<TessLevels>& levels, Domain domain,
+               const std::array<std::uint32_t, 3>& t, std::string* source = nullptr) {
     return level_of(levels.at(mesh.patch_ids[t[0]]), domain,
                     {mesh.tess_coords[t[0]], mesh.tess_coords[t[1]], mesh.tess_coords[t[2]]}, source);
 }
@@ -326,7 +329,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const WeightsView& wei
                     while (k < triangle_count && triangle_ids[k] != id) ++k;
                     if (k == triangle_count) {
                         triangle_ids[k] = id;
-                        if (provenance) triangle_levels[k] = level_of(view->mesh, levels, domain, tri);
+                        if (provenance) triangle_levels[k] = level_of(view->mesh, levels, domain, view->triangles[tri]);
                         if (derivatives && !line_derivatives) triangles[k] = view->quad_triangle(tri);
                         ++triangle_count;
                     }
@@ -345,7 +348,7 @@ void resolve(RenderResult& result, const Framebuffer& fb, const WeightsView& wei
                 const SurfaceView& view = *view_of;
                 const glm::vec3 b = weights.at(x, row);
                 if (provenance) {
-                    const auto& t = view.mesh.triangles[tri];
+                    const auto& t = view.triangles[tri];
                     result.barycentric[i] = b;
                     result.patch_id[i] = view.mesh.patch_ids[t[0]];
                     result.tess_coord[i] = b[0] * view.mesh.tess_coords[t[0]] + b[1] * view.mesh.tess_coords[t[1]] +
@@ -394,7 +397,7 @@ std::uint64_t covered_pixels(const RenderResult& result) {
 }  // namespace
 
 float triangle_level(const PipelineResult& pipeline, Domain domain, std::uint32_t triangle, std::string* source) {
-    return level_of(pipeline.mesh, pipeline.levels, domain, triangle, source);
+    return level_of(pipeline.mesh, pipeline.levels, domain, pipeline.mesh.triangles.at(triangle), source);
 }
 
 namespace {
@@ -405,6 +408,11 @@ struct PatchChunk {
     std::size_t first_patch = 0, last_patch = 0;
     std::uint32_t first_triangle = 0;
     SurfaceMesh mesh;
+    // mesh.triangles, or for a chunk of one patch whose triangles are its pattern's, those
+    // (PatchStream::shared_triangles): emit() copied and offset every one of them, most of
+    // which the box test rejects (5 % of the render at level 63, 8192 triangles a patch).
+    std::span<const std::array<std::uint32_t, 3>> triangles;
+    bool shared_triangles = false;  // triangles are the pattern's (below its point count)
     std::vector<glm::dvec3> face_normals;
     std::vector<glm::vec4> clip;
     // Per vertex, with deferred vertex normals: whether a triangle of it won a pixel in this
@@ -452,7 +460,12 @@ std::size_t plan_batch(const PatchStream& stream, std::size_t& next_patch, std::
 void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp,
                     PatchStream::VertexNormals normals_mode, PatchStream::Provenance provenance) {
     SurfaceMesh& m = c.mesh;
-    stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode, provenance);
+    const auto shared = c.last_patch == c.first_patch + 1 ? stream.shared_triangles(c.first_patch)
+                                                          : std::span<const std::array<std::uint32_t, 3>>();
+    stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode, provenance,
+                    shared.empty() ? PatchStream::Triangles::write : PatchStream::Triangles::shared);
+    c.triangles = shared.empty() ? std::span<const std::array<std::uint32_t, 3>>(m.triangles) : shared;
+    c.shared_triangles = !shared.empty();
     const std::size_t vertices = m.positions.size();
     if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(vertices, 0);
     c.clip.resize(vertices);
@@ -501,8 +514,8 @@ private:
 
 // The deferred vertex normals of the vertices the resolve reads: every pixel of the whole
 // quads it visits in the rectangles the draw changed (a superset does no harm) marks its
-// triangle's vertices; then their normals are evaluated chunk by chunk by
-// PatchStream::evaluate_points, so every value is the one emit() would have written.
+// triangle's vertices; then their normals are computed chunk by chunk by
+// PatchStream::later_normals, so every value is the one emit() would have written.
 void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, const BatchIds& ids,
                       const Framebuffer& fb, const RenderResult& result,
                       const std::vector<Rasterizer::Rect>& drawn) {
@@ -516,7 +529,7 @@ void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, c
                 const auto [k, tri] = ids.find(fb.triangle_id[result.index(x, row)]);
                 if (k == ids.none()) continue;
                 PatchChunk& c = chunks[k];
-                for (const std::uint32_t v : c.mesh.triangles[tri])
+                for (const std::uint32_t v : c.triangles[tri])
                     std::atomic_ref<std::uint8_t>(c.wins[v]).store(1, std::memory_order_relaxed);
             }
         }
@@ -524,8 +537,6 @@ void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, c
     tessref::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t k) {
         PatchChunk& c = chunks[k];
         const std::size_t v0 = stream.vertex_base(c.first_patch);
-        SurfaceMesh some;
-        std::vector<glm::dvec3> no_faces;
         std::vector<std::uint32_t> points;
         const std::uint8_t* const wins = c.wins.data();
         for (std::size_t p = c.first_patch; p < c.last_patch; ++p) {
@@ -540,9 +551,7 @@ void complete_normals(const PatchStream& stream, std::span<PatchChunk> chunks, c
                 count += wins[v] != 0;
             }
             if (count == 0) continue;
-            stream.size(some, no_faces, count, 0);
-            stream.evaluate_points(p, std::span<const std::uint32_t>(points.data(), count), some, 0);
-            for (std::size_t j = 0; j < count; ++j) c.mesh.normals[first + points[j]] = some.normals[j];
+            stream.later_normals(p, std::span<const std::uint32_t>(points.data(), count), c.mesh, first);
         }
     });
 }
@@ -619,9 +628,9 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     const glm::mat4 mvp = result.mvp;
     // The geometry stage's vertex normals (a normal-map fetch or a height-field difference
     // each) only for the vertices of triangles that win a pixel: at level 63 on the bench
-    // terrain about 1 vertex in 10. They are computed between the draw and the resolve, by
-    // the same evaluation (PatchStream::evaluate_points), so every value is the one emit()
-    // would have written. Only where triangles far outnumber pixels: with fewer, most
+    // terrain about 1 vertex in 10. They are computed between the draw and the resolve from
+    // the positions and uvs emit() wrote (PatchStream::later_normals), so every value is the
+    // one emit() would have written. Only where triangles far outnumber pixels: with fewer, most
     // vertices win a pixel and marking them costs more than it saves (measured on the bench
     // terrain at 1280x800: level 63, 32 triangles a pixel, 30 % less time deferred; level 16,
     // 2.3 a pixel, 7 % more).
@@ -648,7 +657,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
             PatchChunk& c = batch_chunks[k];
             evaluate_chunk(stream, c, mvp, normals_mode, provenance);
             if (!c.finite) return {};
-            return {c.clip, c.mesh.triangles, c.first_triangle};
+            return {c.clip, c.triangles, c.first_triangle, c.shared_triangles};
         });
         for (const PatchChunk& c : batch_chunks) {
             if (!c.finite) {
@@ -665,7 +674,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         const BatchIds ids(batch_chunks, static_cast<std::uint32_t>(stream.triangle_base(chunks[used - 1].last_patch)));
         std::vector<SurfaceView> chunk_views;
         for (const PatchChunk& c : batch_chunks)
-            chunk_views.push_back({c.mesh, c.face_normals, c.clip, stream.face_normals(), origin});
+            chunk_views.push_back({c.mesh, c.triangles, c.face_normals, c.clip, stream.face_normals(), origin});
         const std::vector<Rasterizer::Rect> drawn = rasterizer.drawn();
         if (defer_normals && needs.normal) complete_normals(stream, batch_chunks, ids, fb, result, drawn);
         tessref::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t r) {
@@ -792,7 +801,7 @@ RenderResult render_surface(const Scene& scene, std::shared_ptr<const PipelineRe
     start = Clock::now();
     progress("shading", 0.0);
     render_detail::allocate(result, width, height, false, options.provenance);  // fb's visibility at the end
-    const SurfaceView view{mesh, pipe.face_normals, clip, face_normals};  // world positions
+    const SurfaceView view{mesh, mesh.triangles, pipe.face_normals, clip, face_normals};  // world positions
     const Domain domain = scene.generator.domain;
     result.domain = domain;
     tessref::parallel_for(tbb::blocked_range<int>(0, (height + 1) / 2), [&](const tbb::blocked_range<int>& rows) {
@@ -915,7 +924,7 @@ PixelProvenance pixel_provenance(const RenderResult& result, int x, int y) {
     }
     if (!mesh.uvs.empty()) p.uv = b[0] * mesh.uvs[t[0]] + b[1] * mesh.uvs[t[1]] + b[2] * mesh.uvs[t[2]];
     p.patch_levels = pipe.levels.at(p.patch_id);
-    level_of(mesh, pipe.levels, result.domain, triangle, &p.level_source);
+    level_of(mesh, pipe.levels, result.domain, t, &p.level_source);
     return p;
 }
 
