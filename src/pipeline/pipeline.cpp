@@ -298,11 +298,12 @@ struct StreamImpl final : PatchStream::Impl {
         const std::uint32_t* indices = pattern.indices().data();
         const std::size_t count = pattern.primitive_count();
         const auto base = static_cast<std::uint32_t>(first_vertex);
+        const auto placed = [&](std::size_t t, bool flip) -> std::array<std::uint32_t, 3> {
+            const std::uint32_t* prim = indices + 3 * t;
+            return {base + prim[0], base + prim[flip ? 2 : 1], base + prim[flip ? 1 : 2]};
+        };
         const auto move = [&]<bool flip>() {
-            for (std::size_t t = 0; t < count; ++t) {
-                const std::uint32_t* prim = indices + 3 * t;
-                mesh.triangles[first_triangle + t] = {base + prim[0], base + prim[flip ? 2 : 1], base + prim[flip ? 1 : 2]};
-            }
+            for (std::size_t t = 0; t < count; ++t) mesh.triangles[first_triangle + t] = placed(t, flip);
         };
         if (write_triangles) {
             if (program->flip) move.template operator()<true>();
@@ -311,9 +312,7 @@ struct StreamImpl final : PatchStream::Impl {
         if (face_normals && normals_out) {
             for (std::size_t t = 0; t < count; ++t) {
                 // The geometry shader's face normal, from the vertices as the evaluation wrote them.
-                const std::uint32_t* prim = indices + 3 * t;
-                const std::array<std::uint32_t, 3> tri{base + prim[0], base + prim[program->flip ? 2 : 1],
-                                                       base + prim[program->flip ? 1 : 2]};
+                const std::array<std::uint32_t, 3> tri = placed(t, program->flip);
                 const vec3_t<T> p0(mesh.positions[tri[0]]), p1(mesh.positions[tri[1]]), p2(mesh.positions[tri[2]]);
                 (*normals_out)[first_triangle + t] = glm::dvec3(face_normal<T>(p0, p1, p2));
             }
