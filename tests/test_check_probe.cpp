@@ -371,3 +371,91 @@ TEST(CheckProbe, OcclusionAnswersAsTheNearestHit) {
     EXPECT_GT(hits, 10000u);
     EXPECT_GT(misses, 1000u);
 }
+
+// The probe builds its scene with RayScene::Build::quick (Embree's Morton builder, corners in
+// the leaves) where the render builds Build::compact (the SAH builder, indices in the
+// leaves), and the trees do differ in which of the triangles at an edge or a vertex a ray
+// exactly through it meets (on this terrain, for about a quarter of such rays). What the
+// probe reads must not: occluded() answers alike (the terrain probe); and all_hits() has a
+// grazing hit on both or on neither (the closed probe then casts the line again), and else
+// lists the same triangles at the same t, crossed from the same side. Rays exactly through
+// every vertex and along every edge of a rough welded terrain, where the robust test's
+// single-precision rounding decides which triangles a ray meets, down, up and slanted, and
+// random rays over, beside and nearly level across it. The test fails when the quick build
+// leaves out the robust flag.
+TEST(CheckProbe, QuickBuildMeetsWhatTheCompactOneMeets) {
+    const int n = 64;
+    std::mt19937 random(11);
+    std::uniform_real_distribution<double> height(0.0, top);
+    std::vector<glm::dvec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    const double step = side / n;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) positions.emplace_back(i * step, j * step, height(random));
+    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            // Both diagonals, so that rays meet edges of every direction.
+            if ((i + j) % 2 == 0) {
+                triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+                triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+            } else {
+                triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1)});
+                triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+            }
+        }
+    const tessref::RayScene compact(positions, triangles, tessref::RayScene::Build::compact);
+    const tessref::RayScene quick(positions, triangles, tessref::RayScene::Build::quick);
+    std::size_t hits = 0, misses = 0, grazing = 0;
+    // What the probe reads of a ray's hits: whether any hit grazes (the ray is then cast
+    // again beside itself) and else every hit, in order (grazes() in probe.cpp).
+    const double resolution = compact.resolution();
+    ASSERT_EQ(quick.resolution(), resolution);
+    struct Seen {
+        bool grazes = false;
+        struct Crossing {
+            double t;
+            std::uint32_t triangle;
+            int side;
+            bool operator==(const Crossing&) const = default;
+        };
+        std::vector<Crossing> crossings;
+        bool operator==(const Seen&) const = default;
+    };
+    const auto seen = [&](const std::vector<tessref::RayHit>& hits) {
+        Seen s;
+        for (const tessref::RayHit& h : hits) {
+            s.grazes = s.grazes || h.side == 0 || h.edge_distance <= resolution;
+            s.crossings.push_back({h.t, h.triangle, h.side});
+        }
+        if (s.grazes) s.crossings.clear();
+        return s;
+    };
+    const auto same = [&](const glm::dvec3& origin, const glm::dvec3& direction) {
+        const std::vector<tessref::RayHit> a = compact.all_hits(origin, direction), b = quick.all_hits(origin, direction);
+        const Seen x = seen(a), y = seen(b);
+        EXPECT_TRUE(x == y) << origin.x << " " << origin.y << " " << origin.z << ": " << a.size() << " hits against " << b.size();
+        const bool occluded = compact.occluded(origin, direction);
+        EXPECT_EQ(quick.occluded(origin, direction), occluded) << origin.x << " " << origin.y << " " << origin.z;
+        EXPECT_EQ(occluded, !a.empty());
+        (a.empty() ? misses : hits) += 1;
+        grazing += x.grazes;
+    };
+    // Through every vertex, every edge's middle and its quarters, down, up and slanted.
+    for (int j = 0; j <= 4 * n; ++j)
+        for (int i = 0; i <= 4 * n; ++i) {
+            const double u = i * step / 4, w = j * step / 4;
+            same({u, w, 2 * top}, {0.0, 0.0, -1.0});
+            same({u, w, -top}, {0.0, 0.0, 1.0});
+            same({u, w, 2 * top}, glm::normalize(glm::dvec3(1.0, 2.0, -40.0)));
+        }
+    // Random rays over and beside the terrain, and nearly level ones across it.
+    std::uniform_real_distribution<double> ground(-1.0, side + 1.0);
+    for (int k = 0; k < 20000; ++k) {
+        same({ground(random), ground(random), 2 * top}, glm::normalize(glm::dvec3(ground(random), ground(random), -side)));
+        same({-1.0, ground(random), 0.5 * top}, glm::normalize(glm::dvec3(1.0, 0.01 * ground(random), 0.0)));
+    }
+    EXPECT_GT(hits, 100000u);
+    EXPECT_GT(misses, 1000u);
+    EXPECT_GT(grazing, 10000u);  // through the vertices and edges
+}

@@ -34,9 +34,24 @@ struct RayHit {
 
 class RayScene {
 public:
+    // How Embree builds the BVH. Both run Embree's robust (watertight) test, so a ray never
+    // slips between two welded triangles; and a ray that passes no edge or vertex within
+    // single-precision rounding meets the same triangles at the same t in both. Which of the
+    // triangles at an edge or a vertex a ray through it meets (one or several) depends on the
+    // tree and its leaves, so all_hits() of such a grazing ray, and which triangle
+    // intersect() reports for a tie, may differ between the two.
+    enum class Build {
+        // The SAH builder, with the corners' indices in the leaves: the least memory and the
+        // fastest rays, for scenes many rays cross (the render's ray tracer).
+        compact,
+        // The Morton builder, with the corners themselves in the leaves: about twice as fast
+        // to build, for a scene built for one pass of rays (the check's probe).
+        quick,
+    };
+
     // Throws tessref::Error when Embree cannot build the scene.
     RayScene(std::span<const glm::dvec3> positions,
-             std::span<const std::array<std::uint32_t, 3>> triangles);
+             std::span<const std::array<std::uint32_t, 3>> triangles, Build build = Build::compact);
     ~RayScene();
     RayScene(RayScene&&) noexcept;
     RayScene& operator=(RayScene&&) noexcept;

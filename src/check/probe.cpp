@@ -609,8 +609,15 @@ void run_ray_probe(CheckState& state) {
         report.probe.skipped_because = "the terrain has no closed outline";
         return;
     }
+    // The probe casts one pass of rays: Embree's quick build (RayScene::Build::quick) costs
+    // less than it adds to the rays (on the 2.4 M-triangle grid, 0.04 s of CPU for the
+    // build and 0.08 s for the rays, against 0.08 s and 0.06 s). The tree decides only which
+    // triangles a ray through an edge or a vertex meets there, and the probe never asks
+    // which: the terrain probe asks whether a ray hits, and a ray through a welded edge or
+    // vertex hits on any tree (the watertight test); the closed probe recasts a line with
+    // any grazing hit, and it has one on any tree.
     state.progress("ray probe: building the BVH", 0.8);
-    const RayScene scene(mesh.positions, triangles);
+    const RayScene scene(mesh.positions, triangles, RayScene::Build::quick);
     triangles.clear();
     triangles.shrink_to_fit();
     if (terrain) terrain_probe(state, scene, *rays);

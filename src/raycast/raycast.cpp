@@ -125,7 +125,7 @@ constexpr const char* kDeviceConfig = "verbose=0";
 }  // namespace
 
 RayScene::RayScene(std::span<const glm::dvec3> positions,
-                   std::span<const std::array<std::uint32_t, 3>> triangles)
+                   std::span<const std::array<std::uint32_t, 3>> triangles, Build build)
     : impl_(std::make_unique<Impl>()) {
     impl_->triangles = triangles.size();
     impl_->device = rtcNewDevice(kDeviceConfig);
@@ -137,13 +137,20 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
 
     impl_->scene = rtcNewScene(impl_->device);
     if (!impl_->scene) embree_failure(impl_->device, "cannot create a scene");
-    // Compact: a smaller BVH, which for large meshes also builds faster (fewer pages to fault in).
-    rtcSetSceneFlags(impl_->scene, static_cast<RTCSceneFlags>(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_COMPACT |
-                                                              RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+    // Robust: Embree's watertight (Pluecker) test. Compact (Build::compact): leaves of corner
+    // indices, a smaller BVH, which for large meshes also builds faster (fewer pages to fault
+    // in); without it (Build::quick), leaves of the corners themselves, which rays read
+    // without the indirection. A low build quality for the scene is Embree's two-level build,
+    // and the geometry's own quality picks its tree's builder: the SAH builder (medium,
+    // Embree's default) or the Morton builder (low).
+    const auto flags = RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION |
+                       (build == Build::compact ? RTC_SCENE_FLAG_COMPACT : RTC_SCENE_FLAG_NONE);
+    rtcSetSceneFlags(impl_->scene, static_cast<RTCSceneFlags>(flags));
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_LOW);
 
     RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!geometry) embree_failure(impl_->device, "cannot create a triangle geometry");
+    if (build == Build::quick) rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
     // Embree owns these buffers (it may read 16 bytes past the last vertex; it pads them).
     auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
         geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), positions.size()));
