@@ -1449,3 +1449,59 @@ TEST(CheckTables, ComponentsAreNumberedByTheirSmallestVertex) {
                                           std::to_string(4 * smallest[c].second) + ")") == std::string::npos;
     EXPECT_EQ(wrong, 0u) << locations[0].detail;
 }
+
+// The coincident-vertex grid files the vertices a face uses, at finite positions, in
+// parallel chunks (a vertex left out is filed under a code past every cell's and cut off):
+// on a shuffled grid of 40 000 vertices (three chunks), separate triangles whose corners
+// copy grid vertices exactly (each copy and its original one defect) or 1e-6 away (near
+// ones), and vertices no face uses that copy grid vertices and each other (none of them
+// reported, not even the two at one position, nor joined to the groups of the copies).
+TEST(CheckTables, CoincidentVerticesAreTheFacesVerticesOnly) {
+    constexpr std::uint32_t n = 200;
+    const std::vector<std::uint32_t> shuffled = shuffled_ids(n * n, 17);
+    IndexedMesh mesh;
+    mesh.positions.resize(shuffled.size());
+    for (std::uint32_t i = 0; i < shuffled.size(); ++i) mesh.positions[shuffled[i]] = glm::dvec3(i % n, i / n, 0.0);
+    const auto at = [&](std::uint32_t x, std::uint32_t y) { return shuffled[y * n + x]; };
+    for (std::uint32_t y = 0; y + 1 < n; ++y)
+        for (std::uint32_t x = 0; x + 1 < n; ++x) {
+            mesh.add_triangle(at(x, y), at(x + 1, y), at(x + 1, y + 1));
+            mesh.add_triangle(at(x, y), at(x + 1, y + 1), at(x, y + 1));
+        }
+    const auto add_vertex = [&](glm::dvec3 p) {
+        mesh.positions.push_back(p);
+        return static_cast<std::uint32_t>(mesh.positions.size() - 1);
+    };
+    std::set<std::vector<std::uint32_t>> exact, near;  // each group's vertices, sorted
+    const auto copy_triangle = [&](std::uint32_t x, std::uint32_t y, double offset) {
+        std::uint32_t copies[3];
+        const std::uint32_t originals[3] = {at(x, y), at(x + 1, y), at(x, y + 1)};
+        for (int k = 0; k < 3; ++k) {
+            copies[k] = add_vertex(mesh.positions[originals[k]] + glm::dvec3(0.0, 0.0, offset));
+            (offset == 0.0 ? exact : near).insert({std::min(originals[k], copies[k]), std::max(originals[k], copies[k])});
+        }
+        mesh.add_triangle(copies[0], copies[1], copies[2]);
+    };
+    copy_triangle(10, 10, 0.0);
+    copy_triangle(150, 3, 0.0);
+    copy_triangle(77, 190, 0.0);
+    copy_triangle(120, 120, 1e-6);
+    // Vertices no face uses: copies of grid vertices (one of them a vertex copied above too)
+    // and two at one position of their own.
+    for (std::uint32_t k = 0; k < 50; ++k) add_vertex(mesh.positions[at(3 * k + 1, 2 * k + 5)]);
+    add_vertex(mesh.positions[at(10, 10)]);
+    add_vertex({500.0, 500.0, 7.0});
+    add_vertex({500.0, 500.0, 7.0});
+    CheckOptions options = quick(Expect::open);
+    options.ray_probe = false;
+    const CheckReport r = tessref::check_mesh(mesh, options);
+    EXPECT_EQ(r.unreferenced_vertices, 53u);
+    const auto groups = [&](DefectClass kind) {
+        std::set<std::vector<std::uint32_t>> found;
+        for (const auto& d : r.of(kind).locations) found.insert(d.vertices);
+        EXPECT_EQ(found.size(), r.count(kind));
+        return found;
+    };
+    EXPECT_EQ(groups(DefectClass::coincident_vertices), exact);
+    EXPECT_EQ(groups(DefectClass::near_coincident_vertices), near);
+}

@@ -158,18 +158,22 @@ std::vector<T> concatenate(std::vector<std::vector<T>>&& parts) {
 }
 
 // Lock-free union-find: roots link under smaller roots, so every set ends with its
-// smallest element as root, whatever the order of the unions.
+// smallest element as root, whatever the order of the unions. Each element starts as its own
+// root, written in parallel chunks (a table of atomics would first be cleared on one thread).
 class ConcurrentDisjointSets {
 public:
-    explicit ConcurrentDisjointSets(std::size_t n) : parent_(n) {
-        for (std::size_t i = 0; i < n; ++i) parent_[i].store(static_cast<std::uint32_t>(i), std::memory_order_relaxed);
+    explicit ConcurrentDisjointSets(std::size_t n) {
+        parent_.allocate(n);
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) parent_[i] = static_cast<std::uint32_t>(i);
+        });
     }
     std::uint32_t find(std::uint32_t v) {
         while (true) {
-            std::uint32_t p = parent_[v].load(std::memory_order_relaxed);
+            std::uint32_t p = parent(v).load(std::memory_order_relaxed);
             if (p == v) return v;
-            const std::uint32_t gp = parent_[p].load(std::memory_order_relaxed);
-            if (gp != p) parent_[v].compare_exchange_weak(p, gp, std::memory_order_relaxed);
+            const std::uint32_t gp = parent(p).load(std::memory_order_relaxed);
+            if (gp != p) parent(v).compare_exchange_weak(p, gp, std::memory_order_relaxed);
             v = gp;
         }
     }
@@ -180,12 +184,13 @@ public:
             if (a == b) return;
             if (a < b) std::swap(a, b);  // link the larger root under the smaller
             std::uint32_t expected = a;
-            if (parent_[a].compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
+            if (parent(a).compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
         }
     }
 
 private:
-    std::vector<std::atomic<std::uint32_t>> parent_;
+    std::atomic_ref<std::uint32_t> parent(std::uint32_t v) { return std::atomic_ref<std::uint32_t>(parent_[v]); }
+    Table<std::uint32_t> parent_;
 };
 
 // Steps of check_mesh(), in the order they run.

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <numeric>
+#include <span>
 #include <string>
 #include <unordered_map>
 
@@ -44,17 +46,34 @@ std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
 // are adjacent and a cell is found by binary search.
 class PointGrid {
 public:
-    PointGrid(const std::vector<glm::dvec3>& points, const std::vector<std::uint32_t>& ids, glm::dvec3 origin,
-              double cell)
+    struct Entry {
+        std::uint64_t key;  // the cell's code
+        std::uint32_t id;   // the point's index
+        auto operator<=>(const Entry&) const = default;
+    };
+
+    // The points i of `points` for which include(i). Each entry is written once, by the
+    // thread that computes its cell (a std::vector would first clear them all on one
+    // thread: 19 MB for 1.2 M points, after the kernel cleared the fresh pages); a point
+    // left out takes a code no cell has, which sorts after every cell's, and is cut off.
+    template <class Include>
+    PointGrid(std::span<const glm::dvec3> points, Include&& include, glm::dvec3 origin, double cell)
         : origin_(origin), cell_(cell) {
-        entries_.resize(ids.size());
-        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, ids.size(), 1 << 14), [&](const auto& r) {
+        entries_.allocate(points.size());
+        tessref::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1 << 14), [&](const auto& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const glm::i64vec3 c = cell_of(points[ids[i]]);
-                entries_[i] = {cell_key(c.x, c.y, c.z), ids[i]};
+                const auto id = static_cast<std::uint32_t>(i);
+                if (!include(id)) {
+                    entries_[i] = {kLeftOut, id};
+                    continue;
+                }
+                const glm::i64vec3 c = cell_of(points[i]);
+                entries_[i] = {cell_key(c.x, c.y, c.z), id};
             }
         });
         tessref::parallel_sort(entries_.begin(), entries_.end());
+        size_ = static_cast<std::size_t>(std::lower_bound(entries_.begin(), entries_.end(), Entry{kLeftOut, 0}) -
+                                         entries_.begin());
     }
 
     glm::i64vec3 cell_of(const glm::dvec3& p) const {
@@ -65,19 +84,22 @@ public:
     template <class Fn>
     void visit(const glm::i64vec3& c, Fn&& fn) const {
         const std::uint64_t key = cell_key(c.x, c.y, c.z);
-        auto it = std::lower_bound(entries_.begin(), entries_.end(), std::make_pair(key, std::uint32_t{0}));
-        for (; it != entries_.end() && it->first == key; ++it) fn(it->second);
+        const Entry* end = entries_.begin() + size_;
+        for (auto it = std::lower_bound(entries_.begin(), end, Entry{key, 0}); it != end && it->key == key; ++it) fn(it->id);
     }
 
     double cell() const { return cell_; }
     // The points in cell order: entry(i) = (cell key, id); a cell's points are adjacent.
-    std::size_t size() const { return entries_.size(); }
-    const std::pair<std::uint64_t, std::uint32_t>& entry(std::size_t i) const { return entries_[i]; }
+    std::size_t size() const { return size_; }
+    const Entry& entry(std::size_t i) const { return entries_[i]; }
 
 private:
+    // Above every cell code (cell_key() sets the low 63 bits at most).
+    static constexpr std::uint64_t kLeftOut = std::numeric_limits<std::uint64_t>::max();
     glm::dvec3 origin_;
     double cell_;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> entries_;
+    Table<Entry> entries_;
+    std::size_t size_ = 0;
 };
 
 // Point-to-segment: the parameter along a->b of the closest point, and the distance.
@@ -251,11 +273,11 @@ void analyse_face_geometry(CheckState& state) {
 
 void find_coincident_vertices(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
-    std::vector<std::uint32_t> ids;
-    for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+    // The vertices a face uses, at finite positions.
+    const auto searched = [&](std::uint32_t v) {
         const glm::dvec3& p = mesh.positions[v];
-        if (state.vertex_referenced[v] && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) ids.push_back(v);
-    }
+        return state.vertex_referenced[v] && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    };
     const double tolerance = state.tolerance;
     auto equal_position = [&](std::uint32_t a, std::uint32_t b) { return mesh.positions[a] == mesh.positions[b]; };
 
@@ -266,17 +288,17 @@ void find_coincident_vertices(CheckState& state) {
         // it lies within the tolerance of the face between them (a few percent of points),
         // and into its own cell by walking its run of the grid's sorted entries.
         const double cell = std::max(32.0 * tolerance, 1e-12 * std::max(1.0, state.diagonal));
-        const PointGrid grid(mesh.positions, ids, state.bbox_min, cell);
+        const PointGrid grid(mesh.positions, searched, state.bbox_min, cell);
         auto parts = map_chunks<std::vector<std::pair<std::uint32_t, std::uint32_t>>>(
             grid.size(), kVertexChunk, [&](std::size_t i0, std::size_t i1, auto& out) {
                 for (std::size_t i = i0; i < i1; ++i) {
                     // Not a structured binding: the lambda below captures v, which clang 15
                     // (the fuzz build's compiler) cannot do for a binding.
-                    const auto key = grid.entry(i).first;
-                    const std::uint32_t v = grid.entry(i).second;
+                    const auto key = grid.entry(i).key;
+                    const std::uint32_t v = grid.entry(i).id;
                     const glm::dvec3 p = mesh.positions[v];
-                    for (std::size_t j = i + 1; j < grid.size() && grid.entry(j).first == key; ++j) {
-                        const std::uint32_t u = grid.entry(j).second;
+                    for (std::size_t j = i + 1; j < grid.size() && grid.entry(j).key == key; ++j) {
+                        const std::uint32_t u = grid.entry(j).id;
                         if (glm::distance(p, mesh.positions[u]) <= tolerance) out.emplace_back(std::min(u, v), std::max(u, v));
                     }
                     const glm::i64vec3 c = grid.cell_of(p);
@@ -303,7 +325,9 @@ void find_coincident_vertices(CheckState& state) {
         tessref::parallel_sort(pairs.begin(), pairs.end());
         pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
     } else {
-        std::vector<std::uint32_t> sorted = ids;
+        std::vector<std::uint32_t> sorted;
+        for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v)
+            if (searched(v)) sorted.push_back(v);
         auto less = [&](std::uint32_t a, std::uint32_t b) {
             const glm::dvec3 &p = mesh.positions[a], &q = mesh.positions[b];
             if (p.x != q.x) return p.x < q.x;
@@ -403,17 +427,13 @@ void find_t_junctions(CheckState& state) {
     // the grid's cells list them in the order of their ids): a table over every vertex of
     // the mesh would be fresh pages for a few thousand entries, on one thread.
     std::vector<glm::dvec3> flat_positions(vertices.size());
-    std::vector<std::uint32_t> ranks(vertices.size());
-    for (std::size_t i = 0; i < vertices.size(); ++i) {
-        flat_positions[i] = flat(mesh.positions[vertices[i]]);
-        ranks[i] = static_cast<std::uint32_t>(i);
-    }
+    for (std::size_t i = 0; i < vertices.size(); ++i) flat_positions[i] = flat(mesh.positions[vertices[i]]);
 
     const double mean_length = total_length / double(boundary.size());
     const double cell = std::max({mean_length, 4.0 * tolerance, 1e-12 * std::max(1.0, state.diagonal)});
     glm::dvec3 origin = flat(state.bbox_min);
     // (Seen from above, the up coordinate is zero everywhere, so the grid is one cell thick.)
-    const PointGrid grid(flat_positions, ranks, origin, cell);
+    const PointGrid grid(flat_positions, [](std::uint32_t) { return true; }, origin, cell);
 
     struct Found {
         std::uint32_t vertex, edge;
@@ -442,7 +462,7 @@ void find_t_junctions(CheckState& state) {
             };
             if (cells > 4096) {
                 // A very long edge against a fine grid: test every boundary vertex instead.
-                for (std::uint32_t rank : ranks) test(rank);
+                for (std::uint32_t rank = 0; rank < vertices.size(); ++rank) test(rank);
                 continue;
             }
             for (std::int64_t x = c0.x; x <= c1.x; ++x)

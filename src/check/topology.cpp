@@ -421,7 +421,8 @@ void find_components(CheckState& state) {
     // components by their smallest vertex: each chunk of vertices counts its roots, numbers
     // them from the chunk's first number, then every vertex takes its root's number.
     const std::size_t vertex_count = mesh.vertex_count();
-    std::vector<std::uint32_t> root(vertex_count);
+    Table<std::uint32_t> root;  // written whole below
+    root.allocate(vertex_count);
     const auto roots = map_chunks<std::uint32_t>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, std::uint32_t& count) {
         for (std::size_t v = v0; v < v1; ++v) {
             root[v] = in_kept_face(static_cast<std::uint32_t>(v)) ? sets.find(static_cast<std::uint32_t>(v)) : kNoIndex;
