@@ -63,8 +63,8 @@ struct Frame {
     double resolution = 0.0;
 };
 
-// In parallel chunks: minima and maxima are exact and ignore a NaN whichever order they
-// meet it in, so the chunks' results join into the serial pass's, bit for bit. (A terrain
+// The box in parallel chunks: minima and maxima are exact and ignore a NaN whichever order
+// they meet it in, so the chunks' results join into the serial pass's, bit for bit. (A terrain
 // probe's scene holds a fifth of a 1.2 M-vertex mesh's triangles but every position: on one
 // thread these passes and the copy into Embree's buffer were about a fifth of its build's
 // CPU time.)
@@ -87,16 +87,13 @@ Frame frame_of(std::span<const glm::dvec3> positions) {
         },
         [](const Box& a, const Box& b) { return Box{glm::min(a.lo, b.lo), glm::max(a.hi, b.hi)}; });
     f.shift = 0.5 * (box.lo + box.hi);
-    const double largest = parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, positions.size(), kPositionChunk), 0.0,
-        [&](const tbb::blocked_range<std::size_t>& r, double largest) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const glm::dvec3 p = positions[i] - f.shift;
-                largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-            }
-            return largest;
-        },
-        [](double a, double b) { return std::max(a, b); });
+    // The largest |p - shift| over the positions, from the box's corners alone: rounding is
+    // monotonic, so on each axis p - shift is largest for the largest p and smallest for the
+    // smallest, and its magnitude is largest at one of the two (a NaN, from an infinite
+    // coordinate, is never larger, as in a pass over every position).
+    double largest = 0.0;
+    for (int k = 0; k < 3; ++k)
+        for (const double corner : {box.lo[k], box.hi[k]}) largest = std::max(largest, std::abs(corner - f.shift[k]));
     f.resolution = std::ldexp(largest, -20);
     return f;
 }
