@@ -240,7 +240,9 @@ void classify_edges(CheckState& state) {
             }
             if (kept.empty()) return;
             ++out.edges;
-            const glm::dvec3 mid = 0.5 * (mesh.positions[lo] + mesh.positions[hi]);
+            // Only a defect's location reads the positions (a boundary edge is located by
+            // its loop): an edge's second vertex is far from its first in the list.
+            const auto mid = [&] { return 0.5 * (mesh.positions[lo] + mesh.positions[hi]); };
             if (kept.size() == 1) {
                 const HalfEdgeEntry& h = state.half_edges[kept[0]];
                 out.boundary.push_back(h.forward() ? BoundaryHalfEdge{lo, hi, h.face()} : BoundaryHalfEdge{hi, lo, h.face()});
@@ -251,7 +253,7 @@ void classify_edges(CheckState& state) {
                     ++out.inconsistent_count;
                     if (out.inconsistent.size() < cap) {
                         Defect d;
-                        d.position = mid;
+                        d.position = mid();
                         d.faces = {h0.face(), h1.face()};
                         d.vertices = h0.forward() ? std::vector<std::uint32_t>{lo, hi} : std::vector<std::uint32_t>{hi, lo};
                         d.detail = "faces " + std::to_string(h0.face()) + " and " + std::to_string(h1.face()) +
@@ -264,7 +266,7 @@ void classify_edges(CheckState& state) {
                 ++out.non_manifold_count;
                 if (out.non_manifold.size() < cap) {
                     Defect d;
-                    d.position = mid;
+                    d.position = mid();
                     d.vertices = {lo, hi};
                     for (std::uint32_t i : kept) d.faces.push_back(state.half_edges[i].face());
                     d.measure = double(kept.size());

@@ -279,9 +279,12 @@ bool read_plain_binary_ply(Reading& r, const PlyHeader& h, const PlyRoles& roles
         }
     });
     std::atomic<bool> clean = true;
-    // A property as store_vertex() takes it: through double, then rounded to float.
+    // A property as store_vertex() takes it: through double, then rounded to float. A float
+    // property (most are) is loaded here, without load_scalar()'s call and switch.
     const auto value = [&](const unsigned char* record_bytes, int role) {
-        return load_scalar(record_bytes + at[role], ve.properties[role].type, big);
+        const Scalar type = ve.properties[role].type;
+        return type == Scalar::f32 ? double(load<float>(record_bytes + at[role], big))
+                                   : load_scalar(record_bytes + at[role], type, big);
     };
     const auto as_float = [](double v) { return static_cast<float>(v); };
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertices, 1 << 14), [&](const auto& range) {
