@@ -1451,11 +1451,14 @@ TEST(CheckTables, ComponentsAreNumberedByTheirSmallestVertex) {
 }
 
 // The coincident-vertex grid files the vertices a face uses, at finite positions, in
-// parallel chunks (a vertex left out is filed under a code past every cell's and cut off):
-// on a shuffled grid of 40 000 vertices (three chunks), separate triangles whose corners
+// parallel chunks (a vertex left out is filed under a code past every cell's and cut off),
+// and a vertex near a face of its cell looks into the cell beyond: on a shuffled grid of 40 000 vertices (three chunks), separate triangles whose corners
 // copy grid vertices exactly (each copy and its original one defect) or 1e-6 away (near
 // ones), and vertices no face uses that copy grid vertices and each other (none of them
 // reported, not even the two at one position, nor joined to the groups of the copies).
+// With a tolerance of 1/64 (cells 32 times as wide: 0.5, from the box's corner at 0) a
+// triangle copied 1e-3 below its originals in x is near too, each copy in the cell below
+// its original's.
 TEST(CheckTables, CoincidentVerticesAreTheFacesVerticesOnly) {
     constexpr std::uint32_t n = 200;
     const std::vector<std::uint32_t> shuffled = shuffled_ids(n * n, 17);
@@ -1473,19 +1476,22 @@ TEST(CheckTables, CoincidentVerticesAreTheFacesVerticesOnly) {
         return static_cast<std::uint32_t>(mesh.positions.size() - 1);
     };
     std::set<std::vector<std::uint32_t>> exact, near;  // each group's vertices, sorted
-    const auto copy_triangle = [&](std::uint32_t x, std::uint32_t y, double offset) {
+    std::set<std::vector<std::uint32_t>> across;  // near with the wider tolerance only
+    const auto copy_triangle = [&](std::uint32_t x, std::uint32_t y, glm::dvec3 offset,
+                                   std::set<std::vector<std::uint32_t>>& groups) {
         std::uint32_t copies[3];
         const std::uint32_t originals[3] = {at(x, y), at(x + 1, y), at(x, y + 1)};
         for (int k = 0; k < 3; ++k) {
-            copies[k] = add_vertex(mesh.positions[originals[k]] + glm::dvec3(0.0, 0.0, offset));
-            (offset == 0.0 ? exact : near).insert({std::min(originals[k], copies[k]), std::max(originals[k], copies[k])});
+            copies[k] = add_vertex(mesh.positions[originals[k]] + offset);
+            groups.insert({std::min(originals[k], copies[k]), std::max(originals[k], copies[k])});
         }
         mesh.add_triangle(copies[0], copies[1], copies[2]);
     };
-    copy_triangle(10, 10, 0.0);
-    copy_triangle(150, 3, 0.0);
-    copy_triangle(77, 190, 0.0);
-    copy_triangle(120, 120, 1e-6);
+    copy_triangle(10, 10, glm::dvec3(0.0), exact);
+    copy_triangle(150, 3, glm::dvec3(0.0), exact);
+    copy_triangle(77, 190, glm::dvec3(0.0), exact);
+    copy_triangle(120, 120, {0.0, 0.0, 1e-6}, near);
+    copy_triangle(60, 61, {-1e-3, 0.0, 0.0}, across);
     // Vertices no face uses: copies of grid vertices (one of them a vertex copied above too)
     // and two at one position of their own.
     for (std::uint32_t k = 0; k < 50; ++k) add_vertex(mesh.positions[at(3 * k + 1, 2 * k + 5)]);
@@ -1494,14 +1500,20 @@ TEST(CheckTables, CoincidentVerticesAreTheFacesVerticesOnly) {
     add_vertex({500.0, 500.0, 7.0});
     CheckOptions options = quick(Expect::open);
     options.ray_probe = false;
-    const CheckReport r = tessref::check_mesh(mesh, options);
-    EXPECT_EQ(r.unreferenced_vertices, 53u);
-    const auto groups = [&](DefectClass kind) {
+    const auto groups = [&](const CheckReport& r, DefectClass kind) {
         std::set<std::vector<std::uint32_t>> found;
         for (const auto& d : r.of(kind).locations) found.insert(d.vertices);
         EXPECT_EQ(found.size(), r.count(kind));
         return found;
     };
-    EXPECT_EQ(groups(DefectClass::coincident_vertices), exact);
-    EXPECT_EQ(groups(DefectClass::near_coincident_vertices), near);
+    const CheckReport r = tessref::check_mesh(mesh, options);
+    EXPECT_EQ(r.unreferenced_vertices, 53u);
+    EXPECT_EQ(groups(r, DefectClass::coincident_vertices), exact);
+    EXPECT_EQ(groups(r, DefectClass::near_coincident_vertices), near);
+    options.tolerance = 1.0 / 64;
+    const CheckReport wide = tessref::check_mesh(mesh, options);
+    ASSERT_EQ(wide.bbox_min, glm::dvec3(0.0));
+    EXPECT_EQ(groups(wide, DefectClass::coincident_vertices), exact);
+    near.insert(across.begin(), across.end());
+    EXPECT_EQ(groups(wide, DefectClass::near_coincident_vertices), near);
 }
