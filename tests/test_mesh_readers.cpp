@@ -601,6 +601,31 @@ TEST(MeshReaders, PlainBinaryPlyReadsAsItsAsciiTwinAndNamesBadRecords) {
     expect_refused(scratch("plain_negative.ply", with(face_offset + 13 * f + 9, le32(std::uint32_t(-2)))),
                    "face " + std::to_string(f) + " at byte offset " + std::to_string(face_offset + 13 * f + 9) +
                        " refers to vertex -2");
+
+    // The check reads the patch ids without the tess coords (MeshFileOptions::tess_coords),
+    // and refuses a non-finite tess coord all the same (`tessref check`, in expect_refused),
+    // in the parallel reading and in the serial one of the ASCII twin.
+    tessref::MeshFileOptions check_reading;
+    check_reading.provenance = true;
+    check_reading.tess_coords = false;
+    for (const fs::path& path : {binary_path, scratch_dir() / "plain_ascii.ply"}) {
+        const IndexedMesh m = tessref::read_mesh_file(path.string(), check_reading);
+        EXPECT_EQ(m.positions, a.positions);
+        EXPECT_EQ(m.patch_ids, a.patch_ids);
+        EXPECT_TRUE(m.tess_coords.empty() && m.normals.empty());
+    }
+    expect_refused(scratch("plain_nan_tess.ply", with(header + record * v + 36, f32(NAN))),
+                   "vertex " + std::to_string(v) + " at byte offset " + std::to_string(header + record * v) +
+                       " has a non-finite tess coord");
+    std::string ascii_nan = ascii;
+    const std::size_t line_start = ascii_nan.find("\n", ascii_nan.find("end_header")) + 1;
+    const std::size_t line_end = ascii_nan.find("\n", line_start);
+    const std::size_t last = ascii_nan.rfind("0.25 ", line_end);
+    ASSERT_GT(last, line_start);
+    ascii_nan.replace(last, 4, "nan ");
+    const int first_line = static_cast<int>(std::count(counts.begin(), counts.end(), '\n')) + 3;  // ply, format, counts
+    expect_refused(scratch("plain_nan_tess_ascii.ply", ascii_nan), "vertex 0 at line " + std::to_string(first_line) +
+                                                                       " has a non-finite tess coord", first_line);
 }
 
 TEST(MeshReaders, ObjCornerFormsNegativeIndicesAndOtherStatements) {

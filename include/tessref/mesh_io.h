@@ -59,6 +59,10 @@ struct IndexedMesh {
 struct MeshFileOptions {
     bool vertex_attributes = false;              // also read normals and texture coordinates
     bool provenance = false;                     // also read a PLY's patch ids and tess coords
+    // With provenance: keep the tess coords too. Without, a bad one is refused all the same
+    // (the file is read as it would be with them) and tess_coords stays empty (the check
+    // names patches, and has no use for 12 bytes a vertex more).
+    bool tess_coords = true;
     std::function<void(double)> progress;        // fraction of the file read, now and then
 };
 

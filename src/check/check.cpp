@@ -347,6 +347,7 @@ CheckedMesh read_and_check_mesh(const std::string& path, const CheckOptions& opt
     MeshFileOptions read_options;
     read_options.progress = read_progress;
     read_options.provenance = true;  // a PLY's patch ids name the patches of each location
+    read_options.tess_coords = false;
     return check_indexed_mesh(read_mesh_file(path, read_options), options);
 }
 

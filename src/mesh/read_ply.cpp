@@ -226,9 +226,11 @@ void store_vertex(Reading& r, const PlyRoles& roles, const std::vector<Real>& re
                           first_line);
         r.mesh.patch_ids.push_back(static_cast<std::uint32_t>(id));
     }
-    if (roles.tess_u >= 0)
-        r.mesh.tess_coords.emplace_back(finite(roles.tess_u, "tess coord"), finite(roles.tess_v, "tess coord"),
-                                        finite(roles.tess_w, "tess coord"));
+    if (roles.tess_u >= 0) {
+        const glm::vec3 tess(finite(roles.tess_u, "tess coord"), finite(roles.tess_v, "tess coord"),
+                             finite(roles.tess_w, "tess coord"));
+        if (r.options.tess_coords) r.mesh.tess_coords.push_back(tess);
+    }
 }
 
 // A binary PLY laid out as tessref, OpenMesh and most writers write one: the vertex element,
@@ -273,7 +275,7 @@ bool read_plain_binary_ply(Reading& r, const PlyHeader& h, const PlyRoles& roles
             case 1: if (roles.nx >= 0) mesh.normals.resize(vertices); break;
             case 2: if (roles.u >= 0) mesh.uvs.resize(vertices); break;
             case 3: if (roles.patch_id >= 0) mesh.patch_ids.resize(vertices); break;
-            case 4: if (roles.tess_u >= 0) mesh.tess_coords.resize(vertices); break;
+            case 4: if (roles.tess_u >= 0 && r.options.tess_coords) mesh.tess_coords.resize(vertices); break;
             case 5: mesh.face_start.resize(faces + 1); break;
             default: mesh.face_vertices.resize(3 * faces); break;
         }
@@ -314,7 +316,7 @@ bool read_plain_binary_ply(Reading& r, const PlyHeader& h, const PlyRoles& roles
                 const glm::vec3 t(as_float(value(p, roles.tess_u)), as_float(value(p, roles.tess_v)),
                                   as_float(value(p, roles.tess_w)));
                 ok = ok && std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z);
-                mesh.tess_coords[i] = t;
+                if (r.options.tess_coords) mesh.tess_coords[i] = t;
             }
         }
         if (!ok) clean.store(false, std::memory_order_relaxed);
@@ -358,7 +360,7 @@ void read_ply(Reading& r) {
     if (vroles.nx >= 0) r.mesh.normals.reserve(vertex_count);
     if (vroles.u >= 0) r.mesh.uvs.reserve(vertex_count);
     if (vroles.patch_id >= 0) r.mesh.patch_ids.reserve(vertex_count);
-    if (vroles.tess_u >= 0) r.mesh.tess_coords.reserve(vertex_count);
+    if (vroles.tess_u >= 0 && r.options.tess_coords) r.mesh.tess_coords.reserve(vertex_count);
     if (read_plain_binary_ply(r, h, vroles, big)) return;
 
     Tokens tokens(r.text, h.body_offset, h.body_line);
