@@ -200,12 +200,17 @@ public:
     // clip[first_vertex + k], clearing `finite` when a position is not: a terrain projects
     // each block of points while its float positions are at hand, where the renderer read
     // the double positions back (one Projection per thread: emit writes `finite`).
+    // positions false: mesh.positions may be left as they are, for a caller that reads only
+    // the clip positions (the streamed render whose shading takes no world position, with no
+    // face or height-field normals: at level 63 the 24-byte stores were a third of the
+    // evaluation's own time).
     enum class VertexNormals { now, later };
     enum class Provenance { now, later };
     enum class Triangles { write, shared };
     struct Projection {
         glm::mat4 mvp{1.0f};
         glm::vec4* clip = nullptr;
+        bool positions = true;
         bool finite = true;
     };
     void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,

@@ -126,7 +126,8 @@ void TerrainProgram<T>::evaluate_into(std::size_t p, std::span<const DomainPoint
         if (write_normals) vertex_normals(p, tc, positions, coordinates, std::span<vec3_t<T>>(normal.data(), count));
         // The mesh in double, written in order.
         const std::size_t v = first_vertex + k0;
-        for (std::size_t k = 0; k < count; ++k) mesh.positions[v + k] = glm::dvec3(position[k]);
+        if (!projection || projection->positions)
+            for (std::size_t k = 0; k < count; ++k) mesh.positions[v + k] = glm::dvec3(position[k]);
         for (std::size_t k = 0; k < count; ++k) mesh.uvs[v + k] = glm::dvec2(textureCoordinate[k]);
         if (write_normals)
             for (std::size_t k = 0; k < count; ++k) mesh.normals[v + k] = glm::dvec3(normal[k]);

@@ -368,13 +368,13 @@ std::size_t plan_batch(const PatchStream& stream, std::size_t& next_patch, std::
 // Evaluates and projects a chunk's patches (pass 4 of the pipeline, with gl_Position of each
 // block of points as it is evaluated: PatchStream::Projection), noting whether every vertex
 // is finite.
-void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp,
+void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp, bool positions,
                     PatchStream::VertexNormals normals_mode, PatchStream::Provenance provenance) {
     SurfaceMesh& m = c.mesh;
     const auto shared = c.last_patch == c.first_patch + 1 ? stream.shared_triangles(c.first_patch)
                                                           : std::span<const std::array<std::uint32_t, 3>>();
     c.clip.resize(stream.vertex_base(c.last_patch) - stream.vertex_base(c.first_patch));
-    PatchStream::Projection projection{mvp, c.clip.data()};
+    PatchStream::Projection projection{mvp, c.clip.data(), positions};
     stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode, provenance,
                     shared.empty() ? PatchStream::Triangles::write : PatchStream::Triangles::shared, &projection);
     c.finite = projection.finite;
@@ -543,6 +543,12 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     const auto normals_mode = defer_normals ? PatchStream::VertexNormals::later : PatchStream::VertexNormals::now;
     // Each vertex's patch id and tess coord are read only for the provenance buffers.
     const auto provenance = options.provenance ? PatchStream::Provenance::now : PatchStream::Provenance::later;
+    // The evaluation's positions (in double) are read after the projection only by the
+    // resolve's world position (a model that takes one, pom's uv derivatives), emit()'s face
+    // normals and the deferred height-field normals: without those, only the clip positions
+    // are kept (PatchStream::Projection::positions).
+    const bool positions = needs.worldPosition || needs.uv_derivatives || stream.face_normals() ||
+                           (scene.geometry && scene.geometry->normals == GeometryNormals::height_field);
 
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
     std::vector<PatchChunk> chunks;
@@ -559,7 +565,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         // at two. A chunk with a non-finite vertex draws nothing: the render stops below.
         rasterizer.draw(used, [&](std::size_t k) -> RasterChunk {
             PatchChunk& c = batch_chunks[k];
-            evaluate_chunk(stream, c, mvp, normals_mode, provenance);
+            evaluate_chunk(stream, c, mvp, positions, normals_mode, provenance);
             if (!c.finite) return {};
             return {c.clip, c.triangles, c.first_triangle, c.shared_triangles};
         });
