@@ -201,9 +201,9 @@ public:
     // each block of points while its float positions are at hand, where the renderer read
     // the double positions back (one Projection per thread: emit writes `finite`).
     // positions false: mesh.positions may be left as they are, for a caller that reads only
-    // the clip positions (the streamed render whose shading takes no world position, with no
-    // face or height-field normals: at level 63 the 24-byte stores were a third of the
-    // evaluation's own time).
+    // the clip positions (the streamed render whose shading takes no world position, without
+    // height-field normals: at level 63 the 24-byte stores were a third of the evaluation's
+    // own time); emit() still writes them where it computes face normals from them.
     enum class VertexNormals { now, later };
     enum class Provenance { now, later };
     enum class Triangles { write, shared };

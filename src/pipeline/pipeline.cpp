@@ -293,10 +293,16 @@ struct StreamImpl final : PatchStream::Impl {
             return;
         }
         const Pattern& pattern = *patterns[p];
-        if (projection)
+        if (projection) {
+            // The face normals below are computed from the positions: written whatever the
+            // caller asked.
+            const bool asked = projection->positions;
+            projection->positions = asked || (face_normals && normals_out);
             program->evaluate_projected(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals, *projection);
-        else
+            projection->positions = asked;
+        } else {
             program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals);
+        }
         if (provenance) write_coords(p, pattern.points(), mesh, first_vertex);
         // The pattern's triangles (a scene's domain makes triangles: three indices each) moved
         // to the patch's vertices, reversed (1 <-> 2) where the program flips them: a loop per

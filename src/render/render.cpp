@@ -544,10 +544,10 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     // Each vertex's patch id and tess coord are read only for the provenance buffers.
     const auto provenance = options.provenance ? PatchStream::Provenance::now : PatchStream::Provenance::later;
     // The evaluation's positions (in double) are read after the projection only by the
-    // resolve's world position (a model that takes one, pom's uv derivatives), emit()'s face
-    // normals and the deferred height-field normals: without those, only the clip positions
-    // are kept (PatchStream::Projection::positions).
-    const bool positions = needs.worldPosition || needs.uv_derivatives || stream.face_normals() ||
+    // resolve's world position (a model that takes one, pom's uv derivatives) and the deferred
+    // height-field normals (emit() keeps them for its face normals itself): without those,
+    // only the clip positions are kept (PatchStream::Projection::positions).
+    const bool positions = needs.worldPosition || needs.uv_derivatives ||
                            (scene.geometry && scene.geometry->normals == GeometryNormals::height_field);
 
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
