@@ -30,7 +30,6 @@ using render_detail::perspective_weights;
 using render_detail::pixel_ndc;
 using render_detail::window_depth;
 using pipeline::gl_position;
-using pipeline::project_vertices;
 
 namespace render_detail {
 
