@@ -17,6 +17,7 @@
 
 #include <tbb/global_control.h>
 
+#include "common/simd.h"
 #include "render_compare.h"
 #include "tessref/error.h"
 #include "tessref/pipeline.h"
@@ -603,6 +604,95 @@ TEST(PatchStream, SharedTrianglesAreTheEmittedOnes) {
     }
     EXPECT_GT(shared_patches, 100u);
     EXPECT_GT(other_patches, 0u);
+}
+
+// PatchStream::Projection: the clip positions emit() computes as it evaluates are gl_Position
+// of the positions it writes, mvp * vec4(p rounded to float, 1) summed column by column in
+// order, a rounding a step (llvmpipe's order, written out here), bit for bit, at every SIMD
+// level the CPU runs; everything else emit() writes is unchanged, and positions false leaves
+// mesh.positions as they were. Every shipped scene that streams (terrains and PN, a patch's
+// vertices at an offset as in a run), both precisions and camera-relative evaluation.
+TEST(PatchStream, ProjectionIsGlPositionOfTheEmittedPositions) {
+    using tessref::PatchStream;
+    const tessref::SimdLevel saved = tessref::simd_level();
+    std::vector<tessref::SimdLevel> levels{tessref::SimdLevel::sse2};
+    if (tessref::cpu_simd_level() == tessref::SimdLevel::avx2) levels.push_back(tessref::SimdLevel::avx2);
+    std::size_t vertices_compared = 0;
+    for (const fs::path& path : shipped_scenes()) {
+        const tessref::Scene scene = tessref::load_scene(path.string());
+        if (!PatchStream::streams(scene) || !scene.camera) continue;
+        for (int variant = 0; variant < 3; ++variant) {
+            // A user's shaders run in gpu precision and world coordinates only.
+            if (variant > 0 && !scene.shaders.empty()) continue;
+            tessref::PipelineOptions options;
+            options.precision = variant == 1 ? tessref::Precision::exact : tessref::Precision::gpu;
+            options.camera_relative = variant == 2;
+            const PatchStream stream(scene, options);
+            const glm::mat4 mvp(tessref::camera_moved_by(*scene.camera, stream.origin()).view_projection());
+            for (const tessref::SimdLevel level : levels) {
+                tessref::set_simd_level(level);
+                SCOPED_TRACE(path.filename().string() + " variant " + std::to_string(variant) + " " +
+                             tessref::simd_level_name(level));
+                const std::size_t n = stream.patch_count();
+                for (std::size_t p = 0; p < n; p += std::max<std::size_t>(1, n / 8)) {
+                    const std::size_t offset = 3;
+                    const std::size_t vertices = stream.vertex_base(p + 1) - stream.vertex_base(p);
+                    const std::size_t triangles = stream.triangle_base(p + 1) - stream.triangle_base(p);
+                    tessref::SurfaceMesh now, projected, lean;
+                    std::vector<glm::dvec3> faces, projected_faces, lean_faces;
+                    stream.size(now, faces, offset + vertices, triangles);
+                    stream.size(projected, projected_faces, offset + vertices, triangles);
+                    stream.size(lean, lean_faces, offset + vertices, triangles);
+                    const glm::dvec3 untouched(-7.0);
+                    std::fill(lean.positions.begin() + offset, lean.positions.end(), untouched);
+                    const glm::vec4 unwritten(-9.0f);
+                    std::vector<glm::vec4> clip(offset + vertices, unwritten), lean_clip(offset + vertices, unwritten);
+                    PatchStream::Projection with{mvp, clip.data()};
+                    PatchStream::Projection without{mvp, lean_clip.data(), false};
+                    stream.emit(p, now, offset, 0, &faces);
+                    stream.emit(p, projected, offset, 0, &projected_faces, PatchStream::VertexNormals::now,
+                                PatchStream::Provenance::now, PatchStream::Triangles::write, &with);
+                    stream.emit(p, lean, offset, 0, &lean_faces, PatchStream::VertexNormals::now,
+                                PatchStream::Provenance::now, PatchStream::Triangles::write, &without);
+                    EXPECT_TRUE(with.finite && without.finite);
+                    for (std::size_t v = 0; v < offset; ++v) ASSERT_TRUE(same_bytes(std::vector{clip[v]}, {unwritten}));
+                    for (std::size_t v = offset; v < offset + vertices; ++v) {
+                        const glm::vec3 q(now.positions[v]);
+                        glm::vec4 expected = mvp[0] * q.x;
+                        const glm::vec4 y = mvp[1] * q.y;
+                        expected += y;
+                        const glm::vec4 z = mvp[2] * q.z;
+                        expected += z;
+                        expected += mvp[3];
+                        ASSERT_EQ(std::memcmp(&clip[v], &expected, sizeof expected), 0) << "patch " << p << " vertex " << v;
+                        ASSERT_EQ(std::memcmp(&lean_clip[v], &expected, sizeof expected), 0)
+                            << "patch " << p << " vertex " << v;
+                        ++vertices_compared;
+                    }
+                    EXPECT_TRUE(same_bytes(projected.positions, now.positions));
+                    EXPECT_TRUE(same_bytes(projected.uvs, now.uvs));
+                    EXPECT_TRUE(same_bytes(projected.normals, now.normals));
+                    EXPECT_TRUE(same_bytes(projected.tess_coords, now.tess_coords));
+                    EXPECT_TRUE(same_bytes(projected.triangles, now.triangles));
+                    EXPECT_TRUE(same_bytes(projected_faces, faces));
+                    // positions false: a terrain leaves them unless emit() computes face
+                    // normals from them; a program without its own projection (PN) writes
+                    // them as emit() always did. All the rest as emit() writes it.
+                    const bool left = std::all_of(lean.positions.begin() + offset, lean.positions.end(),
+                                                  [&](const glm::dvec3& q) { return q == untouched; });
+                    EXPECT_TRUE(left || same_bytes(lean.positions, now.positions));
+                    if (vertices > 0)  // a culled patch has none to leave
+                        EXPECT_EQ(left, scene.evaluation.model != tessref::EvaluationModel::pn && !stream.face_normals());
+                    EXPECT_TRUE(same_bytes(lean_faces, faces));
+                    EXPECT_TRUE(same_bytes(lean.uvs, now.uvs));
+                    EXPECT_TRUE(same_bytes(lean.normals, now.normals));
+                    EXPECT_TRUE(same_bytes(lean.triangles, now.triangles));
+                }
+            }
+        }
+    }
+    tessref::set_simd_level(saved);
+    EXPECT_GT(vertices_compared, 100000u);
 }
 
 // RenderOptions::colour8 keeps the image as the unorm8 codes to_rgba8 gives of the float

@@ -195,19 +195,35 @@ public:
     // Triangles::shared (only for a patch whose shared_triangles() is not empty): mesh.triangles
     // is left as it is, for a caller that reads shared_triangles(patch) instead (the streamed
     // render of a chunk of one patch: at level 63 the copy was 5 % of the render).
+    // projection (not null): also gl_Position of every vertex emit() writes, as the renderer
+    // computes it (mvp * vec4(position rounded to float, 1), pipeline/gl_position.h), into
+    // clip[first_vertex + k], clearing `finite` when a position is not: a terrain projects
+    // each block of points while its float positions are at hand, where the renderer read
+    // the double positions back (one Projection per thread: emit writes `finite`).
+    // positions false: mesh.positions may be left as they are, for a caller that reads only
+    // the clip positions (the streamed render whose shading takes no world position, without
+    // height-field normals: at level 63 the 24-byte stores were a third of the evaluation's
+    // own time); emit() still writes them where it computes face normals from them.
     enum class VertexNormals { now, later };
     enum class Provenance { now, later };
     enum class Triangles { write, shared };
+    struct Projection {
+        glm::mat4 mvp{1.0f};
+        glm::vec4* clip = nullptr;
+        bool positions = true;
+        bool finite = true;
+    };
     void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
               std::vector<glm::dvec3>* face_normals, VertexNormals normals = VertexNormals::now,
-              Provenance provenance = Provenance::now, Triangles triangles = Triangles::write) const;
+              Provenance provenance = Provenance::now, Triangles triangles = Triangles::write,
+              Projection* projection = nullptr) const;
     // size() and emit() for the run of patches [first, last) as one mesh: its vertices and
     // triangles from index 0, the triangles indexing the run's own vertices; face normals
     // into *face_normals when face_normals() and the pointer is not null. Triangles::shared:
-    // mesh.triangles is left empty.
+    // mesh.triangles is left empty. projection: clip[0, the run's vertex count) as emit's.
     void emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh, std::vector<glm::dvec3>* face_normals,
                   VertexNormals normals = VertexNormals::now, Provenance provenance = Provenance::now,
-                  Triangles triangles = Triangles::write) const;
+                  Triangles triangles = Triangles::write, Projection* projection = nullptr) const;
     // Patch p's triangles as emit() writes them less first_vertex (indexing the patch's own
     // vertices from 0), where they are its pattern's indices as they are, shared by every
     // patch of the pattern and held by the stream: not reversed (reversed() false) and no

@@ -144,7 +144,7 @@ struct PatchStream::Impl {
     virtual ~Impl() = default;
     virtual void emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
                       std::vector<glm::dvec3>* face_normals, bool vertex_normals, bool provenance,
-                      bool triangles) const = 0;
+                      bool triangles, PatchStream::Projection* projection) const = 0;
     virtual void evaluate_points(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
                                  std::size_t first) const = 0;
     virtual void later_normals(std::size_t patch, std::span<const std::uint32_t> points, SurfaceMesh& mesh,
@@ -275,12 +275,15 @@ struct StreamImpl final : PatchStream::Impl {
 
     void emit(std::size_t p, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
               std::vector<glm::dvec3>* normals_out, bool vertex_normals, bool provenance,
-              bool write_triangles) const override {
+              bool write_triangles, PatchStream::Projection* projection) const override {
         if (geometry_shader) {
             const SurfaceMesh& e = emitted[p];
             std::vector<std::uint32_t> all(e.positions.size());
             for (std::size_t v = 0; v < all.size(); ++v) all[v] = static_cast<std::uint32_t>(v);
             copy_emitted(p, all, mesh, first_vertex);
+            if (projection)
+                projection->finite &= pipeline::project_vertices(mesh.positions.data() + first_vertex, all.size(),
+                                                                 projection->mvp, projection->clip + first_vertex);
             const auto base = static_cast<std::uint32_t>(first_vertex);
             for (std::size_t t = 0; t < e.triangles.size(); ++t)
                 mesh.triangles[first_triangle + t] = {base + e.triangles[t][0], base + e.triangles[t][1], base + e.triangles[t][2]};
@@ -290,7 +293,16 @@ struct StreamImpl final : PatchStream::Impl {
             return;
         }
         const Pattern& pattern = *patterns[p];
-        program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals);
+        if (projection) {
+            // The face normals below are computed from the positions: written whatever the
+            // caller asked.
+            const bool asked = projection->positions;
+            projection->positions = asked || (face_normals && normals_out);
+            program->evaluate_projected(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals, *projection);
+            projection->positions = asked;
+        } else {
+            program->evaluate(p, domain_points<T>(pattern), mesh, first_vertex, vertex_normals);
+        }
         if (provenance) write_coords(p, pattern.points(), mesh, first_vertex);
         // The pattern's triangles (a scene's domain makes triangles: three indices each) moved
         // to the patch's vertices, reversed (1 <-> 2) where the program flips them: a loop per
@@ -688,23 +700,24 @@ void PatchStream::size(SurfaceMesh& mesh, std::vector<glm::dvec3>& face_normals,
 }
 void PatchStream::emit(std::size_t patch, SurfaceMesh& mesh, std::size_t first_vertex, std::size_t first_triangle,
                        std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance,
-                       Triangles triangles) const {
+                       Triangles triangles, Projection* projection) const {
     if (triangles == Triangles::shared && shared_triangles(patch).empty())
         throw Error("patch " + std::to_string(patch) + "'s triangles are not its pattern's to share",
                     Where::at_key("triangles"));
     impl_->emit(patch, mesh, first_vertex, first_triangle, face_normals, normals == VertexNormals::now,
-                provenance == Provenance::now, triangles == Triangles::write);
+                provenance == Provenance::now, triangles == Triangles::write, projection);
 }
 void PatchStream::emit_run(std::size_t first, std::size_t last, SurfaceMesh& mesh,
                            std::vector<glm::dvec3>* face_normals, VertexNormals normals, Provenance provenance,
-                           Triangles triangles) const {
+                           Triangles triangles, Projection* projection) const {
     const std::size_t v0 = vertex_base(first), t0 = triangle_base(first);
     std::vector<glm::dvec3> none;
     const bool shared = triangles == Triangles::shared;
     size(mesh, face_normals ? *face_normals : none, vertex_base(last) - v0, shared ? 0 : triangle_base(last) - t0);
     if (shared && face_normals && impl_->face_normals) face_normals->resize(triangle_base(last) - t0);
     for (std::size_t p = first; p < last; ++p)
-        emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals, provenance, triangles);
+        emit(p, mesh, vertex_base(p) - v0, triangle_base(p) - t0, face_normals, normals, provenance, triangles,
+             projection);
 }
 std::span<const std::array<std::uint32_t, 3>> PatchStream::shared_triangles(std::size_t patch) const {
     if (impl_->flip || impl_->geometry_shader) return {};

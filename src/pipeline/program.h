@@ -20,6 +20,7 @@
 #include <span>
 #include <vector>
 
+#include "pipeline/gl_position.h"
 #include "tessref/control.h"
 #include "tessref/mesh.h"
 #include "tessref/pipeline.h"
@@ -47,6 +48,18 @@ public:
     // Called after control() of the same patch, concurrently for different patches.
     virtual void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                           std::size_t first_vertex, bool normals) const = 0;
+
+    // evaluate(), then gl_Position of every point it wrote (PatchStream::Projection: the
+    // renderer's, pipeline/gl_position.h) into projection.clip[first_vertex + k]. This default
+    // reads mesh.positions back; TerrainProgram projects each block of points from the
+    // positions its evaluation computed, still on its stack (in float at gpu precision),
+    // where the renderer reloaded the 24-byte double positions the evaluation had just stored.
+    virtual void evaluate_projected(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                                    std::size_t first_vertex, bool normals, PatchStream::Projection& projection) const {
+        evaluate(patch, points, mesh, first_vertex, normals);
+        projection.finite &= project_vertices(mesh.positions.data() + first_vertex, points.size(), projection.mvp,
+                                              projection.clip + first_vertex);
+    }
 
     // The per-vertex normals that evaluate() left out (normals false) for some of the points
     // it evaluated: point k was written at mesh index vertices[k], and its normal goes to

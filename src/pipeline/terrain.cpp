@@ -106,6 +106,13 @@ PatchLevels<T> TerrainProgram<T>::control(std::size_t p) {
 template <typename T>
 void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                                  std::size_t first_vertex, bool normals) const {
+    evaluate_into(p, points, mesh, first_vertex, normals, nullptr);
+}
+
+template <typename T>
+void TerrainProgram<T>::evaluate_into(std::size_t p, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                                      std::size_t first_vertex, bool normals,
+                                      PatchStream::Projection* projection) const {
     const bool write_normals = geometry_vertex_normals && normals;
     std::array<vec3_t<T>, kBlock> position;
     std::array<vec2_t<T>, kBlock> textureCoordinate;
@@ -119,10 +126,15 @@ void TerrainProgram<T>::evaluate(std::size_t p, std::span<const DomainPoint<T>> 
         if (write_normals) vertex_normals(p, tc, positions, coordinates, std::span<vec3_t<T>>(normal.data(), count));
         // The mesh in double, written in order.
         const std::size_t v = first_vertex + k0;
-        for (std::size_t k = 0; k < count; ++k) mesh.positions[v + k] = glm::dvec3(position[k]);
+        if (!projection || projection->positions)
+            for (std::size_t k = 0; k < count; ++k) mesh.positions[v + k] = glm::dvec3(position[k]);
         for (std::size_t k = 0; k < count; ++k) mesh.uvs[v + k] = glm::dvec2(textureCoordinate[k]);
         if (write_normals)
             for (std::size_t k = 0; k < count; ++k) mesh.normals[v + k] = glm::dvec3(normal[k]);
+        // gl_Position from the block's positions as computed (rounded to float when T is
+        // double, as the mesh's would be): the same clip coordinates as from the mesh.
+        if (projection)
+            projection->finite &= project_vertices(positions.data(), count, projection->mvp, projection->clip + v);
     }
 }
 

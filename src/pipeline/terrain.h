@@ -29,6 +29,10 @@ public:
     PatchLevels<T> control(std::size_t patch) override;
     void evaluate(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
                   std::size_t first_vertex, bool normals) const override;
+    void evaluate_projected(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                            std::size_t first_vertex, bool normals, PatchStream::Projection& projection) const override {
+        evaluate_into(patch, points, mesh, first_vertex, normals, &projection);
+    }
     void geometry_normals(std::size_t patch, std::span<const DomainPoint<T>> points, std::span<const vec3_t<T>> position,
                           std::span<const vec2_t<T>> uv, std::span<vec3_t<T>> normal) const override {
         if (!geometry_vertex_normals) return;
@@ -103,6 +107,10 @@ protected:
     std::vector<Lab4Lod<T>> lab4Lod;             // per patch, with control model lab4
 
 private:
+    // evaluate(), and evaluate_projected() where projection is not null.
+    void evaluate_into(std::size_t patch, std::span<const DomainPoint<T>> points, SurfaceMesh& mesh,
+                       std::size_t first_vertex, bool normals, PatchStream::Projection* projection) const;
+
     std::vector<T> u_coords, v_coords;  // grid corner coordinates as the vertex buffer holds them
     std::vector<T> u_relative, v_relative;  // the same minus origin (rounded once), when relative
     bool geometry_vertex_normals = false;

@@ -12,15 +12,11 @@
 #include <string>
 #include <utility>
 
-#if defined(__x86_64__)
-#include <immintrin.h>
-#endif
-
 #include "common/huge_pages.h"
 #include "common/parallel.h"
-#include "common/simd.h"
 #include "common/unorm8.h"
 
+#include "pipeline/gl_position.h"
 #include "render/render_internal.h"
 #include "render/user_fragment.h"
 #include "tessref/compare.h"
@@ -33,6 +29,7 @@ using render_detail::Derivatives;
 using render_detail::perspective_weights;
 using render_detail::pixel_ndc;
 using render_detail::window_depth;
+using pipeline::gl_position;
 
 namespace render_detail {
 
@@ -156,94 +153,6 @@ double plane_depth(const std::array<glm::dvec4, 3>& c, int x, int row, int width
 
 }  // namespace
 
-// mvp * vec4(p, 1.0) as llvmpipe sums it: column by column in order, each step rounded,
-// ((m0 x + m1 y) + m2 z) + m3. glm adds the two halves pairwise, (m0 x + m1 y) + (m2 z + m3),
-// which for a terrain far from the origin moves clip coordinates by an ulp often enough to
-// change thousands of pixels' coverage against llvmpipe (tests/extremes: the terrain 1e6
-// units out). Separate statements, so that no compiler fuses a multiply and an add.
-namespace {
-
-glm::vec4 gl_position(const glm::mat4& m, const glm::vec3& p) {
-    glm::vec4 sum = m[0] * p.x;
-    const glm::vec4 y = m[1] * p.y;
-    sum += y;
-    const glm::vec4 z = m[2] * p.z;
-    sum += z;
-    sum += m[3];
-    return sum;
-}
-
-// gl_position of the evaluation's positions, rounded to float, into clip[0, n); whether
-// every position is finite.
-bool project_vertices(const glm::dvec3* q, std::size_t n, const glm::mat4& m, glm::vec4* clip) {
-    bool finite = true;
-    for (std::size_t v = 0; v < n; ++v) {
-        // No short circuit: a loop without branches.
-        finite &= std::isfinite(q[v].x) & std::isfinite(q[v].y) & std::isfinite(q[v].z);
-        clip[v] = gl_position(m, glm::vec3(q[v]));
-    }
-    return finite;
-}
-
-#if defined(__x86_64__) && defined(__GNUC__)
-// project_vertices eight vertices at a time with AVX2 (SimdLevel::avx2): the positions
-// loaded, rounded to float (vcvtpd2ps, as cvtsd2ss) and sorted by component, each clip
-// component summed as gl_position sums it, ((m0 x + m1 y) + m2 z) + m3, a rounding a step,
-// then transposed back to one vec4 a vertex. Finite: |c| < infinity, false for a NaN, as
-// std::isfinite. The loop it replaces went a vertex at a time (7 % of a level-63 render).
-[[gnu::target("avx2")]] bool project_vertices_avx2(const glm::dvec3* q, std::size_t n, const glm::mat4& m,
-                                                   glm::vec4* clip) {
-    static_assert(sizeof(glm::dvec3) == 24 && sizeof(glm::vec4) == 16);
-    const double* d = &q[0].x;
-    const __m256d magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
-    const __m256d infinity = _mm256_set1_pd(std::numeric_limits<double>::infinity());
-    __m256d finite = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-    std::size_t v = 0;
-    for (; v + 8 <= n; v += 8) {
-        // The 24 doubles of the eight positions in six plain loads, each rounded to float
-        // (vcvtpd2ps, as cvtsd2ss) and checked finite: (x0 y0 z0 x1), (y1 z1 x2 y2),
-        // (z2 x3 y3 z3) in the low halves, vertices 4-7 likewise in the high ones. (Gathers
-        // of each component, as this loop had, measured slower on this project's machine.)
-        __m128 f[6];
-        for (int k = 0; k < 6; ++k) {
-            const __m256d q4 = _mm256_loadu_pd(d + 3 * v + 4 * k);
-            finite = _mm256_and_pd(finite, _mm256_cmp_pd(_mm256_and_pd(q4, magnitude), infinity, _CMP_LT_OQ));
-            f[k] = _mm256_cvtpd_ps(q4);
-        }
-        const __m256 a = _mm256_set_m128(f[3], f[0]), b = _mm256_set_m128(f[4], f[1]), cc = _mm256_set_m128(f[5], f[2]);
-        // Three-component structures to components, in each half (x2 y2 x3 y3, y0 z0 y1 z1).
-        const __m256 x2y2x3y3 = _mm256_shuffle_ps(b, cc, _MM_SHUFFLE(2, 1, 3, 2));
-        const __m256 y0z0y1z1 = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));
-        const __m256 c[3] = {_mm256_shuffle_ps(a, x2y2x3y3, _MM_SHUFFLE(2, 0, 3, 0)),
-                             _mm256_shuffle_ps(y0z0y1z1, x2y2x3y3, _MM_SHUFFLE(3, 1, 2, 0)),
-                             _mm256_shuffle_ps(y0z0y1z1, cc, _MM_SHUFFLE(3, 0, 3, 1))};  // x, y, z in float
-        __m256 out[4];  // clip x, y, z, w of the eight vertices
-        for (int r = 0; r < 4; ++r) {
-            __m256 sum = _mm256_mul_ps(_mm256_set1_ps(m[0][r]), c[0]);
-            sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(m[1][r]), c[1]));
-            sum = _mm256_add_ps(sum, _mm256_mul_ps(_mm256_set1_ps(m[2][r]), c[2]));
-            out[r] = _mm256_add_ps(sum, _mm256_set1_ps(m[3][r]));
-        }
-        // 4 x 8 -> 8 x 4: within each 128-bit half the usual 4 x 4 transpose, then the halves
-        // hold vertices 0-3 and 4-7.
-        const __m256 t0 = _mm256_unpacklo_ps(out[0], out[1]), t1 = _mm256_unpackhi_ps(out[0], out[1]);
-        const __m256 t2 = _mm256_unpacklo_ps(out[2], out[3]), t3 = _mm256_unpackhi_ps(out[2], out[3]);
-        const __m256 v0 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
-        const __m256 v1 = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
-        const __m256 v2 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
-        const __m256 v3 = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
-        float* o = &clip[v].x;
-        _mm256_storeu_ps(o + 0, _mm256_permute2f128_ps(v0, v1, 0x20));
-        _mm256_storeu_ps(o + 8, _mm256_permute2f128_ps(v2, v3, 0x20));
-        _mm256_storeu_ps(o + 16, _mm256_permute2f128_ps(v0, v1, 0x31));
-        _mm256_storeu_ps(o + 24, _mm256_permute2f128_ps(v2, v3, 0x31));
-    }
-    const bool all = _mm256_movemask_pd(finite) == 0xf;
-    return project_vertices(q + v, n - v, m, clip + v) & all;
-}
-#endif
-
-}  // namespace
 
 namespace {
 
@@ -455,28 +364,22 @@ std::size_t plan_batch(const PatchStream& stream, std::size_t& next_patch, std::
     return used;
 }
 
-// Evaluates and projects a chunk's patches (pass 4 of the pipeline, then gl_Position),
-// noting whether every vertex is finite.
-void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp,
+// Evaluates and projects a chunk's patches (pass 4 of the pipeline, with gl_Position of each
+// block of points as it is evaluated: PatchStream::Projection), noting whether every vertex
+// is finite.
+void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp, bool positions,
                     PatchStream::VertexNormals normals_mode, PatchStream::Provenance provenance) {
     SurfaceMesh& m = c.mesh;
     const auto shared = c.last_patch == c.first_patch + 1 ? stream.shared_triangles(c.first_patch)
                                                           : std::span<const std::array<std::uint32_t, 3>>();
+    c.clip.resize(stream.vertex_base(c.last_patch) - stream.vertex_base(c.first_patch));
+    PatchStream::Projection projection{mvp, c.clip.data(), positions};
     stream.emit_run(c.first_patch, c.last_patch, m, &c.face_normals, normals_mode, provenance,
-                    shared.empty() ? PatchStream::Triangles::write : PatchStream::Triangles::shared);
+                    shared.empty() ? PatchStream::Triangles::write : PatchStream::Triangles::shared, &projection);
+    c.finite = projection.finite;
     c.triangles = shared.empty() ? std::span<const std::array<std::uint32_t, 3>>(m.triangles) : shared;
     c.shared_triangles = !shared.empty();
-    const std::size_t vertices = m.positions.size();
-    if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(vertices, 0);
-    c.clip.resize(vertices);
-    // The renderer's gl_Position of the evaluation's float position.
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (simd_level() == SimdLevel::avx2) {
-        c.finite = project_vertices_avx2(m.positions.data(), vertices, mvp, c.clip.data());
-        return;
-    }
-#endif
-    c.finite = project_vertices(m.positions.data(), vertices, mvp, c.clip.data());
+    if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(m.positions.size(), 0);
 }
 
 // A triangle id of a batch: its chunk and its index there; the chunk count for an id outside
@@ -639,6 +542,12 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
     const auto normals_mode = defer_normals ? PatchStream::VertexNormals::later : PatchStream::VertexNormals::now;
     // Each vertex's patch id and tess coord are read only for the provenance buffers.
     const auto provenance = options.provenance ? PatchStream::Provenance::now : PatchStream::Provenance::later;
+    // The evaluation's positions (in double) are read after the projection only by the
+    // resolve's world position (a model that takes one, pom's uv derivatives) and the deferred
+    // height-field normals (emit() keeps them for its face normals itself): without those,
+    // only the clip positions are kept (PatchStream::Projection::positions).
+    const bool positions = needs.worldPosition || needs.uv_derivatives ||
+                           (scene.geometry && scene.geometry->normals == GeometryNormals::height_field);
 
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
     std::vector<PatchChunk> chunks;
@@ -655,7 +564,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         // at two. A chunk with a non-finite vertex draws nothing: the render stops below.
         rasterizer.draw(used, [&](std::size_t k) -> RasterChunk {
             PatchChunk& c = batch_chunks[k];
-            evaluate_chunk(stream, c, mvp, normals_mode, provenance);
+            evaluate_chunk(stream, c, mvp, positions, normals_mode, provenance);
             if (!c.finite) return {};
             return {c.clip, c.triangles, c.first_triangle, c.shared_triangles};
         });
