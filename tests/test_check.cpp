@@ -1267,6 +1267,23 @@ std::vector<std::uint32_t> shuffled_ids(std::uint32_t count, std::uint64_t seed)
     }
     return ids;
 }
+
+// An n x n grid of vertices at (x, y, 0) whose numbers are shuffled_ids(n * n, seed), cut
+// into two triangles a cell in grid order: the first triangle of cell (x, y) is face
+// 2 (y (n - 1) + x). `shuffled` receives the numbers (the vertex at (x, y) is shuffled[y n + x]).
+IndexedMesh shuffled_grid(std::uint32_t n, std::uint64_t seed, std::vector<std::uint32_t>& shuffled) {
+    shuffled = shuffled_ids(n * n, seed);
+    IndexedMesh mesh;
+    mesh.positions.resize(shuffled.size());
+    for (std::uint32_t i = 0; i < shuffled.size(); ++i) mesh.positions[shuffled[i]] = glm::dvec3(i % n, i / n, 0.0);
+    const auto at = [&](std::uint32_t x, std::uint32_t y) { return shuffled[y * n + x]; };
+    for (std::uint32_t y = 0; y + 1 < n; ++y)
+        for (std::uint32_t x = 0; x + 1 < n; ++x) {
+            mesh.add_triangle(at(x, y), at(x + 1, y), at(x + 1, y + 1));
+            mesh.add_triangle(at(x, y), at(x + 1, y + 1), at(x, y + 1));
+        }
+    return mesh;
+}
 }  // namespace
 
 // The corner table and the half-edge table, made by parts of the faces in parallel, against
@@ -1374,17 +1391,8 @@ TEST(CheckTables, AnEdgeKeepsTheOriginalOfADuplicate) {
 // listed four times (every copy names the first, not the copy before it).
 TEST(CheckTables, DuplicatesNameTheirEarliestFaceAcrossChunks) {
     constexpr std::uint32_t n = 200;
-    const std::vector<std::uint32_t> shuffled = shuffled_ids(n * n, 13);
-    IndexedMesh mesh;
-    mesh.positions.resize(shuffled.size());
-    for (std::uint32_t i = 0; i < shuffled.size(); ++i) mesh.positions[shuffled[i]] = glm::dvec3(i % n, i / n, 0.0);
-    const auto at = [&](std::uint32_t x, std::uint32_t y) { return shuffled[y * n + x]; };
-    for (std::uint32_t y = 0; y + 1 < n; ++y)
-        for (std::uint32_t x = 0; x + 1 < n; ++x) {
-            mesh.add_triangle(at(x, y), at(x + 1, y), at(x + 1, y + 1));
-            mesh.add_triangle(at(x, y), at(x + 1, y + 1), at(x, y + 1));
-        }
-    // The first triangle of cell (x, y) is face 2 (y (n - 1) + x).
+    std::vector<std::uint32_t> shuffled;
+    IndexedMesh mesh = shuffled_grid(n, 13, shuffled);
     const auto first_of = [&](std::uint32_t x, std::uint32_t y) { return 2 * (y * (n - 1) + x); };
     std::vector<std::vector<std::uint32_t>> expected;  // {original, copy} in copy order
     const auto copy = [&](std::uint32_t x, std::uint32_t y, int turn) {
@@ -1461,16 +1469,9 @@ TEST(CheckTables, ComponentsAreNumberedByTheirSmallestVertex) {
 // its original's.
 TEST(CheckTables, CoincidentVerticesAreTheFacesVerticesOnly) {
     constexpr std::uint32_t n = 200;
-    const std::vector<std::uint32_t> shuffled = shuffled_ids(n * n, 17);
-    IndexedMesh mesh;
-    mesh.positions.resize(shuffled.size());
-    for (std::uint32_t i = 0; i < shuffled.size(); ++i) mesh.positions[shuffled[i]] = glm::dvec3(i % n, i / n, 0.0);
+    std::vector<std::uint32_t> shuffled;
+    IndexedMesh mesh = shuffled_grid(n, 17, shuffled);
     const auto at = [&](std::uint32_t x, std::uint32_t y) { return shuffled[y * n + x]; };
-    for (std::uint32_t y = 0; y + 1 < n; ++y)
-        for (std::uint32_t x = 0; x + 1 < n; ++x) {
-            mesh.add_triangle(at(x, y), at(x + 1, y), at(x + 1, y + 1));
-            mesh.add_triangle(at(x, y), at(x + 1, y + 1), at(x, y + 1));
-        }
     const auto add_vertex = [&](glm::dvec3 p) {
         mesh.positions.push_back(p);
         return static_cast<std::uint32_t>(mesh.positions.size() - 1);

@@ -122,6 +122,34 @@ void expect_clean_probe(const CheckReport& r) {
 
 const int resolutions[] = {256, 511, 512, 513, 1024, 2048};
 
+// A welded (n + 1) x (n + 1) grid over [0, side]^2 with random heights in [0, top) drawn
+// from `random` row by row, two triangles a cell, cut along the cell's rising diagonal, or
+// along both diagonals in a checkerboard (`both_diagonals`), so that rays along the grid meet
+// edges of every direction.
+struct RoughTerrain {
+    std::vector<glm::dvec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+RoughTerrain rough_terrain(int n, std::mt19937& random, bool both_diagonals) {
+    std::uniform_real_distribution<double> height(0.0, top);
+    RoughTerrain t;
+    const double step = side / n;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) t.positions.emplace_back(i * step, j * step, height(random));
+    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            if (!both_diagonals || (i + j) % 2 == 0) {
+                t.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+                t.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+            } else {
+                t.triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1)});
+                t.triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+            }
+        }
+    return t;
+}
+
 }  // namespace
 
 // The case: a closed, manifold, consistently oriented solid that fails at some
@@ -337,18 +365,9 @@ TEST(CheckProbe, SceneFrameAndCopyAreTheSerialOnes) {
 TEST(CheckProbe, OcclusionAnswersAsTheNearestHit) {
     const int n = 24;
     std::mt19937 random(3);
-    std::uniform_real_distribution<double> height(0.0, top);
-    std::vector<glm::dvec3> positions;
-    std::vector<std::array<std::uint32_t, 3>> triangles;
     const double step = side / n;
-    for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i) positions.emplace_back(i * step, j * step, height(random));
-    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-            triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-        }
+    const RoughTerrain terrain = rough_terrain(n, random, false);
+    const auto& [positions, triangles] = terrain;
     const tessref::RayScene scene(positions, triangles);
     std::size_t hits = 0, misses = 0;
     const auto same = [&](const glm::dvec3& origin, const glm::dvec3& direction) {
@@ -386,24 +405,10 @@ TEST(CheckProbe, OcclusionAnswersAsTheNearestHit) {
 TEST(CheckProbe, QuickBuildMeetsWhatTheCompactOneMeets) {
     const int n = 64;
     std::mt19937 random(11);
-    std::uniform_real_distribution<double> height(0.0, top);
-    std::vector<glm::dvec3> positions;
-    std::vector<std::array<std::uint32_t, 3>> triangles;
     const double step = side / n;
-    for (int j = 0; j <= n; ++j)
-        for (int i = 0; i <= n; ++i) positions.emplace_back(i * step, j * step, height(random));
-    const auto at = [&](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-            // Both diagonals, so that rays meet edges of every direction.
-            if ((i + j) % 2 == 0) {
-                triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-                triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-            } else {
-                triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1)});
-                triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
-            }
-        }
+    // Both diagonals, so that rays meet edges of every direction.
+    const RoughTerrain terrain = rough_terrain(n, random, true);
+    const auto& [positions, triangles] = terrain;
     const tessref::RayScene compact(positions, triangles, tessref::RayScene::Build::compact);
     const tessref::RayScene quick(positions, triangles, tessref::RayScene::Build::quick);
     std::size_t hits = 0, misses = 0, grazing = 0;
