@@ -76,7 +76,7 @@ Frame frame_of(std::span<const glm::dvec3> positions) {
     struct Box {
         glm::dvec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
     };
-    const Box box = parallel_reduce(
+    const Box box = tessref::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, positions.size(), kPositionChunk), Box{},
         [&](const tbb::blocked_range<std::size_t>& r, Box b) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -158,7 +158,7 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
         embree_failure(impl_->device, "cannot allocate geometry buffers");
     }
     const glm::dvec3 shift = impl_->shift;
-    parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), kPositionChunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, positions.size(), kPositionChunk), [&](const auto& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
             const glm::dvec3 p = positions[i] - shift;
             vertices[3 * i + 0] = static_cast<float>(p.x);
@@ -166,7 +166,7 @@ RayScene::RayScene(std::span<const glm::dvec3> positions,
             vertices[3 * i + 2] = static_cast<float>(p.z);
         }
     });
-    parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), kPositionChunk), [&](const auto& r) {
+    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, triangles.size(), kPositionChunk), [&](const auto& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i)
             for (int k = 0; k < 3; ++k) indices[3 * i + k] = triangles[i][k];
     });
