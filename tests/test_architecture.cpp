@@ -134,6 +134,21 @@ TEST(Layers, OnePictureKit) {
     EXPECT_TRUE(bad.empty()) << "defines its own escape, colour or font instead of src/picture/'s:" << joined(bad);
 }
 
+// Every parallel algorithm goes through src/common/parallel.h's wrappers, which ThreadSanitizer
+// builds annotate (Debian's libtbb is not instrumented), and every call names them
+// `tessref::`: with a TBB range among the arguments an unqualified call also finds TBB's own
+// function by argument-dependent lookup and may take it, unannotated (the ray scene's frame
+// did, and a TSan run reported a race there).
+TEST(Layers, ParallelCallsGoThroughTheAnnotatedWrappers) {
+    const std::regex unqualified(R"re((^|[^:\w])parallel_(for|reduce|sort)\s*\(|tbb::parallel_(for|reduce|sort|invoke)\b)re");
+    std::vector<std::string> bad;
+    for (const auto& [path, text] : sources_except(kSource / "src" / "common" / "parallel.h")) {
+        std::smatch m;
+        if (std::regex_search(text, m, unqualified)) bad.push_back(path + ": " + m.str());
+    }
+    EXPECT_TRUE(bad.empty()) << "calls a parallel algorithm other than as tessref::parallel_*:" << joined(bad);
+}
+
 // The lab 4 canyon with a camera clearance (and `extra` appended).
 std::string clearance_scene(const std::string& extra = "") {
     std::ifstream in(kSource / "data" / "scenes" / "lab4-canyon.toml");

@@ -119,7 +119,7 @@ void check_whole_triangles(std::size_t vertices, const std::string& source, cons
 std::vector<Triangle> sorted_triangles(const Capture& capture, const char* side) {
     check_whole_triangles(capture.vertices.size(), capture.source, side);
     std::vector<Triangle> triangles = triangles_of(capture.vertices, 0, capture.source, side);
-    parallel_sort(triangles.begin(), triangles.end());  // a total order (index last): any thread count, one result
+    tessref::parallel_sort(triangles.begin(), triangles.end());  // a total order (index last): any thread count, one result
     return triangles;
 }
 
@@ -406,7 +406,7 @@ CaptureCompareResult compare_captures(const Capture& reference, const Capture& t
         pairs.push_back(p);
     }
     std::vector<PatchOutcome> outcomes(pairs.size());
-    parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t k) {
+    tessref::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t k) {
         outcomes[k] = compare_patch(pairs[k].patch, {pairs[k].r, reference.vertices, reference.has_levels},
                                     {pairs[k].t, test.vertices, test.has_levels}, options);
     });
@@ -452,7 +452,7 @@ void StreamedCaptureComparison::add(std::span<const PatchPair> patches) {
         s.reference_triangles += patches[k].reference.size() / 3;
         s.test_triangles += patches[k].test.size() / 3;
     }
-    parallel_for(std::size_t{0}, patches.size(), [&](std::size_t k) {
+    tessref::parallel_for(std::size_t{0}, patches.size(), [&](std::size_t k) {
         const PatchPair& p = patches[k];
         // The usual case: llvmpipe gave the patch's vertices in the reference's order, with
         // the same tess coords. Then the test's triangles, sorted, are the reference's

@@ -248,7 +248,7 @@ struct CaptureDigester::State {
             texts.resize(last - first);
             const std::size_t base = digest.patches.size();
             digest.patches.resize(base + (last - first));
-            parallel_for(std::size_t(0), last - first + 1, [&](std::size_t i) {
+            tessref::parallel_for(std::size_t(0), last - first + 1, [&](std::size_t i) {
                 if (i == 0) {
                     add_pending();
                     return;
