@@ -241,7 +241,7 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     report.unreferenced_vertices = static_cast<std::size_t>(
         std::count(state.vertex_referenced.begin(), state.vertex_referenced.end(), std::uint8_t{0}));
 
-    build_vertex_tables(state);
+    build_corner_table(state);
     state.progress("topology", 0.15);
     classify_edges(state);
     report.closed = state.boundary.empty();
@@ -249,16 +249,14 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
     find_non_manifold_vertices(state);
     state.progress("topology", 0.4);
     find_components(state);
-    state.corner_faces.release();
-    state.corner_start.release();
     check_orientation(state);
     // Only this step adds refused_face defects, and no later step reads them; after the
     // orientation, whose flipped faces explain some refusals (report_refused_faces).
     report_refused_faces(state, refused_faces(state));
     state.progress("coincident vertices", 0.45);
     find_coincident_vertices(state);
-    state.half_edges.release();
-    state.half_edge_start.release();
+    state.corner_faces.release();
+    state.corner_start.release();
     state.progress("geometry", 0.5);
     analyse_face_geometry(state);
     trace_boundary_loops(state);

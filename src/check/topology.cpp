@@ -1,6 +1,7 @@
 // Topology of the face list as the file gives it: edges, fans, components, orientation and
-// boundary loops, computed on our own half-edge table so that non-manifold input is seen
-// exactly (a half-edge data structure cannot even hold it).
+// boundary loops, computed on our own corner table (the faces at each vertex) and the
+// half-edges made from it, so that non-manifold input is seen exactly (a half-edge data
+// structure cannot even hold it).
 #include <algorithm>
 #include <atomic>
 #include <limits>
@@ -19,7 +20,7 @@ namespace {
 
 constexpr std::size_t kVertexChunk = 1 << 14;
 constexpr std::size_t kFaceChunk = 1 << 14;
-// At most this many runs of faces fill the vertex tables (build_vertex_tables).
+// At most this many runs of faces fill the corner table (build_corner_table).
 constexpr std::size_t kMaxTableParts = 4;
 
 bool same_vertex_set(const IndexedMesh& mesh, std::uint32_t f, std::uint32_t g) {
@@ -38,17 +39,18 @@ bool same_vertex_set(const IndexedMesh& mesh, std::uint32_t f, std::uint32_t g) 
     return x == y;
 }
 
-// Calls fn(lo, hi, begin, end) for every undirected edge: the half-edges [begin, end) of
-// vertex lo's group that go to hi.
+// Calls fn(lo, hi, half_edges) for every undirected edge with lo in [v0, v1): the
+// half-edges of lo's group (half_edges_at) that go to hi.
 template <class Fn>
 void for_each_edge_in(const CheckState& state, std::size_t v0, std::size_t v1, Fn&& fn) {
+    std::vector<HalfEdgeEntry> group;
     for (std::size_t v = v0; v < v1; ++v) {
-        std::uint32_t i = state.half_edge_start[v];
-        const std::uint32_t end = state.half_edge_start[v + 1];
-        while (i < end) {
-            std::uint32_t j = i + 1;
-            while (j < end && state.half_edges[j].other == state.half_edges[i].other) ++j;
-            fn(static_cast<std::uint32_t>(v), state.half_edges[i].other, i, j);
+        half_edges_at(state, static_cast<std::uint32_t>(v), group);
+        std::size_t i = 0;
+        while (i < group.size()) {
+            std::size_t j = i + 1;
+            while (j < group.size() && group[j].other == group[i].other) ++j;
+            fn(static_cast<std::uint32_t>(v), group[i].other, std::span<const HalfEdgeEntry>(group.data() + i, j - i));
             i = j;
         }
     }
@@ -56,141 +58,118 @@ void for_each_edge_in(const CheckState& state, std::size_t v0, std::size_t v1, F
 
 }  // namespace
 
-void build_vertex_tables(CheckState& state) {
+void half_edges_at(const CheckState& state, std::uint32_t v, std::vector<HalfEdgeEntry>& out) {
+    out.clear();
+    const IndexedMesh& mesh = state.mesh;
+    for (std::uint32_t c = state.corner_start[v]; c < state.corner_start[v + 1]; ++c) {
+        const std::uint32_t f = state.corner_faces[c];
+        const auto face = mesh.face(f);
+        const std::size_t n = face.size();
+        std::size_t k = 0;
+        while (face[k] != v) ++k;  // once: a kept face repeats no vertex
+        // The face runs prev -> v -> next: v -> next is forward when next is the larger,
+        // prev -> v backward when prev is; each is filed here when v is the smaller.
+        const std::uint32_t prev = face[k == 0 ? n - 1 : k - 1], next = face[k + 1 == n ? 0 : k + 1];
+        if (next > v) out.push_back({next, f << 1 | 1u});
+        if (prev > v) out.push_back({prev, f << 1});
+    }
+    // By (other, face << 1 | forward): a vertex has a few half-edges, sorted by insertion;
+    // the apex of a large fan has many.
+    const auto before = [](const HalfEdgeEntry& x, const HalfEdgeEntry& y) {
+        return x.other != y.other ? x.other < y.other : x.face_and_direction < y.face_and_direction;
+    };
+    if (out.size() > 32) {
+        std::sort(out.begin(), out.end(), before);
+        return;
+    }
+    for (std::size_t i = 1; i < out.size(); ++i) {
+        const HalfEdgeEntry h = out[i];
+        std::size_t j = i;
+        for (; j > 0 && before(h, out[j - 1]); --j) out[j] = out[j - 1];
+        out[j] = h;
+    }
+}
+
+void build_corner_table(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     const std::size_t vertex_count = mesh.vertex_count();
     const std::size_t face_count = mesh.face_count();
     if (face_count >= (std::size_t(1) << 31))
         throw Error("mesh too large to check: more than 2^31 faces", Where::in_file(mesh.source));
 
-    // Both tables are counting sorts of the kept faces by vertex. The faces are cut into
-    // `parts` runs, each counted and filed by one task with counters of its own, so no
-    // counter is shared between threads (an atomic increment costs several plain ones).
-    // Part p files its entries after those of parts 0 .. p-1 at every vertex, so a vertex's
-    // entries come out in face order whatever the number of parts: the corner table is the
-    // one a serial pass makes, and the half-edge groups, sorted afterwards, are too. The
-    // counters take 8 bytes a vertex for each part, so the parts are few.
+    // A counting sort of the kept faces' corners by vertex. The faces are cut into `parts`
+    // runs, each counted and filed by one task with counters of its own, so no counter is
+    // shared between threads (an atomic increment costs several plain ones). Part p files
+    // its entries after those of parts 0 .. p-1 at every vertex, so a vertex's entries come
+    // out in face order whatever the number of parts: the table a serial pass makes. The
+    // counters take 4 bytes a vertex for each part, so the parts are few.
     const std::size_t parts = std::clamp<std::size_t>(
         std::min<std::size_t>(static_cast<std::size_t>(tessref::worker_threads()), kMaxTableParts), 1,
         face_count / kFaceChunk + 1);
     const std::size_t part_faces = (face_count + parts - 1) / parts;
-    // Per part and vertex: the part's corners and half-edges there, then where the part
-    // files its next one (corners[p * vertex_count + v], half[p * vertex_count + v]).
-    Table<std::uint32_t> corners, half;
+    // Per part and vertex: the part's corners there, then where the part files its next
+    // one (corners[p * vertex_count + v]).
+    Table<std::uint32_t> corners;
     corners.allocate(parts * vertex_count);
-    half.allocate(parts * vertex_count);
     const auto for_each_part = [&](auto&& fn) {
         tessref::parallel_for(tbb::blocked_range<std::size_t>(0, parts, 1), [&](const auto& r) {
             for (std::size_t p = r.begin(); p != r.end(); ++p)
-                fn(corners.begin() + p * vertex_count, half.begin() + p * vertex_count, p * part_faces,
-                   std::min(face_count, (p + 1) * part_faces));
+                fn(corners.begin() + p * vertex_count, p * part_faces, std::min(face_count, (p + 1) * part_faces));
         });
     };
-    for_each_part([&](std::uint32_t* corner, std::uint32_t* half_edge, std::size_t f0, std::size_t f1) {
+    for_each_part([&](std::uint32_t* corner, std::size_t f0, std::size_t f1) {
         std::fill(corner, corner + vertex_count, 0u);
-        std::fill(half_edge, half_edge + vertex_count, 0u);
         for (std::size_t f = f0; f < f1; ++f) {
             if (state.face_status[f] != face_kept) continue;
-            const auto face = mesh.face(f);
-            for (std::size_t k = 0; k < face.size(); ++k) {
-                const std::uint32_t a = face[k], b = face[k + 1 == face.size() ? 0 : k + 1];
-                ++corner[a];
-                ++half_edge[std::min(a, b)];
-            }
+            for (const std::uint32_t a : mesh.face(f)) ++corner[a];
         }
     });
 
-    // Each vertex's starts, and each part's first slots there; chunks of vertices in
+    // Each vertex's start, and each part's first slot there; chunks of vertices in
     // parallel once their totals are known.
-    struct Totals {
-        std::uint64_t corners = 0, half_edges = 0;
-    };
-    const auto totals = map_chunks<Totals>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, Totals& total) {
+    const auto totals = map_chunks<std::uint64_t>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, std::uint64_t& total) {
         for (std::size_t p = 0; p < parts; ++p)
-            for (std::size_t v = v0; v < v1; ++v) {
-                total.corners += corners[p * vertex_count + v];
-                total.half_edges += half[p * vertex_count + v];
-            }
+            for (std::size_t v = v0; v < v1; ++v) total += corners[p * vertex_count + v];
     });
-    std::vector<Totals> chunk_start(totals.size() + 1);
-    for (std::size_t c = 0; c < totals.size(); ++c)
-        chunk_start[c + 1] = {chunk_start[c].corners + totals[c].corners, chunk_start[c].half_edges + totals[c].half_edges};
+    std::vector<std::uint64_t> chunk_start(totals.size() + 1, 0);
+    for (std::size_t c = 0; c < totals.size(); ++c) chunk_start[c + 1] = chunk_start[c] + totals[c];
     state.corner_start.allocate(vertex_count + 1);
-    state.half_edge_start.allocate(vertex_count + 1);
     tessref::parallel_for(tbb::blocked_range<std::size_t>(0, totals.size(), 1), [&](const auto& r) {
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
-            auto next_corner = static_cast<std::uint32_t>(chunk_start[c].corners);
-            auto next_half_edge = static_cast<std::uint32_t>(chunk_start[c].half_edges);
+            auto next_corner = static_cast<std::uint32_t>(chunk_start[c]);
             for (std::size_t v = c * kVertexChunk; v < std::min(vertex_count, (c + 1) * kVertexChunk); ++v) {
                 state.corner_start[v] = next_corner;
-                state.half_edge_start[v] = next_half_edge;
-                for (std::size_t p = 0; p < parts; ++p) {
-                    const std::size_t i = p * vertex_count + v;
-                    next_corner += std::exchange(corners[i], next_corner);
-                    next_half_edge += std::exchange(half[i], next_half_edge);
-                }
+                for (std::size_t p = 0; p < parts; ++p) next_corner += std::exchange(corners[p * vertex_count + v], next_corner);
             }
         }
     });
-    state.corner_start[vertex_count] = static_cast<std::uint32_t>(chunk_start.back().corners);
-    state.half_edge_start[vertex_count] = static_cast<std::uint32_t>(chunk_start.back().half_edges);
+    state.corner_start[vertex_count] = static_cast<std::uint32_t>(chunk_start.back());
 
-    // Every slot is written below: the tables are not cleared first.
-    state.corner_faces.allocate(chunk_start.back().corners);
-    state.half_edges.allocate(chunk_start.back().half_edges);
-    for_each_part([&](std::uint32_t* corner, std::uint32_t* half_edge, std::size_t f0, std::size_t f1) {
+    // Every slot is written below: the table is not cleared first.
+    state.corner_faces.allocate(chunk_start.back());
+    for_each_part([&](std::uint32_t* corner, std::size_t f0, std::size_t f1) {
         for (std::size_t f = f0; f < f1; ++f) {
             if (state.face_status[f] != face_kept) continue;
-            const auto face = mesh.face(f);
-            for (std::size_t k = 0; k < face.size(); ++k) {
-                const std::uint32_t a = face[k], b = face[k + 1 == face.size() ? 0 : k + 1];
-                state.corner_faces[corner[a]++] = static_cast<std::uint32_t>(f);
-                const std::uint32_t lo = std::min(a, b), hi = std::max(a, b);
-                state.half_edges[half_edge[lo]++] = {hi, static_cast<std::uint32_t>(f) << 1 | (a < b ? 1u : 0u)};
-            }
-        }
-    });
-    corners.release();
-    half.release();
-
-    // Each group sorted by the other vertex (then face): a vertex has a few half-edges,
-    // sorted by insertion; the apex of a large fan has many.
-    const auto before = [](const HalfEdgeEntry& x, const HalfEdgeEntry& y) {
-        return x.other != y.other ? x.other < y.other : x.face_and_direction < y.face_and_direction;
-    };
-    tessref::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, kVertexChunk), [&](const auto& r) {
-        for (std::size_t v = r.begin(); v != r.end(); ++v) {
-            HalfEdgeEntry* const group = state.half_edges.begin() + state.half_edge_start[v];
-            const std::uint32_t size = state.half_edge_start[v + 1] - state.half_edge_start[v];
-            if (size > 32) {
-                std::sort(group, group + size, before);
-                continue;
-            }
-            for (std::uint32_t i = 1; i < size; ++i) {
-                const HalfEdgeEntry h = group[i];
-                std::uint32_t j = i;
-                for (; j > 0 && before(h, group[j - 1]); --j) group[j] = group[j - 1];
-                group[j] = h;
-            }
+            for (const std::uint32_t a : mesh.face(f)) state.corner_faces[corner[a]++] = static_cast<std::uint32_t>(f);
         }
     });
 }
 
 namespace {
 
-// Finds the faces repeating others on the edge whose half-edges are [b, e): a face there
-// over the same vertex set as an earlier one has its half-edge marked in `repeats`
-// (relative to b), and (the face, the earliest face there it repeats) is added to
-// `duplicates`: at most one pair a half-edge, however many copies of a face there are.
-void find_duplicates_on_edge(const CheckState& state, std::uint32_t b, std::uint32_t e,
+// Finds the faces repeating others on the edge whose half-edges are `edge`: a face there
+// over the same vertex set as an earlier one has its half-edge marked in `repeats`, and
+// (the face, the earliest face there it repeats) is added to `duplicates`: at most one pair
+// a half-edge, however many copies of a face there are.
+void find_duplicates_on_edge(const CheckState& state, std::span<const HalfEdgeEntry> edge,
                              std::vector<std::pair<std::uint32_t, std::uint32_t>>& duplicates,
                              std::vector<std::uint8_t>& repeats, std::vector<std::uint32_t>& earliest) {
     const IndexedMesh& mesh = state.mesh;
-    repeats.assign(e - b, 0);
-    earliest.assign(e - b, kNoIndex);
-    for (std::uint32_t i = b; i < e; ++i)
-        for (std::uint32_t j = i + 1; j < e; ++j) {
-            std::uint32_t f = state.half_edges[i].face(), g = state.half_edges[j].face();
+    repeats.assign(edge.size(), 0);
+    earliest.assign(edge.size(), kNoIndex);
+    for (std::size_t i = 0; i < edge.size(); ++i)
+        for (std::size_t j = i + 1; j < edge.size(); ++j) {
+            std::uint32_t f = edge[i].face(), g = edge[j].face();
             if (f == g) continue;
             const auto x = mesh.face(f), y = mesh.face(g);
             // Two triangles on this edge hold both its vertices (a kept face repeats
@@ -198,18 +177,18 @@ void find_duplicates_on_edge(const CheckState& state, std::uint32_t b, std::uint
             if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
                                                : !same_vertex_set(mesh, f, g))
                 continue;
-            const std::uint32_t later = (f > g ? i : j) - b;
+            const std::size_t later = f > g ? i : j;
             repeats[later] = 1;
             earliest[later] = std::min({earliest[later], f, g});
         }
-    for (std::uint32_t i = b; i < e; ++i)
-        if (repeats[i - b]) duplicates.emplace_back(state.half_edges[i].face(), earliest[i - b]);
+    for (std::size_t i = 0; i < edge.size(); ++i)
+        if (repeats[i]) duplicates.emplace_back(edge[i].face(), earliest[i]);
 }
 
 }  // namespace
 
 // Duplicate faces, and each edge as boundary, manifold, inconsistent or non-manifold, in one
-// pass over the half-edge table. Two faces over the same vertex set share every edge, so
+// pass over the vertices' half-edges. Two faces over the same vertex set share every edge, so
 // comparing the faces met on each edge finds every duplicate; the earliest face of a set is
 // the original. And since a face's duplicates are on every edge of it, an edge's kept faces
 // (those that repeat no other) are known from the edge's own half-edges, before the faces
@@ -226,17 +205,17 @@ void classify_edges(CheckState& state) {
     };
     const std::size_t cap = state.options.max_locations;
     auto results = map_chunks<ChunkResult>(mesh.vertex_count(), kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
-        std::vector<std::uint32_t> kept;
+        std::vector<HalfEdgeEntry> kept;
         std::vector<std::uint8_t> repeats;
         std::vector<std::uint32_t> earliest;
-        for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::uint32_t b, std::uint32_t e) {
+        for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::span<const HalfEdgeEntry> edge) {
             kept.clear();
-            if (e - b == 1) {
-                kept.push_back(b);
+            if (edge.size() == 1) {
+                kept.push_back(edge[0]);
             } else {
-                find_duplicates_on_edge(state, b, e, out.duplicates, repeats, earliest);
-                for (std::uint32_t i = b; i < e; ++i)
-                    if (!repeats[i - b]) kept.push_back(i);
+                find_duplicates_on_edge(state, edge, out.duplicates, repeats, earliest);
+                for (std::size_t i = 0; i < edge.size(); ++i)
+                    if (!repeats[i]) kept.push_back(edge[i]);
             }
             if (kept.empty()) return;
             ++out.edges;
@@ -244,11 +223,11 @@ void classify_edges(CheckState& state) {
             // its loop): an edge's second vertex is far from its first in the list.
             const auto mid = [&] { return 0.5 * (mesh.positions[lo] + mesh.positions[hi]); };
             if (kept.size() == 1) {
-                const HalfEdgeEntry& h = state.half_edges[kept[0]];
+                const HalfEdgeEntry& h = kept[0];
                 out.boundary.push_back(h.forward() ? BoundaryHalfEdge{lo, hi, h.face()} : BoundaryHalfEdge{hi, lo, h.face()});
             } else if (kept.size() == 2) {
-                const HalfEdgeEntry& h0 = state.half_edges[kept[0]];
-                const HalfEdgeEntry& h1 = state.half_edges[kept[1]];
+                const HalfEdgeEntry& h0 = kept[0];
+                const HalfEdgeEntry& h1 = kept[1];
                 if (h0.forward() == h1.forward()) {
                     ++out.inconsistent_count;
                     if (out.inconsistent.size() < cap) {
@@ -268,7 +247,7 @@ void classify_edges(CheckState& state) {
                     Defect d;
                     d.position = mid();
                     d.vertices = {lo, hi};
-                    for (std::uint32_t i : kept) d.faces.push_back(state.half_edges[i].face());
+                    for (const HalfEdgeEntry& h : kept) d.faces.push_back(h.face());
                     d.measure = double(kept.size());
                     d.detail = "edge " + std::to_string(lo) + "-" + std::to_string(hi) + " is shared by " +
                                std::to_string(kept.size()) + " faces";
@@ -456,9 +435,9 @@ void find_components(CheckState& state) {
         state.component_has_boundary[state.vertex_component[d.vertices[0]]] = 1;
     if (state.report.count(DefectClass::non_manifold_edge) > state.report.of(DefectClass::non_manifold_edge).locations.size()) {
         // Not every non-manifold edge is listed: mark their components from the table.
-        for_each_edge_in(state, 0, mesh.vertex_count(), [&](std::uint32_t lo, std::uint32_t, std::uint32_t b, std::uint32_t e) {
+        for_each_edge_in(state, 0, mesh.vertex_count(), [&](std::uint32_t lo, std::uint32_t, std::span<const HalfEdgeEntry> edge) {
             std::uint32_t kept = 0;
-            for (std::uint32_t i = b; i < e; ++i) kept += state.face_status[state.half_edges[i].face()] == face_kept;
+            for (const HalfEdgeEntry& h : edge) kept += state.face_status[h.face()] == face_kept;
             if (kept > 2) state.component_has_boundary[state.vertex_component[lo]] = 1;
         });
     }
@@ -475,16 +454,17 @@ void check_orientation(CheckState& state) {
         bool disagree;
     };
     std::vector<Link> links;
-    for_each_edge_in(state, 0, mesh.vertex_count(), [&](std::uint32_t, std::uint32_t, std::uint32_t b, std::uint32_t e) {
-        std::uint32_t kept[2], n = 0;
-        for (std::uint32_t i = b; i < e; ++i)
-            if (state.face_status[state.half_edges[i].face()] == face_kept) {
-                if (n < 2) kept[n] = i;
+    for_each_edge_in(state, 0, mesh.vertex_count(), [&](std::uint32_t, std::uint32_t, std::span<const HalfEdgeEntry> edge) {
+        HalfEdgeEntry kept[2];
+        std::uint32_t n = 0;
+        for (const HalfEdgeEntry& h : edge)
+            if (state.face_status[h.face()] == face_kept) {
+                if (n < 2) kept[n] = h;
                 ++n;
             }
         if (n != 2) return;
-        const HalfEdgeEntry& h0 = state.half_edges[kept[0]];
-        const HalfEdgeEntry& h1 = state.half_edges[kept[1]];
+        const HalfEdgeEntry& h0 = kept[0];
+        const HalfEdgeEntry& h1 = kept[1];
         links.push_back({h0.face(), h1.face(), h0.forward() == h1.forward()});
     });
     for (const Link& l : links) {
