@@ -1287,7 +1287,7 @@ IndexedMesh shuffled_grid(std::uint32_t n, std::uint64_t seed, std::vector<std::
 }  // namespace
 
 // The corner table, made by parts of the faces in parallel, and the half-edges made from it
-// (half_edges_at), against the serial way: every kept face in face order, each entry
+// (VertexStar), against the serial way: every kept face in face order, each entry
 // appended to its vertex, the half-edge groups then sorted by (other vertex, face << 1 |
 // forward). On a grid whose vertices are shuffled (each face's vertices far apart in the
 // list), with a non-manifold edge, duplicate faces (same and other corner order), isolated
@@ -1351,14 +1351,14 @@ TEST(CheckTables, CornerAndHalfEdgeTablesAreTheSerialOnes) {
             build_corner_table(state);
             ASSERT_EQ(state.corner_start.size(), mesh.vertex_count() + 1);
             std::size_t corner_mismatches = 0, group_mismatches = 0;
-            std::vector<HalfEdgeEntry> half_edges;
+            VertexStar star;
             for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
                 const std::vector<std::uint32_t> corner(state.corner_faces.begin() + state.corner_start[v],
                                                         state.corner_faces.begin() + state.corner_start[v + 1]);
                 corner_mismatches += corner != corners[v];
-                half_edges_at(state, v, half_edges);
+                star.make(state, v);
                 std::vector<std::pair<std::uint32_t, std::uint32_t>> group;
-                for (const HalfEdgeEntry& h : half_edges) group.emplace_back(h.other, h.face_and_direction);
+                for (const HalfEdgeEntry& h : star.half_edges) group.emplace_back(h.other, h.face_and_direction);
                 group_mismatches += group != groups[v];
             }
             EXPECT_EQ(corner_mismatches, 0u);
@@ -1383,6 +1383,25 @@ TEST(CheckTables, AnEdgeKeepsTheOriginalOfADuplicate) {
     EXPECT_EQ(r.edge_count, 5u);
     EXPECT_EQ(r.boundary_edge_count, 4u);
     EXPECT_TRUE(r.manifold);
+}
+
+// The vertices' fans are found in the edges' pass, of the faces the corner table holds,
+// which include the duplicates that pass is finding: where it finds any, the fans are found
+// again without them. Two squares touching at vertex 0 (two fans there), the first square's
+// first triangle listed again: the pinched vertex names its four faces, not the copy.
+TEST(CheckTables, APinchedVertexNamesNoDuplicate) {
+    IndexedMesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 0, 0}, {-1, -1, 0}, {0, -1, 0}};
+    for (std::vector<std::uint32_t> face :
+         {std::vector<std::uint32_t>{0, 1, 2}, {0, 2, 3}, {0, 4, 5}, {0, 5, 6}, {0, 1, 2}})
+        mesh.add_face(face);
+    const CheckReport r = tessref::check_mesh(mesh, quick());
+    ASSERT_EQ(r.count(DefectClass::duplicate_face), 1u);
+    ASSERT_EQ(r.count(DefectClass::non_manifold_vertex), 1u);
+    const tessref::Defect& pinch = r.of(DefectClass::non_manifold_vertex).locations[0];
+    EXPECT_EQ(pinch.vertices, (std::vector<std::uint32_t>{0}));
+    EXPECT_EQ(pinch.faces, (std::vector<std::uint32_t>{0, 1, 2, 3}));
+    EXPECT_EQ(pinch.measure, 2.0);
 }
 
 // A duplicate face is found on each of its edges, filed under the edges' smaller vertices,

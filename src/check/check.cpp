@@ -186,7 +186,7 @@ void attach_faces(CheckState& state) {
 }
 
 // Which faces OpenMesh's kernel refuses, asked once the topology is known (after
-// find_non_manifold_vertices): read_and_check_mesh() may then answer without the import.
+// classify_edges_and_vertices): read_and_check_mesh() may then answer without the import.
 using RefusedFaces = std::function<const std::vector<std::uint32_t>&(const CheckState&)>;
 
 void name_patches(CheckState& state);
@@ -243,10 +243,8 @@ CheckReport run_checks(const IndexedMesh& mesh, const CheckOptions& options, con
 
     build_corner_table(state);
     state.progress("topology", 0.15);
-    classify_edges(state);
+    classify_edges_and_vertices(state);
     report.closed = state.boundary.empty();
-    state.progress("topology", 0.3);
-    find_non_manifold_vertices(state);
     state.progress("topology", 0.4);
     find_components(state);
     check_orientation(state);

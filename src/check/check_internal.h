@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <span>
 #include <string_view>
 #include <type_traits>
 #include <unordered_map>
@@ -36,7 +37,7 @@ enum FaceStatus : std::uint8_t {
 
 // A half-edge filed under its smaller vertex: the other vertex, and face << 1 | forward,
 // where forward means the face traverses the edge from the smaller vertex to the larger
-// (half_edges_at).
+// (VertexStar).
 struct HalfEdgeEntry {
     std::uint32_t other;
     std::uint32_t face_and_direction;
@@ -93,7 +94,7 @@ struct CheckState {
 
     // The faces at each vertex that classify_faces kept, in face order (corner_faces[
     // corner_start[v] .. corner_start[v + 1]]): made by build_corner_table, read by the
-    // topology steps and, through half_edges_at(), by every step that asks for an edge.
+    // topology steps and, through VertexStar, by every step that asks for an edge.
     Table<std::uint32_t> corner_start;  // vertex_count + 1
     Table<std::uint32_t> corner_faces;
 
@@ -191,17 +192,41 @@ private:
     Table<std::uint32_t> parent_;
 };
 
-// The half-edges of the faces in vertex v's corner table that are filed under v (their
-// smaller vertex), sorted by (other vertex, face << 1 | forward), into `out`: the edges
-// from v to larger vertices, each with the faces on it. Made from the corner table each
-// time it is asked for (a table of every half-edge was 57 MB of fresh pages on a 2.4 M
-// triangle mesh, filled and sorted to be read once).
-void half_edges_at(const CheckState& state, std::uint32_t v, std::vector<HalfEdgeEntry>& out);
+// A vertex's star: the faces at it (the corner table's, in face order), each with its two
+// neighbours of the vertex, and from those the half-edges filed under the vertex (its
+// smaller one): its edges to larger vertices, each with the faces on it. Made from the
+// corner table when a step asks for it (a table of every half-edge was 57 MB of fresh
+// pages on a 2.4 M-triangle mesh, filled and sorted to be read once); reused as scratch
+// from vertex to vertex.
+struct VertexStar {
+    std::uint32_t vertex = 0;
+    std::span<const std::uint32_t> faces;  // at the vertex, in face order
+    // neighbour << 32 | i << 1 | 1 where faces[i] runs from the vertex to the neighbour,
+    // | 0 where it runs from the neighbour to the vertex; sorted.
+    std::vector<std::uint64_t> neighbours;
+    // The half-edges filed under the vertex, sorted by (other, face << 1 | forward).
+    std::vector<HalfEdgeEntry> half_edges;
+
+    void make(const CheckState& state, std::uint32_t v);  // of the corner table's faces at v
+    void make(const CheckState& state, std::uint32_t v, std::span<const std::uint32_t> faces);  // of these
+    static std::uint32_t face_index(std::uint64_t neighbour) { return static_cast<std::uint32_t>(neighbour) >> 1; }
+
+    // Calls fn(vertex, other, half-edges) for each edge filed under the vertex.
+    template <class Fn>
+    void for_each_edge(Fn&& fn) const {
+        for (std::size_t i = 0; i < half_edges.size();) {
+            std::size_t j = i + 1;
+            while (j < half_edges.size() && half_edges[j].other == half_edges[i].other) ++j;
+            fn(vertex, half_edges[i].other, std::span<const HalfEdgeEntry>(half_edges.data() + i, j - i));
+            i = j;
+        }
+    }
+};
 
 // Steps of check_mesh(), in the order they run.
 void build_corner_table(CheckState& state);
-void classify_edges(CheckState& state);  // and finds the duplicate faces
-void find_non_manifold_vertices(CheckState& state);
+// The duplicate faces, the edges' classes and the vertices where the surface is pinched.
+void classify_edges_and_vertices(CheckState& state);
 void find_components(CheckState& state);
 void check_orientation(CheckState& state);
 void analyse_face_geometry(CheckState& state);

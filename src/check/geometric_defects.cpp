@@ -363,11 +363,11 @@ void find_coincident_vertices(CheckState& state) {
     };
     // Two vertices joined by an edge are a short edge, not a weld that was missed (a face
     // too thin to matter is reported as degenerate instead).
-    std::vector<HalfEdgeEntry> group;
+    VertexStar star;
     auto joined = [&](std::uint32_t v, std::uint32_t u) {
         const std::uint32_t lo = std::min(v, u), hi = std::max(v, u);
-        half_edges_at(state, lo, group);
-        return std::any_of(group.begin(), group.end(), [&](const HalfEdgeEntry& h) {
+        star.make(state, lo);
+        return std::any_of(star.half_edges.begin(), star.half_edges.end(), [&](const HalfEdgeEntry& h) {
             return h.other == hi && state.face_status[h.face()] == face_kept;
         });
     };

@@ -40,54 +40,56 @@ bool same_vertex_set(const IndexedMesh& mesh, std::uint32_t f, std::uint32_t g) 
 }
 
 // Calls fn(lo, hi, half_edges) for every undirected edge with lo in [v0, v1): the
-// half-edges of lo's group (half_edges_at) that go to hi.
+// half-edges filed under lo (VertexStar) that go to hi.
 template <class Fn>
 void for_each_edge_in(const CheckState& state, std::size_t v0, std::size_t v1, Fn&& fn) {
-    std::vector<HalfEdgeEntry> group;
+    VertexStar star;
     for (std::size_t v = v0; v < v1; ++v) {
-        half_edges_at(state, static_cast<std::uint32_t>(v), group);
-        std::size_t i = 0;
-        while (i < group.size()) {
-            std::size_t j = i + 1;
-            while (j < group.size() && group[j].other == group[i].other) ++j;
-            fn(static_cast<std::uint32_t>(v), group[i].other, std::span<const HalfEdgeEntry>(group.data() + i, j - i));
-            i = j;
-        }
+        star.make(state, static_cast<std::uint32_t>(v));
+        star.for_each_edge(fn);
     }
 }
 
 }  // namespace
 
-void half_edges_at(const CheckState& state, std::uint32_t v, std::vector<HalfEdgeEntry>& out) {
-    out.clear();
+void VertexStar::make(const CheckState& state, std::uint32_t v, std::span<const std::uint32_t> faces) {
+    vertex = v;
+    this->faces = faces;
+    neighbours.clear();
+    half_edges.clear();
     const IndexedMesh& mesh = state.mesh;
-    for (std::uint32_t c = state.corner_start[v]; c < state.corner_start[v + 1]; ++c) {
-        const std::uint32_t f = state.corner_faces[c];
-        const auto face = mesh.face(f);
+    for (std::uint32_t i = 0; i < faces.size(); ++i) {
+        const auto face = mesh.face(faces[i]);
         const std::size_t n = face.size();
         std::size_t k = 0;
         while (face[k] != v) ++k;  // once: a kept face repeats no vertex
-        // The face runs prev -> v -> next: v -> next is forward when next is the larger,
-        // prev -> v backward when prev is; each is filed here when v is the smaller.
         const std::uint32_t prev = face[k == 0 ? n - 1 : k - 1], next = face[k + 1 == n ? 0 : k + 1];
-        if (next > v) out.push_back({next, f << 1 | 1u});
-        if (prev > v) out.push_back({prev, f << 1});
+        neighbours.push_back(std::uint64_t(prev) << 32 | i << 1);
+        neighbours.push_back(std::uint64_t(next) << 32 | i << 1 | 1u);
     }
-    // By (other, face << 1 | forward): a vertex has a few half-edges, sorted by insertion;
-    // the apex of a large fan has many.
-    const auto before = [](const HalfEdgeEntry& x, const HalfEdgeEntry& y) {
-        return x.other != y.other ? x.other < y.other : x.face_and_direction < y.face_and_direction;
-    };
-    if (out.size() > 32) {
-        std::sort(out.begin(), out.end(), before);
-        return;
+    // A vertex has a few neighbours, sorted by insertion; the apex of a large fan has many.
+    if (neighbours.size() > 32) {
+        std::sort(neighbours.begin(), neighbours.end());
+    } else {
+        for (std::size_t i = 1; i < neighbours.size(); ++i) {
+            const std::uint64_t x = neighbours[i];
+            std::size_t j = i;
+            for (; j > 0 && neighbours[j - 1] > x; --j) neighbours[j] = neighbours[j - 1];
+            neighbours[j] = x;
+        }
     }
-    for (std::size_t i = 1; i < out.size(); ++i) {
-        const HalfEdgeEntry h = out[i];
-        std::size_t j = i;
-        for (; j > 0 && before(h, out[j - 1]); --j) out[j] = out[j - 1];
-        out[j] = h;
-    }
+    // The face runs prev -> v -> next: v -> next is forward when next is the larger, prev ->
+    // v backward when prev is; each is filed here when v is the smaller. The faces are in
+    // face order, so (neighbour, i, 1 for next) sorts as (other, face << 1 | forward).
+    for (const std::uint64_t x : neighbours)
+        if (x >> 32 > v)
+            half_edges.push_back({static_cast<std::uint32_t>(x >> 32), faces[face_index(x)] << 1 | static_cast<std::uint32_t>(x & 1u)});
+}
+
+void VertexStar::make(const CheckState& state, std::uint32_t v) {
+    make(state, v,
+         std::span<const std::uint32_t>(state.corner_faces.begin() + state.corner_start[v],
+                                        state.corner_faces.begin() + state.corner_start[v + 1]));
 }
 
 void build_corner_table(CheckState& state) {
@@ -157,6 +159,15 @@ void build_corner_table(CheckState& state) {
 
 namespace {
 
+// Whether faces f and g, both on one edge, are two faces over the same vertex set.
+bool same_faces_on_edge(const IndexedMesh& mesh, std::uint32_t f, std::uint32_t g) {
+    if (f == g) return false;
+    const auto x = mesh.face(f), y = mesh.face(g);
+    // Two triangles on an edge hold both its vertices (a kept face repeats none), so their
+    // third vertices decide, and so do the xors of all three.
+    return x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) == (y[0] ^ y[1] ^ y[2]) : same_vertex_set(mesh, f, g);
+}
+
 // Finds the faces repeating others on the edge whose half-edges are `edge`: a face there
 // over the same vertex set as an earlier one has its half-edge marked in `repeats`, and
 // (the face, the earliest face there it repeats) is added to `duplicates`: at most one pair
@@ -170,13 +181,7 @@ void find_duplicates_on_edge(const CheckState& state, std::span<const HalfEdgeEn
     for (std::size_t i = 0; i < edge.size(); ++i)
         for (std::size_t j = i + 1; j < edge.size(); ++j) {
             std::uint32_t f = edge[i].face(), g = edge[j].face();
-            if (f == g) continue;
-            const auto x = mesh.face(f), y = mesh.face(g);
-            // Two triangles on this edge hold both its vertices (a kept face repeats
-            // none), so their third vertices decide, and so do the xors of all three.
-            if (x.size() == 3 && y.size() == 3 ? (x[0] ^ x[1] ^ x[2]) != (y[0] ^ y[1] ^ y[2])
-                                               : !same_vertex_set(mesh, f, g))
-                continue;
+            if (!same_faces_on_edge(mesh, f, g)) continue;
             const std::size_t later = f > g ? i : j;
             repeats[later] = 1;
             earliest[later] = std::min({earliest[later], f, g});
@@ -185,15 +190,73 @@ void find_duplicates_on_edge(const CheckState& state, std::span<const HalfEdgeEn
         if (repeats[i]) duplicates.emplace_back(edge[i].face(), earliest[i]);
 }
 
+// The vertices of a run where the surface is pinched.
+struct PinchedVertices {
+    std::vector<Defect> defects;  // the run's first max_locations
+    std::size_t count = 0;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> fans;  // (vertex << 32 | face, fan)
+};
+
+// Whether the star's faces make more than one fan (faces around the vertex connected
+// through edges at it) and so pinch the surface there (two cones touching at their tips, a
+// bow tie); if so, the vertex and each face's fan into `out`. parent: scratch.
+void find_fans(const CheckState& state, const VertexStar& star, std::vector<std::uint32_t>& parent, PinchedVertices& out) {
+    const auto count = static_cast<std::uint32_t>(star.faces.size());
+    if (count < 2) return;
+    parent.resize(count);
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](std::uint32_t x) {
+        while (parent[x] != x) x = parent[x] = parent[parent[x]];
+        return x;
+    };
+    // Faces sharing a neighbour share the edge to it: one fan.
+    std::uint32_t fans = count;
+    const std::vector<std::uint64_t>& neighbours = star.neighbours;
+    for (std::size_t i = 1; i < neighbours.size(); ++i) {
+        if (neighbours[i] >> 32 != neighbours[i - 1] >> 32) continue;
+        const std::uint32_t x = find(VertexStar::face_index(neighbours[i])), y = find(VertexStar::face_index(neighbours[i - 1]));
+        if (x != y) {
+            parent[std::max(x, y)] = std::min(x, y);
+            --fans;
+        }
+    }
+    if (fans <= 1) return;
+    const std::uint32_t v = star.vertex;
+    for (std::uint32_t i = 0; i < count; ++i) out.fans.emplace_back(std::uint64_t(v) << 32 | star.faces[i], find(i));
+    ++out.count;
+    if (out.defects.size() >= state.options.max_locations) return;
+    Defect d;
+    d.position = state.mesh.positions[v];
+    d.vertices = {v};
+    for (std::uint32_t i = 0; i < count && d.faces.size() < 32; ++i) d.faces.push_back(star.faces[i]);
+    d.measure = fans;
+    d.detail = "vertex " + std::to_string(v) + " joins " + std::to_string(fans) + " separate fans of faces";
+    out.defects.push_back(std::move(d));
+}
+
+// The runs' pinched vertices into the report, in vertex order (counts exact, the first
+// max_locations located).
+void add_pinched_vertices(CheckState& state, std::vector<PinchedVertices>& runs) {
+    auto& report = state.report.defects[int(DefectClass::non_manifold_vertex)];
+    for (PinchedVertices& r : runs) {
+        report.count += r.count;
+        for (Defect& d : r.defects)
+            if (report.locations.size() < state.options.max_locations) report.locations.push_back(std::move(d));
+        state.fan_at_pinch.insert(r.fans.begin(), r.fans.end());
+    }
+}
+
 }  // namespace
 
-// Duplicate faces, and each edge as boundary, manifold, inconsistent or non-manifold, in one
-// pass over the vertices' half-edges. Two faces over the same vertex set share every edge, so
-// comparing the faces met on each edge finds every duplicate; the earliest face of a set is
-// the original. And since a face's duplicates are on every edge of it, an edge's kept faces
-// (those that repeat no other) are known from the edge's own half-edges, before the faces
-// are marked.
-void classify_edges(CheckState& state) {
+// Duplicate faces, each edge as boundary, manifold, inconsistent or non-manifold, and the
+// vertices with more than one fan, in one pass over the vertices' stars (each made once
+// from the corner table, read for both). Two faces over the same vertex set share every
+// edge, so comparing the faces met on each edge finds every duplicate; the earliest face of
+// a set is the original. And since a face's duplicates are on every edge of it, an edge's
+// kept faces (those that repeat no other) are known from the edge's own half-edges, before
+// the faces are marked. The fans, though, are of the faces the corner table holds, which
+// include the duplicates: where there are any, the fans are found again without them.
+void classify_edges_and_vertices(CheckState& state) {
     const IndexedMesh& mesh = state.mesh;
     struct ChunkResult {
         std::vector<std::pair<std::uint32_t, std::uint32_t>> duplicates;  // (face, a face it repeats)
@@ -202,59 +265,65 @@ void classify_edges(CheckState& state) {
         std::vector<Defect> non_manifold;
         std::vector<Defect> inconsistent;
         std::size_t non_manifold_count = 0, inconsistent_count = 0;
+        PinchedVertices pinched;
     };
     const std::size_t cap = state.options.max_locations;
     auto results = map_chunks<ChunkResult>(mesh.vertex_count(), kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
+        VertexStar star;
         std::vector<HalfEdgeEntry> kept;
         std::vector<std::uint8_t> repeats;
-        std::vector<std::uint32_t> earliest;
-        for_each_edge_in(state, v0, v1, [&](std::uint32_t lo, std::uint32_t hi, std::span<const HalfEdgeEntry> edge) {
-            kept.clear();
-            if (edge.size() == 1) {
-                kept.push_back(edge[0]);
-            } else {
-                find_duplicates_on_edge(state, edge, out.duplicates, repeats, earliest);
-                for (std::size_t i = 0; i < edge.size(); ++i)
-                    if (!repeats[i]) kept.push_back(edge[i]);
-            }
-            if (kept.empty()) return;
-            ++out.edges;
-            // Only a defect's location reads the positions (a boundary edge is located by
-            // its loop): an edge's second vertex is far from its first in the list.
-            const auto mid = [&] { return 0.5 * (mesh.positions[lo] + mesh.positions[hi]); };
-            if (kept.size() == 1) {
-                const HalfEdgeEntry& h = kept[0];
-                out.boundary.push_back(h.forward() ? BoundaryHalfEdge{lo, hi, h.face()} : BoundaryHalfEdge{hi, lo, h.face()});
-            } else if (kept.size() == 2) {
-                const HalfEdgeEntry& h0 = kept[0];
-                const HalfEdgeEntry& h1 = kept[1];
-                if (h0.forward() == h1.forward()) {
-                    ++out.inconsistent_count;
-                    if (out.inconsistent.size() < cap) {
+        std::vector<std::uint32_t> earliest, parent;
+        for (std::size_t v = v0; v < v1; ++v) {
+            star.make(state, static_cast<std::uint32_t>(v));
+            star.for_each_edge([&](std::uint32_t lo, std::uint32_t hi, std::span<const HalfEdgeEntry> edge) {
+                kept.clear();
+                if (edge.size() == 1 || (edge.size() == 2 && !same_faces_on_edge(mesh, edge[0].face(), edge[1].face()))) {
+                    kept.assign(edge.begin(), edge.end());  // most edges: no face there repeats another
+                } else {
+                    find_duplicates_on_edge(state, edge, out.duplicates, repeats, earliest);
+                    for (std::size_t i = 0; i < edge.size(); ++i)
+                        if (!repeats[i]) kept.push_back(edge[i]);
+                }
+                if (kept.empty()) return;
+                ++out.edges;
+                // Only a defect's location reads the positions (a boundary edge is located by
+                // its loop): an edge's second vertex is far from its first in the list.
+                const auto mid = [&] { return 0.5 * (mesh.positions[lo] + mesh.positions[hi]); };
+                if (kept.size() == 1) {
+                    const HalfEdgeEntry& h = kept[0];
+                    out.boundary.push_back(h.forward() ? BoundaryHalfEdge{lo, hi, h.face()} : BoundaryHalfEdge{hi, lo, h.face()});
+                } else if (kept.size() == 2) {
+                    const HalfEdgeEntry& h0 = kept[0];
+                    const HalfEdgeEntry& h1 = kept[1];
+                    if (h0.forward() == h1.forward()) {
+                        ++out.inconsistent_count;
+                        if (out.inconsistent.size() < cap) {
+                            Defect d;
+                            d.position = mid();
+                            d.faces = {h0.face(), h1.face()};
+                            d.vertices = h0.forward() ? std::vector<std::uint32_t>{lo, hi} : std::vector<std::uint32_t>{hi, lo};
+                            d.detail = "faces " + std::to_string(h0.face()) + " and " + std::to_string(h1.face()) +
+                                       " both run from vertex " + std::to_string(d.vertices[0]) + " to " +
+                                       std::to_string(d.vertices[1]);
+                            out.inconsistent.push_back(std::move(d));
+                        }
+                    }
+                } else {
+                    ++out.non_manifold_count;
+                    if (out.non_manifold.size() < cap) {
                         Defect d;
                         d.position = mid();
-                        d.faces = {h0.face(), h1.face()};
-                        d.vertices = h0.forward() ? std::vector<std::uint32_t>{lo, hi} : std::vector<std::uint32_t>{hi, lo};
-                        d.detail = "faces " + std::to_string(h0.face()) + " and " + std::to_string(h1.face()) +
-                                   " both run from vertex " + std::to_string(d.vertices[0]) + " to " +
-                                   std::to_string(d.vertices[1]);
-                        out.inconsistent.push_back(std::move(d));
+                        d.vertices = {lo, hi};
+                        for (const HalfEdgeEntry& h : kept) d.faces.push_back(h.face());
+                        d.measure = double(kept.size());
+                        d.detail = "edge " + std::to_string(lo) + "-" + std::to_string(hi) + " is shared by " +
+                                   std::to_string(kept.size()) + " faces";
+                        out.non_manifold.push_back(std::move(d));
                     }
                 }
-            } else {
-                ++out.non_manifold_count;
-                if (out.non_manifold.size() < cap) {
-                    Defect d;
-                    d.position = mid();
-                    d.vertices = {lo, hi};
-                    for (const HalfEdgeEntry& h : kept) d.faces.push_back(h.face());
-                    d.measure = double(kept.size());
-                    d.detail = "edge " + std::to_string(lo) + "-" + std::to_string(hi) + " is shared by " +
-                               std::to_string(kept.size()) + " faces";
-                    out.non_manifold.push_back(std::move(d));
-                }
-            }
-        });
+            });
+            find_fans(state, star, parent, out.pinched);
+        }
     });
     // Each repeat was found on each of its edges, perhaps in several chunks: sorted, a face's
     // first pair names the earliest face it repeats, and the faces come in face order. (No
@@ -297,93 +366,26 @@ void classify_edges(CheckState& state) {
     std::sort(state.boundary.begin(), state.boundary.end());
     state.report.edge_count = edges;
     state.report.boundary_edge_count = state.boundary.size();
-}
 
-void find_non_manifold_vertices(CheckState& state) {
-    const IndexedMesh& mesh = state.mesh;
-    const std::size_t vertex_count = mesh.vertex_count();
-    // A fan: faces around v connected through edges at v. More than one fan: the surface
-    // is pinched at v (two cones touching at their tips, a bow tie).
-    struct ChunkResult {
-        std::vector<Defect> defects;
-        std::size_t count = 0;
-        std::vector<std::pair<std::uint64_t, std::uint32_t>> fans;  // (vertex << 32 | face, fan)
-    };
-    const std::size_t cap = state.options.max_locations;
-    // The corner table was made before classify_edges: a duplicate found since is left
-    // out here (the face it repeats stays, so every vertex keeps a kept face).
-    const bool has_duplicates = state.report.count(DefectClass::duplicate_face) != 0;
-    auto results = map_chunks<ChunkResult>(vertex_count, kVertexChunk, [&](std::size_t v0, std::size_t v1, ChunkResult& out) {
-        // neighbour << 32 | local face: one integer compare a step, and a vertex's few
-        // entries sorted by insertion.
-        std::vector<std::uint64_t> by_neighbour;
-        std::vector<std::uint32_t> parent, kept;
-        for (std::size_t v = v0; v < v1; ++v) {
-            std::span<const std::uint32_t> faces(state.corner_faces.begin() + state.corner_start[v],
-                                                 state.corner_faces.begin() + state.corner_start[v + 1]);
-            if (has_duplicates) {
+    std::vector<PinchedVertices> pinched;
+    if (duplicates.empty()) {
+        for (ChunkResult& r : results) pinched.push_back(std::move(r.pinched));
+    } else {
+        // Without the duplicates just marked (the face each repeats stays, so every vertex
+        // keeps a kept face).
+        pinched = map_chunks<PinchedVertices>(mesh.vertex_count(), kVertexChunk, [&](std::size_t v0, std::size_t v1, PinchedVertices& out) {
+            VertexStar star;
+            std::vector<std::uint32_t> kept, parent;
+            for (std::size_t v = v0; v < v1; ++v) {
                 kept.clear();
-                for (std::uint32_t f : faces)
-                    if (state.face_status[f] == face_kept) kept.push_back(f);
-                faces = kept;
+                for (std::uint32_t c = state.corner_start[v]; c < state.corner_start[v + 1]; ++c)
+                    if (state.face_status[state.corner_faces[c]] == face_kept) kept.push_back(state.corner_faces[c]);
+                star.make(state, static_cast<std::uint32_t>(v), kept);
+                find_fans(state, star, parent, out);
             }
-            const auto count = static_cast<std::uint32_t>(faces.size());
-            if (count < 2) continue;
-            by_neighbour.clear();
-            for (std::uint32_t i = 0; i < count; ++i) {
-                const auto face = mesh.face(faces[i]);
-                const std::size_t n = face.size();
-                std::size_t k = 0;
-                while (face[k] != v) ++k;
-                by_neighbour.push_back(std::uint64_t(face[(k + n - 1) % n]) << 32 | i);
-                by_neighbour.push_back(std::uint64_t(face[(k + 1) % n]) << 32 | i);
-            }
-            if (by_neighbour.size() <= 32) {
-                for (std::size_t i = 1; i < by_neighbour.size(); ++i) {
-                    const std::uint64_t x = by_neighbour[i];
-                    std::size_t j = i;
-                    for (; j > 0 && by_neighbour[j - 1] > x; --j) by_neighbour[j] = by_neighbour[j - 1];
-                    by_neighbour[j] = x;
-                }
-            } else {
-                std::sort(by_neighbour.begin(), by_neighbour.end());
-            }
-            parent.resize(count);
-            std::iota(parent.begin(), parent.end(), 0u);
-            auto find = [&](std::uint32_t x) {
-                while (parent[x] != x) x = parent[x] = parent[parent[x]];
-                return x;
-            };
-            std::uint32_t fans = count;
-            for (std::size_t i = 1; i < by_neighbour.size(); ++i) {
-                if (by_neighbour[i] >> 32 != by_neighbour[i - 1] >> 32) continue;
-                const std::uint32_t x = find(static_cast<std::uint32_t>(by_neighbour[i])),
-                                    y = find(static_cast<std::uint32_t>(by_neighbour[i - 1]));
-                if (x != y) {
-                    parent[std::max(x, y)] = std::min(x, y);
-                    --fans;
-                }
-            }
-            if (fans <= 1) continue;
-            for (std::uint32_t i = 0; i < count; ++i) out.fans.emplace_back(std::uint64_t(v) << 32 | faces[i], find(i));
-            ++out.count;
-            if (out.defects.size() >= cap) continue;
-            Defect d;
-            d.position = mesh.positions[v];
-            d.vertices = {static_cast<std::uint32_t>(v)};
-            for (std::uint32_t i = 0; i < count && d.faces.size() < 32; ++i) d.faces.push_back(faces[i]);
-            d.measure = fans;
-            d.detail = "vertex " + std::to_string(v) + " joins " + std::to_string(fans) + " separate fans of faces";
-            out.defects.push_back(std::move(d));
-        }
-    });
-    auto& report = state.report.defects[int(DefectClass::non_manifold_vertex)];
-    for (ChunkResult& r : results) {
-        report.count += r.count;
-        for (Defect& d : r.defects)
-            if (report.locations.size() < cap) report.locations.push_back(std::move(d));
-        state.fan_at_pinch.insert(r.fans.begin(), r.fans.end());
+        });
     }
+    add_pinched_vertices(state, pinched);
 }
 
 void find_components(CheckState& state) {
