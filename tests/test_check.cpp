@@ -1226,9 +1226,12 @@ TEST(CheckCommand, PassingTerrainPictureHasNoPinholesAndAScaleBar) {
 }
 
 TEST(CheckCommand, PictureMarksTheDefects) {
-    const fs::path dir = scratch_dir();
+    // A directory of its own: the suite's scratch directory holds other tests' pictures when
+    // the tests run in one process.
+    const fs::path dir = scratch_dir() / "picture_marks_the_defects";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
     const fs::path png = dir / "defects.png";
-    fs::remove(png);
     const RunResult r = tessref_check({corpus("terrain_hole.obj").string(), "--image", png.string()});
     EXPECT_EQ(r.status, 1) << r.err;
     OIIO::ImageBuf image(png.string());
