@@ -512,11 +512,17 @@ inline bool float1_x4_fits(const TextureLevel& level) { return level.width <= 32
 //
 // axes_gpu_x4's operations on eight lanes (the same instructions, VEX-encoded: vmaxps and
 // vminps keep a NaN first operand's "give the second" rule), then what the four-point path
-// leaves to bilinear_gpu_n<1> point by point: the four texels gathered (the index
+// leaves to bilinear_gpu_n<1> point by point: the four texels fetched (the index
 // y * width + x fits 31 bits for the levels float1_x4_fits takes) and lp_build_lerp_2d's
 // three lerps as vfmadd, which rounds once as std::fma does. Where the four-point path
 // spends its time on the scalar fetches and lerps (12 % of a level-63 render of the bench
 // terrain, the height-map reads of the evaluation), this one takes them eight at a time.
+//
+// A gather costs about a cycle an element here, so a row's two texels come as one 8-byte
+// element: the pair (first, first + 1) with first = min(i0, width - 2), which holds both
+// clamped indices (a level at least 2 wide): i0 is first, or first + 1 where i0 is the last
+// column; i1 is first + 1, or first where the axis clamped both to column 0. Each texel is
+// then the pair's half its index names, the same float either way.
 #if defined(__x86_64__) && defined(__GNUC__)
 #define TESSREF_HAVE_AVX2_VARIANTS 1
 
@@ -551,7 +557,21 @@ struct Axes8 {
     return _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(v), _MM_SHUFFLE(3, 1, 2, 0)));
 }
 
-// Eight points st[0..7] -> their samples' r.
+// The texel pairs (index, index + 1) of eight points, index[j] the texel of point j: the
+// first texels in order (a), the second ones in order (b).
+struct TexelPairs8 {
+    __m256 a, b;
+};
+[[gnu::target("avx2,fma"), gnu::always_inline]] inline TexelPairs8 texel_pairs_x8(const float* texels, __m256i index) {
+    const auto* base = reinterpret_cast<const long long*>(texels);
+    // (a0 b0 a1 b1 a2 b2 a3 b3) and (a4 b4 .. a7 b7), scale 4: the index counts floats.
+    const __m256 low = _mm256_castsi256_ps(_mm256_i32gather_epi64(base, _mm256_castsi256_si128(index), 4));
+    const __m256 high = _mm256_castsi256_ps(_mm256_i32gather_epi64(base, _mm256_extracti128_si256(index, 1), 4));
+    return {in_order(_mm256_shuffle_ps(low, high, _MM_SHUFFLE(2, 0, 2, 0))),
+            in_order(_mm256_shuffle_ps(low, high, _MM_SHUFFLE(3, 1, 3, 1)))};
+}
+
+// Eight points st[0..7] -> their samples' r, on a level at least 2 texels wide.
 [[gnu::target("avx2,fma"), gnu::always_inline]] inline __m256 float1_x8(const float* texels, __m256i width,
                                                                          __m256 width_f, __m256 height_f,
                                                                          __m256i last_s, __m256i last_t,
@@ -562,12 +582,18 @@ struct Axes8 {
     const __m256 b = _mm256_loadu_ps(&st[4].x);
     const Axes8 ax = axes_gpu_x8(in_order(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0))), width_f, last_s);
     const Axes8 ay = axes_gpu_x8(in_order(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1))), height_f, last_t);
-    const __m256i row0 = _mm256_mullo_epi32(ay.i0, width);
-    const __m256i row1 = _mm256_mullo_epi32(ay.i1, width);
-    const __m256 t00 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row0, ax.i0), 4);
-    const __m256 t10 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row0, ax.i1), 4);
-    const __m256 t01 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row1, ax.i0), 4);
-    const __m256 t11 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row1, ax.i1), 4);
+    const __m256i first = _mm256_min_epi32(ax.i0, _mm256_sub_epi32(last_s, _mm256_set1_epi32(1)));
+    const auto [a0, b0] = texel_pairs_x8(texels, _mm256_add_epi32(_mm256_mullo_epi32(ay.i0, width), first));
+    const auto [a1, b1] = texel_pairs_x8(texels, _mm256_add_epi32(_mm256_mullo_epi32(ay.i1, width), first));
+    // Where i0 is first, the pair's first texel, else its second; where i1 is first + 1, the
+    // second, else the first.
+    const __m256 i0_first = _mm256_castsi256_ps(_mm256_cmpeq_epi32(ax.i0, first));
+    const __m256 i1_second =
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(ax.i1, _mm256_add_epi32(first, _mm256_set1_epi32(1))));
+    const __m256 t00 = _mm256_blendv_ps(b0, a0, i0_first);
+    const __m256 t10 = _mm256_blendv_ps(a0, b0, i1_second);
+    const __m256 t01 = _mm256_blendv_ps(b1, a1, i0_first);
+    const __m256 t11 = _mm256_blendv_ps(a1, b1, i1_second);
     return lerp_gpu_x8(lerp_gpu_x8(t00, t10, ax.weight), lerp_gpu_x8(t01, t11, ax.weight), ay.weight);
 }
 
@@ -583,8 +609,8 @@ template <class Out>
     for (std::size_t j = 0; j < n; ++j) put_r(out[j], value[j]);
 }
 
-// texture_level0_float1_x4 with SimdLevel::avx2. Not inlined into its caller, whose clones
-// target less.
+// texture_level0_float1_x4 with SimdLevel::avx2, for a level at least 2 wide. Not inlined
+// into its caller, whose clones target less.
 template <class Out>
 [[gnu::target("avx2,fma"), gnu::noinline]] void texture_level0_float1_x8(const TextureLevel& level,
                                                                          const glm::vec2* st, Out* out,
@@ -621,7 +647,8 @@ template <int C, bool Unorm8, class Out>
     } else if constexpr (C == 1) {
         if (!repeat && float1_x4_fits(level)) {
 #if defined(TESSREF_HAVE_AVX2_VARIANTS)
-            if (simd_level() == SimdLevel::avx2) return texture_level0_float1_x8(level, st, out, count);
+            if (simd_level() == SimdLevel::avx2 && level.width >= 2)
+                return texture_level0_float1_x8(level, st, out, count);
 #endif
             return texture_level0_float1_x4(level, st, out, count);
         }
