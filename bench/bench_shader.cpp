@@ -122,8 +122,8 @@ void BM_ThesisEvaluationModel(benchmark::State& state) {
 void BM_ThesisEvaluationModelBatch(benchmark::State& state) {
     const tessref::TerrainGrid& g = *scene().grid;
     const tessref::Texture* t = &g.heightmap->texture;
-    const tessref::Sampler2DBatch<float> heightMap = [t](std::span<const glm::vec2> uv, std::span<glm::vec4> out) {
-        t->texture(uv, out);
+    const tessref::Sampler2DRedBatch<float> heightMap = [t](std::span<const glm::vec2> uv, std::span<float> red) {
+        t->texture_red(uv, red);
     };
     const std::vector<glm::vec3> points = domain_points();
     std::vector<tessref::DomainPoint<float>> tc;

@@ -110,7 +110,8 @@ TEST(Thesis, MvpTransformsTheDisplacedPosition) {
 
 // thesis_evaluate_batch is thesis_evaluate at every point, bit for bit (position and
 // texture coordinate), on the real generator's points of a patch with more points than one
-// block of height samples, and reads the height map only through the batched sampler.
+// block of height samples, and reads the height map only through the batched sampler's red
+// channel.
 template <typename T>
 void thesis_batch_is_the_scalar_evaluation() {
     ThesisEvaluation<T> evaluation;
@@ -118,11 +119,11 @@ void thesis_batch_is_the_scalar_evaluation() {
     evaluation.scaleXY = T(40);
     evaluation.scaleZ = T(12.5);
     std::size_t calls = 0, sampled = 0;
-    const Sampler2DBatch<T> heightMap = [&](std::span<const vec2_t<T>> uv, std::span<vec4_t<T>> out) {
+    const Sampler2DRedBatch<T> heightMap = [&](std::span<const vec2_t<T>> uv, std::span<T> red) {
         ++calls;
         sampled += uv.size();
-        EXPECT_EQ(uv.size(), out.size());
-        for (std::size_t k = 0; k < uv.size(); ++k) out[k] = bumps<T>(uv[k]);
+        EXPECT_EQ(uv.size(), red.size());
+        for (std::size_t k = 0; k < uv.size(); ++k) red[k] = bumps<T>(uv[k]).r;
     };
     const Precision precision = std::is_same_v<T, float> ? Precision::gpu : Precision::exact;
     const Pattern pattern = tessellate(TessSettings{Domain::quads, Spacing::fractional_odd},

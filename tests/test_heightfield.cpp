@@ -284,6 +284,8 @@ TEST(TextureSampling, LuminanceSamplesAsItsThreeChannelCopy) {
             while (st.size() < 400) st.emplace_back(coordinate(rng), coordinate(rng));
             std::vector<glm::vec4> batch(st.size());
             luminance.texture(std::span<const glm::vec2>(st), std::span<glm::vec4>(batch));
+            std::vector<float> red(st.size());
+            luminance.texture_red(std::span<const glm::vec2>(st), std::span<float>(red));
             for (std::size_t k = 0; k < st.size(); ++k) {
                 SCOPED_TRACE(std::string(tessref::to_string(format)) + " coordinate " + std::to_string(k));
                 const float l = k < 5 ? static_cast<float>(k) * 1.3f : lod(rng);
@@ -291,6 +293,7 @@ TEST(TextureSampling, LuminanceSamplesAsItsThreeChannelCopy) {
                 ASSERT_EQ(expected.g, expected.r);  // the copy's own channels agree
                 EXPECT_EQ(luminance.textureLod(st[k], l), expected);
                 EXPECT_EQ(batch[k], copy.texture(st[k]));
+                EXPECT_EQ(red[k], copy.texture(st[k]).r);
                 EXPECT_EQ(luminance.texture(st[k]), copy.texture(st[k]));
                 const glm::dvec2 sd(st[k]);
                 EXPECT_EQ(luminance.textureLod(sd, static_cast<double>(l)), copy.textureLod(sd, static_cast<double>(l)));
@@ -332,7 +335,8 @@ struct RandomTexels {
 
 // The batched texture() is the scalar one at every coordinate, bit for bit, for every format,
 // channel count and wrap mode, and both are textureLod(st, 0) (a separate code path): random
-// coordinates in and well outside [0, 1], texel centres and edges, NaN and infinities.
+// coordinates in and well outside [0, 1], texel centres and edges, NaN and infinities. The
+// batched texture_red() is their red channel, in float and double.
 TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
     std::mt19937 rng(20261127);
     std::uniform_real_distribution<float> coordinate(-0.6f, 1.6f);
@@ -351,11 +355,19 @@ TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
                 while (st.size() < 300) st.emplace_back(coordinate(rng), coordinate(rng));
                 std::vector<glm::vec4> out(st.size());
                 texture.texture(std::span<const glm::vec2>(st), std::span<glm::vec4>(out));
+                std::vector<float> red(st.size());
+                texture.texture_red(std::span<const glm::vec2>(st), std::span<float>(red));
+                const std::vector<glm::dvec2> st_double(st.begin(), st.end());
+                std::vector<double> red_double(st.size());
+                texture.texture_red(std::span<const glm::dvec2>(st_double), std::span<double>(red_double));
                 for (std::size_t k = 0; k < st.size(); ++k) {
                     SCOPED_TRACE(std::string(tessref::to_string(format)) + " channels " + std::to_string(channels) +
                                  " coordinate " + std::to_string(k));
                     EXPECT_EQ(bits(out[k]), bits(texture.texture(st[k])));
                     EXPECT_EQ(bits(out[k]), bits(texture.textureLod(st[k], 0.0f)));
+                    EXPECT_EQ(std::bit_cast<std::uint32_t>(red[k]), bits(out[k])[0]);
+                    EXPECT_EQ(std::bit_cast<std::uint64_t>(red_double[k]),
+                              std::bit_cast<std::uint64_t>(texture.texture(st_double[k]).r));
                 }
             }
         }
@@ -365,7 +377,7 @@ TEST(TextureSampling, BatchedTextureIsTextureAtEachCoordinate) {
 // The same at the edges of the batches (four coordinates at a time with SSE2; the unorm8 one
 // keeps each axis's texel pair adjacent): levels from 1 x 1 up, coordinates on and next to
 // every texel boundary, the two edges and beyond them, the special values, and batches of
-// every length up to 9 (the remainders of groups of four).
+// every length up to 9 (the remainders of groups of four); texture_red() likewise.
 TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
     std::mt19937 rng(20260611);
     std::uniform_real_distribution<float> coordinate(-0.6f, 1.6f);
@@ -419,11 +431,14 @@ TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
                     texture.set_wrap(wrap);
                     std::vector<glm::vec4> out(st.size());
                     texture.texture(std::span<const glm::vec2>(st), std::span<glm::vec4>(out));
+                    std::vector<float> red(st.size());
+                    texture.texture_red(std::span<const glm::vec2>(st), std::span<float>(red));
                     for (std::size_t k = 0; k < st.size(); ++k) {
                         SCOPED_TRACE(std::string(tessref::to_string(format)) + " " + std::to_string(width) + "x" +
                                      std::to_string(height) + "x" + std::to_string(channels) + " coordinate (" +
                                      std::to_string(st[k].x) + ", " + std::to_string(st[k].y) + ")");
                         ASSERT_EQ(bits(out[k]), bits(texture.textureLod(st[k], 0.0f)));
+                        ASSERT_EQ(std::bit_cast<std::uint32_t>(red[k]), bits(out[k])[0]);
                     }
                     // Every batch length up to 9, from every start up to 4.
                     for (std::size_t first = 0; first < 4; ++first)
@@ -432,6 +447,11 @@ TEST(TextureSampling, BatchedTextureIsTextureAtTheEdgesOfEverySize) {
                             texture.texture(std::span<const glm::vec2>(st).subspan(first, count),
                                             std::span<glm::vec4>(part));
                             for (std::size_t k = 0; k < count; ++k) ASSERT_EQ(bits(part[k]), bits(out[first + k]));
+                            std::vector<float> part_red(count, -7.0f);
+                            texture.texture_red(std::span<const glm::vec2>(st).subspan(first, count),
+                                                std::span<float>(part_red));
+                            for (std::size_t k = 0; k < count; ++k)
+                                ASSERT_EQ(std::bit_cast<std::uint32_t>(part_red[k]), bits(out[first + k])[0]);
                         }
                 }
             }

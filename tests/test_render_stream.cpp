@@ -25,6 +25,7 @@
 #include "tessref/raster.h"
 #include "tessref/render.h"
 #include "tessref/scene.h"
+#include "tessref/tessellator.h"
 
 namespace fs = std::filesystem;
 
@@ -264,6 +265,100 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     EXPECT_EQ(lean.primitives_culled, one.primitives_culled);
     EXPECT_EQ(lean.fragments, one.fragments);
     EXPECT_EQ(lean.fragments_passed, one.fragments_passed);
+}
+
+// triangle_blocks: every block's two runs hold the vertices of its triangles, each run 2 to
+// kMaxTriangleBlockRun vertices long and below the vertex count, or the block has none (then
+// its triangles are tested one by one); on patterns of both domains at several levels and on
+// a soup whose triangles' vertices lie far apart.
+TEST(Rasterizer, TriangleBlocksHoldTheirTrianglesVertices) {
+    std::vector<std::vector<std::array<std::uint32_t, 3>>> lists;
+    for (const auto domain : {tessref::Domain::quads, tessref::Domain::triangles})
+        for (const float level : {1.0f, 2.0f, 5.3f, 16.0f, 63.0f}) {
+            const tessref::Pattern pattern =
+                tessref::tessellate(tessref::TessSettings{domain, tessref::Spacing::fractional_odd},
+                                    tessref::TessLevels{{level, level * 0.7f, level, 3.0f}, {level, level * 0.9f}});
+            std::vector<std::array<std::uint32_t, 3>> tris;
+            for (std::size_t t = 0; t < pattern.primitive_count(); ++t) {
+                const auto p = pattern.primitive(t);
+                tris.push_back({p[0], p[1], p[2]});
+            }
+            lists.push_back(tris);
+        }
+    std::mt19937 rng(63);
+    std::uniform_int_distribution<std::uint32_t> index(0, 500);
+    std::vector<std::array<std::uint32_t, 3>> soup(203);
+    for (auto& tri : soup) tri = {index(rng), index(rng), index(rng)};
+    soup[5] = {7, 7, 7};  // one vertex alone: a run takes a neighbour
+    lists.push_back(soup);
+    std::size_t testable = 0, blocks_seen = 0;
+    for (const auto& tris : lists) {
+        const std::vector<tessref::TriangleBlock> blocks = tessref::triangle_blocks(tris);
+        ASSERT_EQ(blocks.size(), (tris.size() + tessref::kTriangleBlock - 1) / tessref::kTriangleBlock);
+        std::uint32_t max_index = 0;
+        for (const auto& tri : tris) max_index = std::max({max_index, tri[0], tri[1], tri[2]});
+        for (std::size_t k = 0; k < blocks.size(); ++k) {
+            const tessref::TriangleBlock& b = blocks[k];
+            ++blocks_seen;
+            if (b.count[0] == 0) continue;
+            ++testable;
+            for (int r = 0; r < 2; ++r) {
+                EXPECT_GE(b.count[r], 2u);
+                EXPECT_LE(b.count[r], tessref::kMaxTriangleBlockRun);
+                EXPECT_LE(b.first[r] + b.count[r] - 1, max_index);
+            }
+            for (std::size_t t = k * tessref::kTriangleBlock; t < std::min(tris.size(), (k + 1) * tessref::kTriangleBlock); ++t)
+                for (const std::uint32_t v : tris[t])
+                    EXPECT_TRUE((v >= b.first[0] && v < b.first[0] + b.count[0]) ||
+                                (v >= b.first[1] && v < b.first[1] + b.count[1]))
+                        << "block " << k << " triangle " << t << " vertex " << v;
+        }
+    }
+    EXPECT_GT(testable, blocks_seen * 9 / 10 - 30);  // the patterns' blocks nearly all have runs
+}
+
+// A chunk drawn with its triangle blocks leaves the buffers and counts it leaves without:
+// a level-63 pattern at about 30 triangles a pixel, on a slope through the pixel grid, with a
+// corner behind the eye (its blocks hold a vertex that is not inside) and one vertex on the
+// viewport's edge.
+TEST(Rasterizer, TriangleBlocksDrawWhatTheTrianglesDraw) {
+    const tessref::Pattern pattern =
+        tessref::tessellate(tessref::TessSettings{tessref::Domain::quads, tessref::Spacing::fractional_odd},
+                            tessref::TessLevels{{63, 63, 63, 63}, {63, 63}});
+    std::vector<std::array<std::uint32_t, 3>> tris;
+    for (std::size_t t = 0; t < pattern.primitive_count(); ++t) {
+        const auto p = pattern.primitive(t);
+        tris.push_back({p[0], p[1], p[2]});
+    }
+    std::vector<glm::vec4> positions;
+    for (const auto& q : pattern.points())
+        positions.emplace_back(1.9f * q.u - 0.97f + 0.1f * q.v, 1.8f * q.v - 0.9f, 0.3f * q.u - 0.2f * q.v, 1.0f);
+    positions[0].w = -0.5f;
+    positions[positions.size() / 2].x = 1.0f;
+    const std::vector<tessref::TriangleBlock> blocks = tessref::triangle_blocks(tris);
+    tessref::RasterSettings settings;
+    settings.depth_func = tessref::DepthFunc::less;
+    tessref::Framebuffer plain = tessref::Framebuffer::create_visibility(31, 17);
+    tessref::Framebuffer blocked = tessref::Framebuffer::create_visibility(31, 17);
+    tessref::Rasterizer plain_rasterizer(plain, settings), blocked_rasterizer(blocked, settings);
+    plain_rasterizer.draw(std::vector<tessref::RasterChunk>{{positions, tris, 5, true}});
+    blocked_rasterizer.draw(std::vector<tessref::RasterChunk>{{positions, tris, 5, true, blocks}});
+    const tessref::RasterStats a = plain_rasterizer.stats(), b = blocked_rasterizer.stats();
+    ASSERT_GT(a.fragments_passed, 400u);
+    EXPECT_GT(a.triangles_clipped, 0u);
+    EXPECT_TRUE(same_bytes(blocked.triangle_id, plain.triangle_id));
+    EXPECT_TRUE(same_bytes(blocked.depth, plain.depth));
+    EXPECT_EQ(b.triangles_in, a.triangles_in);
+    EXPECT_EQ(b.triangles_clipped, a.triangles_clipped);
+    EXPECT_EQ(b.triangles_rejected, a.triangles_rejected);
+    EXPECT_EQ(b.primitives, a.primitives);
+    EXPECT_EQ(b.primitives_culled, a.primitives_culled);
+    EXPECT_EQ(b.fragments, a.fragments);
+    EXPECT_EQ(b.fragments_passed, a.fragments_passed);
+    // Blocks of another chunk's triangles are refused.
+    EXPECT_THROW(blocked_rasterizer.draw(std::vector<tessref::RasterChunk>{
+                     {positions, std::span<const std::array<std::uint32_t, 3>>(tris).first(9), 0, true, blocks}}),
+                 tessref::Error);
 }
 
 // A draw of one small triangle reports the quads around it, not its whole tile: the

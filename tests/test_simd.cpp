@@ -60,7 +60,8 @@ TEST(Simd, LevelNamesAndTheCpu) {
 // The one-channel float filter (a height map's reads): random coordinates in and around
 // [0, 1], texel centres and edges, huge, infinite and NaN ones, in runs of 1 to 19 points
 // (the eight-point variant's tails), on levels of several shapes. Each sample must be the
-// baseline's and the one-point textureLod's, bit for bit.
+// baseline's and the one-point textureLod's, bit for bit, and the red-channel batch
+// (texture_red) its r at both levels.
 TEST_F(SimdLevels, FloatTextureSamplesAreTheBaselines) {
     std::mt19937 rng(30);
     std::uniform_real_distribution<float> value(-100.0f, 100.0f), coordinate(-0.25f, 1.25f);
@@ -87,10 +88,19 @@ TEST_F(SimdLevels, FloatTextureSamplesAreTheBaselines) {
                 tex.texture(in, out);
                 return out;
             };
+            const auto sample_red = [&] {
+                std::vector<float> red(n);
+                tex.texture_red(in, red);
+                return red;
+            };
             const std::vector<glm::vec4> base = at_level(tessref::SimdLevel::sse2, sample);
             const std::vector<glm::vec4> wide = at_level(tessref::SimdLevel::avx2, sample);
+            const std::vector<float> base_red = at_level(tessref::SimdLevel::sse2, sample_red);
+            const std::vector<float> wide_red = at_level(tessref::SimdLevel::avx2, sample_red);
             for (std::size_t k = 0; k < n; ++k) {
                 const glm::vec4 one = tex.textureLod(in[k], 0.0f);
+                ASSERT_EQ(std::memcmp(&base_red[k], &base[k].r, sizeof(float)), 0) << k;
+                ASSERT_EQ(std::memcmp(&wide_red[k], &base[k].r, sizeof(float)), 0) << k;
                 ASSERT_EQ(std::memcmp(&wide[k], &base[k], sizeof(glm::vec4)), 0)
                     << w << "x" << h << " st (" << in[k].x << ", " << in[k].y << "): " << wide[k].r << " against "
                     << base[k].r;

@@ -118,6 +118,10 @@ using Sampler2D = std::function<vec4_t<T>(vec2_t<T> uv)>;
 // block of points through it, one call per block instead of one per point.
 template <typename T>
 using Sampler2DBatch = std::function<void(std::span<const vec2_t<T>> uv, std::span<vec4_t<T>> out)>;
+// Sampler2DBatch's red channel alone: red[k] = texture(sampler, uv[k]).r. The evaluation's
+// height reads use nothing else.
+template <typename T>
+using Sampler2DRedBatch = std::function<void(std::span<const vec2_t<T>> uv, std::span<T> red)>;
 // GLSL's textureLod(sampler, uv, lod).
 template <typename T>
 using Sampler2DLod = std::function<vec4_t<T>(vec2_t<T> uv, T lod)>;

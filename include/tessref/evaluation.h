@@ -68,12 +68,12 @@ EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>& tcPosition,
                                    const ThesisEvaluation<T>& evaluation);
 // thesis_evaluate at many domain points of one patch, for the mesh: position[k] and
 // textureCoordinate[k] are thesis_evaluate(tcPosition, glTessCoord[k], evaluation)'s bit for
-// bit, where evaluation samples through `heightMap` (one call per block of points instead of
-// one per point); gl_Position, which the pipeline does not keep, is not computed. The three
+// bit, where evaluation samples through `heightMap`'s red channel (one call per block of
+// points instead of one per point); gl_Position, which the pipeline does not keep, is not computed. The three
 // spans have the same size.
 template <typename T>
 void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
-                           std::span<const DomainPoint<T>> glTessCoord, const Sampler2DBatch<T>& heightMap,
+                           std::span<const DomainPoint<T>> glTessCoord, const Sampler2DRedBatch<T>& heightMap,
                            T scaleXY, T scaleZ, std::span<vec3_t<T>> position,
                            std::span<vec2_t<T>> textureCoordinate);
 

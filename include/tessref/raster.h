@@ -189,6 +189,24 @@ struct WeightsView {
         return {fb.barycentric.data(), static_cast<std::size_t>(fb.width), 0, 0};
     }
 };
+// Where the vertices of kTriangleBlock consecutive triangles lie: two runs of vertex indices,
+// [first[r], first[r] + count[r]), that hold every one of them (and perhaps others), each
+// of 2 to kMaxTriangleBlockRun vertices, or count[0] = 0 where two such runs do not. The box test rejects a
+// block whose vertices' joint box holds no pixel centre at once (each triangle's box lies in
+// it), reading the runs' bounds in order where it read three vertices through the indices
+// for each triangle. Made once for a pattern that many chunks share (triangle_blocks).
+inline constexpr std::size_t kTriangleBlock = 8;
+inline constexpr std::uint32_t kMaxTriangleBlockRun = 8;
+struct TriangleBlock {
+    std::array<std::uint32_t, 2> first{};
+    std::array<std::uint32_t, 2> count{};
+};
+// The blocks of triangles [kTriangleBlock * b, kTriangleBlock * (b + 1)), the last one
+// possibly shorter: each block's two runs split its distinct vertex indices at their
+// largest gap (a run of one vertex takes a neighbour too; the same run twice where the
+// indices have no gap).
+std::vector<TriangleBlock> triangle_blocks(std::span<const std::array<std::uint32_t, 3>> triangles);
+
 struct RasterChunk {
     std::span<const glm::vec4> positions;  // gl_Position of the vertices the triangles index
     std::span<const std::array<std::uint32_t, 3>> triangles;
@@ -198,6 +216,8 @@ struct RasterChunk {
     // the draw does not scan them for an index out of range, which it otherwise does for
     // every chunk (3 % of a level-63 render, the same pattern's indices each time).
     bool indices_in_range = false;
+    // triangle_blocks(triangles), or empty: the triangles are box-tested one by one.
+    std::span<const TriangleBlock> blocks{};
 };
 
 class Rasterizer {

@@ -164,6 +164,11 @@ public:
     // channel count dispatched once for all of them. st and out have the same size.
     void texture(std::span<const glm::vec2> st, std::span<glm::vec4> out) const;
     void texture(std::span<const glm::dvec2> st, std::span<glm::dvec4> out) const;
+    // texture() at many coordinates, the red channel alone: red[k] = texture(st[k]).r, bit
+    // for bit, by the same filter; for callers that read nothing else (a height map's reads),
+    // which then store a float where a vec4 was written. st and red have the same size.
+    void texture_red(std::span<const glm::vec2> st, std::span<float> red) const;
+    void texture_red(std::span<const glm::dvec2> st, std::span<double> red) const;
     // GLSL textureLod(sampler, st, lod): lod clamped to [0, max_level()] (a NaN lod reads as
     // 0), linear between levels floor(lod) and floor(lod) + 1. A NaN coordinate reads as a
     // coordinate below 0 (the edge texel): GL leaves it undefined, tessref keeps it defined.

@@ -130,16 +130,14 @@ inline void thesis_ground_x4(const ThesisGroundX4& g, const DomainPoint<float>* 
     _mm_storeu_ps(&textureCoordinate[2].x, _mm_unpackhi_ps(s, t));
 }
 
-// Four positions (px, py, texel.r * scaleZ), stored as four glm::vec3 (store_xyz4).
-inline void thesis_positions_x4(const float* px, const float* py, const glm::vec4* texel, __m128 scaleZ,
+// Four positions (px, py, red * scaleZ), stored as four glm::vec3 (store_xyz4).
+inline void thesis_positions_x4(const float* px, const float* py, const float* red, __m128 scaleZ,
                                 glm::vec3* position) {
-    static_assert(sizeof(glm::vec3) == 12 && sizeof(glm::vec4) == 16);
+    static_assert(sizeof(glm::vec3) == 12);
     const __m128 x = _mm_loadu_ps(px);
     const __m128 y = _mm_loadu_ps(py);
-    const __m128 r01 = _mm_unpacklo_ps(_mm_loadu_ps(&texel[0].x), _mm_loadu_ps(&texel[1].x));  // r0 r1 g0 g1
-    const __m128 r23 = _mm_unpacklo_ps(_mm_loadu_ps(&texel[2].x), _mm_loadu_ps(&texel[3].x));  // r2 r3 g2 g3
     // GLSL: thesis_terrain.tese:34 height
-    const __m128 z = _mm_mul_ps(_mm_movelh_ps(r01, r23), scaleZ);
+    const __m128 z = _mm_mul_ps(_mm_loadu_ps(red), scaleZ);
     store_xyz4(&position[0].x, x, y, z);
 }
 
@@ -148,12 +146,12 @@ inline void thesis_positions_x4(const float* px, const float* py, const glm::vec
 
 template <typename T>
 void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
-                           std::span<const DomainPoint<T>> glTessCoord, const Sampler2DBatch<T>& heightMap,
+                           std::span<const DomainPoint<T>> glTessCoord, const Sampler2DRedBatch<T>& heightMap,
                            T scaleXY, T scaleZ, std::span<vec3_t<T>> position,
                            std::span<vec2_t<T>> textureCoordinate) {
-    // Blocks whose height samples fit on the stack: the points' coordinates, their samples
-    // in one call, then the heights.
-    std::array<vec4_t<T>, 64> texel;
+    // Blocks whose height samples fit on the stack: the points' coordinates, their samples'
+    // red channels in one call, then the heights.
+    std::array<T, 64> red;
     // The corners as a local: the loop need not reload them (nor recompute their differences)
     // after each store.
     const std::array<vec4_t<T>, 4> corners = tcPosition;
@@ -163,8 +161,8 @@ void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
         const ThesisGroundX4 ground(corners, scaleXY);
         const __m128 scaleZ4 = _mm_set1_ps(scaleZ);
         alignas(16) std::array<float, 64> px, py;
-        for (std::size_t k0 = 0; k0 < glTessCoord.size(); k0 += texel.size()) {
-            const std::size_t count = std::min(texel.size(), glTessCoord.size() - k0);
+        for (std::size_t k0 = 0; k0 < glTessCoord.size(); k0 += red.size()) {
+            const std::size_t count = std::min(red.size(), glTessCoord.size() - k0);
             const std::size_t whole = count & ~std::size_t{3};
             for (std::size_t k = 0; k < whole; k += 4)
                 thesis_ground_x4(ground, &glTessCoord[k0 + k], &px[k], &py[k], &textureCoordinate[k0 + k]);
@@ -174,25 +172,25 @@ void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>& tcPosition,
                 py[k] = g.position.y;
                 textureCoordinate[k0 + k] = g.textureCoordinate;
             }
-            heightMap(textureCoordinate.subspan(k0, count), std::span<vec4_t<T>>(texel.data(), count));
+            heightMap(textureCoordinate.subspan(k0, count), std::span<T>(red.data(), count));
             for (std::size_t k = 0; k < whole; k += 4)
-                thesis_positions_x4(&px[k], &py[k], &texel[k], scaleZ4, &position[k0 + k]);
+                thesis_positions_x4(&px[k], &py[k], &red[k], scaleZ4, &position[k0 + k]);
             // GLSL: thesis_terrain.tese:34 height
-            for (std::size_t k = whole; k < count; ++k) position[k0 + k] = vec3_t<T>(px[k], py[k], texel[k].r * scaleZ);
+            for (std::size_t k = whole; k < count; ++k) position[k0 + k] = vec3_t<T>(px[k], py[k], red[k] * scaleZ);
         }
         return;
     }
 #endif
-    for (std::size_t k0 = 0; k0 < glTessCoord.size(); k0 += texel.size()) {
-        const std::size_t count = std::min(texel.size(), glTessCoord.size() - k0);
+    for (std::size_t k0 = 0; k0 < glTessCoord.size(); k0 += red.size()) {
+        const std::size_t count = std::min(red.size(), glTessCoord.size() - k0);
         for (std::size_t k = 0; k < count; ++k) {
             const ThesisGround<T> ground = thesis_ground(corners, glTessCoord[k0 + k], scaleXY);
             position[k0 + k] = vec3_t<T>(ground.position, T(0));
             textureCoordinate[k0 + k] = ground.textureCoordinate;
         }
-        heightMap(textureCoordinate.subspan(k0, count), std::span<vec4_t<T>>(texel.data(), count));
+        heightMap(textureCoordinate.subspan(k0, count), std::span<T>(red.data(), count));
         // GLSL: thesis_terrain.tese:34 height
-        for (std::size_t k = 0; k < count; ++k) position[k0 + k].z = texel[k].r * scaleZ;
+        for (std::size_t k = 0; k < count; ++k) position[k0 + k].z = red[k] * scaleZ;
     }
 }
 
@@ -401,7 +399,7 @@ EvaluatedVertex<T> pn_evaluate(const PnPatch<T>& patch, const DomainPoint<T>& gl
     template EvaluatedVertex<T> thesis_evaluate(const std::array<vec4_t<T>, 4>&,                  \
                                                 const DomainPoint<T>&, const ThesisEvaluation<T>&); \
     template void thesis_evaluate_batch(const std::array<vec4_t<T>, 4>&, std::span<const DomainPoint<T>>,     \
-                                        const Sampler2DBatch<T>&, T, T, std::span<vec3_t<T>>,             \
+                                        const Sampler2DRedBatch<T>&, T, T, std::span<vec3_t<T>>,             \
                                         std::span<vec2_t<T>>);                                            \
     template EvaluatedVertex<T> cosc422_evaluate(const std::array<vec4_t<T>, 4>&,                 \
                                                  const DomainPoint<T>&,                           \

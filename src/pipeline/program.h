@@ -167,6 +167,12 @@ Sampler2DBatch<T> sampler_batch(const std::shared_ptr<const Texture>& texture) {
     return [texture](std::span<const vec2_t<T>> st, std::span<vec4_t<T>> out) { texture->texture(st, out); };
 }
 template <typename T>
+Sampler2DRedBatch<T> sampler_red_batch(const std::shared_ptr<const Texture>& texture) {
+    if (!texture)
+        return [](std::span<const vec2_t<T>>, std::span<T> red) { std::fill(red.begin(), red.end(), T(0)); };
+    return [texture](std::span<const vec2_t<T>> st, std::span<T> red) { texture->texture_red(st, red); };
+}
+template <typename T>
 Sampler2DLod<T> sampler_lod(const std::shared_ptr<const Texture>& texture) {
     return [texture](vec2_t<T> st, T lod) { return texture->textureLod(st, lod); };
 }

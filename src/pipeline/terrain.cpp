@@ -21,7 +21,7 @@ TerrainProgram<T>::TerrainProgram(const Scene& s, const glm::dvec3& o)
     height_texture = std::shared_ptr<const Texture>(g.heightmap, &g.heightmap->texture);
     heightMap = sampler<T>(height_texture);
     heightMapLod = sampler_lod<T>(height_texture);
-    heightMapBatch = sampler_batch<T>(height_texture);
+    heightMapRedBatch = sampler_red_batch<T>(height_texture);
     if (g.normal_map) normalMap = sampler<T>(g.normal_map);
     normalMapBatch = sampler_batch<T>(g.normal_map);
     for (double u : g.u_coords) u_coords.push_back(static_cast<T>(u));

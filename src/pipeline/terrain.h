@@ -96,8 +96,8 @@ protected:
     Sampler2D<T> heightMap;
     Sampler2DLod<T> heightMapLod;
     Sampler2D<T> normalMap;                      // unbound unless the scene has a normal map
-    Sampler2DBatch<T> heightMapBatch;            // heightMap, many coordinates at a time
-    Sampler2DBatch<T> normalMapBatch;            // normalMap, likewise
+    Sampler2DRedBatch<T> heightMapRedBatch;      // heightMap's r (the height), many coordinates at a time
+    Sampler2DBatch<T> normalMapBatch;            // normalMap, many coordinates at a time
     mat3_t<T> normalMatrix{T(1)};                // the thesis's normalMatrix: model is the identity
     std::vector<std::array<vec4_t<T>, 4>> tcPosition;  // per patch: the control stage's output corners
 

@@ -16,7 +16,7 @@ public:
         scaleXY = static_cast<T>(this->grid.scale_xy);
         scaleZ = static_cast<T>(this->grid.scale_z);
         evaluationHeightMap = this->heightMap;
-        evaluationHeightMapBatch = this->heightMapBatch;
+        evaluationHeightMapRedBatch = this->heightMapRedBatch;
         if (this->relative) {
             // Camera-relative: textureCoordinate = position.xy / scaleXY + textureOffset, with
             // textureOffset = origin.xy / scaleXY in double, rounded once. The shaders' functions
@@ -26,8 +26,8 @@ public:
             const vec2_t<T> offset = textureOffset;
             const Sampler2D<T> world = this->heightMap;
             evaluationHeightMap = [world, offset](vec2_t<T> st) { return world(st + offset); };
-            const Sampler2DBatch<T> worldBatch = this->heightMapBatch;
-            evaluationHeightMapBatch = [worldBatch, offset](std::span<const vec2_t<T>> st, std::span<vec4_t<T>> out) {
+            const Sampler2DRedBatch<T> worldBatch = this->heightMapRedBatch;
+            evaluationHeightMapRedBatch = [worldBatch, offset](std::span<const vec2_t<T>> st, std::span<T> out) {
                 std::array<vec2_t<T>, TerrainProgram<T>::kBlock> shifted;
                 for (std::size_t k0 = 0; k0 < st.size(); k0 += shifted.size()) {
                     const std::size_t count = std::min(shifted.size(), st.size() - k0);
@@ -46,7 +46,7 @@ private:
     void evaluate_block(std::size_t p, std::span<const DomainPoint<T>> tc, std::span<vec3_t<T>> position,
                         std::span<vec2_t<T>> textureCoordinate) const override {
         // thesis_terrain.tese (thesis_evaluate) without gl_Position, which the mesh does not keep.
-        thesis_evaluate_batch<T>(this->tcPosition[p], tc, evaluationHeightMapBatch, scaleXY, scaleZ, position,
+        thesis_evaluate_batch<T>(this->tcPosition[p], tc, evaluationHeightMapRedBatch, scaleXY, scaleZ, position,
                                  textureCoordinate);
         if (this->relative)
             for (vec2_t<T>& st : textureCoordinate) st = st + textureOffset;
@@ -57,7 +57,7 @@ private:
     // The evaluation's heightMap: the scene's, or when camera-relative one that adds
     // textureOffset to the coordinate.
     Sampler2D<T> evaluationHeightMap;
-    Sampler2DBatch<T> evaluationHeightMapBatch;
+    Sampler2DRedBatch<T> evaluationHeightMapRedBatch;
 };
 
 }  // namespace

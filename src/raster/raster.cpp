@@ -655,11 +655,41 @@ const glm::vec3 kUnitWeights[3] = {glm::vec3(1.0f, 0.0f, 0.0f), glm::vec3(0.0f, 
     }
 }
 
+// Whether a block of triangles (TriangleBlock) can hold no pixel centre: the lane-wise min of
+// its runs' vertex bounds, the box of all their vertices, holds none. Then neither does any
+// of its triangles' boxes, which lie in it (each bound is a min, so the block's sums
+// x0 + (-x1) and y0 + (-y1) are at most each triangle's). A block with a vertex that is not
+// inside (kAnywhereBox) never is.
+[[gnu::always_inline]] inline bool block_has_no_pixels(const raster::BoxBounds* bounds, const TriangleBlock& block) {
+    if (block.count[0] == 0) return false;
+#if defined(__SSE2__)
+    // Each run of 2 to 8 vertices as four pairs, the last ones overlapping: the same loads
+    // whatever the run's length, without a branch.
+    static_assert(kMaxTriangleBlockRun == 8);
+    __m128i box = _mm_set1_epi16(INT16_MAX);
+    for (int r = 0; r < 2; ++r) {
+        const raster::BoxBounds* p = bounds + block.first[r];
+        const std::uint32_t last_pair = block.count[r] - 2;
+        for (std::uint32_t k = 0; k < 8; k += 2)
+            box = _mm_min_epi16(box, _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + std::min(k, last_pair))));
+    }
+    box = _mm_min_epi16(box, _mm_shuffle_epi32(box, _MM_SHUFFLE(1, 0, 3, 2)));
+    const __m128i ends = _mm_add_epi16(box, _mm_shuffle_epi32(box, _MM_SHUFFLE(2, 3, 0, 1)));
+    return (_mm_movemask_epi8(_mm_cmpgt_epi16(ends, _mm_setzero_si128())) & 0xF) != 0;
+#else
+    raster::BoxBounds box = bounds[block.first[0]];
+    for (int r = 0; r < 2; ++r)
+        for (std::uint32_t k = 0; k < block.count[r]; ++k) box = raster::triangle_box(box, box, bounds[block.first[r] + k]);
+    return !raster::box_has_pixels(box);
+#endif
+}
+
 // Sets up triangles [first, last) of tris, whose ids start at first_id (the chunk's first
 // triangle is first_id + 0), with their vertices at `positions`, prepared in `prepared`.
+// `blocks`: triangle_blocks(tris) with first = 0, or empty.
 void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const PreparedVertices& prepared,
                  std::span<const std::array<std::uint32_t, 3>> tris, std::size_t first, std::size_t last,
-                 std::uint32_t first_id, Chunk& chunk) {
+                 std::uint32_t first_id, std::span<const TriangleBlock> blocks, Chunk& chunk) {
     chunk.prims.clear();
     chunk.frags.clear();
     chunk.items.clear();
@@ -690,12 +720,13 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
         chunk.boxes.resize(last - first);
         const raster::BoxBounds* b = bounds;
         raster::BoxBounds* box_out = chunk.boxes.data();
-        std::size_t t = first;
+        // Triangles [t, end) one by one.
+        auto box_test = [&](std::size_t t, std::size_t end) {
 #if defined(__SSE2__)
         // Two triangles a step, one in each half of the registers: the box is the lane-wise
         // min of the vertices' bounds; lanes 0 and 1 of each half of box + (its halves'
         // 32-bit pairs swapped) are x0 + (-x1) and y0 + (-y1).
-        for (; t + 2 <= last; t += 2) {
+        for (; t + 2 <= end; t += 2) {
             const auto& p = tris[t];
             const auto& q = tris[t + 1];
             auto load = [&](std::uint32_t u, std::uint32_t v) {
@@ -713,12 +744,33 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
             count += (empty & 0xF00) == 0;
         }
 #endif
-        for (; t < last; ++t) {
+        for (; t < end; ++t) {
             const auto& tri = tris[t];
             const raster::BoxBounds box = raster::triangle_box(b[tri[0]], b[tri[1]], b[tri[2]]);
             candidates[count] = static_cast<std::uint32_t>(t);
             box_out[count] = box;
             count += raster::box_has_pixels(box);
+        }
+        };
+        if (blocks.empty()) {
+            box_test(first, last);
+        } else {
+            // At 30 triangles a pixel three blocks in four hold no pixel centre, at random: the
+            // blocks that may are listed first, without a branch on each, then tested triangle
+            // by triangle.
+            std::uint32_t maybe[64];
+            for (std::size_t k0 = 0; k0 < blocks.size(); k0 += std::size(maybe)) {
+                const std::size_t k_end = std::min(blocks.size(), k0 + std::size(maybe));
+                std::size_t n = 0;
+                for (std::size_t k = k0; k < k_end; ++k) {
+                    maybe[n] = static_cast<std::uint32_t>(k);
+                    n += !block_has_no_pixels(b, blocks[k]);
+                }
+                for (std::size_t j = 0; j < n; ++j) {
+                    const std::size_t t = first + maybe[j] * kTriangleBlock;
+                    box_test(t, std::min(t + kTriangleBlock, last));
+                }
+            }
         }
         const std::size_t rejected = (last - first) - count;
         chunk.stats.primitives += rejected;
@@ -1168,7 +1220,7 @@ RasterStats run(Framebuffer& fb, const RasterInput& input, const RasterSettings&
         tessref::parallel_for(std::size_t{0}, wave, [&](std::size_t c) {
             const std::size_t first = wave_first + c * kChunkTriangles;
             setup_chunk(state.ctx, input.positions, vertices, input.triangles, first, std::min(wave_last, first + kChunkTriangles),
-                        static_cast<std::uint32_t>(first), state.chunks[used + c]);
+                        static_cast<std::uint32_t>(first), {}, state.chunks[used + c]);
         });
         for (std::size_t c = 0; c < wave; ++c) batch_prims += state.chunks[used + c].items.size();
         state.used += wave;
@@ -1196,6 +1248,42 @@ RasterStats rasterize(Framebuffer& fb, const RasterInput& input, const RasterSet
         return stats;
     }
     return run(fb, input, settings);
+}
+
+std::vector<TriangleBlock> triangle_blocks(std::span<const std::array<std::uint32_t, 3>> triangles) {
+    std::vector<TriangleBlock> blocks((triangles.size() + kTriangleBlock - 1) / kTriangleBlock);
+    std::uint32_t max_index = 0;
+    for (const auto& tri : triangles) max_index = std::max({max_index, tri[0], tri[1], tri[2]});
+    std::vector<std::uint32_t> v;
+    for (std::size_t k = 0; k < blocks.size(); ++k) {
+        v.clear();
+        const std::size_t end = std::min(triangles.size(), (k + 1) * kTriangleBlock);
+        for (std::size_t t = k * kTriangleBlock; t < end; ++t) v.insert(v.end(), triangles[t].begin(), triangles[t].end());
+        std::sort(v.begin(), v.end());
+        v.erase(std::unique(v.begin(), v.end()), v.end());
+        // The largest gap between neighbouring indices splits them into two runs.
+        std::size_t split = v.size();  // the second run's first element
+        for (std::size_t i = 1; i < v.size(); ++i)
+            if (split == v.size() || v[i] - v[i - 1] > v[split] - v[split - 1]) split = i;
+        TriangleBlock block;
+        block.first = {v.front(), v[split % v.size()]};
+        block.count = {v[split - 1] - v.front() + 1, v.back() - v[split % v.size()] + 1};
+        for (int r = 0; r < 2; ++r) {
+            if (block.count[r] > 1) continue;
+            // A run of one vertex, and a neighbour that some triangle indexes too (every
+            // index is below the vertex count).
+            if (block.first[r] < max_index) {
+                block.count[r] = 2;
+            } else if (block.first[r] > 0) {
+                --block.first[r];
+                block.count[r] = 2;
+            }
+        }
+        if (block.count[0] >= 2 && block.count[1] >= 2 && block.count[0] <= kMaxTriangleBlockRun &&
+            block.count[1] <= kMaxTriangleBlockRun)
+            blocks[k] = block;
+    }
+    return blocks;
 }
 
 Rasterizer::Rasterizer(Framebuffer& fb, const RasterSettings& settings) {
@@ -1232,8 +1320,10 @@ void Rasterizer::draw(std::size_t count, const std::function<RasterChunk(std::si
                                         std::to_string(chunk.positions.size()) + " vertices in the chunk)",
                                     Where::at_key("triangles"));
         }
+        if (!chunk.blocks.empty() && chunk.blocks.size() != (chunk.triangles.size() + kTriangleBlock - 1) / kTriangleBlock)
+            throw Error("a chunk's triangle blocks are not its triangles'", Where::at_key("triangles"));
         setup_chunk(s.ctx, chunk.positions, vertices, chunk.triangles, 0, chunk.triangles.size(), chunk.first_id,
-                    s.chunks[used + c]);
+                    chunk.blocks, s.chunks[used + c]);
     });
     s.used += count;
     s.flush();

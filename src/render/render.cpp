@@ -8,7 +8,9 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <mutex>
 #include <span>
+#include <unordered_map>
 #include <string>
 #include <utility>
 
@@ -322,6 +324,7 @@ struct PatchChunk {
     // which the box test rejects (5 % of the render at level 63, 8192 triangles a patch).
     std::span<const std::array<std::uint32_t, 3>> triangles;
     bool shared_triangles = false;  // triangles are the pattern's (below its point count)
+    std::span<const TriangleBlock> blocks;  // the pattern's triangle_blocks, with shared_triangles
     std::vector<glm::dvec3> face_normals;
     std::vector<glm::vec4> clip;
     // Per vertex, with deferred vertex normals: whether a triangle of it won a pixel in this
@@ -346,6 +349,23 @@ constexpr std::size_t kStreamBatchTrianglesPerThread = std::size_t{1} << 15;
 // triangles a pixel (render_streamed).
 constexpr std::uint64_t kDeferNormalsTrianglesPerPixel = 8;
 
+// triangle_blocks of each pattern whose own triangles chunks are drawn from (PatchStream::
+// shared_triangles), made the first time a chunk asks: at a uniform level one pattern serves
+// every patch, so its blocks are made once for the whole render.
+class SharedBlocks {
+public:
+    std::span<const TriangleBlock> of(std::span<const std::array<std::uint32_t, 3>> triangles) {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        std::vector<TriangleBlock>& blocks = made_[triangles.data()];
+        if (blocks.empty()) blocks = triangle_blocks(triangles);
+        return blocks;
+    }
+
+private:
+    std::mutex mutex_;
+    std::unordered_map<const void*, std::vector<TriangleBlock>> made_;  // by the pattern's triangles
+};
+
 // The next batch's chunk boundaries, in patch order, from `next_patch` on: runs of whole
 // patches of about kStreamChunkTriangles triangles until the batch holds `batch_size`.
 // Reuses `chunks`' storage; returns how many chunks the batch has, and moves next_patch on.
@@ -368,7 +388,8 @@ std::size_t plan_batch(const PatchStream& stream, std::size_t& next_patch, std::
 // block of points as it is evaluated: PatchStream::Projection), noting whether every vertex
 // is finite.
 void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& mvp, bool positions,
-                    PatchStream::VertexNormals normals_mode, PatchStream::Provenance provenance) {
+                    PatchStream::VertexNormals normals_mode, PatchStream::Provenance provenance,
+                    SharedBlocks& shared_blocks) {
     SurfaceMesh& m = c.mesh;
     const auto shared = c.last_patch == c.first_patch + 1 ? stream.shared_triangles(c.first_patch)
                                                           : std::span<const std::array<std::uint32_t, 3>>();
@@ -379,6 +400,7 @@ void evaluate_chunk(const PatchStream& stream, PatchChunk& c, const glm::mat4& m
     c.finite = projection.finite;
     c.triangles = shared.empty() ? std::span<const std::array<std::uint32_t, 3>>(m.triangles) : shared;
     c.shared_triangles = !shared.empty();
+    c.blocks = shared.empty() ? std::span<const TriangleBlock>() : shared_blocks.of(shared);
     if (normals_mode == PatchStream::VertexNormals::later) c.wins.assign(m.positions.size(), 0);
 }
 
@@ -551,6 +573,7 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
 
     result.stats.seconds_shade += seconds_since(buffers_start);  // the image buffers
     std::vector<PatchChunk> chunks;
+    SharedBlocks shared_blocks;
     const std::size_t batch_size =
         std::max(kStreamBatchTriangles, kStreamBatchTrianglesPerThread * static_cast<std::size_t>(worker_threads()));
     std::size_t next_patch = 0;
@@ -564,9 +587,9 @@ RenderResult render_streamed(const Scene& scene, const Scene& pipeline_scene, co
         // at two. A chunk with a non-finite vertex draws nothing: the render stops below.
         rasterizer.draw(used, [&](std::size_t k) -> RasterChunk {
             PatchChunk& c = batch_chunks[k];
-            evaluate_chunk(stream, c, mvp, positions, normals_mode, provenance);
+            evaluate_chunk(stream, c, mvp, positions, normals_mode, provenance, shared_blocks);
             if (!c.finite) return {};
-            return {c.clip, c.triangles, c.first_triangle, c.shared_triangles};
+            return {c.clip, c.triangles, c.first_triangle, c.shared_triangles, c.blocks};
         });
         for (const PatchChunk& c : batch_chunks) {
             if (!c.finite) {

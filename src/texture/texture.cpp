@@ -258,6 +258,15 @@ struct LastAxis {
     }
 };
 
+// Where a batch's samples go: texture() writes every channel (Out = glm::vec4), texture_red()
+// the red one alone (Out = float), for callers that read nothing else (a height map's reads
+// in the evaluation). One filter for both: only its last store differs.
+[[gnu::always_inline]] inline void put(glm::vec4& out, const glm::vec4& sample) { out = sample; }
+[[gnu::always_inline]] inline void put(float& out, const glm::vec4& sample) { out = sample.r; }
+// A one-channel float level's sample as texture() returns it, (r, 0, 0, 1), or its r.
+[[gnu::always_inline]] inline void put_r(glm::vec4& out, float r) { out = glm::vec4(r, 0.0f, 0.0f, 1.0f); }
+[[gnu::always_inline]] inline void put_r(float& out, float r) { out = r; }
+
 #if defined(__SSE2__)
 // ---- the 8-bit filter, four coordinates at a time (SSE2) ------------------------------------
 //
@@ -406,13 +415,13 @@ template <int C>
 // four(st + k, out + k, n) over points [0, count) four at a time: four reads four points and
 // writes the samples of the first n of them (n = 4 but for the last one to three points, which
 // are padded with copies of the last; what four writes beyond n is dropped).
-template <class Four>
-[[gnu::always_inline]] inline void in_fours(const glm::vec2* st, glm::vec4* out, std::size_t count, Four&& four) {
+template <class Out, class Four>
+[[gnu::always_inline]] inline void in_fours(const glm::vec2* st, Out* out, std::size_t count, Four&& four) {
     std::size_t k = 0;
     for (; k + 4 <= count; k += 4) four(st + k, out + k, std::size_t{4});
     if (k < count) {
         glm::vec2 tail_st[4];
-        glm::vec4 tail_out[4];
+        Out tail_out[4];
         for (std::size_t j = 0; j < 4; ++j) tail_st[j] = st[std::min(k + j, count - 1)];
         four(tail_st, tail_out, count - k);
         for (std::size_t j = 0; k + j < count; ++j) out[k + j] = tail_out[j];
@@ -420,14 +429,20 @@ template <class Four>
 }
 
 // texture_level0_n's unorm8 clamp-to-edge case for a level of 2 x 2 to 32764 x 32764.
-template <int C>
+template <int C, class Out>
 [[gnu::always_inline]] inline void texture_level0_unorm8_x4(const TextureLevel& level, const glm::vec2* st,
-                                                            glm::vec4* out, std::size_t count) {
+                                                            Out* out, std::size_t count) {
     const std::uint8_t* texels = level.unorm8.data();
     const std::size_t stride = static_cast<std::size_t>(level.width) * C;
     const AxisU8Setup s_setup(level.width), t_setup(level.height);
-    in_fours(st, out, count, [&](const glm::vec2* st4, glm::vec4* out4, std::size_t) {
-        texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, st4, out4);
+    in_fours(st, out, count, [&](const glm::vec2* st4, Out* out4, std::size_t) {
+        if constexpr (std::is_same_v<Out, glm::vec4>) {
+            texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, st4, out4);
+        } else {
+            glm::vec4 samples[4];
+            texture_unorm8_x4<C>(texels, stride, s_setup, t_setup, st4, samples);
+            for (std::size_t j = 0; j < 4; ++j) put(out4[j], samples[j]);
+        }
     });
 }
 
@@ -467,13 +482,14 @@ struct AxesFx4 {
 }
 
 // texture_level0_n<1, false>'s clamp-to-edge case for a level of at most 32766 x 32766.
+template <class Out>
 [[gnu::always_inline]] inline void texture_level0_float1_x4(const TextureLevel& level, const glm::vec2* st,
-                                                            glm::vec4* out, std::size_t count) {
+                                                            Out* out, std::size_t count) {
     const __m128 width_f = _mm_set1_ps(static_cast<float>(level.width));
     const __m128 height_f = _mm_set1_ps(static_cast<float>(level.height));
     const __m128i last_s = _mm_set1_epi32(level.width - 1);
     const __m128i last_t = _mm_set1_epi32(level.height - 1);
-    in_fours(st, out, count, [&](const glm::vec2* st4, glm::vec4* out4, std::size_t n) {
+    in_fours(st, out, count, [&](const glm::vec2* st4, Out* out4, std::size_t n) {
         const __m128 st01 = _mm_loadu_ps(&st4[0].x);
         const __m128 st23 = _mm_loadu_ps(&st4[2].x);
         AxesFx4 ax, ay;
@@ -484,7 +500,7 @@ struct AxesFx4 {
             const AxisF y{ay.i0[j], ay.i1[j], ay.weight[j]};
             float value[4];
             bilinear_gpu_n<1>(level, x, y, value);
-            out4[j] = glm::vec4(value[0], 0.0f, 0.0f, 1.0f);
+            put_r(out4[j], value[0]);
         }
     });
 }
@@ -496,11 +512,17 @@ inline bool float1_x4_fits(const TextureLevel& level) { return level.width <= 32
 //
 // axes_gpu_x4's operations on eight lanes (the same instructions, VEX-encoded: vmaxps and
 // vminps keep a NaN first operand's "give the second" rule), then what the four-point path
-// leaves to bilinear_gpu_n<1> point by point: the four texels gathered (the index
+// leaves to bilinear_gpu_n<1> point by point: the four texels fetched (the index
 // y * width + x fits 31 bits for the levels float1_x4_fits takes) and lp_build_lerp_2d's
 // three lerps as vfmadd, which rounds once as std::fma does. Where the four-point path
 // spends its time on the scalar fetches and lerps (12 % of a level-63 render of the bench
 // terrain, the height-map reads of the evaluation), this one takes them eight at a time.
+//
+// A gather costs about a cycle an element here, so a row's two texels come as one 8-byte
+// element: the pair (first, first + 1) with first = min(i0, width - 2), which holds both
+// clamped indices (a level at least 2 wide): i0 is first, or first + 1 where i0 is the last
+// column; i1 is first + 1, or first where the axis clamped both to column 0. Each texel is
+// then the pair's half its index names, the same float either way.
 #if defined(__x86_64__) && defined(__GNUC__)
 #define TESSREF_HAVE_AVX2_VARIANTS 1
 
@@ -535,30 +557,63 @@ struct Axes8 {
     return _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(v), _MM_SHUFFLE(3, 1, 2, 0)));
 }
 
-// Eight points st[0..7] -> their samples' r in value[0..7].
-[[gnu::target("avx2,fma"), gnu::always_inline]] inline void float1_x8(const float* texels, __m256i width,
-                                                                       __m256 width_f, __m256 height_f,
-                                                                       __m256i last_s, __m256i last_t,
-                                                                       const glm::vec2* st, float* value) {
+// The texel pairs (index, index + 1) of eight points, index[j] the texel of point j: the
+// first texels in order (a), the second ones in order (b).
+struct TexelPairs8 {
+    __m256 a, b;
+};
+[[gnu::target("avx2,fma"), gnu::always_inline]] inline TexelPairs8 texel_pairs_x8(const float* texels, __m256i index) {
+    const auto* base = reinterpret_cast<const long long*>(texels);
+    // (a0 b0 a1 b1 a2 b2 a3 b3) and (a4 b4 .. a7 b7), scale 4: the index counts floats.
+    const __m256 low = _mm256_castsi256_ps(_mm256_i32gather_epi64(base, _mm256_castsi256_si128(index), 4));
+    const __m256 high = _mm256_castsi256_ps(_mm256_i32gather_epi64(base, _mm256_extracti128_si256(index, 1), 4));
+    return {in_order(_mm256_shuffle_ps(low, high, _MM_SHUFFLE(2, 0, 2, 0))),
+            in_order(_mm256_shuffle_ps(low, high, _MM_SHUFFLE(3, 1, 3, 1)))};
+}
+
+// Eight points st[0..7] -> their samples' r, on a level at least 2 texels wide.
+[[gnu::target("avx2,fma"), gnu::always_inline]] inline __m256 float1_x8(const float* texels, __m256i width,
+                                                                         __m256 width_f, __m256 height_f,
+                                                                         __m256i last_s, __m256i last_t,
+                                                                         const glm::vec2* st) {
     // (s0 t0 .. s3 t3) and (s4 t4 .. s7 t7): shufps takes the s (t) of each 128-bit half,
     // in the order s0 s1 s4 s5 s2 s3 s6 s7, which vpermpd's 64-bit pairs put back.
     const __m256 a = _mm256_loadu_ps(&st[0].x);
     const __m256 b = _mm256_loadu_ps(&st[4].x);
     const Axes8 ax = axes_gpu_x8(in_order(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0))), width_f, last_s);
     const Axes8 ay = axes_gpu_x8(in_order(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1))), height_f, last_t);
-    const __m256i row0 = _mm256_mullo_epi32(ay.i0, width);
-    const __m256i row1 = _mm256_mullo_epi32(ay.i1, width);
-    const __m256 t00 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row0, ax.i0), 4);
-    const __m256 t10 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row0, ax.i1), 4);
-    const __m256 t01 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row1, ax.i0), 4);
-    const __m256 t11 = _mm256_i32gather_ps(texels, _mm256_add_epi32(row1, ax.i1), 4);
-    _mm256_storeu_ps(value, lerp_gpu_x8(lerp_gpu_x8(t00, t10, ax.weight), lerp_gpu_x8(t01, t11, ax.weight), ay.weight));
+    const __m256i first = _mm256_min_epi32(ax.i0, _mm256_sub_epi32(last_s, _mm256_set1_epi32(1)));
+    const auto [a0, b0] = texel_pairs_x8(texels, _mm256_add_epi32(_mm256_mullo_epi32(ay.i0, width), first));
+    const auto [a1, b1] = texel_pairs_x8(texels, _mm256_add_epi32(_mm256_mullo_epi32(ay.i1, width), first));
+    // Where i0 is first, the pair's first texel, else its second; where i1 is first + 1, the
+    // second, else the first.
+    const __m256 i0_first = _mm256_castsi256_ps(_mm256_cmpeq_epi32(ax.i0, first));
+    const __m256 i1_second =
+        _mm256_castsi256_ps(_mm256_cmpeq_epi32(ax.i1, _mm256_add_epi32(first, _mm256_set1_epi32(1))));
+    const __m256 t00 = _mm256_blendv_ps(b0, a0, i0_first);
+    const __m256 t10 = _mm256_blendv_ps(a0, b0, i1_second);
+    const __m256 t01 = _mm256_blendv_ps(b1, a1, i0_first);
+    const __m256 t11 = _mm256_blendv_ps(a1, b1, i1_second);
+    return lerp_gpu_x8(lerp_gpu_x8(t00, t10, ax.weight), lerp_gpu_x8(t01, t11, ax.weight), ay.weight);
 }
 
-// texture_level0_float1_x4 with SimdLevel::avx2. Not inlined into its caller, whose clones
-// target less.
+// Eight samples' r to out[0..n): stored as they are for texture_red(), spread to (r, 0, 0, 1)
+// for texture().
+template <class Out>
+[[gnu::target("avx2,fma"), gnu::always_inline]] inline void put_r_x8(Out* out, __m256 r, std::size_t n) {
+    if constexpr (std::is_same_v<Out, float>) {
+        if (n == 8) return _mm256_storeu_ps(out, r);
+    }
+    alignas(32) float value[8];
+    _mm256_store_ps(value, r);
+    for (std::size_t j = 0; j < n; ++j) put_r(out[j], value[j]);
+}
+
+// texture_level0_float1_x4 with SimdLevel::avx2, for a level at least 2 wide. Not inlined
+// into its caller, whose clones target less.
+template <class Out>
 [[gnu::target("avx2,fma"), gnu::noinline]] void texture_level0_float1_x8(const TextureLevel& level,
-                                                                         const glm::vec2* st, glm::vec4* out,
+                                                                         const glm::vec2* st, Out* out,
                                                                          std::size_t count) {
     const float* texels = level.texels.data();
     const __m256i width = _mm256_set1_epi32(level.width);
@@ -566,17 +621,13 @@ struct Axes8 {
     const __m256 height_f = _mm256_set1_ps(static_cast<float>(level.height));
     const __m256i last_s = _mm256_set1_epi32(level.width - 1);
     const __m256i last_t = _mm256_set1_epi32(level.height - 1);
-    alignas(32) float value[8];
     std::size_t k = 0;
-    for (; k + 8 <= count; k += 8) {
-        float1_x8(texels, width, width_f, height_f, last_s, last_t, st + k, value);
-        for (std::size_t j = 0; j < 8; ++j) out[k + j] = glm::vec4(value[j], 0.0f, 0.0f, 1.0f);
-    }
+    for (; k + 8 <= count; k += 8)
+        put_r_x8(out + k, float1_x8(texels, width, width_f, height_f, last_s, last_t, st + k), 8);
     if (k < count) {  // the last one to seven points, padded with copies of the last
         glm::vec2 tail[8];
         for (std::size_t j = 0; j < 8; ++j) tail[j] = st[std::min(k + j, count - 1)];
-        float1_x8(texels, width, width_f, height_f, last_s, last_t, tail, value);
-        for (std::size_t j = 0; k + j < count; ++j) out[k + j] = glm::vec4(value[j], 0.0f, 0.0f, 1.0f);
+        put_r_x8(out + k, float1_x8(texels, width, width_f, height_f, last_s, last_t, tail), count - k);
     }
 }
 #endif
@@ -584,9 +635,10 @@ struct Axes8 {
 
 
 // texture(sampler, st[k]) on level 0 for k < count: the texture's C channels, the others as
-// GL fills them (g = b = 0, a = 1); unorm8 codes read as code * (1/255).
-template <int C, bool Unorm8>
-[[gnu::always_inline]] inline void texture_level0_n(const TextureLevel& level, const glm::vec2* st, glm::vec4* out,
+// GL fills them (g = b = 0, a = 1); unorm8 codes read as code * (1/255). Into out[k] as put()
+// writes a sample: all of it, or its r.
+template <int C, bool Unorm8, class Out>
+[[gnu::always_inline]] inline void texture_level0_n(const TextureLevel& level, const glm::vec2* st, Out* out,
                                                     std::size_t count, bool repeat) {
 #if defined(__SSE2__)
     if constexpr (Unorm8) {
@@ -595,7 +647,8 @@ template <int C, bool Unorm8>
     } else if constexpr (C == 1) {
         if (!repeat && float1_x4_fits(level)) {
 #if defined(TESSREF_HAVE_AVX2_VARIANTS)
-            if (simd_level() == SimdLevel::avx2) return texture_level0_float1_x8(level, st, out, count);
+            if (simd_level() == SimdLevel::avx2 && level.width >= 2)
+                return texture_level0_float1_x8(level, st, out, count);
 #endif
             return texture_level0_float1_x4(level, st, out, count);
         }
@@ -615,13 +668,13 @@ template <int C, bool Unorm8>
             bilinear_gpu_n<C>(level, ax, ay, values);
             for (int c = 0; c < C; ++c) sample[c] = values[c];
         }
-        out[k] = sample;
+        put(out[k], sample);
     }
 }
 
-TESSREF_FMA_CLONES
-void texture_level0(const TextureLevel& level, int channels, bool unorm8, const glm::vec2* st, glm::vec4* out,
-                    std::size_t count, bool repeat) {
+template <class Out>
+[[gnu::always_inline]] inline void texture_level0_any(const TextureLevel& level, int channels, bool unorm8,
+                                                      const glm::vec2* st, Out* out, std::size_t count, bool repeat) {
     switch (channels * 2 + (unorm8 ? 1 : 0)) {
         case 2: return texture_level0_n<1, false>(level, st, out, count, repeat);
         case 3: return texture_level0_n<1, true>(level, st, out, count, repeat);
@@ -632,6 +685,18 @@ void texture_level0(const TextureLevel& level, int channels, bool unorm8, const 
         case 8: return texture_level0_n<4, false>(level, st, out, count, repeat);
         default: return texture_level0_n<4, true>(level, st, out, count, repeat);
     }
+}
+
+// Every sample (texture()) or the red channels alone (texture_red()).
+TESSREF_FMA_CLONES
+void texture_level0(const TextureLevel& level, int channels, bool unorm8, const glm::vec2* st, glm::vec4* out,
+                    std::size_t count, bool repeat) {
+    texture_level0_any(level, channels, unorm8, st, out, count, repeat);
+}
+TESSREF_FMA_CLONES
+void texture_level0(const TextureLevel& level, int channels, bool unorm8, const glm::vec2* st, float* red,
+                    std::size_t count, bool repeat) {
+    texture_level0_any(level, channels, unorm8, st, red, count, repeat);
 }
 
 double unorm_max(TexelFormat format) {
@@ -1164,6 +1229,17 @@ glm::dvec4 Texture::texture(glm::dvec2 st) const { return textureLod(st, 0.0); }
 void Texture::texture(std::span<const glm::dvec2> st, std::span<glm::dvec4> out) const {
     if (st.size() != out.size()) throw Error("Texture::texture: as many samples as coordinates");
     for (std::size_t k = 0; k < st.size(); ++k) out[k] = texture(st[k]);
+}
+void Texture::texture_red(std::span<const glm::vec2> st, std::span<float> red) const {
+    // texture() without the swizzle, which leaves r as it is.
+    if (empty()) throw Error("texture on an empty texture");
+    if (st.size() != red.size()) throw Error("Texture::texture_red: as many samples as coordinates");
+    texture_level0(levels_[0], channels_, format_ == TexelFormat::unorm8, st.data(), red.data(), st.size(),
+                   wrap_ == Wrap::repeat);
+}
+void Texture::texture_red(std::span<const glm::dvec2> st, std::span<double> red) const {
+    if (st.size() != red.size()) throw Error("Texture::texture_red: as many samples as coordinates");
+    for (std::size_t k = 0; k < st.size(); ++k) red[k] = texture(st[k]).r;
 }
 
 glm::vec4 Texture::textureLod(glm::vec2 st, float lod) const {
