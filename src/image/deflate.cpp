@@ -98,8 +98,10 @@ void code_lengths(const std::uint32_t* freq, int n, int limit, std::uint8_t* len
         depth[node] = depth[parent[node]] + 1;
         if (node < count) ++per_length[std::min(depth[node], 63)];
     }
-    // Too long: fold the lengths above the limit into it and restore Kraft's equality by
-    // lengthening the deepest shorter codes (miniz's tdefl_huffman_enforce_max_code_size).
+    // Too long: fold the lengths above the limit into it, then restore Kraft's equality
+    // (the sum of 2^-length over the codes is 1) one unit of 2^-limit at a time: a code at
+    // the limit is taken away and the deepest shorter code split into two one bit longer,
+    // which keeps the number of codes.
     for (int l = limit + 1; l < 64; ++l) {
         per_length[limit] += per_length[l];
         per_length[l] = 0;
