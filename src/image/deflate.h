@@ -17,7 +17,7 @@ namespace tessref::image::detail {
 // Greedy LZ77 (one candidate a position, the last position with the same hash of its 4
 // bytes; matches of 4 to 258 bytes within 32 KiB, the positions inside a match not
 // hashed) and one dynamic-Huffman block, or stored blocks where those would be larger. A
-// rendered image's filtered rows come out about 5 % larger than zlib's level 1 makes them,
+// rendered image's filtered rows come out 3 to 5 % larger than zlib's level 1 makes them,
 // in a third of the time.
 std::vector<std::uint8_t> deflate_band(const std::uint8_t* data, std::size_t size, bool last);
 
