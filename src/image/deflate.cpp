@@ -216,24 +216,26 @@ std::vector<std::uint8_t> deflate_band(const std::uint8_t* data, std::size_t siz
     const auto end_run = [&](std::size_t at) {
         if (at > run_start) items[item_count++] = static_cast<std::uint32_t>(at - run_start);
     };
+    // How far the bytes at i repeat those at `from` (the first kMinMatch already compared),
+    // up to kMaxMatch and the band's end: eight bytes a step, the first difference's byte
+    // found from its lowest set bit (the loads are little endian).
+    const auto match_length = [&](std::size_t from) {
+        const std::size_t limit = std::min<std::size_t>(kMaxMatch, size - i);
+        std::size_t length = kMinMatch;
+        for (; length + 8 <= limit; length += 8) {
+            const std::uint64_t diff = load64(data + i + length) ^ load64(data + from + length);
+            if (diff != 0) return length + static_cast<std::size_t>(__builtin_ctzll(diff) >> 3);
+        }
+        while (length < limit && data[i + length] == data[from + length]) ++length;
+        return length;
+    };
     while (i + kMinMatch <= size) {
         const std::uint32_t v = load32(data + i);
         const std::uint32_t h = (v * 2654435761u) >> (32 - kHashBits);
         const std::uint32_t candidate = head[h];
         head[h] = static_cast<std::uint32_t>(i);
         if (candidate < i && i - candidate <= kWindow && load32(data + candidate) == v) {
-            std::size_t length = kMinMatch;
-            const std::size_t limit = std::min<std::size_t>(kMaxMatch, size - i);
-            while (length + 8 <= limit) {
-                const std::uint64_t diff = load64(data + i + length) ^ load64(data + candidate + length);
-                if (diff != 0) {
-                    length += static_cast<std::size_t>(__builtin_ctzll(diff) >> 3);
-                    goto matched;
-                }
-                length += 8;
-            }
-            while (length < limit && data[i + length] == data[candidate + length]) ++length;
-        matched:
+            const std::size_t length = match_length(candidate);
             end_run(i);
             const std::uint32_t distance = static_cast<std::uint32_t>(i - candidate);
             items[item_count++] = kMatch | static_cast<std::uint32_t>(length - 3) << 15 | (distance - 1);
