@@ -9,21 +9,17 @@
 //  - without the module, an EXR is a clear error naming the places searched (exit 2),
 //    while PNG still works.
 #include <png.h>
-#include <zlib.h>
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <random>
 #include <string>
 #include <vector>
 
-#include "image/deflate.h"
 #include "image/image_io.h"
 #include "image/oiio_module.h"
 #include "run_program.h"
@@ -305,76 +301,6 @@ TEST_F(ImageIo, WrittenPngsReadBackWithEverySample) {
             }
         }
     }
-}
-
-// The PNG writer's deflate encoder (image/deflate.h), band by band as the writer calls it:
-// the bands' data, joined, must inflate (zlib's raw inflate, which checks every code and
-// distance) to the bytes given, for data of every kind the encoder treats apart: noise
-// (stored blocks), long zero runs (matches of 258 and the code of its own), short periods
-// (overlapping matches), repeats just inside and just beyond the 32 KiB window, and a
-// skewed alphabet whose Huffman code must be cut to 15 bits. Compressible data must come
-// out smaller, so the Huffman path is what is checked there.
-TEST(Deflate, BandsJoinedInflateToTheirBytes) {
-    std::uint32_t state = 777;
-    auto next = [&state] {
-        state = state * 1664525u + 1013904223u;
-        return state >> 8;
-    };
-    const auto inflated = [](const std::vector<std::uint8_t>& deflated, std::size_t expected, bool& complete) {
-        std::vector<std::uint8_t> out(expected + 64);
-        z_stream z{};
-        EXPECT_EQ(inflateInit2(&z, -15), Z_OK);
-        z.next_in = const_cast<Bytef*>(deflated.data());
-        z.avail_in = static_cast<uInt>(deflated.size());
-        z.next_out = out.data();
-        z.avail_out = static_cast<uInt>(out.size());
-        complete = inflate(&z, Z_FINISH) == Z_STREAM_END && z.avail_in == 0;
-        out.resize(z.total_out);
-        inflateEnd(&z);
-        return out;
-    };
-    // Symbol k of 24 drawn with a weight of about 1.7^-k: its Huffman code is far longer than 15 bits.
-    std::vector<double> skew(24);
-    for (std::size_t k = 0; k < skew.size(); ++k) skew[k] = std::pow(1.7, -static_cast<double>(k));
-    std::discrete_distribution<int> skewed(skew.begin(), skew.end());
-    std::mt19937 rng(5);
-    int cases = 0;
-    for (const std::size_t size : {1, 3, 4, 5, 258, 259, 1000, 65535, 65536, 200000, 600000}) {
-        for (int kind = 0; kind < 7; ++kind) {
-            std::vector<std::uint8_t> data(size);
-            for (std::size_t i = 0; i < size; ++i) {
-                switch (kind) {
-                    case 0: data[i] = static_cast<std::uint8_t>(next()); break;  // noise
-                    case 1: data[i] = 0; break;
-                    case 2: data[i] = static_cast<std::uint8_t>(i % 7); break;
-                    case 3: data[i] = next() % 16 == 0 ? static_cast<std::uint8_t>(next()) : (i > 0 ? data[i - 1] : 0); break;
-                    case 4: data[i] = static_cast<std::uint8_t>(skewed(rng)); break;
-                    // 32768 and 32769 bytes of noise repeated: a match at the window's edge, and none beyond it.
-                    case 5: data[i] = i < 32768 ? static_cast<std::uint8_t>(next()) : data[i - 32768]; break;
-                    case 6: data[i] = i < 32769 ? static_cast<std::uint8_t>(next()) : data[i - 32769]; break;
-                }
-            }
-            for (const std::size_t bands : {1, 2, 7}) {
-                SCOPED_TRACE("size " + std::to_string(size) + ", kind " + std::to_string(kind) + ", bands " +
-                             std::to_string(bands));
-                const std::size_t per = std::max<std::size_t>(1, (size + bands - 1) / bands);
-                std::vector<std::uint8_t> joined;
-                for (std::size_t at = 0; at < size; at += per) {
-                    const std::size_t n = std::min(per, size - at);
-                    const std::vector<std::uint8_t> band =
-                        tessref::image::detail::deflate_band(data.data() + at, n, at + n == size);
-                    joined.insert(joined.end(), band.begin(), band.end());
-                }
-                bool complete = false;
-                EXPECT_TRUE(inflated(joined, size, complete) == data) << "the inflated bytes differ from those deflated";
-                EXPECT_TRUE(complete) << "the joined bands are not one complete deflate stream";
-                if (size >= 65536 && bands == 1 && kind >= 1 && kind <= 5)
-                    EXPECT_LT(joined.size(), kind == 5 ? size * 6 / 10 : size / 2) << "compressible data did not shrink";
-                ++cases;
-            }
-        }
-    }
-    EXPECT_EQ(cases, 11 * 7 * 3);
 }
 
 TEST_F(ImageIo, EveryPngAndPnmOfTheRepositoryReadsAsOpenImageIOReadsIt) {

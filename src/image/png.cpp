@@ -1,7 +1,7 @@
 // PNG read through libpng, as OpenImageIO 2.4.7 read it (the values tessref has always
 // used): png_set_expand (palette to RGB, grey below 8 bits to 8, tRNS to an alpha channel),
 // 16-bit samples as such, no gamma, no premultiplication. Written 8-bit, a Software text
-// chunk when asked, no time, deflated in parallel bands (see "writing" below).
+// chunk when asked, no time, compressed by zlib in parallel (see "writing" below).
 //
 // libpng reports errors by longjmp: every libpng call runs inside a small function that
 // sets the jump point and holds no C++ object, and the structures are freed by one owner
@@ -26,7 +26,6 @@
 
 #include "common/parallel.h"
 #include "image/codecs.h"
-#include "image/deflate.h"
 #include "tessref/error.h"
 
 namespace tessref::image::detail {
@@ -39,6 +38,10 @@ constexpr png_alloc_size_t kChunkMallocMax = 64u << 20;
 // Sides beyond this are refused in the header (libpng's own default, said here); the
 // pixels' memory is checked by the caller (ReadOptions::check_header) before any is taken.
 constexpr png_uint_32 kMaxSide = 1000000;
+// Writing favours speed: a render's PNG is written on the hot path. For a 1280 x 800 render
+// (bench/scenes/jacksboro-grid-16.toml) zlib level 1 with the Sub filter took 35 ms and
+// 511 KB on one thread, where OpenImageIO's level 6 without filters took 159 ms for 365 KB.
+constexpr int kCompressionLevel = 1;
 
 struct ErrorText {
     char text[256] = "";
@@ -155,22 +158,20 @@ void check_chunks(const std::string& path, const std::string& kind) {
 // ---- writing ------------------------------------------------------------------------
 //
 // libpng compresses on one thread, and a render's PNG is written after the render, where
-// nothing else runs. So the file is put together here, its compression cut into bands as
-// pigz cuts a gzip stream: every row is filtered (Average: each byte less the mean of the
-// byte one pixel to its left and the byte above it), the filtered rows are split into bands
-// of about kBandBytes, and the bands are deflated in parallel by deflate.h's encoder, each
-// band on its own (a cut costs a band's first few matches). A band filters its own rows
-// into a buffer of its own: no image-sized buffer of filtered rows is cleared and faulted
-// in on one thread, and the rows are still in cache when they are deflated. Every band but the last ends on a byte boundary, as
-// zlib's Z_SYNC_FLUSH ends it, so the bands' raw deflate data concatenate into one deflate
-// stream; the zlib stream around them (RFC 1950) takes the Adler-32 combined from the
-// bands' (zlib's adler32_combine). Each band is one IDAT chunk.
-//
-// For a 1280 x 800 render (bench/scenes/jacksboro-grid-16.toml, 4 MB of filtered rows) the
-// encoder takes about 6.3 ms of CPU for 467 KB, where zlib's level 1 took about 20 ms for
-// 511 KB of Sub-filtered rows (OpenImageIO's level 6 without filters: 159 ms for 365 KB).
+// nothing else runs. So the file is put together here and zlib does the compression, cut
+// into bands as pigz cuts a gzip stream: every row is filtered (Sub: each byte less the
+// byte one pixel to its left), the filtered rows are split into bands of about kBandBytes,
+// and the bands are deflated in parallel, each primed with the 32 KiB of filtered data
+// before it (deflateSetDictionary) so that a cut costs almost no compression. A band filters
+// its own rows, and again the rows before it that the primer reads, into a buffer of its
+// own: no image-sized buffer of filtered rows is cleared and faulted in on one thread, and
+// the rows are still in cache when zlib reads them. Every band
+// but the last ends on a byte boundary (Z_SYNC_FLUSH), so the bands' raw deflate data
+// concatenate into one deflate stream; the zlib stream around them (RFC 1950) takes the
+// Adler-32 combined from the bands' (adler32_combine). Each band is one IDAT chunk.
 
 constexpr std::size_t kBandBytes = std::size_t{256} << 10;
+constexpr std::size_t kDeflateWindow = std::size_t{32} << 10;
 
 void put32(std::vector<std::uint8_t>& out, std::uint32_t v) {
     for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
@@ -187,31 +188,20 @@ void put_chunk(std::vector<std::uint8_t>& out, const char (&type)[5], const std:
     put32(out, static_cast<std::uint32_t>(crc));
 }
 
-// One row's Average filter (PNG 1.2, section 6.5): each byte less the mean, rounded down,
-// of the byte one pixel (`pixel` bytes) to its left and the byte above it, modulo 256; a
-// byte left of the row or above the image counts as 0 (`above` null for the first row).
-// Sixteen bytes at a time with SSE2: pavgb rounds the mean up, so the sum's low bit, where
-// it is 1, is taken off; the byte subtraction wraps as the filter's does. On a rendered
-// image it compresses best of None, Sub, Up and Average, and fastest (the level-16 bench
-// image: 467 KB where Sub gave 535 KB, in 8 % less of the encoder's time).
-void average_filter(const std::uint8_t* in, const std::uint8_t* above, std::uint8_t* out, std::size_t row,
-                    std::size_t pixel) {
-    const auto up = [&](std::size_t i) { return above != nullptr ? above[i] : 0; };
-    std::size_t i = 0;
-    for (; i < std::min(pixel, row); ++i) out[i] = static_cast<std::uint8_t>(in[i] - (up(i) >> 1));
+// One row's Sub filter (PNG 1.2, section 6.3): each byte less the byte one pixel (`pixel`
+// bytes) to its left, modulo 256; the first pixel's bytes as they are. Sixteen bytes at a
+// time with SSE2, whose byte subtraction wraps as the filter's does.
+void sub_filter(const std::uint8_t* in, std::uint8_t* out, std::size_t row, std::size_t pixel) {
+    std::memcpy(out, in, std::min(pixel, row));
+    std::size_t i = pixel;
 #if defined(__SSE2__)
-    if (above != nullptr) {
-        for (; i + 16 <= row; i += 16) {
-            const __m128i here = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
-            const __m128i left = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i - pixel));
-            const __m128i over = _mm_loadu_si128(reinterpret_cast<const __m128i*>(above + i));
-            const __m128i odd = _mm_and_si128(_mm_xor_si128(left, over), _mm_set1_epi8(1));
-            const __m128i mean = _mm_sub_epi8(_mm_avg_epu8(left, over), odd);
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), _mm_sub_epi8(here, mean));
-        }
+    for (; i + 16 <= row; i += 16) {
+        const __m128i here = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
+        const __m128i left = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i - pixel));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), _mm_sub_epi8(here, left));
     }
 #endif
-    for (; i < row; ++i) out[i] = static_cast<std::uint8_t>(in[i] - ((in[i - pixel] + up(i)) >> 1));
+    for (; i < row; ++i) out[i] = static_cast<std::uint8_t>(in[i] - in[i - pixel]);
 }
 
 // Rows [first, end) of the image, filtered, one after the other: each row's filter-type
@@ -219,13 +209,40 @@ void average_filter(const std::uint8_t* in, const std::uint8_t* above, std::uint
 void filter_rows(const std::uint8_t* samples, std::size_t row, std::size_t pixel, std::size_t first, std::size_t end,
                  std::uint8_t* out) {
     for (std::size_t y = first; y < end; ++y, out += row + 1) {
-        out[0] = 3;  // the filter type: Average
-        average_filter(samples + y * row, y > 0 ? samples + (y - 1) * row : nullptr, out + 1, row, pixel);
+        out[0] = 1;  // the filter type: Sub
+        sub_filter(samples + y * row, out + 1, row, pixel);
     }
 }
 
-// The whole file: signature, IHDR, the Software tEXt when given, the IDATs, IEND.
-void encode_png(const std::uint8_t* samples, int width, int height, int channels, std::uint8_t color_type,
+// The raw deflate data of filtered[begin, end), primed with what precedes it; the last band
+// finishes the stream. Empty on a zlib failure.
+std::vector<std::uint8_t> deflate_band(const std::vector<std::uint8_t>& filtered, std::size_t begin, std::size_t end,
+                                       bool last) {
+    z_stream z{};
+    if (deflateInit2(&z, kCompressionLevel, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY) != Z_OK) return {};
+    std::vector<std::uint8_t> out;
+    bool ok = true;
+    const std::size_t primer = std::min(begin, kDeflateWindow);
+    if (primer > 0)
+        ok = deflateSetDictionary(&z, filtered.data() + begin - primer, static_cast<uInt>(primer)) == Z_OK;
+    if (ok) {
+        // deflateBound covers a finished stream; a sync flush adds an empty stored block.
+        out.resize(deflateBound(&z, static_cast<uLong>(end - begin)) + 16);
+        z.next_in = const_cast<Bytef*>(filtered.data() + begin);
+        z.avail_in = static_cast<uInt>(end - begin);
+        z.next_out = out.data();
+        z.avail_out = static_cast<uInt>(out.size());
+        const int rc = deflate(&z, last ? Z_FINISH : Z_SYNC_FLUSH);
+        ok = rc == (last ? Z_STREAM_END : Z_OK) && z.avail_in == 0 && z.avail_out > 0;
+        out.resize(z.total_out);
+    }
+    deflateEnd(&z);
+    return ok ? out : std::vector<std::uint8_t>{};
+}
+
+// The whole file: signature, IHDR, the Software tEXt when given, the IDATs, IEND. False on a
+// zlib failure.
+bool encode_png(const std::uint8_t* samples, int width, int height, int channels, std::uint8_t color_type,
                 const std::string* software, std::vector<std::uint8_t>& file) {
     const std::size_t pixel = static_cast<std::size_t>(channels);
     const std::size_t row = static_cast<std::size_t>(width) * pixel;
@@ -233,21 +250,26 @@ void encode_png(const std::uint8_t* samples, int width, int height, int channels
     const std::size_t rows = static_cast<std::size_t>(height);
     const std::size_t band_rows = std::max<std::size_t>(1, kBandBytes / stride);
     const std::size_t bands = (rows + band_rows - 1) / band_rows;
-    // Band b is rows [first_row(b), first_row(b + 1)).
+    // Band b is rows [first_row(b), first_row(b + 1)); its primer, the rows before it that
+    // hold the last kDeflateWindow filtered bytes.
     const auto first_row = [&](std::size_t b) { return std::min(rows, b * band_rows); };
+    const std::size_t primer_rows = (kDeflateWindow + stride - 1) / stride;
     std::vector<std::vector<std::uint8_t>> deflated(bands);
     std::vector<uLong> adler(bands);
     tessref::parallel_for(std::size_t{0}, bands, [&](std::size_t b) {
         const std::size_t first = first_row(b), end = first_row(b + 1);
-        std::vector<std::uint8_t> filtered((end - first) * stride);
-        filter_rows(samples, row, pixel, first, end, filtered.data());
-        deflated[b] = deflate_band(filtered.data(), filtered.size(), b + 1 == bands);
-        adler[b] = adler32_z(1, filtered.data(), filtered.size());
+        const std::size_t primed = first - std::min(first, primer_rows);
+        std::vector<std::uint8_t> filtered((end - primed) * stride);
+        filter_rows(samples, row, pixel, primed, end, filtered.data());
+        const std::size_t begin = (first - primed) * stride;
+        deflated[b] = deflate_band(filtered, begin, filtered.size(), b + 1 == bands);
+        adler[b] = adler32_z(1, filtered.data() + begin, filtered.size() - begin);
     });
     uLong checksum = adler[0];
-    for (std::size_t b = 1; b < bands; ++b) {
+    for (std::size_t b = 0; b < bands; ++b) {
+        if (deflated[b].empty()) return false;
         const std::size_t band_bytes = (first_row(b + 1) - first_row(b)) * stride;
-        checksum = adler32_combine(checksum, adler[b], static_cast<z_off_t>(band_bytes));
+        if (b > 0) checksum = adler32_combine(checksum, adler[b], static_cast<z_off_t>(band_bytes));
     }
 
     static constexpr std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
@@ -272,6 +294,7 @@ void encode_png(const std::uint8_t* samples, int width, int height, int channels
         put_chunk(file, "IDAT", data.data(), data.size());
     }
     put_chunk(file, "IEND", nullptr, 0);
+    return true;
 }
 
 }  // namespace
@@ -363,8 +386,9 @@ void write_png(const std::string& path, const ImageView& image, const WriteOptio
     }
     const std::string software = "tessref " TESSREF_VERSION;
     std::vector<std::uint8_t> file;
-    encode_png(base, image.width, image.height, image.channels, static_cast<std::uint8_t>(color_type),
-               options.software_tag ? &software : nullptr, file);
+    if (!encode_png(base, image.width, image.height, image.channels, static_cast<std::uint8_t>(color_type),
+                    options.software_tag ? &software : nullptr, file))
+        fail(path, "cannot write the image: zlib cannot compress it");
     std::string reason;
     std::FILE* out = std::fopen(path.c_str(), "wb");
     if (out == nullptr) fail(path, std::string("cannot write the image: ") + std::strerror(errno));
