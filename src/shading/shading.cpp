@@ -208,7 +208,16 @@ void texture_of_fragments(const Texture* sampler, std::span<const FragmentInputs
 
 // ---- the thesis (Jakobsen 2012): listing 3, appendix A.5 and A.6 ---------------------------
 
-glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& uniforms) {
+namespace {
+
+// The specular term's half vector, normalize(lightPosition + vec3(0, 0, 1)): a function of
+// the uniforms alone, which the GLSL computes per fragment; shading many fragments computes
+// it once (the same value, so the same bits).
+glm::vec3 thesis_half_vector(const ThesisLight& uniforms) {
+    return glm::normalize(uniforms.lightPosition + glm::vec3(0.0f, 0.0f, 1.0f));
+}
+
+glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& uniforms, glm::vec3 half) {
     const glm::vec3& lightPosition = uniforms.lightPosition;
     // GLSL: thesis_terrain.frag:40 (thesis_terrain_single.frag:27) vec3 h = normalize(
     // lightPosition + vec3(0, 0, 1)); — the thesis's own line computes h and never reads it,
@@ -219,7 +228,7 @@ glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& 
     const float df = std::abs(glm::dot(gNormal, lightPosition));
     // GLSL: thesis_terrain.frag:42 float sf = abs(dot(gNormal, normalize(lightPosition +
     // vec3(0, 0, 1)))); — a half vector with a fixed eye direction +z; abs() again.
-    float sf = std::abs(glm::dot(gNormal, glm::normalize(lightPosition + glm::vec3(0.0f, 0.0f, 1.0f))));
+    float sf = std::abs(glm::dot(gNormal, half));
     // GLSL: thesis_terrain.frag:43 sf = pow(sf, shininess);
     sf = std::pow(sf, uniforms.shininess);
     // GLSL: thesis_terrain.frag:45 vec3 light = texture(AmbientOcc, ...).rgb + df *
@@ -227,16 +236,15 @@ glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& 
     return ambient + df * uniforms.diffuseMaterial + sf * uniforms.specularMaterial;
 }
 
-namespace {
 
 // thesis_terrain_single.frag with its texture lookup's value given (shade() of many fragments
 // takes the lookups together).
-glm::vec4 thesis_single_texture(const FragmentInputs& fragment, const ThesisLight& uniforms,
+glm::vec4 thesis_single_texture(const FragmentInputs& fragment, const ThesisLight& uniforms, glm::vec3 half,
                                 const glm::vec4& diffuseTexture) {
     // GLSL: thesis_terrain_single.frag:25 vec3 gNormal = geometryIn.gNormal;
     const glm::vec3 gNormal = fragment.normal;
     // GLSL: thesis_terrain_single.frag:27-32 (listing 3) vec3 light = ambientMaterial + ...
-    const glm::vec3 light = thesis_light(gNormal, uniforms.ambientMaterial, uniforms);
+    const glm::vec3 light = thesis_light(gNormal, uniforms.ambientMaterial, uniforms, half);
     // GLSL: thesis_terrain_single.frag:34 vec4 diffuseTexture = texture(diffuse, gTextureCoordinate);
     // (the caller's)
     // GLSL: thesis_terrain_single.frag:36 vec4 fragmentColour = diffuseTexture;
@@ -250,10 +258,14 @@ glm::vec4 thesis_single_texture(const FragmentInputs& fragment, const ThesisLigh
 
 }  // namespace
 
+glm::vec3 thesis_light(glm::vec3 gNormal, glm::vec3 ambient, const ThesisLight& uniforms) {
+    return thesis_light(gNormal, ambient, uniforms, thesis_half_vector(uniforms));
+}
+
 glm::vec4 thesis_single_texture(const FragmentInputs& fragment, const ThesisLight& uniforms,
                                 const Texture* diffuse) {
-    return thesis_single_texture(
-        fragment, uniforms, textureGrad(diffuse, fragment.texCoord, fragment.texCoord_dx, fragment.texCoord_dy));
+    return thesis_single_texture(fragment, uniforms, thesis_half_vector(uniforms),
+                                 textureGrad(diffuse, fragment.texCoord, fragment.texCoord_dx, fragment.texCoord_dy));
 }
 
 glm::vec4 thesis_multi_texture(const FragmentInputs& fragment, const ThesisLight& uniforms,
@@ -465,13 +477,14 @@ glm::vec4 shade(const ShadingModel& model, const FragmentInputs& fragment) {
 
 void shade(const ShadingModel& model, std::span<const FragmentInputs> fragments, std::span<glm::vec4> out) {
     if (fragments.size() != out.size()) throw Error("shade: as many colours as fragments");
+    const glm::vec3 half = thesis_half_vector(model.thesis);
     for (std::size_t first = 0; first < fragments.size(); first += 4) {
         const auto some = fragments.subspan(first, std::min<std::size_t>(4, fragments.size() - first));
         if (model.kind == ShadingKind::thesis_single) {
             glm::vec4 diffuseTexture[4];
             texture_of_fragments(model.textures.diffuse.get(), some, diffuseTexture);
             for (std::size_t k = 0; k < some.size(); ++k)
-                out[first + k] = thesis_single_texture(some[k], model.thesis, diffuseTexture[k]);
+                out[first + k] = thesis_single_texture(some[k], model.thesis, half, diffuseTexture[k]);
         } else {
             for (std::size_t k = 0; k < some.size(); ++k) out[first + k] = shade(model, some[k]);
         }
