@@ -57,6 +57,17 @@ std::vector<fs::path> shipped_scenes() {
     return out;
 }
 
+// Every count of two draws of the same triangles (raster.h RasterStats), field by field.
+void expect_same_counts(const tessref::RasterStats& a, const tessref::RasterStats& b) {
+    EXPECT_EQ(a.triangles_in, b.triangles_in);
+    EXPECT_EQ(a.triangles_clipped, b.triangles_clipped);
+    EXPECT_EQ(a.triangles_rejected, b.triangles_rejected);
+    EXPECT_EQ(a.primitives, b.primitives);
+    EXPECT_EQ(a.primitives_culled, b.primitives_culled);
+    EXPECT_EQ(a.fragments, b.fragments);
+    EXPECT_EQ(a.fragments_passed, b.fragments_passed);
+}
+
 }  // namespace
 
 TEST(RenderStream, EveryShippedSceneMatchesTheWholeSurfacePass) {
@@ -246,13 +257,7 @@ TEST(Rasterizer, ChunkedDrawsEqualOnePass) {
     EXPECT_TRUE(same_bytes(batched.barycentric_dy, whole.barycentric_dy));
     EXPECT_TRUE(same_bytes(batched.fragment_count, whole.fragment_count));
     EXPECT_TRUE(same_bytes(batched.front_facing, whole.front_facing));
-    EXPECT_EQ(many.triangles_in, one.triangles_in);
-    EXPECT_EQ(many.triangles_clipped, one.triangles_clipped);
-    EXPECT_EQ(many.triangles_rejected, one.triangles_rejected);
-    EXPECT_EQ(many.primitives, one.primitives);
-    EXPECT_EQ(many.primitives_culled, one.primitives_culled);
-    EXPECT_EQ(many.fragments, one.fragments);
-    EXPECT_EQ(many.fragments_passed, one.fragments_passed);
+    expect_same_counts(many, one);
     EXPECT_TRUE(same_bytes(visible.triangle_id, whole.triangle_id));
     EXPECT_TRUE(same_bytes(visible.depth, whole.depth));
     EXPECT_TRUE(same_bytes(visible_weights, whole.barycentric));
@@ -348,13 +353,7 @@ TEST(Rasterizer, TriangleBlocksDrawWhatTheTrianglesDraw) {
     EXPECT_GT(a.triangles_clipped, 0u);
     EXPECT_TRUE(same_bytes(blocked.triangle_id, plain.triangle_id));
     EXPECT_TRUE(same_bytes(blocked.depth, plain.depth));
-    EXPECT_EQ(b.triangles_in, a.triangles_in);
-    EXPECT_EQ(b.triangles_clipped, a.triangles_clipped);
-    EXPECT_EQ(b.triangles_rejected, a.triangles_rejected);
-    EXPECT_EQ(b.primitives, a.primitives);
-    EXPECT_EQ(b.primitives_culled, a.primitives_culled);
-    EXPECT_EQ(b.fragments, a.fragments);
-    EXPECT_EQ(b.fragments_passed, a.fragments_passed);
+    expect_same_counts(b, a);
     // Blocks of another chunk's triangles are refused.
     EXPECT_THROW(blocked_rasterizer.draw(std::vector<tessref::RasterChunk>{
                      {positions, std::span<const std::array<std::uint32_t, 3>>(tris).first(9), 0, true, blocks}}),
