@@ -723,34 +723,34 @@ void setup_chunk(const Context& ctx, std::span<const glm::vec4> positions, const
         // Triangles [t, end) one by one.
         auto box_test = [&](std::size_t t, std::size_t end) {
 #if defined(__SSE2__)
-        // Two triangles a step, one in each half of the registers: the box is the lane-wise
-        // min of the vertices' bounds; lanes 0 and 1 of each half of box + (its halves'
-        // 32-bit pairs swapped) are x0 + (-x1) and y0 + (-y1).
-        for (; t + 2 <= end; t += 2) {
-            const auto& p = tris[t];
-            const auto& q = tris[t + 1];
-            auto load = [&](std::uint32_t u, std::uint32_t v) {
-                const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b + u)));
-                return _mm_castps_si128(_mm_loadh_pi(low, reinterpret_cast<const __m64*>(b + v)));
-            };
-            const __m128i box = _mm_min_epi16(_mm_min_epi16(load(p[0], q[0]), load(p[1], q[1])), load(p[2], q[2]));
-            const __m128i ends = _mm_add_epi16(box, _mm_shuffle_epi32(box, _MM_SHUFFLE(2, 3, 0, 1)));
-            const int empty = _mm_movemask_epi8(_mm_cmpgt_epi16(ends, _mm_setzero_si128()));
-            candidates[count] = static_cast<std::uint32_t>(t);
-            _mm_storel_epi64(reinterpret_cast<__m128i*>(box_out + count), box);
-            count += (empty & 0xF) == 0;
-            candidates[count] = static_cast<std::uint32_t>(t + 1);
-            _mm_storeh_pi(reinterpret_cast<__m64*>(box_out + count), _mm_castsi128_ps(box));
-            count += (empty & 0xF00) == 0;
-        }
+            // Two triangles a step, one in each half of the registers: the box is the lane-wise
+            // min of the vertices' bounds; lanes 0 and 1 of each half of box + (its halves'
+            // 32-bit pairs swapped) are x0 + (-x1) and y0 + (-y1).
+            for (; t + 2 <= end; t += 2) {
+                const auto& p = tris[t];
+                const auto& q = tris[t + 1];
+                auto load = [&](std::uint32_t u, std::uint32_t v) {
+                    const __m128 low = _mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(b + u)));
+                    return _mm_castps_si128(_mm_loadh_pi(low, reinterpret_cast<const __m64*>(b + v)));
+                };
+                const __m128i box = _mm_min_epi16(_mm_min_epi16(load(p[0], q[0]), load(p[1], q[1])), load(p[2], q[2]));
+                const __m128i ends = _mm_add_epi16(box, _mm_shuffle_epi32(box, _MM_SHUFFLE(2, 3, 0, 1)));
+                const int empty = _mm_movemask_epi8(_mm_cmpgt_epi16(ends, _mm_setzero_si128()));
+                candidates[count] = static_cast<std::uint32_t>(t);
+                _mm_storel_epi64(reinterpret_cast<__m128i*>(box_out + count), box);
+                count += (empty & 0xF) == 0;
+                candidates[count] = static_cast<std::uint32_t>(t + 1);
+                _mm_storeh_pi(reinterpret_cast<__m64*>(box_out + count), _mm_castsi128_ps(box));
+                count += (empty & 0xF00) == 0;
+            }
 #endif
-        for (; t < end; ++t) {
-            const auto& tri = tris[t];
-            const raster::BoxBounds box = raster::triangle_box(b[tri[0]], b[tri[1]], b[tri[2]]);
-            candidates[count] = static_cast<std::uint32_t>(t);
-            box_out[count] = box;
-            count += raster::box_has_pixels(box);
-        }
+            for (; t < end; ++t) {
+                const auto& tri = tris[t];
+                const raster::BoxBounds box = raster::triangle_box(b[tri[0]], b[tri[1]], b[tri[2]]);
+                candidates[count] = static_cast<std::uint32_t>(t);
+                box_out[count] = box;
+                count += raster::box_has_pixels(box);
+            }
         };
         if (blocks.empty()) {
             box_test(first, last);
